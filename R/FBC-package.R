@@ -1,0 +1,11 @@
+#' FBC: Full Bayesian Calibration of computer models
+#'
+#' Fits the Kennedy-O'Hagan calibration model (a GP emulator of the
+#' simulator, a GP discrepancy and measurement error) and samples every
+#' unknown by adaptive Metropolis-within-Gibbs in C++. Start with
+#' [calibrate()].
+#'
+#' @keywords internal
+#' @useDynLib FBC, .registration = TRUE
+#' @importFrom Rcpp sourceCpp
+"_PACKAGE"

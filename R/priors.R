@@ -1,0 +1,269 @@
+# Prior families, their codes in the C++ core (src/fbc.h) and their checks.
+
+prior_families <- c(
+  uniform = 1L, gaussian = 2L, gamma = 3L, beta = 4L, lognormal = 5L,
+  logistic = 6L, betashift = 7L, exponential = 8L, inversegamma = 9L,
+  jeffreys = 10L, fixed = 11L
+)
+
+# Parameter classes in the order of phi, with the domain of each class and
+# the scale its random walk runs on (0 identity, 1 log, 2 logit of x - 1).
+param_classes <- c("kappa", "thetaS", "alphaS", "thetaB", "alphaB",
+                   "sigma2S", "sigma2B", "sigma2E", "muB")
+class_domain <- c(kappa = "real", thetaS = "positive", alphaS = "unit12",
+                  thetaB = "positive", alphaB = "unit12", sigma2S = "positive",
+                  sigma2B = "positive", sigma2E = "positive", muB = "real")
+class_transform <- c(kappa = 0L, thetaS = 1L, alphaS = 2L, thetaB = 1L, alphaB = 2L,
+                     sigma2S = 1L, sigma2B = 1L, sigma2E = 1L, muB = 0L)
+
+# Support of a family as c(lower, upper).
+family_support <- function(dist, p1, p2) {
+  switch(dist,
+    uniform = c(p1, p2),
+    beta = c(0, 1),
+    betashift = c(1, 2),
+    gamma = , lognormal = , exponential = , inversegamma = , jeffreys = c(0, Inf),
+    c(-Inf, Inf)
+  )
+}
+
+#' Build a log prior density
+#'
+#' Returns a vectorised function giving the log density of a prior family,
+#' `-Inf` outside its support. The density is computed by the same compiled
+#' code the sampler uses.
+#'
+#' | `prior` | `p1` | `p2` |
+#' |---|---|---|
+#' | `"uniform"` | lower bound | upper bound |
+#' | `"gaussian"` | mean | standard deviation |
+#' | `"gamma"` | shape | rate (as in [stats::dgamma()]) |
+#' | `"beta"` | shape1 | shape2 |
+#' | `"lognormal"` | meanlog | sdlog |
+#' | `"logistic"` | location | scale |
+#' | `"betashift"` | shape1 | shape2 (a beta shifted to `[1, 2]`) |
+#' | `"exponential"` | rate | (unused) |
+#' | `"inversegamma"` | shape | scale |
+#' | `"jeffreys"` | (unused) | (unused); density `1/x` on `x > 0`, improper |
+#' | `"fixed"` | (unused) | (unused); log density 0 |
+#'
+#' @param prior Name of the prior family (see the table).
+#' @param p1,p2 Parameters of the family.
+#' @return A function of one numeric vector returning the log densities.
+#' @export
+#' @examples
+#' pr_fun <- prior_builder(prior = "beta", p1 = 2, p2 = 5)
+#' round(exp(pr_fun(c(-1, 0, 0.1, 0.5, 0.9, 1, 2))), 3)
+#'
+#' pr_fun <- prior_builder(prior = "uniform", p1 = -10, p2 = 10)
+#' round(exp(pr_fun(c(-11, -5, 0, 4, 10, 12))), 3)
+prior_builder <- function(prior, p1 = NA, p2 = NA) {
+  check_prior(prior, p1, p2, arg = "prior")
+  code <- prior_families[[prior]]
+  p1 <- as.numeric(p1)
+  p2 <- as.numeric(p2)
+  function(x) .log_prior(as.numeric(x), code, p1, p2)
+}
+
+# Validates a family name and its parameters; `arg` names the argument.
+check_prior <- function(dist, p1, p2, arg, call = parent.frame()) {
+  if (!is.character(dist) || length(dist) != 1L || is.na(dist) ||
+      !dist %in% names(prior_families)) {
+    cli::cli_abort(c(
+      "{.arg {arg}} must be one of {.or {.val {names(prior_families)}}}.",
+      x = "Got {.val {format_value(dist)}}."
+    ), call = call)
+  }
+  bad <- function(what) {
+    cli::cli_abort(c(
+      "Impossible parameters for the {.val {dist}} prior in {.arg {arg}}: {what}.",
+      x = "Got p1 = {format_value(p1)} and p2 = {format_value(p2)}."
+    ), call = call)
+  }
+  num <- function(v) is.numeric(v) && length(v) == 1L && is.finite(v)
+  pos <- function(v) num(v) && v > 0
+  switch(dist,
+    uniform = if (!num(p1) || !num(p2) || p1 >= p2) bad("p1 (lower) must be below p2 (upper), both finite"),
+    gaussian = , lognormal = , logistic =
+      if (!num(p1) || !pos(p2)) bad("p1 must be finite and p2 (the spread) positive"),
+    gamma = , beta = , betashift = , inversegamma =
+      if (!pos(p1) || !pos(p2)) bad("both shape/scale parameters must be positive"),
+    exponential = if (!pos(p1)) bad("p1 (the rate) must be positive")
+  )
+  invisible(TRUE)
+}
+
+# Does the family's support fit inside the parameter class's domain?
+check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
+  domain <- class_domain[[cls]]
+  if (dist == "fixed" || domain == "real") return(invisible(TRUE))
+  s <- family_support(dist, p1, p2)
+  ok <- switch(domain,
+    positive = s[1] >= 0,
+    unit12 = s[1] >= 1 && s[2] <= 2
+  )
+  if (!ok) {
+    allowed <- switch(domain,
+      positive = "gamma, lognormal, exponential, inversegamma, jeffreys, beta, betashift, uniform on [0, upper] or fixed",
+      unit12 = "betashift, uniform within [1, 2] or fixed"
+    )
+    what <- switch(domain, positive = "positive", unit12 = "in [1, 2]")
+    cli::cli_abort(c(
+      "The {.val {dist}} prior in {.arg {arg}} does not fit {.field {cls}}, which must be {what}.",
+      i = "Use {allowed}."
+    ), call = call)
+  }
+  invisible(TRUE)
+}
+
+#' Priors for the hyperparameters
+#'
+#' Sets the prior family (`*Dist`), initial value (`*Init`) and the two family
+#' parameters (`*P1`, `*P2`) for each class of hyperparameter (vignette
+#' Table 1). A scalar applies to every parameter of its class; a vector gives
+#' one value per parameter and must have that length (`p + q` for `thetaS`,
+#' `alphaS`; `p` for `thetaB`, `alphaB`). The families and their parameters
+#' are those of [prior_builder()]; `"fixed"` keeps the parameter at its
+#' initial value and does not sample it. All hyperparameters live on the
+#' scaled space (inputs in `[0, 1]`, responses standardised; see
+#' [calibrate()]).
+#'
+#' Defaults (vignette A.1): correlation scales \eqn{\theta} Gamma(1.1, rate
+#' 0.1); smoothness \eqn{\alpha} Beta(5, 2) shifted to `[1, 2]`; variances
+#' inverse gamma (shape 1.5, scale 1.5); the bias mean \eqn{\mu_b}
+#' Gaussian(0, 1).
+#'
+#' @param thetaSDist,thetaSInit,thetaSP1,thetaSP2 Simulator GP correlation scales.
+#' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in `[1, 2]`.
+#' @param thetaBDist,thetaBInit,thetaBP1,thetaBP2 Bias GP correlation scales.
+#' @param alphaBDist,alphaBInit,alphaBP1,alphaBP2 Bias GP smoothness, in `[1, 2]`.
+#' @param sigma2SDist,sigma2SInit,sigma2SP1,sigma2SP2 Simulator GP marginal variance.
+#' @param sigma2BDist,sigma2BInit,sigma2BP1,sigma2BP2 Bias GP marginal variance.
+#' @param sigma2EDist,sigma2EInit,sigma2EP1,sigma2EP2 Measurement error variance.
+#' @param muBDist,muBInit,muBP1,muBP2 Bias GP mean.
+#' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
+#' @export
+#' @examples
+#' priors <- set_hyperPriors(thetaSDist = "beta", thetaSP1 = 2, thetaSP2 = 6,
+#'                           thetaSInit = 0.5)
+#' priors$thetaS
+set_hyperPriors <- function(
+    thetaSDist = "gamma", thetaSInit = 1, thetaSP1 = 1.1, thetaSP2 = 0.1,
+    alphaSDist = "betashift", alphaSInit = 1.9, alphaSP1 = 5, alphaSP2 = 2,
+    thetaBDist = "gamma", thetaBInit = 1, thetaBP1 = 1.1, thetaBP2 = 0.1,
+    alphaBDist = "betashift", alphaBInit = 1.9, alphaBP1 = 5, alphaBP2 = 2,
+    sigma2SDist = "inversegamma", sigma2SInit = 1, sigma2SP1 = 1.5, sigma2SP2 = 1.5,
+    sigma2BDist = "inversegamma", sigma2BInit = 0.1, sigma2BP1 = 1.5, sigma2BP2 = 1.5,
+    sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 1.5, sigma2EP2 = 1.5,
+    muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1) {
+  env <- environment()
+  out <- list()
+  for (cls in param_classes[-1]) {
+    spec <- list(
+      dist = get(paste0(cls, "Dist"), env), init = get(paste0(cls, "Init"), env),
+      p1 = get(paste0(cls, "P1"), env), p2 = get(paste0(cls, "P2"), env)
+    )
+    check_class_spec(spec, cls, n = NULL, call = env)
+    out[[cls]] <- spec
+  }
+  structure(out, class = "fbc_hypers")
+}
+
+#' @export
+print.fbc_hypers <- function(x, ...) {
+  cat("<fbc hyperparameter priors>\n")
+  for (cls in names(x)) {
+    s <- x[[cls]]
+    cat(sprintf("  %-8s %s(%s, %s), init %s\n", cls, paste(s$dist, collapse = "/"),
+                paste(format(s$p1), collapse = "/"), paste(format(s$p2), collapse = "/"),
+                paste(format(s$init), collapse = "/")))
+  }
+  invisible(x)
+}
+
+# Checks one class's Dist/Init/P1/P2 (each of length 1 or `n` when n is
+# known) and returns them recycled to length n.
+check_class_spec <- function(spec, cls, n, call = parent.frame()) {
+  args <- paste0(cls, c("Dist", "Init", "P1", "P2"))
+  len <- lengths(spec)
+  if (is.null(n)) {
+    n_ <- max(len)
+    if (any(!len %in% c(1L, n_))) {
+      cli::cli_abort(
+        "{.arg {args}} must have length 1 or a common length (got lengths {len}).",
+        call = call
+      )
+    }
+  } else {
+    for (i in seq_along(spec)) spec[[i]] <- check_length(spec[[i]], n, args[i], paste(cls, "parameter"), call = call)
+    n_ <- n
+  }
+  spec <- lapply(spec, rep_len, n_)
+  if (!is.character(spec$dist)) {
+    cli::cli_abort("{.arg {args[1]}} must be a character vector of prior family names.", call = call)
+  }
+  for (v in c("init", "p1", "p2")) {
+    x <- spec[[v]]
+    if (!is.numeric(x) && !all(is.na(x))) {
+      cli::cli_abort("{.arg {args[match(v, c('dist', 'init', 'p1', 'p2'))]}} must be numeric.", call = call)
+    }
+    spec[[v]] <- as.numeric(x)
+  }
+  for (i in seq_len(n_)) {
+    d <- spec$dist[i]
+    check_prior(d, spec$p1[i], spec$p2[i], arg = args[1], call = call)
+    check_support(d, spec$p1[i], spec$p2[i], cls, arg = args[1], call = call)
+    if (cls != "kappa") check_init(spec$init[i], d, spec$p1[i], spec$p2[i], cls, args[2], call)
+  }
+  spec
+}
+
+# An initial value must lie inside the parameter's domain (strictly, when the
+# parameter is sampled on a log or logit scale) and inside its prior support.
+check_init <- function(init, dist, p1, p2, cls, arg, call = parent.frame()) {
+  if (is.na(init)) {
+    if (dist == "fixed") {
+      cli::cli_abort("{.arg {arg}} must be given when the prior is {.val fixed}.", call = call)
+    }
+    return(invisible(TRUE))
+  }
+  domain <- class_domain[[cls]]
+  inside <- switch(domain,
+    real = is.finite(init),
+    positive = is.finite(init) && init > 0,
+    unit12 = if (dist == "fixed") init >= 1 && init <= 2 else init > 1 && init < 2
+  )
+  if (!inside) {
+    what <- switch(domain, real = "finite", positive = "positive",
+                   unit12 = if (dist == "fixed") "in [1, 2]" else "strictly between 1 and 2")
+    cli::cli_abort("{.arg {arg}} must be {what} (got {format_value(init)}).", call = call)
+  }
+  if (dist != "fixed" && !is.finite(.log_prior(init, prior_families[[dist]], p1, p2))) {
+    cli::cli_abort(
+      "{.arg {arg}} = {format_value(init)} lies outside the support of its {.val {dist}} prior.",
+      call = call
+    )
+  }
+  invisible(TRUE)
+}
+
+# Log prior and walk of one parameter: the prior argument is a + b * value
+# (value on the sampler's scale), plus a constant so that logPost is the
+# log density in the units the parameter is reported in.
+prior_row <- function(dist, p1, p2, cls, a = 0, b = 1, lconst = 0) {
+  data.frame(
+    family = prior_families[[dist]], transform = class_transform[[cls]],
+    p1 = if (is.na(p1)) 0 else p1, p2 = if (is.na(p2)) 0 else p2,
+    a = a, b = b, lconst = lconst
+  )
+}
+
+# A value inside the prior's support to start from when no init is given.
+prior_center <- function(dist, p1, p2) {
+  switch(dist,
+    uniform = (p1 + p2) / 2, gaussian = , logistic = p1,
+    gamma = p1 / p2, beta = p1 / (p1 + p2), lognormal = exp(p1),
+    betashift = 1 + p1 / (p1 + p2), exponential = 1 / p1,
+    inversegamma = p2 / (p1 + 1), jeffreys = 1, NA_real_
+  )
+}
