@@ -1,0 +1,4 @@
+library(testthat)
+library(FBC)
+
+test_check("FBC")
