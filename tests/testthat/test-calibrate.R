@@ -142,3 +142,13 @@ test_that("calibrate() explains bad input", {
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, hypers = list()))
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, showProgress = "yes"))
 })
+
+test_that("showProgress = TRUE runs the same chain", {
+  withr_opts <- options(cli.progress_show_after = 0, cli.dynamic = FALSE)
+  on.exit(options(withr_opts))
+  set.seed(12); a <- calibrate(ballSim, ballField, nMCMC = 400, nBurn = 100, thinning = 1)
+  set.seed(12)
+  expect_no_error(b <- suppressMessages(calibrate(ballSim, ballField, nMCMC = 400, nBurn = 100,
+                                                  thinning = 1, showProgress = TRUE)))
+  expect_identical(a$Phi, b$Phi)
+})
