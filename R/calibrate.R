@@ -71,7 +71,7 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 500, thinning = 2)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 800, nBurn = 300, thinning = 1)
 #' fit
 calibrate <- function(sim, field, nMCMC = 6000, nBurn = 1000, thinning = 5,
                       kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
