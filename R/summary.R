@@ -31,7 +31,7 @@ print.summary.fbc <- function(x, digits = 3, ...) {
   num <- vapply(df, is.numeric, logical(1))
   # each number with its own significant digits (a column may span magnitudes)
   df[num] <- lapply(df[num], function(col) {
-    vapply(col, function(v) format(v, digits = digits), character(1))
+    formatC(col, digits = digits, format = "fg", flag = "#")
   })
   print(df, right = TRUE)
   invisible(x)

@@ -61,6 +61,20 @@ test_that("the Bayesian method combines per-draw conditionals by total variance 
   }
 })
 
+test_that("the field mean is the calibrated simulator plus the bias, draw by draw", {
+  # E[eta + delta | y] = E[eta | y] + E[delta | y] for every draw (linearity)
+  set.seed(6)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, thinning = 4)
+  h <- c(0.5, 2.2, 4)
+  sim <- predict(fit, h, type = "simulator", draws = TRUE)$draws
+  bias <- predict(fit, h, type = "bias", draws = TRUE)$draws
+  mean_ <- predict(fit, h, type = "mean", draws = TRUE)
+  expect_equal(mean_$draws, sim + bias, tolerance = 1e-8)
+  field <- predict(fit, h, type = "field")
+  expect_equal(field$pred, mean_$pred, tolerance = 1e-10)
+  expect_true(all(field$se > mean_$se))
+})
+
 test_that("blocks of new points give the same answers as one point at a time", {
   set.seed(3)
   fit <- fixed_fit(random_phi(2, 1))
