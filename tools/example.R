@@ -6,8 +6,8 @@ library(FBC)
 
 set.seed(2024)
 fit <- calibrate(ballSim, ballField)
-print(fit)
-cat("\nPosterior summary:\n")
+cat(sprintf("Calibrated in %.1f s; %d draws kept.\n\nPosterior summary:\n",
+            fit$settings$time, nrow(fit$Phi)))
 print(summary(fit))
 cat("\nCalibrated prediction of the drop time at h = 2.2 and 2.4 m:\n")
 pred <- predict(fit, c(2.2, 2.4))
