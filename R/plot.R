@@ -26,7 +26,7 @@
 #' @importFrom ggplot2 .data
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 500, thinning = 2)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
 #' plot(fit)
 #' plot(fit, "thetaS", type = "trace")
 #' plot(fit, type = "fits", xlab = "height (m)")

@@ -62,7 +62,7 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 500, thinning = 2)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
 #' predict(fit, c(2.2, 2.4))
 #' predict(fit, c(2.2, 2.4), method = "MAP")
 #' predict(fit, c(2.2, 2.4), type = "bias")

@@ -13,7 +13,7 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 500, thinning = 2)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
 #' summary(fit)
 #' coef(fit)
 #' coef(fit, stat = "median")["kappa1"]
