@@ -69,6 +69,8 @@ void Posterior::reject() { phi[oldj_] = old_; }
 // current buffers for everything else; returns the new log-likelihood.
 double Posterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E];
+  // D = sigma2S Ds is positive definite only for sigma2S > 0.
+  if (!(s2S > 0)) return R_NegInf;
   const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
   const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
   const bool simCorr = t.all || t.simDim >= 0;
