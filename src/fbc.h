@@ -32,6 +32,9 @@ double from_walk(int transform, double w);
 // when `lower` and a == b).
 void pow_dist(const arma::vec& a, const arma::vec& b, double alpha,
               arma::mat& out, bool lower);
+// G(i,j) = log|a_i - b_j| and P = exp(alpha G) = |a_i - b_j|^alpha.
+void log_dist(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower);
+void pow_from_log(const arma::mat& G, double alpha, arma::mat& out, bool lower);
 // R(i,j) = exp(-sum_k theta_k P_k(i,j)), written into `out`.
 void corr_from_pows(const std::vector<const arma::mat*>& P,
                     const arma::vec& theta, arma::mat& out, bool lower);
@@ -109,6 +112,8 @@ private:
   double old_;
   int oldj_;
   std::vector<Buf2<arma::mat> > Ps_, Px_, Pfs_, Pfb_;
+  // log-distances per input dimension (fixed): sim-sim, sim-field, field-field
+  std::vector<arma::mat> Gs_, Gx_, Gf_;
   Buf2<arma::mat> Ls_, Rx_, Rkk_, W_, Q_, Rb_, LS_;
   Buf2<arma::vec> z_, c_, wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;

@@ -33,6 +33,16 @@ Posterior::Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
     z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(n);
   }
   u_.zeros(n);
+  Gs_.resize(p + q); Gx_.resize(p); Gf_.resize(p);
+  for (int k = 0; k < p + q; ++k) {
+    Gs_[k].zeros(m, m);
+    log_dist(Xs.col(k), Xs.col(k), Gs_[k], true);
+  }
+  for (int k = 0; k < p; ++k) {
+    Gx_[k].zeros(m, n); Gf_[k].zeros(n, n);
+    log_dist(Xs.col(k), Xf.col(k), Gx_[k], false);
+    log_dist(Xf.col(k), Xf.col(k), Gf_[k], true);
+  }
 }
 
 // Map a parameter index to the blocks it touches.
@@ -88,7 +98,7 @@ double Posterior::evaluate(const Touch& t) {
     std::vector<const arma::mat*> P(p + q);
     for (int k = 0; k < p + q; ++k) {
       const bool redo = t.all || (t.simAlpha && t.simDim == k);
-      if (redo) pow_dist(Xs_.col(k), Xs_.col(k), alphaS[k], Ps_[k].alt(), true);
+      if (redo) pow_from_log(Gs_[k], alphaS[k], Ps_[k].alt(), true);
       P[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
     }
     arma::mat& L = Ls_.alt();
@@ -111,8 +121,8 @@ double Posterior::evaluate(const Touch& t) {
     for (int k = 0; k < p; ++k) {
       const bool redo = t.all || (t.simAlpha && t.simDim == k);
       if (redo) {
-        pow_dist(Xs_.col(k), Xf_.col(k), alphaS[k], Px_[k].alt(), false);
-        pow_dist(Xf_.col(k), Xf_.col(k), alphaS[k], Pfs_[k].alt(), true);
+        pow_from_log(Gx_[k], alphaS[k], Px_[k].alt(), false);
+        pow_from_log(Gf_[k], alphaS[k], Pfs_[k].alt(), true);
       }
       Px[k] = redo ? &Px_[k].alt() : &Px_[k].cur();
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
@@ -164,7 +174,7 @@ double Posterior::evaluate(const Touch& t) {
     std::vector<const arma::mat*> P(p);
     for (int k = 0; k < p; ++k) {
       const bool redo = t.all || (t.biasAlpha && t.biasDim == k);
-      if (redo) pow_dist(Xf_.col(k), Xf_.col(k), alphaB[k], Pfb_[k].alt(), true);
+      if (redo) pow_from_log(Gf_[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     corr_from_pows(P, thetaB, Rb_.alt(), true);
