@@ -58,6 +58,13 @@ test_that("the cached one-move path equals the dense log-likelihood at every row
     expect_equal(path, dense, tolerance = 1e-8)
     # returning to the start reproduces the from-scratch value
     expect_equal(path[nrow(phis)], path[1], tolerance = 1e-10)
+    # the same with a rejected decoy proposal before every move, and with
+    # thetaS/alphaS moved jointly (the sampler's blockSim move)
+    decoy <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE)
+    expect_equal(decoy, dense, tolerance = 1e-8)
+    block <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, blockSim = TRUE,
+                          decoys = TRUE)
+    expect_equal(block, dense, tolerance = 1e-8)
   }
 })
 
@@ -75,6 +82,19 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
                      60L, 20L, 4L, TRUE, 0L, 1e-6, NULL)
   acc <- res$acceptance[!is.na(res$acceptance)]
   expect_true(all(acc > 0 & acc < 1))  # both branches were taken
+  dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+  expect_equal(res$logLik, dense, tolerance = 1e-8)
+
+  # the joint thetaS/alphaS move: the block shares one acceptance rate and
+  # its adapted proposal factor is returned
+  set.seed(4)
+  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), sp$init, sp$logsd,
+                     260L, 200L, 4L, TRUE, 0L, 1e-6, NULL, blockSim = TRUE)
+  sim <- unname(unlist(FBC:::param_indices(p, q)[c("thetaS", "alphaS")]))
+  expect_identical(res$block$index, sim)
+  expect_length(unique(res$acceptance[sim]), 1)
+  expect_true(res$acceptance[sim[1]] > 0 && res$acceptance[sim[1]] < 1)
+  expect_equal(dim(res$block$chol), c(length(sim), length(sim)))
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
   expect_equal(res$logLik, dense, tolerance = 1e-8)
 })
@@ -121,4 +141,6 @@ test_that("a covariance that is not positive definite gives -Inf, not a crash", 
   expect_true(all(is.finite(res$logLik)))
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
   expect_equal(res$logLik, dense, tolerance = 1e-8)
+  sigma2E <- FBC:::param_indices(p, q)$sigma2E
+  expect_lt(res$acceptance[sigma2E], 0.6)  # the negative proposals were rejected
 })
