@@ -128,6 +128,8 @@ private:
   std::vector<Buf2<arma::mat> > Ps_, Px_, Pfs_, Pfb_;
   // log-distances per input dimension (fixed): sim-sim, sim-field, field-field
   std::vector<arma::mat> Gs_, Gx_, Gf_;
+  // preallocated lists of the power matrices evaluate() combines
+  std::vector<const arma::mat*> ptrS_, ptrX_, ptrF_, ptrB_;
   Buf2<arma::mat> Ls_, Rx_, Rkk_, W_, Q_, Rb_, LS_;
   Buf2<arma::vec> z_, c_, wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;

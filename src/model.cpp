@@ -33,6 +33,7 @@ Posterior::Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
     z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(n);
   }
   u_.zeros(n);
+  ptrS_.resize(p + q); ptrX_.resize(p); ptrF_.resize(p); ptrB_.resize(p);
   Gs_.resize(p + q); Gx_.resize(p); Gf_.resize(p);
   for (int k = 0; k < p + q; ++k) {
     Gs_[k].zeros(m, m);
@@ -103,7 +104,7 @@ double Posterior::evaluate(const Touch& t) {
   const arma::vec* z = &z_.cur();
   double ldDs = ldDs_.cur(), zz = zz_.cur();
   if (simCorr) {
-    std::vector<const arma::mat*> P(p + q);
+    std::vector<const arma::mat*>& P = ptrS_;
     for (int k = 0; k < p + q; ++k) {
       const bool redo = t.simPow(k);
       if (redo) pow_from_log(Gs_[k], alphaS[k], Ps_[k].alt(), true);
@@ -125,7 +126,8 @@ double Posterior::evaluate(const Touch& t) {
   const arma::mat* Rx = &Rx_.cur();
   const arma::mat* Rkk = &Rkk_.cur();
   if (expDim) {
-    std::vector<const arma::mat*> Px(p), Pf(p);
+    std::vector<const arma::mat*>& Px = ptrX_;
+    std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.simPow(k);
       if (redo) {
@@ -179,7 +181,7 @@ double Posterior::evaluate(const Touch& t) {
   if (biasCorr) {
     const arma::vec thetaB = phi.subvec(iThetaB, iAlphaB - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
-    std::vector<const arma::mat*> P(p);
+    std::vector<const arma::mat*>& P = ptrB_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.biasPow(k);
       if (redo) pow_from_log(Gf_[k], alphaB[k], Pfb_[k].alt(), true);
