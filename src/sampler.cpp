@@ -115,7 +115,10 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
           if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ll + lpDiff + jac) {
             post.accept();
             ll = llNew;
-            for (int i = 0; i < nb; ++i) { lp[blk[i]] = bLp[i]; bW[i] = bNew[i]; }
+            for (int i = 0; i < nb; ++i) {
+              lp[blk[i]] = bLp[i]; bW[i] = bNew[i];
+              accBatch[blk[i]] += 1;  // shown by the progress bar only
+            }
             bAccBatch += 1;
             if (it > nBurn) bAccKept += 1;
           } else {
@@ -154,7 +157,9 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
       ++batch;
       if (adapt && it <= nBurn) {
         const double delta = 1.0 / std::sqrt((double) batch);
-        for (int j : free) logsd[j] += (accBatch[j] / BATCH > 0.44) ? delta : -delta;
+        for (int j : free)  // (the block's coordinates keep their single-site SDs)
+          if (nb == 0 || j < post.iThetaS || j >= post.iThetaB)
+            logsd[j] += (accBatch[j] / BATCH > 0.44) ? delta : -delta;
         if (nb > 0) {
           ++bBatch;
           bScale += (bAccBatch / BATCH > 0.234 ? 1 : -1) * std::min(0.5, 1.0 / std::sqrt((double) bBatch));

@@ -24,9 +24,9 @@ args <- commandArgs(trailingOnly = TRUE)
 quick <- length(args) > 0 && args[1] == "quick"
 
 # ---- helpers -------------------------------------------------------------
-peak_mb <- function() {
+peak_mb <- function(field = "VmHWM") {
   s <- tryCatch(readLines("/proc/self/status"), error = function(e) character())
-  v <- grep("^VmHWM", s, value = TRUE)
+  v <- grep(paste0("^", field), s, value = TRUE)
   if (length(v)) as.numeric(gsub("[^0-9]", "", v)) / 1024 else NA_real_
 }
 reset_peak <- function() {
@@ -152,6 +152,8 @@ cases <- list(
        chunks = if (quick) 1 else 2)
 )
 has_block <- "blockSim" %in% names(formals(FBC:::.fbc_sample))
+invisible(gc())
+baseline_mb <- peak_mb("VmRSS")
 t_start <- proc.time()[[3]]
 rows <- list()
 for (cs in cases) {
@@ -175,6 +177,8 @@ cat("ms/sweep: CPU ms per sweep of frozen-proposal runs after calibrate()'s adap
     "floor = 2(p+q) t_chol(n+m) + (d-1-2(p+q)) t_chol(n), t_chol = CPU ms of R's chol()\n",
     "measured between the chunks; ratio = median over chunks of ms/sweep / floor.\n",
     "ESS/s kappa: posterior::ess_bulk of each kappa / CPU s (m = 1000: too few sweeps).\n",
-    "blocked = .fbc_sample(blockSim = TRUE): joint thetaS/alphaS move, same floor.\n\n", sep = "")
+    "blocked = .fbc_sample(blockSim = TRUE): joint thetaS/alphaS move, same floor.\n",
+    sprintf("peak MB: VmHWM of the R process during the case (R + FBC alone: %.0f MB).\n\n",
+            baseline_mb), sep = "")
 print(tab, row.names = FALSE)
 cat(sprintf("\nTotal benchmark time: %.0f s (wall)\n", proc.time()[[3]] - t_start))

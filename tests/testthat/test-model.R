@@ -95,6 +95,7 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
   expect_length(unique(res$acceptance[sim]), 1)
   expect_true(res$acceptance[sim[1]] > 0 && res$acceptance[sim[1]] < 1)
   expect_equal(dim(res$block$chol), c(length(sim), length(sim)))
+  expect_identical(res$logsd[sim], sp$logsd[sim])  # single-site SDs left alone
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
   expect_equal(res$logLik, dense, tolerance = 1e-8)
 })
