@@ -119,7 +119,9 @@ check_chain_results <- function(results, nMCMC, call = parent.frame()) {
       )
     }
     n <- length(results)
-    msg <- c("Interrupted: chain{?s} {which(interrupted)} stopped after {done[interrupted]} of {nMCMC} iterations.")
+    ids <- which(interrupted)
+    its <- done[interrupted]
+    msg <- c("Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} iterations.")
     if (n > 1L) {
       msg <- c(msg, i = "Keeping {sum(kept > 0L)} of {n} chain{?s} with {sum(kept)} retained draw{?s}; chains that had not started or kept no draw are dropped.")
     } else {

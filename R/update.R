@@ -52,9 +52,10 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
   }
   interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))
   if (any(interrupted)) {
-    done <- vapply(results, function(r) as.integer(r$done), integer(1))
+    ids <- which(interrupted)
+    its <- vapply(results, function(r) as.integer(r$done), integer(1))[interrupted]
     cli::cli_warn(c(
-      "Interrupted: chain{?s} {which(interrupted)} stopped after {done[interrupted]} of {nMCMC} further iterations.",
+      "Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} further iterations.",
       i = "Returning all draws retained so far; continue with {.code update(fit, nMCMC = ...)}."
     ))
   }
