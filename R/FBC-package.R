@@ -8,4 +8,5 @@
 #' @keywords internal
 #' @useDynLib FBC, .registration = TRUE
 #' @importFrom Rcpp sourceCpp
+#' @importFrom cli cli_abort cli_warn
 "_PACKAGE"

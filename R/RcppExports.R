@@ -2,22 +2,26 @@
 # Generator token: 10BE3573-1514-4C36-9D1C-5A225CD40393
 
 .log_prior <- function(x, family, p1, p2) {
-    .Call('_FBC_log_prior_vec', PACKAGE = 'FBC', x, family, p1, p2)
+    .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
 }
 
 .corr_matrix <- function(X, Y, theta, alpha) {
-    .Call('_FBC_corr_matrix_r', PACKAGE = 'FBC', X, Y, theta, alpha)
+    .Call(`_FBC_corr_matrix_r`, X, Y, theta, alpha)
 }
 
 .loglik_path <- function(Xf, yf, Xs, ys, phis, nugget) {
-    .Call('_FBC_loglik_path', PACKAGE = 'FBC', Xf, yf, Xs, ys, phis, nugget)
+    .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget)
+}
+
+.fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block) {
+    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block)
 }
 
 .fbc_sample <- function(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress) {
-    .Call('_FBC_fbc_sample', PACKAGE = 'FBC', Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress)
+    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress)
 }
 
 .fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget) {
-    .Call('_FBC_fbc_loglik', PACKAGE = 'FBC', Xf, yf, Xs, ys, phi, nugget)
+    .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget)
 }
 

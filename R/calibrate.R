@@ -114,7 +114,7 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 300, nChains = 2)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 800, nBurn = 300, nChains = 2)
 #' fit
 #' \donttest{
 #' # the defaults: 4 chains, R-hat and ESS checked (about 40 s, or in

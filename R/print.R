@@ -1,7 +1,8 @@
 #' Print a calibration
 #'
-#' Shows the data sizes, the MCMC settings, the acceptance rates and the
-#' posterior summary of every parameter.
+#' Shows a compact header (data sizes, the names of the calibration inputs,
+#' the MCMC settings and the range of the acceptance rates) and the posterior
+#' summary of every parameter ([summary.fbc()]).
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param digits Significant digits for the table.
@@ -10,16 +11,27 @@
 #' @export
 print.fbc <- function(x, digits = 3, ...) {
   s <- x$settings
+  sc <- x$scale
   cat("<fbc> Full Bayesian calibration (Kennedy-O'Hagan)\n")
   cat(sprintf("  data: n = %d field, m = %d simulator runs; p = %d, q = %d\n",
-              length(x$data$yf), length(x$data$ys), x$scale$p, x$scale$q))
-  cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws (%.1f s)\n",
-              s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi), s$time))
+              length(x$data$yf), length(x$data$ys), sc$p, sc$q))
+  cal <- sc$names$calibration
+  if (length(cal) == sc$q) {
+    cat(sprintf("  calibration: %s\n",
+                paste0("kappa", seq_len(sc$q), " = ", cal, collapse = ", ")))
+  }
+  chains <- if (is.null(x$chain)) 1L else length(unique(x$chain))
+  cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
+              s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),
+              if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
   acc <- x$acceptance[!is.na(x$acceptance)]
   if (length(acc)) {
     cat(sprintf("  acceptance: %.2f to %.2f (target 0.44)\n", min(acc), max(acc)))
   }
+  if (isTRUE(x$state$interrupted)) {
+    cat(sprintf("  interrupted after %d iterations\n", x$state$done))
+  }
   cat("\n")
-  print(format(x$estimates, digits = digits), quote = FALSE)
+  print(summary(x), digits = digits)
   invisible(x)
 }

@@ -55,6 +55,25 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// fbc_predict
+Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block);
+RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xnew(XnewSEXP);
+    Rcpp::traits::input_parameter< int >::type type(typeSEXP);
+    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
+    Rcpp::traits::input_parameter< int >::type block(blockSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block));
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_sample
 Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress);
 RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP) {
@@ -100,6 +119,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 4},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 6},
+    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 9},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 14},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 6},
     {NULL, NULL, 0}

@@ -92,7 +92,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
         const double delta = 1.0 / std::sqrt((double) batch);
         for (int j : free) logsd[j] += (accBatch[j] / BATCH > 0.44) ? delta : -delta;
       }
-      if (!Rf_isNull(bar)) {
+      if (!Rf_isNull(bar) && user_interrupted()) interrupted = true;
+      if (!Rf_isNull(bar) && !interrupted) {
         double lo = 1, mean = 0;
         for (int j : free) { lo = std::min(lo, accBatch[j] / BATCH); mean += accBatch[j] / BATCH; }
         if (!free.empty()) mean /= free.size();
@@ -110,8 +111,15 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
       ++kept;
     }
     done = it;
-    if (!Rf_isNull(bar) && CLI_SHOULD_TICK) cli_progress_set(bar, it);
-    if (it % 100 == 0 && user_interrupted()) { interrupted = true; break; }
+    // Poll Ctrl-C every 100 iterations, and before every progress update:
+    // cli's update runs R code, which would otherwise take the interrupt
+    // and unwind through this loop, losing the draws.
+    const bool tick = !Rf_isNull(bar) && CLI_SHOULD_TICK;
+    if (interrupted || ((it % 100 == 0 || tick) && user_interrupted())) {
+      interrupted = true;
+      break;
+    }
+    if (tick) cli_progress_set(bar, it);
   }
   if (!Rf_isNull(bar)) { cli_progress_done(bar); UNPROTECT(1); }
 

@@ -26,5 +26,5 @@ if (length(missing)) {
 }
 # Install FBC from this checkout (--preclean: never link stale objects).
 status <- system2(file.path(R.home("bin"), "R"),
-                  c("CMD", "INSTALL", "--preclean", "--no-multiarch", "--quiet", "."))
+                  c("CMD", "INSTALL", "--preclean", "--no-multiarch", "."))
 if (status != 0) stop("R CMD INSTALL of FBC failed")

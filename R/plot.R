@@ -1,0 +1,145 @@
+#' Plot a calibration
+#'
+#' Draws, with ggplot2, one of three views of a calibration:
+#' * `"density"`: the posterior density of every parameter of a class (one
+#'   facet each), estimated from the retained draws, with the prior density
+#'   in the same units overlaid (dashed) and the posterior mode as a vertical
+#'   line;
+#' * `"trace"`: the retained draws of every parameter of a class against the
+#'   iteration, to judge mixing;
+#' * `"fits"`: the field observations, the MAP fitted values
+#'   ([predict.fbc()] with `method = "MAP"` at the field inputs) and their
+#'   95% prediction intervals against each experimental input (one facet
+#'   each). `parameter` is ignored.
+#'
+#' @param x An `fbc` object from [calibrate()].
+#' @param parameter The parameter class: one of `"kappa"`, `"thetaS"`,
+#'   `"alphaS"`, `"thetaB"`, `"alphaB"`, `"sigma2S"`, `"sigma2B"`,
+#'   `"sigma2E"`, `"muB"`.
+#' @param type `"density"`, `"trace"` or `"fits"`.
+#' @param xlab For `"fits"`, the names of the experimental inputs (one per
+#'   input; default the column names of the field data, else `x1`, ..., `xp`).
+#'   For the other types, the x-axis title.
+#' @param ... Unused.
+#' @return A ggplot object; print it to draw it, or add layers and themes.
+#' @export
+#' @importFrom ggplot2 .data
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' plot(fit)
+#' plot(fit, "thetaS", type = "trace")
+#' plot(fit, type = "fits", xlab = "height (m)")
+plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...) {
+  type <- match_choice(type, c("density", "trace", "fits"), "type")
+  if (type == "fits") return(plot_fits(x, xlab))
+  if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
+    cli::cli_abort(c(
+      "{.arg parameter} must be one parameter class: {.or {.val {param_classes}}}.",
+      x = "Got {.val {format_value(parameter)}}."
+    ))
+  }
+  if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
+  vars <- colnames(x$Phi)[x$indices[[parameter]]]
+  labels <- param_labels(x, vars)
+  if (type == "density") plot_density(x, vars, labels, xlab) else plot_trace(x, vars, labels, xlab)
+}
+
+# Facet labels: kappa1 (g) for calibration parameters, the name otherwise.
+param_labels <- function(x, vars) {
+  cal <- x$scale$names$calibration
+  out <- vars
+  k <- grepl("^kappa[0-9]+$", vars)
+  if (any(k) && length(cal) == x$scale$q) {
+    out[k] <- paste0(vars[k], " (", cal[as.integer(sub("kappa", "", vars[k]))], ")")
+  }
+  stats::setNames(out, vars)
+}
+
+plot_density <- function(x, vars, labels, xlab) {
+  post <- list()
+  prior <- list()
+  for (v in vars) {
+    draws <- x$Phi[, v]
+    r <- range(draws)
+    if (r[1] == r[2]) {  # a fixed parameter: no density, the mode line only
+      grid <- r[1] + c(-1, 1) * max(abs(r[1]) * 0.1, 0.1)
+      post[[v]] <- data.frame(parameter = labels[[v]], value = numeric(0), density = numeric(0))
+    } else {
+      d <- stats::density(draws, n = 256)
+      grid <- d$x
+      post[[v]] <- data.frame(parameter = labels[[v]], value = d$x, density = d$y)
+    }
+    grid <- seq(grid[1], grid[length(grid)], length.out = 256)
+    dens <- exp(x$priorFns[[v]](grid))
+    prior[[v]] <- data.frame(parameter = labels[[v]], value = grid, density = dens)
+  }
+  post <- do.call(rbind, post)
+  prior <- do.call(rbind, prior)
+  prior <- prior[is.finite(prior$density), , drop = FALSE]
+  modes <- data.frame(parameter = unname(labels[vars]), mode = x$estimates[vars, "mode"])
+  lev <- unname(labels[vars])
+  post$parameter <- factor(post$parameter, lev)
+  prior$parameter <- factor(prior$parameter, lev)
+  modes$parameter <- factor(modes$parameter, lev)
+  ggplot2::ggplot(mapping = ggplot2::aes(x = .data$value, y = .data$density)) +
+    ggplot2::geom_area(data = post, stat = "identity", fill = "steelblue", alpha = 0.35, colour = "steelblue") +
+    ggplot2::geom_line(data = prior, linetype = "dashed", colour = "grey30") +
+    ggplot2::geom_vline(data = modes, mapping = ggplot2::aes(xintercept = .data$mode),
+                        colour = "firebrick") +
+    ggplot2::facet_wrap(ggplot2::vars(.data$parameter), scales = "free") +
+    ggplot2::labs(x = xlab %||% "value", y = "density",
+                  title = "Posterior (shaded), prior (dashed) and posterior mode") +
+    ggplot2::theme_bw()
+}
+
+plot_trace <- function(x, vars, labels, xlab) {
+  nd <- nrow(x$Phi)
+  chain <- if (is.null(x$chain)) rep(1L, nd) else x$chain
+  iter <- stats::ave(seq_len(nd), chain, FUN = seq_along)
+  df <- do.call(rbind, lapply(vars, function(v) {
+    data.frame(parameter = labels[[v]], draw = iter, value = unname(x$Phi[, v]),
+               chain = factor(chain))
+  }))
+  df$parameter <- factor(df$parameter, unname(labels[vars]))
+  p <- ggplot2::ggplot(df, ggplot2::aes(x = .data$draw, y = .data$value, group = .data$chain))
+  p <- if (length(unique(chain)) > 1L) {
+    p + ggplot2::geom_line(ggplot2::aes(colour = .data$chain), linewidth = 0.3)
+  } else {
+    p + ggplot2::geom_line(colour = "steelblue", linewidth = 0.3)
+  }
+  p + ggplot2::facet_wrap(ggplot2::vars(.data$parameter), scales = "free_y", ncol = 1) +
+    ggplot2::labs(x = xlab %||% "retained draw", y = "value", title = "Trace of the retained draws") +
+    ggplot2::theme_bw()
+}
+
+plot_fits <- function(x, xlab) {
+  sc <- x$scale
+  p <- sc$p
+  if (is.null(xlab)) {
+    xlab <- sc$names$inputs
+    if (length(xlab) != p) xlab <- paste0("x", seq_len(p))
+  } else if (!is.character(xlab) || length(xlab) != p || anyNA(xlab)) {
+    cli::cli_abort(
+      "{.arg xlab} must be a character vector with one name per experimental input ({p}); got {.obj_type_friendly {xlab}} of length {length(xlab)}."
+    )
+  }
+  X <- sweep(sweep(x$data$Xf, 2, sc$xmax[seq_len(p)] - sc$xmin[seq_len(p)], "*"),
+             2, sc$xmin[seq_len(p)], "+")
+  y <- sc$ymean + sc$ysd * x$data$yf
+  fits <- stats::predict(x, X, method = "MAP", type = "field", level = 0.95)
+  df <- do.call(rbind, lapply(seq_len(p), function(k) {
+    data.frame(input = xlab[k], x = X[, k], observed = y, fitted = fits$pred,
+               lower = fits$lower, upper = fits$upper)
+  }))
+  df$input <- factor(df$input, unique(xlab))
+  ggplot2::ggplot(df, ggplot2::aes(x = .data$x)) +
+    ggplot2::geom_linerange(ggplot2::aes(ymin = .data$lower, ymax = .data$upper),
+                            colour = "steelblue", alpha = 0.6) +
+    ggplot2::geom_point(ggplot2::aes(y = .data$fitted), colour = "steelblue", shape = 17) +
+    ggplot2::geom_point(ggplot2::aes(y = .data$observed), colour = "firebrick") +
+    ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") +
+    ggplot2::labs(x = if (p == 1L) xlab else NULL, y = sc$names$response %||% "response",
+                  title = "Field data (red) and MAP fits with 95% intervals (blue)") +
+    ggplot2::theme_bw()
+}

@@ -1,0 +1,40 @@
+# Plain-R GP conditional of a prediction target given y = (yf, ys), built from
+# the dense joint covariance (helper-dense.R) with one explicit solve per
+# target: mean = mu* + k' C^-1 (y - mu), var = v* - k' C^-1 k (scaled space).
+dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6) {
+  p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
+  th <- unpack_phi(phi, p, q)
+  C <- dense_cov(Xf, Xs, phi, nugget)
+  r <- c(yf - th$muB, ys)
+  Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
+  Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
+  ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS)
+  kbias <- rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB),
+                 matrix(0, m, nrow(Xnew)))
+  k <- switch(type, field = , mean = ksim + kbias, simulator = ksim, bias = kbias)
+  mu0 <- if (type == "simulator") 0 else th$muB
+  v0 <- switch(type, field = th$sigma2S + th$sigma2B + th$sigma2E,
+               mean = th$sigma2S + th$sigma2B, simulator = th$sigma2S, bias = th$sigma2B)
+  list(mean = drop(mu0 + crossprod(k, solve(C, r))),
+       var = v0 - colSums(k * solve(C, k)))
+}
+
+# A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
+# at `phi` (sampler scale), so each retained draw equals phi.
+fixed_fit <- function(phi, seed = 11) {
+  d <- random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed)
+  # native units: inputs stretched, response shifted/scaled
+  sim <- cbind(y = 3 + 2 * d$ys, x1 = 10 * d$Xs[, 1], x2 = d$Xs[, 2] - 5, t = 4 * d$Xs[, 3])
+  field <- cbind(y = 3 + 2 * d$yf, x1 = 10 * d$Xf[, 1], x2 = d$Xf[, 2] - 5)
+  sc <- FBC:::fbc_scale(sim, 2)
+  th <- unpack_phi(phi, 2, 1)
+  kap <- sc$xmin[3] + th$kappa * (sc$xmax[3] - sc$xmin[3])
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = th$thetaS, alphaSDist = "fixed", alphaSInit = th$alphaS,
+    thetaBDist = "fixed", thetaBInit = th$thetaB, alphaBDist = "fixed", alphaBInit = th$alphaB,
+    sigma2SDist = "fixed", sigma2SInit = th$sigma2S, sigma2BDist = "fixed",
+    sigma2BInit = th$sigma2B, sigma2EDist = "fixed", sigma2EInit = th$sigma2E,
+    muBDist = "fixed", muBInit = th$muB)
+  calibrate(sim, field, nMCMC = 6, nBurn = 2, thinning = 2, kappaDist = "fixed",
+            kappaInit = kap, hypers = hyp)
+}

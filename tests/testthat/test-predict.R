@@ -1,0 +1,124 @@
+# References: dense_predict() (helper-predict.R) is the GP conditional written
+# with the dense joint covariance of helper-dense.R and base R's solve(); the
+# Bayesian combination is the law of total variance written out in plain R.
+
+scaled_new <- function(X, sc) sweep(sweep(X, 2, sc$xmin[1:2]), 2, sc$xmax[1:2] - sc$xmin[1:2], "/")
+Xnew <- matrix(c(1, 5, 9, 2, 11, -4.5, -4.9, -4.1, -4.6, -4.2), 5)
+
+test_that("with every parameter fixed, predict() is the dense GP conditional (all types, both methods)", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi)
+  sc <- fit$scale
+  expect_true(all(apply(fit$Phi, 2, stats::var) == 0))
+  for (type in c("field", "mean", "simulator", "bias")) {
+    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+                         scaled_new(Xnew, sc), type)
+    shift <- if (type == "bias") 0 else sc$ymean
+    for (method in c("Bayesian", "MAP")) {
+      pr <- predict(fit, Xnew, method = method, type = type)
+      expect_equal(pr$pred, shift + sc$ysd * ref$mean, tolerance = 1e-8)
+      expect_equal(pr$se, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+      # one Gaussian: the mixture quantiles are the Gaussian ones
+      expect_equal(pr$lower, pr$pred - qnorm(0.975) * pr$se, tolerance = 1e-8)
+      expect_equal(pr$upper, pr$pred + qnorm(0.975) * pr$se, tolerance = 1e-8)
+    }
+  }
+})
+
+test_that("the Bayesian method combines per-draw conditionals by total variance and mixture quantiles", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi)
+  sc <- fit$scale
+  # replace the draws by 4 different parameter vectors (kappa in native units)
+  set.seed(8)
+  phis <- rbind(phi, t(replicate(3, random_phi(2, 1))))
+  Phi <- phis
+  Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
+  colnames(Phi) <- colnames(fit$Phi)
+  fit$Phi <- Phi
+  fit$logPost <- c(-3, -1, -7, -2)
+  Xn <- scaled_new(Xnew, sc)
+  for (type in c("field", "bias")) {
+    shift <- if (type == "bias") 0 else sc$ymean
+    refs <- lapply(seq_len(4), function(i) {
+      dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phis[i, ], Xn, type)
+    })
+    m <- shift + sc$ysd * sapply(refs, `[[`, "mean")
+    s <- sc$ysd * sqrt(sapply(refs, `[[`, "var"))
+    pr <- predict(fit, Xnew, type = type, draws = TRUE, level = 0.9)
+    expect_equal(pr$draws, m, tolerance = 1e-8, ignore_attr = TRUE)
+    expect_equal(pr$pred, rowMeans(m), tolerance = 1e-8)
+    expect_equal(pr$se, sqrt(rowMeans(s^2) + apply(m, 1, var)), tolerance = 1e-8)
+    # the bounds solve mean_i Phi((y - m_i) / s_i) = 0.05, 0.95
+    expect_equal(rowMeans(pnorm((pr$lower - m) / s)), rep(0.05, 5), tolerance = 1e-7)
+    expect_equal(rowMeans(pnorm((pr$upper - m) / s)), rep(0.95, 5), tolerance = 1e-7)
+    # MAP: the draw with the highest log posterior (the second)
+    pm <- predict(fit, Xnew, type = type, method = "MAP")
+    expect_equal(pm$pred, m[, 2], tolerance = 1e-8)
+    expect_equal(pm$se, s[, 2], tolerance = 1e-8)
+  }
+})
+
+test_that("the field mean is the calibrated simulator plus the bias, draw by draw", {
+  # E[eta + delta | y] = E[eta | y] + E[delta | y] for every draw (linearity)
+  set.seed(6)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, thinning = 4)
+  h <- c(0.5, 2.2, 4)
+  sim <- predict(fit, h, type = "simulator", draws = TRUE)$draws
+  bias <- predict(fit, h, type = "bias", draws = TRUE)$draws
+  mean_ <- predict(fit, h, type = "mean", draws = TRUE)
+  expect_equal(mean_$draws, sim + bias, tolerance = 1e-8)
+  field <- predict(fit, h, type = "field")
+  expect_equal(field$pred, mean_$pred, tolerance = 1e-10)
+  expect_true(all(field$se > mean_$se))
+})
+
+test_that("blocks of new points give the same answers as one point at a time", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  set.seed(4)
+  big <- cbind(runif(1203, 0, 10), runif(1203, -5, -4))
+  all <- predict(fit, big, method = "MAP")
+  some <- c(1, 500, 501, 1001, 1203)
+  each <- sapply(some, function(i) predict(fit, big[i, , drop = FALSE], method = "MAP")$pred)
+  expect_equal(all$pred[some], each, tolerance = 1e-12)
+  expect_length(all$se, 1203)
+})
+
+test_that("newdata may be a data frame, or a vector when p = 1", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_equal(predict(fit, as.data.frame(Xnew))$pred, predict(fit, Xnew)$pred)
+  set.seed(2)
+  fit1 <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 20, thinning = 10)
+  expect_equal(predict(fit1, c(1, 2))$pred, predict(fit1, matrix(c(1, 2)))$pred)
+})
+
+test_that("bad arguments give clear errors", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_snapshot(error = TRUE, {
+    predict(fit, c(1, 2))
+    predict(fit, matrix(1:3, 1))
+    predict(fit, matrix(c(1, NA), 1))
+    predict(fit, data.frame(a = 1, b = "x"))
+    predict(fit, "a")
+    predict(fit, Xnew, method = "mode")
+    predict(fit, Xnew, type = "noise")
+    predict(fit, Xnew, level = 1)
+    predict(fit, Xnew, draws = NA)
+  })
+})
+
+test_that("ball data: predictions at h = 2.2, 2.4 match the reference (vignette 1.4)", {
+  set.seed(42)
+  fit <- calibrate(ballSim, ballField, nMCMC = 2500, nBurn = 500, thinning = 4)
+  for (method in c("Bayesian", "MAP")) {
+    pr <- predict(fit, c(2.2, 2.4), method = method)
+    expect_equal(pr$pred, c(0.69, 0.73), tolerance = 0.04 / 0.7)
+    expect_true(all(pr$se > 0.02 & pr$se < 0.12))
+    expect_true(all(pr$lower < pr$pred & pr$pred < pr$upper))
+  }
+})
