@@ -40,8 +40,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // loglik_path
-Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget);
-RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP) {
+Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, bool blockSim, bool decoys);
+RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP blockSimSEXP, SEXP decoysSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -51,7 +51,9 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
-    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget));
+    Rcpp::traits::input_parameter< bool >::type blockSim(blockSimSEXP);
+    Rcpp::traits::input_parameter< bool >::type decoys(decoysSEXP);
+    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, blockSim, decoys));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -75,8 +77,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_sample
-Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress);
-RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP) {
+Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress, bool blockSim);
+RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP blockSimSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -94,7 +96,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type batchStart(batchStartSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< SEXP >::type progress(progressSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress));
+    Rcpp::traits::input_parameter< bool >::type blockSim(blockSimSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -118,9 +121,9 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 4},
-    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 6},
+    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 8},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 9},
-    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 14},
+    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 15},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 6},
     {NULL, NULL, 0}
 };

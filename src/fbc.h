@@ -32,6 +32,9 @@ double from_walk(int transform, double w);
 // when `lower` and a == b).
 void pow_dist(const arma::vec& a, const arma::vec& b, double alpha,
               arma::mat& out, bool lower);
+// G(i,j) = log|a_i - b_j| and P = exp(alpha G) = |a_i - b_j|^alpha.
+void log_dist(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower);
+void pow_from_log(const arma::mat& G, double alpha, arma::mat& out, bool lower);
 // R(i,j) = exp(-sum_k theta_k P_k(i,j)), written into `out`.
 void corr_from_pows(const std::vector<const arma::mat*>& P,
                     const arma::vec& theta, arma::mat& out, bool lower);
@@ -64,12 +67,22 @@ template <class T> struct Buf2 {
 // Which cached blocks a move touches (see Posterior::evaluate).
 struct Touch {
   bool all = false;       // recompute everything (initialisation)
+  bool simAll = false;    // every thetaS/alphaS moved at once (block move)
   int simDim = -1;        // thetaS/alphaS dimension moved
   bool simAlpha = false;  //   ... and it was alphaS
   bool kappa = false;     // a calibration parameter moved
   int biasDim = -1;       // thetaB/alphaB dimension moved
   bool biasAlpha = false; //   ... and it was alphaB
   bool field = false;     // sigma2S, sigma2B or sigma2E moved
+  // Derived: which caches are recomputed (p = number of experimental inputs).
+  bool simPow(int k) const { return all || simAll || (simAlpha && simDim == k); }
+  bool biasPow(int k) const { return all || (biasAlpha && biasDim == k); }
+  bool simCorr() const { return all || simAll || simDim >= 0; }
+  bool expDim(int p) const { return all || simAll || (simDim >= 0 && simDim < p); }
+  bool cChange(int p) const { return all || simAll || kappa || simDim >= p; }
+  bool biasCorr() const { return all || biasDim >= 0; }
+  bool cross() const { return simCorr() || kappa; }
+  bool fieldBlock() const { return cross() || biasCorr() || field; }
 };
 
 // The log-likelihood of the KOH model with every factor cached, so that a
@@ -91,6 +104,9 @@ public:
   // Log-likelihood with phi[j] = value (-Inf if a factor fails); the result
   // is kept in the scratch buffers until accept() or reject().
   double propose(int j, double value);
+  // The same for a joint move of all thetaS and alphaS: values[i] is the
+  // new phi[iThetaS + i], i < 2(p+q).
+  double proposeSim(const arma::vec& values);
   void accept();
   void reject();
 
@@ -108,7 +124,12 @@ private:
   Touch touch_;
   double old_;
   int oldj_;
+  arma::vec oldSim_;  // thetaS/alphaS before a proposeSim()
   std::vector<Buf2<arma::mat> > Ps_, Px_, Pfs_, Pfb_;
+  // log-distances per input dimension (fixed): sim-sim, sim-field, field-field
+  std::vector<arma::mat> Gs_, Gx_, Gf_;
+  // preallocated lists of the power matrices evaluate() combines
+  std::vector<const arma::mat*> ptrS_, ptrX_, ptrF_, ptrB_;
   Buf2<arma::mat> Ls_, Rx_, Rkk_, W_, Q_, Rb_, LS_;
   Buf2<arma::vec> z_, c_, wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;

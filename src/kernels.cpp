@@ -91,6 +91,27 @@ void pow_dist(const arma::vec& a, const arma::vec& b, double alpha,
   }
 }
 
+// G(i,j) = log |a_i - b_j| (-Inf where they coincide), computed once so that
+// a move of alpha needs an exp per entry instead of a pow.
+void log_dist(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
+  const arma::uword na = a.n_elem, nb = b.n_elem;
+  for (arma::uword j = 0; j < nb; ++j) {
+    double* col = out.colptr(j);
+    const double bj = b[j];
+    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = std::log(std::fabs(a[i] - bj));
+  }
+}
+
+// P(i,j) = |a_i - b_j|^alpha = exp(alpha G(i,j)) from G = log_dist(a, b).
+void pow_from_log(const arma::mat& G, double alpha, arma::mat& out, bool lower) {
+  const arma::uword nr = G.n_rows, nc = G.n_cols;
+  for (arma::uword j = 0; j < nc; ++j) {
+    const double* g = G.colptr(j);
+    double* col = out.colptr(j);
+    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] = std::exp(alpha * g[i]);
+  }
+}
+
 // R(i,j) = exp(-sum_k theta_k P_k(i,j)).
 void corr_from_pows(const std::vector<const arma::mat*>& P,
                     const arma::vec& theta, arma::mat& out, bool lower) {

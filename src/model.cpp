@@ -33,6 +33,17 @@ Posterior::Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
     z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(n);
   }
   u_.zeros(n);
+  ptrS_.resize(p + q); ptrX_.resize(p); ptrF_.resize(p); ptrB_.resize(p);
+  Gs_.resize(p + q); Gx_.resize(p); Gf_.resize(p);
+  for (int k = 0; k < p + q; ++k) {
+    Gs_[k].zeros(m, m);
+    log_dist(Xs.col(k), Xs.col(k), Gs_[k], true);
+  }
+  for (int k = 0; k < p; ++k) {
+    Gx_[k].zeros(m, n); Gf_[k].zeros(n, n);
+    log_dist(Xs.col(k), Xf.col(k), Gx_[k], false);
+    log_dist(Xf.col(k), Xf.col(k), Gf_[k], true);
+  }
 }
 
 // Map a parameter index to the blocks it touches.
@@ -62,31 +73,41 @@ double Posterior::propose(int j, double value) {
   return evaluate(touch_);
 }
 
+double Posterior::proposeSim(const arma::vec& values) {
+  const int k = 2 * (p + q);
+  oldSim_ = phi.subvec(iThetaS, iThetaS + k - 1);
+  phi.subvec(iThetaS, iThetaS + k - 1) = values.head(k);
+  touch_ = Touch(); touch_.simAll = true;
+  oldj_ = -1;
+  return evaluate(touch_);
+}
+
 void Posterior::accept() { flip(touch_); }
-void Posterior::reject() { phi[oldj_] = old_; }
+void Posterior::reject() {
+  if (oldj_ >= 0) phi[oldj_] = old_;
+  else phi.subvec(iThetaS, iThetaS + oldSim_.n_elem - 1) = oldSim_;
+}
 
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double Posterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E];
+  // D = sigma2S Ds is positive definite only for sigma2S > 0.
+  if (!(s2S > 0)) return R_NegInf;
   const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
   const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
-  const bool simCorr = t.all || t.simDim >= 0;
-  const bool expDim = t.all || (t.simDim >= 0 && t.simDim < p);
-  const bool cChange = t.all || t.kappa || t.simDim >= p;
-  const bool biasCorr = t.all || t.biasDim >= 0;
-  const bool cross = simCorr || t.kappa;
-  const bool field = cross || biasCorr || t.field;
+  const bool simCorr = t.simCorr(), expDim = t.expDim(p), cChange = t.cChange(p);
+  const bool biasCorr = t.biasCorr(), cross = t.cross(), field = t.fieldBlock();
 
   // Simulator block: Ds = Rs(Xs,Xs) + nugget I, Ls = chol(Ds), z = Ls^-1 ys.
   const arma::mat* Ls = &Ls_.cur();
   const arma::vec* z = &z_.cur();
   double ldDs = ldDs_.cur(), zz = zz_.cur();
   if (simCorr) {
-    std::vector<const arma::mat*> P(p + q);
+    std::vector<const arma::mat*>& P = ptrS_;
     for (int k = 0; k < p + q; ++k) {
-      const bool redo = t.all || (t.simAlpha && t.simDim == k);
-      if (redo) pow_dist(Xs_.col(k), Xs_.col(k), alphaS[k], Ps_[k].alt(), true);
+      const bool redo = t.simPow(k);
+      if (redo) pow_from_log(Gs_[k], alphaS[k], Ps_[k].alt(), true);
       P[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
     }
     arma::mat& L = Ls_.alt();
@@ -105,12 +126,13 @@ double Posterior::evaluate(const Touch& t) {
   const arma::mat* Rx = &Rx_.cur();
   const arma::mat* Rkk = &Rkk_.cur();
   if (expDim) {
-    std::vector<const arma::mat*> Px(p), Pf(p);
+    std::vector<const arma::mat*>& Px = ptrX_;
+    std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
-      const bool redo = t.all || (t.simAlpha && t.simDim == k);
+      const bool redo = t.simPow(k);
       if (redo) {
-        pow_dist(Xs_.col(k), Xf_.col(k), alphaS[k], Px_[k].alt(), false);
-        pow_dist(Xf_.col(k), Xf_.col(k), alphaS[k], Pfs_[k].alt(), true);
+        pow_from_log(Gx_[k], alphaS[k], Px_[k].alt(), false);
+        pow_from_log(Gf_[k], alphaS[k], Pfs_[k].alt(), true);
       }
       Px[k] = redo ? &Px_[k].alt() : &Px_[k].cur();
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
@@ -159,10 +181,10 @@ double Posterior::evaluate(const Touch& t) {
   if (biasCorr) {
     const arma::vec thetaB = phi.subvec(iThetaB, iAlphaB - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
-    std::vector<const arma::mat*> P(p);
+    std::vector<const arma::mat*>& P = ptrB_;
     for (int k = 0; k < p; ++k) {
-      const bool redo = t.all || (t.biasAlpha && t.biasDim == k);
-      if (redo) pow_dist(Xf_.col(k), Xf_.col(k), alphaB[k], Pfb_[k].alt(), true);
+      const bool redo = t.biasPow(k);
+      if (redo) pow_from_log(Gf_[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     corr_from_pows(P, thetaB, Rb_.alt(), true);
@@ -201,19 +223,15 @@ double Posterior::evaluate(const Touch& t) {
 
 // Make the scratch buffers written by evaluate(t) current.
 void Posterior::flip(const Touch& t) {
-  const bool simCorr = t.all || t.simDim >= 0;
-  const bool expDim = t.all || (t.simDim >= 0 && t.simDim < p);
-  const bool cChange = t.all || t.kappa || t.simDim >= p;
-  const bool biasCorr = t.all || t.biasDim >= 0;
-  const bool cross = simCorr || t.kappa;
-  const bool field = cross || biasCorr || t.field;
+  const bool simCorr = t.simCorr(), expDim = t.expDim(p), cChange = t.cChange(p);
+  const bool biasCorr = t.biasCorr(), cross = t.cross(), field = t.fieldBlock();
   for (int k = 0; k < p + q; ++k)
-    if (t.all || (t.simAlpha && t.simDim == k)) {
+    if (t.simPow(k)) {
       Ps_[k].flip();
       if (k < p) { Px_[k].flip(); Pfs_[k].flip(); }
     }
   for (int k = 0; k < p; ++k)
-    if (t.all || (t.biasAlpha && t.biasDim == k)) Pfb_[k].flip();
+    if (t.biasPow(k)) Pfb_[k].flip();
   if (simCorr) { Ls_.flip(); z_.flip(); }
   if (expDim) { Rx_.flip(); Rkk_.flip(); }
   if (cChange) c_.flip();
@@ -232,19 +250,38 @@ arma::vec Posterior::resid() const {
 // Log-likelihood at each row of `phis`, reached by one-parameter moves from
 // the previous row (every changed coordinate proposed and accepted in turn),
 // so that the cached block updates can be checked against a dense formula.
+// blockSim: thetaS/alphaS change through one joint move (proposeSim);
+// decoys: before each move, propose a different value and reject it.
 // [[Rcpp::export(.loglik_path)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
                                 const arma::mat& Xs, const arma::vec& ys,
-                                const arma::mat& phis, double nugget) {
+                                const arma::mat& phis, double nugget,
+                                bool blockSim = false, bool decoys = false) {
   Posterior post(Xf, yf, Xs, ys, nugget);
   Rcpp::NumericVector out(phis.n_rows, NA_REAL);
   if (!post.init(phis.row(0).t())) return out;
   out[0] = post.logLik();
+  const int s0 = post.iThetaS, s1 = post.iThetaB;
   for (arma::uword r = 1; r < phis.n_rows; ++r) {
     double ll = post.logLik();
+    const arma::vec row = phis.row(r).t();
+    if (blockSim && arma::any(row.subvec(s0, s1 - 1) != post.phi.subvec(s0, s1 - 1))) {
+      const arma::vec vals = row.subvec(s0, s1 - 1);
+      if (decoys) {
+        post.proposeSim(0.5 * (vals + post.phi.subvec(s0, s1 - 1)) + 0.01);
+        post.reject();
+      }
+      ll = post.proposeSim(vals);
+      if (!std::isfinite(ll)) { post.reject(); return out; }
+      post.accept();
+    }
     for (int j = 0; j < post.d; ++j) {
-      if (phis(r, j) == post.phi[j]) continue;
-      ll = post.propose(j, phis(r, j));
+      if (row[j] == post.phi[j]) continue;
+      if (decoys) {
+        post.propose(j, 0.5 * (row[j] + post.phi[j]) + 0.01);
+        post.reject();
+      }
+      ll = post.propose(j, row[j]);
       if (!std::isfinite(ll)) { post.reject(); return out; }
       post.accept();
     }

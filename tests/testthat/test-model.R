@@ -1,0 +1,147 @@
+# The compiled block (Schur complement) log-likelihood of src/model.cpp
+# against dense_loglik() (helper-dense.R): one Cholesky factor of the full
+# (n + m) x (n + m) covariance built entry by entry in plain R.
+
+sizes <- list(c(n = 5, m = 12, p = 1, q = 1), c(n = 6, m = 15, p = 2, q = 1),
+              c(n = 7, m = 14, p = 1, q = 2), c(n = 8, m = 20, p = 2, q = 2))
+
+test_that("the block log-likelihood from scratch equals the dense one", {
+  for (s in sizes) {
+    dat <- random_koh_data(s[["n"]], s[["m"]], s[["p"]], s[["q"]], seed = sum(s))
+    for (r in 1:5) {
+      phi <- random_phi(s[["p"]], s[["q"]])
+      block <- .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6)
+      dense <- dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6)
+      expect_equal(block, dense, tolerance = 1e-8)
+    }
+  }
+})
+
+# A path from phi0 on which each row changes one parameter (and a few rows
+# change several), visiting every class and every dimension: kappa,
+# thetaS/alphaS in the experimental and the calibration dimensions,
+# thetaB/alphaB, each variance and muB, then back to the start.
+one_move_path <- function(phi0, p, q) {
+  idx <- FBC:::param_indices(p, q)
+  rows <- list(phi0)
+  move <- function(j, value) {
+    phi <- rows[[length(rows)]]
+    phi[j] <- value
+    rows[[length(rows) + 1]] <<- phi
+  }
+  for (j in idx$kappa) move(j, runif(1))
+  for (k in seq_len(p + q)) {
+    move(idx$thetaS[k], rgamma(1, 2, 2))
+    move(idx$alphaS[k], runif(1, 1.1, 1.95))
+    move(idx$kappa[1], runif(1))  # kappa after each simulator change
+  }
+  for (k in seq_len(p)) {
+    move(idx$thetaB[k], rgamma(1, 2, 2))
+    move(idx$alphaB[k], runif(1, 1.1, 1.95))
+  }
+  for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
+  move(idx$muB, rnorm(1))
+  move(idx$alphaS[p + q], 2)  # alpha = 2 and 1 take special branches
+  move(idx$alphaB[1], 1)
+  rows[[length(rows) + 1]] <- random_phi(p, q)  # every coordinate at once
+  rows[[length(rows) + 1]] <- phi0
+  do.call(rbind, rows)
+}
+
+test_that("the cached one-move path equals the dense log-likelihood at every row", {
+  for (s in sizes) {
+    p <- s[["p"]]; q <- s[["q"]]
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 10 + sum(s))
+    phis <- one_move_path(random_phi(p, q), p, q)
+    path <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6)
+    dense <- apply(phis, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+    expect_equal(path, dense, tolerance = 1e-8)
+    # returning to the start reproduces the from-scratch value
+    expect_equal(path[nrow(phis)], path[1], tolerance = 1e-10)
+    # the same with a rejected decoy proposal before every move, and with
+    # thetaS/alphaS moved jointly (the sampler's blockSim move)
+    decoy <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE)
+    expect_equal(decoy, dense, tolerance = 1e-8)
+    block <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, blockSim = TRUE,
+                          decoys = TRUE)
+    expect_equal(block, dense, tolerance = 1e-8)
+  }
+})
+
+test_that("the sampler's retained log-likelihoods (accept and reject paths) equal the dense ones", {
+  # Every retained draw was reached through a run of proposals, some accepted
+  # and some rejected; a stale cache after a rejection would show up here.
+  p <- 2; q <- 2
+  dat <- random_koh_data(8, 20, p, q, seed = 7)
+  sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q), p2 = rep(1.1, q)),
+                           set_hyperPriors(),
+                           list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
+                           p, q)
+  set.seed(3)
+  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), sp$init, sp$logsd,
+                     60L, 20L, 4L, TRUE, 0L, 1e-6, NULL)
+  acc <- res$acceptance[!is.na(res$acceptance)]
+  expect_true(all(acc > 0 & acc < 1))  # both branches were taken
+  dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+  expect_equal(res$logLik, dense, tolerance = 1e-8)
+
+  # the joint thetaS/alphaS move: the block shares one acceptance rate and
+  # its adapted proposal factor is returned
+  set.seed(4)
+  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), sp$init, sp$logsd,
+                     260L, 200L, 4L, TRUE, 0L, 1e-6, NULL, blockSim = TRUE)
+  sim <- unname(unlist(FBC:::param_indices(p, q)[c("thetaS", "alphaS")]))
+  expect_identical(res$block$index, sim)
+  expect_length(unique(res$acceptance[sim]), 1)
+  expect_true(res$acceptance[sim[1]] > 0 && res$acceptance[sim[1]] < 1)
+  expect_equal(dim(res$block$chol), c(length(sim), length(sim)))
+  expect_identical(res$logsd[sim], sp$logsd[sim])  # single-site SDs left alone
+  dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+  expect_equal(res$logLik, dense, tolerance = 1e-8)
+})
+
+test_that("a covariance that is not positive definite gives -Inf, not a crash", {
+  p <- 1; q <- 1
+  dat <- random_koh_data(6, 12, p, q, seed = 5)
+  idx <- FBC:::param_indices(p, q)
+  set.seed(5)
+  phi <- random_phi(p, q)
+  bad <- phi
+  bad[idx$sigma2E] <- -5  # the field block S has eigenvalues below zero
+  C <- dense_cov(dat$Xf, dat$Xs, bad, 1e-6)
+  expect_lt(min(eigen(C, symmetric = TRUE, only.values = TRUE)$values), 0)
+  expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, bad, 1e-6), -Inf)
+  negS <- phi
+  negS[idx$sigma2S] <- -1  # the simulator block D = sigma2S Ds is negative definite
+  expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, negS, 1e-6), -Inf)
+  negT <- phi
+  negT[idx$thetaS] <- -3  # not a correlation: Rs(Xs, Xs) is indefinite
+  expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, negT, 1e-6), -Inf)
+  # on a path the failing move stops it (the row and the rest are NA)
+  path <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, rbind(phi, bad, phi), 1e-6)
+  expect_equal(path[1], dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6), tolerance = 1e-8)
+  expect_identical(path[2:3], c(NA_real_, NA_real_))
+
+  # In the sampler such proposals are rejected: give sigma2E (by hand, as R
+  # refuses it) a Gaussian(0, 1) prior on an identity walk, so that about
+  # half of its proposals are negative.
+  sp <- FBC:::build_priors(list(dist = "beta", init = NA, p1 = 1.1, p2 = 1.1),
+                           set_hyperPriors(),
+                           list(xmin = c(0, 0), xmax = c(1, 1), p = p, q = q), p, q)
+  tab <- as.list(sp$table)
+  tab$family[idx$sigma2E] <- 2L  # PF_GAUSSIAN
+  tab$p1[idx$sigma2E] <- 0
+  tab$p2[idx$sigma2E] <- 1
+  tab$transform[idx$sigma2E] <- 0L
+  logsd <- sp$logsd
+  logsd[idx$sigma2E] <- log(5)
+  set.seed(6)
+  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, tab, sp$init, logsd,
+                     40L, 0L, 1L, FALSE, 0L, 1e-6, NULL)
+  expect_equal(res$kept, 40L)
+  expect_true(all(is.finite(res$logLik)))
+  dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+  expect_equal(res$logLik, dense, tolerance = 1e-8)
+  sigma2E <- FBC:::param_indices(p, q)$sigma2E
+  expect_lt(res$acceptance[sigma2E], 0.6)  # the negative proposals were rejected
+})
