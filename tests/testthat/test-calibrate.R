@@ -18,7 +18,7 @@ ball_fixed_hypers <- function() {
 test_that("with every hyperparameter fixed, kappa draws match the exact grid posterior", {
   set.seed(42)
   fit <- calibrate(ballSim, ballField, nMCMC = 21000, nBurn = 1000, thinning = 2,
-                   hypers = ball_fixed_hypers())
+                   nChains = 1, hypers = ball_fixed_hypers())
   draws <- fit$Phi[, "kappa1"]
   # fixed columns stay at their values and are not sampled
   expect_equal(unname(fit$Phi[1, -1]), ball_fixed)
@@ -78,7 +78,7 @@ test_that("the default ball calibration covers g = 9.81", {
   acc <- fit$acceptance
   expect_true(all(acc > 0.15 & acc < 0.75))
   expect_s3_class(fit, "fbc")
-  expect_named(fit, c("Phi", "estimates", "logPost", "priors", "acceptance", "vars", "data",
+  expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars", "data",
                       "scale", "indices", "priorFns", "proposalSD", "call", "settings",
                       "logLik", "state", "spec"))
   expect_equal(rownames(fit$estimates), fit$vars)

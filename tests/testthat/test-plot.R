@@ -1,7 +1,7 @@
 # Every test inspects the ggplot objects (layers, data); nothing is drawn.
 fit_for_plots <- function() {
   set.seed(9)
-  calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2)
+  calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1)
 }
 
 test_that("density plot: posterior, prior in reported units, mode; one facet per parameter", {

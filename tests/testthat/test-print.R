@@ -1,6 +1,6 @@
 test_that("print() shows the header and the table and returns the fit invisibly", {
   set.seed(5)
-  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 1)
   out <- capture.output(res <- withVisible(print(fit)))
   expect_false(res$visible)
   expect_identical(res$value, fit)

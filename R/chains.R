@@ -1,0 +1,220 @@
+# Several chains through the future framework.
+#
+# Chains run with future.apply::future_lapply(future.seed = TRUE): each chain
+# gets its own L'Ecuyer-CMRG stream drawn from the caller's RNG state, and the
+# compiled sampler draws from whatever RNG the evaluating process has. So a
+# run is reproduced by set.seed() whatever future::plan() is active, and
+# sequential, multisession, cluster or batchtools plans give the same draws.
+
+# Quantile function of a prior family in the units the family is written in.
+prior_quantile <- function(u, dist, p1, p2) {
+  switch(dist,
+    uniform = stats::qunif(u, p1, p2),
+    gaussian = stats::qnorm(u, p1, p2),
+    gamma = stats::qgamma(u, p1, rate = p2),
+    beta = stats::qbeta(u, p1, p2),
+    lognormal = stats::qlnorm(u, p1, p2),
+    logistic = stats::qlogis(u, p1, p2),
+    betashift = 1 + stats::qbeta(u, p1, p2),
+    exponential = stats::qexp(u, p1),
+    inversegamma = p2 / stats::qgamma(1 - u, p1, rate = 1),
+    NA_real_ # jeffreys (improper) and fixed have no quantile function
+  )
+}
+
+# Starting points on the sampler's scale, one per chain (a list). Chain 1
+# starts at `spec$init` (the documented or user-given initial values); the
+# others draw every sampled parameter from its prior, restricted to the
+# central 10%-90% of the prior mass so that no start sits in a far tail where
+# the covariance cannot be factored, and jitter the initial value (on the
+# walk's scale) where the prior is improper. Kappa is drawn from its prior in
+# native units and mapped to the sampler's [0, 1] scale. A draw at which the
+# log-likelihood is not finite is redrawn (up to 20 times, then chain 1's
+# start is used).
+dispersed_inits <- function(nChains, dat, spec) {
+  tab <- spec$table
+  fam <- names(prior_families)[match(tab$family, prior_families)]
+  d <- length(spec$init)
+  one <- function() {
+    x <- spec$init
+    for (j in seq_len(d)) {
+      if (fam[j] == "fixed") next
+      if (fam[j] == "jeffreys") {
+        x[j] <- x[j] * exp(stats::rnorm(1, 0, 0.5))
+        next
+      }
+      v <- prior_quantile(stats::runif(1, 0.1, 0.9), fam[j], tab$p1[j], tab$p2[j])
+      if (spec$classes[j] == "kappa") {
+        # the prior's argument is a + b * u with u the sampler's value
+        v <- (v - tab$a[j]) / tab$b[j]
+      }
+      x[j] <- v
+    }
+    x
+  }
+  ok <- function(x) {
+    is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget)) &&
+      all(is.finite(mapply(function(j) log_prior_row(tab, j, x[j]), seq_len(d))))
+  }
+  out <- vector("list", nChains)
+  out[[1]] <- spec$init
+  for (k in seq_len(nChains)[-1]) {
+    x <- NULL
+    for (try in 1:20) {
+      cand <- one()
+      if (ok(cand)) { x <- cand; break }
+    }
+    out[[k]] <- x %||% spec$init
+  }
+  out
+}
+
+# Log prior of parameter j at sampler-scale value x (as the sampler sees it).
+log_prior_row <- function(tab, j, x) {
+  .log_prior(tab$a[j] + tab$b[j] * x, tab$family[j], tab$p1[j], tab$p2[j]) + tab$lconst[j]
+}
+
+# Package-level flag: a chain interrupted with Ctrl-C sets it so that the
+# chains of the same call that have not started yet are skipped. (Only
+# meaningful where chains share this process, i.e. the sequential plan; in a
+# parallel plan Ctrl-C reaches the main session, not the workers.)
+fbc_run <- new.env(parent = emptyenv())
+fbc_run$stop <- FALSE
+
+# Runs one chain per element of `inits` (with matching `logsd`, `batch`)
+# through future_lapply. `adapt` and `nBurn` apply to every chain. Returns
+# the list of sampler results; a chain skipped after an interrupt is NULL.
+run_chains <- function(dat, spec, inits, logsds, batches, nMCMC, nBurn, thinning, adapt,
+                       showProgress) {
+  fbc_run$stop <- FALSE
+  on.exit(fbc_run$stop <- FALSE, add = TRUE)
+  nChains <- length(inits)
+  progress <- showProgress && nChains == 1L
+  worker <- function(k) {
+    if (isTRUE(fbc_run$stop)) return(NULL)
+    res <- sample_chain(dat, spec, inits[[k]], logsds[[k]], nMCMC, nBurn, thinning, adapt,
+                        batches[[k]], progress)
+    if (res$interrupted) fbc_run$stop <- TRUE
+    res
+  }
+  if (showProgress && nChains > 1L) {
+    cli::cli_inform("Running {nChains} chains of {nMCMC} iterations on {future::nbrOfWorkers()} worker{?s}.")
+  }
+  future.apply::future_lapply(seq_len(nChains), worker, future.seed = TRUE,
+                              future.packages = "FBC")
+}
+
+# Keeps the chains that retained at least one draw, warns about interrupts,
+# and aborts when nothing is left.
+check_chain_results <- function(results, nMCMC, call = parent.frame()) {
+  started <- !vapply(results, is.null, logical(1))
+  kept <- vapply(results, function(r) if (is.null(r)) 0L else as.integer(r$kept), integer(1))
+  interrupted <- vapply(results, function(r) !is.null(r) && isTRUE(r$interrupted), logical(1))
+  if (any(interrupted) || any(!started)) {
+    done <- vapply(results, function(r) if (is.null(r)) 0L else as.integer(r$done), integer(1))
+    if (!any(kept > 0L)) {
+      cli::cli_abort(
+        "Interrupted after {max(done)} of {nMCMC} iterations, before any draw was retained.",
+        call = call
+      )
+    }
+    n <- length(results)
+    ids <- which(interrupted)
+    its <- done[interrupted]
+    msg <- c("Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} iterations.")
+    if (n > 1L) {
+      msg <- c(msg, i = "Keeping {sum(kept > 0L)} of {n} chain{?s} with {sum(kept)} retained draw{?s}; chains that had not started or kept no draw are dropped.")
+    } else {
+      msg <- c(msg, i = "Returning the {sum(kept)} draw{?s} retained so far.")
+    }
+    msg <- c(msg, i = "Continue the run with {.code update(fit, nMCMC = ...)}.")
+    cli::cli_warn(msg, call = call)
+  }
+  results[kept > 0L]
+}
+
+# Assembles an fbc object from a list of chain results (each as returned by
+# .fbc_sample, draws on the sampler's scale). `prev` is an earlier fbc object
+# whose draws the new ones are appended to (update()), or NULL.
+new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NULL) {
+  p <- scale$p
+  q <- scale$q
+  cal <- p + seq_len(q)
+  pieces <- lapply(seq_along(results), function(k) {
+    r <- results[[k]]
+    kept <- seq_len(r$kept)
+    Phi <- r$draws[kept, , drop = FALSE]
+    colnames(Phi) <- spec$vars
+    Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2,
+                                     scale$xmax[cal] - scale$xmin[cal], "*"),
+                               2, scale$xmin[cal], "+")
+    list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
+  })
+  states <- lapply(results, function(r) {
+    names(r$acceptance) <- names(r$logsd) <- spec$vars
+    list(last = r$last, logsd = r$logsd, batch = r$batch, done = r$done,
+         interrupted = r$interrupted, acceptance = r$acceptance, kept = r$kept)
+  })
+  if (!is.null(prev)) {
+    # append chain k's new draws after its old ones
+    old <- split_chains(prev)
+    pieces <- lapply(seq_along(pieces), function(k) {
+      list(Phi = rbind(old[[k]]$Phi, pieces[[k]]$Phi),
+           logPost = c(old[[k]]$logPost, pieces[[k]]$logPost),
+           logLik = c(old[[k]]$logLik, pieces[[k]]$logLik))
+    })
+    states <- lapply(seq_along(states), function(k) {
+      s <- states[[k]]
+      o <- prev$state$chains[[k]]
+      # acceptance over all post-burn-in iterations
+      nNew <- s$done
+      nOld <- o$postDone
+      if (nNew > 0) s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
+      s$postDone <- nOld + nNew
+      s$done <- o$done + s$done
+      s$kept <- o$kept + s$kept
+      s
+    })
+  } else {
+    states <- lapply(states, function(s) {
+      s$postDone <- max(0, s$done - settings$nBurn)
+      s
+    })
+  }
+  Phi <- do.call(rbind, lapply(pieces, `[[`, "Phi"))
+  rownames(Phi) <- NULL
+  chain <- rep(seq_along(pieces), vapply(pieces, function(x) nrow(x$Phi), integer(1)))
+  acc <- Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states)
+  proposalSD <- exp(Reduce(`+`, lapply(states, function(s) s$logsd)) / length(states))
+  structure(list(
+    Phi = Phi,
+    chain = chain,
+    estimates = estimate_table(Phi, chain),
+    logPost = unlist(lapply(pieces, `[[`, "logPost")),
+    priors = spec$priors,
+    acceptance = acc,
+    vars = spec$vars,
+    data = dat,
+    scale = scale,
+    indices = param_indices(p, q),
+    priorFns = spec$fns,
+    proposalSD = proposalSD,
+    call = call,
+    settings = settings,
+    logLik = unlist(lapply(pieces, `[[`, "logLik")),
+    state = list(chains = states,
+                 interrupted = any(vapply(states, `[[`, logical(1), "interrupted")),
+                 last = states[[1]]$last, logsd = states[[1]]$logsd,
+                 batch = states[[1]]$batch, done = states[[1]]$done),
+    spec = spec
+  ), class = "fbc")
+}
+
+# The draws of each chain: list of list(Phi, logPost, logLik).
+split_chains <- function(x) {
+  chain <- x$chain %||% rep(1L, nrow(x$Phi))
+  lapply(sort(unique(chain)), function(k) {
+    i <- chain == k
+    list(Phi = x$Phi[i, , drop = FALSE], logPost = x$logPost[i], logLik = x$logLik[i])
+  })
+}

@@ -1,0 +1,142 @@
+# Convergence diagnostics: R-hat, ESS and draws piling up at a bound.
+
+# Thresholds of convergence_messages() (Vehtari et al. 2021).
+fbc_rhat_max <- 1.01
+fbc_ess_min <- 400
+# A parameter "piles up" at a bound when at least `fbc_pile_share` of its
+# draws lie within `fbc_pile_band` times the width of its support from it.
+fbc_pile_band <- 0.005
+fbc_pile_share <- 0.2
+
+# Draws of each chain side by side (iterations x chains). Chains of unequal
+# length (after an interrupt) are cut to the shortest.
+chain_matrix <- function(x, chain) {
+  ids <- sort(unique(chain))
+  cols <- lapply(ids, function(k) x[chain == k])
+  n <- min(lengths(cols))
+  vapply(cols, function(v) v[seq_len(n)], numeric(n))
+}
+
+# Rank-normalised split R-hat and bulk ESS of every column of Phi
+# (posterior::rhat, posterior::ess_bulk); NA for constant (fixed) columns or
+# when there are too few draws.
+chain_diagnostics <- function(Phi, chain) {
+  one <- function(x) {
+    m <- chain_matrix(x, chain)
+    if (nrow(m) < 4L || stats::var(as.vector(m)) == 0) return(c(NA_real_, NA_real_))
+    c(posterior::rhat(m), posterior::ess_bulk(m))
+  }
+  out <- vapply(seq_len(ncol(Phi)), function(j) one(Phi[, j]), numeric(2))
+  data.frame(rhat = out[1, ], ess = out[2, ], row.names = colnames(Phi))
+}
+
+# Support of every parameter in the units of Phi (kappa native), as a
+# two-column matrix of lower and upper bounds.
+param_support <- function(x) {
+  tab <- x$spec$table
+  fam <- names(prior_families)[match(tab$family, prior_families)]
+  d <- nrow(tab)
+  lo <- hi <- numeric(d)
+  for (j in seq_len(d)) {
+    cls <- x$spec$classes[j]
+    s <- family_support(fam[j], tab$p1[j], tab$p2[j])
+    dom <- switch(class_domain[[cls]], real = c(-Inf, Inf), positive = c(0, Inf),
+                  unit12 = c(1, 2))
+    s <- c(max(s[1], dom[1]), min(s[2], dom[2]))
+    if (cls == "kappa") {
+      k <- match(x$vars[j], x$vars[x$spec$classes == "kappa"])
+      lo0 <- x$scale$xmin[x$scale$p + k]
+      rng <- x$scale$xmax[x$scale$p + k] - lo0
+      # prior argument a + b * u, u = (kappa - lo0) / rng
+      s <- lo0 + rng * (s - tab$a[j]) / tab$b[j]
+    }
+    lo[j] <- s[1]
+    hi[j] <- s[2]
+  }
+  cbind(lower = lo, upper = hi)
+}
+
+# Parameters whose draws pile up at a finite bound of their support:
+# data.frame(var, bound, share). Fixed parameters are skipped.
+bound_piling <- function(x) {
+  sup <- param_support(x)
+  fixed <- x$spec$table$family == prior_families[["fixed"]]
+  out <- list()
+  for (j in seq_along(x$vars)) {
+    if (fixed[j] || !all(is.finite(sup[j, ]))) next
+    v <- x$Phi[, j]
+    band <- fbc_pile_band * (sup[j, 2] - sup[j, 1])
+    share <- c(mean(v <= sup[j, 1] + band), mean(v >= sup[j, 2] - band))
+    k <- which.max(share)
+    if (share[k] >= fbc_pile_share) {
+      out[[length(out) + 1]] <- data.frame(var = x$vars[j], bound = sup[j, k], share = share[k])
+    }
+  }
+  if (length(out)) do.call(rbind, out) else data.frame(var = character(), bound = numeric(), share = numeric())
+}
+
+#' Convergence warnings for a calibration
+#'
+#' Checks the chains of an `fbc` object and returns the warnings worth
+#' showing, each with what to do: any rank-normalised split R-hat above 1.01
+#' or bulk effective sample size below 400 (the thresholds of Vehtari et al.
+#' 2021, computed by the \pkg{posterior} package and shown in the `rhat` and
+#' `ess` columns of `x$estimates`), a single chain (R-hat then compares only
+#' its two halves), a run interrupted before the end, and parameters whose
+#' draws pile up at a bound of their support (at least 20% of the draws within
+#' 0.5% of the support's width from it), such as a smoothness \eqn{\alpha} at
+#' 2 or a calibration parameter at the edge of its prior range.
+#'
+#' @param x An `fbc` object from [calibrate()] or [update.fbc()].
+#' @return A character vector of messages, empty when nothing is wrong.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
+#' convergence_messages(fit)
+convergence_messages <- function(x) {
+  if (!inherits(x, "fbc")) {
+    cli::cli_abort("{.arg x} must be an {.cls fbc} object, not {.obj_type_friendly {x}}.")
+  }
+  est <- x$estimates
+  msgs <- character()
+  nChains <- length(unique(x$chain %||% 1L))
+  if (isTRUE(x$state$interrupted)) {
+    msgs <- c(msgs, "The run was interrupted before the end; continue it with `update(fit, nMCMC = ...)`.")
+  }
+  rhat <- est$rhat %||% rep(NA_real_, nrow(est))
+  ess <- est$ess %||% rep(NA_real_, nrow(est))
+  bad <- which(rhat > fbc_rhat_max)
+  if (length(bad)) {
+    msgs <- c(msgs, sprintf(
+      "R-hat above %.2f for %s (max %.3f): the chains disagree. Run longer with `update(fit, nMCMC = ...)`%s.",
+      fbc_rhat_max, paste(rownames(est)[bad], collapse = ", "), max(rhat[bad]),
+      if (nChains < 4) " or use more chains (`nChains = 4`)" else ""
+    ))
+  }
+  low <- which(ess < fbc_ess_min)
+  if (length(low)) {
+    msgs <- c(msgs, sprintf(
+      "Bulk ESS below %d for %s (min %.0f): too few effective draws for stable intervals. Run longer with `update(fit, nMCMC = ...)`.",
+      fbc_ess_min, paste(rownames(est)[low], collapse = ", "), min(ess[low])
+    ))
+  }
+  if (nChains == 1L) {
+    msgs <- c(msgs, "Only one chain: R-hat compares its two halves only. Use `nChains = 4` to check that independent chains agree.")
+  }
+  pile <- bound_piling(x)
+  for (i in seq_len(nrow(pile))) {
+    v <- pile$var[i]
+    cls <- x$spec$classes[match(v, x$vars)]
+    hint <- switch(cls,
+      alphaS = , alphaB = sprintf(
+        "The data favour this smoothness; consider fixing it (e.g. `%sDist = \"fixed\", %sInit = %g` in set_hyperPriors()).",
+        cls, cls, pile$bound[i]),
+      kappa = "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb.",
+      "Check that this prior's support is wide enough."
+    )
+    msgs <- c(msgs, sprintf("%.0f%% of the draws of %s lie at its bound %g. %s",
+                            100 * pile$share[i], v, pile$bound[i], hint))
+  }
+  msgs
+}

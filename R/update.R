@@ -1,0 +1,66 @@
+#' Continue a calibration
+#'
+#' Runs every chain of a calibration further from where it stopped, with its
+#' adapted (now frozen) proposal standard deviations, and appends the new
+#' draws to the old ones. Nothing is recomputed: the chains go on exactly as
+#' if they had been run longer in the first place (with fresh random
+#' streams). A run interrupted with Ctrl-C is continued the same way.
+#'
+#' @param object An `fbc` object from [calibrate()] (or from `update()`).
+#' @param nMCMC Number of further iterations (sweeps) per chain. Every
+#'   `thinning`-th is kept, with the `thinning` of the original run.
+#' @param showProgress Show a progress bar (single chain only).
+#' @param ... Unused.
+#' @return The `fbc` object with the chains extended: `Phi`, `chain`,
+#'   `logPost`, `logLik`, `estimates` (with R-hat and ESS over all draws),
+#'   `acceptance` (over all iterations after burn-in), `settings$nMCMC` (total
+#'   sweeps per chain) and `state`.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
+#' fit <- update(fit, nMCMC = 400)
+#' table(fit$chain)
+update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
+  nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
+  check_flag(showProgress, "showProgress")
+  s <- object$settings
+  states <- object$state$chains
+  if (is.null(states)) {
+    cli::cli_abort("{.arg object} has no per-chain state to continue from (made by an older FBC?).")
+  }
+  if (nMCMC %/% s$thinning < 1L) {
+    cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
+  }
+  t0 <- proc.time()[["elapsed"]]
+  results <- run_chains(object$data, object$spec,
+                        inits = lapply(states, `[[`, "last"),
+                        logsds = lapply(states, `[[`, "logsd"),
+                        batches = lapply(states, `[[`, "batch"),
+                        nMCMC = nMCMC, nBurn = 0L, thinning = s$thinning, adapt = FALSE,
+                        showProgress = showProgress)
+  elapsed <- proc.time()[["elapsed"]] - t0
+  # a chain skipped after an interrupt adds nothing and stays where it was
+  for (k in seq_along(results)) {
+    if (is.null(results[[k]])) {
+      st <- states[[k]]
+      results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
+                           logLik = numeric(), kept = 0L, acceptance = st$acceptance,
+                           logsd = st$logsd, last = st$last, batch = st$batch, done = 0L,
+                           interrupted = TRUE)
+    }
+  }
+  interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))
+  if (any(interrupted)) {
+    ids <- which(interrupted)
+    its <- vapply(results, function(r) as.integer(r$done), integer(1))[interrupted]
+    cli::cli_warn(c(
+      "Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} further iterations.",
+      i = "Returning all draws retained so far; continue with {.code update(fit, nMCMC = ...)}."
+    ))
+  }
+  s$nMCMC <- s$nMCMC + nMCMC
+  s$time <- s$time + elapsed
+  new_fbc_chains(results, object$data, object$spec, object$scale, object$call, s,
+                 prev = object)
+}

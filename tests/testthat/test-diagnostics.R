@@ -1,0 +1,92 @@
+# Fake draws put into a real fbc object, so each check sees a known situation.
+with_draws <- function(fit, Phi, chain) {
+  fit$Phi <- Phi
+  fit$chain <- chain
+  fit$estimates <- estimate_table(Phi, chain)
+  fit
+}
+iid_draws <- function(fit, nChains, n) {
+  sup <- param_support(fit)
+  d <- length(fit$vars)
+  Phi <- vapply(seq_len(d), function(j) {
+    lo <- if (is.finite(sup[j, 1])) sup[j, 1] else -5
+    hi <- if (is.finite(sup[j, 2])) sup[j, 2] else lo + 10
+    # mid-support, away from both bounds
+    lo + (hi - lo) * stats::runif(nChains * n, 0.3, 0.7)
+  }, numeric(nChains * n))
+  colnames(Phi) <- fit$vars
+  Phi
+}
+
+test_that("no message for well-mixed independent chains", {
+  fit <- small_fit(nChains = 2)
+  set.seed(1)
+  x <- with_draws(fit, iid_draws(fit, 4, 500), rep(1:4, each = 500))
+  expect_equal(convergence_messages(x), character())
+})
+
+test_that("chains that disagree give an R-hat message, too few draws an ESS message", {
+  fit <- small_fit(nChains = 2)
+  set.seed(1)
+  Phi <- iid_draws(fit, 4, 500)
+  Phi[1:500, "thetaB1"] <- Phi[1:500, "thetaB1"] + 5 # chain 1 elsewhere
+  x <- with_draws(fit, Phi, rep(1:4, each = 500))
+  expect_gt(x$estimates["thetaB1", "rhat"], 1.01)
+  msg <- convergence_messages(x)
+  expect_length(grep("R-hat above 1.01 for thetaB1 ", msg), 1)
+  expect_length(grep("update\\(fit", msg), 2) # R-hat and ESS both say what to do
+
+  y <- with_draws(fit, iid_draws(fit, 4, 50), rep(1:4, each = 50))
+  msg <- convergence_messages(y)
+  expect_length(grep("Bulk ESS below 400", msg), 1)
+})
+
+test_that("a single chain is pointed out", {
+  fit <- small_fit(nChains = 1)
+  set.seed(1)
+  x <- with_draws(fit, iid_draws(fit, 1, 2000), rep(1L, 2000))
+  expect_match(convergence_messages(x), "Only one chain", all = FALSE)
+})
+
+test_that("draws piling up at a bound are reported with a hint", {
+  fit <- small_fit(nChains = 2)
+  set.seed(1)
+  Phi <- iid_draws(fit, 4, 500)
+  Phi[, "alphaS1"] <- 2 - stats::runif(2000, 0, 1e-3)
+  # kappa: the ball simulator design spans g in [6.044, 13.959]
+  Phi[1:600, "kappa1"] <- 13.959 - stats::runif(600, 0, 0.01)
+  x <- with_draws(fit, Phi, rep(1:4, each = 500))
+  pile <- bound_piling(x)
+  expect_equal(pile$var, c("kappa1", "alphaS1"))
+  expect_equal(pile$bound, c(13.959, 2))
+  expect_equal(pile$share, c(0.3, 1))
+  msg <- convergence_messages(x)
+  expect_match(msg, "100% of the draws of alphaS1 lie at its bound 2.*alphaSDist = \"fixed\"", all = FALSE)
+  expect_match(msg, "30% of the draws of kappa1 lie at its bound 13.959", all = FALSE)
+})
+
+test_that("supports follow the priors: stretched beta and uniform kappa, [1, 2] alpha", {
+  fit <- small_fit(nChains = 1)
+  sup <- param_support(fit)
+  expect_equal(unname(sup[1, ]), c(6.044, 13.959))
+  expect_equal(unname(sup[match("alphaB1", fit$vars), ]), c(1, 2))
+  expect_equal(unname(sup[match("sigma2E", fit$vars), ]), c(0, Inf))
+  fit2 <- small_fit(nChains = 1, kappaDist = "uniform", kappaP1 = 7, kappaP2 = 12, kappaInit = 9)
+  expect_equal(unname(param_support(fit2)[1, ]), c(7, 12))
+})
+
+test_that("R-hat and ESS use chains cut to a common length", {
+  set.seed(2)
+  x <- c(rnorm(300), rnorm(200))
+  chain <- rep(1:2, c(300, 200))
+  d <- chain_diagnostics(cbind(a = x), chain)
+  m <- cbind(x[1:200], x[301:500])
+  expect_equal(d$rhat, posterior::rhat(m))
+  expect_equal(d$ess, posterior::ess_bulk(m))
+  # a fixed parameter has none
+  expect_true(all(is.na(unlist(chain_diagnostics(cbind(b = rep(1, 500)), chain)))))
+})
+
+test_that("convergence_messages() wants an fbc object", {
+  expect_snapshot(error = TRUE, convergence_messages(list()))
+})
