@@ -17,8 +17,8 @@
     .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block)
 }
 
-.fbc_sample <- function(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim = FALSE) {
-    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim)
+.fbc_sample <- function(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim = FALSE, blockInit = NULL) {
+    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim, blockInit)
 }
 
 .fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget) {

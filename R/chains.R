@@ -85,7 +85,7 @@ fbc_run$stop <- FALSE
 # through future_lapply. `adapt` and `nBurn` apply to every chain. Returns
 # the list of sampler results; a chain skipped after an interrupt is NULL.
 run_chains <- function(dat, spec, inits, logsds, batches, nMCMC, nBurn, thinning, adapt,
-                       showProgress) {
+                       showProgress, blockSim = FALSE, blocks = NULL) {
   fbc_run$stop <- FALSE
   on.exit(fbc_run$stop <- FALSE, add = TRUE)
   nChains <- length(inits)
@@ -93,7 +93,7 @@ run_chains <- function(dat, spec, inits, logsds, batches, nMCMC, nBurn, thinning
   worker <- function(k) {
     if (isTRUE(fbc_run$stop)) return(NULL)
     res <- sample_chain(dat, spec, inits[[k]], logsds[[k]], nMCMC, nBurn, thinning, adapt,
-                        batches[[k]], progress)
+                        batches[[k]], progress, blockSim = blockSim, block = blocks[[k]])
     if (res$interrupted) fbc_run$stop <- TRUE
     res
   }
@@ -153,7 +153,8 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
   states <- lapply(results, function(r) {
     names(r$acceptance) <- names(r$logsd) <- spec$vars
     list(last = r$last, logsd = r$logsd, batch = r$batch, done = r$done,
-         interrupted = r$interrupted, acceptance = r$acceptance, kept = r$kept)
+         interrupted = r$interrupted, acceptance = r$acceptance, kept = r$kept,
+         block = r$block)
   })
   if (!is.null(prev)) {
     # append chain k's new draws after its old ones

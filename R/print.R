@@ -2,7 +2,10 @@
 #'
 #' Shows a compact header (data sizes, the names of the calibration inputs,
 #' the MCMC settings and the range of the acceptance rates) and the posterior
-#' summary of every parameter ([summary.fbc()]).
+#' summary of every parameter ([summary.fbc()]), followed by the convergence
+#' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
+#' 400, one chain only, an interrupted run, draws piling up at a bound), each
+#' with what to do.
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param digits Significant digits for the table.
@@ -26,12 +29,20 @@ print.fbc <- function(x, digits = 3, ...) {
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
   acc <- x$acceptance[!is.na(x$acceptance)]
   if (length(acc)) {
-    cat(sprintf("  acceptance: %.2f to %.2f (target 0.44)\n", min(acc), max(acc)))
+    cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
+                if (isTRUE(s$blockSim)) "; joint thetaS/alphaS move 0.234" else ""))
   }
   if (isTRUE(x$state$interrupted)) {
     cat(sprintf("  interrupted after %d iterations\n", x$state$done))
   }
   cat("\n")
   print(summary(x), digits = digits)
+  msgs <- convergence_messages(x)
+  if (length(msgs)) {
+    cat("\nWarning", if (length(msgs) > 1L) "s", ":\n", sep = "")
+    cat(paste0("! ", strwrap(msgs, width = getOption("width") - 2L, exdent = 2L,
+                             simplify = FALSE) |>
+                 vapply(paste, character(1), collapse = "\n")), sep = "\n")
+  }
   invisible(x)
 }

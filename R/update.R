@@ -38,7 +38,8 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
                         logsds = lapply(states, `[[`, "logsd"),
                         batches = lapply(states, `[[`, "batch"),
                         nMCMC = nMCMC, nBurn = 0L, thinning = s$thinning, adapt = FALSE,
-                        showProgress = showProgress)
+                        showProgress = showProgress, blockSim = isTRUE(s$blockSim),
+                        blocks = lapply(states, `[[`, "block"))
   elapsed <- proc.time()[["elapsed"]] - t0
   # a chain skipped after an interrupt adds nothing and stays where it was
   for (k in seq_along(results)) {
@@ -47,7 +48,7 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
       results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
                            logLik = numeric(), kept = 0L, acceptance = st$acceptance,
                            logsd = st$logsd, last = st$last, batch = st$batch, done = 0L,
-                           interrupted = TRUE)
+                           interrupted = TRUE, block = st$block)
     }
   }
   interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))

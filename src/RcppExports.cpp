@@ -77,8 +77,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_sample
-Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress, bool blockSim);
-RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP blockSimSEXP) {
+Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress, bool blockSim, SEXP blockInit);
+RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP blockSimSEXP, SEXP blockInitSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -97,7 +97,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< SEXP >::type progress(progressSEXP);
     Rcpp::traits::input_parameter< bool >::type blockSim(blockSimSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim));
+    Rcpp::traits::input_parameter< SEXP >::type blockInit(blockInitSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim, blockInit));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -123,7 +124,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 4},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 8},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 9},
-    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 15},
+    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 16},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 6},
     {NULL, NULL, 0}
 };

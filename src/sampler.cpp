@@ -14,7 +14,8 @@
 // and, after 100 burn-in sweeps, becomes the Cholesky factor of the running
 // covariance of w over burn-in (refreshed every 50 sweeps, Haario et al.
 // 2001); s moves by +-min(0.5, 1/sqrt(b)) per batch b towards acceptance
-// 0.234. Both are frozen after burn-in.
+// 0.234. Both are frozen after burn-in; `blockInit` (a previous run's
+// `block`) restarts from an adapted L and s.
 #include "fbc.h"
 #include <cli/progress.h>
 
@@ -43,7 +44,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
                       const Rcpp::List& prior, const arma::vec& init,
                       const arma::vec& logsdInit, int nIter, int nBurn,
                       int thinning, bool adapt, int batchStart, double nugget,
-                      SEXP progress, bool blockSim = false) {
+                      SEXP progress, bool blockSim = false,
+                      SEXP blockInit = R_NilValue) {
   Rcpp::RNGScope rngScope;
   Priors pr{prior["family"], prior["transform"], prior["p1"], prior["p2"],
             prior["a"], prior["b"], prior["lconst"]};
@@ -67,6 +69,16 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   double bScale = nb > 0 ? -0.5 * std::log((double) nb) : 0.0, bAccBatch = 0, bAccKept = 0;
   int bN = 0, bBatch = 0;
   bool bShaped = false;  // L is the factor of the empirical covariance
+  // Continuing a run (update()): start from the block proposal it adapted.
+  if (nb > 0 && !Rf_isNull(blockInit)) {
+    const Rcpp::List bi(blockInit);
+    const arma::mat L0 = Rcpp::as<arma::mat>(bi["chol"]);
+    if ((int) L0.n_rows != nb || (int) L0.n_cols != nb)
+      Rcpp::stop("the block proposal to continue from has the wrong size");
+    bL = L0;
+    bScale = Rcpp::as<double>(bi["logscale"]);
+    bShaped = Rcpp::as<bool>(bi["shaped"]);
+  }
 
   arma::vec logsd = logsdInit;
   arma::vec lp(d);
@@ -225,7 +237,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     for (int i = 0; i < nb; ++i) idx[i] = blk[i] + 1;
     out.push_back(Rcpp::List::create(Rcpp::Named("index") = idx,
                                      Rcpp::Named("logscale") = bScale,
-                                     Rcpp::Named("chol") = bL), "block");
+                                     Rcpp::Named("chol") = bL,
+                                     Rcpp::Named("shaped") = bShaped), "block");
   }
   return out;
 }

@@ -12,14 +12,14 @@ lhs_like <- function(m, k) {
 fake_interrupt_sampler <- function(stopAt, calls = 1L) {
   n <- 0L
   function(Xf, yf, Xs, ys, prior, init, logsd, nIter, nBurn, thinning, adapt, batch,
-           nugget, progress) {
+           nugget, progress, ...) {
     n <<- n + 1L
     if (n > calls) {
       return(FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, init, logsd, nIter, nBurn, thinning,
-                               adapt, batch, nugget, progress))
+                               adapt, batch, nugget, progress, ...))
     }
     res <- FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, init, logsd, stopAt, min(nBurn, stopAt - 1L),
-                             thinning, adapt, batch, nugget, progress)
+                             thinning, adapt, batch, nugget, progress, ...)
     full <- matrix(0, (nIter - nBurn) %/% thinning, ncol(res$draws))
     full[seq_len(res$kept), ] <- res$draws[seq_len(res$kept), ]
     pad <- function(v) c(v[seq_len(res$kept)], numeric(nrow(full) - res$kept))

@@ -1,53 +1,5 @@
-# Every hyperparameter fixed at these values (scaled space, the order of phi
-# after kappa): thetaS (h, g), alphaS (h, g), thetaB, alphaB, sigma2S,
-# sigma2B, sigma2E, muB.
-ball_fixed <- c(3.5, 0.4, 2, 2, 1.3, 1.8, 3.3, 0.7, 0.15, 0.2)
-ball_fixed_hypers <- function() {
-  set_hyperPriors(
-    thetaSDist = "fixed", thetaSInit = ball_fixed[1:2],
-    alphaSDist = "fixed", alphaSInit = ball_fixed[3:4],
-    thetaBDist = "fixed", thetaBInit = ball_fixed[5],
-    alphaBDist = "fixed", alphaBInit = ball_fixed[6],
-    sigma2SDist = "fixed", sigma2SInit = ball_fixed[7],
-    sigma2BDist = "fixed", sigma2BInit = ball_fixed[8],
-    sigma2EDist = "fixed", sigma2EInit = ball_fixed[9],
-    muBDist = "fixed", muBInit = ball_fixed[10]
-  )
-}
-
-test_that("with every hyperparameter fixed, kappa draws match the exact grid posterior", {
-  set.seed(42)
-  fit <- calibrate(ballSim, ballField, nMCMC = 21000, nBurn = 1000, thinning = 2,
-                   nChains = 1, hypers = ball_fixed_hypers())
-  draws <- fit$Phi[, "kappa1"]
-  # fixed columns stay at their values and are not sampled
-  expect_equal(unname(fit$Phi[1, -1]), ball_fixed)
-  expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
-  expect_true(all(is.na(fit$acceptance[-1])))
-
-  # Reference, computed independently in plain R: scale as documented,
-  # dense Cholesky log-likelihood on a grid of g, plus the default
-  # Beta(1.1, 1.1) prior stretched over the design range of g.
-  lo <- apply(ballSim[, 2:3], 2, min); hi <- apply(ballSim[, 2:3], 2, max)
-  Xs <- sweep(sweep(ballSim[, 2:3], 2, lo), 2, hi - lo, "/")
-  Xf <- matrix((ballField[, 2] - lo[1]) / (hi[1] - lo[1]))
-  ys <- (ballSim[, 1] - mean(ballSim[, 1])) / sd(ballSim[, 1])
-  yf <- (ballField[, 1] - mean(ballSim[, 1])) / sd(ballSim[, 1])
-  u <- seq(0.0005, 0.9995, by = 0.001)
-  lp <- vapply(u, function(k) dense_loglik(Xf, yf, Xs, ys, c(k, ball_fixed)), 0) +
-    dbeta(u, 1.1, 1.1, log = TRUE)
-  w <- exp(lp - max(lp))
-  cdf <- cumsum(w) / sum(w)
-  g <- lo[2] + u * (hi[2] - lo[2])
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  q_grid <- approx(cdf, g, probs, ties = "ordered")$y
-  sd_grid <- sqrt(sum(w * g^2) / sum(w) - (sum(w * g) / sum(w))^2)
-  expect_equal(unname(quantile(draws, probs)), q_grid, tolerance = 0.1 * sd_grid / mean(q_grid))
-  F_grid <- approxfun(g, cdf, yleft = 0, yright = 1, ties = "ordered")
-  s <- sort(draws)
-  ks <- max(abs(seq_along(s) / length(s) - F_grid(s)))
-  expect_lt(ks, 0.04)
-})
+# The exact-posterior checks (kappa vs a grid posterior) are in
+# test-exact-posterior.R.
 
 test_that("calibrate() recovers a known calibration parameter", {
   # exact simulator eta(x, t) = t x^2 + sin(3x); field at t = 1.3 plus noise

@@ -21,3 +21,35 @@ test_that("print() copes with extra estimate columns and several chains", {
   expect_match(out[4], "from 2 chains", fixed = TRUE)
   expect_true(any(grepl("nChains", out)))
 })
+
+test_that("print() ends with the convergence warnings, one per problem", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 2)
+  msgs <- convergence_messages(fit)
+  # 100 draws from 2 short chains cannot reach ESS 400
+  expect_true(any(startsWith(msgs, "Bulk ESS below 400")))
+  out <- capture.output(print(fit))
+  w <- which(out == "Warnings:")
+  expect_length(w, 1)
+  tail_ <- out[-seq_len(w)]  # after the table: only the messages (wrapped)
+  expect_true(all(startsWith(tail_, "! ") | startsWith(tail_, "  ")))
+  expect_equal(sum(startsWith(out, "! ")), length(msgs))
+  expect_true(any(startsWith(out, "! Bulk ESS below 400")))
+})
+
+test_that("print() shows no warning for a converged run", {
+  # only kappa sampled (its move is cheap): 4 chains mix well within 1500 sweeps
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", alphaSDist = "fixed", alphaSInit = 1.9, thetaBDist = "fixed",
+    alphaBDist = "fixed", sigma2SDist = "fixed", sigma2BDist = "fixed",
+    sigma2EDist = "fixed", sigma2EInit = 0.15, muBDist = "fixed"
+  )
+  set.seed(3)
+  fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 300, thinning = 1, nChains = 4,
+                   hypers = hyp)
+  expect_lt(fit$estimates["kappa1", "rhat"], 1.01)
+  expect_gt(fit$estimates["kappa1", "ess"], 400)
+  expect_identical(convergence_messages(fit), character())
+  out <- capture.output(print(fit))
+  expect_false(any(grepl("Warning", out)))
+})

@@ -38,6 +38,27 @@ test_that("update() continues each chain from where it stopped", {
   }
 })
 
+test_that("update() keeps a blocked run's adapted joint proposal", {
+  fit <- small_fit(nChains = 2, blockSim = TRUE)
+  sim <- unlist(fit$indices[c("thetaS", "alphaS")], use.names = FALSE)
+  b1 <- fit$state$chains[[1]]$block
+  expect_identical(b1$index, sim)
+  expect_true(b1$shaped)  # 100 burn-in sweeps shaped it to the draws' covariance
+  # no longer diagonal: the shape came from the burn-in draws
+  expect_gt(sum(abs(b1$chol[lower.tri(b1$chol)])), 0)
+  set.seed(3)
+  up <- update(fit, nMCMC = 40)
+  expect_true(up$settings$blockSim)
+  for (k in 1:2) {
+    # frozen: the same factor and scale as the original run, not restarted
+    expect_identical(up$state$chains[[k]]$block$chol, fit$state$chains[[k]]$block$chol)
+    expect_identical(up$state$chains[[k]]$block$logscale, fit$state$chains[[k]]$block$logscale)
+    acc <- up$state$chains[[k]]$acceptance[sim]
+    expect_length(unique(acc), 1)
+  }
+  expect_equal(as.vector(table(up$chain)), c(120, 120))
+})
+
 test_that("update() checks its arguments", {
   fit <- small_fit(nChains = 1)
   expect_snapshot(error = TRUE, update(fit, nMCMC = 1))
