@@ -4,7 +4,7 @@ check_count <- function(x, arg = caller_arg(x), min = 1, call = parent.frame()) 
   if (!is.numeric(x) || length(x) != 1L || is.na(x) || !is.finite(x) ||
       x != round(x) || x < min) {
     cli::cli_abort(
-      "{.arg {arg}} must be a whole number of at least {min} (got {.val {format_value(x)}}).",
+      "{.arg {arg}} must be a whole number of at least {min} (got {format_value(x)}).",
       call = call
     )
   }
@@ -68,8 +68,9 @@ check_data_matrix <- function(x, arg = caller_arg(x), min_cols = 2L, min_rows = 
 # `x` must have length 1 or `n`; returns it recycled to length n.
 check_length <- function(x, n, arg, what, call = parent.frame()) {
   if (!(length(x) %in% c(1L, n))) {
+    allowed <- if (n == 1L) "1" else paste("1 or", n)
     cli::cli_abort(
-      "{.arg {arg}} must have length 1 or {n} (one per {what}); it has length {length(x)}.",
+      "{.arg {arg}} must have length {allowed} (one per {what}); it has length {length(x)}.",
       call = call
     )
   }

@@ -58,7 +58,7 @@ family_support <- function(dist, p1, p2) {
 #' pr_fun <- prior_builder(prior = "uniform", p1 = -10, p2 = 10)
 #' round(exp(pr_fun(c(-11, -5, 0, 4, 10, 12))), 3)
 prior_builder <- function(prior, p1 = NA, p2 = NA) {
-  check_prior(prior, p1, p2, arg = "prior")
+  check_prior(prior, p1, p2, arg = "prior", parg = c("p1", "p2"))
   code <- prior_families[[prior]]
   p1 <- as.numeric(p1)
   p2 <- as.numeric(p2)
@@ -66,7 +66,7 @@ prior_builder <- function(prior, p1 = NA, p2 = NA) {
 }
 
 # Validates a family name and its parameters; `arg` names the argument.
-check_prior <- function(dist, p1, p2, arg, call = parent.frame()) {
+check_prior <- function(dist, p1, p2, arg, parg = arg, call = parent.frame()) {
   if (!is.character(dist) || length(dist) != 1L || is.na(dist) ||
       !dist %in% names(prior_families)) {
     cli::cli_abort(c(
@@ -76,7 +76,7 @@ check_prior <- function(dist, p1, p2, arg, call = parent.frame()) {
   }
   bad <- function(what) {
     cli::cli_abort(c(
-      "Impossible parameters for the {.val {dist}} prior in {.arg {arg}}: {what}.",
+      "Impossible parameters {.arg {parg}} for the {.val {dist}} prior: {what}.",
       x = "Got p1 = {format_value(p1)} and p2 = {format_value(p2)}."
     ), call = call)
   }
@@ -211,7 +211,7 @@ check_class_spec <- function(spec, cls, n, call = parent.frame()) {
   }
   for (i in seq_len(n_)) {
     d <- spec$dist[i]
-    check_prior(d, spec$p1[i], spec$p2[i], arg = args[1], call = call)
+    check_prior(d, spec$p1[i], spec$p2[i], arg = args[1], parg = args[3:4], call = call)
     check_support(d, spec$p1[i], spec$p2[i], cls, arg = args[1], call = call)
     if (cls != "kappa") check_init(spec$init[i], d, spec$p1[i], spec$p2[i], cls, args[2], call)
   }

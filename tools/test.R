@@ -2,6 +2,7 @@
 # suite and ends with the line "N passed, N failed" (exit status 1 on any
 # failure). Run from the package root: Rscript tools/test.R
 source("tools/deps.R")
+Sys.setenv(NOT_CRAN = "true") # run the snapshot tests too
 res <- testthat::test_dir("tests/testthat", package = "FBC", load_package = "installed",
                           reporter = testthat::ProgressReporter$new(show_praise = FALSE),
                           stop_on_failure = FALSE, stop_on_warning = FALSE)

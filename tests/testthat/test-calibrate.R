@@ -1,0 +1,144 @@
+# Every hyperparameter fixed at these values (scaled space, the order of phi
+# after kappa): thetaS (h, g), alphaS (h, g), thetaB, alphaB, sigma2S,
+# sigma2B, sigma2E, muB.
+ball_fixed <- c(3.5, 0.4, 2, 2, 1.3, 1.8, 3.3, 0.7, 0.15, 0.2)
+ball_fixed_hypers <- function() {
+  set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = ball_fixed[1:2],
+    alphaSDist = "fixed", alphaSInit = ball_fixed[3:4],
+    thetaBDist = "fixed", thetaBInit = ball_fixed[5],
+    alphaBDist = "fixed", alphaBInit = ball_fixed[6],
+    sigma2SDist = "fixed", sigma2SInit = ball_fixed[7],
+    sigma2BDist = "fixed", sigma2BInit = ball_fixed[8],
+    sigma2EDist = "fixed", sigma2EInit = ball_fixed[9],
+    muBDist = "fixed", muBInit = ball_fixed[10]
+  )
+}
+
+test_that("with every hyperparameter fixed, kappa draws match the exact grid posterior", {
+  set.seed(42)
+  fit <- calibrate(ballSim, ballField, nMCMC = 21000, nBurn = 1000, thinning = 2,
+                   hypers = ball_fixed_hypers())
+  draws <- fit$Phi[, "kappa1"]
+  # fixed columns stay at their values and are not sampled
+  expect_equal(unname(fit$Phi[1, -1]), ball_fixed)
+  expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
+  expect_true(all(is.na(fit$acceptance[-1])))
+
+  # Reference, computed independently in plain R: scale as documented,
+  # dense Cholesky log-likelihood on a grid of g, plus the default
+  # Beta(1.1, 1.1) prior stretched over the design range of g.
+  lo <- apply(ballSim[, 2:3], 2, min); hi <- apply(ballSim[, 2:3], 2, max)
+  Xs <- sweep(sweep(ballSim[, 2:3], 2, lo), 2, hi - lo, "/")
+  Xf <- matrix((ballField[, 2] - lo[1]) / (hi[1] - lo[1]))
+  ys <- (ballSim[, 1] - mean(ballSim[, 1])) / sd(ballSim[, 1])
+  yf <- (ballField[, 1] - mean(ballSim[, 1])) / sd(ballSim[, 1])
+  u <- seq(0.0005, 0.9995, by = 0.001)
+  lp <- vapply(u, function(k) dense_loglik(Xf, yf, Xs, ys, c(k, ball_fixed)), 0) +
+    dbeta(u, 1.1, 1.1, log = TRUE)
+  w <- exp(lp - max(lp))
+  cdf <- cumsum(w) / sum(w)
+  g <- lo[2] + u * (hi[2] - lo[2])
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  q_grid <- approx(cdf, g, probs, ties = "ordered")$y
+  sd_grid <- sqrt(sum(w * g^2) / sum(w) - (sum(w * g) / sum(w))^2)
+  expect_equal(unname(quantile(draws, probs)), q_grid, tolerance = 0.1 * sd_grid / mean(q_grid))
+  F_grid <- approxfun(g, cdf, yleft = 0, yright = 1, ties = "ordered")
+  s <- sort(draws)
+  ks <- max(abs(seq_along(s) / length(s) - F_grid(s)))
+  expect_lt(ks, 0.04)
+})
+
+test_that("calibrate() recovers a known calibration parameter", {
+  # exact simulator eta(x, t) = t x^2 + sin(3x); field at t = 1.3 plus noise
+  eta <- function(x, t) t * x^2 + sin(3 * x)
+  set.seed(7)
+  xs <- runif(40); ts <- runif(40, 0.5, 2)
+  sim <- cbind(y = eta(xs, ts), x = xs, t = ts)
+  xf <- seq(0.02, 0.98, length.out = 25)
+  field <- cbind(y = eta(xf, 1.3) + rnorm(25, sd = 0.03), x = xf)
+  fit <- calibrate(sim, field, nMCMC = 4000, nBurn = 1000, thinning = 3)
+  ci <- quantile(fit$Phi[, "kappa1"], c(0.025, 0.975))
+  expect_gt(1.3, ci[[1]])
+  expect_lt(1.3, ci[[2]])
+  # the data sharpen the Beta(1.1, 1.1) prior on [0.5, 2] (sd 1.5 * 0.279 = 0.42)
+  expect_lt(sd(fit$Phi[, "kappa1"]), 0.8 * 1.5 * sqrt(1.1^2 / (2.2^2 * 3.2)))
+  expect_equal(colnames(fit$Phi)[1:3], c("kappa1", "thetaS1", "thetaS2"))
+  # measurement error variance recovered on the standardised scale
+  expect_equal(median(fit$Phi[, "sigma2E"]), (0.03 / sd(sim[, 1]))^2, tolerance = 2)
+})
+
+test_that("the default ball calibration covers g = 9.81", {
+  set.seed(2024)
+  fit <- calibrate(ballSim, ballField)
+  ci <- quantile(fit$Phi[, "kappa1"], c(0.025, 0.975))
+  expect_gt(9.81, ci[[1]])
+  expect_lt(9.81, ci[[2]])
+  expect_true(all(fit$Phi[, "kappa1"] >= 6 & fit$Phi[, "kappa1"] <= 14))
+  acc <- fit$acceptance
+  expect_true(all(acc > 0.15 & acc < 0.75))
+  expect_s3_class(fit, "fbc")
+  expect_named(fit, c("Phi", "estimates", "logPost", "priors", "acceptance", "vars", "data",
+                      "scale", "indices", "priorFns", "proposalSD", "call", "settings",
+                      "logLik", "state", "spec"))
+  expect_equal(rownames(fit$estimates), fit$vars)
+  expect_equal(fit$estimates["kappa1", "median"], median(fit$Phi[, "kappa1"]))
+  expect_equal(fit$estimates["kappa1", "lwr80"], unname(quantile(fit$Phi[, "kappa1"], 0.1)))
+  # the stretched Beta(1.1, 1.1) log density in the units of g
+  lo <- min(ballSim[, "g"]); rng <- diff(range(ballSim[, "g"]))
+  expect_equal(fit$priorFns$kappa1(10), dbeta((10 - lo) / rng, 1.1, 1.1, log = TRUE) - log(rng))
+  expect_output(print(fit), "kappa1")
+})
+
+test_that("set.seed() reproduces a run and the inputs are not modified", {
+  sim <- as.data.frame(ballSim)
+  field <- ballField
+  sim0 <- sim; field0 <- field
+  set.seed(5); a <- calibrate(sim, field, nMCMC = 300, nBurn = 100, thinning = 1)
+  set.seed(5); b <- calibrate(sim, field, nMCMC = 300, nBurn = 100, thinning = 1)
+  expect_identical(a$Phi, b$Phi)
+  expect_identical(a$logPost, b$logPost)
+  expect_identical(sim, sim0)
+  expect_identical(field, field0)
+  set.seed(6); d <- calibrate(sim, field, nMCMC = 300, nBurn = 100, thinning = 1)
+  expect_false(identical(a$Phi, d$Phi))
+})
+
+test_that("logPost is the log-likelihood plus the log priors of the draw", {
+  set.seed(9)
+  fit <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 10)
+  i <- 3
+  phi <- fit$Phi[i, ]
+  lp <- sum(vapply(fit$vars, function(v) fit$priorFns[[v]](phi[[v]]), 0))
+  # the sampler's scale: g mapped to [0, 1] over the design range
+  u <- phi
+  lo <- min(ballSim[, "g"]); rng <- diff(range(ballSim[, "g"]))
+  u[1] <- (phi[1] - lo) / rng
+  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, unname(u))
+  expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
+  expect_equal(fit$logPost[i], ll + lp, tolerance = 1e-8)
+})
+
+test_that("calibrate() explains bad input", {
+  bad_na <- ballField; bad_na[3, 1] <- NA
+  bad_inf <- ballSim; bad_inf[5, 3] <- Inf
+  const <- ballSim; const[, "g"] <- 9.8
+  df_chr <- data.frame(t = ballField[, 1], h = as.character(ballField[, 2]))
+  expect_snapshot(error = TRUE, calibrate(letters, ballField))
+  expect_snapshot(error = TRUE, calibrate(ballSim, df_chr))
+  expect_snapshot(error = TRUE, calibrate(ballSim, bad_na))
+  expect_snapshot(error = TRUE, calibrate(bad_inf, ballField))
+  expect_snapshot(error = TRUE, calibrate(ballSim[, 1:2], ballField))
+  expect_snapshot(error = TRUE, calibrate(ballSim, cbind(ballField, ballField[, 2])))
+  expect_snapshot(error = TRUE, calibrate(const, ballField))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, nMCMC = 100, nBurn = 100))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, thinning = 0))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, nMCMC = 10.5))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kappaDist = "cauchy"))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kappaDist = "uniform", kappaP1 = 14, kappaP2 = 6))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kappaDist = c("beta", "beta")))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kappaInit = 20))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, hypers = set_hyperPriors(thetaSInit = c(1, 2, 3))))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, hypers = list()))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, showProgress = "yes"))
+})
