@@ -1,0 +1,136 @@
+# The application data sets (R/data-apps.R): shapes, columns, the generating
+# formulas of the synthetic ones, and one short calibration per application.
+
+# Priors for precisely measured data: the default IG(1.5, 1.5) on sigma2E and
+# sigma2B (standardised scale) rules out noise below ~30% of the simulator's
+# sd, while the analytic field noise is 0.03 / sd(ys) ~ 5% of it.
+precise_hypers <- function() {
+  set_hyperPriors(sigma2EP1 = 1.1, sigma2EP2 = 0.01, sigma2EInit = 0.01,
+                  sigma2BP1 = 1.1, sigma2BP2 = 0.01, sigma2BInit = 0.01)
+}
+
+# A Phi row (kappa native) on the sampler's scale (kappa on [0, 1]).
+to_sampler_scale <- function(fit, phi) {
+  p <- fit$scale$p; q <- fit$scale$q; cal <- p + seq_len(q)
+  phi[seq_len(q)] <- (phi[seq_len(q)] - fit$scale$xmin[cal]) /
+    (fit$scale$xmax[cal] - fit$scale$xmin[cal])
+  unname(phi)
+}
+
+test_that("analytic data follow the documented generating function and truth", {
+  eta <- function(x1, x2, t1, t2) exp(-t1 * x1) + t2 * sin(pi * x2)
+  expect_equal(dim(analyticSim), c(60L, 5L))
+  expect_equal(colnames(analyticSim), c("y", "x1", "x2", "t1", "t2"))
+  expect_equal(dim(analyticField), c(30L, 3L))
+  expect_equal(colnames(analyticField), c("y", "x1", "x2"))
+  s <- as.data.frame(analyticSim)
+  expect_equal(s$y, eta(s$x1, s$x2, s$t1, s$t2), tolerance = 1e-12)
+  # design ranges: x in [0, 1]^2, t1 in [1, 4], t2 in [0, 2]; a Latin
+  # hypercube has exactly one point in each of the 60 strata of each column
+  lo <- c(0, 0, 1, 0); wid <- c(1, 1, 3, 2)
+  for (j in 1:4) {
+    u <- (analyticSim[, j + 1] - lo[j]) / wid[j]
+    expect_setequal(floor(u * 60), 0:59)
+  }
+  # field = eta at kappa = (2.5, 0.8) + N(0, 0.03^2) noise
+  f <- as.data.frame(analyticField)
+  r <- f$y - eta(f$x1, f$x2, 2.5, 0.8)
+  expect_lt(abs(mean(r)), 3 * 0.03 / sqrt(30))
+  expect_gt(sd(r), 0.02)
+  expect_lt(sd(r), 0.04)
+  # the wrong kappa leaves a much larger residual (root mean square)
+  expect_gt(sqrt(mean((f$y - eta(f$x1, f$x2, 1.5, 1.2))^2)), 5 * sqrt(mean(r^2)))
+})
+
+test_that("spot weld data have the documented shapes, replicates and run filter", {
+  expect_equal(dim(swField), c(120L, 4L))
+  expect_equal(colnames(swField), c("diameter", "gauge", "load", "current"))
+  expect_equal(dim(swSim), c(35L, 5L))
+  expect_equal(colnames(swSim), c("diameter", "gauge", "load", "current", "tau"))
+  expect_false(anyNA(swSim))
+  # 12 settings x 10 replicates
+  settings <- table(apply(swField[, -1], 1, paste, collapse = "/"))
+  expect_length(settings, 12L)
+  expect_true(all(settings == 10L))
+  # rows of sw_sim.txt: case 2 (Gauge 1, t 4.6, Load 4.684, Current 21.68,
+  # NuggetDiam 5.64) is the first complete run, case 52 (5.5, 2, 4.752, 25.24,
+  # tau 7.712) the last
+  expect_equal(unname(swSim[1, ]), c(5.64, 1, 4.684, 21.68, 4.6))
+  expect_equal(unname(swSim[35, ]), c(5.5, 2, 4.752, 25.24, 7.712))
+  # field inputs lie inside the simulator design (they are scaled by it)
+  for (j in 2:4) {
+    expect_true(all(swField[, j] >= min(swSim[, j]) & swField[, j] <= max(swSim[, j])))
+  }
+})
+
+test_that("kinetics data follow the source file and y = 5 exp(-u t)", {
+  expect_equal(dim(kineticField), c(30L, 2L))
+  expect_equal(colnames(kineticField), c("y", "t"))
+  expect_equal(dim(kineticSim), c(21L, 3L))
+  expect_equal(colnames(kineticSim), c("y", "t", "u"))
+  expect_true(all(table(kineticField[, "t"]) == 3L))
+  # first and last rows of field_BayBerPau2007.txt
+  expect_equal(unname(kineticField[1:3, "y"]), c(4.730, 4.720, 4.234))
+  expect_equal(unname(kineticField[28:30, "y"]), c(1.461, 1.157, 1.530))
+  expect_equal(unname(kineticSim[, "y"]), unname(5 * exp(-kineticSim[, "u"] * kineticSim[, "t"])))
+  expect_equal(range(kineticSim[, "t"]), range(kineticField[, "t"]))
+  expect_equal(range(kineticSim[, "u"]), c(0.5, 3))
+  # design_x221.txt case 1 is (0.80, 0.25)
+  expect_equal(unname(kineticSim[1, c("t", "u")]), c(0.11 + 0.8 * 2.9, 0.5 + 0.25 * 2.5))
+})
+
+test_that("a short analytic calibration covers the true kappa", {
+  set.seed(11)
+  fit <- calibrate(analyticSim, analyticField, nMCMC = 2500, nBurn = 1000, thinning = 3,
+                   hypers = precise_hypers())
+  truth <- c(kappa1 = 2.5, kappa2 = 0.8) # data-raw/analytic.R
+  for (k in names(truth)) {
+    ci <- quantile(fit$Phi[, k], c(0.05, 0.95))
+    expect_gt(truth[[k]], ci[[1]])
+    expect_lt(truth[[k]], ci[[2]])
+  }
+  # and learns t2: its 90% interval is far narrower than the prior range [0, 2]
+  expect_lt(diff(quantile(fit$Phi[, "kappa2"], c(0.05, 0.95))), 0.5)
+})
+
+test_that("spot weld calibration handles replicated field inputs", {
+  set.seed(12)
+  fit <- calibrate(swSim, swField, nMCMC = 300, nBurn = 150, thinning = 1)
+  expect_true(all(is.finite(fit$logPost)))
+  expect_true(all(fit$Phi[, "sigma2E"] > 0))
+  # the field block has exact duplicate rows, so Rb is singular; with
+  # sigma2E > 0 the compiled log-likelihood still matches a dense Cholesky
+  d <- fit$data
+  expect_lt(nrow(unique(d$Xf)), nrow(d$Xf))
+  phi <- to_sampler_scale(fit, fit$Phi[nrow(fit$Phi), ])
+  expect_equal(FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget),
+               dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget),
+               tolerance = 1e-8)
+})
+
+test_that("kinetics: calibrated field mean falls within the field data's spread", {
+  set.seed(13)
+  fit <- calibrate(kineticSim, kineticField, nMCMC = 2000, nBurn = 800, thinning = 2)
+  d <- fit$data
+  n <- length(d$yf)
+  # KOH posterior mean of the true process at the field inputs, at the
+  # highest-posterior draw, by plain-R conditioning of the joint Gaussian:
+  # E[zeta | y] = muB + (C_ff - sigma2E I, C_fs) C^-1 (y - (muB, 0))
+  best <- which.max(fit$logPost)
+  phi <- to_sampler_scale(fit, fit$Phi[best, ])
+  C <- dense_cov(d$Xf, d$Xs, phi, fit$settings$nugget)
+  muB <- fit$Phi[best, "muB"]
+  r <- c(d$yf - muB, d$ys)
+  K <- C[seq_len(n), ]
+  diag(K[, seq_len(n)]) <- diag(K[, seq_len(n)]) - fit$Phi[best, "sigma2E"]
+  zeta <- (muB + K %*% solve(C, r)) * fit$scale$ysd + fit$scale$ymean
+  # at each time, within the range of the three replicates widened by their sd
+  y <- kineticField[, "y"]; tt <- kineticField[, "t"]
+  lo <- ave(y, tt, FUN = min) - ave(y, tt, FUN = sd)
+  hi <- ave(y, tt, FUN = max) + ave(y, tt, FUN = sd)
+  expect_true(all(zeta >= lo & zeta <= hi))
+  # the simulator alone cannot do this: 5 exp(-u t) -> 0 while the data level
+  # off near 1.5, so the late-time mean needs a positive discrepancy
+  late <- tt > 2.5
+  expect_true(all(5 * exp(-fit$estimates["kappa1", "median"] * tt[late]) < lo[late]))
+})
