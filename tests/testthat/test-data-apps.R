@@ -11,10 +11,7 @@ precise_hypers <- function() {
 
 # A Phi row (kappa native) on the sampler's scale (kappa on [0, 1]).
 to_sampler_scale <- function(fit, phi) {
-  p <- fit$scale$p; q <- fit$scale$q; cal <- p + seq_len(q)
-  phi[seq_len(q)] <- (phi[seq_len(q)] - fit$scale$xmin[cal]) /
-    (fit$scale$xmax[cal] - fit$scale$xmin[cal])
-  unname(phi)
+  drop(FBC:::sampler_scale(matrix(phi, 1), fit$scale))
 }
 
 test_that("analytic data follow the documented generating function and truth", {
@@ -82,7 +79,7 @@ test_that("kinetics data follow the source file and y = 5 exp(-u t)", {
 test_that("a short analytic calibration covers the true kappa", {
   set.seed(11)
   fit <- calibrate(analyticSim, analyticField, nMCMC = 2500, nBurn = 1000, thinning = 3,
-                   hypers = precise_hypers())
+                   nChains = 2, hypers = precise_hypers())
   truth <- c(kappa1 = 2.5, kappa2 = 0.8) # data-raw/analytic.R
   for (k in names(truth)) {
     ci <- quantile(fit$Phi[, k], c(0.05, 0.95))
@@ -95,7 +92,7 @@ test_that("a short analytic calibration covers the true kappa", {
 
 test_that("spot weld calibration handles replicated field inputs", {
   set.seed(12)
-  fit <- calibrate(swSim, swField, nMCMC = 300, nBurn = 150, thinning = 1)
+  fit <- calibrate(swSim, swField, nMCMC = 300, nBurn = 150, thinning = 1, nChains = 1)
   expect_true(all(is.finite(fit$logPost)))
   expect_true(all(fit$Phi[, "sigma2E"] > 0))
   # the field block has exact duplicate rows, so Rb is singular; with
@@ -110,7 +107,11 @@ test_that("spot weld calibration handles replicated field inputs", {
 
 test_that("kinetics: calibrated field mean falls within the field data's spread", {
   set.seed(13)
-  fit <- calibrate(kineticSim, kineticField, nMCMC = 2000, nBurn = 800, thinning = 2)
+  fit <- calibrate(kineticSim, kineticField, nMCMC = 2000, nBurn = 800, thinning = 2,
+                   nChains = 2)
+  # the convergence diagnostics are computed for every sampled parameter
+  expect_true(all(is.finite(fit$estimates$rhat) & fit$estimates$rhat > 0.99))
+  expect_true(all(is.finite(fit$estimates$ess) & fit$estimates$ess > 0))
   d <- fit$data
   n <- length(d$yf)
   # KOH posterior mean of the true process at the field inputs, at the
