@@ -98,7 +98,8 @@ run_chains <- function(dat, spec, inits, logsds, batches, nMCMC, nBurn, thinning
     res
   }
   if (showProgress && nChains > 1L) {
-    cli::cli_inform("Running {nChains} chains of {nMCMC} iterations on {future::nbrOfWorkers()} worker{?s}.")
+    workers <- future::nbrOfWorkers()
+    cli::cli_inform("Running {nChains} chains of {nMCMC} iterations on {workers} worker{?s}.")
   }
   future.apply::future_lapply(seq_len(nChains), worker, future.seed = TRUE,
                               future.packages = "FBC")
