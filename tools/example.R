@@ -9,6 +9,9 @@ fit <- calibrate(ballSim, ballField)
 cat(sprintf("Calibrated in %.1f s; %d draws kept.\n\nPosterior summary:\n",
             fit$settings$time, nrow(fit$Phi)))
 print(summary(fit))
+msgs <- convergence_messages(fit)
+cat("\nConvergence checks (R-hat < 1.01, bulk ESS >= 400, bounds):\n")
+cat(if (length(msgs)) paste("!", msgs) else "all passed", sep = "\n")
 cat("\nCalibrated prediction of the drop time at h = 2.2 and 2.4 m:\n")
 pred <- predict(fit, c(2.2, 2.4))
 print(data.frame(h = c(2.2, 2.4), pred = pred$pred, se = pred$se,
