@@ -205,9 +205,7 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     settings = settings,
     logLik = unlist(lapply(pieces, `[[`, "logLik")),
     state = list(chains = states,
-                 interrupted = any(vapply(states, `[[`, logical(1), "interrupted")),
-                 last = states[[1]]$last, logsd = states[[1]]$logsd,
-                 batch = states[[1]]$batch, done = states[[1]]$done),
+                 interrupted = any(vapply(states, `[[`, logical(1), "interrupted"))),
     spec = spec
   ), class = "fbc")
 }

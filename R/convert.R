@@ -3,12 +3,7 @@
 # The draws of each chain as a list of matrices (iterations x parameters),
 # with lp__ (log posterior) appended when `lp` is TRUE.
 chain_draws <- function(x, lp = FALSE) {
-  chain <- x$chain %||% rep(1L, nrow(x$Phi))
-  lapply(sort(unique(chain)), function(k) {
-    m <- x$Phi[chain == k, , drop = FALSE]
-    if (lp) m <- cbind(m, lp__ = x$logPost[chain == k])
-    m
-  })
+  lapply(split_chains(x), function(ch) if (lp) cbind(ch$Phi, lp__ = ch$logPost) else ch$Phi)
 }
 
 #' Draws of a calibration for coda and posterior

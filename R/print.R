@@ -33,7 +33,10 @@ print.fbc <- function(x, digits = 3, ...) {
                 if (isTRUE(s$blockSim)) "; joint thetaS/alphaS move 0.234" else ""))
   }
   if (isTRUE(x$state$interrupted)) {
-    cat(sprintf("  interrupted after %d iterations\n", x$state$done))
+    done <- vapply(x$state$chains, `[[`, numeric(1), "done")
+    stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")
+    cat(sprintf("  interrupted: chain %s after %s iterations\n",
+                paste(which(stopped), collapse = ", "), paste(done[stopped], collapse = ", ")))
   }
   cat("\n")
   print(summary(x), digits = digits)

@@ -2,7 +2,8 @@
 #'
 #' `summary()` returns the posterior summary table of every parameter: mean,
 #' median, mode (see [pmode()]), the bounds of the central 50% and 80%
-#' intervals and the standard deviation. The calibration parameters are in
+#' intervals, the standard deviation, and the convergence diagnostics `rhat`
+#' and `ess` (see [convergence_messages()]). The calibration parameters are in
 #' their own units, every hyperparameter on the scaled space of
 #' [calibrate()].
 #'

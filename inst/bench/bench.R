@@ -92,11 +92,13 @@ run_case <- function(prob, nAdapt, nSweep, chunks = 1, floor_ms = NULL) {
   n <- nrow(prob$field); m <- nrow(prob$sim)
   d <- 4 * p + 3 * q + 4
   set.seed(2)
-  fit <- calibrate(prob$sim, prob$field, nMCMC = nAdapt + 2, nBurn = nAdapt, thinning = 1)
+  fit <- calibrate(prob$sim, prob$field, nMCMC = nAdapt + 2, nBurn = nAdapt, thinning = 1,
+                   nChains = 1)
   dat <- fit$data
+  st <- fit$state$chains[[1]]
   args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(fit$spec$table),
-               fit$state$last, unname(fit$state$logsd), 0L, 0L, 1L,
-               blocked, fit$state$batch, fit$settings$nugget, NULL)
+               st$last, unname(st$logsd), 0L, 0L, 1L,
+               blocked, st$batch, fit$settings$nugget, NULL)
   invisible(gc())
   if (blocked) {
     args[[8]] <- nAdapt + nSweep; args[[9]] <- nAdapt; args$blockSim <- TRUE

@@ -70,6 +70,7 @@ test_that("an interrupted run keeps its draws, skips the chains not started, and
   expect_equal(unique(fit$chain), 1L)
   expect_true(all(is.finite(fit$Phi)))
   expect_true(any(grepl("interrupted", convergence_messages(fit))))
+  expect_true(any(capture.output(print(fit)) == "  interrupted: chain 1 after 200 iterations"))
   fit2 <- update(fit, nMCMC = 100)
   expect_equal(nrow(fit2$Phi), 100)
   expect_equal(fit2$Phi[1:50, ], fit$Phi)
