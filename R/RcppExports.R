@@ -9,16 +9,16 @@
     .Call(`_FBC_corr_matrix_r`, X, Y, theta, alpha)
 }
 
-.loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, blockSim = FALSE, decoys = FALSE) {
-    .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, blockSim, decoys)
+.loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE, scale = FALSE) {
+    .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale)
 }
 
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block) {
     .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block)
 }
 
-.fbc_sample <- function(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim = FALSE, blockInit = NULL) {
-    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim, blockInit)
+.fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress) {
+    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress)
 }
 
 .fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget) {

@@ -140,7 +140,8 @@
 calibrate <- function(sim, field, nMCMC = 5000, nBurn = 1000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(),
-                      showProgress = FALSE, blockSim = FALSE) {
+                      showProgress = FALSE, sampler = c("blocks", "single"),
+                      blockSim = NULL) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 3L, min_rows = 3L)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
@@ -165,7 +166,7 @@ calibrate <- function(sim, field, nMCMC = 5000, nBurn = 1000, thinning = 2,
     )
   }
   check_flag(showProgress, "showProgress")
-  check_flag(blockSim, "blockSim")
+  sampler <- check_sampler(sampler, blockSim)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -177,19 +178,19 @@ calibrate <- function(sim, field, nMCMC = 5000, nBurn = 1000, thinning = 2,
   )
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
 
+  moves <- sampler_moves(sampler, spec)
   inits <- dispersed_inits(nChains, dat, spec)
+  states <- lapply(inits, initial_state, spec = spec)
   t0 <- proc.time()[["elapsed"]]
-  results <- run_chains(dat, spec, inits, logsds = rep(list(spec$logsd), nChains),
-                        batches = rep(list(0L), nChains), nMCMC = nMCMC, nBurn = nBurn,
-                        thinning = thinning, adapt = TRUE, showProgress = showProgress,
-                        blockSim = blockSim)
+  results <- run_chains(dat, spec, states, moves, nIter = nMCMC, nBurn = nBurn,
+                        thinning = thinning, showProgress = showProgress)
   elapsed <- proc.time()[["elapsed"]] - t0
   results <- check_chain_results(results, nMCMC)
 
   new_fbc_chains(results, dat, spec, scale, call,
                  settings = list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning,
                                  nChains = length(results), nugget = fbc_nugget,
-                                 blockSim = blockSim, time = elapsed))
+                                 sampler = sampler, moves = moves, time = elapsed))
 }
 
 # Relative nugget added to the diagonal of the simulator correlation matrix.
@@ -331,19 +332,45 @@ prior_functions <- function(table, vars, classes, scale) {
   stats::setNames(fns, vars)
 }
 
-# Runs the compiled sampler once; `init` and `logsd` are on the sampler's
-# scale. An interrupt (Ctrl-C) is reported in the result (`interrupted`,
-# `done`, `kept`), not as a condition: the caller decides what to say.
-sample_chain <- function(dat, spec, init, logsd, nMCMC, nBurn, thinning, adapt, batch,
-                         showProgress, blockSim = FALSE, block = NULL) {
+# Runs the compiled sampler for `nIter` further sweeps from `state` (the
+# sampler's whole state on its own scale: see initial_state()); sweeps up to
+# `nBurn` (counted from the chain's start) adapt the proposals. An interrupt
+# (Ctrl-C) is reported in the result (`interrupted`, `done`, `kept`), not as
+# a condition: the caller decides what to say.
+sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showProgress) {
   progress <- if (showProgress) {
     list(name = "Calibrating", clear = TRUE, show_after = 0,
          format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
   }
-  res <- fbc_sampler_hook()(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), init, logsd,
-                            nMCMC, nBurn, thinning, adapt, batch, fbc_nugget, progress,
-                            blockSim = blockSim, blockInit = block)
-  res
+  fbc_sampler_hook()(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
+                     nIter, nBurn, thinning, fbc_nugget, progress)
+}
+
+# The state a chain starts from: parameters `init` (sampler's scale), the
+# initial proposal SDs, no iteration done. The compiled sampler fills in the
+# rest (adaptation sums, blocks) and returns the state it stopped in.
+initial_state <- function(init, spec) {
+  list(phi = unname(init), logsd = unname(spec$logsd), iter = 0L, batch = 0L)
+}
+
+# The moves of each sampler (see "Sampler" in ?calibrate): index vectors of
+# the jointly moved blocks (1-based, in phi), the scale move, the exact muB draw.
+sampler_moves <- function(sampler, spec) {
+  if (sampler == "single") return(list(blocks = list(), scale = FALSE, gibbsMuB = FALSE))
+  fam <- names(prior_families)[match(spec$table$family, prior_families)]
+  free <- fam != "fixed"
+  cls <- spec$classes
+  block <- function(classes) {
+    idx <- which(cls %in% classes & free)
+    if (length(idx) >= 2L) list(idx) else list()
+  }
+  sig <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
+  mu <- which(cls == "muB")
+  list(
+    blocks = c(block(c("thetaS", "alphaS", "sigma2S")), block(c("thetaB", "alphaB", "sigma2B"))),
+    scale = all(free[sig]),
+    gibbsMuB = free[mu] && fam[mu] == "gaussian" && spec$table$a[mu] == 0 && spec$table$b[mu] == 1
+  )
 }
 
 # The compiled sampler. Tests replace it (options(FBC.sampler = f)) by a

@@ -81,25 +81,23 @@ log_prior_row <- function(tab, j, x) {
 fbc_run <- new.env(parent = emptyenv())
 fbc_run$stop <- FALSE
 
-# Runs one chain per element of `inits` (with matching `logsd`, `batch`)
-# through future_lapply. `adapt` and `nBurn` apply to every chain. Returns
+# Runs one chain per element of `states` (each a sampler state: see
+# initial_state()) for `nIter` further sweeps through future_lapply. Returns
 # the list of sampler results; a chain skipped after an interrupt is NULL.
-run_chains <- function(dat, spec, inits, logsds, batches, nMCMC, nBurn, thinning, adapt,
-                       showProgress, blockSim = FALSE, blocks = NULL) {
+run_chains <- function(dat, spec, states, moves, nIter, nBurn, thinning, showProgress) {
   fbc_run$stop <- FALSE
   on.exit(fbc_run$stop <- FALSE, add = TRUE)
-  nChains <- length(inits)
+  nChains <- length(states)
   progress <- showProgress && nChains == 1L
   worker <- function(k) {
     if (isTRUE(fbc_run$stop)) return(NULL)
-    res <- sample_chain(dat, spec, inits[[k]], logsds[[k]], nMCMC, nBurn, thinning, adapt,
-                        batches[[k]], progress, blockSim = blockSim, block = blocks[[k]])
+    res <- sample_chain(dat, spec, states[[k]], moves, nIter, nBurn, thinning, progress)
     if (res$interrupted) fbc_run$stop <- TRUE
     res
   }
   if (showProgress && nChains > 1L) {
     workers <- future::nbrOfWorkers()
-    cli::cli_inform("Running {nChains} chains of {nMCMC} iterations on {workers} worker{?s}.")
+    cli::cli_inform("Running {nChains} chains of {nIter} iterations on {workers} worker{?s}.")
   }
   future.apply::future_lapply(seq_len(nChains), worker, future.seed = TRUE,
                               future.packages = "FBC")
@@ -152,10 +150,11 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
   })
   states <- lapply(results, function(r) {
-    names(r$acceptance) <- names(r$logsd) <- spec$vars
-    list(last = r$last, logsd = r$logsd, batch = r$batch, done = r$done,
-         interrupted = r$interrupted, acceptance = r$acceptance, kept = r$kept,
-         block = r$block)
+    names(r$acceptance) <- spec$vars
+    logsd <- stats::setNames(r$state$logsd, spec$vars)
+    list(last = r$state$phi, logsd = logsd, done = r$done, nPost = r$nPost,
+         interrupted = r$interrupted, acceptance = r$acceptance,
+         scaleAcceptance = r$scaleAcceptance, kept = r$kept, sampler = r$state)
   })
   if (!is.null(prev)) {
     # append chain k's new draws after its old ones
@@ -169,9 +168,16 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
       s <- states[[k]]
       o <- prev$state$chains[[k]]
       # acceptance over all post-burn-in iterations
-      nNew <- s$done
+      nNew <- s$nPost
       nOld <- o$postDone
-      if (nNew > 0) s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
+      if (nNew > 0) {
+        s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
+        if (!is.na(o$scaleAcceptance %||% NA) && !is.na(s$scaleAcceptance))
+          s$scaleAcceptance <- (o$scaleAcceptance * nOld + s$scaleAcceptance * nNew) / (nOld + nNew)
+      } else {
+        s$acceptance <- o$acceptance
+        s$scaleAcceptance <- o$scaleAcceptance
+      }
       s$postDone <- nOld + nNew
       s$done <- o$done + s$done
       s$kept <- o$kept + s$kept
@@ -179,7 +185,7 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     })
   } else {
     states <- lapply(states, function(s) {
-      s$postDone <- max(0, s$done - settings$nBurn)
+      s$postDone <- s$nPost
       s
     })
   }

@@ -86,3 +86,24 @@ format_value <- function(x) {
   if (length(x) != 1L) return(paste0("a vector of length ", length(x)))
   format(x)
 }
+
+# `sampler` is "blocks" or "single"; the old `blockSim` flag maps onto it.
+check_sampler <- function(sampler, blockSim = NULL, call = parent.frame()) {
+  if (!is.null(blockSim)) {
+    check_flag(blockSim, "blockSim", call = call)
+    new <- if (blockSim) "blocks" else "single"
+    cli::cli_warn(c(
+      "{.arg blockSim} is deprecated; use {.code sampler = \"{new}\"}.",
+      i = "The default sampler ({.val blocks}) moves {.code thetaS}, {.code alphaS} and {.code sigma2S} jointly, and more (see {.help FBC::calibrate})."
+    ), call = call)
+    return(new)
+  }
+  if (!is.character(sampler) || length(sampler) < 1L || anyNA(sampler)) {
+    cli::cli_abort("{.arg sampler} must be {.val blocks} or {.val single}, not {format_value(sampler)}.", call = call)
+  }
+  if (length(sampler) > 1L) sampler <- sampler[1L]
+  if (!sampler %in% c("blocks", "single")) {
+    cli::cli_abort("{.arg sampler} must be {.val blocks} or {.val single}, not {.val {sampler}}.", call = call)
+  }
+  sampler
+}

@@ -30,7 +30,7 @@ print.fbc <- function(x, digits = 3, ...) {
   acc <- x$acceptance[!is.na(x$acceptance)]
   if (length(acc)) {
     cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
-                if (isTRUE(s$blockSim)) "; joint thetaS/alphaS move 0.234" else ""))
+                if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
   }
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")

@@ -33,13 +33,10 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
     cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
   }
   t0 <- proc.time()[["elapsed"]]
-  results <- run_chains(object$data, object$spec,
-                        inits = lapply(states, `[[`, "last"),
-                        logsds = lapply(states, `[[`, "logsd"),
-                        batches = lapply(states, `[[`, "batch"),
-                        nMCMC = nMCMC, nBurn = 0L, thinning = s$thinning, adapt = FALSE,
-                        showProgress = showProgress, blockSim = isTRUE(s$blockSim),
-                        blocks = lapply(states, `[[`, "block"))
+  moves <- s$moves %||% sampler_moves(s$sampler %||% "single", object$spec)
+  results <- run_chains(object$data, object$spec, lapply(states, `[[`, "sampler"), moves,
+                        nIter = nMCMC, nBurn = s$nBurn, thinning = s$thinning,
+                        showProgress = showProgress)
   elapsed <- proc.time()[["elapsed"]] - t0
   # a chain skipped after an interrupt adds nothing and stays where it was
   for (k in seq_along(results)) {
@@ -47,8 +44,8 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
       st <- states[[k]]
       results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
                            logLik = numeric(), kept = 0L, acceptance = st$acceptance,
-                           logsd = st$logsd, last = st$last, batch = st$batch, done = 0L,
-                           interrupted = TRUE, block = st$block)
+                           scaleAcceptance = st$scaleAcceptance, done = 0L, nPost = 0L,
+                           interrupted = TRUE, state = st$sampler)
     }
   }
   interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))

@@ -40,8 +40,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // loglik_path
-Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, bool blockSim, bool decoys);
-RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP blockSimSEXP, SEXP decoysSEXP) {
+Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale);
+RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -51,9 +51,10 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
-    Rcpp::traits::input_parameter< bool >::type blockSim(blockSimSEXP);
+    Rcpp::traits::input_parameter< SEXP >::type groups(groupsSEXP);
     Rcpp::traits::input_parameter< bool >::type decoys(decoysSEXP);
-    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, blockSim, decoys));
+    Rcpp::traits::input_parameter< bool >::type scale(scaleSEXP);
+    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -77,8 +78,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_sample
-Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const arma::vec& init, const arma::vec& logsdInit, int nIter, int nBurn, int thinning, bool adapt, int batchStart, double nugget, SEXP progress, bool blockSim, SEXP blockInit);
-RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP initSEXP, SEXP logsdInitSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP adaptSEXP, SEXP batchStartSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP blockSimSEXP, SEXP blockInitSEXP) {
+Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress);
+RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -87,18 +88,14 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type prior(priorSEXP);
-    Rcpp::traits::input_parameter< const arma::vec& >::type init(initSEXP);
-    Rcpp::traits::input_parameter< const arma::vec& >::type logsdInit(logsdInitSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type moves(movesSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type state(stateSEXP);
     Rcpp::traits::input_parameter< int >::type nIter(nIterSEXP);
     Rcpp::traits::input_parameter< int >::type nBurn(nBurnSEXP);
     Rcpp::traits::input_parameter< int >::type thinning(thinningSEXP);
-    Rcpp::traits::input_parameter< bool >::type adapt(adaptSEXP);
-    Rcpp::traits::input_parameter< int >::type batchStart(batchStartSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< SEXP >::type progress(progressSEXP);
-    Rcpp::traits::input_parameter< bool >::type blockSim(blockSimSEXP);
-    Rcpp::traits::input_parameter< SEXP >::type blockInit(blockInitSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, init, logsdInit, nIter, nBurn, thinning, adapt, batchStart, nugget, progress, blockSim, blockInit));
+    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -122,9 +119,9 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 4},
-    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 8},
+    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 9},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 9},
-    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 16},
+    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 12},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 6},
     {NULL, NULL, 0}
 };

@@ -12,6 +12,8 @@
 #define R_NO_REMAP
 #endif
 #include <RcppArmadillo.h>
+#include <memory>
+#include <vector>
 
 // Prior family codes; R/priors.R keeps the same table (prior_families()).
 enum PriorFamily {
@@ -64,67 +66,97 @@ template <class T> struct Buf2 {
 };
 
 
-// Which cached blocks a move touches (see Posterior::evaluate).
+// Which cached blocks a move touches (see DensePosterior::evaluate). A move
+// of several parameters touches the union of what each one touches.
 struct Touch {
-  bool all = false;       // recompute everything (initialisation)
-  bool simAll = false;    // every thetaS/alphaS moved at once (block move)
-  int simDim = -1;        // thetaS/alphaS dimension moved
-  bool simAlpha = false;  //   ... and it was alphaS
-  bool kappa = false;     // a calibration parameter moved
-  int biasDim = -1;       // thetaB/alphaB dimension moved
-  bool biasAlpha = false; //   ... and it was alphaB
-  bool field = false;     // sigma2S, sigma2B or sigma2E moved
-  // Derived: which caches are recomputed (p = number of experimental inputs).
-  bool simPow(int k) const { return all || simAll || (simAlpha && simDim == k); }
-  bool biasPow(int k) const { return all || (biasAlpha && biasDim == k); }
-  bool simCorr() const { return all || simAll || simDim >= 0; }
-  bool expDim(int p) const { return all || simAll || (simDim >= 0 && simDim < p); }
-  bool cChange(int p) const { return all || simAll || kappa || simDim >= p; }
-  bool biasCorr() const { return all || biasDim >= 0; }
-  bool cross() const { return simCorr() || kappa; }
-  bool fieldBlock() const { return cross() || biasCorr() || field; }
+  std::vector<char> simPow;   // per simulator input: alphaS_k moved (power matrix)
+  std::vector<char> biasPow;  // per experimental input: alphaB_k moved
+  bool simCorr = false;   // some thetaS/alphaS moved: Ds and its factor
+  bool expDim = false;    //   ... of an experimental input: Rs(Xs,Xk), Rs(Xk,Xk)
+  bool cChange = false;   // kappa or a calibration-input thetaS/alphaS moved
+  bool biasCorr = false;  // thetaB/alphaB moved
+  bool cross = false;     // W = Ls^-1 Rs(Xs,Xk) and W'z
+  bool field = false;     // the Schur complement S and its factor
+  bool scale = false;     // sigma2S, sigma2B, sigma2E multiplied by one factor
+  void reset(int nSim, int nBias) {
+    simPow.assign(nSim, 0); biasPow.assign(nBias, 0);
+    simCorr = expDim = cChange = biasCorr = cross = field = scale = false;
+  }
+  void everything(int nSim, int nBias) {
+    simPow.assign(nSim, 1); biasPow.assign(nBias, 1);
+    simCorr = expDim = cChange = biasCorr = cross = field = true;
+    scale = false;
+  }
 };
 
-// The log-likelihood of the KOH model with every factor cached, so that a
-// one-parameter move recomputes only the blocks it touches (model.cpp).
+// The posterior's likelihood part with every factor cached, so that a move
+// recomputes only the blocks it touches. This is the one interface the
+// sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
+// it (dense Cholesky here, model.cpp) is chosen by make_posterior().
 // Parameter vector phi (length d = 4p + 3q + 4), scaled space, kappa on [0,1]:
 //   kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p],
 //   sigma2S, sigma2B, sigma2E, muB.
 class Posterior {
 public:
-  Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-            const arma::vec& ys, double nugget);
+  virtual ~Posterior() {}
   int n, m, p, q, d;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB;
   arma::vec phi;  // current parameters
 
   // Set phi and compute every block; false if a covariance is not PD.
-  bool init(const arma::vec& phi0);
-  double logLik() const { return loglik_.cur(); }
-  // Log-likelihood with phi[j] = value (-Inf if a factor fails); the result
-  // is kept in the scratch buffers until accept() or reject().
-  double propose(int j, double value);
-  // The same for a joint move of all thetaS and alphaS: values[i] is the
-  // new phi[iThetaS + i], i < 2(p+q).
-  double proposeSim(const arma::vec& values);
-  void accept();
-  void reject();
+  virtual bool init(const arma::vec& phi0) = 0;
+  virtual double logLik() const = 0;
+  // Log-likelihood with phi[idx[i]] = values[i] for every i (-Inf if a
+  // factor fails); kept in scratch buffers until accept() or reject().
+  virtual double propose(const std::vector<int>& idx, const arma::vec& values) = 0;
+  double propose(int j, double value) {
+    one_[0] = j; oneVal_[0] = value;
+    return propose(one_, oneVal_);
+  }
+  // Log-likelihood with sigma2S, sigma2B and sigma2E all multiplied by c:
+  // C(c) = c C, so log|C| and the quadratic form follow in closed form.
+  virtual double proposeScale(double c) = 0;
+  virtual void accept() = 0;
+  virtual void reject() = 0;
+  // The log-likelihood is Gaussian in muB: -0.5 |b - muB a|^2 + const with
+  // a = LS^-1 1, b = LS^-1 (yf - W'z); returns a'a and a'b.
+  virtual void muBQuadratic(double& aa, double& ab) const = 0;
 
-  // Cached pieces prediction reuses (current state).
-  const arma::mat& Ls() const { return Ls_.cur(); }
-  const arma::mat& LS() const { return LS_.cur(); }
-  const arma::mat& W() const { return W_.cur(); }
-  const arma::vec& z() const { return z_.cur(); }
-  arma::vec resid() const;  // LS^-1 (yf - muB - W'z)
+  // Prediction at the current state (predict.cpp): for targets with
+  // covariance ks with ys and kf with yf (columns), fills the conditional
+  // mean and variance given y, with prior means mu0 and variances v0.
+  virtual void condition(const arma::mat& ks, const arma::mat& kf, double mu0,
+                         double v0, double* mean, double* var) = 0;
+
+protected:
+  void set_sizes(int n_, int m_, int p_, int q_);
+  std::vector<int> one_ = std::vector<int>(1);
+  arma::vec oneVal_ = arma::vec(1);
+};
+
+// The dense algebra: Cholesky factors of the m x m simulator block and of
+// the n x n Schur complement (model.cpp).
+class DensePosterior : public Posterior {
+public:
+  DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                 const arma::vec& ys, double nugget);
+  bool init(const arma::vec& phi0) override;
+  double logLik() const override { return loglik_.cur(); }
+  double propose(const std::vector<int>& idx, const arma::vec& values) override;
+  double proposeScale(double c) override;
+  void accept() override;
+  void reject() override;
+  void muBQuadratic(double& aa, double& ab) const override;
+  void condition(const arma::mat& ks, const arma::mat& kf, double mu0, double v0,
+                 double* mean, double* var) override;
 
 private:
   const arma::mat& Xf_; const arma::vec& yf_;
   const arma::mat& Xs_; const arma::vec& ys_;
   double nugget_;
   Touch touch_;
-  double old_;
-  int oldj_;
-  arma::vec oldSim_;  // thetaS/alphaS before a proposeSim()
+  std::vector<int> oldIdx_;
+  arma::vec oldVal_;
   std::vector<Buf2<arma::mat> > Ps_, Px_, Pfs_, Pfb_;
   // log-distances per input dimension (fixed): sim-sim, sim-field, field-field
   std::vector<arma::mat> Gs_, Gx_, Gf_;
@@ -134,9 +166,15 @@ private:
   Buf2<arma::vec> z_, c_, wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;
+  arma::mat G_, A_;  // prediction workspaces
   double evaluate(const Touch& t);
   void flip(const Touch& t);
-  Touch touch_for(int j) const;
+  void add_touch(int j, Touch& t) const;
 };
+
+// The algebra for the data at hand (today: always dense).
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget);
 
 #endif

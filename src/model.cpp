@@ -14,14 +14,25 @@
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
-Posterior::Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                     const arma::vec& ys, double nugget)
-  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget) {
-  n = Xf.n_rows; m = Xs.n_rows; p = Xf.n_cols; q = Xs.n_cols - p;
+void Posterior::set_sizes(int n_, int m_, int p_, int q_) {
+  n = n_; m = m_; p = p_; q = q_;
   iKappa = 0; iThetaS = q; iAlphaS = iThetaS + p + q; iThetaB = iAlphaS + p + q;
   iAlphaB = iThetaB + p; iSigma2S = iAlphaB + p; iSigma2B = iSigma2S + 1;
   iSigma2E = iSigma2B + 1; iMuB = iSigma2E + 1; d = iMuB + 1;
   phi.zeros(d);
+}
+
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget) {
+  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget));
+}
+
+DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                               const arma::vec& ys, double nugget)
+  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget) {
+  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols);
+  touch_.reset(p + q, p);
   Ps_.resize(p + q); Px_.resize(p); Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
@@ -46,58 +57,122 @@ Posterior::Posterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   }
 }
 
-// Map a parameter index to the blocks it touches.
-Touch Posterior::touch_for(int j) const {
-  Touch t;
-  if (j < iThetaS) t.kappa = true;
-  else if (j < iAlphaS) t.simDim = j - iThetaS;
-  else if (j < iThetaB) { t.simDim = j - iAlphaS; t.simAlpha = true; }
-  else if (j < iAlphaB) t.biasDim = j - iThetaB;
-  else if (j < iSigma2S) { t.biasDim = j - iAlphaB; t.biasAlpha = true; }
-  else if (j < iMuB) t.field = true;
-  return t;  // muB: only the residual moves
+// Add what a move of parameter j touches to t.
+void DensePosterior::add_touch(int j, Touch& t) const {
+  if (j < iThetaS) {                       // kappa
+    t.cChange = t.cross = t.field = true;
+  } else if (j < iThetaB) {                // thetaS, alphaS
+    const bool alpha = j >= iAlphaS;
+    const int k = alpha ? j - iAlphaS : j - iThetaS;
+    if (alpha) t.simPow[k] = 1;
+    t.simCorr = t.cross = t.field = true;
+    if (k < p) t.expDim = true; else t.cChange = true;
+  } else if (j < iSigma2S) {               // thetaB, alphaB
+    const bool alpha = j >= iAlphaB;
+    const int k = alpha ? j - iAlphaB : j - iThetaB;
+    if (alpha) t.biasPow[k] = 1;
+    t.biasCorr = t.field = true;
+  } else if (j < iMuB) {                   // sigma2S, sigma2B, sigma2E
+    t.field = true;
+  }                                        // muB: only the residual moves
 }
 
-bool Posterior::init(const arma::vec& phi0) {
+bool DensePosterior::init(const arma::vec& phi0) {
   phi = phi0;
-  Touch all; all.all = true;
+  Touch all; all.everything(p + q, p);
   double ll = evaluate(all);
   if (!std::isfinite(ll)) return false;
   flip(all);
   return true;
 }
 
-double Posterior::propose(int j, double value) {
-  oldj_ = j; old_ = phi[j]; phi[j] = value;
-  touch_ = touch_for(j);
+double DensePosterior::propose(const std::vector<int>& idx, const arma::vec& values) {
+  const int k = idx.size();
+  oldIdx_ = idx;
+  oldVal_.set_size(k);
+  touch_.reset(p + q, p);
+  for (int i = 0; i < k; ++i) {
+    oldVal_[i] = phi[idx[i]];
+    phi[idx[i]] = values[i];
+    add_touch(idx[i], touch_);
+  }
   return evaluate(touch_);
 }
 
-double Posterior::proposeSim(const arma::vec& values) {
-  const int k = 2 * (p + q);
-  oldSim_ = phi.subvec(iThetaS, iThetaS + k - 1);
-  phi.subvec(iThetaS, iThetaS + k - 1) = values.head(k);
-  touch_ = Touch(); touch_.simAll = true;
-  oldj_ = -1;
-  return evaluate(touch_);
+// C -> c C: log|Ds| and z'z are unchanged, S -> c S (LS -> sqrt(c) LS,
+// log|S| + n log c, v'v / c) and sigma2S -> c sigma2S.
+double DensePosterior::proposeScale(double c) {
+  oldIdx_.assign({iSigma2S, iSigma2B, iSigma2E});
+  oldVal_ = {phi[iSigma2S], phi[iSigma2B], phi[iSigma2E]};
+  touch_.reset(p + q, p);
+  touch_.scale = true;
+  phi[iSigma2S] *= c; phi[iSigma2B] *= c; phi[iSigma2E] *= c;
+  const double s2S = phi[iSigma2S];
+  if (!(s2S > 0) || !std::isfinite(c)) return R_NegInf;
+  const double ldDs = ldDs_.cur(), zz = zz_.cur();
+  const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
+  ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
+  const double ll = -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS +
+                            zz / s2S + vv);
+  loglik_.alt() = ll;
+  return ll;
 }
 
-void Posterior::accept() { flip(touch_); }
-void Posterior::reject() {
-  if (oldj_ >= 0) phi[oldj_] = old_;
-  else phi.subvec(iThetaS, iThetaS + oldSim_.n_elem - 1) = oldSim_;
+void DensePosterior::accept() {
+  if (touch_.scale) {
+    const double c = phi[iSigma2S] / oldVal_[0];
+    LS_.alt() = std::sqrt(c) * LS_.cur();
+  }
+  flip(touch_);
+}
+
+void DensePosterior::reject() {
+  for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
+}
+
+void DensePosterior::muBQuadratic(double& aa, double& ab) const {
+  arma::vec a(n, arma::fill::ones);
+  arma::vec b = yf_ - wz_.cur();
+  solve_lower(LS_.cur(), a);
+  solve_lower(LS_.cur(), b);
+  aa = arma::dot(a, a);
+  ab = arma::dot(a, b);
+}
+
+// GP conditional through the block factors: g = Ls^-1 ks,
+// h = LS^-1 (kf - W'g), mean = mu0 + g'z / s2S + h'v, var = v0 - g'g / s2S - h'h
+// (ks and kf already carry their variances; v = LS^-1 (yf - muB - W'z)).
+void DensePosterior::condition(const arma::mat& ks, const arma::mat& kf, double mu0,
+                               double v0, double* mean, double* var) {
+  const double s2S = phi[iSigma2S];
+  const arma::vec& z = z_.cur();
+  arma::vec v = yf_ - phi[iMuB] - wz_.cur();
+  solve_lower(LS_.cur(), v);
+  G_ = ks;
+  solve_lower(Ls_.cur(), G_);
+  A_ = kf - W_.cur().t() * G_;
+  solve_lower(LS_.cur(), A_);
+  for (arma::uword c = 0; c < G_.n_cols; ++c) {
+    const double* g = G_.colptr(c);
+    const double* h = A_.colptr(c);
+    double gz = 0.0, gg = 0.0, hv = 0.0, hh = 0.0;
+    for (arma::uword k = 0; k < G_.n_rows; ++k) { gz += g[k] * z[k]; gg += g[k] * g[k]; }
+    for (int k = 0; k < n; ++k) { hv += h[k] * v[k]; hh += h[k] * h[k]; }
+    mean[c] = mu0 + gz / s2S + hv;
+    var[c] = v0 - gg / s2S - hh;
+  }
 }
 
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
-double Posterior::evaluate(const Touch& t) {
+double DensePosterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E];
   // D = sigma2S Ds is positive definite only for sigma2S > 0.
   if (!(s2S > 0)) return R_NegInf;
   const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
   const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
-  const bool simCorr = t.simCorr(), expDim = t.expDim(p), cChange = t.cChange(p);
-  const bool biasCorr = t.biasCorr(), cross = t.cross(), field = t.fieldBlock();
+  const bool simCorr = t.simCorr, expDim = t.expDim, cChange = t.cChange;
+  const bool biasCorr = t.biasCorr, cross = t.cross, field = t.field;
 
   // Simulator block: Ds = Rs(Xs,Xs) + nugget I, Ls = chol(Ds), z = Ls^-1 ys.
   const arma::mat* Ls = &Ls_.cur();
@@ -106,7 +181,7 @@ double Posterior::evaluate(const Touch& t) {
   if (simCorr) {
     std::vector<const arma::mat*>& P = ptrS_;
     for (int k = 0; k < p + q; ++k) {
-      const bool redo = t.simPow(k);
+      const bool redo = t.simPow[k];
       if (redo) pow_from_log(Gs_[k], alphaS[k], Ps_[k].alt(), true);
       P[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
     }
@@ -129,7 +204,7 @@ double Posterior::evaluate(const Touch& t) {
     std::vector<const arma::mat*>& Px = ptrX_;
     std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
-      const bool redo = t.simPow(k);
+      const bool redo = t.simPow[k];
       if (redo) {
         pow_from_log(Gx_[k], alphaS[k], Px_[k].alt(), false);
         pow_from_log(Gf_[k], alphaS[k], Pfs_[k].alt(), true);
@@ -183,7 +258,7 @@ double Posterior::evaluate(const Touch& t) {
     const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
     std::vector<const arma::mat*>& P = ptrB_;
     for (int k = 0; k < p; ++k) {
-      const bool redo = t.biasPow(k);
+      const bool redo = t.biasPow[k];
       if (redo) pow_from_log(Gf_[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
@@ -222,16 +297,16 @@ double Posterior::evaluate(const Touch& t) {
 }
 
 // Make the scratch buffers written by evaluate(t) current.
-void Posterior::flip(const Touch& t) {
-  const bool simCorr = t.simCorr(), expDim = t.expDim(p), cChange = t.cChange(p);
-  const bool biasCorr = t.biasCorr(), cross = t.cross(), field = t.fieldBlock();
+void DensePosterior::flip(const Touch& t) {
+  const bool simCorr = t.simCorr, expDim = t.expDim, cChange = t.cChange;
+  const bool biasCorr = t.biasCorr, cross = t.cross, field = t.field || t.scale;
   for (int k = 0; k < p + q; ++k)
-    if (t.simPow(k)) {
+    if (t.simPow[k]) {
       Ps_[k].flip();
       if (k < p) { Px_[k].flip(); Pfs_[k].flip(); }
     }
   for (int k = 0; k < p; ++k)
-    if (t.biasPow(k)) Pfb_[k].flip();
+    if (t.biasPow[k]) Pfb_[k].flip();
   if (simCorr) { Ls_.flip(); z_.flip(); }
   if (expDim) { Rx_.flip(); Rkk_.flip(); }
   if (cChange) c_.flip();
@@ -241,51 +316,72 @@ void Posterior::flip(const Touch& t) {
   ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip();
 }
 
-arma::vec Posterior::resid() const {
-  arma::vec u = yf_ - phi[iMuB] - wz_.cur();
-  solve_lower(LS_.cur(), u);
-  return u;
-}
 
-// Log-likelihood at each row of `phis`, reached by one-parameter moves from
-// the previous row (every changed coordinate proposed and accepted in turn),
-// so that the cached block updates can be checked against a dense formula.
-// blockSim: thetaS/alphaS change through one joint move (proposeSim);
-// decoys: before each move, propose a different value and reject it.
+// Log-likelihood at each row of `phis`, reached by moves from the previous
+// row, so that the cached block updates can be checked against a dense
+// formula. `groups[j]` > 0 puts parameter j in a group moved jointly (one
+// propose() of the group's changed coordinates); 0 moves it alone.
+// scale: when sigma2S, sigma2B, sigma2E all change by one factor, move them
+// by proposeScale(). decoys: before each move, propose another value and
+// reject it.
 // [[Rcpp::export(.loglik_path)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
                                 const arma::mat& Xs, const arma::vec& ys,
                                 const arma::mat& phis, double nugget,
-                                bool blockSim = false, bool decoys = false) {
-  Posterior post(Xf, yf, Xs, ys, nugget);
+                                SEXP groups = R_NilValue,
+                                bool decoys = false, bool scale = false) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget);
+  Posterior& post = *pp;
   Rcpp::NumericVector out(phis.n_rows, NA_REAL);
   if (!post.init(phis.row(0).t())) return out;
   out[0] = post.logLik();
-  const int s0 = post.iThetaS, s1 = post.iThetaB;
+  const int d = post.d;
+  std::vector<int> grp(d, 0);
+  if (!Rf_isNull(groups)) {
+    const Rcpp::IntegerVector g(groups);
+    for (int j = 0; j < std::min<int>(d, g.size()); ++j) grp[j] = g[j];
+  }
+  const int nG = *std::max_element(grp.begin(), grp.end());
+  auto move = [&](const std::vector<int>& idx, const arma::vec& vals) {
+    if (decoys) {
+      arma::vec dv(vals.n_elem);
+      for (size_t i = 0; i < idx.size(); ++i) dv[i] = 0.5 * (vals[i] + post.phi[idx[i]]) + 0.01;
+      post.propose(idx, dv);
+      post.reject();
+    }
+    const double ll = post.propose(idx, vals);
+    if (!std::isfinite(ll)) { post.reject(); return false; }
+    post.accept();
+    return true;
+  };
   for (arma::uword r = 1; r < phis.n_rows; ++r) {
-    double ll = post.logLik();
     const arma::vec row = phis.row(r).t();
-    if (blockSim && arma::any(row.subvec(s0, s1 - 1) != post.phi.subvec(s0, s1 - 1))) {
-      const arma::vec vals = row.subvec(s0, s1 - 1);
-      if (decoys) {
-        post.proposeSim(0.5 * (vals + post.phi.subvec(s0, s1 - 1)) + 0.01);
-        post.reject();
+    if (scale) {
+      const int a = post.iSigma2S;
+      const double c = row[a] / post.phi[a];
+      bool same = c != 1.0;
+      for (int j = a; j < a + 3; ++j)
+        same = same && std::fabs(row[j] / post.phi[j] - c) < 1e-12 * c;
+      if (same) {
+        if (decoys) { post.proposeScale(1.3); post.reject(); }
+        if (!std::isfinite(post.proposeScale(c))) { post.reject(); return out; }
+        post.accept();
+        for (int j = a; j < a + 3; ++j) post.phi[j] = row[j];  // exact values
       }
-      ll = post.proposeSim(vals);
-      if (!std::isfinite(ll)) { post.reject(); return out; }
-      post.accept();
     }
-    for (int j = 0; j < post.d; ++j) {
+    for (int g = 1; g <= nG; ++g) {
+      std::vector<int> idx;
+      for (int j = 0; j < d; ++j) if (grp[j] == g && row[j] != post.phi[j]) idx.push_back(j);
+      if (idx.empty()) continue;
+      arma::vec vals(idx.size());
+      for (size_t i = 0; i < idx.size(); ++i) vals[i] = row[idx[i]];
+      if (!move(idx, vals)) return out;
+    }
+    for (int j = 0; j < d; ++j) {
       if (row[j] == post.phi[j]) continue;
-      if (decoys) {
-        post.propose(j, 0.5 * (row[j] + post.phi[j]) + 0.01);
-        post.reject();
-      }
-      ll = post.propose(j, row[j]);
-      if (!std::isfinite(ll)) { post.reject(); return out; }
-      post.accept();
+      if (!move(std::vector<int>{j}, arma::vec{row[j]})) return out;
     }
-    out[r] = ll;
+    out[r] = post.logLik();
   }
   return out;
 }

@@ -8,8 +8,9 @@
 //   mean:      as field, v* = s2S + s2B
 //   simulator: kf = s2S Rs(Xk,xk*), ks = s2S Rs(Xs,xk*), mu* = 0, v* = s2S
 //   bias:      kf = s2B Rb(Xf,x*), ks = 0, mu* = muB, v* = s2B
-// With g = Ls^-1 ks, a = kf - W'g, h = LS^-1 a (block inverse of C through
-// the Schur complement S = LS LS'):
+// The conditional itself is the algebra's (Posterior::condition): for the
+// dense one, with g = Ls^-1 ks, a = kf - W'g, h = LS^-1 a (block inverse of C
+// through the Schur complement S = LS LS'):
 //   mean = mu* + g'z / s2S + h'v,   var = v* - g'g / s2S - h'h.
 #include "fbc.h"
 
@@ -18,13 +19,14 @@ Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat
                        const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew,
                        int type, double nugget, int block) {
   // type: 1 field, 2 mean, 3 simulator, 4 bias
-  Posterior post(Xf, yf, Xs, ys, nugget);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget);
+  Posterior& post = *pp;
   const int n = post.n, p = post.p, q = post.q, N = Xnew.n_rows, M = phis.n_rows;
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   if (Xnew.n_cols != (arma::uword)p) Rcpp::stop("Xnew must have %d columns", p);
   if (block < 1) block = 1;
   arma::mat mean(N, M), var(N, M);
-  arma::mat Xk(n, p + q), Ks, Kf, G, A;
+  arma::mat Xk(n, p + q), Ks, Kf;
   Xk.cols(0, p - 1) = Xf;
   const bool simPart = type != 4, biasPart = type != 3;
 
@@ -41,11 +43,6 @@ Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat
     const double s2E = phi[post.iSigma2E], muB = phi[post.iMuB];
     const arma::rowvec kappa = phi.subvec(post.iKappa, post.iThetaS - 1).t();
     for (int j = 0; j < q; ++j) Xk.col(p + j).fill(kappa[j]);
-    const arma::mat& Ls = post.Ls();
-    const arma::mat& LS = post.LS();
-    const arma::mat& W = post.W();
-    const arma::vec& z = post.z();
-    const arma::vec v = post.resid();
     double mu0 = 0.0, v0 = 0.0;
     switch (type) {
       case 1: mu0 = muB; v0 = s2S + s2B + s2E; break;
@@ -61,24 +58,13 @@ Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat
       xk.cols(0, p - 1) = xs;
       for (int j = 0; j < q; ++j) xk.col(p + j).fill(kappa[j]);
       Kf.zeros(n, b);
-      G.zeros(Ls.n_rows, b);
+      Ks.zeros(Xs.n_rows, b);
       if (simPart) {
-        G = s2S * corr_matrix(Xs, xk, thetaS, alphaS);  // ks
-        solve_lower(Ls, G);                             // g = Ls^-1 ks
+        Ks = s2S * corr_matrix(Xs, xk, thetaS, alphaS);
         Kf = s2S * corr_matrix(Xk, xk, thetaS, alphaS);
       }
       if (biasPart) Kf += s2B * corr_matrix(Xf, xs, thetaB, alphaB);
-      A = Kf - W.t() * G;                               // a = kf - W'g
-      solve_lower(LS, A);                               // h = LS^-1 a
-      for (int c = 0; c < b; ++c) {
-        const double* g = G.colptr(c);
-        const double* h = A.colptr(c);
-        double gz = 0.0, gg = 0.0, hv = 0.0, hh = 0.0;
-        for (arma::uword k = 0; k < G.n_rows; ++k) { gz += g[k] * z[k]; gg += g[k] * g[k]; }
-        for (int k = 0; k < n; ++k) { hv += h[k] * v[k]; hh += h[k] * h[k]; }
-        mean.at(r0 + c, i) = mu0 + gz / s2S + hv;
-        var.at(r0 + c, i) = v0 - gg / s2S - hh;
-      }
+      post.condition(Ks, Kf, mu0, v0, mean.colptr(i) + r0, var.colptr(i) + r0);
     }
   }
   return Rcpp::List::create(Rcpp::Named("mean") = mean, Rcpp::Named("var") = var);

@@ -7,29 +7,32 @@ lhs_like <- function(m, k) {
 
 # A sampler that imitates Ctrl-C: the first `calls` calls stop after `stopAt`
 # iterations and return what the compiled sampler returns when interrupted
-# (draws matrix of the full size, rows after `kept` unused; interrupted =
-# TRUE). Install with withr-free options(FBC.sampler = ...).
+# (interrupted = TRUE, the state where it stopped). Install with
+# options(FBC.sampler = ...).
 fake_interrupt_sampler <- function(stopAt, calls = 1L) {
   n <- 0L
-  function(Xf, yf, Xs, ys, prior, init, logsd, nIter, nBurn, thinning, adapt, batch,
-           nugget, progress, ...) {
+  function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress) {
     n <<- n + 1L
     if (n > calls) {
-      return(FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, init, logsd, nIter, nBurn, thinning,
-                               adapt, batch, nugget, progress, ...))
+      return(FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning,
+                               nugget, progress))
     }
-    res <- FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, init, logsd, stopAt, min(nBurn, stopAt - 1L),
-                             thinning, adapt, batch, nugget, progress, ...)
-    full <- matrix(0, (nIter - nBurn) %/% thinning, ncol(res$draws))
-    full[seq_len(res$kept), ] <- res$draws[seq_len(res$kept), ]
-    pad <- function(v) c(v[seq_len(res$kept)], numeric(nrow(full) - res$kept))
-    res$draws <- full
-    res$logPost <- pad(res$logPost)
-    res$logLik <- pad(res$logLik)
+    res <- FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, moves, state, stopAt, nBurn, thinning,
+                             nugget, progress)
     res$interrupted <- TRUE
     res
   }
 }
+
+# The compiled sampler on scaled data `dat` with priors `sp` (build_priors())
+# from the priors' initial values: `sampler` "single" or "blocks".
+run_sampler <- function(dat, sp, sampler, nIter, nBurn, thinning, state = NULL) {
+  moves <- FBC:::sampler_moves(sampler, sp)
+  state <- state %||% FBC:::initial_state(sp$init, sp)
+  FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), moves, state,
+                    nIter, nBurn, thinning, 1e-6, NULL)
+}
+`%||%` <- function(x, y) if (is.null(x)) y else x
 
 # A small, quick calibration of the ball data.
 small_fit <- function(nChains = 2, seed = 1, ...) {

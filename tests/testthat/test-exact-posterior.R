@@ -104,7 +104,7 @@ test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
   }
 })
 
-test_that("the joint thetaS move (blockSim = TRUE) matches the 2-D grid posterior of thetaS", {
+test_that("the joint thetaS move (default sampler) matches the 2-D grid posterior of thetaS", {
   # Everything but thetaS = (thetaS1, thetaS2) fixed, Gamma(4, 2) priors on
   # both; the reference is the plain-R dense likelihood times the priors on a
   # grid of thetaS. The block move proposes both at once on the log scale, so
@@ -127,8 +127,8 @@ test_that("the joint thetaS move (blockSim = TRUE) matches the 2-D grid posterio
   )
   kappa0 <- min(Xs[, 2]) + 0.4 * diff(range(Xs[, 2]))
   fit <- calibrate(sim, field, nMCMC = 12000, nBurn = 2000, thinning = 2, nChains = 2,
-                   kappaDist = "fixed", kappaInit = kappa0, hypers = hyp, blockSim = TRUE)
-  expect_true(fit$settings$blockSim)
+                   kappaDist = "fixed", kappaInit = kappa0, hypers = hyp)
+  expect_identical(fit$settings$sampler, "blocks")
   expect_equal(fit$acceptance[["thetaS1"]], fit$acceptance[["thetaS2"]])
   g <- seq(0.02, 8, length.out = 100)
   dens <- grid_posterior_2d(fit, 2:3, g, function(x) stats::dgamma(x, 4, 2, log = TRUE))

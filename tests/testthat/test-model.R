@@ -58,13 +58,24 @@ test_that("the cached one-move path equals the dense log-likelihood at every row
     expect_equal(path, dense, tolerance = 1e-8)
     # returning to the start reproduces the from-scratch value
     expect_equal(path[nrow(phis)], path[1], tolerance = 1e-10)
-    # the same with a rejected decoy proposal before every move, and with
-    # thetaS/alphaS moved jointly (the sampler's blockSim move)
+    # the same with a rejected decoy proposal before every move, and with the
+    # default sampler's joint moves: (thetaS, alphaS, sigma2S), (thetaB,
+    # alphaB, sigma2B), and sigma2S, sigma2B, sigma2E scaled by one factor
     decoy <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE)
     expect_equal(decoy, dense, tolerance = 1e-8)
-    block <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, blockSim = TRUE,
-                          decoys = TRUE)
-    expect_equal(block, dense, tolerance = 1e-8)
+    idx <- FBC:::param_indices(p, q)
+    groups <- integer(ncol(phis))
+    groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
+    groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
+    sig <- c(idx$sigma2S, idx$sigma2B, idx$sigma2E)
+    scaled <- phis[c(1, 1, 1), ]
+    scaled[2, sig] <- scaled[1, sig] * 1.7
+    scaled[3, sig] <- scaled[2, sig] * 0.3
+    phis2 <- rbind(phis, scaled, phis[2, ], scaled[3, ])
+    dense2 <- apply(phis2, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+    block <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis2, 1e-6, groups = groups,
+                          decoys = TRUE, scale = TRUE)
+    expect_equal(block, dense2, tolerance = 1e-8)
   }
 })
 
@@ -78,24 +89,27 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
                            p, q)
   set.seed(3)
-  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), sp$init, sp$logsd,
-                     60L, 20L, 4L, TRUE, 0L, 1e-6, NULL)
+  res <- run_sampler(dat, sp, "single", 60L, 20L, 4L)
   acc <- res$acceptance[!is.na(res$acceptance)]
   expect_true(all(acc > 0 & acc < 1))  # both branches were taken
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
   expect_equal(res$logLik, dense, tolerance = 1e-8)
 
-  # the joint thetaS/alphaS move: the block shares one acceptance rate and
-  # its adapted proposal factor is returned
+  # the default sampler: each block shares one acceptance rate and returns
+  # its adapted proposal factor; muB is drawn exactly (always accepted)
   set.seed(4)
-  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), sp$init, sp$logsd,
-                     260L, 200L, 4L, TRUE, 0L, 1e-6, NULL, blockSim = TRUE)
-  sim <- unname(unlist(FBC:::param_indices(p, q)[c("thetaS", "alphaS")]))
-  expect_identical(res$block$index, sim)
+  res <- run_sampler(dat, sp, "blocks", 260L, 200L, 4L)
+  idx <- FBC:::param_indices(p, q)
+  sim <- unname(unlist(idx[c("thetaS", "alphaS", "sigma2S")]))
+  b1 <- res$state$blocks[[1]]
+  expect_identical(b1$index, sim)
   expect_length(unique(res$acceptance[sim]), 1)
   expect_true(res$acceptance[sim[1]] > 0 && res$acceptance[sim[1]] < 1)
-  expect_equal(dim(res$block$chol), c(length(sim), length(sim)))
-  expect_identical(res$logsd[sim], sp$logsd[sim])  # single-site SDs left alone
+  expect_equal(dim(b1$chol), c(length(sim), length(sim)))
+  expect_true(b1$shaped)
+  expect_identical(res$state$logsd[sim], sp$logsd[sim])  # single-site SDs left alone
+  expect_identical(res$acceptance[idx$muB], 1)
+  expect_true(res$scaleAcceptance > 0 && res$scaleAcceptance < 1)
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
   expect_equal(res$logLik, dense, tolerance = 1e-8)
 })
@@ -136,8 +150,9 @@ test_that("a covariance that is not positive definite gives -Inf, not a crash", 
   logsd <- sp$logsd
   logsd[idx$sigma2E] <- log(5)
   set.seed(6)
-  res <- .fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, tab, sp$init, logsd,
-                     40L, 0L, 1L, FALSE, 0L, 1e-6, NULL)
+  sp$table <- tab
+  sp$logsd <- logsd
+  res <- run_sampler(dat, sp, "single", 40L, 0L, 1L)
   expect_equal(res$kept, 40L)
   expect_true(all(is.finite(res$logLik)))
   dense <- apply(res$draws, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))

@@ -38,25 +38,57 @@ test_that("update() continues each chain from where it stopped", {
   }
 })
 
-test_that("update() keeps a blocked run's adapted joint proposal", {
-  fit <- small_fit(nChains = 2, blockSim = TRUE)
-  sim <- unlist(fit$indices[c("thetaS", "alphaS")], use.names = FALSE)
-  b1 <- fit$state$chains[[1]]$block
+test_that("update() keeps the adapted joint proposals and goes on as one run", {
+  fit <- small_fit(nChains = 2)  # the default sampler: joint moves
+  sim <- unlist(fit$indices[c("thetaS", "alphaS", "sigma2S")], use.names = FALSE)
+  b1 <- fit$state$chains[[1]]$sampler$blocks[[1]]
   expect_identical(b1$index, sim)
   expect_true(b1$shaped)  # 100 burn-in sweeps shaped it to the draws' covariance
   # no longer diagonal: the shape came from the burn-in draws
   expect_gt(sum(abs(b1$chol[lower.tri(b1$chol)])), 0)
   set.seed(3)
   up <- update(fit, nMCMC = 40)
-  expect_true(up$settings$blockSim)
+  expect_identical(up$settings$sampler, "blocks")
   for (k in 1:2) {
     # frozen: the same factor and scale as the original run, not restarted
-    expect_identical(up$state$chains[[k]]$block$chol, fit$state$chains[[k]]$block$chol)
-    expect_identical(up$state$chains[[k]]$block$logscale, fit$state$chains[[k]]$block$logscale)
+    for (b in seq_along(fit$state$chains[[k]]$sampler$blocks)) {
+      old <- fit$state$chains[[k]]$sampler$blocks[[b]]
+      new <- up$state$chains[[k]]$sampler$blocks[[b]]
+      expect_identical(new[c("chol", "logscale", "shaped")], old[c("chol", "logscale", "shaped")])
+    }
+    expect_identical(up$state$chains[[k]]$sampler$scaleLogsd, fit$state$chains[[k]]$sampler$scaleLogsd)
     acc <- up$state$chains[[k]]$acceptance[sim]
     expect_length(unique(acc), 1)
   }
   expect_equal(as.vector(table(up$chain)), c(120, 120))
+})
+
+test_that("a run split by update() gives the same draws as one run", {
+  # The sampler's state goes in and comes out whole, so with the same RNG
+  # stream, sweeps run in two pieces equal sweeps run at once (calibrate()
+  # and update() draw fresh streams per call, so call the sampler directly).
+  set.seed(11)
+  first <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 2, nChains = 1)
+  st <- first$state$chains[[1]]$sampler
+  moves <- first$settings$moves
+  set.seed(12)
+  a <- FBC:::sample_chain(first$data, first$spec, st, moves, 100L, 100L, 2L, FALSE)
+  set.seed(12)
+  b1 <- FBC:::sample_chain(first$data, first$spec, st, moves, 40L, 100L, 2L, FALSE)
+  b2 <- FBC:::sample_chain(first$data, first$spec, b1$state, moves, 60L, 100L, 2L, FALSE)
+  expect_identical(rbind(b1$draws[seq_len(b1$kept), ], b2$draws[seq_len(b2$kept), ]),
+                   a$draws[seq_len(a$kept), ])
+  expect_identical(b2$state, a$state)
+  # a burn-in split in two pieces adapts exactly as in one piece
+  sp <- first$spec
+  st0 <- FBC:::initial_state(sp$init, sp)
+  set.seed(13)
+  a <- FBC:::sample_chain(first$data, sp, st0, moves, 160L, 120L, 1L, FALSE)
+  set.seed(13)
+  b1 <- FBC:::sample_chain(first$data, sp, st0, moves, 73L, 120L, 1L, FALSE)
+  b2 <- FBC:::sample_chain(first$data, sp, b1$state, moves, 87L, 120L, 1L, FALSE)
+  expect_identical(b2$draws, a$draws)
+  expect_identical(b2$state, a$state)
 })
 
 test_that("update() checks its arguments", {
