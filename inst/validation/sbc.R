@@ -84,8 +84,9 @@ ranks <- suppressWarnings(t(vapply(seq_len(L), function(l) {
   stopifnot(!is.null(R))
   y <- drop(crossprod(R, rnorm(n + m))) + c(rep(truth[11], n), rep(0, m))
   dat <- list(Xf = Xf, yf = y[seq_len(n)], Xs = Xs, ys = y[n + seq_len(m)])
-  res <- FBC:::sample_chain(dat, spec, spec$init, spec$logsd, nMCMC, nBurn, thin,
-                            adapt = TRUE, batch = 0L, showProgress = FALSE)
+  res <- FBC:::sample_chain(dat, spec, FBC:::initial_state(spec$init, spec),
+                            FBC:::sampler_moves("blocks", spec), nMCMC, nBurn, thin,
+                            showProgress = FALSE)
   colSums(res$draws < matrix(truth, nDraws, length(truth), byrow = TRUE))
 }, numeric(length(priors)))))
 elapsed <- proc.time()[["elapsed"]] - t0

@@ -50,8 +50,11 @@ small_fit <- function(nChains = 2, seed = 1, ...) {
 # x parameters matrix of ranks in 0..nDraws. `sigma2EFactor` != 1 generates
 # the data with a wrong noise variance (a sampler targeting the wrong
 # posterior, seen from the other side), to show the check has power.
+# `joint = TRUE` also samples thetaS (Gamma(4, 2)) and sigma2B
+# (InvGamma(4, 0.3)), so that the default sampler's joint moves all act: the
+# (thetaS, sigma2S) block, the variance scale move and the exact muB draw.
 sbc_ranks <- function(L, n = 5, m = 12, nDraws = 99, thin = 10, nBurn = 500, seed = 1,
-                      sigma2EFactor = 1) {
+                      sigma2EFactor = 1, sampler = "blocks", joint = FALSE) {
   set.seed(seed)
   p <- 1; q <- 1
   Xf <- matrix(seq(0.05, 0.95, length.out = n), n, 1)
@@ -64,16 +67,21 @@ sbc_ranks <- function(L, n = 5, m = 12, nDraws = 99, thin = 10, nBurn = 500, see
     sigma2EDist = "inversegamma", sigma2EInit = 0.05, sigma2EP1 = 4, sigma2EP2 = 0.15,
     muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 0.5
   )
+  if (joint) {
+    hyp$thetaS <- list(dist = "gamma", init = 2, p1 = 4, p2 = 2)
+    hyp$sigma2B <- list(dist = "inversegamma", init = 0.1, p1 = 4, p2 = 0.3)
+  }
   scale <- list(xmin = c(0, 0), xmax = c(1, 1), ymean = 0, ysd = 1, p = p, q = q,
                 names = list(response = "y", inputs = "x", calibration = "t"))
   kappaSpec <- check_class_spec(list(dist = "beta", init = NA, p1 = 2, p2 = 2), "kappa", q)
   spec <- build_priors(kappaSpec, hyp, scale, p, q)
-  free <- c("kappa1", "sigma2S", "sigma2E", "muB")
+  free <- c("kappa1", "sigma2S", "sigma2E", "muB", if (joint) c("thetaS1", "thetaS2", "sigma2B"))
   draw_prior <- function() {
     phi <- spec$init
     phi[match(free, spec$vars)] <- c(
       stats::rbeta(1, 2, 2), 1 / stats::rgamma(1, 4, rate = 3),
-      1 / stats::rgamma(1, 4, rate = 0.15), stats::rnorm(1, 0, 0.5)
+      1 / stats::rgamma(1, 4, rate = 0.15), stats::rnorm(1, 0, 0.5),
+      if (joint) c(stats::rgamma(2, 4, 2), 1 / stats::rgamma(1, 4, rate = 0.3))
     )
     phi
   }
@@ -85,11 +93,11 @@ sbc_ranks <- function(L, n = 5, m = 12, nDraws = 99, thin = 10, nBurn = 500, see
     C <- dense_cov(Xf, Xs, gen, fbc_nugget)
     y <- drop(t(chol(C)) %*% stats::rnorm(n + m)) + c(rep(truth[length(truth)], n), rep(0, m))
     dat <- list(Xf = Xf, yf = y[seq_len(n)], Xs = Xs, ys = y[n + seq_len(m)])
-    res <- sample_chain(dat, spec, spec$init, spec$logsd, nMCMC, nBurn, thin,
-                        adapt = TRUE, batch = 0L, showProgress = FALSE)
+    res <- sample_chain(dat, spec, initial_state(spec$init, spec), sampler_moves(sampler, spec),
+                        nMCMC, nBurn, thin, showProgress = FALSE)
     j <- match(free, spec$vars)
     colSums(res$draws[, j, drop = FALSE] < matrix(truth[j], nDraws, length(j), byrow = TRUE))
-  }, numeric(4)))
+  }, numeric(length(free))))
 }
 
 # Chi-square test of uniform ranks in `bins` equal bins (ranks 0..nDraws).

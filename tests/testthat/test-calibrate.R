@@ -28,6 +28,8 @@ test_that("the default ball calibration covers g = 9.81", {
   expect_lt(9.81, ci[[2]])
   expect_true(all(fit$Phi[, "kappa1"] >= 6 & fit$Phi[, "kappa1"] <= 14))
   acc <- fit$acceptance
+  expect_identical(acc[["muB"]], 1)  # drawn exactly from its full conditional
+  acc <- acc[names(acc) != "muB"]
   expect_true(all(acc > 0.15 & acc < 0.75))
   expect_s3_class(fit, "fbc")
   expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars", "data",

@@ -139,3 +139,126 @@ test_that("the joint thetaS move (default sampler) matches the 2-D grid posterio
     expect_lt(err, 0.12, label = paste("thetaS", j))
   }
 })
+
+# A small problem drawn from the model (n = 6, m = 20, p = q = 1) for the
+# exact tests of the default sampler's joint moves.
+small_model_problem <- function(seed) {
+  set.seed(seed)
+  n <- 6; m <- 20
+  Xf <- matrix(seq(0, 1, length.out = n), n, 1)
+  Xs <- lhs_like(m, 2)
+  truth <- c(0.4, 1.5, 3, 1.9, 1.9, 2, 1.9, 1, 0.3, 0.05, 0.2)
+  y <- drop(t(chol(dense_cov(Xf, Xs, truth))) %*% stats::rnorm(n + m)) + c(rep(0.2, n), rep(0, m))
+  list(sim = cbind(y = y[n + seq_len(m)], x = Xs[, 1], t = Xs[, 2]),
+       field = cbind(y = y[seq_len(n)], x = Xf[, 1]), kappa0 = min(Xs[, 2]) + 0.4 * diff(range(Xs[, 2])))
+}
+
+test_that("the exact muB draw matches muB's closed-form Gaussian posterior", {
+  # Everything but muB fixed; muB ~ N(0.5, 0.8^2). The log-likelihood is
+  # Gaussian in muB, so the posterior is N(mean, sd) computed here from the
+  # plain-R dense likelihood at three points (a quadratic's exact fit).
+  pr <- small_model_problem(21)
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(1.5, 3), alphaSDist = "fixed", alphaSInit = 1.9,
+    thetaBDist = "fixed", thetaBInit = 2, alphaBDist = "fixed", alphaBInit = 1.9,
+    sigma2SDist = "fixed", sigma2SInit = 1, sigma2BDist = "fixed", sigma2BInit = 0.3,
+    sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "gaussian", muBP1 = 0.5, muBP2 = 0.8
+  )
+  set.seed(22)
+  fit <- calibrate(pr$sim, pr$field, nMCMC = 4100, nBurn = 100, thinning = 1, nChains = 1,
+                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
+  expect_identical(fit$acceptance[["muB"]], 1)
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  lpost <- function(mu) {
+    phi[length(phi)] <- mu
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget) + stats::dnorm(mu, 0.5, 0.8, log = TRUE)
+  }
+  f <- vapply(c(-1, 0, 1), lpost, numeric(1))
+  a <- (f[3] + f[1] - 2 * f[2]) / 2  # lpost(mu) = a mu^2 + b mu + c
+  b <- (f[3] - f[1]) / 2
+  sd <- sqrt(-1 / (2 * a)); mean <- -b / (2 * a)
+  draws <- fit$Phi[, "muB"]
+  # 4000 independent draws: mean error ~0.016 sd, sd error ~1.1%
+  expect_lt(abs(mean(draws) - mean) / sd, 0.07)
+  expect_lt(abs(stats::sd(draws) / sd - 1), 0.05)
+  expect_gt(stats::ks.test(draws, "pnorm", mean, sd)$p.value, 0.001)
+})
+
+test_that("the scale move and single-site variance moves match the 3-D grid posterior", {
+  # sigma2S, sigma2B, sigma2E free (InvGamma(3, 1), (3, 0.5), (3, 0.2)),
+  # everything else fixed: the default sampler moves each variance alone and
+  # all three by one factor (C -> c C). A missing Jacobian (3e) or a wrong
+  # closed-form likelihood of the scale move would shift these marginals.
+  pr <- small_model_problem(23)
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(1.5, 3), alphaSDist = "fixed", alphaSInit = 1.9,
+    thetaBDist = "fixed", thetaBInit = 2, alphaBDist = "fixed", alphaBInit = 1.9,
+    sigma2SDist = "inversegamma", sigma2SInit = 1, sigma2SP1 = 3, sigma2SP2 = 1,
+    sigma2BDist = "inversegamma", sigma2BInit = 0.3, sigma2BP1 = 3, sigma2BP2 = 0.5,
+    sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 3, sigma2EP2 = 0.2,
+    muBDist = "fixed", muBInit = 0.2
+  )
+  set.seed(24)
+  fit <- calibrate(pr$sim, pr$field, nMCMC = 16000, nBurn = 1000, thinning = 3, nChains = 2,
+                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
+  expect_true(fit$settings$moves$scale)
+  sc <- fit$state$chains[[1]]$scaleAcceptance
+  expect_true(sc > 0.1 && sc < 0.9)
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  ix <- unlist(fit$indices[c("sigma2S", "sigma2B", "sigma2E")])
+  # grids on the log scale, covering the posterior (exp(-4) .. exp(2.5))
+  lg <- seq(-4.5, 2.5, length.out = 36)
+  g <- exp(lg)
+  shape <- c(3, 3, 3); rate <- c(1, 0.5, 0.2)
+  lp <- array(NA_real_, c(36, 36, 36))
+  for (i in 1:36) for (j in 1:36) for (k in 1:36) {
+    phi[ix] <- g[c(i, j, k)]
+    lp[i, j, k] <- dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget) +
+      sum(shape * log(rate) - lgamma(shape) - (shape + 1) * log(g[c(i, j, k)]) - rate / g[c(i, j, k)]) +
+      sum(lg[c(i, j, k)])  # density of log sigma2 on the log grid
+  }
+  dens <- exp(lp - max(lp))
+  for (a in 1:3) {
+    marg <- apply(dens, a, sum)
+    ref <- grid_quantile(lg, marg, c(0.1, 0.25, 0.5, 0.75, 0.9))
+    x <- log(fit$Phi[, ix[a]])
+    got <- stats::quantile(x, c(0.1, 0.25, 0.5, 0.75, 0.9), names = FALSE)
+    # ESS of several hundred to thousands: quantile errors ~0.05 sd; grid
+    # spacing 0.2 on the log scale adds ~0.03 sd
+    expect_lt(max(abs(got - ref)) / stats::sd(x), 0.2, label = names(ix)[a])
+  }
+})
+
+test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
+  pr <- small_model_problem(25)
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(1.5, 3), alphaSDist = "fixed", alphaSInit = 1.9,
+    thetaBDist = "gamma", thetaBInit = 2, thetaBP1 = 3, thetaBP2 = 1,
+    alphaBDist = "fixed", alphaBInit = 1.9, sigma2SDist = "fixed", sigma2SInit = 1,
+    sigma2BDist = "inversegamma", sigma2BInit = 0.3, sigma2BP1 = 3, sigma2BP2 = 0.5,
+    sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0.2
+  )
+  set.seed(26)
+  fit <- calibrate(pr$sim, pr$field, nMCMC = 12000, nBurn = 1000, thinning = 2, nChains = 2,
+                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
+  ix <- c(fit$indices$thetaB, fit$indices$sigma2B)
+  expect_identical(fit$settings$moves$blocks, list(ix))
+  expect_equal(fit$acceptance[["thetaB1"]], fit$acceptance[["sigma2B"]])
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  lg <- seq(-5, 3, length.out = 81)
+  g <- exp(lg)
+  lp <- outer(seq_along(g), seq_along(g), Vectorize(function(i, j) {
+    phi[ix] <- g[c(i, j)]
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget) +
+      stats::dgamma(g[i], 3, 1, log = TRUE) +
+      3 * log(0.5) - lgamma(3) - 4 * log(g[j]) - 0.5 / g[j] + lg[i] + lg[j]
+  }))
+  dens <- exp(lp - max(lp))
+  for (a in 1:2) {
+    err <- marginal_quantile_error(log(fit$Phi[, ix[a]]), dens, a, lg)
+    expect_lt(err, 0.15, label = names(fit$Phi[1, ix[a], drop = FALSE]))
+  }
+})
