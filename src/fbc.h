@@ -154,6 +154,9 @@ private:
   const arma::mat& Xf_; const arma::vec& yf_;
   const arma::mat& Xs_; const arma::vec& ys_;
   double nugget_;
+  int nu_;                 // distinct field input rows
+  arma::mat Xu_;           // ... and their values (nu x p)
+  std::vector<int> grp_;   // field row i is distinct row grp_[i]
   Touch touch_;
   std::vector<int> oldIdx_;
   arma::vec oldVal_;

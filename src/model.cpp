@@ -33,15 +33,31 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
   : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget) {
   set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols);
   touch_.reset(p + q, p);
+  // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
+  // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
+  // (row i of Xf is row grp_[i] of Xu_).
+  grp_.resize(n);
+  std::vector<int> first;
+  for (int i = 0; i < n; ++i) {
+    int g = -1;
+    for (size_t u = 0; u < first.size() && g < 0; ++u)
+      if (arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
+    if (g < 0) { g = first.size(); first.push_back(i); }
+    grp_[i] = g;
+  }
+  nu_ = first.size();
+  Xu_.set_size(nu_, p);
+  for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
   Ps_.resize(p + q); Px_.resize(p); Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
     for (int k = 0; k < p; ++k) {
-      Px_[k].b[b].zeros(m, n); Pfs_[k].b[b].zeros(n, n); Pfb_[k].b[b].zeros(n, n);
+      Px_[k].b[b].zeros(m, nu_); Pfs_[k].b[b].zeros(nu_, nu_); Pfb_[k].b[b].zeros(nu_, nu_);
     }
-    Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, n); Rkk_.b[b].zeros(n, n);
-    W_.b[b].zeros(m, n); Q_.b[b].zeros(n, n); Rb_.b[b].zeros(n, n); LS_.b[b].zeros(n, n);
-    z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(n);
+    Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); Rkk_.b[b].zeros(nu_, nu_);
+    W_.b[b].zeros(m, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
+    LS_.b[b].zeros(n, n);
+    z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(nu_);
   }
   u_.zeros(n);
   ptrS_.resize(p + q); ptrX_.resize(p); ptrF_.resize(p); ptrB_.resize(p);
@@ -51,9 +67,9 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
     log_dist(Xs.col(k), Xs.col(k), Gs_[k], true);
   }
   for (int k = 0; k < p; ++k) {
-    Gx_[k].zeros(m, n); Gf_[k].zeros(n, n);
-    log_dist(Xs.col(k), Xf.col(k), Gx_[k], false);
-    log_dist(Xf.col(k), Xf.col(k), Gf_[k], true);
+    Gx_[k].zeros(m, nu_); Gf_[k].zeros(nu_, nu_);
+    log_dist(Xs.col(k), Xu_.col(k), Gx_[k], false);
+    log_dist(Xu_.col(k), Xu_.col(k), Gf_[k], true);
   }
 }
 
@@ -132,7 +148,9 @@ void DensePosterior::reject() {
 
 void DensePosterior::muBQuadratic(double& aa, double& ab) const {
   arma::vec a(n, arma::fill::ones);
-  arma::vec b = yf_ - wz_.cur();
+  arma::vec b(n);
+  const arma::vec& wz = wz_.cur();
+  for (int i = 0; i < n; ++i) b[i] = yf_[i] - wz[grp_[i]];
   solve_lower(LS_.cur(), a);
   solve_lower(LS_.cur(), b);
   aa = arma::dot(a, a);
@@ -146,11 +164,16 @@ void DensePosterior::condition(const arma::mat& ks, const arma::mat& kf, double 
                                double v0, double* mean, double* var) {
   const double s2S = phi[iSigma2S];
   const arma::vec& z = z_.cur();
-  arma::vec v = yf_ - phi[iMuB] - wz_.cur();
+  const arma::vec& wz = wz_.cur();
+  arma::vec v(n);
+  for (int i = 0; i < n; ++i) v[i] = yf_[i] - phi[iMuB] - wz[grp_[i]];
   solve_lower(LS_.cur(), v);
   G_ = ks;
   solve_lower(Ls_.cur(), G_);
-  A_ = kf - W_.cur().t() * G_;
+  const arma::mat T = W_.cur().t() * G_;  // distinct field rows
+  A_ = kf;
+  for (arma::uword c = 0; c < A_.n_cols; ++c)
+    for (int i = 0; i < n; ++i) A_(i, c) -= T(grp_[i], c);
   solve_lower(LS_.cur(), A_);
   for (arma::uword c = 0; c < G_.n_cols; ++c) {
     const double* g = G_.colptr(c);
@@ -237,14 +260,14 @@ double DensePosterior::evaluate(const Touch& t) {
   const arma::vec* wz = &wz_.cur();
   if (cross) {
     arma::mat& Wn = W_.alt();
-    for (int j = 0; j < n; ++j) {
+    for (int j = 0; j < nu_; ++j) {
       const double* rx = Rx->colptr(j);
       double* w = Wn.colptr(j);
       for (int i = 0; i < m; ++i) w[i] = (*c)[i] * rx[i];
     }
     solve_lower(*Ls, Wn);
     arma::vec& wzn = wz_.alt();
-    for (int j = 0; j < n; ++j) wzn[j] = arma::dot(Wn.col(j), *z);
+    for (int j = 0; j < nu_; ++j) wzn[j] = arma::dot(Wn.col(j), *z);
     arma::mat& Qn = Q_.alt();
     Qn = *Rkk;
     syrk_lower(Wn, -1.0, 1.0, Qn);
@@ -270,12 +293,17 @@ double DensePosterior::evaluate(const Touch& t) {
   const arma::mat* LS = &LS_.cur();
   double ldS = ldS_.cur();
   if (field) {
+    // S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) + s2E [i = j], from the
+    // lower triangles of the distinct-row Q and Rb
     arma::mat& S = LS_.alt();
     for (int j = 0; j < n; ++j) {
-      const double* qc = Q->colptr(j);
-      const double* rb = Rb->colptr(j);
+      const int gj = grp_[j];
       double* sc = S.colptr(j);
-      for (int i = j; i < n; ++i) sc[i] = s2S * qc[i] + s2B * rb[i];
+      for (int i = j; i < n; ++i) {
+        const int gi = grp_[i];
+        const int r = std::max(gi, gj), c = std::min(gi, gj);
+        sc[i] = s2S * Q->at(r, c) + s2B * Rb->at(r, c);
+      }
       sc[j] += s2E;
     }
     if (!chol_lower(S)) return R_NegInf;
@@ -285,7 +313,7 @@ double DensePosterior::evaluate(const Touch& t) {
 
   // Residual of the field block given the simulator block.
   const double muB = phi[iMuB];
-  for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[j];
+  for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[grp_[j]];
   solve_lower(*LS, u_);
   const double vv = arma::dot(u_, u_);
 

@@ -54,10 +54,11 @@ struct Priors {
 // An adaptive joint random walk over some parameters (see the top).
 struct Block {
   std::vector<int> idx;
+  int repeats = 1;  // moves per sweep
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
   double logscale = 0, accBatch = 0, accKept = 0;
-  int n = 0, batch = 0;
+  int n = 0, batch = 0, restart = 0;
   bool shaped = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
@@ -92,6 +93,8 @@ struct Block {
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
       Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
   }
+  // Start the running mean and covariance afresh (L is kept).
+  void forget() { n = 0; mean.zeros(); cov.zeros(); }
   // Welford update of the running mean and covariance of w.
   void record() {
     ++n;
@@ -263,6 +266,12 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   for (int j = 0; j < d; ++j) if (pr.family[j] != PF_FIXED) free.push_back(j);
   // Blocks: continue the adapted ones of `state`, else start the ones of `moves`.
   const Rcpp::List blockSpec = moves["blocks"];
+  const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
+    Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
+  // The joint proposals' covariance is estimated afresh from the middle of
+  // burn-in (when burn-in has at least 400 sweeps), so the first sweeps'
+  // drift from the starting point does not inflate it.
+  const int restartAt = nBurn >= 400 ? nBurn / 2 : 0;
   Rcpp::List blockState;
   if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
     blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
@@ -280,6 +289,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     const Rcpp::IntegerVector ix = blockSpec[b];
     if ((int) ch.blocks[b].idx.size() != ix.size())
       Rcpp::stop("the block proposal to continue from has the wrong size");
+    if (repeats.size() > b) ch.blocks[b].repeats = std::max(1, repeats[b]);
+    ch.blocks[b].restart = restartAt;
   }
   ch.blockAt.assign(d, -1);
   ch.inBlock.assign(d, 0);
@@ -322,12 +333,17 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
       if (ch.inBlock[j]) {
         if (ch.blockAt[j] < 0) continue;
         Block& b = ch.blocks[ch.blockAt[j]];
-        if (move_block(ch, b)) {
-          b.accBatch += 1;
-          if (!burn) b.accKept += 1;
-          for (int k : b.idx) ch.accBatch[k] += 1;  // shown by the progress bar only
+        for (int r = 0; r < b.repeats; ++r) {
+          if (move_block(ch, b)) {
+            b.accBatch += 1.0 / b.repeats;
+            if (!burn) b.accKept += 1.0 / b.repeats;
+            for (int k : b.idx) ch.accBatch[k] += 1.0 / b.repeats;  // progress bar only
+          }
+          if (burn) {
+            if (it == b.restart && r == 0) b.forget();
+            b.record();
+          }
         }
-        if (burn) b.record();
       } else if (j == post.iMuB && ch.gibbsMuB) {
         move_muB(ch);
         ch.accBatch[j] += 1;

@@ -79,6 +79,23 @@ test_that("the cached one-move path equals the dense log-likelihood at every row
   }
 })
 
+test_that("replicated field inputs (shared columns) give the dense log-likelihood", {
+  # (predictions with replicates: test-predict.R, on the ball data, 3 per height)
+  # the algebra computes Rs(Xs, Xk), Rs(Xk, Xk) and Rb for distinct field
+  # rows only; rows repeated in any order must not change anything
+  for (s in sizes) {
+    p <- s[["p"]]; q <- s[["q"]]
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 30 + sum(s))
+    rep_rows <- c(seq_len(s[["n"]]), 2, 1, 2, s[["n"]])
+    dat$Xf <- dat$Xf[rep_rows, , drop = FALSE]
+    dat$yf <- c(dat$yf, rnorm(4))
+    phis <- one_move_path(random_phi(p, q), p, q)
+    path <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE)
+    dense <- apply(phis, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
+    expect_equal(path, dense, tolerance = 1e-8)
+  }
+})
+
 test_that("the sampler's retained log-likelihoods (accept and reject paths) equal the dense ones", {
   # Every retained draw was reached through a run of proposals, some accepted
   # and some rejected; a stale cache after a rejection would show up here.
