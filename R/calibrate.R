@@ -27,17 +27,53 @@
 #' variance of `1e-6 * sigma2S`, far below any simulator's rounding).
 #'
 #' @section Sampler:
-#' Parameters are updated one at a time in the order of `Phi`'s columns.
-#' Positive parameters move by a Gaussian random walk on the log scale,
-#' smoothness parameters on the logit scale of `[1, 2]`, \eqn{\kappa} and
-#' \eqn{\mu_B} on their own scale; the acceptance ratio includes the Jacobian
-#' of each transformation. During burn-in each proposal's log standard
-#' deviation moves every 50 iterations by \eqn{\pm 1/\sqrt{b}} (batch `b`)
-#' towards an acceptance rate of 0.44; it is then frozen, so the retained
-#' draws come from one fixed, valid Markov kernel. A proposal whose covariance
-#' is not positive definite is rejected. The chain uses R's random number
-#' generator, so [set.seed()] reproduces a run, and it can be interrupted with
-#' Ctrl-C: the draws retained so far are returned with a warning.
+#' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
+#' leaves the posterior invariant, the acceptance ratios include the Jacobian
+#' of each transformation, and every adapted proposal is frozen after
+#' burn-in, so the retained draws come from one fixed, valid Markov kernel.
+#' Positive parameters move on the log scale, smoothness parameters on the
+#' logit scale of `[1, 2]`, \eqn{\kappa} and \eqn{\mu_B} on their own
+#' scale. A proposal whose covariance is not positive definite is rejected.
+#'
+#' `sampler = "single"` is the vignette's sampler: parameters are updated one
+#' at a time in the order of `Phi`'s columns, and during burn-in each
+#' proposal's log standard deviation moves every 50 iterations by
+#' \eqn{\pm 1/\sqrt{b}} (batch `b`) towards an acceptance rate of 0.44. It
+#' reproduces FBC 0.1.0's draws exactly.
+#'
+#' `sampler = "blocks"` (the default) makes, in each sweep:
+#' * three moves of each \eqn{\kappa_l} (a \eqn{\kappa} move needs no
+#'   factorisation of the simulator block, and \eqn{\kappa} is what the user
+#'   came for);
+#' * two joint moves of the simulator GP's parameters (`thetaS`, `alphaS`,
+#'   `sigma2S`, whose range and scale trade off), each costing one
+#'   factorisation of the simulator block;
+#' * two joint moves of the bias GP's parameters (`thetaB`, `alphaB`,
+#'   `sigma2B`), which touch only the field block;
+#' * a single-site move of `sigma2E`;
+#' * an exact draw of `muB` from its Gaussian full conditional (Gibbs; when
+#'   its prior is gaussian, else a random walk);
+#' * a move multiplying `sigma2S`, `sigma2B` and `sigma2E` by one factor:
+#'   the whole covariance scales, so its log-determinant and quadratic form
+#'   follow in closed form with no factorisation.
+#'
+#' A joint move proposes \eqn{w^* = w + e^{s} L \epsilon} on the walk scales.
+#' \eqn{L} starts diagonal; after 100 burn-in sweeps it takes the shape of the
+#' running covariance of the burn-in draws (Haario et al. 2001), estimated
+#' afresh from the middle of burn-in so that the drift from the starting
+#' point does not inflate it, and \eqn{s} adapts towards acceptance 0.234
+#' (0.44 for one parameter). The `acceptance` of a block's parameters is that
+#' of its joint move (1 for `muB`'s exact draw);
+#' `state$chains[[k]]$scaleAcceptance` is the scale move's.
+#' `inst/bench/mixing.R` measures both samplers and Stan's NUTS on the same
+#' model (see "Defaults").
+#'
+#' Each chain uses R's random number generator, so [set.seed()] reproduces a
+#' run, and it can be interrupted with Ctrl-C: the draws retained so far are
+#' returned with a warning. The sampler's whole state (parameters, adapted
+#' proposals, adaptation sums) is kept in `state$chains[[k]]$sampler`, so
+#' [update.fbc()] continues a chain exactly where it stopped (even within
+#' burn-in).
 #'
 #' @section Several chains:
 #' `nChains` independent chains are run through the \pkg{future} framework
@@ -67,18 +103,6 @@
 #' continues it. With a parallel plan Ctrl-C reaches only the main session,
 #' so the workers' draws are lost: run long parallel jobs in blocks with
 #' `update()` instead.
-#'
-#' @section Block move:
-#' With `blockSim = TRUE` the free `thetaS` and `alphaS` move in one joint
-#' random-walk step on their log and logit scales, so a sweep needs one
-#' factorisation of the simulator block instead of `2(p + q)`. The joint
-#' proposal starts diagonal; after 100 burn-in sweeps it takes the shape of
-#' the running covariance of the burn-in draws (Haario et al. 2001), scaled
-#' towards acceptance 0.234, and is frozen after burn-in (and kept by
-#' [update.fbc()]). Every other parameter moves one at a time as usual.
-#' `inst/bench/` measures the gain: on the benchmark problems it gave 2 to 5
-#' times the effective samples per second for `kappa`. The
-#' `acceptance` of the block's parameters is that of the joint move.
 #'
 #' @section Defaults:
 #' `nChains = 4`, `nMCMC = 5000`, `nBurn = 1000`, `thinning = 2`: 4 x 2000 =
@@ -117,9 +141,10 @@
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
 #' @param showProgress Show a progress bar with the time left and the current
 #'   acceptance rates.
-#' @param blockSim Move all of `thetaS` and `alphaS` together, with a joint
-#'   proposal adapted during burn-in (see "Block move"), instead of one at a
-#'   time. `FALSE` (the default) is the vignette's sampler.
+#' @param sampler `"blocks"` (the default: joint and exact moves, see
+#'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
+#' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
+#'   `sampler = "single"`, with a warning.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked), `chain` (the chain of each row), `estimates`
 #'   (posterior summaries with `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars`, `data`,
@@ -137,7 +162,7 @@
 #' fit <- calibrate(ballSim, ballField)
 #' fit$estimates[, c("mean", "lwr80", "upr80", "rhat", "ess")]
 #' }
-calibrate <- function(sim, field, nMCMC = 5000, nBurn = 1000, thinning = 2,
+calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(),
                       showProgress = FALSE, sampler = c("blocks", "single"),
@@ -354,20 +379,31 @@ initial_state <- function(init, spec) {
 }
 
 # The moves of each sampler (see "Sampler" in ?calibrate): index vectors of
-# the jointly moved blocks (1-based, in phi), the scale move, the exact muB draw.
+# the jointly moved blocks (1-based, in phi) and how often each moves per
+# sweep, the scale move, the exact muB draw.
 sampler_moves <- function(sampler, spec) {
-  if (sampler == "single") return(list(blocks = list(), scale = FALSE, gibbsMuB = FALSE))
+  if (sampler == "single") {
+    return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE))
+  }
   fam <- names(prior_families)[match(spec$table$family, prior_families)]
   free <- fam != "fixed"
   cls <- spec$classes
   block <- function(classes) {
     idx <- which(cls %in% classes & free)
-    if (length(idx) >= 2L) list(idx) else list()
+    if (length(idx) >= 2L) idx
   }
+  # each free kappa alone (a one-parameter block: its walk scale adapts like
+  # the joint ones'), three moves a sweep: a kappa move needs no m x m
+  # factorization, and kappa is what the user came for
+  kappa <- lapply(which(cls == "kappa" & free), identity)
+  joint <- list(sim = block(c("thetaS", "alphaS", "sigma2S")),
+                bias = block(c("thetaB", "alphaB", "sigma2B")))
+  joint <- joint[lengths(joint) > 0L]
   sig <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
   mu <- which(cls == "muB")
   list(
-    blocks = c(block(c("thetaS", "alphaS", "sigma2S")), block(c("thetaB", "alphaB", "sigma2B"))),
+    blocks = c(kappa, unname(joint)),
+    repeats = c(rep(3L, length(kappa)), rep(2L, length(joint))),
     scale = all(free[sig]),
     gibbsMuB = free[mu] && fam[mu] == "gaussian" && spec$table$a[mu] == 0 && spec$table$b[mu] == 1
   )

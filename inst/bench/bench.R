@@ -18,7 +18,7 @@
 #   ratio     ms/sweep / floor;
 #   ESS/s     posterior::ess_bulk of each kappa's draws / the run's time;
 #   peak MB   peak resident memory (VmHWM) of this R process during the case.
-# Blocked rows (if present) use the joint thetaS/alphaS move (blockSim = TRUE).
+# "blocks" rows use the default sampler (joint moves; see ?calibrate).
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- length(args) > 0 && args[1] == "quick"
@@ -74,18 +74,15 @@ synthetic_problem <- function(n, m, seed = 1) {
   list(name = sprintf("p=q=2 n=%d m=%d", n, m), sim = sim, field = field)
 }
 
-# Adapt the proposals with calibrate() (nAdapt sweeps), then time nSweep
-# sweeps of .fbc_sample() from where it stopped with the proposals frozen, in
-# `chunks` runs, each continuing the last, with t_chol(n) and t_chol(n + m)
-# measured between them: the medians of sweep time, floor and their ratio
-# resist the load of other jobs on the shared cores.
-# The blocked variant starts from the same state, adapts its joint
-# thetaS/alphaS proposal for nAdapt sweeps of burn-in and then samples nSweep
-# sweeps in one run (the adapted joint proposal stays inside .fbc_sample);
-# every sweep costs the same, so the time is split pro rata, and its ratio
-# uses the single-site run's floor.
-run_case <- function(prob, nAdapt, nSweep, chunks = 1, floor_ms = NULL) {
-  blocked <- !is.null(floor_ms)
+# Adapt the proposals with calibrate() (nAdapt sweeps of burn-in, sampler
+# `sampler`), then time nSweep sweeps of .fbc_sample() from where it stopped
+# with the proposals frozen, in `chunks` runs, each continuing the last from
+# the returned state, with t_chol(n) and t_chol(n + m) measured between
+# them: the medians of sweep time, floor and their ratio resist the load of
+# other jobs on the shared cores. The "blocks" rows use the single-site
+# rows' floor (a blocked sweep makes fewer factorizations than the floor
+# counts: ratios below 1).
+run_case <- function(prob, nAdapt, nSweep, chunks = 1, sampler = "single", floor_ms = NULL) {
   reset_peak()
   p <- ncol(prob$field) - 1L
   q <- ncol(prob$sim) - 1L - p
@@ -93,50 +90,43 @@ run_case <- function(prob, nAdapt, nSweep, chunks = 1, floor_ms = NULL) {
   d <- 4 * p + 3 * q + 4
   set.seed(2)
   fit <- calibrate(prob$sim, prob$field, nMCMC = nAdapt + 2, nBurn = nAdapt, thinning = 1,
-                   nChains = 1)
+                   nChains = 1, sampler = sampler)
   dat <- fit$data
-  st <- fit$state$chains[[1]]
-  args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(fit$spec$table),
-               st$last, unname(st$logsd), 0L, 0L, 1L,
-               blocked, st$batch, fit$settings$nugget, NULL)
+  state <- fit$state$chains[[1]]$sampler
+  moves <- fit$settings$moves
   invisible(gc())
-  if (blocked) {
-    args[[8]] <- nAdapt + nSweep; args[[9]] <- nAdapt; args$blockSim <- TRUE
+  per <- ceiling(nSweep / chunks)
+  el <- wall <- 0
+  chunk_ms <- fl <- tn <- tnm <- numeric(chunks)
+  draws <- NULL
+  for (i in seq_len(chunks)) {
     t0 <- cpu(); w0 <- proc.time()[[3]]
-    res <- do.call(FBC:::.fbc_sample, args)
-    share <- nSweep / (nAdapt + nSweep)
-    el <- (cpu() - t0) * share; wall <- (proc.time()[[3]] - w0) * share
-    draws <- res$draws[seq_len(res$kept), seq_len(q), drop = FALSE]
-    sweep_ms <- 1000 * el / nSweep
-    tn <- tnm <- NA_real_
-    ratio <- sweep_ms / floor_ms
-  } else {
-    per <- ceiling(nSweep / chunks)
-    el <- wall <- 0
-    chunk_ms <- fl <- tn <- tnm <- numeric(chunks)
-    draws <- NULL
-    for (i in seq_len(chunks)) {
-      args[[8]] <- per
-      t0 <- cpu(); w0 <- proc.time()[[3]]
-      res <- do.call(FBC:::.fbc_sample, args)
-      dt <- cpu() - t0
-      el <- el + dt; wall <- wall + proc.time()[[3]] - w0
-      chunk_ms[i] <- 1000 * dt / per
-      args[[6]] <- res$last
-      draws <- rbind(draws, res$draws[seq_len(res$kept), seq_len(q), drop = FALSE])
+    res <- FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(fit$spec$table), moves,
+                             state, per, 0L, 1L, fit$settings$nugget, NULL)
+    dt <- cpu() - t0
+    el <- el + dt; wall <- wall + proc.time()[[3]] - w0
+    chunk_ms[i] <- 1000 * dt / per
+    state <- res$state
+    draws <- rbind(draws, res$draws[seq_len(res$kept), seq_len(q), drop = FALSE])
+    if (is.null(floor_ms)) {
       tn[i] <- t_chol(n, budget = 0.3); tnm[i] <- t_chol(n + m, budget = 0.3)
       fl[i] <- 2 * (p + q) * tnm[i] + (d - 1 - 2 * (p + q)) * tn[i]
     }
-    nSweep <- per * chunks
-    sweep_ms <- stats::median(chunk_ms)
+  }
+  nSweep <- per * chunks
+  sweep_ms <- stats::median(chunk_ms)
+  if (is.null(floor_ms)) {
     floor_ms <- stats::median(fl)
     ratio <- stats::median(chunk_ms / fl)
     tn <- stats::median(tn); tnm <- stats::median(tnm)
+  } else {
+    ratio <- sweep_ms / floor_ms
+    tn <- tnm <- NA_real_
   }
   essps <- vapply(seq_len(q), function(j) {
     if (nrow(draws) < 100) NA_real_ else ess(draws[, j]) / el
   }, 0)
-  data.frame(case = prob$name, move = if (blocked) "blocked" else "single",
+  data.frame(case = prob$name, sampler = sampler,
              sweeps = nSweep, `ms/sweep` = sweep_ms, `wall ms` = 1000 * wall / nSweep,
              `t_chol(n)` = tn, `t_chol(n+m)` = tnm, `floor ms` = floor_ms,
              ratio = ratio,
@@ -153,7 +143,6 @@ cases <- list(
   list(prob = synthetic_problem(60, 1000), nAdapt = 1, nSweep = if (quick) 2 else 6,
        chunks = if (quick) 1 else 2)
 )
-has_block <- "blockSim" %in% names(formals(FBC:::.fbc_sample))
 invisible(gc())
 baseline_mb <- peak_mb("VmRSS")
 t_start <- proc.time()[[3]]
@@ -161,9 +150,9 @@ rows <- list()
 for (cs in cases) {
   single <- run_case(cs$prob, cs$nAdapt, cs$nSweep, cs$chunks)
   rows[[length(rows) + 1]] <- single
-  if (has_block && cs$nAdapt > 1) {
-    rows[[length(rows) + 1]] <- run_case(cs$prob, cs$nAdapt, cs$nSweep,
-                                         floor_ms = single[["floor ms"]])
+  if (cs$nAdapt > 1) {
+    rows[[length(rows) + 1]] <- run_case(cs$prob, cs$nAdapt, cs$nSweep, cs$chunks,
+                                         sampler = "blocks", floor_ms = single[["floor ms"]])
   }
 }
 tab <- do.call(rbind, rows)
@@ -179,7 +168,7 @@ cat("ms/sweep: CPU ms per sweep of frozen-proposal runs after calibrate()'s adap
     "floor = 2(p+q) t_chol(n+m) + (d-1-2(p+q)) t_chol(n), t_chol = CPU ms of R's chol()\n",
     "measured between the chunks; ratio = median over chunks of ms/sweep / floor.\n",
     "ESS/s kappa: posterior::ess_bulk of each kappa / CPU s (m = 1000: too few sweeps).\n",
-    "blocked = .fbc_sample(blockSim = TRUE): joint thetaS/alphaS move, same floor.\n",
+    "blocks = the default sampler (joint moves, see ?calibrate), same floor as single.\n",
     sprintf("peak MB: VmHWM of the R process during the case (R + FBC alone: %.0f MB).\n\n",
             baseline_mb), sep = "")
 print(tab, row.names = FALSE)

@@ -93,10 +93,11 @@ check_stan_density <- function(model, sdata, fit) {
 }
 
 stan_row <- function(model, sdata, seed, fit) {
+  t0 <- cpu()
   sf <- rstan::sampling(model, data = sdata, chains = 4, iter = 2000, warmup = 1000,
                         cores = 1, seed = seed, refresh = 0,
                         control = list(adapt_delta = 0.9))
-  cpuSec <- sum(rstan::get_elapsed_time(sf))
+  cpuSec <- cpu() - t0  # CPU time of this process (chains run in it, one after another)
   dr <- posterior::as_draws_array(sf)
   dr <- posterior::subset_draws(dr, variable = setdiff(posterior::variables(dr), "lp__"))
   summarise_fit(dr, cpuSec, grep("^kappa", posterior::variables(dr), value = TRUE))
