@@ -118,7 +118,8 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
   res <- run_sampler(dat, sp, "blocks", 260L, 200L, 4L)
   idx <- FBC:::param_indices(p, q)
   sim <- unname(unlist(idx[c("thetaS", "alphaS", "sigma2S")]))
-  b1 <- res$state$blocks[[1]]
+  simBlock <- vapply(res$state$blocks, function(b) idx$thetaS[1] %in% b$index, logical(1))
+  b1 <- res$state$blocks[simBlock][[1]]
   expect_identical(b1$index, sim)
   expect_length(unique(res$acceptance[sim]), 1)
   expect_true(res$acceptance[sim[1]] > 0 && res$acceptance[sim[1]] < 1)

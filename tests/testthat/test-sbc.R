@@ -17,7 +17,7 @@ test_that("SBC ranks of kappa, sigma2S, sigma2E and muB are uniform", {
 test_that("the same check rejects a posterior that is off (it has power)", {
   # data made with 2x the noise variance the model believes in: the true
   # sigma2E sits low among the posterior draws
-  ranks <- sbc_ranks(L = 400, seed = 42, sigma2EFactor = 2)
+  ranks <- sbc_ranks(L = 400, seed = 42, sigma2EFactor = 2, sampler = "single")
   pv <- suppressWarnings(rank_chisq(ranks))
   expect_lt(pv[3], 1e-4)
   expect_lt(mean(ranks[, 3]), 45) # 49.5 when uniform

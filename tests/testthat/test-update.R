@@ -41,7 +41,8 @@ test_that("update() continues each chain from where it stopped", {
 test_that("update() keeps the adapted joint proposals and goes on as one run", {
   fit <- small_fit(nChains = 2)  # the default sampler: joint moves
   sim <- unlist(fit$indices[c("thetaS", "alphaS", "sigma2S")], use.names = FALSE)
-  b1 <- fit$state$chains[[1]]$sampler$blocks[[1]]
+  blocks <- fit$state$chains[[1]]$sampler$blocks
+  b1 <- blocks[vapply(blocks, function(b) sim[1] %in% b$index, logical(1))][[1]]
   expect_identical(b1$index, sim)
   expect_true(b1$shaped)  # 100 burn-in sweeps shaped it to the draws' covariance
   # no longer diagonal: the shape came from the burn-in draws
