@@ -204,6 +204,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
 
   moves <- sampler_moves(sampler, spec)
+  blas_hint(nrow(sim))
   inits <- dispersed_inits(nChains, dat, spec)
   states <- lapply(inits, initial_state, spec = spec)
   t0 <- proc.time()[["elapsed"]]
