@@ -105,20 +105,21 @@
 #' `update()` instead.
 #'
 #' @section Defaults:
-#' `nChains = 4`, `nMCMC = 5000`, `nBurn = 1000`, `thinning = 2`: 4 x 2000 =
-#' 8000 retained draws. Four chains are the usual minimum for R-hat to
-#' detect chains stuck in different places. On the ball data the
-#' slowest-mixing parameter (`sigma2S`) gains a bulk ESS of about 40 per
-#' 1000 sweeps and chain, `kappa` about 150: with 3000 post-burn-in sweeps
-#' per chain `sigma2S` reached an ESS of only 460 and an R-hat of 1.0098, too
-#' close to the 400 / 1.01 limits, so the default keeps 4000. With it,
-#' seeds 1, 77 and 2024 gave every parameter R-hat <= 1.008 and bulk ESS >=
-#' 640 (kappa's ESS about 2200-2400). Thinning by 2 halves the memory at
-#' little cost in ESS. The run took 37 s sequentially and 21 s with
-#' `future::plan(future::multisession, workers = 2)` (2 cores).
-#' Harder problems (more parameters, larger data) need longer runs: check
-#' `convergence_messages(fit)` (or `print(fit)`) and continue with
-#' [update.fbc()].
+#' `nChains = 4`, `nMCMC = 8000`, `nBurn = 2000`, `thinning = 2`: 4 x 3000 =
+#' 12000 retained draws. Four chains are the usual minimum for R-hat to
+#' detect chains stuck in different places. The burn-in of 2000 sweeps lets
+#' the joint proposals take the posterior's shape (with 1000 the ESS per
+#' sweep of the simulator block was about half). On the ball data, seeds 1,
+#' 77 and 2024 gave every parameter R-hat <= 1.0021 and bulk ESS >= 2190
+#' (`kappa`'s about 7600-8500), in 24-26 CPU seconds for the four chains one
+#' after the other (FBC 0.1.0's one-at-a-time default: R-hat <= 1.008 and
+#' ESS >= 640 in 35 s). In `inst/bench/mixing.R` the default sampler's
+#' slowest parameter gains about 100 effective draws per CPU second on the
+#' ball data, 17 times Stan's NUTS on the same model and priors, and `kappa`
+#' about 300, 42 times Stan's. Thinning by 2 halves the memory at little
+#' cost in ESS. Harder problems (more parameters, larger data) need longer
+#' runs: check `convergence_messages(fit)` (or `print(fit)`) and continue
+#' with [update.fbc()].
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the response
 #'   in the first column, then the `p` experimental inputs, then the `q`
@@ -157,7 +158,7 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 800, nBurn = 300, nChains = 2)
 #' fit
 #' \donttest{
-#' # the defaults: 4 chains, R-hat and ESS checked (about 40 s, or in
+#' # the defaults: 4 chains, R-hat and ESS checked (about 25 s, or in
 #' # parallel after future::plan(future::multisession, workers = 2))
 #' fit <- calibrate(ballSim, ballField)
 #' fit$estimates[, c("mean", "lwr80", "upr80", "rhat", "ess")]
