@@ -7,7 +7,12 @@
 #   Rscript inst/bench/mixing.R nostan     # FBC only
 # Stan's part needs rstan (Debian: apt-get install r-cran-rstan; CRAN:
 # install.packages("rstan")); it is skipped when rstan is missing. rstan is
-# not a dependency of FBC.
+# not a dependency of FBC. Debian's r-cran-bh ships no include/ folder, so
+# rstan reports "Boost not found"; link the system's Boost headers there:
+#   mkdir -p /usr/lib/R/site-library/BH/include
+#   ln -s /usr/include/boost /usr/lib/R/site-library/BH/include/boost
+# The whole run takes about 15 minutes on an idle 2-core machine (Stan's
+# four ball chains most of it).
 #
 # Problems: the ball data (n 63, m 100, p = q = 1) and a q = 2 decay problem
 # (n 20, m 60, p = 1): y = t1 exp(-t2 x) on x in [0, 3], t1 in [1, 3],
@@ -53,6 +58,7 @@ summarise_fit <- function(draws, cpuSec, kappaNames) {
              max_rhat = max(s$rhat))
 }
 
+# (max_rhat is printed with 4 decimals: the goal is every R-hat < 1.01)
 fbc_row <- function(pr, sampler, seed) {
   set.seed(seed)
   t0 <- cpu()
@@ -134,9 +140,11 @@ for (pn in names(problems)) {
 }
 tab <- do.call(rbind, rows)
 cat("\nMixing table (CPU s include burn-in / warm-up; ESS = bulk ESS)\n")
-num <- vapply(tab, is.numeric, logical(1))
-tab[num] <- lapply(tab[num], function(v) signif(v, 3))
-print(tab, row.names = FALSE)
+shown <- tab
+shown$max_rhat <- sprintf("%.4f", shown$max_rhat)
+num <- vapply(shown, is.numeric, logical(1)) & names(shown) != "seed"
+shown[num] <- lapply(shown[num], function(v) signif(v, 3))
+print(shown, row.names = FALSE, right = TRUE)
 if (useStan) {
   cat("\nRatios FBC blocks / Stan (min ESS per CPU s; kappa ESS per CPU s):\n")
   for (pn in names(problems)) for (seed in seeds) {
