@@ -43,22 +43,25 @@ fit_loglik <- function(fit, phi) {
 }
 
 # One row per flagged parameter: var, class, side ("lower"/"upper"), the
-# prior CDF at the posterior median, the median, the value the data alone
-# favour (`dataValue`; kappa in its own units), and the suggested
-# prior (`suggestion`, an R call as text, or NA).
+# prior CDF at the posterior median, the median, the value where the
+# likelihood alone peaks (`dataValue`, kappa in its own units; `priorValue`
+# in the prior's units), and whether that is a bound of the support
+# (`atBound`, `bound`).
 prior_conflicts <- function(fit) {
   empty <- data.frame(var = character(), class = character(), side = character(),
                       cdf = numeric(), median = numeric(), dataValue = numeric(),
-                      suggestion = character())
+                      atBound = logical(), bound = numeric(), priorValue = numeric())
   tab <- fit$spec$table
   if (is.null(tab) || nrow(fit$Phi) < 2L) return(empty)
   fam <- names(prior_families)[match(tab$family, prior_families)]
   phis <- sampler_scale(fit$Phi, fit$scale)
   map <- phis[which.max(fit$logPost), ]
   piled <- bound_piling(fit)$var
+  support <- param_support(fit)
   out <- list()
   for (j in seq_along(fit$vars)) {
     if (fam[j] %in% c("fixed", "jeffreys") || fit$vars[j] %in% piled) next
+    sup_j <- support[j, ]
     x <- phis[, j]
     if (stats::var(x) == 0) next
     u <- prior_cdf(tab$a[j] + tab$b[j] * stats::median(x), fam[j], tab$p1[j], tab$p2[j])
@@ -91,54 +94,68 @@ prior_conflicts <- function(fit) {
     } else {
       reported <- valueL
     }
+    bound <- sup_j[if (dir < 0) 1L else 2L]
+    atBound <- all(is.finite(sup_j)) && abs(reported - bound) <= fbc_pile_band * diff(sup_j)
     out[[length(out) + 1L]] <- data.frame(
       var = fit$vars[j], class = fit$spec$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
-      suggestion = suggest_prior(fit, j, fam[j], valueL)
+      atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL
     )
   }
   if (length(out)) do.call(rbind, out) else empty
 }
 
-# A looser prior of the same kind that has `value` (the data's preferred
-# value, in the prior's units) near its centre, as the text of an R call; NA
-# when there is no obvious one.
-suggest_prior <- function(fit, j, dist, value) {
+# A looser prior for the flagged members `js` of one class, each of the same
+# kind with the data's value (`values`, in the prior's units) near its
+# centre, or fixed at a bound the data press against (`bounds`, NA when
+# none); other members keep their priors. Returns the text of an R call, or
+# NA when there is no obvious one.
+suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
   tab <- fit$spec$table
-  cls <- fit$spec$classes[j]
+  cls <- fit$spec$classes[js[1]]
   members <- which(fit$spec$classes == cls)
-  k <- match(j, members)
+  fams <- names(prior_families)[match(tab$family[members], prior_families)]
   p1 <- tab$p1[members]
   p2 <- tab$p2[members]
-  fams <- names(prior_families)[match(tab$family[members], prior_families)]
   init <- fit$priors[[cls]]$init %||% rep(NA_real_, length(members))
-  new <- switch(dist,
-    # prior median at the data's value, shape at most 1.1 (a heavy upper tail)
-    inversegamma = {
-      s <- min(tab$p1[j], 1.1)
-      list(dist = "inversegamma", p1 = s, p2 = value * stats::qgamma(0.5, s), init = value)
-    },
-    gamma = {
-      s <- min(tab$p1[j], 1.1)
-      list(dist = "gamma", p1 = s, p2 = stats::qgamma(0.5, s) / value, init = value)
-    },
-    # same centre, the data's value within half a prior sd
-    gaussian = list(dist = "gaussian", p1 = tab$p1[j],
-                    p2 = max(tab$p2[j], 2 * abs(value - tab$p1[j])), init = value),
-    lognormal = list(dist = "lognormal", p1 = log(value), p2 = max(tab$p2[j], 1), init = value),
-    betashift = list(dist = "uniform", p1 = 1, p2 = 2, init = 1.5),
-    NULL
-  )
-  if (is.null(new)) return(NA_character_)
-  fams[k] <- new$dist
-  p1[k] <- new$p1
-  p2[k] <- new$p2
-  init[k] <- new$init
+  for (i in seq_along(js)) {
+    j <- js[i]
+    k <- match(j, members)
+    value <- values[i]
+    new <- if (!is.na(bounds[i])) {
+      if (cls == "kappa") return(NA_character_)  # widen the range instead
+      list(dist = "fixed", p1 = p1[k], p2 = p2[k], init = bounds[i])
+    } else switch(fams[k],
+      # prior median at the data's value, shape at most 1.1 (a heavy upper tail)
+      inversegamma = {
+        sh <- min(p1[k], 1.1)
+        list(dist = "inversegamma", p1 = sh, p2 = value * stats::qgamma(0.5, sh), init = value)
+      },
+      gamma = {
+        sh <- min(p1[k], 1.1)
+        list(dist = "gamma", p1 = sh, p2 = stats::qgamma(0.5, sh) / value, init = value)
+      },
+      # same centre, the data's value within half a prior sd
+      gaussian = list(dist = "gaussian", p1 = p1[k], p2 = max(p2[k], 2 * abs(value - p1[k])),
+                      init = value),
+      lognormal = list(dist = "lognormal", p1 = log(value), p2 = max(p2[k], 1), init = value),
+      betashift = list(dist = "uniform", p1 = 1, p2 = 2, init = 1.5),
+      NULL
+    )
+    if (is.null(new)) return(NA_character_)
+    fams[k] <- new$dist
+    p1[k] <- new$p1
+    p2[k] <- new$p2
+    init[k] <- new$init
+  }
   if (cls == "kappa") {
     # kappa's prior is given in calibrate(), in the calibration inputs' units
-    if (new$dist != "gaussian") return(NA_character_)
+    if (any(fams != "gaussian")) return(NA_character_)
     return(sprintf("calibrate(sim, field, kappaDist = %s, kappaP1 = %s, kappaP2 = %s, kappaInit = %s)",
                    r_vec(fams), r_vec(p1), r_vec(p2), r_vec(init)))
+  }
+  if (all(fams[match(js, members)] == "fixed")) {
+    return(sprintf("set_hyperPriors(%sDist = %s, %sInit = %s)", cls, r_vec(fams), cls, r_vec(init)))
   }
   sprintf("set_hyperPriors(%sDist = %s, %sP1 = %s, %sP2 = %s, %sInit = %s)",
           cls, r_vec(fams), cls, r_vec(p1), cls, r_vec(p2), cls, r_vec(init))
@@ -152,27 +169,54 @@ r_vec <- function(v) {
 format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific = abs(x) < 1e-4 && x != 0),
                                  character(1))
 
-# The convergence_messages() text for each conflict.
+# The convergence_messages() text: one message per class of parameters.
 conflict_messages <- function(fit) {
   cf <- prior_conflicts(fit)
-  vapply(seq_len(nrow(cf)), function(i) {
-    r <- cf[i, ]
-    j <- match(r$var, fit$vars)
-    tab <- fit$spec$table
+  tab <- fit$spec$table
+  vapply(unique(cf$class), function(cls) {
+    rows <- cf[cf$class == cls, , drop = FALSE]
+    one <- nrow(rows) == 1L
+    j <- match(rows$var, fit$vars)
     dist <- names(prior_families)[match(tab$family[j], prior_families)]
-    where <- if (r$side == "lower") "below" else "above"
-    prob <- if (r$side == "lower") r$cdf else 1 - r$cdf
-    head <- sprintf(
-      "Prior-data conflict for %s: its posterior median, %s, sits in the far %s tail of its %s(%s, %s) prior (prior probability %s %s it), while the likelihood alone (the other parameters at the MAP draw) peaks near %s: the prior, not the data, sets %s.",
-      r$var, format_num(r$median), r$side, dist, format_num(tab$p1[j]), format_num(tab$p2[j]),
-      format(signif(prob, 1)), where, format_num(r$dataValue), r$var)
-    tail_ <- if (is.na(r$suggestion)) {
-      " Loosen or re-centre this prior and calibrate again."
-    } else if (r$class == "kappa") {
-      sprintf(" Loosen it, e.g. `%s`.", r$suggestion)
+    priors <- unique(sprintf("%s(%s, %s)", dist, format_num(tab$p1[j]), format_num(tab$p2[j])))
+    prob <- ifelse(rows$side == "lower", rows$cdf, 1 - rows$cdf)
+    side <- if (length(unique(rows$side)) == 1L) paste(rows$side[1], "tail") else "tails"
+    where <- if (length(unique(rows$side)) == 1L) {
+      if (rows$side[1] == "lower") " below" else " above"
+    } else ""
+    peak <- if (all(rows$atBound)) {
+      sprintf("at the bound %s", paste(unique(format_num(rows$bound)), collapse = ", "))
     } else {
-      sprintf(" Loosen it, e.g. `hypers = %s`, and calibrate again.", r$suggestion)
+      sprintf("near %s", paste(format_num(rows$dataValue), collapse = ", "))
     }
-    paste0(head, tail_)
-  }, character(1))
+    parts <- sprintf(
+      "%s posterior median%s, %s, sit%s in the far %s of %s %s prior%s (prior probability %s%s), while the likelihood alone (the other parameters at the MAP draw) peaks %s",
+      if (one) "its" else "their", if (one) "" else "s",
+      paste(format(signif(rows$median, 3)), collapse = ", "), if (one) "s" else "",
+      side, if (one) "its" else "their", paste(priors, collapse = ", "), if (one) "" else "s",
+      paste(format(signif(prob, 1)), collapse = ", "), where, peak)
+    vars <- paste(rows$var, collapse = ", ")
+    verdict <- if (all(rows$atBound) && cls %in% c("alphaS", "alphaB")) {
+      "the data favour this smoothness"
+    } else if (all(rows$atBound) && cls == "kappa") {
+      "the posterior wants values outside the prior's range"
+    } else {
+      sprintf("the prior, not the data, sets %s", vars)
+    }
+    sugg <- suggest_prior(fit, match(rows$var, fit$vars), rows$priorValue,
+                          ifelse(rows$atBound, rows$bound, NA_real_))
+    advice <- if (cls == "kappa" && all(rows$atBound)) {
+      " Widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
+    } else if (is.na(sugg)) {
+      " Loosen or re-centre this prior and calibrate again."
+    } else if (cls == "kappa") {
+      sprintf(" Loosen %s, e.g. `%s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else if (all(rows$atBound)) {
+      sprintf(" Consider fixing %s, e.g. `hypers = %s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else {
+      sprintf(" Loosen %s, e.g. `hypers = %s`, and calibrate again.",
+              if (nrow(rows) == 1L) "it" else "them", sugg)
+    }
+    sprintf("Prior-data conflict for %s: %s: %s.%s", vars, parts, verdict, advice)
+  }, character(1), USE.NAMES = FALSE)
 }

@@ -42,10 +42,11 @@ test_that("small field noise: the default sigma2E prior is flagged, and the sugg
   expect_gt(cf$median, 0.1)           # held up by the prior
   expect_lt(cf$dataValue, 0.03)       # the likelihood peaks near the truth
   msg <- convergence_messages(fit)
-  expect_match(msg, "^Prior-data conflict for sigma2E", all = FALSE)
+  expect_match(msg, "^Prior-data conflict for sigma2E: its posterior median", all = FALSE)
   expect_match(capture.output(print(fit)), "Prior-data conflict for sigma2E", all = FALSE)
   # the suggested call, run as given, removes the conflict and finds the noise
-  hypers <- eval(parse(text = cf$suggestion))
+  call <- sub(".*`hypers = (.*)`.*", "\\1", grep("^Prior-data conflict", msg, value = TRUE))
+  hypers <- eval(parse(text = call))
   expect_equal(hypers$sigma2E$dist, "inversegamma")
   expect_equal(hypers$sigma2E$p1, 1.1)
   set.seed(1)
@@ -88,7 +89,7 @@ test_that("the conflict message, on draws built by hand", {
                                               replace(map, 10, s)))
   expect_equal(log(cf$dataValue), log(grid[which.max(ll)]), tolerance = 0.05)
   # its suggestion: an inverse gamma with median at that value
-  h <- eval(parse(text = cf$suggestion))
+  h <- eval(parse(text = FBC:::suggest_prior(fit, 10, cf$priorValue)))
   expect_equal(h$sigma2E$p2 / qgamma(0.5, h$sigma2E$p1), cf$dataValue, tolerance = 0.05)
   expect_snapshot(writeLines(strwrap(FBC:::conflict_messages(fit), 78)))
   # rule 1 alone is not enough: the same draws around 0.5, inside the prior
@@ -99,14 +100,21 @@ test_that("the conflict message, on draws built by hand", {
 
 test_that("suggestions keep the other members of a class and give the family's centre", {
   fit <- small_fit(nChains = 1)
-  j <- match("thetaS2", fit$vars)
-  s <- FBC:::suggest_prior(fit, j, "gamma", 40)
+  j <- match(c("thetaS1", "thetaS2"), fit$vars)
+  s <- FBC:::suggest_prior(fit, j[2], 40)
   expect_equal(s, "set_hyperPriors(thetaSDist = c(\"gamma\", \"gamma\"), thetaSP1 = c(1.1, 1.1), thetaSP2 = c(0.1, 0.02), thetaSInit = c(1, 40))")
   h <- eval(parse(text = s))
   expect_equal(qgamma(0.5, 1.1, rate = h$thetaS$p2[2]), 40, tolerance = 0.03) # 2 significant digits
-  s <- FBC:::suggest_prior(fit, match("muB", fit$vars), "gaussian", -3)
+  # two members at once
+  s <- FBC:::suggest_prior(fit, j, c(0.01, 40))
+  expect_equal(s, "set_hyperPriors(thetaSDist = c(\"gamma\", \"gamma\"), thetaSP1 = c(1.1, 1.1), thetaSP2 = c(79, 0.02), thetaSInit = c(0.01, 40))")
+  s <- FBC:::suggest_prior(fit, match("muB", fit$vars), -3)
   expect_equal(s, "set_hyperPriors(muBDist = \"gaussian\", muBP1 = 0, muBP2 = 6, muBInit = -3)")
-  s <- FBC:::suggest_prior(fit, match("alphaB1", fit$vars), "betashift", 1.1)
+  s <- FBC:::suggest_prior(fit, match("alphaB1", fit$vars), 1.1)
   expect_equal(s, "set_hyperPriors(alphaBDist = \"uniform\", alphaBP1 = 1, alphaBP2 = 2, alphaBInit = 1.5)")
-  expect_true(is.na(FBC:::suggest_prior(fit, 1, "beta", 0.5)))
+  # a smoothness the data press to its bound: fix it there
+  s <- FBC:::suggest_prior(fit, match("alphaS2", fit$vars), 2, bounds = 2)
+  expect_equal(s, "set_hyperPriors(alphaSDist = c(\"betashift\", \"fixed\"), alphaSInit = c(1.9, 2))")
+  expect_s3_class(eval(parse(text = s)), "fbc_hypers")
+  expect_true(is.na(FBC:::suggest_prior(fit, 1, 0.5)))  # kappa's stretched beta
 })
