@@ -148,8 +148,10 @@ gp_heldout <- function(K, y, fold = NULL) {
   list(mean = mean, var = var)
 }
 
-# Fold labels (NULL for leave-one-out) from the `folds` argument.
+# Above this many simulator runs, validate_emulator() uses 10 folds.
 fbc_kfold_above <- 2000L
+
+# Fold labels (NULL for leave-one-out) from the `folds` argument.
 emulator_folds <- function(folds, m, call = parent.frame()) {
   if (is.null(folds)) {
     if (m <= fbc_kfold_above) return(NULL)
