@@ -4,7 +4,8 @@
 #' the MCMC settings and the range of the acceptance rates) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
-#' 400, one chain only, an interrupted run, draws piling up at a bound), each
+#' 400, one chain only, an interrupted run, draws piling up at a bound, a
+#' prior-data conflict), each
 #' with what to do.
 #'
 #' @param x An `fbc` object from [calibrate()].

@@ -1,0 +1,222 @@
+# Prior-data conflict: a parameter whose posterior sits in the far tail of its
+# prior while the data alone point further out. See "Prior-data conflict" in
+# ?convergence_messages for the rule.
+
+# The posterior median's prior CDF below this, or above 1 - this, makes a
+# parameter a candidate ...
+fbc_conflict_tail <- 0.01
+# ... and it is flagged when its likelihood (the other parameters at the MAP
+# draw) still rises this many posterior sds beyond the median, away from the
+# prior's bulk.
+fbc_conflict_sds <- 3
+
+# CDF of a prior family in the units the family is written in (NA for the
+# improper and fixed ones).
+prior_cdf <- function(x, dist, p1, p2) {
+  switch(dist,
+    uniform = stats::punif(x, p1, p2),
+    gaussian = stats::pnorm(x, p1, p2),
+    gamma = stats::pgamma(x, p1, rate = p2),
+    beta = stats::pbeta(x, p1, p2),
+    lognormal = stats::plnorm(x, p1, p2),
+    logistic = stats::plogis(x, p1, p2),
+    betashift = stats::pbeta(x - 1, p1, p2),
+    exponential = stats::pexp(x, p1),
+    inversegamma = stats::pgamma(p2 / x, p1, lower.tail = FALSE),
+    NA_real_
+  )
+}
+
+# The sampler's walk scale (calibrate(), "Sampler") and back.
+to_walk <- function(x, transform) {
+  switch(as.character(transform), `0` = x, `1` = log(x), `2` = stats::qlogis(x - 1))
+}
+from_walk <- function(w, transform) {
+  switch(as.character(transform), `0` = w, `1` = exp(w), `2` = 1 + stats::plogis(w))
+}
+
+# Log-likelihood of the fit's data at phi (the sampler's scale).
+fit_loglik <- function(fit, phi) {
+  d <- fit$data
+  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget)
+  if (is.finite(ll)) ll else -Inf
+}
+
+# One row per flagged parameter: var, class, side ("lower"/"upper"), the
+# prior CDF at the posterior median, the median, the value where the
+# likelihood alone peaks (`dataValue`, kappa in its own units; `priorValue`
+# in the prior's units), and whether that is a bound of the support
+# (`atBound`, `bound`).
+prior_conflicts <- function(fit) {
+  empty <- data.frame(var = character(), class = character(), side = character(),
+                      cdf = numeric(), median = numeric(), dataValue = numeric(),
+                      atBound = logical(), bound = numeric(), priorValue = numeric())
+  tab <- fit$spec$table
+  if (is.null(tab) || nrow(fit$Phi) < 2L) return(empty)
+  fam <- names(prior_families)[match(tab$family, prior_families)]
+  phis <- sampler_scale(fit$Phi, fit$scale)
+  map <- phis[which.max(fit$logPost), ]
+  piled <- bound_piling(fit)$var
+  support <- param_support(fit)
+  out <- list()
+  for (j in seq_along(fit$vars)) {
+    if (fam[j] %in% c("fixed", "jeffreys") || fit$vars[j] %in% piled) next
+    sup_j <- support[j, ]
+    x <- phis[, j]
+    if (stats::var(x) == 0) next
+    u <- prior_cdf(tab$a[j] + tab$b[j] * stats::median(x), fam[j], tab$p1[j], tab$p2[j])
+    if (is.na(u) || (u >= fbc_conflict_tail && u <= 1 - fbc_conflict_tail)) next
+    dir <- if (u < fbc_conflict_tail) -1 else 1
+    w <- to_walk(x, tab$transform[j])
+    wmed <- stats::median(w)
+    sdw <- stats::sd(w)
+    ll <- function(wv) {
+      phi <- map
+      phi[j] <- from_walk(wv, tab$transform[j])
+      fit_loglik(fit, phi)
+    }
+    w3 <- wmed + dir * fbc_conflict_sds * sdw
+    if (!(ll(w3 + dir * 0.1 * sdw) > ll(w3))) next
+    # where the likelihood alone peaks, further out (within the prior's support)
+    far <- w3 + dir * 40 * sdw
+    if (tab$transform[j] == 0) {
+      sup <- (family_support(fam[j], tab$p1[j], tab$p2[j]) - tab$a[j]) / tab$b[j]
+      far <- min(max(far, sup[1]), sup[2])
+    }
+    wL <- stats::optimize(function(v) max(ll(v), -1e300), sort(c(w3, far)), maximum = TRUE,
+                          tol = 0.1 * sdw)$maximum
+    uL <- from_walk(wL, tab$transform[j])
+    valueL <- tab$a[j] + tab$b[j] * uL  # in the prior's units
+    if (fit$spec$classes[j] == "kappa") {
+      k <- match(fit$vars[j], fit$vars[fit$spec$classes == "kappa"])
+      lo <- fit$scale$xmin[fit$scale$p + k]
+      reported <- lo + (fit$scale$xmax[fit$scale$p + k] - lo) * uL
+    } else {
+      reported <- valueL
+    }
+    bound <- sup_j[if (dir < 0) 1L else 2L]
+    atBound <- all(is.finite(sup_j)) && abs(reported - bound) <= fbc_pile_band * diff(sup_j)
+    out[[length(out) + 1L]] <- data.frame(
+      var = fit$vars[j], class = fit$spec$classes[j], side = if (dir < 0) "lower" else "upper",
+      cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
+      atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL
+    )
+  }
+  if (length(out)) do.call(rbind, out) else empty
+}
+
+# A looser prior for the flagged members `js` of one class, each of the same
+# kind with the data's value (`values`, in the prior's units) near its
+# centre, or fixed at a bound the data press against (`bounds`, NA when
+# none); other members keep their priors. Returns the text of an R call, or
+# NA when there is no obvious one.
+suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
+  tab <- fit$spec$table
+  cls <- fit$spec$classes[js[1]]
+  members <- which(fit$spec$classes == cls)
+  fams <- names(prior_families)[match(tab$family[members], prior_families)]
+  p1 <- tab$p1[members]
+  p2 <- tab$p2[members]
+  init <- fit$priors[[cls]]$init %||% rep(NA_real_, length(members))
+  for (i in seq_along(js)) {
+    j <- js[i]
+    k <- match(j, members)
+    value <- values[i]
+    new <- if (!is.na(bounds[i])) {
+      if (cls == "kappa") return(NA_character_)  # widen the range instead
+      list(dist = "fixed", p1 = p1[k], p2 = p2[k], init = bounds[i])
+    } else switch(fams[k],
+      # prior median at the data's value, shape at most 1.1 (a heavy upper tail)
+      inversegamma = {
+        sh <- min(p1[k], 1.1)
+        list(dist = "inversegamma", p1 = sh, p2 = value * stats::qgamma(0.5, sh), init = value)
+      },
+      gamma = {
+        sh <- min(p1[k], 1.1)
+        list(dist = "gamma", p1 = sh, p2 = stats::qgamma(0.5, sh) / value, init = value)
+      },
+      # same centre, the data's value within half a prior sd
+      gaussian = list(dist = "gaussian", p1 = p1[k], p2 = max(p2[k], 2 * abs(value - p1[k])),
+                      init = value),
+      lognormal = list(dist = "lognormal", p1 = log(value), p2 = max(p2[k], 1), init = value),
+      betashift = list(dist = "uniform", p1 = 1, p2 = 2, init = 1.5),
+      NULL
+    )
+    if (is.null(new)) return(NA_character_)
+    fams[k] <- new$dist
+    p1[k] <- new$p1
+    p2[k] <- new$p2
+    init[k] <- new$init
+  }
+  if (cls == "kappa") {
+    # kappa's prior is given in calibrate(), in the calibration inputs' units
+    if (any(fams != "gaussian")) return(NA_character_)
+    return(sprintf("calibrate(sim, field, kappaDist = %s, kappaP1 = %s, kappaP2 = %s, kappaInit = %s)",
+                   r_vec(fams), r_vec(p1), r_vec(p2), r_vec(init)))
+  }
+  if (all(fams[match(js, members)] == "fixed")) {
+    return(sprintf("set_hyperPriors(%sDist = %s, %sInit = %s)", cls, r_vec(fams), cls, r_vec(init)))
+  }
+  sprintf("set_hyperPriors(%sDist = %s, %sP1 = %s, %sP2 = %s, %sInit = %s)",
+          cls, r_vec(fams), cls, r_vec(p1), cls, r_vec(p2), cls, r_vec(init))
+}
+
+# A vector as R code, numbers to two significant digits.
+r_vec <- function(v) {
+  txt <- if (is.character(v)) paste0("\"", v, "\"") else format_num(v)
+  if (length(v) == 1L) txt else paste0("c(", paste(txt, collapse = ", "), ")")
+}
+format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific = abs(x) < 1e-4 && x != 0),
+                                 character(1))
+
+# The convergence_messages() text: one message per class of parameters.
+conflict_messages <- function(fit) {
+  cf <- prior_conflicts(fit)
+  tab <- fit$spec$table
+  vapply(unique(cf$class), function(cls) {
+    rows <- cf[cf$class == cls, , drop = FALSE]
+    one <- nrow(rows) == 1L
+    j <- match(rows$var, fit$vars)
+    dist <- names(prior_families)[match(tab$family[j], prior_families)]
+    priors <- unique(sprintf("%s(%s, %s)", dist, format_num(tab$p1[j]), format_num(tab$p2[j])))
+    prob <- ifelse(rows$side == "lower", rows$cdf, 1 - rows$cdf)
+    side <- if (length(unique(rows$side)) == 1L) paste(rows$side[1], "tail") else "tails"
+    where <- if (length(unique(rows$side)) == 1L) {
+      if (rows$side[1] == "lower") " below" else " above"
+    } else ""
+    peak <- if (all(rows$atBound)) {
+      sprintf("at the bound %s", paste(unique(format_num(rows$bound)), collapse = ", "))
+    } else {
+      sprintf("near %s", paste(format_num(rows$dataValue), collapse = ", "))
+    }
+    parts <- sprintf(
+      "%s posterior median%s, %s, sit%s in the far %s of %s %s prior%s (prior probability %s%s), while the likelihood alone (the other parameters at the MAP draw) peaks %s",
+      if (one) "its" else "their", if (one) "" else "s",
+      paste(format(signif(rows$median, 3)), collapse = ", "), if (one) "s" else "",
+      side, if (one) "its" else "their", paste(priors, collapse = ", "), if (one) "" else "s",
+      paste(format(signif(prob, 1)), collapse = ", "), where, peak)
+    vars <- paste(rows$var, collapse = ", ")
+    verdict <- if (all(rows$atBound) && cls %in% c("alphaS", "alphaB")) {
+      "the data favour this smoothness"
+    } else if (all(rows$atBound) && cls == "kappa") {
+      "the posterior wants values outside the prior's range"
+    } else {
+      sprintf("the prior, not the data, sets %s", vars)
+    }
+    sugg <- suggest_prior(fit, match(rows$var, fit$vars), rows$priorValue,
+                          ifelse(rows$atBound, rows$bound, NA_real_))
+    advice <- if (cls == "kappa" && all(rows$atBound)) {
+      " Widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
+    } else if (is.na(sugg)) {
+      " Loosen or re-centre this prior and calibrate again."
+    } else if (cls == "kappa") {
+      sprintf(" Loosen %s, e.g. `%s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else if (all(rows$atBound)) {
+      sprintf(" Consider fixing %s, e.g. `hypers = %s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else {
+      sprintf(" Loosen %s, e.g. `hypers = %s`, and calibrate again.",
+              if (nrow(rows) == 1L) "it" else "them", sugg)
+    }
+    sprintf("Prior-data conflict for %s: %s: %s.%s", vars, parts, verdict, advice)
+  }, character(1), USE.NAMES = FALSE)
+}

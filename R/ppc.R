@@ -1,0 +1,220 @@
+#' Posterior predictive check of the field data
+#'
+#' Compares the field observations with replicated field data drawn from the
+#' posterior predictive distribution, so that a systematic misfit (a trend
+#' the model misses, noise it under- or overstates) shows up. The numbers
+#' come with a plot in the style of \pkg{bayesplot}'s `ppc_intervals()` and
+#' `ppc_dens_overlay()` ([plot.fbc_ppc()]); [pp_check()][pp_check.fbc] hands
+#' the same replicates to \pkg{bayesplot} when it is installed.
+#'
+#' @section Which predictive distribution:
+#' For each posterior draw used, observation \eqn{i} is replicated from the
+#' distribution of a *new* field observation at its input \eqn{x_i} given
+#' *all* the data (the field data included): the Gaussian \eqn{N(m_i, v_i)}
+#' of [predict.fbc()] with `type = "field"` (simulator, discrepancy and
+#' measurement error; see "Formulas" there), and
+#' \eqn{y^{rep}_i = m_i + \sqrt{v_i}\, \epsilon}, \eqn{\epsilon \sim N(0, 1)}.
+#' This is the usual posterior predictive check (Gelman et al. 2013, ch. 6):
+#' the data are used twice, to fit and to check, so the check is
+#' conservative. Observations fall inside their intervals somewhat more often
+#' than the nominal rate even for a good model, and a share outside well
+#' above nominal is a clear sign of misfit. It is not a cross-validation: an
+#' observation is not held out from its own prediction.
+#'
+#' @section Numbers:
+#' Per observation, from the equal-weight mixture of the draws' Gaussians
+#' (exact, not from the random replicates): the predictive `mean` and `sd`,
+#' the `median`, the 50% and 90% central intervals (`lower50`, `upper50`, `lower90`,
+#' `upper90`) and the posterior predictive p-value
+#' \eqn{p_i = \Pr(y^{rep}_i \ge y_i \mid y)}; values near 0 or 1 mark
+#' observations the model does not expect. `outside` gives the share of
+#' observations outside their central 50%, 90% and 95% intervals
+#' (\eqn{p_i} outside \eqn{[(1 - l)/2, (1 + l)/2]}), to compare with 0.5,
+#' 0.1 and 0.05.
+#'
+#' @param fit An `fbc` object from [calibrate()].
+#' @param ndraws How many posterior draws to use, evenly spaced over the
+#'   retained ones (all when fewer are retained); one replicated data set
+#'   per draw.
+#' @return An object of class `fbc_ppc`: a list with `y` (the observations,
+#'   response units), `yrep` (an `ndraws x n` matrix of replicated data sets,
+#'   one row per draw, as \pkg{bayesplot} expects), `x` (the field inputs, a
+#'   matrix with named columns), `obs` (the per-observation table: inputs,
+#'   `observed`, `mean`, `sd`, `median`, the intervals, `p`), `outside` (named by
+#'   level) and `ndraws`.
+#' @seealso [validate_emulator()] for the simulator runs.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, nChains = 2)
+#' pp <- ppc_field(fit, ndraws = 100)
+#' pp
+#' plot(pp)
+#' plot(pp, type = "density")
+ppc_field <- function(fit, ndraws = 500) {
+  check_fbc(fit)
+  ndraws <- check_count(ndraws, "ndraws")
+  sc <- fit$scale
+  dat <- fit$data
+  rows <- draw_rows(fit, "Bayesian", ndraws)
+  phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
+  res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
+                      fit$settings$nugget %||% fbc_nugget, 500L)
+  m <- sc$ymean + sc$ysd * res$mean         # n x D
+  s <- sc$ysd * sqrt(pmax(res$var, 0))
+  n <- nrow(m)
+  D <- ncol(m)
+  y <- sc$ymean + sc$ysd * dat$yf
+  yrep <- t(m) + t(s) * matrix(stats::rnorm(D * n), D, n)
+
+  mu <- rowMeans(m)
+  p <- rowMeans(stats::pnorm((m - y) / s))   # Pr(yrep >= y)
+  X <- unscale_inputs(dat$Xf, sc, seq_len(sc$p))
+  inputs <- field_input_names(sc)
+  stat_cols <- c("observed", "mean", "sd", "median", "lower50", "upper50", "lower90", "upper90", "p")
+  colnames(X) <- make.unique(c(stat_cols, inputs))[-seq_along(stat_cols)]
+  obs <- data.frame(X, observed = y, mean = mu, sd = sqrt(rowMeans(s^2) + rowMeans((m - mu)^2)),
+                    median = mixture_quantile(m, s, 0.5),
+                    lower50 = mixture_quantile(m, s, 0.25), upper50 = mixture_quantile(m, s, 0.75),
+                    lower90 = mixture_quantile(m, s, 0.05), upper90 = mixture_quantile(m, s, 0.95),
+                    p = p, check.names = FALSE)
+  levels_ <- c(0.5, 0.9, 0.95)
+  outside <- stats::setNames(vapply(levels_, function(l) mean(abs(p - 0.5) > l / 2), numeric(1)),
+                             paste0(100 * levels_, "%"))
+  structure(list(y = y, yrep = yrep, x = X, obs = obs, outside = outside, ndraws = D,
+                 response = sc$names$response %||% "response"),
+            class = "fbc_ppc")
+}
+
+field_input_names <- function(scale) {
+  nm <- scale$names$inputs
+  if (length(nm) != scale$p || anyNA(nm) || any(!nzchar(nm))) nm <- paste0("x", seq_len(scale$p))
+  nm
+}
+
+#' @export
+print.fbc_ppc <- function(x, digits = 3, ...) {
+  n <- length(x$y)
+  cat(sprintf("<fbc_ppc> Posterior predictive check of %d field observation%s\n", n,
+              if (n == 1) "" else "s"))
+  cat(sprintf("  %d posterior draw%s; each observation's predictive given all the data\n",
+              x$ndraws, if (x$ndraws == 1) "" else "s"))
+  cat(sprintf("  share outside the 50/90/95%% intervals: %s (nominal 0.5, 0.1, 0.05)\n",
+              paste(sprintf("%.2f", x$outside), collapse = ", ")))
+  p <- x$obs$p
+  extreme <- sum(p < 0.005 | p > 0.995)
+  cat(sprintf("  p-values below 0.005 or above 0.995: %d observation%s\n", extreme,
+              if (extreme == 1) "" else "s"))
+  z <- (x$y - x$obs$mean) / x$obs$sd
+  worst <- which.max(abs(z))
+  cat(sprintf("  most surprising: observation %d (observed %s, predictive mean %s, p = %s)\n",
+              worst, format(signif(x$y[worst], digits)), format(signif(x$obs$mean[worst], digits)),
+              format(signif(p[worst], 2))))
+  if (x$outside[["90%"]] > 0.2) {
+    cat_warning(
+      "Many observations fall outside their 90% intervals: the model misses part of the field data. The plot shows where; a discrepancy the bias GP cannot follow, or a measurement error variance fixed too low, are common causes.")
+  } else if (x$outside[["50%"]] < 0.2) {
+    cat_warning(
+      "The observations sit much closer to their predictive means than the intervals allow: the model overstates the noise, often because a prior holds sigma2E too high (see convergence_messages()).")
+  }
+  invisible(x)
+}
+
+#' Plot a posterior predictive check
+#'
+#' Two views of [ppc_field()], following \pkg{bayesplot}'s conventions:
+#' * `"intervals"` (like `ppc_intervals()`): for each field observation, the
+#'   median of its predictive distribution (light dot) with the central 50%
+#'   (thick) and 90% (thin) intervals, and the observation (dark dot),
+#'   against each experimental input (one panel per input, labelled with its
+#'   name);
+#' * `"density"` (like `ppc_dens_overlay()`): the density of the observed
+#'   data (dark) over the densities of up to `nOverlay` replicated data sets
+#'   (light).
+#'
+#' @param x An `fbc_ppc` object.
+#' @param type `"intervals"` or `"density"`.
+#' @param nOverlay For `"density"`, how many replicated data sets to draw.
+#' @param ... Unused.
+#' @return A ggplot object.
+#' @export
+plot.fbc_ppc <- function(x, type = c("intervals", "density"), nOverlay = 50, ...) {
+  type <- match_choice(type, c("intervals", "density"), "type")
+  nOverlay <- check_count(nOverlay, "nOverlay")
+  light <- "#9ecae1"
+  dark <- "#08306b"
+  if (type == "density") {
+    k <- min(nOverlay, nrow(x$yrep))
+    rep_df <- data.frame(value = as.vector(t(x$yrep[seq_len(k), , drop = FALSE])),
+                         draw = rep(seq_len(k), each = ncol(x$yrep)))
+    return(
+      ggplot2::ggplot() +
+        ggplot2::stat_density(data = rep_df, ggplot2::aes(x = .data$value, group = .data$draw),
+                              geom = "line", position = "identity", colour = light,
+                              linewidth = 0.3, alpha = 0.7) +
+        ggplot2::stat_density(data = data.frame(value = x$y), ggplot2::aes(x = .data$value),
+                              geom = "line", colour = dark, linewidth = 1) +
+        ggplot2::labs(x = x$response, y = "density",
+                      title = "Field data (dark) and replicated data sets (light)") +
+        ggplot2::theme_bw()
+    )
+  }
+  obs <- x$obs
+  inputs <- colnames(x$x)
+  df <- do.call(rbind, lapply(inputs, function(v) {
+    data.frame(input = v, x = x$x[, v], y = x$y, median = obs$median,
+               lower50 = obs$lower50, upper50 = obs$upper50,
+               lower90 = obs$lower90, upper90 = obs$upper90)
+  }))
+  df$input <- factor(df$input, inputs)
+  ggplot2::ggplot(df, ggplot2::aes(x = .data$x)) +
+    ggplot2::geom_linerange(ggplot2::aes(ymin = .data$lower90, ymax = .data$upper90),
+                            colour = light, linewidth = 0.5) +
+    ggplot2::geom_linerange(ggplot2::aes(ymin = .data$lower50, ymax = .data$upper50),
+                            colour = light, linewidth = 1.5) +
+    ggplot2::geom_point(ggplot2::aes(y = .data$median), colour = light, size = 1.6) +
+    ggplot2::geom_point(ggplot2::aes(y = .data$y), colour = dark, size = 1.2) +
+    ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") +
+    ggplot2::labs(x = if (length(inputs) == 1L) inputs else NULL, y = x$response,
+                  title = "Field data (dark) and posterior predictive 50% / 90% intervals (light)") +
+    ggplot2::theme_bw()
+}
+
+#' Posterior predictive checks with bayesplot
+#'
+#' A method for \pkg{bayesplot}'s `pp_check()` generic (registered when
+#' \pkg{bayesplot} is installed; FBC does not depend on it): it replicates
+#' the field data as [ppc_field()] does and calls
+#' `bayesplot::ppc_<type>(y, yrep, ...)`.
+#'
+#' @param object An `fbc` object from [calibrate()].
+#' @param type The name of a \pkg{bayesplot} `ppc_` function without the
+#'   prefix, e.g. `"dens_overlay"` (default), `"intervals"`, `"ribbon"`,
+#'   `"stat"`, `"ecdf_overlay"`.
+#' @param ndraws Number of posterior draws (replicated data sets).
+#' @param ... Passed to the \pkg{bayesplot} function. For `"intervals"` and
+#'   `"ribbon"`, `x` defaults to the first experimental input.
+#' @return The ggplot object of the \pkg{bayesplot} function.
+#' @exportS3Method bayesplot::pp_check
+#' @examples
+#' if (requireNamespace("bayesplot", quietly = TRUE)) {
+#'   set.seed(1)
+#'   fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, nChains = 2)
+#'   bayesplot::pp_check(fit, ndraws = 50)
+#'   bayesplot::pp_check(fit, type = "intervals")
+#' }
+pp_check.fbc <- function(object, type = "dens_overlay", ndraws = 50, ...) {
+  if (!requireNamespace("bayesplot", quietly = TRUE)) {
+    cli::cli_abort(c("{.fn pp_check} needs the {.pkg bayesplot} package.",
+                     i = "Install it, or use {.fn ppc_field} and its {.fn plot} method."))
+  }
+  type <- check_string(type, "type")
+  fun <- paste0("ppc_", type)
+  if (!exists(fun, envir = asNamespace("bayesplot"), inherits = FALSE)) {
+    cli::cli_abort("{.arg type} must name a {.pkg bayesplot} {.code ppc_} function; {.fn bayesplot::{fun}} does not exist.")
+  }
+  pp <- ppc_field(object, ndraws = ndraws)
+  args <- list(y = pp$y, yrep = pp$yrep, ...)
+  if (type %in% c("intervals", "ribbon") && is.null(args$x)) args$x <- pp$x[, 1]
+  do.call(getExportedValue("bayesplot", fun), args)
+}

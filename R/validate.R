@@ -1,0 +1,302 @@
+#' Validate the simulator emulator
+#'
+#' Checks how well the simulator emulator predicts the simulator runs it was
+#' built from: each run is predicted from the others (leave-one-out, or
+#' k-fold for large designs) at the posterior, and its standardized error
+#' tells whether the emulator's uncertainty is honest. Look at this before
+#' trusting a calibration: an emulator that is wrong somewhere in the design
+#' passes its error on to \eqn{\kappa}.
+#'
+#' @section What is predicted:
+#' The emulator is the simulator GP alone, conditioned on the simulator runs:
+#' zero mean and covariance \eqn{K = \sigma^2_S (R_s + \nu I)} on the scaled
+#' space of [calibrate()] (\eqn{\nu} the nugget, `fit$settings$nugget`). The
+#' field data play no part. For one draw of the parameters, with
+#' \eqn{Q = K^{-1}} and \eqn{a = Q y_s} computed from one Cholesky factor of
+#' \eqn{K}, the closed-form identities of GP regression give the held-out
+#' predictive of every run without refitting (Rasmussen and Williams 2006,
+#' section 5.4.2):
+#' * leave-one-out: mean \eqn{y_i - a_i / Q_{ii}}, variance \eqn{1 / Q_{ii}};
+#' * a fold \eqn{B} held out: mean \eqn{y_B - (Q_{BB})^{-1} a_B},
+#'   covariance \eqn{(Q_{BB})^{-1}}, of which each run's marginal is used.
+#'
+#' With `method = "MAP"` the draw with the highest log posterior is used.
+#' With `method = "Bayesian"`, `ndraws` draws evenly spaced over the retained
+#' ones; each run's predictive is then the equal-weight mixture of the
+#' draws' Gaussians: mean the mean of the means, variance the mean of the
+#' variances plus the variance of the means (law of total variance).
+#' Results are in the response's units.
+#'
+#' @section Folds:
+#' `folds = NULL` uses leave-one-out when there are at most 2000 runs and
+#' 10 folds otherwise. A number `k` asks for `k` folds (`k` = the number of
+#' runs is leave-one-out): run `i` goes to fold `((i - 1) mod k) + 1`, so
+#' each fold is an even thinning of the runs in their given order. A vector
+#' with one fold label per run sets the folds directly (e.g. to hold out
+#' whole blocks of the design).
+#'
+#' @section Summaries:
+#' For each run: `z = (observed - mean) / sd` and `pit`, the predictive
+#' probability below the observed value (for the Bayesian method, of the
+#' mixture). A run lies inside the central `level` interval when
+#' `|pit - 0.5| < level / 2`; `coverage` gives the share of runs inside the
+#' 50%, 90% and 95% intervals, which should be close to those levels.
+#' `rmse` is the root mean squared error of the means (`rmseRel`: as a share
+#' of the simulator response's sd) and `shareZ3` the share of runs with
+#' `|z| > 3` (0.27% for a Gaussian). Coverage well below nominal or many
+#' large `|z|` mean the emulator is overconfident (`print()` says so when the
+#' 95% coverage is below 0.85 or at least 3 runs, and 2%, have `|z| > 3`);
+#' coverage well above
+#' nominal means it is too cautious. Leave-one-out is optimistic when runs
+#' sit very close to each other: then use folds of neighbouring runs.
+#'
+#' @param fit An `fbc` object from [calibrate()].
+#' @param method `"Bayesian"` (a mixture over `ndraws` posterior draws) or
+#'   `"MAP"` (the draw with the highest log posterior).
+#' @param ndraws For `method = "Bayesian"`, how many draws to use (all when
+#'   fewer are retained). Each costs one Cholesky factor and one inverse of
+#'   the `m x m` simulator covariance.
+#' @param folds `NULL` (default), a number of folds, or one fold label per
+#'   simulator run (see "Folds").
+#' @return An object of class `fbc_validation`: a list with `runs` (a data
+#'   frame with one row per simulator run: its inputs in their own units,
+#'   `fold`, `observed`, `mean`, `sd`, `z`, `pit`), `coverage` (named by
+#'   level), `rmse`, `rmseRel`, `shareZ3`, `method`, `ndraws` (draws used),
+#'   `nFolds` and `inputs` (the names of the input columns of `runs`). It
+#'   has `print()` and `plot()` methods (see [plot.fbc_validation()]).
+#' @seealso [ppc_field()] for the field data.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, nChains = 2)
+#' v <- validate_emulator(fit, ndraws = 20)
+#' v
+#' plot(v)
+validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds = NULL) {
+  check_fbc(fit)
+  method <- match_choice(method, c("Bayesian", "MAP"), "method")
+  ndraws <- check_count(ndraws, "ndraws")
+  sc <- fit$scale
+  ys <- fit$data$ys
+  m <- length(ys)
+  fold <- emulator_folds(folds, m)
+  rows <- draw_rows(fit, method, ndraws)
+  phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
+  nugget <- fit$settings$nugget %||% fbc_nugget
+  sig <- match("sigma2S", fit$vars)
+
+  D <- nrow(phis)
+  means <- vars <- matrix(0, m, D)
+  for (d in seq_len(D)) {
+    K <- sim_corr(fit, fit$data$Xs, fit$data$Xs, phis[d, ])
+    diag(K) <- diag(K) + nugget
+    cv <- gp_heldout(K, ys, fold)
+    means[, d] <- cv$mean
+    vars[, d] <- phis[d, sig] * cv$var  # sigma2S cancels in the mean
+  }
+  mu <- rowMeans(means)
+  v <- rowMeans(vars) + rowMeans((means - mu)^2)
+  sds <- sqrt(vars)
+  pit <- rowMeans(stats::pnorm((ys - means) / sds))
+  z <- (ys - mu) / sqrt(v)
+
+  X <- unscale_inputs(fit$data$Xs, sc, seq_len(ncol(fit$data$Xs)))
+  stat_cols <- c("fold", "observed", "mean", "sd", "z", "pit")
+  inputs <- make.unique(c(stat_cols, sim_input_names(sc, ncol(X))))[-seq_along(stat_cols)]
+  colnames(X) <- inputs
+  runs <- data.frame(X, fold = fold %||% seq_len(m),
+                     observed = sc$ymean + sc$ysd * ys, mean = sc$ymean + sc$ysd * mu,
+                     sd = sc$ysd * sqrt(v), z = z, pit = pit, check.names = FALSE)
+  levels_ <- c(0.5, 0.9, 0.95)
+  coverage <- stats::setNames(vapply(levels_, function(l) mean(abs(pit - 0.5) < l / 2), numeric(1)),
+                              paste0(100 * levels_, "%"))
+  rmse <- sqrt(mean((runs$observed - runs$mean)^2))
+  structure(list(
+    runs = runs, coverage = coverage, rmse = rmse, rmseRel = rmse / sc$ysd,
+    shareZ3 = mean(abs(z) > 3), method = method, ndraws = D,
+    nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
+    response = sc$names$response %||% "response"
+  ), class = "fbc_validation")
+}
+
+# The simulator correlation R_s(X, Y) at parameter vector `phi` (the
+# sampler's scale). Every simulator correlation of the checks goes through
+# here, so a new correlation family needs one change.
+sim_corr <- function(fit, X, Y, phi) {
+  idx <- fit$indices %||% param_indices(fit$scale$p, fit$scale$q)
+  .corr_matrix(X, Y, as.numeric(phi[idx$thetaS]), as.numeric(phi[idx$alphaS]))
+}
+
+# Held-out predictive of every element of y ~ N(0, K): leave-one-out when
+# `fold` is NULL, else one fold at a time (see ?validate_emulator). One
+# Cholesky factor of K; Q = K^-1 from it. Returns list(mean, var).
+gp_heldout <- function(K, y, fold = NULL) {
+  U <- chol(K)
+  Q <- chol2inv(U)
+  a <- drop(Q %*% y)
+  if (is.null(fold)) {
+    d <- diag(Q)
+    return(list(mean = y - a / d, var = 1 / d))
+  }
+  mean <- var <- numeric(length(y))
+  for (k in unique(fold)) {
+    B <- which(fold == k)
+    S <- chol2inv(chol(Q[B, B, drop = FALSE]))  # covariance of y_B given the rest
+    mean[B] <- y[B] - drop(S %*% a[B])
+    var[B] <- diag(S)
+  }
+  list(mean = mean, var = var)
+}
+
+# Above this many simulator runs, validate_emulator() uses 10 folds.
+fbc_kfold_above <- 2000L
+
+# Fold labels (NULL for leave-one-out) from the `folds` argument.
+emulator_folds <- function(folds, m, call = parent.frame()) {
+  if (is.null(folds)) {
+    if (m <= fbc_kfold_above) return(NULL)
+    folds <- 10L
+  }
+  if (length(folds) == 1L) {
+    k <- check_count(folds, "folds", min = 2, call = call)
+    if (k > m) {
+      cli::cli_abort("{.arg folds} must be at most the number of simulator runs ({m}); got {k}.",
+                     call = call)
+    }
+    if (k == m) return(NULL)
+    return((seq_len(m) - 1L) %% k + 1L)
+  }
+  if (length(folds) != m || anyNA(folds)) {
+    cli::cli_abort(c(
+      "{.arg folds} must be a number of folds or one fold label per simulator run ({m}).",
+      x = "It has length {length(folds)}{if (anyNA(folds)) ' and missing values' else ''}."
+    ), call = call)
+  }
+  if (length(unique(folds)) < 2L) {
+    cli::cli_abort("{.arg folds} must define at least 2 folds.", call = call)
+  }
+  if (all(table(folds) == 1L)) return(NULL)
+  as.vector(folds)
+}
+
+# Rows of Phi used by a check: the MAP draw, or `ndraws` evenly spaced ones.
+draw_rows <- function(fit, method, ndraws) {
+  N <- nrow(fit$Phi)
+  if (method == "MAP") return(which.max(fit$logPost))
+  if (ndraws >= N) return(seq_len(N))
+  unique(round(seq(1, N, length.out = ndraws)))
+}
+
+unscale_inputs <- function(X, scale, cols) {
+  sweep(sweep(X, 2, scale$xmax[cols] - scale$xmin[cols], "*"), 2, scale$xmin[cols], "+")
+}
+
+# Names of the simulator's input columns (experimental, then calibration).
+sim_input_names <- function(scale, k) {
+  nm <- c(scale$names$inputs, scale$names$calibration)
+  if (length(nm) != k || anyNA(nm) || any(!nzchar(nm))) {
+    nm <- c(paste0("x", seq_len(scale$p)), paste0("t", seq_len(scale$q)))
+  }
+  nm
+}
+
+# Prints a message as print.fbc() prints its warnings: "! " then wrapped lines.
+cat_warning <- function(msg) {
+  lines <- strwrap(msg, width = getOption("width") - 2L, exdent = 2L)
+  cat(paste0("! ", paste(lines, collapse = "\n")), "\n", sep = "")
+}
+
+check_fbc <- function(x, arg = "fit", call = parent.frame()) {
+  if (!inherits(x, "fbc")) {
+    cli::cli_abort("{.arg {arg}} must be an {.cls fbc} object from {.fn calibrate}, not {.obj_type_friendly {x}}.",
+                   call = call)
+  }
+  invisible(x)
+}
+
+#' @export
+print.fbc_validation <- function(x, digits = 3, ...) {
+  m <- nrow(x$runs)
+  how <- if (x$nFolds == m) "leave-one-out" else sprintf("%d-fold", x$nFolds)
+  at <- if (x$method == "MAP") "at the MAP draw" else
+    sprintf("over %d posterior draw%s (Gaussian mixture per run)", x$ndraws, if (x$ndraws > 1) "s" else "")
+  cat(sprintf("<fbc_validation> Emulator check: %s predictions of %d simulator runs\n", how, m))
+  cat(sprintf("  %s\n", at))
+  cat(sprintf("  coverage of nominal intervals: %s\n",
+              paste(sprintf("%s: %.2f", names(x$coverage), x$coverage), collapse = "  ")))
+  cat(sprintf("  RMSE %s (%s%% of the response's sd); |z| > 3: %d run%s (%.1f%%)\n",
+              format(signif(x$rmse, digits)), format(signif(100 * x$rmseRel, digits)),
+              sum(abs(x$runs$z) > 3), if (sum(abs(x$runs$z) > 3) == 1) "" else "s",
+              100 * x$shareZ3))
+  worst <- which.max(abs(x$runs$z))
+  cat(sprintf("  largest |z|: run %d (z = %s)\n", worst, format(signif(x$runs$z[worst], digits))))
+  verdict <- validation_verdict(x)
+  if (length(verdict)) cat_warning(verdict)
+  invisible(x)
+}
+
+# A one-line reading of the coverage, when it is clearly off.
+validation_verdict <- function(x) {
+  cov95 <- x$coverage[["95%"]]
+  cov50 <- x$coverage[["50%"]]
+  if (cov95 < 0.85 || sum(abs(x$runs$z) > 3) >= max(3, 0.02 * nrow(x$runs))) {
+    return("The emulator is overconfident: its intervals miss too many runs. Look at the plot for where (an input range, a corner of the design), and consider more runs there or a longer run of the sampler.")
+  }
+  if (cov50 > 0.85) {
+    return("The emulator's intervals are much wider than its errors: it is too cautious (often harmless; check sigma2S and thetaS).")
+  }
+  character()
+}
+
+#' Plot an emulator validation
+#'
+#' Draws, with ggplot2, the standardized held-out errors `z` of
+#' [validate_emulator()] against each simulator input (one panel each,
+#' labelled with the input's name), with dashed lines at 0 and \eqn{\pm 2},
+#' and a normal QQ plot of `z` (last panel: `z` against the standard normal
+#' quantiles, the identity line dashed). Runs with `|z| > 3` are red. A
+#' trend or a funnel against an input shows where the emulator is wrong;
+#' points above the QQ line at the right (below it at the left) mean heavier
+#' tails than the emulator admits.
+#'
+#' @param x An `fbc_validation` object.
+#' @param which `"both"` (default), `"inputs"` or `"qq"`.
+#' @param ... Unused.
+#' @return A ggplot object.
+#' @export
+plot.fbc_validation <- function(x, which = c("both", "inputs", "qq"), ...) {
+  which <- match_choice(which, c("both", "inputs", "qq"), "which")
+  runs <- x$runs
+  qq_label <- "normal QQ (x: N(0, 1) quantile)"
+  panels <- list()
+  if (which != "qq") {
+    panels <- lapply(x$inputs, function(v) {
+      data.frame(panel = v, x = runs[[v]], z = runs$z)
+    })
+  }
+  if (which != "inputs") {
+    o <- order(runs$z)
+    panels[[length(panels) + 1L]] <- data.frame(
+      panel = qq_label, x = stats::qnorm(stats::ppoints(nrow(runs))), z = runs$z[o]
+    )
+  }
+  df <- do.call(rbind, panels)
+  lev <- c(if (which != "qq") x$inputs, if (which != "inputs") qq_label)
+  df$panel <- factor(df$panel, lev)
+  df$large <- abs(df$z) > 3
+  p <- ggplot2::ggplot(df, ggplot2::aes(x = .data$x, y = .data$z)) +
+    ggplot2::geom_hline(yintercept = 0, colour = "grey40") +
+    ggplot2::geom_hline(yintercept = c(-2, 2), linetype = "dashed", colour = "grey60")
+  if (which != "inputs") {
+    p <- p + ggplot2::geom_abline(data = data.frame(panel = factor(qq_label, lev)),
+                                  ggplot2::aes(intercept = 0, slope = 1),
+                                  linetype = "dashed", colour = "steelblue")
+  }
+  how <- if (x$nFolds == nrow(runs)) "leave-one-out" else paste0(x$nFolds, "-fold")
+  p + ggplot2::geom_point(ggplot2::aes(colour = .data$large), size = 1.2, show.legend = FALSE) +
+    ggplot2::scale_colour_manual(values = c(`FALSE` = "grey20", `TRUE` = "firebrick")) +
+    ggplot2::facet_wrap(ggplot2::vars(.data$panel), scales = "free_x") +
+    ggplot2::labs(x = NULL, y = "standardized error z",
+                  title = sprintf("Emulator check: %s standardized errors of the simulator runs", how)) +
+    ggplot2::theme_bw()
+}

@@ -1,0 +1,120 @@
+# References: the priors' CDFs against numerical integrals of the package's
+# own log densities; the conflict rule on real short runs (small noise: the
+# truth is known; ball data: the rule must stay silent) and on draws built by
+# hand so that the message is reproducible to the digit.
+
+# Free fall t = sqrt(2 h / g) on a 12 x 8 grid, field data at g = 9.81 with
+# noise sd `frac` times the simulator response's sd (sigma2E = frac^2 on the
+# standardised scale), no discrepancy.
+small_noise_data <- function(frac = 0.1, seed = 10) {
+  set.seed(seed)
+  h <- seq(5, 30, length.out = 20)
+  grid <- expand.grid(h = seq(4, 31, length.out = 12), g = seq(6, 14, length.out = 8))
+  sim <- cbind(t = sqrt(2 * grid$h / grid$g), h = grid$h, g = grid$g)
+  field <- cbind(t = sqrt(2 * h / 9.81) + rnorm(length(h), 0, frac * sd(sim[, "t"])), h = h)
+  list(sim = sim, field = field)
+}
+
+test_that("prior CDFs integrate the prior densities", {
+  cases <- list(list("uniform", -1, 2, 0.5), list("gaussian", 1, 2, 0.3), list("gamma", 1.1, 0.1, 3),
+                list("beta", 2, 5, 0.2), list("lognormal", 0, 1, 2), list("logistic", 1, 0.5, 0.2),
+                list("betashift", 5, 2, 1.6), list("exponential", 2, NA, 0.4),
+                list("inversegamma", 1.5, 1.5, 0.3))
+  for (cs in cases) {
+    f <- prior_builder(cs[[1]], cs[[2]], cs[[3]])
+    lo <- switch(cs[[1]], uniform = -1, betashift = 1, gaussian = , logistic = -Inf, 0)
+    ref <- integrate(function(x) exp(f(x)), lo, cs[[4]], rel.tol = 1e-10)$value
+    expect_equal(FBC:::prior_cdf(cs[[4]], cs[[1]], cs[[2]], cs[[3]]), ref, tolerance = 1e-7,
+                 label = cs[[1]])
+  }
+  expect_true(is.na(FBC:::prior_cdf(1, "jeffreys", NA, NA)))
+  # the default sigma2E prior has almost no mass below 0.1
+  expect_lt(FBC:::prior_cdf(0.1, "inversegamma", 1.5, 1.5), 1e-5)
+})
+
+test_that("small field noise: the default sigma2E prior is flagged, and the suggested prior fixes it", {
+  d <- small_noise_data(frac = 0.1)  # true sigma2E about 0.01
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2)
+  cf <- FBC:::prior_conflicts(fit)
+  expect_equal(cf$var, "sigma2E")
+  expect_equal(cf$side, "lower")
+  expect_gt(cf$median, 0.1)           # held up by the prior
+  expect_lt(cf$dataValue, 0.03)       # the likelihood peaks near the truth
+  msg <- convergence_messages(fit)
+  expect_match(msg, "^Prior-data conflict for sigma2E: its posterior median", all = FALSE)
+  expect_match(capture.output(print(fit)), "Prior-data conflict for sigma2E", all = FALSE)
+  # the suggested call, run as given, removes the conflict and finds the noise
+  call <- sub(".*`hypers = (.*)`.*", "\\1", grep("^Prior-data conflict", msg, value = TRUE))
+  hypers <- eval(parse(text = call))
+  expect_equal(hypers$sigma2E$dist, "inversegamma")
+  expect_equal(hypers$sigma2E$p1, 1.1)
+  set.seed(1)
+  fit2 <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2, hypers = hypers)
+  expect_equal(nrow(FBC:::prior_conflicts(fit2)), 0L)
+  expect_lt(median(fit2$Phi[, "sigma2E"]), 0.05)
+})
+
+test_that("no conflict on the ball data with the default priors", {
+  set.seed(1)
+  fit <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 400, nChains = 2)
+  # sigma2E is in the prior's tail (rule 1) but the likelihood peaks within
+  # 3 posterior sds of its median (rule 2 fails)
+  u <- FBC:::prior_cdf(median(fit$Phi[, "sigma2E"]), "inversegamma", 1.5, 1.5)
+  expect_lt(u, 0.01)
+  expect_equal(nrow(FBC:::prior_conflicts(fit)), 0L)
+  expect_false(any(grepl("Prior-data conflict", convergence_messages(fit))))
+})
+
+test_that("the conflict message, on draws built by hand", {
+  d <- small_noise_data(frac = 0.1)
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
+  # 400 draws: every parameter at a fixed value except sigma2E, log-normal
+  # around 0.16; the MAP row is the middle one
+  base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
+            thetaB1 = 1, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
+  Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
+  Phi[, "sigma2E"] <- exp(qnorm(ppoints(400), log(0.16), 0.25))
+  fit$Phi <- Phi
+  fit$chain <- rep(1:4, each = 100)
+  fit$logPost <- -abs(seq_len(400) - 200.5)
+  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  cf <- FBC:::prior_conflicts(fit)
+  expect_equal(cf$var, "sigma2E")
+  # the peak of the likelihood in sigma2E, the others at the MAP row, by a grid
+  map <- FBC:::sampler_scale(Phi, fit$scale)[200, ]
+  grid <- exp(seq(log(1e-4), log(0.2), length.out = 2000))
+  ll <- sapply(grid, function(s) dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+                                              replace(map, 10, s)))
+  expect_equal(log(cf$dataValue), log(grid[which.max(ll)]), tolerance = 0.05)
+  # its suggestion: an inverse gamma with median at that value
+  h <- eval(parse(text = FBC:::suggest_prior(fit, 10, cf$priorValue)))
+  expect_equal(h$sigma2E$p2 / qgamma(0.5, h$sigma2E$p1), cf$dataValue, tolerance = 0.05)
+  expect_snapshot(writeLines(strwrap(FBC:::conflict_messages(fit), 78)))
+  # rule 1 alone is not enough: the same draws around 0.5, inside the prior
+  Phi[, "sigma2E"] <- exp(qnorm(ppoints(400), log(0.5), 0.25))
+  fit$Phi <- Phi
+  expect_equal(nrow(FBC:::prior_conflicts(fit)), 0L)
+})
+
+test_that("suggestions keep the other members of a class and give the family's centre", {
+  fit <- small_fit(nChains = 1)
+  j <- match(c("thetaS1", "thetaS2"), fit$vars)
+  s <- FBC:::suggest_prior(fit, j[2], 40)
+  expect_equal(s, "set_hyperPriors(thetaSDist = c(\"gamma\", \"gamma\"), thetaSP1 = c(1.1, 1.1), thetaSP2 = c(0.1, 0.02), thetaSInit = c(1, 40))")
+  h <- eval(parse(text = s))
+  expect_equal(qgamma(0.5, 1.1, rate = h$thetaS$p2[2]), 40, tolerance = 0.03) # 2 significant digits
+  # two members at once
+  s <- FBC:::suggest_prior(fit, j, c(0.01, 40))
+  expect_equal(s, "set_hyperPriors(thetaSDist = c(\"gamma\", \"gamma\"), thetaSP1 = c(1.1, 1.1), thetaSP2 = c(79, 0.02), thetaSInit = c(0.01, 40))")
+  s <- FBC:::suggest_prior(fit, match("muB", fit$vars), -3)
+  expect_equal(s, "set_hyperPriors(muBDist = \"gaussian\", muBP1 = 0, muBP2 = 6, muBInit = -3)")
+  s <- FBC:::suggest_prior(fit, match("alphaB1", fit$vars), 1.1)
+  expect_equal(s, "set_hyperPriors(alphaBDist = \"uniform\", alphaBP1 = 1, alphaBP2 = 2, alphaBInit = 1.5)")
+  # a smoothness the data press to its bound: fix it there
+  s <- FBC:::suggest_prior(fit, match("alphaS2", fit$vars), 2, bounds = 2)
+  expect_equal(s, "set_hyperPriors(alphaSDist = c(\"betashift\", \"fixed\"), alphaSInit = c(1.9, 2))")
+  expect_s3_class(eval(parse(text = s)), "fbc_hypers")
+  expect_true(is.na(FBC:::suggest_prior(fit, 1, 0.5)))  # kappa's stretched beta
+})

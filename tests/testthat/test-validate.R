@@ -1,0 +1,160 @@
+# References: explicit refits of the emulator without the held-out runs,
+# written with dense_corr() (helper-dense.R) and base R's solve(): the GP
+# conditional of y_B given y_-B, mean K_B,-B K_-B^-1 y_-B and covariance
+# K_BB - K_B,-B K_-B^-1 K_-B,B, with K = sigma2S (R_s + nugget I).
+
+# Held-out predictive of every run by refitting without it (or its fold).
+refit_heldout <- function(Xs, ys, th, fold, nugget = 1e-6) {
+  m <- nrow(Xs)
+  K <- th$sigma2S * (dense_corr(Xs, Xs, th$thetaS, th$alphaS) + nugget * diag(m))
+  mean <- var <- numeric(m)
+  for (k in unique(fold)) {
+    B <- which(fold == k)
+    A <- solve(K[-B, -B], K[-B, B, drop = FALSE])
+    mean[B] <- crossprod(A, ys[-B])
+    var[B] <- diag(K[B, B, drop = FALSE] - K[B, -B, drop = FALSE] %*% A)
+  }
+  list(mean = mean, var = var)
+}
+
+test_that("leave-one-out and k-fold predictions equal explicit refits", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi)
+  sc <- fit$scale
+  th <- unpack_phi(phi, 2, 1)
+  m <- length(fit$data$ys)
+  cases <- list(list(folds = NULL, labels = seq_len(m)),
+                list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1),
+                list(folds = rep(1:4, each = 3), labels = rep(1:4, each = 3)))
+  for (cs in cases) {
+    ref <- refit_heldout(fit$data$Xs, fit$data$ys, th, cs$labels)
+    for (method in c("MAP", "Bayesian")) {
+      v <- validate_emulator(fit, method = method, folds = cs$folds)
+      expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
+      expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+      expect_equal(v$runs$observed, sc$ymean + sc$ysd * fit$data$ys)
+      z <- (fit$data$ys - ref$mean) / sqrt(ref$var)
+      expect_equal(v$runs$z, z, tolerance = 1e-7)
+      expect_equal(v$runs$pit, pnorm(z), tolerance = 1e-7)
+    }
+  }
+  expect_equal(v$nFolds, 4L)
+  expect_equal(v$runs$fold, rep(1:4, each = 3))
+  # inputs in their own units, with the data's names
+  expect_equal(as.matrix(v$runs[, c("x1", "x2", "t")]),
+               FBC:::unscale_inputs(fit$data$Xs, sc, 1:3), ignore_attr = TRUE)
+})
+
+test_that("several draws combine as a Gaussian mixture (total variance, mixture PIT)", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi)
+  sc <- fit$scale
+  set.seed(8)
+  phis <- rbind(phi, t(replicate(3, random_phi(2, 1))))
+  Phi <- phis
+  Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
+  colnames(Phi) <- colnames(fit$Phi)
+  fit$Phi <- Phi
+  fit$logPost <- c(-3, -1, -7, -2)
+  m <- length(fit$data$ys)
+  refs <- lapply(1:4, function(i) refit_heldout(fit$data$Xs, fit$data$ys, unpack_phi(phis[i, ], 2, 1),
+                                                seq_len(m)))
+  mu <- sapply(refs, `[[`, "mean")
+  s2 <- sapply(refs, `[[`, "var")
+  v <- validate_emulator(fit)
+  expect_equal(v$ndraws, 4L)
+  expect_equal(v$runs$mean, sc$ymean + sc$ysd * rowMeans(mu), tolerance = 1e-8)
+  # law of total variance of the equal-weight mixture (divisor M)
+  tv <- rowMeans(s2) + rowMeans((mu - rowMeans(mu))^2)
+  expect_equal(v$runs$sd, sc$ysd * sqrt(tv), tolerance = 1e-8)
+  expect_equal(v$runs$pit, rowMeans(pnorm((fit$data$ys - mu) / sqrt(s2))), tolerance = 1e-7)
+  # ndraws = 2: the first and the last draw
+  v2 <- validate_emulator(fit, ndraws = 2)
+  expect_equal(v2$runs$mean, sc$ymean + sc$ysd * rowMeans(mu[, c(1, 4)]), tolerance = 1e-8)
+  # MAP: the second draw
+  vm <- validate_emulator(fit, method = "MAP")
+  expect_equal(vm$runs$mean, sc$ymean + sc$ysd * mu[, 2], tolerance = 1e-8)
+  # coverage, RMSE and |z| > 3 from the per-run numbers
+  expect_equal(unname(v$coverage), sapply(c(0.5, 0.9, 0.95), function(l) mean(abs(v$runs$pit - 0.5) < l / 2)))
+  expect_equal(v$rmse, sqrt(mean((v$runs$observed - v$runs$mean)^2)))
+  expect_equal(v$rmseRel, v$rmse / sc$ysd)
+  expect_equal(v$shareZ3, mean(abs(v$runs$z) > 3))
+})
+
+# An fbc object whose simulator runs are a draw from the emulator's own GP
+# at the fixed parameters: its held-out predictives are exact, so each z is
+# N(0, 1) and the coverage is nominal up to sampling noise.
+gp_truth_fit <- function(sigma2SFit, m = 400, seed = 21) {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  set.seed(seed)
+  Xs <- matrix(runif(m * 3), m, 3)
+  th <- c(2, 1, 3)
+  al <- c(1.5, 1.5, 1.5)
+  K <- dense_corr(Xs, Xs, th, al) + 1e-6 * diag(m)
+  fit$data$Xs <- Xs
+  fit$data$ys <- drop(crossprod(chol(K), rnorm(m)))  # sigma2S = 1
+  idx <- fit$indices
+  fit$Phi[, idx$thetaS] <- matrix(th, nrow(fit$Phi), 3, byrow = TRUE)
+  fit$Phi[, idx$alphaS] <- matrix(al, nrow(fit$Phi), 3, byrow = TRUE)
+  fit$Phi[, idx$sigma2S] <- sigma2SFit
+  fit
+}
+
+test_that("an exact emulator has nominal coverage; an overconfident one does not", {
+  v <- validate_emulator(gp_truth_fit(1), method = "MAP")
+  # 400 runs: binomial sd of a 95% coverage is 0.011
+  expect_equal(unname(v$coverage), c(0.5, 0.9, 0.95), tolerance = 0.08)
+  expect_lt(abs(mean(v$runs$z)), 0.15)
+  expect_lt(abs(sd(v$runs$z) - 1), 0.1)
+  expect_lte(v$shareZ3, 0.01)
+  # sigma2S ten times too small: intervals sqrt(10) times too narrow
+  bad <- validate_emulator(gp_truth_fit(0.1), method = "MAP")
+  expect_equal(bad$runs$mean, v$runs$mean)
+  expect_lt(bad$coverage[["95%"]], 0.6)
+  expect_match(FBC:::validation_verdict(bad), "overconfident")
+  expect_identical(FBC:::validation_verdict(v), character())
+})
+
+test_that("folds: the default rule and argument checks", {
+  expect_null(FBC:::emulator_folds(NULL, 2000))
+  expect_equal(FBC:::emulator_folds(NULL, 2001), (seq_len(2001) - 1) %% 10 + 1)
+  expect_null(FBC:::emulator_folds(12, 12))
+  expect_null(FBC:::emulator_folds(1:12, 12))
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_snapshot(error = TRUE, validate_emulator(fit, folds = 13))
+  expect_snapshot(error = TRUE, validate_emulator(fit, folds = 1:5))
+  expect_snapshot(error = TRUE, validate_emulator(fit, folds = rep(1, 12)))
+  expect_snapshot(error = TRUE, validate_emulator(list()))
+  expect_snapshot(error = TRUE, validate_emulator(fit, method = "exact"))
+})
+
+test_that("print and plot of a validation", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  v <- validate_emulator(fit, folds = 3)
+  expect_snapshot(print(v))
+  p <- plot(v)
+  expect_s3_class(p, "ggplot")
+  # one panel per simulator input, named as in the data, and the QQ panel
+  expect_equal(levels(p$data$panel), c("x1", "x2", "t", "normal QQ (x: N(0, 1) quantile)"))
+  expect_equal(nrow(p$data), 4 * 12)
+  qq <- p$data[p$data$panel == levels(p$data$panel)[4], ]
+  expect_equal(qq$z, sort(v$runs$z))
+  expect_equal(levels(plot(v, which = "qq")$data$panel), "normal QQ (x: N(0, 1) quantile)")
+  expect_equal(levels(plot(v, which = "inputs")$data$panel), c("x1", "x2", "t"))
+  expect_no_error(ggplot2::ggplot_build(p))
+})
+
+test_that("the simulator correlation goes through sim_corr()", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi)
+  th <- unpack_phi(phi, 2, 1)
+  X <- fit$data$Xs
+  expect_equal(FBC:::sim_corr(fit, X, X[1:4, ], phi), dense_corr(X, X[1:4, ], th$thetaS, th$alphaS),
+               tolerance = 1e-12)
+})
