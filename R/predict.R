@@ -46,7 +46,10 @@
 #' @param object An `fbc` object from [calibrate()].
 #' @param newdata New experimental inputs in their own units: a numeric matrix
 #'   or data frame with the `p` experimental input columns (a vector when
-#'   `p = 1`).
+#'   `p = 1`). When the calibration's data carried column names (see
+#'   "Columns" in [calibrate()]) and `newdata` does too, its columns are
+#'   matched by name, in any order, and other columns are ignored; an
+#'   unnamed matrix gives the inputs by position.
 #' @param method `"Bayesian"` (average over all retained draws) or `"MAP"`
 #'   (the draw with the highest log posterior).
 #' @param type What to predict: `"field"` (a new field observation),
@@ -76,7 +79,8 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   }
   check_flag(draws, "draws")
   sc <- object$scale
-  X <- check_newdata(newdata, sc$p)
+  X <- check_newdata(newdata, sc)
+  warn_newdata_outside(X, object)
   Xn <- scale_inputs(X, sc, seq_len(sc$p))
 
   rows <- if (method == "MAP") which.max(object$logPost) else seq_len(nrow(object$Phi))
@@ -137,8 +141,13 @@ mixture_quantile <- function(mu, sd, prob, tol = 1e-10) {
   (lo + hi) / 2
 }
 
-# New experimental inputs as a double matrix with p columns.
-check_newdata <- function(newdata, p, call = parent.frame()) {
+# New experimental inputs as an unnamed double matrix with p columns, in the
+# order of the fit's inputs (matched by name when both carry names).
+check_newdata <- function(newdata, scale, call = parent.frame()) {
+  p <- scale$p
+  if (is.data.frame(newdata) && isTRUE(scale$named) && all(scale$names$inputs %in% names(newdata))) {
+    newdata <- newdata[scale$names$inputs]  # other columns (say the response) are not needed
+  }
   if (is.data.frame(newdata)) {
     bad <- !vapply(newdata, is.numeric, logical(1))
     if (any(bad)) {
@@ -148,6 +157,9 @@ check_newdata <- function(newdata, p, call = parent.frame()) {
       ), call = call)
     }
     newdata <- as.matrix(newdata)
+  }
+  if (is.matrix(newdata) && is.numeric(newdata)) {
+    newdata <- match_newdata_columns(newdata, scale, call = call)
   }
   if (is.numeric(newdata) && is.null(dim(newdata))) {
     if (p != 1L) {
