@@ -164,7 +164,10 @@
 #'   for each calibration input. `kappaInit = NA` starts at the middle of
 #'   that range (or at the centre of the prior when that lies outside it).
 #'   Scalars apply to every calibration parameter; vectors must have length
-#'   `q`.
+#'   `q`. The defaults of `kappaP1` and `kappaP2` are the Beta's: another
+#'   family must be given its own parameters (e.g. `kappaDist = "gaussian",
+#'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
+#'   units), else `calibrate()` refuses it and names the arguments to give.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
 #' @param showProgress Show a progress bar with the time left and the current
 #'   acceptance rates.
@@ -225,12 +228,16 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
     )
   }
+  check_run_size((nMCMC - nBurn) %/% thinning, length(param_names(p, q)), nChains,
+                 iters = nMCMC, args = c("nMCMC", "nChains"))
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
 
+  units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
+  check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
   scale <- fbc_scale(sim, p, named = cols$named)
   inform_duplicated_runs(sim)
   warn_field_outside(sim, field, scale)

@@ -20,7 +20,8 @@
 #' @param xlab For `"fits"`, the names of the experimental inputs (one per
 #'   input; default the column names of the field data, else `x1`, ..., `xp`).
 #'   For the other types, the x-axis title.
-#' @param ... Unused.
+#' @param ... Not used: an argument given here is an error (a typo such
+#'   as `lvl =` would otherwise be ignored silently).
 #' @return A ggplot object; print it to draw it, or add layers and themes.
 #' @export
 #' @importFrom ggplot2 .data
@@ -31,6 +32,7 @@
 #' plot(fit, "thetaS", type = "trace")
 #' plot(fit, type = "fits", xlab = "height (m)")
 plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...) {
+  check_dots_empty(..., fn = plot.fbc, name = "plot")
   type <- match_choice(type, c("density", "trace", "fits"), "type")
   if (type == "fits") return(plot_fits(x, xlab))
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {

@@ -58,7 +58,8 @@
 #'   discrepancy \eqn{\delta(x)}).
 #' @param level Probability of the interval `[lower, upper]`.
 #' @param draws If `TRUE`, also return the per-draw predictive means.
-#' @param ... Unused.
+#' @param ... Not used: an argument given here is an error (a typo such
+#'   as `lvl =` would otherwise be ignored silently).
 #' @return A list with `pred`, `se`, `lower` and `upper` (one value per row of
 #'   `newdata`, in the response's units) and, when `draws = TRUE`, `draws`: a
 #'   matrix with one row per new point and one column per draw used.
@@ -72,6 +73,7 @@
 predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
                         type = c("field", "mean", "simulator", "bias"),
                         level = 0.95, draws = FALSE, ...) {
+  check_dots_empty(..., fn = predict.fbc, name = "predict")
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
   type <- match_choice(type, c("field", "mean", "simulator", "bias"), "type")
   if (!is.numeric(level) || length(level) != 1L || is.na(level) || level <= 0 || level >= 1) {

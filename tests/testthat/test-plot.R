@@ -65,3 +65,11 @@ test_that("unknown classes, types and bad xlab are clear errors", {
     plot(fit, type = "fits", xlab = c("a", "b"))
   })
 })
+
+test_that("unknown plot arguments are refused", {
+  fit <- fit_for_plots()
+  expect_snapshot(error = TRUE, {
+    plot(fit, paramter = "thetaS")
+    plot(fit, main = "g")
+  })
+})

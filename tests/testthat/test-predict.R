@@ -122,3 +122,15 @@ test_that("ball data: predictions at h = 2.2, 2.4 match the reference (vignette 
     expect_true(all(pr$lower < pr$pred & pr$pred < pr$upper))
   }
 })
+
+test_that("unknown or misspelled arguments are refused, not ignored", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_snapshot(error = TRUE, {
+    predict(fit, Xnew, lvl = 0.5)
+    predict(fit, Xnew, 0.5)
+    predict(fit, Xnew, typ = "bias", nd = 10)
+  })
+  # the argument itself is not evaluated to say so
+  expect_error(predict(fit, Xnew, levle = stop("evaluated")), class = "fbc_unused_dots")
+})
