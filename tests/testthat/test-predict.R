@@ -129,8 +129,76 @@ test_that("unknown or misspelled arguments are refused, not ignored", {
   expect_snapshot(error = TRUE, {
     predict(fit, Xnew, lvl = 0.5)
     predict(fit, Xnew, 0.5)
-    predict(fit, Xnew, typ = "bias", nd = 10)
+    predict(fit, Xnew, typ = "bias", samples = 10)
   })
   # the argument itself is not evaluated to say so
   expect_error(predict(fit, Xnew, levle = stop("evaluated")), class = "fbc_unused_dots")
+})
+
+test_that("ndraws uses evenly spaced draws over all chains; NULL uses them all", {
+  set.seed(21)
+  fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
+  n <- nrow(fit$Phi)  # 40: 20 per chain
+  h <- c(0.7, 2.2, 3.9)
+  pr <- predict(fit, h, ndraws = 7, draws = TRUE)
+  rows <- as.integer(round(seq(1, n, length.out = 7)))  # 1, 8, 14, 20, 27, 33, 40: both chains
+  expect_identical(attr(pr, "draw_rows"), rows)
+  expect_true(all(c(1, 2) %in% fit$chain[rows]))
+  # the same as predicting from a fit that holds only those draws
+  sub <- fit
+  sub$Phi <- fit$Phi[rows, ]
+  ref <- predict(sub, h, ndraws = NULL, draws = TRUE)
+  expect_equal(pr[c("pred", "se", "lower", "upper", "draws")],
+               ref[c("pred", "se", "lower", "upper", "draws")], tolerance = 1e-14)
+  # NULL, and any ndraws >= the number of draws, use every draw
+  all <- predict(fit, h, ndraws = NULL, draws = TRUE)
+  expect_identical(attr(all, "draw_rows"), seq_len(n))
+  expect_identical(predict(fit, h, draws = TRUE), all)  # default 1000 > 40
+  expect_equal(ncol(all$draws), n)
+  expect_snapshot(error = TRUE, {
+    predict(fit, h, ndraws = 0)
+    predict(fit, h, ndraws = "all")
+  })
+})
+
+test_that("points in blocks give exactly the answers of one block", {
+  set.seed(21)
+  fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
+  h <- seq(0.3, 4.1, length.out = 23)
+  one <- predict(fit, h, draws = TRUE, level = 0.8)
+  old <- options(FBC.predict_block = 4)  # 6 blocks, the last one of 3 points
+  on.exit(options(old))
+  blocked <- predict(fit, h, draws = TRUE, level = 0.8)
+  expect_identical(blocked, one)
+  expect_identical(predict(fit, h, method = "MAP"), {
+    options(FBC.predict_block = NULL); predict(fit, h, method = "MAP")
+  })
+  # with a progress bar forced on, the same numbers
+  options(FBC.predict_block = 5, FBC.progress = TRUE, cli.progress_show_after = 0)
+  expect_identical(suppressMessages(predict(fit, h, draws = TRUE, level = 0.8)), one)
+  options(FBC.progress = NULL, cli.progress_show_after = NULL, FBC.predict_block = NULL)
+  # block sizes: bounded by the memory budget, >= 500 points otherwise
+  expect_equal(FBC:::predict_block_size(5000, 1000), 500L)
+  expect_equal(FBC:::predict_block_size(1e6, 1000), 6250L)  # 1e8 bytes / (16 * 1000)
+  expect_equal(FBC:::predict_block_size(1e6, 1e5), 62L)
+  expect_equal(FBC:::predict_block_size(20, 1000), 20L)
+})
+
+test_that("mixture quantiles solve the mixture's distribution function, also far from Gaussian", {
+  # reference: uniroot on the mixture CDF written out in plain R
+  set.seed(5)
+  M <- 50
+  mu <- rbind(c(rep(-3, 25), rep(3, 25)),            # two separated modes
+              rnorm(M, 0, 0.01),                      # near one Gaussian
+              c(rnorm(49, 0, 1), 40),                 # one far component
+              rnorm(M, 100, 1))
+  sd <- rbind(rep(0.5, M), runif(M, 1, 2), rep(1, M), runif(M, 1e-3, 1e-2))
+  for (p in c(0.025, 0.5, 0.975)) {
+    q <- FBC:::mixture_quantile(mu, sd, p)
+    ref <- vapply(1:4, function(i) {
+      uniroot(function(x) mean(pnorm(x, mu[i, ], sd[i, ])) - p, c(-200, 200), tol = 1e-13)$root
+    }, numeric(1))
+    expect_equal(q, ref, tolerance = 1e-8)
+    expect_equal(rowMeans(pnorm(q, mu, sd)), rep(p, 4), tolerance = 1e-10)
+  }
 })
