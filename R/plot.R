@@ -89,9 +89,9 @@ value_label <- function(x, vars) {
     if (length(vars) == 1L && length(cal) == x$scale$q) {
       return(cal[as.integer(sub("kappa", "", vars))])
     }
-    return("value (in each calibration input's units)")
+    return("value (each input's units)")
   }
-  "value (scaled space: inputs in [0, 1], response standardised)"
+  "value (scaled space)"
 }
 
 # Kernel density of `draws` on their support [lo, hi] (either end may be

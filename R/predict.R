@@ -51,8 +51,9 @@
 #' rows used are in `attr(result, "draw_rows")`): the Monte Carlo error of
 #' the prediction is then far below its standard error for a well-mixed fit,
 #' and `ndraws = NULL` uses every draw. The new points are processed in
-#' blocks whose points x draws matrices take at most about 100 MB (about
-#' 300 MB at the peak), so memory does not grow with the number of points;
+#' blocks whose points x draws means and variances take at most about 100 MB
+#' (about 0.5 GB at the peak, with the interval computation's temporaries),
+#' so memory does not grow with the number of points;
 #' each block refactorizes every draw's covariance, a small cost next to the
 #' predictions (blocks have at least 500 points). A progress bar appears
 #' when there are several blocks and the prediction takes more than a couple
@@ -174,8 +175,9 @@ draw_rows <- function(n, ndraws) {
 }
 
 # Bytes for the per-block means and variances of predict(): points x draws x
-# 2 doubles. The block's peak (with mixture_quantile()'s temporaries) is
-# about three times this.
+# 2 doubles. The process's peak (with the compiled result, the rescaled
+# copies and mixture_quantile()'s temporaries) is about five times this:
+# 458 MB for 1000 points x 12000 draws of the ball fit.
 fbc_predict_budget <- 1e8
 
 # Points per block: as many as the budget allows, but no more than about a
