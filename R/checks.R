@@ -179,7 +179,8 @@ check_dots_empty <- function(..., fn, name, cls = "fbc", action = c("abort", "wa
   formals_ <- setdiff(names(formals(fn)), "...")
   hints <- character()
   for (nm in nms[nms != ""]) {
-    close <- formals_[utils::adist(nm, formals_, ignore.case = TRUE) <= max(2, nchar(nm) %/% 3)]
+    dist <- drop(utils::adist(nm, formals_, ignore.case = TRUE))
+    close <- formals_[order(dist)][sort(dist) <= max(2, nchar(nm) %/% 3)]  # closest first
     if (!length(close)) close <- formals_[startsWith(formals_, nm)]
     if (length(close)) hints <- c(hints, sprintf("Did you mean `%s` instead of `%s`?", close[1], nm))
   }
