@@ -121,11 +121,37 @@
 #' runs: check `convergence_messages(fit)` (or `print(fit)`) and continue
 #' with [update.fbc()].
 #'
-#' @param sim Simulator runs: a numeric matrix or data frame with the response
-#'   in the first column, then the `p` experimental inputs, then the `q`
-#'   calibration inputs. Column names are kept as labels.
-#' @param field Field data: response first, then the same `p` experimental
-#'   inputs.
+#' @section Columns:
+#' When both `sim` and `field` carry column names (matrices with
+#' `colnames()`, data frames), the columns are matched by name, as
+#' [model.frame()] does: the first column of `sim` is the response; the
+#' columns of `field` are that response (under the same name) and the
+#' experimental inputs, in any order; the columns of `sim` that `field` does
+#' not have are the calibration inputs (`kappa1`, ..., `kappaq`, in `sim`'s
+#' order). A column of `field` that `sim` lacks, a `field` without the
+#' response, or a name used twice is refused with the names of both sides.
+#' When either has no usable names (a matrix without column names, or a name
+#' missing), the columns are taken by position: the response first, then the
+#' `p` experimental inputs in the same order in both, then `sim`'s `q`
+#' calibration inputs. The names label the results (`fit$scale$names`,
+#' `print()`, `plot()`), and [predict.fbc()] matches the columns of
+#' `newdata` by name in the same way.
+#'
+#' @section Checks:
+#' Besides refusing malformed data and settings with a message naming the
+#' argument, `calibrate()` warns when field inputs lie outside the simulator
+#' design's range by more than 5% of its width (the emulator extrapolates
+#' there), says when `sim` holds
+#' duplicated runs (identical input rows: legal thanks to the nugget, but
+#' they add nothing), refuses run lengths whose retained draws could not be
+#' stored (saying how much memory they would need), and refuses a prior
+#' family given without its own parameters (see `kappaDist`).
+#'
+#' @param sim Simulator runs: a numeric matrix or data frame with the
+#'   response, the `p` experimental inputs and the `q` calibration inputs
+#'   (matched by name or by position: see "Columns").
+#' @param field Field data: the response and the same `p` experimental
+#'   inputs (see "Columns").
 #' @param nMCMC Total number of MCMC iterations (sweeps), burn-in included.
 #' @param nBurn Number of initial iterations discarded; the proposals adapt
 #'   during these.
@@ -138,7 +164,10 @@
 #'   for each calibration input. `kappaInit = NA` starts at the middle of
 #'   that range (or at the centre of the prior when that lies outside it).
 #'   Scalars apply to every calibration parameter; vectors must have length
-#'   `q`.
+#'   `q`. The defaults of `kappaP1` and `kappaP2` are the Beta's: another
+#'   family must be given its own parameters (e.g. `kappaDist = "gaussian",
+#'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
+#'   units), else `calibrate()` refuses it and names the arguments to give.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
 #' @param showProgress Show a progress bar with the time left and the current
 #'   acceptance rates.
@@ -169,14 +198,22 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL) {
   call <- match.call()
-  sim <- check_data_matrix(sim, "sim", min_cols = 3L, min_rows = 3L)
+  sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
+  cols <- align_columns(sim, field)
+  sim <- cols$sim
+  field <- cols$field
   p <- ncol(field) - 1L
   q <- ncol(sim) - 1L - p
   if (q < 1L) {
     cli::cli_abort(c(
-      "{.arg sim} must have at least one calibration input column after the {p} experimental input{?s} of {.arg field}.",
-      i = "{.arg field} has {ncol(field)} columns (response + {p} input{?s}), so {.arg sim} needs at least {p + 2}; it has {ncol(sim)}."
+      "{.arg sim} needs a calibration input: a column besides the response and the {cli::qty(p)}experimental input{?s} it shares with {.arg field}.",
+      i = if (cols$named) {
+        "{.arg sim} has {.val {colnames(sim)}} and {.arg field} {.val {colnames(field)}}: every input of {.arg sim} is an experimental input of {.arg field}, so nothing is left to calibrate."
+      } else {
+        "{.arg field} has {ncol(field)} column{?s} (response + {p} input{?s}), so {.arg sim} needs at least {p + 2}; it has {ncol(sim)}."
+      },
+      i = "A calibration input is a simulator input that the field experiment does not set (such as {.code g} in {.code ballSim})."
     ))
   }
   nMCMC <- check_count(nMCMC, "nMCMC", min = 2)
@@ -191,13 +228,19 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
     )
   }
+  check_run_size((nMCMC - nBurn) %/% thinning, length(param_names(p, q)), nChains,
+                 iters = nMCMC, args = c("nMCMC", "nChains"))
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
 
-  scale <- fbc_scale(sim, p)
+  units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
+  check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
+  scale <- fbc_scale(sim, p, named = cols$named)
+  inform_duplicated_runs(sim)
+  warn_field_outside(sim, field, scale)
   dat <- scale_data(sim, field, scale)
   kappaSpec <- check_class_spec(
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
@@ -224,7 +267,9 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
 fbc_nugget <- 1e-6
 
 # Min/max of each simulator input, mean/sd of the simulator response.
-fbc_scale <- function(sim, p, call = parent.frame()) {
+# `named`: whether the columns were matched by name (then predict() matches
+# newdata's columns by name too).
+fbc_scale <- function(sim, p, named = FALSE, call = parent.frame()) {
   X <- sim[, -1, drop = FALSE]
   xmin <- apply(X, 2, min)
   xmax <- apply(X, 2, max)
@@ -240,9 +285,9 @@ fbc_scale <- function(sim, p, call = parent.frame()) {
   if (stats::sd(ys) == 0) {
     cli::cli_abort("The simulator response (first column of {.arg sim}) is constant.", call = call)
   }
-  names_ <- colnames(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
+  names_ <- usable_names(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
   list(xmin = unname(xmin), xmax = unname(xmax), ymean = mean(ys), ysd = stats::sd(ys),
-       p = p, q = ncol(sim) - 1L - p,
+       p = p, q = ncol(sim) - 1L - p, named = named,
        names = list(response = names_[1], inputs = names_[1L + seq_len(p)],
                     calibration = names_[-seq_len(p + 1L)]))
 }

@@ -8,7 +8,59 @@ check_count <- function(x, arg = caller_arg(x), min = 1, call = parent.frame()) 
       call = call
     )
   }
+  imax <- .Machine$integer.max
+  if (x > imax) {
+    cli::cli_abort(c(
+      "{.arg {arg}} must be at most {format(imax, big.mark = ',')} (got {format(x, big.mark = ',', scientific = FALSE)}).",
+      i = "Counts are stored as integers; run long chains in pieces with {.fn update}."
+    ), call = call)
+  }
   as.integer(x)
+}
+
+# The retained draws of a run must fit in memory: each chain's draws are one
+# matrix (at most .Machine$integer.max elements), and all chains' draws (plus
+# their log posterior and log likelihood, and the copy made when the chains
+# are stacked) must fit in the machine's memory. `kept` is the number of
+# draws each chain will hold in the end (old and new for update()), `d` the
+# number of parameters, `iters` the total sweeps per chain.
+check_run_size <- function(kept, d, nChains, iters, args, thin = TRUE, call = parent.frame()) {
+  imax <- .Machine$integer.max
+  kept <- as.numeric(kept)
+  if (iters > imax) {
+    cli::cli_abort(c(
+      "The chains would run {format(iters, big.mark = ',', scientific = FALSE)} sweeps in all, more than the {format(imax, big.mark = ',')} a chain can count.",
+      i = "Use a smaller {.arg {args[1]}}."
+    ), call = call)
+  }
+  bytes <- 2 * nChains * kept * (d + 2) * 8
+  limit <- fbc_memory_limit()
+  what <- sprintf("%s draws per chain x %d parameters x %d chain%s",
+                  format(kept, big.mark = ",", scientific = FALSE), d, nChains,
+                  if (nChains == 1) "" else "s")
+  if (kept * d > imax || bytes > limit) {
+    cli::cli_abort(c(
+      "The retained draws would need {format_bytes(bytes)} ({what}), more than can be stored{if (is.finite(limit)) paste0(' (memory: ', format_bytes(limit), ')') else ''}.",
+      i = "Keep fewer draws: a smaller {.or {.arg {args}}}{if (thin) ', or a larger `thinning`' else ''}."
+    ), call = call)
+  }
+  invisible(bytes)
+}
+
+# Memory the draws may use: the FBC.memory_limit option (bytes), else the
+# machine's total memory where /proc/meminfo tells it, else no limit.
+fbc_memory_limit <- function() {
+  opt <- getOption("FBC.memory_limit")
+  if (!is.null(opt)) return(as.numeric(opt))
+  info <- tryCatch(readLines("/proc/meminfo", n = 1L, warn = FALSE), error = function(e) "")
+  kb <- suppressWarnings(as.numeric(sub("^MemTotal:\\s+([0-9]+) kB.*$", "\\1", info)))
+  if (length(kb) == 1L && is.finite(kb)) kb * 1024 else Inf
+}
+
+format_bytes <- function(x) {
+  units <- c("bytes", "kB", "MB", "GB", "TB", "PB")
+  k <- max(1L, min(length(units), floor(log(max(x, 1), 1000)) + 1L))
+  paste(format(signif(x / 1000^(k - 1L), 3), scientific = FALSE), units[k])
 }
 
 check_flag <- function(x, arg = caller_arg(x), call = parent.frame()) {
@@ -106,4 +158,40 @@ check_sampler <- function(sampler, blockSim = NULL, call = parent.frame()) {
     cli::cli_abort("{.arg sampler} must be {.val blocks} or {.val single}, not {.val {sampler}}.", call = call)
   }
   sampler
+}
+
+# S3 methods take `...` because their generics do; an argument that lands
+# there is a typo (`lvl =` for `level =`) or one the method does not support
+# (`update(fit, sim = other)`), and silently ignoring it gives the user an
+# answer to another question. `check_dots_empty(...)` refuses it, naming the
+# argument and the closest formal argument of `fn` ("did you mean");
+# `action = "warn"` only warns, for methods that other code calls with
+# arguments meant for other methods (print(), conversions).
+check_dots_empty <- function(..., fn, name, cls = "fbc", action = c("abort", "warn"),
+                             call = parent.frame()) {
+  n <- ...length()
+  if (n == 0L) return(invisible(TRUE))
+  action <- match.arg(action)
+  # the names only: the arguments themselves are not evaluated
+  nms <- names(as.list(substitute(list(...)))[-1L]) %||% rep("", n)
+  shown <- ifelse(nms == "", paste0("an unnamed argument (position ", seq_len(n), ")"),
+                  paste0("`", nms, "`"))
+  formals_ <- setdiff(names(formals(fn)), "...")
+  hints <- character()
+  for (nm in nms[nms != ""]) {
+    dist <- drop(utils::adist(nm, formals_, ignore.case = TRUE))
+    close <- formals_[order(dist)][sort(dist) <= max(2, nchar(nm) %/% 3)]  # closest first
+    if (!length(close)) close <- formals_[startsWith(formals_, nm)]
+    if (length(close)) hints <- c(hints, sprintf("Did you mean `%s` instead of `%s`?", close[1], nm))
+  }
+  msg <- c(
+    "{cli::qty(n)}Argument{?s} {shown} {?is/are} not used by {.fn {name}} for {.cls {cls}} objects.",
+    stats::setNames(hints, rep("i", length(hints))),
+    i = "Its arguments are {.arg {formals_}}."
+  )
+  if (action == "abort") {
+    cli::cli_abort(msg, class = "fbc_unused_dots", call = call)
+  } else {
+    cli::cli_warn(msg, class = "fbc_unused_dots", call = call)
+  }
 }

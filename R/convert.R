@@ -16,7 +16,8 @@ chain_draws <- function(x, lp = FALSE) {
 #' draws also carry `lp__`, the log posterior density.
 #'
 #' @param x An `fbc` object from [calibrate()].
-#' @param ... Unused.
+#' @param ... Not used: an argument given here gives a warning (other code
+#'   may pass arguments meant for other methods).
 #' @return `as.mcmc.list()`: a `coda` `mcmc.list` with one `mcmc` per chain
 #'   (iteration numbers count sweeps from the start, burn-in included).
 #'   `as_draws()` and `as_draws_df()`: a `draws_df`.
@@ -34,6 +35,7 @@ NULL
 #' @rdname fbc-draws
 #' @exportS3Method coda::as.mcmc.list
 as.mcmc.list.fbc <- function(x, ...) {
+  check_dots_empty(..., fn = as.mcmc.list.fbc, name = "as.mcmc.list", action = "warn")
   rlang_check_installed("coda")
   s <- x$settings
   out <- lapply(chain_draws(x), function(m) {
@@ -45,12 +47,14 @@ as.mcmc.list.fbc <- function(x, ...) {
 #' @rdname fbc-draws
 #' @exportS3Method posterior::as_draws
 as_draws.fbc <- function(x, ...) {
-  as_draws_df.fbc(x, ...)
+  check_dots_empty(..., fn = as_draws.fbc, name = "as_draws", action = "warn")
+  as_draws_df.fbc(x)
 }
 
 #' @rdname fbc-draws
 #' @exportS3Method posterior::as_draws_df
 as_draws_df.fbc <- function(x, ...) {
+  check_dots_empty(..., fn = as_draws_df.fbc, name = "as_draws_df", action = "warn")
   ms <- chain_draws(x, lp = TRUE)
   df <- do.call(rbind, lapply(seq_along(ms), function(k) {
     d <- as.data.frame(ms[[k]])

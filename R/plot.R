@@ -2,15 +2,24 @@
 #'
 #' Draws, with ggplot2, one of three views of a calibration:
 #' * `"density"`: the posterior density of every parameter of a class (one
-#'   facet each), estimated from the retained draws, with the prior density
-#'   in the same units overlaid (dashed) and the posterior mode as a vertical
-#'   line;
+#'   facet each), a kernel estimate from the retained draws that respects the
+#'   parameter's support (the kernel's mass beyond a bound, such as the ends
+#'   of a calibration parameter's prior range or 0 for a variance, is
+#'   reflected back inside, and nothing is drawn outside), with the prior
+#'   density in the same units overlaid (dashed) and the posterior mode as a
+#'   vertical line;
 #' * `"trace"`: the retained draws of every parameter of a class against the
 #'   iteration, to judge mixing;
 #' * `"fits"`: the field observations, the MAP fitted values
 #'   ([predict.fbc()] with `method = "MAP"` at the field inputs) and their
 #'   95% prediction intervals against each experimental input (one facet
 #'   each). `parameter` is ignored.
+#'
+#' Facets and axes use the data's own names: a calibration parameter is
+#' labelled by its input (`"g (kappa1)"`, and the axis `"g"`), a
+#' hyperparameter of one input by its name and the input (`"thetaS1 (h)"`,
+#' `"thetaS2 (g)"`); hyperparameters live on the scaled space of
+#' [calibrate()], as the axis says.
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param parameter The parameter class: one of `"kappa"`, `"thetaS"`,
@@ -20,7 +29,8 @@
 #' @param xlab For `"fits"`, the names of the experimental inputs (one per
 #'   input; default the column names of the field data, else `x1`, ..., `xp`).
 #'   For the other types, the x-axis title.
-#' @param ... Unused.
+#' @param ... Not used: an argument given here is an error (a typo such
+#'   as `lvl =` would otherwise be ignored silently).
 #' @return A ggplot object; print it to draw it, or add layers and themes.
 #' @export
 #' @importFrom ggplot2 .data
@@ -31,6 +41,7 @@
 #' plot(fit, "thetaS", type = "trace")
 #' plot(fit, type = "fits", xlab = "height (m)")
 plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...) {
+  check_dots_empty(..., fn = plot.fbc, name = "plot")
   type <- match_choice(type, c("density", "trace", "fits"), "type")
   if (type == "fits") return(plot_fits(x, xlab))
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
@@ -45,18 +56,64 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   if (type == "density") plot_density(x, vars, labels, xlab) else plot_trace(x, vars, labels, xlab)
 }
 
-# Facet labels: kappa1 (g) for calibration parameters, the name otherwise.
+# Facet labels in the data's own names: a calibration parameter is named by
+# its input, with FBC's name in brackets ("g (kappa1)"); a hyperparameter of
+# one input by FBC's name with the input in brackets ("thetaS1 (h)",
+# "thetaS2 (g)", "alphaB1 (h)"); the others by FBC's name ("sigma2E").
 param_labels <- function(x, vars) {
-  cal <- x$scale$names$calibration
+  nm <- x$scale$names
+  p <- x$scale$p
+  q <- x$scale$q
+  inputs <- c(nm$inputs, nm$calibration)
+  cls <- x$spec$classes[match(vars, x$vars)]
+  k <- suppressWarnings(as.integer(sub("^[A-Za-z]+([0-9]+)$", "\\1", vars)))
   out <- vars
-  k <- grepl("^kappa[0-9]+$", vars)
-  if (any(k) && length(cal) == x$scale$q) {
-    out[k] <- paste0(vars[k], " (", cal[as.integer(sub("kappa", "", vars[k]))], ")")
+  ok <- !is.na(k)
+  if (length(nm$calibration) == q) {
+    kap <- ok & cls == "kappa"
+    out[kap] <- paste0(nm$calibration[k[kap]], " (", vars[kap], ")")
+  }
+  if (length(inputs) == p + q) {
+    per <- ok & cls %in% c("thetaS", "alphaS", "thetaB", "alphaB")
+    out[per] <- paste0(vars[per], " (", inputs[k[per]], ")")
   }
   stats::setNames(out, vars)
 }
 
+# Axis title for the values of a class: the input's name for a single
+# calibration parameter, its units otherwise.
+value_label <- function(x, vars) {
+  cls <- x$spec$classes[match(vars[1], x$vars)]
+  if (cls == "kappa") {
+    cal <- x$scale$names$calibration
+    if (length(vars) == 1L && length(cal) == x$scale$q) {
+      return(cal[as.integer(sub("kappa", "", vars))])
+    }
+    return("value (each input's units)")
+  }
+  "value (scaled space)"
+}
+
+# Kernel density of `draws` on their support [lo, hi] (either end may be
+# infinite): a Gaussian kernel with bw.nrd0's bandwidth, the mass it would
+# put beyond a finite bound reflected back inside (Silverman 1986, sec.
+# 3.10), f(v) = sum_i [k(v - x_i) + k(2 lo - v - x_i) + k(2 hi - v - x_i)] / n.
+# The grid stops at the bounds, so the estimate is zero outside the support
+# and integrates to 1 over it.
+support_density <- function(draws, lo = -Inf, hi = Inf, n = 256L) {
+  bw <- stats::bw.nrd0(draws)
+  from <- max(lo, min(draws) - 3 * bw)
+  to <- min(hi, max(draws) + 3 * bw)
+  dens <- function(v) stats::density(v, bw = bw, from = from, to = to, n = n)$y
+  y <- dens(draws)
+  if (is.finite(lo)) y <- y + dens(2 * lo - draws)
+  if (is.finite(hi)) y <- y + dens(2 * hi - draws)
+  list(x = seq(from, to, length.out = n), y = y, bw = bw)
+}
+
 plot_density <- function(x, vars, labels, xlab) {
+  sup <- param_support(x)
+  rownames(sup) <- x$vars
   post <- list()
   prior <- list()
   for (v in vars) {
@@ -66,7 +123,7 @@ plot_density <- function(x, vars, labels, xlab) {
       grid <- r[1] + c(-1, 1) * max(abs(r[1]) * 0.1, 0.1)
       post[[v]] <- data.frame(parameter = labels[[v]], value = numeric(0), density = numeric(0))
     } else {
-      d <- stats::density(draws, n = 256)
+      d <- support_density(draws, sup[v, 1], sup[v, 2])
       grid <- d$x
       post[[v]] <- data.frame(parameter = labels[[v]], value = d$x, density = d$y)
     }
@@ -88,7 +145,7 @@ plot_density <- function(x, vars, labels, xlab) {
     ggplot2::geom_vline(data = modes, mapping = ggplot2::aes(xintercept = .data$mode),
                         colour = "firebrick") +
     ggplot2::facet_wrap(ggplot2::vars(.data$parameter), scales = "free") +
-    ggplot2::labs(x = xlab %||% "value", y = "density",
+    ggplot2::labs(x = xlab %||% value_label(x, vars), y = "density",
                   title = "Posterior (shaded), prior (dashed) and posterior mode") +
     ggplot2::theme_bw()
 }
@@ -109,7 +166,8 @@ plot_trace <- function(x, vars, labels, xlab) {
     p + ggplot2::geom_line(colour = "steelblue", linewidth = 0.3)
   }
   p + ggplot2::facet_wrap(ggplot2::vars(.data$parameter), scales = "free_y", ncol = 1) +
-    ggplot2::labs(x = xlab %||% "retained draw", y = "value", title = "Trace of the retained draws") +
+    ggplot2::labs(x = xlab %||% "retained draw", y = value_label(x, vars),
+                  title = "Trace of the retained draws") +
     ggplot2::theme_bw()
 }
 

@@ -10,10 +10,12 @@
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param digits Significant digits for the table.
-#' @param ... Unused.
+#' @param ... Not used: an argument given here gives a warning (other code
+#'   may pass arguments meant for other methods).
 #' @return `x`, invisibly.
 #' @export
 print.fbc <- function(x, digits = 3, ...) {
+  check_dots_empty(..., fn = print.fbc, name = "print", action = "warn")
   s <- x$settings
   sc <- x$scale
   cat("<fbc> Full Bayesian calibration (Kennedy-O'Hagan)\n")

@@ -128,6 +128,12 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' scaled space (inputs in `[0, 1]`, responses standardised; see
 #' [calibrate()]).
 #'
+#' A class whose family is changed (say `thetaSDist = "lognormal"`) must be
+#' given that family's parameters (`thetaSP1`, `thetaSP2`): the defaults
+#' belong to the default family and are refused for another one, with a
+#' message naming the arguments to give. Initial values are checked against
+#' the new family's support.
+#'
 #' Defaults (vignette A.1): correlation scales \eqn{\theta} Gamma(1.1, rate
 #' 0.1); smoothness \eqn{\alpha} Beta(5, 2) shifted to `[1, 2]`; variances
 #' inverse gamma (shape 1.5, scale 1.5); the bias mean \eqn{\mu_b}
@@ -157,8 +163,17 @@ set_hyperPriors <- function(
     sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 1.5, sigma2EP2 = 1.5,
     muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1) {
   env <- environment()
+  defaults <- formals(sys.function())
   out <- list()
   for (cls in param_classes[-1]) {
+    is_missing <- function(arg) eval(call("missing", as.name(paste0(cls, arg))), env)
+    dist <- get(paste0(cls, "Dist"), env)
+    # a family that cannot fit the class is the first thing to say
+    for (d in unique(dist[is.character(dist) & dist %in% setdiff(names(prior_families), "uniform")])) {
+      check_support(d, NA, NA, cls, arg = paste0(cls, "Dist"), call = env)
+    }
+    check_family_switch(get(paste0(cls, "Dist"), env), defaults[[paste0(cls, "Dist")]],
+                        is_missing("P1"), is_missing("P2"), cls, call = env)
     spec <- list(
       dist = get(paste0(cls, "Dist"), env), init = get(paste0(cls, "Init"), env),
       p1 = get(paste0(cls, "P1"), env), p2 = get(paste0(cls, "P2"), env)
@@ -171,6 +186,7 @@ set_hyperPriors <- function(
 
 #' @export
 print.fbc_hypers <- function(x, ...) {
+  check_dots_empty(..., fn = print.fbc_hypers, name = "print", cls = "fbc_hypers", action = "warn")
   cat("<fbc hyperparameter priors>\n")
   for (cls in names(x)) {
     s <- x[[cls]]
@@ -179,6 +195,44 @@ print.fbc_hypers <- function(x, ...) {
                 paste(format(s$init), collapse = "/")))
   }
   invisible(x)
+}
+
+# The parameters a family uses, and what each means (the table of
+# prior_builder()).
+family_params <- function(dist) {
+  switch(dist,
+    uniform = c(p1 = "lower bound", p2 = "upper bound"),
+    gaussian = c(p1 = "mean", p2 = "standard deviation"),
+    gamma = c(p1 = "shape", p2 = "rate"),
+    beta = , betashift = c(p1 = "shape1", p2 = "shape2"),
+    lognormal = c(p1 = "meanlog", p2 = "sdlog"),
+    logistic = c(p1 = "location", p2 = "scale"),
+    exponential = c(p1 = "rate"),
+    inversegamma = c(p1 = "shape", p2 = "scale"),
+    character()
+  )
+}
+
+# A prior family switched away from its argument's default while the family
+# parameters were left at their defaults (`missingP1`, `missingP2`): those
+# belong to the default family and would silently mean something else (Beta's
+# 1.1, 1.1 read as N(1.1, 1.1)). Refused, naming the arguments to give.
+check_family_switch <- function(dist, default, missingP1, missingP2, prefix, units = NULL,
+                                 call = parent.frame()) {
+  if (!is.character(dist)) return(invisible(TRUE))
+  for (d in unique(dist[!is.na(dist) & dist != default & dist %in% names(prior_families)])) {
+    need <- family_params(d)
+    miss <- c(p1 = missingP1, p2 = missingP2)[names(need)]
+    if (!any(miss)) next
+    args <- paste0(prefix, toupper(names(need)))
+    give <- paste0("`", args[miss], "` (", need[miss], ")")
+    cli::cli_abort(c(
+      "{.code {prefix}Dist = \"{d}\"} needs its own parameters: give {paste(give, collapse = ' and ')}{if (!is.null(units)) paste0(', in the units of ', units) else ''}.",
+      i = "The defaults of {.arg {prefix}P1} and {.arg {prefix}P2} belong to the default {.val {default}} prior and mean something else for {.val {d}}.",
+      i = "See {.help FBC::prior_builder} for each family's parameters."
+    ), call = call)
+  }
+  invisible(TRUE)
 }
 
 # Checks one class's Dist/Init/P1/P2 (each of length 1 or `n` when n is

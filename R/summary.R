@@ -8,7 +8,9 @@
 #' [calibrate()].
 #'
 #' @param object An `fbc` object from [calibrate()].
-#' @param ... Unused.
+#' @param ... Not used: an argument given here is an error for `summary()`
+#'   and `coef()` (a typo would otherwise be ignored silently), a warning for
+#'   `print()`.
 #' @return `summary()`: a data frame of class `summary.fbc`, one row per
 #'   parameter (the `estimates` element of the fit).
 #' @export
@@ -19,6 +21,7 @@
 #' coef(fit)
 #' coef(fit, stat = "median")["kappa1"]
 summary.fbc <- function(object, ...) {
+  check_dots_empty(..., fn = summary.fbc, name = "summary")
   structure(object$estimates, class = c("summary.fbc", "data.frame"))
 }
 
@@ -27,6 +30,7 @@ summary.fbc <- function(object, ...) {
 #' @param digits Significant digits.
 #' @export
 print.summary.fbc <- function(x, digits = 3, ...) {
+  check_dots_empty(..., fn = print.summary.fbc, name = "print", cls = "summary.fbc", action = "warn")
   df <- as.data.frame(unclass(x), stringsAsFactors = FALSE)
   attr(df, "row.names") <- attr(x, "row.names")
   num <- vapply(df, is.numeric, logical(1))
@@ -44,6 +48,7 @@ print.summary.fbc <- function(x, digits = 3, ...) {
 #' @return `coef()`: a named numeric vector, one value per parameter.
 #' @export
 coef.fbc <- function(object, stat = c("mean", "median"), ...) {
+  check_dots_empty(..., fn = coef.fbc, name = "coef")
   stat <- match_choice(stat, c("mean", "median"), "stat")
   stats::setNames(object$estimates[[stat]], rownames(object$estimates))
 }

@@ -10,7 +10,8 @@
 #' @param nMCMC Number of further iterations (sweeps) per chain. Every
 #'   `thinning`-th is kept, with the `thinning` of the original run.
 #' @param showProgress Show a progress bar (single chain only).
-#' @param ... Unused.
+#' @param ... Not used: an argument given here is an error (a typo such
+#'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
 #'   `logPost`, `logLik`, `estimates` (with R-hat and ESS over all draws),
 #'   `acceptance` (over all iterations after burn-in), `settings$nMCMC` (total
@@ -22,6 +23,7 @@
 #' fit <- update(fit, nMCMC = 400)
 #' table(fit$chain)
 update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
+  check_dots_empty(..., fn = update.fbc, name = "update")
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
   check_flag(showProgress, "showProgress")
   s <- object$settings
@@ -32,6 +34,10 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
   if (nMCMC %/% s$thinning < 1L) {
     cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
   }
+  check_run_size(max(vapply(states, function(st) as.numeric(st$kept %||% 0), numeric(1))) +
+                   nMCMC %/% s$thinning,
+                 length(object$vars), length(states), iters = as.numeric(s$nMCMC) + nMCMC,
+                 args = "nMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
   moves <- s$moves %||% sampler_moves(s$sampler %||% "single", object$spec)
   results <- run_chains(object$data, object$spec, lapply(states, `[[`, "sampler"), moves,

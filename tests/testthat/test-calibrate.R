@@ -106,3 +106,19 @@ test_that("showProgress = TRUE runs the same chain", {
                                                   thinning = 1, showProgress = TRUE)))
   expect_identical(a$Phi, b$Phi)
 })
+
+test_that("run lengths whose draws cannot be stored are refused with the memory they need", {
+  withr_opts <- options(FBC.memory_limit = 8e9)  # the same message on every machine
+  on.exit(options(withr_opts))
+  expect_snapshot(error = TRUE, {
+    calibrate(ballSim, ballField, nMCMC = 2^31)
+    calibrate(ballSim, ballField, nBurn = 2^31)
+    calibrate(ballSim, ballField, nMCMC = 2e9, nBurn = 0, thinning = 1)
+    calibrate(ballSim, ballField, nMCMC = 2e8, nChains = 8)
+  })
+  # 4 chains x 3000 draws x (11 parameters + 2) x 8 bytes, twice (stacking):
+  # 2.5 MB, refused under a 1 MB limit and accepted under 3 MB
+  expect_equal(FBC:::check_run_size(3000, 11, 4, 8000, "nMCMC"), 2 * 4 * 3000 * 13 * 8)
+  options(FBC.memory_limit = 1e6)
+  expect_error(calibrate(ballSim, ballField), "2.5 MB")
+})

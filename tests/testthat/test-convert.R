@@ -26,3 +26,11 @@ test_that("as.mcmc.list() gives one mcmc per chain with the sweep numbers", {
   # burn-in 100, thinning 2: the first kept sweep is 102, the last 300
   expect_equal(coda::mcpar(m[[1]]), c(102, 300, 2))
 })
+
+test_that("the conversions warn about arguments they do not use", {
+  fit <- small_fit(nChains = 2)
+  expect_snapshot(d <- posterior::as_draws_df(fit, chains = 1))
+  expect_equal(posterior::nchains(d), 2)  # the argument changed nothing
+  skip_if_not_installed("coda")
+  expect_snapshot(m <- coda::as.mcmc.list(fit, thin = 5))
+})

@@ -11,10 +11,17 @@ test_that("density plot: posterior, prior in reported units, mode; one facet per
   geoms <- vapply(p$layers, function(l) class(l$geom)[1], character(1))
   expect_identical(geoms, c("GeomArea", "GeomLine", "GeomVline"))
   post <- ggplot2::layer_data(p, 1)
-  # the posterior curve is a density estimate of the kappa draws (integrates to ~1)
+  # the posterior curve is a density estimate of the kappa draws (integrates
+  # to ~1), inside g's prior range: the simulator design's
   expect_equal(sum(diff(post$x) * head(post$y, -1)), 1, tolerance = 0.02)
-  d <- stats::density(fit$Phi[, "kappa1"], n = 256)
+  g <- range(ballSim[, "g"])
+  d <- FBC:::support_density(fit$Phi[, "kappa1"], g[1], g[2])
   expect_equal(post$x, d$x)
+  expect_equal(post$y, d$y)
+  expect_true(all(post$x >= g[1] & post$x <= g[2]))
+  # labels in the data's own names
+  expect_identical(levels(p$layers[[1]]$data$parameter), "g (kappa1)")
+  expect_identical(p$labels$x, "g")
   prior <- ggplot2::layer_data(p, 2)
   expect_equal(prior$y, exp(fit$priorFns$kappa1(prior$x)))
   # stretched Beta(1.1, 1.1) over the design range of g, by hand
@@ -25,9 +32,11 @@ test_that("density plot: posterior, prior in reported units, mode; one facet per
 
   p2 <- plot(fit, "thetaS")
   expect_equal(nrow(ggplot2::ggplot_build(p2)$layout$layout), 2)
-  expect_equal(sort(unique(as.character(p2$layers[[3]]$data$parameter))), c("thetaS1", "thetaS2"))
+  expect_equal(sort(unique(as.character(p2$layers[[3]]$data$parameter))),
+               c("thetaS1 (h)", "thetaS2 (g)"))
+  expect_match(p2$labels$x, "scaled space")
   pr2 <- p2$layers[[2]]$data
-  th1 <- pr2[pr2$parameter == "thetaS1", ]
+  th1 <- pr2[pr2$parameter == "thetaS1 (h)", ]
   expect_equal(th1$density, dgamma(th1$value, 1.1, 0.1))  # default gamma(1.1, 0.1) prior
 })
 
@@ -37,8 +46,13 @@ test_that("trace plot has one facet per parameter and the draws in order", {
   expect_identical(class(p$layers[[1]]$geom)[1], "GeomLine")
   df <- p$data
   expect_equal(nrow(df), 2 * nrow(fit$Phi))
-  expect_equal(df$value[df$parameter == "alphaS2"], unname(fit$Phi[, "alphaS2"]))
-  expect_equal(df$draw[df$parameter == "alphaS2"], seq_len(nrow(fit$Phi)))
+  expect_equal(df$value[df$parameter == "alphaS2 (g)"], unname(fit$Phi[, "alphaS2"]))
+  expect_equal(df$draw[df$parameter == "alphaS2 (g)"], seq_len(nrow(fit$Phi)))
+  # the same labels as the density plot
+  expect_identical(levels(df$parameter), levels(plot(fit, "alphaS")$layers[[1]]$data$parameter))
+  pk <- plot(fit, type = "trace")
+  expect_identical(levels(pk$data$parameter), "g (kappa1)")
+  expect_identical(pk$labels$y, "g")
   expect_equal(nrow(ggplot2::ggplot_build(p)$layout$layout), 2)
 })
 
@@ -64,4 +78,48 @@ test_that("unknown classes, types and bad xlab are clear errors", {
     plot(fit, type = "histogram")
     plot(fit, type = "fits", xlab = c("a", "b"))
   })
+})
+
+test_that("unknown plot arguments are refused", {
+  fit <- fit_for_plots()
+  expect_snapshot(error = TRUE, {
+    plot(fit, paramter = "thetaS")
+    plot(fit, main = "g")
+  })
+})
+
+test_that("the density respects the support: reflected at finite bounds, zero outside", {
+  # reference: the reflected Gaussian-kernel estimate written out as a sum
+  set.seed(4)
+  draws <- rbeta(3000, 1, 4)  # piles up at its bound 0
+  d <- FBC:::support_density(draws, 0, 1)
+  expect_true(all(d$x >= 0 & d$x <= 1))
+  expect_equal(d$x[1], 0)
+  # trapezoid rule over the support: the mass reflected back is not lost
+  expect_equal(sum(diff(d$x) * (head(d$y, -1) + tail(d$y, -1)) / 2), 1, tolerance = 0.005)
+  bw <- bw.nrd0(draws)
+  direct <- vapply(d$x, function(v) {
+    mean(dnorm(v, draws, bw) + dnorm(2 * 0 - v, draws, bw) + dnorm(2 * 1 - v, draws, bw))
+  }, numeric(1))
+  expect_equal(d$y, direct, tolerance = 0.01)
+  # near the bound the plain estimate loses half its mass; this one does not
+  expect_gt(d$y[1], 0.9 * dbeta(0.01, 1, 4))
+  # one finite bound (a variance): reflected at 0 only
+  v <- rexp(2000)
+  d1 <- FBC:::support_density(v, 0, Inf)
+  expect_equal(d1$x[1], 0)
+  expect_equal(sum(diff(d1$x) * (head(d1$y, -1) + tail(d1$y, -1)) / 2), 1, tolerance = 0.005)
+})
+
+test_that("a posterior pressed against its prior bound is drawn inside it", {
+  # g's prior U(6, 9) excludes free fall's 9.81: the draws pile up at 9
+  set.seed(9)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1,
+                   kappaDist = "uniform", kappaP1 = 6, kappaP2 = 9)
+  post <- ggplot2::layer_data(plot(fit), 1)
+  expect_lte(max(post$x), 9)
+  expect_gte(min(post$x), 6)
+  expect_equal(sum(diff(post$x) * (head(post$y, -1) + tail(post$y, -1)) / 2), 1, tolerance = 0.01)
+  # the plain estimate would spill past 9
+  expect_gt(max(stats::density(fit$Phi[, "kappa1"])$x), 9)
 })

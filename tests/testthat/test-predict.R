@@ -3,7 +3,7 @@
 # Bayesian combination is the law of total variance written out in plain R.
 
 scaled_new <- function(X, sc) sweep(sweep(X, 2, sc$xmin[1:2]), 2, sc$xmax[1:2] - sc$xmin[1:2], "/")
-Xnew <- matrix(c(1, 5, 9, 2, 11, -4.5, -4.9, -4.1, -4.6, -4.2), 5)
+Xnew <- matrix(c(1, 5, 9, 2, 10, -4.5, -4.9, -4.1, -4.6, -4.2), 5)
 
 test_that("with every parameter fixed, predict() is the dense GP conditional (all types, both methods)", {
   set.seed(3)
@@ -79,7 +79,7 @@ test_that("blocks of new points give the same answers as one point at a time", {
   set.seed(3)
   fit <- fixed_fit(random_phi(2, 1))
   set.seed(4)
-  big <- cbind(runif(1203, 0, 10), runif(1203, -5, -4))
+  big <- cbind(runif(1203, 0, 10), runif(1203, -4.9, -4.2))
   all <- predict(fit, big, method = "MAP")
   some <- c(1, 500, 501, 1001, 1203)
   each <- sapply(some, function(i) predict(fit, big[i, , drop = FALSE], method = "MAP")$pred)
@@ -90,7 +90,7 @@ test_that("blocks of new points give the same answers as one point at a time", {
 test_that("newdata may be a data frame, or a vector when p = 1", {
   set.seed(3)
   fit <- fixed_fit(random_phi(2, 1))
-  expect_equal(predict(fit, as.data.frame(Xnew))$pred, predict(fit, Xnew)$pred)
+  expect_equal(predict(fit, data.frame(x1 = Xnew[, 1], x2 = Xnew[, 2]))$pred, predict(fit, Xnew)$pred)
   set.seed(2)
   fit1 <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 20, thinning = 10)
   expect_equal(predict(fit1, c(1, 2))$pred, predict(fit1, matrix(c(1, 2)))$pred)
@@ -120,5 +120,85 @@ test_that("ball data: predictions at h = 2.2, 2.4 match the reference (vignette 
     expect_equal(pr$pred, c(0.69, 0.73), tolerance = 0.04 / 0.7)
     expect_true(all(pr$se > 0.02 & pr$se < 0.12))
     expect_true(all(pr$lower < pr$pred & pr$pred < pr$upper))
+  }
+})
+
+test_that("unknown or misspelled arguments are refused, not ignored", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_snapshot(error = TRUE, {
+    predict(fit, Xnew, lvl = 0.5)
+    predict(fit, Xnew, 0.5)
+    predict(fit, Xnew, typ = "bias", samples = 10)
+  })
+  # the argument itself is not evaluated to say so
+  expect_error(predict(fit, Xnew, levle = stop("evaluated")), class = "fbc_unused_dots")
+})
+
+test_that("ndraws uses evenly spaced draws over all chains; NULL uses them all", {
+  set.seed(21)
+  fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
+  n <- nrow(fit$Phi)  # 40: 20 per chain
+  h <- c(0.7, 2.2, 3.9)
+  pr <- predict(fit, h, ndraws = 7, draws = TRUE)
+  rows <- as.integer(round(seq(1, n, length.out = 7)))  # 1, 8, 14, 20, 27, 33, 40: both chains
+  expect_identical(attr(pr, "draw_rows"), rows)
+  expect_true(all(c(1, 2) %in% fit$chain[rows]))
+  # the same as predicting from a fit that holds only those draws
+  sub <- fit
+  sub$Phi <- fit$Phi[rows, ]
+  ref <- predict(sub, h, ndraws = NULL, draws = TRUE)
+  expect_equal(pr[c("pred", "se", "lower", "upper", "draws")],
+               ref[c("pred", "se", "lower", "upper", "draws")], tolerance = 1e-14)
+  # NULL, and any ndraws >= the number of draws, use every draw
+  all <- predict(fit, h, ndraws = NULL, draws = TRUE)
+  expect_identical(attr(all, "draw_rows"), seq_len(n))
+  expect_identical(predict(fit, h, draws = TRUE), all)  # default 1000 > 40
+  expect_equal(ncol(all$draws), n)
+  expect_snapshot(error = TRUE, {
+    predict(fit, h, ndraws = 0)
+    predict(fit, h, ndraws = "all")
+  })
+})
+
+test_that("points in blocks give exactly the answers of one block", {
+  set.seed(21)
+  fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
+  h <- seq(0.3, 4.1, length.out = 23)
+  one <- predict(fit, h, draws = TRUE, level = 0.8)
+  old <- options(FBC.predict_block = 4)  # 6 blocks, the last one of 3 points
+  on.exit(options(old))
+  blocked <- predict(fit, h, draws = TRUE, level = 0.8)
+  expect_identical(blocked, one)
+  expect_identical(predict(fit, h, method = "MAP"), {
+    options(FBC.predict_block = NULL); predict(fit, h, method = "MAP")
+  })
+  # with a progress bar forced on, the same numbers
+  options(FBC.predict_block = 5, FBC.progress = TRUE, cli.progress_show_after = 0)
+  expect_identical(suppressMessages(predict(fit, h, draws = TRUE, level = 0.8)), one)
+  options(FBC.progress = NULL, cli.progress_show_after = NULL, FBC.predict_block = NULL)
+  # block sizes: bounded by the memory budget, >= 500 points otherwise
+  expect_equal(FBC:::predict_block_size(5000, 1000), 500L)
+  expect_equal(FBC:::predict_block_size(1e6, 1000), 6250L)  # 1e8 bytes / (16 * 1000)
+  expect_equal(FBC:::predict_block_size(1e6, 1e5), 62L)
+  expect_equal(FBC:::predict_block_size(20, 1000), 20L)
+})
+
+test_that("mixture quantiles solve the mixture's distribution function, also far from Gaussian", {
+  # reference: uniroot on the mixture CDF written out in plain R
+  set.seed(5)
+  M <- 50
+  mu <- rbind(c(rep(-3, 25), rep(3, 25)),            # two separated modes
+              rnorm(M, 0, 0.01),                      # near one Gaussian
+              c(rnorm(49, 0, 1), 40),                 # one far component
+              rnorm(M, 100, 1))
+  sd <- rbind(rep(0.5, M), runif(M, 1, 2), rep(1, M), runif(M, 1e-3, 1e-2))
+  for (p in c(0.025, 0.5, 0.975)) {
+    q <- FBC:::mixture_quantile(mu, sd, p)
+    ref <- vapply(1:4, function(i) {
+      uniroot(function(x) mean(pnorm(x, mu[i, ], sd[i, ])) - p, c(-200, 200), tol = 1e-13)$root
+    }, numeric(1))
+    expect_equal(q, ref, tolerance = 1e-8)
+    expect_equal(rowMeans(pnorm(q, mu, sd)), rep(p, 4), tolerance = 1e-10)
   }
 })

@@ -53,3 +53,12 @@ test_that("print() shows no warning for a converged run", {
   out <- capture.output(print(fit))
   expect_false(any(grepl("Warning", out)))
 })
+
+test_that("print() warns about arguments it does not use, and still prints", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 1)
+  # (`digit =` would be partial matching of `digits`, which R does itself)
+  expect_snapshot(out <- capture.output(print(fit, row.names = FALSE)))
+  expect_match(out[1], "<fbc>", fixed = TRUE)
+  expect_snapshot(out <- capture.output(print(set_hyperPriors(), all = TRUE)))
+})

@@ -67,5 +67,31 @@ test_that("set_hyperPriors() refuses priors that do not fit the parameter", {
   expect_snapshot(error = TRUE, set_hyperPriors(thetaSDist = c("gamma", "gamma"), thetaSInit = c(1, 2, 3)))
   # allowed: a fixed Gaussian correlation, a beta prior on a scale (vignette 1.5)
   expect_silent(set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2))
-  expect_silent(set_hyperPriors(thetaSDist = "beta", thetaSP2 = 6, thetaSInit = 0.5))
+  expect_silent(set_hyperPriors(thetaSDist = "beta", thetaSP1 = 1.1, thetaSP2 = 6, thetaSInit = 0.5))
+})
+
+test_that("a prior family switched without its own parameters is refused, naming them", {
+  # the defaults belong to the default family: gamma's (1.1, 0.1) as a
+  # lognormal would be a different prior than the user thinks
+  expect_snapshot(error = TRUE, {
+    set_hyperPriors(thetaSDist = "lognormal")
+    set_hyperPriors(thetaSDist = "beta", thetaSP2 = 6, thetaSInit = 0.5)
+    set_hyperPriors(sigma2EDist = "exponential")
+    set_hyperPriors(muBDist = c("gaussian", "logistic"))
+    calibrate(ballSim, ballField, kappaDist = "gaussian")
+    calibrate(ballSim, ballField, kappaDist = "uniform", kappaP1 = 7)
+    calibrate(unname(ballSim), unname(ballField), kappaDist = "gaussian", kappaP2 = 1)
+  })
+  # given its parameters, the family is used as given
+  h <- set_hyperPriors(sigma2EDist = "exponential", sigma2EP1 = 2)
+  expect_identical(h$sigma2E[c("dist", "p1")], list(dist = "exponential", p1 = 2))
+  h <- set_hyperPriors(sigma2EDist = "jeffreys")  # no parameters to give
+  expect_identical(h$sigma2E$dist, "jeffreys")
+  # the default family named explicitly keeps its defaults
+  expect_identical(set_hyperPriors(thetaSDist = "gamma"), set_hyperPriors())
+  set.seed(1)
+  fit <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 20, nChains = 1,
+                   kappaDist = "gaussian", kappaP1 = 9.8, kappaP2 = 1)
+  # N(9.8, 1) in g's units, not the Beta's 1.1, 1.1
+  expect_equal(fit$priorFns$kappa1(c(8, 10)), dnorm(c(8, 10), 9.8, 1, log = TRUE))
 })

@@ -22,3 +22,11 @@ test_that("coef() gives posterior means or medians of every column of Phi", {
   expect_equal(coef(fit, stat = "median"), apply(fit$Phi, 2, median))
   expect_snapshot(error = TRUE, coef(fit, stat = "mode"))
 })
+
+test_that("summary() and coef() refuse unknown arguments; print() of the summary warns", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
+  expect_snapshot(error = TRUE, summary(fit, digits = 2))
+  expect_snapshot(error = TRUE, coef(fit, stats = "median"))
+  expect_snapshot(x <- capture.output(print(summary(fit), right = FALSE)))
+})

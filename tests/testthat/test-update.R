@@ -97,3 +97,21 @@ test_that("update() checks its arguments", {
   expect_snapshot(error = TRUE, update(fit, nMCMC = 1))
   expect_snapshot(error = TRUE, update(fit, nMCMC = -3))
 })
+
+test_that("update() refuses arguments it does not use", {
+  fit <- small_fit(nChains = 1)
+  # `sim` cannot be changed by update(): refit with calibrate()
+  expect_snapshot(error = TRUE, update(fit, nMCMC = 100, sim = ballSim))
+  expect_snapshot(error = TRUE, update(fit, nmcmc = 100))
+})
+
+test_that("update() refuses run lengths whose draws cannot be stored", {
+  fit <- small_fit(nChains = 2)
+  withr_opts <- options(FBC.memory_limit = 8e9)
+  on.exit(options(withr_opts))
+  expect_snapshot(error = TRUE, {
+    update(fit, nMCMC = 2^31)
+    update(fit, nMCMC = .Machine$integer.max - 100)
+    update(fit, nMCMC = 1e9)
+  })
+})
