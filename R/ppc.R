@@ -56,7 +56,7 @@ ppc_field <- function(fit, ndraws = 500) {
   ndraws <- check_count(ndraws, "ndraws")
   sc <- fit$scale
   dat <- fit$data
-  rows <- draw_rows(fit, "Bayesian", ndraws)
+  rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
                       fit$settings$nugget %||% fbc_nugget, 500L)

@@ -80,7 +80,7 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   ys <- fit$data$ys
   m <- length(ys)
   fold <- emulator_folds(folds, m)
-  rows <- draw_rows(fit, method, ndraws)
+  rows <- check_rows(fit, method, ndraws)
   phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
   nugget <- fit$settings$nugget %||% fbc_nugget
   sig <- match("sigma2S", fit$vars)
@@ -179,12 +179,11 @@ emulator_folds <- function(folds, m, call = parent.frame()) {
   as.vector(folds)
 }
 
-# Rows of Phi used by a check: the MAP draw, or `ndraws` evenly spaced ones.
-draw_rows <- function(fit, method, ndraws) {
-  N <- nrow(fit$Phi)
+# Rows of Phi used by a check: the MAP draw, or `ndraws` evenly spaced ones
+# (the same rows predict() would use: draw_rows() in predict.R).
+check_rows <- function(fit, method, ndraws) {
   if (method == "MAP") return(which.max(fit$logPost))
-  if (ndraws >= N) return(seq_len(N))
-  unique(round(seq(1, N, length.out = ndraws)))
+  draw_rows(nrow(fit$Phi), ndraws)
 }
 
 unscale_inputs <- function(X, scale, cols) {
