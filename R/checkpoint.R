@@ -275,6 +275,11 @@ run_chain <- function(job, k, start) {
   status <- "done"
   status <- tryCatch({
     repeat {
+      # a Ctrl-C that reached this process (a terminal sends it to the
+      # workers too) while no R code checked for it stays pending until
+      # something does; Sys.sleep() does, here, inside the handler, rather
+      # than later in the future's own code, which would lose the result
+      Sys.sleep(0.001)
       it <- cur$state$iter
       if (it >= target) break
       if (stopAsked()) { status <- "stopped"; break }
@@ -371,6 +376,8 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
                                           initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
   }
   futures <- vector("list", n)
+  launching <- 0L
+  dirty <- FALSE
   failed <- integer()
   errors <- list()
   launch <- function(k) {
@@ -380,7 +387,12 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
                      globals = list(job = job, start = starts[[k]]),
                      label = sprintf("FBC chain %d", k))
     }
-    futures[[k]] <<- suspendInterrupts(make())
+    # not with interrupts suspended: launching waits for the worker to
+    # answer, and a Ctrl-C must always get through; a launch cut short by
+    # Ctrl-C may leave that worker out of step, so the plan is restarted
+    launching <<- k
+    futures[[k]] <<- make()
+    launching <<- 0L
   }
   # the sequential plan runs the chains here, without futures, each with
   # its own stream; the session's RNG state is left as it was
@@ -436,16 +448,21 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
       if (length(errors)) break
     }
     while (!length(errors) && !collect()) Sys.sleep(0.05)
-  }, progression = onProgress), interrupt = function(e) interrupted <<- TRUE)
+  }, progression = onProgress), interrupt = function(e) {
+    interrupted <<- TRUE
+    dirty <<- launching > 0L
+  })
+  hard <- FALSE
   if (interrupted || length(errors)) {
-    withCallingHandlers(
+    hard <- withCallingHandlers(
       stop_chains(run, collect, sequential, quiet = !interrupted),
       progression = function(c) if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
     )
   }
   if (!is.null(bar)) bar$done()
   if (length(errors)) stop(errors[[1]])
-  if (length(failed)) reset_plan()
+  # a dead worker's connection, or one a Ctrl-C cut short, is useless
+  if ((length(failed) || dirty) && !hard) reset_plan()
   # a chain whose worker died, or that the interrupt cut short, comes back
   # as far as its checkpoint
   for (k in seq_len(n)) {
@@ -467,9 +484,10 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
 }
 
 # After Ctrl-C: ask the workers to stop at their next piece and collect
-# them; on a second Ctrl-C, kill this run's workers on this machine.
+# them; on a second Ctrl-C, kill this run's workers on this machine and
+# restart the plan's workers (returns TRUE then).
 stop_chains <- function(run, collect, sequential, quiet = FALSE) {
-  if (sequential) return(invisible())
+  if (sequential) return(FALSE)
   if (!is.null(run)) file.create(file.path(run$dir, "STOP"))
   if (!quiet) {
     cli::cli_inform(c("!" = "Interrupted: stopping the chains at their next checkpoint (press Ctrl-C again to kill the workers)."))
@@ -483,7 +501,7 @@ stop_chains <- function(run, collect, sequential, quiet = FALSE) {
     kill_workers(run)
     reset_plan()
   }
-  invisible()
+  hard
 }
 
 # Kills the processes on this machine that run this call's chains.
