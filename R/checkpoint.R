@@ -145,6 +145,8 @@ identity_differences <- function(old, new, vars) {
 # one of the same run (else those given). Refuses, changing nothing, when
 # the directory holds something else.
 open_checkpoint <- function(dir, every, identity, starts, seeds, vars, call = parent.frame()) {
+  # workers may start elsewhere (a cluster job's directory): an absolute path
+  if (dir.exists(dir)) dir <- normalizePath(dir)
   runFile <- file.path(dir, "run.rds")
   if (file.exists(runFile)) {
     run <- read_checkpoint_file(runFile, "run", call = call)
@@ -179,6 +181,7 @@ open_checkpoint <- function(dir, every, identity, starts, seeds, vars, call = pa
   if (!dir.exists(dir) && !dir.create(dir, recursive = TRUE, showWarnings = FALSE)) {
     cli::cli_abort("Cannot create the checkpoint directory {.file {dir}}.", call = call)
   }
+  dir <- normalizePath(dir)
   id <- basename(tempfile("run-"))
   write_atomic(list(format = fbc_checkpoint_format, id = id, identity = identity,
                     starts = starts, seeds = seeds, fbc = as.character(utils::packageVersion("FBC")),
