@@ -77,7 +77,7 @@
 #'
 #' @section Several chains:
 #' `nChains` independent chains are run through the \pkg{future} framework
-#' ([future.apply::future_lapply()] with `future.seed = TRUE`): sequentially
+#' (one future per chain): sequentially
 #' when no plan is set, on the cores of one machine after
 #' `future::plan(future::multisession)`, on a cluster with `plan(cluster)` or
 #' a \pkg{future.batchtools} backend, with no change to the call. Each chain
@@ -96,13 +96,41 @@
 #' draws to \pkg{posterior}, \pkg{bayesplot} and \pkg{coda}.
 #'
 #' @section Interrupting:
-#' Ctrl-C stops a chain at the next multiple of 100 iterations; with the
-#' sequential plan the chains not yet started are skipped, and the draws kept
-#' so far come back as a valid `fbc` object with a warning saying how far the
-#' run got (`state$interrupted` is `TRUE`). `update(fit, nMCMC = ...)`
-#' continues it. With a parallel plan Ctrl-C reaches only the main session,
-#' so the workers' draws are lost: run long parallel jobs in blocks with
-#' `update()` instead.
+#' Ctrl-C stops the chains and returns the draws kept so far as a valid
+#' `fbc` object, with a warning saying how far each chain got
+#' (`state$interrupted` is `TRUE`); `update(fit, nMCMC = ...)` continues it.
+#' With the sequential plan the running chain stops within 100 iterations
+#' and the chains not yet started are skipped. With a parallel plan the
+#' workers are asked to stop at the end of their current piece of 50
+#' iterations and their draws are collected, so the session and its workers
+#' are ready for the next run at once; a second Ctrl-C kills this run's
+#' worker processes on this machine and restarts the plan's workers, and the
+#' chains then come back as far as their last checkpoint. A worker that dies
+#' (killed, out of memory) costs only its chain's draws since its last
+#' checkpoint: the others go on, the plan's workers are restarted, and the
+#' warning names the chain.
+#'
+#' @section Checkpoints:
+#' With `checkpoint = "<directory>"` every chain saves its whole state (the
+#' sampler's parameters and adapted proposals, its random number stream's
+#' position, the draws kept so far) in that directory at most every
+#' `checkpointEvery` seconds and when it stops. Each chain runs in pieces of
+#' 50 iterations and saves at the end of a piece; a file is written under a
+#' temporary name and renamed, so a kill at any instant leaves a readable
+#' checkpoint. The directory also holds the run's data, priors, settings and
+#' each chain's start, so that calling `calibrate()` again with the same
+#' data and settings and the same `checkpoint` resumes the run after a
+#' Ctrl-C, a killed worker, a crashed session or a cluster job's time limit:
+#' every chain continues from its last checkpoint (chains that had not
+#' started start), on whatever plan is set then, and the draws are exactly
+#' those of an uninterrupted run with the same seed (the session's seed
+#' does not matter when resuming: the streams are in the checkpoint). A
+#' finished run's directory gives the fit back without sampling. A
+#' directory holding another run (other data, priors or settings), a
+#' corrupt checkpoint, or a non-empty directory that is not a checkpoint is
+#' refused with a message saying what differs, and nothing is written. The
+#' directory must be on storage the workers share (on a cluster, not a
+#' node's local disk); see `vignette("clusters", package = "FBC")`.
 #'
 #' @section Defaults:
 #' `nChains = 4`, `nMCMC = 8000`, `nBurn = 2000`, `thinning = 2`: 4 x 3000 =
@@ -169,17 +197,24 @@
 #'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
 #'   units), else `calibrate()` refuses it and names the arguments to give.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
-#' @param showProgress Show a progress bar with the time left and the current
-#'   acceptance rates.
+#' @param showProgress Show a progress bar over all chains (on any plan: the
+#'   workers report through \pkg{progressr}) with the time left and each
+#'   chain's acceptance rate after burn-in (mean over its parameters).
+#'   `FALSE` (the default) prints nothing.
 #' @param sampler `"blocks"` (the default: joint and exact moves, see
 #'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
 #' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
 #'   `sampler = "single"`, with a warning.
+#' @param checkpoint `NULL` (no checkpoints) or a directory where the chains
+#'   save checkpoints (created if needed; see "Checkpoints"). When it holds
+#'   a checkpoint of the same run, the run is resumed from it.
+#' @param checkpointEvery Seconds between a chain's checkpoints (it also
+#'   saves when it stops); `0` saves after every piece of 50 iterations.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked), `chain` (the chain of each row), `estimates`
 #'   (posterior summaries with `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars`, `data`,
 #'   `scale`, `indices`, `priorFns`, `proposalSD`, `call`, `settings`
-#'   (MCMC sizes, nugget, run time) and `state` (`chains`: where each chain
+#'   (MCMC sizes, nugget, run time, checkpoint directory) and `state` (`chains`: where each chain
 #'   stopped, its adapted proposal scales and acceptance; `interrupted`).
 #' @export
 #' @examples
@@ -192,11 +227,21 @@
 #' fit <- calibrate(ballSim, ballField)
 #' fit$estimates[, c("mean", "lwr80", "upr80", "rhat", "ess")]
 #' }
+#' # checkpoints: the same call resumes an interrupted run, or returns a
+#' # finished one
+#' dir <- file.path(tempdir(), "ball-run")
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 400, nBurn = 200, nChains = 2,
+#'                  checkpoint = dir)
+#' again <- calibrate(ballSim, ballField, nMCMC = 400, nBurn = 200, nChains = 2,
+#'                    checkpoint = dir)
+#' identical(fit$Phi, again$Phi)
+#' unlink(dir, recursive = TRUE)
 calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(),
                       showProgress = FALSE, sampler = c("blocks", "single"),
-                      blockSim = NULL) {
+                      blockSim = NULL, checkpoint = NULL, checkpointEvery = 60) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
@@ -232,6 +277,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                  iters = nMCMC, args = c("nMCMC", "nChains"))
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
+  check_checkpoint(checkpoint, checkpointEvery)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -250,17 +296,35 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   moves <- sampler_moves(sampler, spec)
   blas_hint(nrow(sim))
   inits <- dispersed_inits(nChains, dat, spec)
-  states <- lapply(inits, initial_state, spec = spec)
+  seeds <- chain_seeds(nChains)
+  starts <- lapply(inits, function(x) chain_start(initial_state(x, spec), length(x), 0L))
+  settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
+                   nugget = fbc_nugget, sampler = sampler)
+  run <- NULL
+  if (!is.null(checkpoint)) {
+    # a directory holding this run's checkpoint continues it, with the
+    # chains' saved starts and streams (the session's RNG is advanced as
+    # for a new run all the same)
+    run <- open_checkpoint(checkpoint, checkpointEvery, run_identity(sim, field, spec, settings),
+                           starts, seeds, spec$vars)
+    starts <- run$starts
+    seeds <- run$seeds
+    if (run$resumed) {
+      at <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
+      cli::cli_inform("Resuming the run in {.file {checkpoint}}: {cli::qty(length(at))}chain{?s} at iteration{?s} {at} of {nMCMC}.")
+    }
+  }
   t0 <- proc.time()[["elapsed"]]
-  results <- run_chains(dat, spec, states, moves, nIter = nMCMC, nBurn = nBurn,
-                        thinning = thinning, showProgress = showProgress)
+  results <- run_chains(dat, spec, starts, seeds, moves, target = nMCMC, nBurn = nBurn,
+                        thinning = thinning, showProgress = showProgress, run = run,
+                        every = checkpointEvery)
   elapsed <- proc.time()[["elapsed"]] - t0
-  results <- check_chain_results(results, nMCMC)
+  results <- check_chain_results(results, nMCMC, checkpoint = checkpoint)
 
-  new_fbc_chains(results, dat, spec, scale, call,
-                 settings = list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning,
-                                 nChains = length(results), nugget = fbc_nugget,
-                                 sampler = sampler, moves = moves, time = elapsed))
+  settings <- c(settings[c("nMCMC", "nBurn", "thinning")],
+                list(nChains = length(results), nugget = fbc_nugget, sampler = sampler,
+                     moves = moves, time = elapsed, checkpoint = checkpoint))
+  new_fbc_chains(results, dat, spec, scale, call, settings = settings)
 }
 
 # Relative nugget added to the diagonal of the simulator correlation matrix.
@@ -409,13 +473,14 @@ prior_functions <- function(table, vars, classes, scale) {
 # `nBurn` (counted from the chain's start) adapt the proposals. An interrupt
 # (Ctrl-C) is reported in the result (`interrupted`, `done`, `kept`), not as
 # a condition: the caller decides what to say.
-sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showProgress) {
+sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showProgress,
+                         sampler = fbc_sampler_hook()) {
   progress <- if (showProgress) {
     list(name = "Calibrating", clear = TRUE, show_after = 0,
          format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
   }
-  fbc_sampler_hook()(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
-                     nIter, nBurn, thinning, fbc_nugget, progress)
+  sampler(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
+          nIter, nBurn, thinning, fbc_nugget, progress)
 }
 
 # The state a chain starts from: parameters `init` (sampler's scale), the

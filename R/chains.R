@@ -1,9 +1,9 @@
 # Several chains through the future framework.
 #
-# Chains run with future.apply::future_lapply(future.seed = TRUE): each chain
-# gets its own L'Ecuyer-CMRG stream drawn from the caller's RNG state, and the
-# compiled sampler draws from whatever RNG the evaluating process has. So a
-# run is reproduced by set.seed() whatever future::plan() is active, and
+# Each chain is one future (run_chains() in checkpoint.R) with its own
+# L'Ecuyer-CMRG stream drawn from the caller's RNG state (chain_seeds()), and
+# the compiled sampler draws from whatever RNG the evaluating process has. So
+# a run is reproduced by set.seed() whatever future::plan() is active, and
 # sequential, multisession, cluster or batchtools plans give the same draws.
 
 # Quantile function of a prior family in the units the family is written in.
@@ -74,59 +74,45 @@ log_prior_row <- function(tab, j, x) {
   .log_prior(tab$a[j] + tab$b[j] * x, tab$family[j], tab$p1[j], tab$p2[j]) + tab$lconst[j]
 }
 
-# Package-level flag: a chain interrupted with Ctrl-C sets it so that the
-# chains of the same call that have not started yet are skipped. (Only
-# meaningful where chains share this process, i.e. the sequential plan; in a
-# parallel plan Ctrl-C reaches the main session, not the workers.)
+# Package-level flag: a chain interrupted with Ctrl-C in this process sets
+# it so that the chains of the same call that have not started yet are
+# skipped (sequential plan; see run_chains() in checkpoint.R).
 fbc_run <- new.env(parent = emptyenv())
 fbc_run$stop <- FALSE
 
-# Runs one chain per element of `states` (each a sampler state: see
-# initial_state()) for `nIter` further sweeps through future_lapply. Returns
-# the list of sampler results; a chain skipped after an interrupt is NULL.
-run_chains <- function(dat, spec, states, moves, nIter, nBurn, thinning, showProgress) {
-  fbc_run$stop <- FALSE
-  on.exit(fbc_run$stop <- FALSE, add = TRUE)
-  nChains <- length(states)
-  progress <- showProgress && nChains == 1L
-  worker <- function(k) {
-    if (isTRUE(fbc_run$stop)) return(NULL)
-    res <- sample_chain(dat, spec, states[[k]], moves, nIter, nBurn, thinning, progress)
-    if (res$interrupted) fbc_run$stop <- TRUE
-    res
-  }
-  if (showProgress && nChains > 1L) {
-    workers <- future::nbrOfWorkers()
-    cli::cli_inform("Running {nChains} chains of {nIter} iterations on {workers} worker{?s}.")
-  }
-  future.apply::future_lapply(seq_len(nChains), worker, future.seed = TRUE,
-                              future.packages = "FBC")
-}
-
-# Keeps the chains that retained at least one draw, warns about interrupts,
-# and aborts when nothing is left.
-check_chain_results <- function(results, nMCMC, call = parent.frame()) {
+# Keeps the chains that retained at least one draw, warns about interrupts
+# (and workers lost), and aborts when nothing is left.
+check_chain_results <- function(results, nMCMC, checkpoint = NULL, call = parent.frame()) {
   started <- !vapply(results, is.null, logical(1))
   kept <- vapply(results, function(r) if (is.null(r)) 0L else as.integer(r$kept), integer(1))
   interrupted <- vapply(results, function(r) !is.null(r) && isTRUE(r$interrupted), logical(1))
+  died <- which(vapply(results, function(r) identical(r$status, "died"), logical(1)))
+  resume <- if (is.null(checkpoint)) {
+    "Continue the run with {.code update(fit, nMCMC = ...)}."
+  } else {
+    "Resume it with the same {.fn calibrate} call: every chain continues from its checkpoint in {.file {checkpoint}}, with the draws of an uninterrupted run."
+  }
   if (any(interrupted) || any(!started)) {
     done <- vapply(results, function(r) if (is.null(r)) 0L else as.integer(r$done), integer(1))
     if (!any(kept > 0L)) {
-      cli::cli_abort(
+      cli::cli_abort(c(
         "Interrupted after {max(done)} of {nMCMC} iterations, before any draw was retained.",
-        call = call
-      )
+        if (!is.null(checkpoint)) c(i = resume)
+      ), call = call)
     }
     n <- length(results)
     ids <- which(interrupted)
     its <- done[interrupted]
     msg <- c("Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} iterations.")
+    if (length(died)) {
+      msg <- c(msg, "!" = "{cli::qty(length(died))}The worker{?s} running chain{?s} {died} stopped (killed or crashed): {?its/their} draws are those of {?its/their} last checkpoint.")
+    }
     if (n > 1L) {
       msg <- c(msg, i = "Keeping {sum(kept > 0L)} of {n} chain{?s} with {sum(kept)} retained draw{?s}; chains that had not started or kept no draw are dropped.")
     } else {
       msg <- c(msg, i = "Returning the {sum(kept)} draw{?s} retained so far.")
     }
-    msg <- c(msg, i = "Continue the run with {.code update(fit, nMCMC = ...)}.")
+    msg <- c(msg, i = resume)
     cli::cli_warn(msg, call = call)
   }
   results[kept > 0L]

@@ -9,7 +9,7 @@
 #' @param object An `fbc` object from [calibrate()] (or from `update()`).
 #' @param nMCMC Number of further iterations (sweeps) per chain. Every
 #'   `thinning`-th is kept, with the `thinning` of the original run.
-#' @param showProgress Show a progress bar (single chain only).
+#' @param showProgress Show a progress bar over all chains (see [calibrate()]).
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
@@ -40,8 +40,11 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
                  args = "nMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
   moves <- s$moves %||% sampler_moves(s$sampler %||% "single", object$spec)
-  results <- run_chains(object$data, object$spec, lapply(states, `[[`, "sampler"), moves,
-                        nIter = nMCMC, nBurn = s$nBurn, thinning = s$thinning,
+  d <- length(object$vars)
+  starts <- lapply(states, function(st) chain_start(st$sampler, d))
+  target <- vapply(starts, function(st) st$iter0, integer(1)) + as.integer(nMCMC)
+  results <- run_chains(object$data, object$spec, starts, chain_seeds(length(starts)), moves,
+                        target = target, nBurn = s$nBurn, thinning = s$thinning,
                         showProgress = showProgress)
   elapsed <- proc.time()[["elapsed"]] - t0
   # a chain skipped after an interrupt adds nothing and stays where it was

@@ -162,7 +162,7 @@ tab[num] <- lapply(tab[num], function(x) signif(x, 3))
 cat(sprintf("FBC %s speed benchmark, %s\n", utils::packageVersion("FBC"), format(Sys.time(), "%Y-%m-%d %H:%M")))
 si <- utils::sessionInfo()
 cat(sprintf("%s; %s; %d cores; BLAS: %s\n", R.version.string, si$running,
-            parallel::detectCores(), basename(si$BLAS)))
+            as.integer(parallelly::availableCores()), basename(si$BLAS)))
 cat("ms/sweep: CPU ms per sweep of frozen-proposal runs after calibrate()'s adaptation\n",
     "(median over chunks; wall ms alongside, the cores are shared).\n",
     "floor = 2(p+q) t_chol(n+m) + (d-1-2(p+q)) t_chol(n), t_chol = CPU ms of R's chol()\n",

@@ -1,0 +1,76 @@
+# Helpers for the checkpoint tests (test-checkpoint.R).
+
+# The run the kill-and-resume tests interrupt: two short chains of the ball
+# data. The uninterrupted reference is computed once per test session.
+ck_args <- list(nMCMC = 800, nBurn = 300, thinning = 2, nChains = 2)
+ck_seed <- 21L
+ck_reference <- local({
+  fit <- NULL
+  function() {
+    if (is.null(fit)) {
+      set.seed(ck_seed)
+      fit <<- do.call(calibrate, c(list(ballSim, ballField), ck_args))
+    }
+    fit
+  }
+})
+
+# A sampler that sleeps `pause` seconds before each piece (a call) and, when
+# `marker` is given, writes the process id there: a run that is long in
+# wall time but cheap in CPU, to be killed mid-way. Installed with
+# options(FBC.sampler = ...); run_chains() hands it to the workers.
+slow_sampler <- function(pause, marker = NULL) {
+  function(...) {
+    if (!is.null(marker)) cat(Sys.getpid(), "\n", file = marker, append = TRUE)
+    if (pause > 0) Sys.sleep(pause)
+    FBC:::.fbc_sample(...)
+  }
+}
+
+# A sampler that imitates a Ctrl-C caught by the compiled sampler at the end
+# of its `m`-th call (the compiled sampler polls for Ctrl-C every 100
+# sweeps, which are ends of pieces): that call's sweeps are kept and the
+# result is flagged as interrupted.
+interrupt_at_call <- function(m) {
+  n <- 0L
+  function(...) {
+    n <<- n + 1L
+    res <- FBC:::.fbc_sample(...)
+    if (n == m) res$interrupted <- TRUE
+    res
+  }
+}
+
+# Polls `cond()` every 0.1 s until TRUE; fails the test after `timeout` s.
+wait_until <- function(cond, timeout = 60) {
+  t0 <- Sys.time()
+  while (!isTRUE(tryCatch(suppressWarnings(cond()), error = function(e) FALSE))) {
+    if (as.numeric(Sys.time() - t0, units = "secs") > timeout) {
+      testthat::fail(sprintf("condition not met within %d s", timeout))
+      return(FALSE)
+    }
+    Sys.sleep(0.1)
+  }
+  TRUE
+}
+
+# The iteration chain k's checkpoint in `dir` has reached (0 when none).
+ck_iter <- function(dir, k) {
+  f <- file.path(dir, sprintf("chain-%d.rds", k))
+  if (!file.exists(f)) return(0L)
+  readRDS(f)$start$state$iter
+}
+
+# md5 sums of every file in a directory (to show nothing was rewritten).
+dir_md5 <- function(dir) tools::md5sum(sort(list.files(dir, full.names = TRUE, all.files = TRUE, no.. = TRUE)))
+
+expect_same_draws <- function(fit, ref) {
+  expect_identical(fit$Phi, ref$Phi)
+  expect_identical(fit$chain, ref$chain)
+  expect_identical(fit$logPost, ref$logPost)
+  expect_identical(fit$logLik, ref$logLik)
+  expect_equal(fit$acceptance, ref$acceptance)
+  for (k in seq_along(ref$state$chains)) {
+    expect_identical(fit$state$chains[[k]]$sampler, ref$state$chains[[k]]$sampler)
+  }
+}
