@@ -2,7 +2,10 @@
 # checkout. Debian's prebuilt r-cran-* packages are used when we are root on
 # a Debian machine (quick, and built for this R); CRAN otherwise.
 needed <- c("Rcpp", "RcppArmadillo", "cli", "ggplot2", "lhs", "testthat", "knitr",
-            "rmarkdown", "coda", "posterior", "future", "future.apply")
+            "rmarkdown", "coda", "posterior", "future", "progressr",
+            # Suggests the tests use: kill-and-resume in a child process,
+            # the batchtools backend (both skip when missing, but CI runs them)
+            "callr", "future.batchtools")
 have <- function(p) requireNamespace(p, quietly = TRUE)
 missing <- needed[!vapply(needed, have, logical(1))]
 if (length(missing)) {
