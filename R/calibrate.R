@@ -39,7 +39,9 @@
 #' at a time in the order of `Phi`'s columns, and during burn-in each
 #' proposal's log standard deviation moves every 50 iterations by
 #' \eqn{\pm 1/\sqrt{b}} (batch `b`) towards an acceptance rate of 0.44. It
-#' reproduces FBC 0.1.0's draws exactly.
+#' is FBC 0.1.0's sampler, move for move; the draws for a given seed differ
+#' from 0.1.0's only because each chain's random stream is now derived from
+#' the seed differently (see "Several chains").
 #'
 #' `sampler = "blocks"` (the default) makes, in each sweep:
 #' * three moves of each \eqn{\kappa_l} (a \eqn{\kappa} move needs no
