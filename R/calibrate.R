@@ -26,6 +26,26 @@
 #' the diagonal of the simulator correlation matrix (a simulator noise
 #' variance of `1e-6 * sigma2S`, far below any simulator's rounding).
 #'
+#' @section Simulator algebra:
+#' When the simulator runs are every combination of \eqn{I} settings of the
+#' experimental inputs and \eqn{J} settings of the calibration inputs, in
+#' any row order (a functional output: each of \eqn{J} runs returns the
+#' response at the same \eqn{I} times, positions or grid points), the
+#' simulator correlation is a Kronecker product \eqn{R_x \otimes R_t} up to
+#' a permutation of the rows. The likelihood is then evaluated exactly
+#' through the eigendecompositions of the two small factors (the nugget
+#' keeps its meaning): a move of an experimental-input correlation parameter
+#' costs one \eqn{I \times I} eigendecomposition, a calibration-input one a
+#' \eqn{J \times J} one, a \eqn{\kappa} move \eqn{O(IJ + In^2)}, and no
+#' \eqn{m \times m} matrix is ever formed (\eqn{m = IJ}). The field inputs
+#' need not lie on the grid. `calibrate()` detects such a design itself
+#' (rows compared exactly; used from about 4 settings of each on, where it
+#' pays) and otherwise uses the dense algebra, Cholesky factors of the
+#' \eqn{m \times m} simulator block: a design with one run missing is not a
+#' product design. `algebra = "dense"` forces the dense algebra (the same
+#' posterior, slower). `print()` and `fit$settings$simAlgebra` say which one
+#' ran; [predict.fbc()] uses the same.
+#'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
 #' leaves the posterior invariant, the acceptance ratios include the Jacobian
@@ -144,13 +164,16 @@
 #'   acceptance rates.
 #' @param sampler `"blocks"` (the default: joint and exact moves, see
 #'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
+#' @param algebra `"auto"` (the default: the Kronecker algebra on a product
+#'   design, else the dense one) or `"dense"` (always the dense one); see
+#'   "Simulator algebra".
 #' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
 #'   `sampler = "single"`, with a warning.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked), `chain` (the chain of each row), `estimates`
 #'   (posterior summaries with `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars`, `data`,
 #'   `scale`, `indices`, `priorFns`, `proposalSD`, `call`, `settings`
-#'   (MCMC sizes, nugget, run time) and `state` (`chains`: where each chain
+#'   (MCMC sizes, nugget, run time, `algebra` and the `simAlgebra` used) and `state` (`chains`: where each chain
 #'   stopped, its adapted proposal scales and acceptance; `interrupted`).
 #' @export
 #' @examples
@@ -167,7 +190,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(),
                       showProgress = FALSE, sampler = c("blocks", "single"),
-                      blockSim = NULL) {
+                      blockSim = NULL, algebra = c("auto", "dense")) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 3L, min_rows = 3L)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
@@ -193,6 +216,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   }
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
+  algebra <- match_choice(algebra, c("auto", "dense"), "algebra")
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -203,6 +227,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
+  spec$model <- list(kernS = kernel_codes[["powexp"]], kernB = kernel_codes[["powexp"]],
+                     algebra = if (algebra == "dense") 1L else 0L)
 
   moves <- sampler_moves(sampler, spec)
   blas_hint(nrow(sim))
@@ -217,7 +243,29 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   new_fbc_chains(results, dat, spec, scale, call,
                  settings = list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning,
                                  nChains = length(results), nugget = fbc_nugget,
-                                 sampler = sampler, moves = moves, time = elapsed))
+                                 sampler = sampler, moves = moves, time = elapsed,
+                                 algebra = algebra,
+                                 simAlgebra = sim_algebra_info(dat, p, spec$model)))
+}
+
+# Correlation family codes (src/fbc.h, KernelFamily).
+kernel_codes <- c(powexp = 1L)
+
+# The model codes the compiled entry points take after their usual
+# arguments (kernS, kernB: correlation families of the simulator and bias
+# GPs; algebra: 0 auto, 1 dense), with the defaults for objects made before
+# they existed.
+model_codes <- function(spec) {
+  mc <- spec$model
+  list(kernS = mc$kernS %||% 1L, kernB = mc$kernB %||% 1L, algebra = mc$algebra %||% 0L)
+}
+
+# Which algebra the compiled code uses for the simulator block: the
+# Kronecker one on a product design (`dims`: I experimental x J calibration
+# settings), else the dense one.
+sim_algebra_info <- function(dat, p, model) {
+  dims <- .sim_algebra(dat$Xs, p, model$algebra %||% 0L)
+  if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
 }
 
 # Relative nugget added to the diagonal of the simulator correlation matrix.
@@ -369,8 +417,13 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
     list(name = "Calibrating", clear = TRUE, show_after = 0,
          format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
   }
-  fbc_sampler_hook()(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
-                     nIter, nBurn, thinning, fbc_nugget, progress)
+  args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
+               nIter, nBurn, thinning, fbc_nugget, progress)
+  # the model codes only where they differ from the defaults, so a sampler
+  # hook written for the twelve usual arguments keeps working
+  mc <- model_codes(spec)
+  extra <- mc[unlist(mc) != c(1L, 1L, 0L)]
+  do.call(fbc_sampler_hook(), c(args, extra))
 }
 
 # The state a chain starts from: parameters `init` (sampler's scale), the

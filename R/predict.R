@@ -81,9 +81,11 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
 
   rows <- if (method == "MAP") which.max(object$logPost) else seq_len(nrow(object$Phi))
   phis <- sampler_scale(object$Phi[rows, , drop = FALSE], sc)
+  mc <- model_codes(object$spec)
   res <- .fbc_predict(object$data$Xf, object$data$yf, object$data$Xs, object$data$ys,
                       phis, Xn, match(type, c("field", "mean", "simulator", "bias")),
-                      object$settings$nugget %||% fbc_nugget, 500L)
+                      object$settings$nugget %||% fbc_nugget, 500L, mc$kernS, mc$kernB,
+                      mc$algebra)
   shift <- if (type == "bias") 0 else sc$ymean
   m <- shift + sc$ysd * res$mean
   v <- sc$ysd^2 * pmax(res$var, 0)
