@@ -77,6 +77,16 @@
 #'   the whole covariance scales, so its log-determinant and quadratic form
 #'   follow in closed form with no factorisation.
 #'
+#' With 500 simulator runs or more on the dense algebra (see "Simulator
+#' algebra"), each \eqn{\kappa_l} and the simulator block move once a
+#' sweep instead of three and two times: there a simulator-block move costs
+#' a Cholesky factorisation of the \eqn{m \times m} simulator block and a
+#' \eqn{\kappa} move an \eqn{m \times m \times n} triangular solve, while
+#' every other move costs \eqn{O(n^3)}; a sweep then costs about one
+#' factorisation of the \eqn{(n + m) \times (n + m)} covariance
+#' (`inst/bench/scale.R`). Product designs on the Kronecker algebra keep the
+#' default schedule: all their moves are cheap.
+#'
 #' A joint move proposes \eqn{w^* = w + e^{s} L \epsilon} on the walk scales.
 #' \eqn{L} starts diagonal; after 100 burn-in sweeps it takes the shape of the
 #' running covariance of the burn-in draws (Haario et al. 2001), estimated
@@ -230,7 +240,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   spec$model <- list(kernS = kernel_codes[["powexp"]], kernB = kernel_codes[["powexp"]],
                      algebra = if (algebra == "dense") 1L else 0L)
 
-  moves <- sampler_moves(sampler, spec)
+  simAlgebra <- sim_algebra_info(dat, p, spec$model)
+  moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
   blas_hint(nrow(sim))
   inits <- dispersed_inits(nChains, dat, spec)
   states <- lapply(inits, initial_state, spec = spec)
@@ -244,8 +255,14 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                  settings = list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning,
                                  nChains = length(results), nugget = fbc_nugget,
                                  sampler = sampler, moves = moves, time = elapsed,
-                                 algebra = algebra,
-                                 simAlgebra = sim_algebra_info(dat, p, spec$model)))
+                                 algebra = algebra, simAlgebra = simAlgebra))
+}
+
+# The dense algebra with at least this many simulator runs gets the
+# large-problem move schedule (sampler_moves(large = TRUE)).
+fbc_large_m <- 500L
+large_dense <- function(m, simAlgebra) {
+  identical(simAlgebra$name, "dense") && m >= fbc_large_m
 }
 
 # Correlation family codes (src/fbc.h, KernelFamily).
@@ -435,8 +452,11 @@ initial_state <- function(init, spec) {
 
 # The moves of each sampler (see "Sampler" in ?calibrate): index vectors of
 # the jointly moved blocks (1-based, in phi) and how often each moves per
-# sweep, the scale move, the exact muB draw.
-sampler_moves <- function(sampler, spec) {
+# sweep, the scale move, the exact muB draw. `large`: a large simulator
+# block on the dense algebra, where a move of the simulator block costs a
+# Cholesky factor of it and a kappa move an m x m x n triangular solve:
+# each moves once a sweep.
+sampler_moves <- function(sampler, spec, large = FALSE) {
   if (sampler == "single") {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE))
   }
@@ -448,17 +468,19 @@ sampler_moves <- function(sampler, spec) {
     if (length(idx) >= 2L) idx
   }
   # each free kappa alone (a one-parameter block: its walk scale adapts like
-  # the joint ones'), three moves a sweep: a kappa move needs no m x m
-  # factorization, and kappa is what the user came for
+  # the joint ones'), three moves a sweep (one when `large`): a kappa move
+  # needs no m x m factorization, and kappa is what the user came for
   kappa <- lapply(which(cls == "kappa" & free), identity)
   joint <- list(sim = block(c("thetaS", "alphaS", "sigma2S")),
                 bias = block(c("thetaB", "alphaB", "sigma2B")))
   joint <- joint[lengths(joint) > 0L]
   sig <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
   mu <- which(cls == "muB")
+  rep_kappa <- if (large) 1L else 3L
+  rep_joint <- as.integer(ifelse(names(joint) == "sim" & large, 1L, 2L))
   list(
     blocks = c(kappa, unname(joint)),
-    repeats = c(rep(3L, length(kappa)), rep(2L, length(joint))),
+    repeats = c(rep(rep_kappa, length(kappa)), rep_joint),
     scale = all(free[sig]),
     gibbsMuB = free[mu] && fam[mu] == "gaussian" && spec$table$a[mu] == 0 && spec$table$b[mu] == 1
   )

@@ -6,8 +6,10 @@
 // per-dimension log-distances and power matrices of Rs(Xs,Xs) and Rx are
 // kept (a move of thetaS_k then costs no exp per dimension); beyond it the
 // correlation is formed on the fly with the same operations (the same
-// numbers), and the algebra holds two m x m matrices (Ls and its proposal)
-// plus O((p + n) m).
+// numbers), reading the packed log-distances of the first min(p + q, 4)
+// inputs (at most 2 m (m + 1) doubles: no logs for those), so the algebra
+// holds about 4 m x m doubles (Ls, its proposal, the packed caches) plus
+// O((p + n) m) whatever p + q is.
 #include "fbc.h"
 
 double fbc_cache_budget = 16.0 * 1024 * 1024;
@@ -29,7 +31,15 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
     Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); W_.b[b].zeros(m, nu_);
     z_.b[b].zeros(m); c_.b[b].zeros(m);
   }
-  if (!cached_) return;
+  if (!cached_) {
+    const int K = std::min(p + q, 4);
+    Gp_.resize(K); ptrG_.resize(K);
+    for (int k = 0; k < K; ++k) {
+      kernel_dist_packed(kernS_, Xs.col(k), Gp_[k]);
+      ptrG_[k] = Gp_[k].data();
+    }
+    return;
+  }
   Ps_.resize(p + q); Px_.resize(p);
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
@@ -61,7 +71,7 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
       }
       kernel_combine(kernS_, ptrS_, thetaS, L, true);
     } else {
-      kernel_corr(kernS_, Xs_, Xs_, p + q, thetaS.memptr(), alphaS.memptr(), L, true);
+      kernel_corr_self(kernS_, Xs_, p + q, thetaS.memptr(), alphaS.memptr(), ptrG_, L);
     }
     for (int i = 0; i < m; ++i) L.at(i, i) += nugget_;
     if (!chol_lower(L)) return false;

@@ -56,6 +56,15 @@ void kernel_combine(int kern, const std::vector<const arma::mat*>& P, const arma
 // The same numbers computed on the fly, with no per-dimension storage.
 void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
                  const double* alpha, arma::mat& out, bool lower);
+// Packed lower-triangle caches for the self-correlation of the m simulator
+// rows: G = kernel_dist_packed(a) (m (m + 1) / 2 doubles), entry (i, j),
+// i >= j, at packed_offset(j, m) + i - j; kernel_corr_self() uses G[k] where
+// non-null and computes dimension k on the fly elsewhere (same numbers).
+size_t packed_offset(size_t j, size_t m);
+void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G);
+void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
+                      const double* alpha, const std::vector<const double*>& G,
+                      arma::mat& out);
 // out_i = R(X_i, point) over columns col0 .. col0 + K - 1 of X (the
 // calibration factor of Rs(Xs, Xk): every field row shares kappa).
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
@@ -215,7 +224,8 @@ private:
 
 // The dense algebra: the Cholesky factor of the m x m simulator block
 // (dense.cpp). Per-dimension power matrices are cached while they fit in the
-// cache budget, otherwise the correlation is formed on the fly.
+// cache budget; beyond it the correlation is formed on the fly, from packed
+// log-distances of at most 4 inputs (2 m^2 doubles).
 class DensePosterior : public SchurPosterior {
 public:
   DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
@@ -234,6 +244,9 @@ private:
   // log-distances per input dimension (fixed): sim-sim, sim-field
   std::vector<arma::mat> Gs_, Gx_;
   std::vector<const arma::mat*> ptrS_, ptrX_;
+  // beyond the budget: packed log-distances of up to 4 simulator inputs
+  std::vector<std::vector<double> > Gp_;
+  std::vector<const double*> ptrG_;
   Buf2<arma::mat> Ls_, Rx_, W_;
   Buf2<arma::vec> z_, c_;
   arma::mat K_;  // prediction workspace

@@ -166,6 +166,47 @@ void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const 
   }
 }
 
+// Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),
+// i >= j, at packed_offset(j, m) + i - j.
+size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
+
+// kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles).
+void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
+  check_kernel(kern);
+  const size_t m = a.n_elem;
+  G.resize(m * (m + 1) / 2);
+  for (size_t j = 0; j < m; ++j) {
+    double* g = G.data() + packed_offset(j, m);
+    const double aj = a[j];
+    for (size_t i = j; i < m; ++i) g[i - j] = std::log(std::fabs(a[i] - aj));
+  }
+}
+
+// kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()
+// caches G[k] where given (non-null), on the fly elsewhere: the same numbers.
+void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
+                      const double* alpha, const std::vector<const double*>& G,
+                      arma::mat& out) {
+  check_kernel(kern);
+  const size_t m = X.n_rows;
+  for (size_t j = 0; j < m; ++j) {
+    double* col = out.colptr(j);
+    for (size_t i = j; i < m; ++i) col[i] = 0.0;
+    for (int k = 0; k < K; ++k) {
+      const double t = theta[k], a = alpha[k];
+      if (k < (int) G.size() && G[k]) {
+        const double* g = G[k] + packed_offset(j, m) - j;
+        for (size_t i = j; i < m; ++i) col[i] += t * std::exp(a * g[i]);
+      } else {
+        const double* x = X.colptr(k);
+        const double xj = x[j];
+        for (size_t i = j; i < m; ++i) col[i] += t * std::exp(a * std::log(std::fabs(x[i] - xj)));
+      }
+    }
+    for (size_t i = j; i < m; ++i) col[i] = std::exp(-col[i]);
+  }
+}
+
 // out_i = prod_l r(|X(i, col0 + l) - point_l|; theta_l, alpha_l), l < K.
 // Power exponential: exp(-sum_l theta_l |X(i, col0 + l) - point_l|^alpha_l).
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
