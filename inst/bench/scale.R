@@ -3,7 +3,8 @@
 #
 # Run after installing FBC, choosing the parts by argument:
 #   Rscript inst/bench/scale.R sweep            # ms/sweep of all three cases (minutes)
-#   Rscript inst/bench/scale.R functional       # + the functional converged run
+#   Rscript inst/bench/scale.R functional       # the functional converged runs (defaults,
+#                                               #   then alphaS = 2; or functional-alpha2 alone)
 #   Rscript inst/bench/scale.R m1000            # converged run at m = 1000 (hours
 #   Rscript inst/bench/scale.R m2000            #   on the reference BLAS)
 #   Rscript inst/bench/scale.R sweep functional m1000 m2000   # everything
@@ -35,7 +36,7 @@ args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
 parts <- setdiff(args, "quick")
 if (!length(parts)) parts <- "sweep"
-known <- c("sweep", "functional", "m1000", "m2000")
+known <- c("sweep", "functional", "functional-alpha2", "m1000", "m2000")
 if (length(bad <- setdiff(parts, known))) {
   stop("unknown part(s): ", paste(bad, collapse = ", "), "; use ", paste(known, collapse = ", "))
 }
@@ -117,11 +118,13 @@ helpers <- function() {
     })
     first <- cpu() - t0
     firstFit <- fit
-    ok <- function(f) all(f$estimates$rhat < 1.01) && all(f$estimates$ess >= 400)
+    # (fixed parameters have no R-hat or ESS)
+    ok <- function(f) all(f$estimates$rhat < 1.01, na.rm = TRUE) &&
+      all(f$estimates$ess >= 400, na.rm = TRUE)
     say <- function(f) {
       message(sprintf("[%s] %s: %d sweeps/chain, %.0f CPU s, max R-hat %.4f, min ESS %.0f",
                       format(Sys.time(), "%H:%M"), name, f$settings$nMCMC, cpu() - t0,
-                      max(f$estimates$rhat), min(f$estimates$ess)))
+                      max(f$estimates$rhat, na.rm = TRUE), min(f$estimates$ess, na.rm = TRUE)))
     }
     say(fit)
     while (!ok(fit) && fit$settings$nMCMC < maxSweeps && !quick) {
@@ -139,11 +142,12 @@ helpers <- function() {
                     ifelse(iv[, 1] <= pr$truth & pr$truth <= iv[, 2], "", "(miss)")), collapse = " ")
     }
     est <- fit$estimates
-    worst <- rownames(est)[est$rhat >= 1.01 | est$ess < 400]
+    worst <- rownames(est)[which(est$rhat >= 1.01 | est$ess < 400)]
     if (length(worst)) message(name, ": not converged: ", paste(worst, collapse = ", "))
     data.frame(case = name, `first CPU s` = first, `first 90% kappa` = cover(firstFit),
                converged = ok(fit), `sweeps/chain` = fit$settings$nMCMC,
-               `CPU s` = total, `max rhat` = max(est$rhat), `min ess` = min(est$ess),
+               `CPU s` = total, `max rhat` = max(est$rhat, na.rm = TRUE),
+               `min ess` = min(est$ess, na.rm = TRUE),
                `90% kappa` = cover(fit), truth = paste(pr$truth, collapse = ", "),
                `peak MB` = peak_mb(), check.names = FALSE)
   }
@@ -197,7 +201,8 @@ if ("sweep" %in% parts) {
 }
 
 runs <- c(if ("functional" %in% parts) c("functional", "functional-alpha2"),
-          intersect(c("m1000", "m2000"), parts))
+          intersect(c("functional-alpha2", "m1000", "m2000"), parts))
+runs <- unique(runs)
 for (nm in runs) {
   cat(sprintf("\n== Time to a converged posterior: %s ==\n", nm))
   show(in_fresh_process(function(nm, quick) converged(nm, quick = quick), nm = nm, quick = quick))
