@@ -26,6 +26,26 @@
 #' the diagonal of the simulator correlation matrix (a simulator noise
 #' variance of `1e-6 * sigma2S`, far below any simulator's rounding).
 #'
+#' @section Simulator algebra:
+#' When the simulator runs are every combination of \eqn{I} settings of the
+#' experimental inputs and \eqn{J} settings of the calibration inputs, in
+#' any row order (a functional output: each of \eqn{J} runs returns the
+#' response at the same \eqn{I} times, positions or grid points), the
+#' simulator correlation is a Kronecker product \eqn{R_x \otimes R_t} up to
+#' a permutation of the rows. The likelihood is then evaluated exactly
+#' through the eigendecompositions of the two small factors (the nugget
+#' keeps its meaning): a move of an experimental-input correlation parameter
+#' costs one \eqn{I \times I} eigendecomposition, a calibration-input one a
+#' \eqn{J \times J} one, a \eqn{\kappa} move \eqn{O(IJ + In^2)}, and no
+#' \eqn{m \times m} matrix is ever formed (\eqn{m = IJ}). The field inputs
+#' need not lie on the grid. `calibrate()` detects such a design itself
+#' (rows compared exactly; used from about 4 settings of each on, where it
+#' pays) and otherwise uses the dense algebra, Cholesky factors of the
+#' \eqn{m \times m} simulator block: a design with one run missing is not a
+#' product design. `algebra = "dense"` forces the dense algebra (the same
+#' posterior, slower). `print()` and `fit$settings$simAlgebra` say which one
+#' ran; [predict.fbc()] uses the same.
+#'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
 #' leaves the posterior invariant, the acceptance ratios include the Jacobian
@@ -58,6 +78,16 @@
 #' * a move multiplying `sigma2S`, `sigma2B` and `sigma2E` by one factor:
 #'   the whole covariance scales, so its log-determinant and quadratic form
 #'   follow in closed form with no factorisation.
+#'
+#' With 500 simulator runs or more on the dense algebra (see "Simulator
+#' algebra"), each \eqn{\kappa_l} and the simulator block move once a
+#' sweep instead of three and two times: there a simulator-block move costs
+#' a Cholesky factorisation of the \eqn{m \times m} simulator block and a
+#' \eqn{\kappa} move an \eqn{m \times m \times n} triangular solve, while
+#' every other move costs \eqn{O(n^3)}; a sweep then costs about one
+#' factorisation of the \eqn{(n + m) \times (n + m)} covariance
+#' (`inst/bench/scale.R`). Product designs on the Kronecker algebra keep the
+#' default schedule: all their moves are cheap.
 #'
 #' A joint move proposes \eqn{w^* = w + e^{s} L \epsilon} on the walk scales.
 #' \eqn{L} starts diagonal; after 100 burn-in sweeps it takes the shape of the
@@ -205,6 +235,9 @@
 #'   `FALSE` (the default) prints nothing.
 #' @param sampler `"blocks"` (the default: joint and exact moves, see
 #'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
+#' @param algebra `"auto"` (the default: the Kronecker algebra on a product
+#'   design, else the dense one) or `"dense"` (always the dense one); see
+#'   "Simulator algebra".
 #' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
 #'   `sampler = "single"`, with a warning.
 #' @param checkpoint `NULL` (no checkpoints) or a directory where the chains
@@ -216,7 +249,8 @@
 #'   draw, chains stacked), `chain` (the chain of each row), `estimates`
 #'   (posterior summaries with `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars`, `data`,
 #'   `scale`, `indices`, `priorFns`, `proposalSD`, `call`, `settings`
-#'   (MCMC sizes, nugget, run time, checkpoint directory) and `state` (`chains`: where each chain
+#'   (MCMC sizes, nugget, run time, checkpoint directory, `algebra` and the
+#'   `simAlgebra` used) and `state` (`chains`: where each chain
 #'   stopped, its adapted proposal scales and acceptance; `interrupted`).
 #' @export
 #' @examples
@@ -243,7 +277,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(),
                       showProgress = FALSE, sampler = c("blocks", "single"),
-                      blockSim = NULL, checkpoint = NULL, checkpointEvery = 60) {
+                      blockSim = NULL, algebra = c("auto", "dense"), checkpoint = NULL,
+                      checkpointEvery = 60) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
@@ -280,6 +315,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   check_checkpoint(checkpoint, checkpointEvery)
+  algebra <- match_choice(algebra, c("auto", "dense"), "algebra")
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -294,8 +330,11 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
+  spec$model <- list(kernS = kernel_codes[["powexp"]], kernB = kernel_codes[["powexp"]],
+                     algebra = if (algebra == "dense") 1L else 0L)
 
-  moves <- sampler_moves(sampler, spec)
+  simAlgebra <- sim_algebra_info(dat, p, spec$model)
+  moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
   blas_hint(nrow(sim))
   inits <- dispersed_inits(nChains, dat, spec)
   seeds <- chain_seeds(nChains)
@@ -325,8 +364,36 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
 
   settings <- c(settings[c("nMCMC", "nBurn", "thinning")],
                 list(nChains = length(results), nugget = fbc_nugget, sampler = sampler,
-                     moves = moves, time = elapsed, checkpoint = checkpoint))
+                     moves = moves, time = elapsed, checkpoint = checkpoint,
+                     algebra = algebra, simAlgebra = simAlgebra))
   new_fbc_chains(results, dat, spec, scale, call, settings = settings)
+}
+
+# The dense algebra with at least this many simulator runs gets the
+# large-problem move schedule (sampler_moves(large = TRUE)).
+fbc_large_m <- 500L
+large_dense <- function(m, simAlgebra) {
+  identical(simAlgebra$name, "dense") && m >= fbc_large_m
+}
+
+# Correlation family codes (src/fbc.h, KernelFamily).
+kernel_codes <- c(powexp = 1L)
+
+# The model codes the compiled entry points take after their usual
+# arguments (kernS, kernB: correlation families of the simulator and bias
+# GPs; algebra: 0 auto, 1 dense), with the defaults for objects made before
+# they existed.
+model_codes <- function(spec) {
+  mc <- spec$model
+  list(kernS = mc$kernS %||% 1L, kernB = mc$kernB %||% 1L, algebra = mc$algebra %||% 0L)
+}
+
+# Which algebra the compiled code uses for the simulator block: the
+# Kronecker one on a product design (`dims`: I experimental x J calibration
+# settings), else the dense one.
+sim_algebra_info <- function(dat, p, model) {
+  dims <- .sim_algebra(dat$Xs, p, model$algebra %||% 0L)
+  if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
 }
 
 # Relative nugget added to the diagonal of the simulator correlation matrix.
@@ -481,8 +548,13 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
     list(name = "Calibrating", clear = TRUE, show_after = 0,
          format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
   }
-  sampler(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
-          nIter, nBurn, thinning, fbc_nugget, progress)
+  args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
+               nIter, nBurn, thinning, fbc_nugget, progress)
+  # the model codes only where they differ from the defaults, so a sampler
+  # hook written for the twelve usual arguments keeps working
+  mc <- model_codes(spec)
+  extra <- mc[unlist(mc) != c(1L, 1L, 0L)]
+  do.call(sampler, c(args, extra))
 }
 
 # The state a chain starts from: parameters `init` (sampler's scale), the
@@ -494,8 +566,11 @@ initial_state <- function(init, spec) {
 
 # The moves of each sampler (see "Sampler" in ?calibrate): index vectors of
 # the jointly moved blocks (1-based, in phi) and how often each moves per
-# sweep, the scale move, the exact muB draw.
-sampler_moves <- function(sampler, spec) {
+# sweep, the scale move, the exact muB draw. `large`: a large simulator
+# block on the dense algebra, where a move of the simulator block costs a
+# Cholesky factor of it and a kappa move an m x m x n triangular solve:
+# each moves once a sweep.
+sampler_moves <- function(sampler, spec, large = FALSE) {
   if (sampler == "single") {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE))
   }
@@ -507,17 +582,19 @@ sampler_moves <- function(sampler, spec) {
     if (length(idx) >= 2L) idx
   }
   # each free kappa alone (a one-parameter block: its walk scale adapts like
-  # the joint ones'), three moves a sweep: a kappa move needs no m x m
-  # factorization, and kappa is what the user came for
+  # the joint ones'), three moves a sweep (one when `large`): a kappa move
+  # needs no m x m factorization, and kappa is what the user came for
   kappa <- lapply(which(cls == "kappa" & free), identity)
   joint <- list(sim = block(c("thetaS", "alphaS", "sigma2S")),
                 bias = block(c("thetaB", "alphaB", "sigma2B")))
   joint <- joint[lengths(joint) > 0L]
   sig <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
   mu <- which(cls == "muB")
+  rep_kappa <- if (large) 1L else 3L
+  rep_joint <- as.integer(ifelse(names(joint) == "sim" & large, 1L, 2L))
   list(
     blocks = c(kappa, unname(joint)),
-    repeats = c(rep(3L, length(kappa)), rep(2L, length(joint))),
+    repeats = c(rep(rep_kappa, length(kappa)), rep_joint),
     scale = all(free[sig]),
     gibbsMuB = free[mu] && fam[mu] == "gaussian" && spec$table$a[mu] == 0 && spec$table$b[mu] == 1
   )

@@ -53,7 +53,9 @@ dispersed_inits <- function(nChains, dat, spec) {
     x
   }
   ok <- function(x) {
-    is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget)) &&
+    mc <- model_codes(spec)
+    is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget, mc$kernS, mc$kernB,
+                          mc$algebra)) &&
       all(is.finite(mapply(function(j) log_prior_row(tab, j, x[j]), seq_len(d))))
   }
   out <- vector("list", nChains)

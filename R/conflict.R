@@ -38,7 +38,9 @@ from_walk <- function(w, transform) {
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
   d <- fit$data
-  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget)
+  mc <- model_codes(fit$spec)
+  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget,
+                    mc$kernS, mc$kernB, mc$algebra)
   if (is.finite(ll)) ll else -Inf
 }
 

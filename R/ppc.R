@@ -58,8 +58,9 @@ ppc_field <- function(fit, ndraws = 500) {
   dat <- fit$data
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
+  mc <- model_codes(fit$spec)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
-                      fit$settings$nugget %||% fbc_nugget, 500L)
+                      fit$settings$nugget %||% fbc_nugget, 500L, mc$kernS, mc$kernB, mc$algebra)
   m <- sc$ymean + sc$ysd * res$mean         # n x D
   s <- sc$ysd * sqrt(pmax(res$var, 0))
   n <- nrow(m)

@@ -1,7 +1,9 @@
 #' Print a calibration
 #'
 #' Shows a compact header (data sizes, the names of the calibration inputs,
-#' the MCMC settings and the range of the acceptance rates) and the posterior
+#' the MCMC settings, the range of the acceptance rates and the algebra of
+#' the simulator block: Kronecker on a product design, else dense; see
+#' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
 #' 400, one chain only, an interrupted run, draws piling up at a bound, a
@@ -34,6 +36,12 @@ print.fbc <- function(x, digits = 3, ...) {
   if (length(acc)) {
     cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
                 if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
+  }
+  alg <- s$simAlgebra
+  if (!is.null(alg)) {
+    cat(sprintf("  algebra: %s\n", if (identical(alg$name, "Kronecker"))
+      sprintf("Kronecker, %d x %d (experimental x calibration settings)", alg$dims[1], alg$dims[2])
+      else "dense"))
   }
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")

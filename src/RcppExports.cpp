@@ -11,6 +11,17 @@ Rcpp::Rostream<true>&  Rcpp::Rcout = Rcpp::Rcpp_cout_get();
 Rcpp::Rostream<false>& Rcpp::Rcerr = Rcpp::Rcpp_cerr_get();
 #endif
 
+// fbc_cache_budget_r
+double fbc_cache_budget_r(double bytes);
+RcppExport SEXP _FBC_fbc_cache_budget_r(SEXP bytesSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< double >::type bytes(bytesSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_cache_budget_r(bytes));
+    return rcpp_result_gen;
+END_RCPP
+}
 // log_prior_vec
 Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family, double p1, double p2);
 RcppExport SEXP _FBC_log_prior_vec(SEXP xSEXP, SEXP familySEXP, SEXP p1SEXP, SEXP p2SEXP) {
@@ -26,8 +37,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // corr_matrix_r
-arma::mat corr_matrix_r(const arma::mat& X, const arma::mat& Y, const arma::vec& theta, const arma::vec& alpha);
-RcppExport SEXP _FBC_corr_matrix_r(SEXP XSEXP, SEXP YSEXP, SEXP thetaSEXP, SEXP alphaSEXP) {
+arma::mat corr_matrix_r(const arma::mat& X, const arma::mat& Y, const arma::vec& theta, const arma::vec& alpha, int kernel);
+RcppExport SEXP _FBC_corr_matrix_r(SEXP XSEXP, SEXP YSEXP, SEXP thetaSEXP, SEXP alphaSEXP, SEXP kernelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -35,13 +46,27 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type Y(YSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type theta(thetaSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type alpha(alphaSEXP);
-    rcpp_result_gen = Rcpp::wrap(corr_matrix_r(X, Y, theta, alpha));
+    Rcpp::traits::input_parameter< int >::type kernel(kernelSEXP);
+    rcpp_result_gen = Rcpp::wrap(corr_matrix_r(X, Y, theta, alpha, kernel));
+    return rcpp_result_gen;
+END_RCPP
+}
+// sim_algebra
+Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra);
+RcppExport SEXP _FBC_sim_algebra(SEXP XsSEXP, SEXP pSEXP, SEXP algebraSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< int >::type p(pSEXP);
+    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
+    rcpp_result_gen = Rcpp::wrap(sim_algebra(Xs, p, algebra));
     return rcpp_result_gen;
 END_RCPP
 }
 // loglik_path
-Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale);
-RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP) {
+Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale, int kernS, int kernB, int algebra);
+RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -54,13 +79,16 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< SEXP >::type groups(groupsSEXP);
     Rcpp::traits::input_parameter< bool >::type decoys(decoysSEXP);
     Rcpp::traits::input_parameter< bool >::type scale(scaleSEXP);
-    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale));
+    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
+    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
+    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
+    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, kernS, kernB, algebra));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_predict
-Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block);
-RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP) {
+Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, int kernS, int kernB, int algebra);
+RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -73,13 +101,16 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type type(typeSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< int >::type block(blockSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block));
+    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
+    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
+    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS, kernB, algebra));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_sample
-Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress);
-RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP) {
+Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress, int kernS, int kernB, int algebra);
+RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -95,13 +126,16 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type thinning(thinningSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< SEXP >::type progress(progressSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress));
+    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
+    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
+    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS, kernB, algebra));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_loglik
-double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget);
-RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP) {
+double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget, int kernS, int kernB, int algebra);
+RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -111,18 +145,23 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type phi(phiSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget));
+    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
+    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
+    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget, kernS, kernB, algebra));
     return rcpp_result_gen;
 END_RCPP
 }
 
 static const R_CallMethodDef CallEntries[] = {
+    {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
-    {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 4},
-    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 9},
-    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 9},
-    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 12},
-    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 6},
+    {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
+    {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
+    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 12},
+    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},
+    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 15},
+    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 9},
     {NULL, NULL, 0}
 };
 

@@ -3,8 +3,12 @@
 // Notation (scaled space, as in the vignette): y = (yf, ys) of length n + m,
 //   C = [ A  B' ]   A = sigma2S Rs(Xk,Xk) + sigma2B Rb(Xf,Xf) + sigma2E I_n
 //       [ B  D  ]   B = sigma2S Rs(Xs,Xk),  D = sigma2S (Rs(Xs,Xs) + nugget I_m)
-// with R(x,x') = prod_k exp(-theta_k |x_k - x'_k|^alpha_k).
-// Everything is evaluated through the Schur complement S = A - B' D^-1 B.
+// with separable correlations R(x,x') = prod_k r(|x_k - x'_k|; theta_k, alpha_k)
+// whose one-dimensional family r is chosen per GP (kernels.cpp; today the
+// power exponential r = exp(-theta |d|^alpha) only).
+// Everything is evaluated through the Schur complement S = A - B' D^-1 B;
+// the simulator block D is the algebra's business (dense Cholesky, or
+// Kronecker eigendecompositions on a product design).
 #ifndef FBC_H
 #define FBC_H
 
@@ -24,31 +28,57 @@ enum PriorFamily {
 // Transformation on which a parameter's random walk runs.
 enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2 };
 
-// kernels.cpp -------------------------------------------------------------
+// Correlation family codes, one per GP; R/calibrate.R keeps the same table
+// (kernel_codes()).
+enum KernelFamily { KF_POWEXP = 1 };
+
+// Which algebra make_posterior() uses: the product-design (Kronecker) one
+// whenever the simulator design allows it, or always the dense one.
+enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
+
+// kernels.cpp: priors and walks ---------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
 double log_jacobian(int transform, double x);
 double to_walk(int transform, double x);
 double from_walk(int transform, double w);
 
-// P(i,j) = |a_i - b_j|^alpha for one input dimension (lower triangle only
-// when `lower` and a == b).
-void pow_dist(const arma::vec& a, const arma::vec& b, double alpha,
-              arma::mat& out, bool lower);
-// G(i,j) = log|a_i - b_j| and P = exp(alpha G) = |a_i - b_j|^alpha.
-void log_dist(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower);
-void pow_from_log(const arma::mat& G, double alpha, arma::mat& out, bool lower);
-// R(i,j) = exp(-sum_k theta_k P_k(i,j)), written into `out`.
-void corr_from_pows(const std::vector<const arma::mat*>& P,
-                    const arma::vec& theta, arma::mat& out, bool lower);
-// Full correlation matrix between rows of X and Y.
-arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
-                      const arma::vec& theta, const arma::vec& alpha);
+// kernels.cpp: the kernel module -------------------------------------------
+// Every correlation of either GP is computed here, for the family `kern`.
+// The first K columns of X and Y are the inputs; theta and alpha point to K
+// values. `lower`: X == Y and only the lower triangle is wanted.
+void check_kernel(int kern);
+// Cached per-dimension path (dense algebra, small m): G = kernel_dist(a, b)
+// once, P = kernel_term(G, alpha) when alpha moves, R = kernel_combine(P, theta).
+void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& G, bool lower);
+void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& P, bool lower);
+void kernel_combine(int kern, const std::vector<const arma::mat*>& P, const arma::vec& theta,
+                    arma::mat& out, bool lower);
+// The same numbers computed on the fly, with no per-dimension storage.
+void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
+                 const double* alpha, arma::mat& out, bool lower);
+// Packed lower-triangle caches for the self-correlation of the m simulator
+// rows: G = kernel_dist_packed(a) (m (m + 1) / 2 doubles), entry (i, j),
+// i >= j, at packed_offset(j, m) + i - j; kernel_corr_self() uses G[k] where
+// non-null and computes dimension k on the fly elsewhere (same numbers).
+size_t packed_offset(size_t j, size_t m);
+void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G);
+void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
+                      const double* alpha, const std::vector<const double*>& G,
+                      arma::mat& out);
+// out_i = R(X_i, point) over columns col0 .. col0 + K - 1 of X (the
+// calibration factor of Rs(Xs, Xk): every field row shares kappa).
+void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
+                       const double* theta, const double* alpha, arma::vec& out);
+// Full correlation matrix between rows of X and Y (prediction, correlation()).
+arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
+                      const arma::vec& alpha, int kern = KF_POWEXP);
 
+// kernels.cpp: dense linear algebra -----------------------------------------
 // In-place lower Cholesky (LAPACK dpotrf); returns false when not PD.
 bool chol_lower(arma::mat& A);
 // log|A| from its lower Cholesky factor.
 double logdet_chol(const arma::mat& L);
-// x <- L^-1 x, L lower triangular (BLAS dtrsv / dtrsm).
+// x <- L^-1 x, L lower triangular (LAPACK dtrtrs).
 void solve_lower(const arma::mat& L, arma::vec& x);
 void solve_lower(const arma::mat& L, arma::mat& X);
 // C <- beta C + alpha A' A (lower triangle, BLAS dsyrk).
@@ -65,26 +95,26 @@ template <class T> struct Buf2 {
   void flip() { c = 1 - c; }
 };
 
-
-// Which cached blocks a move touches (see DensePosterior::evaluate). A move
+// Which cached blocks a move touches (see SchurPosterior::evaluate). A move
 // of several parameters touches the union of what each one touches.
 struct Touch {
   std::vector<char> simPow;   // per simulator input: alphaS_k moved (power matrix)
   std::vector<char> biasPow;  // per experimental input: alphaB_k moved
   bool simCorr = false;   // some thetaS/alphaS moved: Ds and its factor
   bool expDim = false;    //   ... of an experimental input: Rs(Xs,Xk), Rs(Xk,Xk)
+  bool calDim = false;    //   ... of a calibration input
   bool cChange = false;   // kappa or a calibration-input thetaS/alphaS moved
   bool biasCorr = false;  // thetaB/alphaB moved
-  bool cross = false;     // W = Ls^-1 Rs(Xs,Xk) and W'z
+  bool cross = false;     // Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk) and Rs(Xs,Xk)' Ds^-1 ys
   bool field = false;     // the Schur complement S and its factor
   bool scale = false;     // sigma2S, sigma2B, sigma2E multiplied by one factor
   void reset(int nSim, int nBias) {
     simPow.assign(nSim, 0); biasPow.assign(nBias, 0);
-    simCorr = expDim = cChange = biasCorr = cross = field = scale = false;
+    simCorr = expDim = calDim = cChange = biasCorr = cross = field = scale = false;
   }
   void everything(int nSim, int nBias) {
     simPow.assign(nSim, 1); biasPow.assign(nBias, 1);
-    simCorr = expDim = cChange = biasCorr = cross = field = true;
+    simCorr = expDim = calDim = cChange = biasCorr = cross = field = true;
     scale = false;
   }
 };
@@ -92,7 +122,7 @@ struct Touch {
 // The posterior's likelihood part with every factor cached, so that a move
 // recomputes only the blocks it touches. This is the one interface the
 // sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
-// it (dense Cholesky here, model.cpp) is chosen by make_posterior().
+// it is chosen by make_posterior().
 // Parameter vector phi (length d = 4p + 3q + 4), scaled space, kappa on [0,1]:
 //   kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p],
 //   sigma2S, sigma2B, sigma2E, muB.
@@ -119,14 +149,15 @@ public:
   virtual void accept() = 0;
   virtual void reject() = 0;
   // The log-likelihood is Gaussian in muB: -0.5 |b - muB a|^2 + const with
-  // a = LS^-1 1, b = LS^-1 (yf - W'z); returns a'a and a'b.
+  // a = LS^-1 1, b = LS^-1 (yf - B'D^-1 ys); returns a'a and a'b.
   virtual void muBQuadratic(double& aa, double& ab) const = 0;
 
-  // Prediction at the current state (predict.cpp): for targets with
-  // covariance ks with ys and kf with yf (columns), fills the conditional
-  // mean and variance given y, with prior means mu0 and variances v0.
-  virtual void condition(const arma::mat& ks, const arma::mat& kf, double mu0,
-                         double v0, double* mean, double* var) = 0;
+  // Prediction at the current state (predict.cpp): for new experimental
+  // inputs Xnew (rows, scaled) and type 1 field, 2 mean, 3 simulator,
+  // 4 bias, the conditional mean and variance of the target given y.
+  virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var) = 0;
+  // A short description of the algebra (for tests and messages).
+  virtual std::string algebra() const = 0;
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_);
@@ -134,12 +165,13 @@ protected:
   arma::vec oneVal_ = arma::vec(1);
 };
 
-// The dense algebra: Cholesky factors of the m x m simulator block and of
-// the n x n Schur complement (model.cpp).
-class DensePosterior : public Posterior {
+// Everything but the simulator block: the field block, its Schur
+// complement S = sigma2S Q + sigma2B Rb + sigma2E I with
+// Q = Rs(Xk,Xk) - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk), the residual and the moves'
+// bookkeeping (model.cpp). The simulator algebra behind it supplies
+// log|Ds|, ys' Ds^-1 ys, Q and Rs(Xs,Xk)' Ds^-1 ys through the sim*() hooks.
+class SchurPosterior : public Posterior {
 public:
-  DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                 const arma::vec& ys, double nugget);
   bool init(const arma::vec& phi0) override;
   double logLik() const override { return loglik_.cur(); }
   double propose(const std::vector<int>& idx, const arma::vec& values) override;
@@ -147,37 +179,123 @@ public:
   void accept() override;
   void reject() override;
   void muBQuadratic(double& aa, double& ab) const override;
-  void condition(const arma::mat& ks, const arma::mat& kf, double mu0, double v0,
-                 double* mean, double* var) override;
+  void condition(const arma::mat& Xnew, int type, double* mean, double* var) override;
 
-private:
+protected:
+  SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                 const arma::vec& ys, double nugget, int kernS, int kernB);
   const arma::mat& Xf_; const arma::vec& yf_;
   const arma::mat& Xs_; const arma::vec& ys_;
   double nugget_;
+  int kernS_, kernB_;
   int nu_;                 // distinct field input rows
   arma::mat Xu_;           // ... and their values (nu x p)
   std::vector<int> grp_;   // field row i is distinct row grp_[i]
+
+  // The simulator algebra, at the proposal (scratch buffers):
+  // update what t touches, setting ldDs = log|Ds| and zz = ys' Ds^-1 ys
+  // when t.simCorr (false if Ds is not PD);
+  virtual bool simUpdate(const Touch& t, double& ldDs, double& zz) = 0;
+  // Q = Rkk - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk) (lower) and wz = Rs(Xs,Xk)' Ds^-1 ys
+  // over the distinct field rows (called when t.cross);
+  virtual void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) = 0;
+  // make the scratch buffers of simUpdate(t) current;
+  virtual void simFlip(const Touch& t) = 0;
+  // at the current state, for targets k_c = Rs(Xs, (Xnew_c, kappa)):
+  // a_c = k_c' Ds^-1 ys, b_c = k_c' Ds^-1 k_c, G = Rs(Xs,Xk)' Ds^-1 K (nu x b).
+  virtual void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+                            arma::mat& G) = 0;
+
+private:
   Touch touch_;
   std::vector<int> oldIdx_;
   arma::vec oldVal_;
-  std::vector<Buf2<arma::mat> > Ps_, Px_, Pfs_, Pfb_;
-  // log-distances per input dimension (fixed): sim-sim, sim-field, field-field
-  std::vector<arma::mat> Gs_, Gx_, Gf_;
-  // preallocated lists of the power matrices evaluate() combines
-  std::vector<const arma::mat*> ptrS_, ptrX_, ptrF_, ptrB_;
-  Buf2<arma::mat> Ls_, Rx_, Rkk_, W_, Q_, Rb_, LS_;
-  Buf2<arma::vec> z_, c_, wz_;
+  std::vector<Buf2<arma::mat> > Pfs_, Pfb_;
+  std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
+  std::vector<const arma::mat*> ptrF_, ptrB_;
+  Buf2<arma::mat> Rkk_, Q_, Rb_, LS_;
+  Buf2<arma::vec> wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;
-  arma::mat G_, A_;  // prediction workspaces
   double evaluate(const Touch& t);
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
 };
 
-// The algebra for the data at hand (today: always dense).
+// The dense algebra: the Cholesky factor of the m x m simulator block
+// (dense.cpp). Per-dimension power matrices are cached while they fit in the
+// cache budget; beyond it the correlation is formed on the fly, from packed
+// log-distances of at most 4 inputs (2 m^2 doubles).
+class DensePosterior : public SchurPosterior {
+public:
+  DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                 const arma::vec& ys, double nugget, int kernS, int kernB);
+  std::string algebra() const override { return cached_ ? "dense (cached)" : "dense"; }
+
+protected:
+  bool simUpdate(const Touch& t, double& ldDs, double& zz) override;
+  void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) override;
+  void simFlip(const Touch& t) override;
+  void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
+
+private:
+  bool cached_;
+  std::vector<Buf2<arma::mat> > Ps_, Px_;
+  // log-distances per input dimension (fixed): sim-sim, sim-field
+  std::vector<arma::mat> Gs_, Gx_;
+  std::vector<const arma::mat*> ptrS_, ptrX_;
+  // beyond the budget: packed log-distances of up to 4 simulator inputs
+  std::vector<std::vector<double> > Gp_;
+  std::vector<const double*> ptrG_;
+  Buf2<arma::mat> Ls_, Rx_, W_;
+  Buf2<arma::vec> z_, c_;
+  arma::mat K_;  // prediction workspace
+};
+
+// A simulator design that is every combination of I experimental settings
+// and J calibration settings: row r of Xs is (Xg[ix[r]], Tg[jt[r]]).
+struct ProductDesign {
+  int I = 0, J = 0;
+  arma::mat Xg, Tg;
+  std::vector<int> ix, jt;
+};
+// True (and the design filled in) when Xs (m x (p + q)) is such a design,
+// rows compared exactly, in any row order.
+bool product_design(const arma::mat& Xs, int p, ProductDesign& out);
+// ... and its eigendecompositions cost less than one m x m Cholesky factor.
+bool kronecker_pays(const ProductDesign& pd);
+
+// The Kronecker algebra on a product design (kronecker.cpp):
+// Ds = Rx (x) Rt + nugget I = (Ux (x) Ut) diag(lx_i lt_j + nugget) (Ux (x) Ut)'.
+class KroneckerPosterior : public SchurPosterior {
+public:
+  KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                     const arma::vec& ys, double nugget, int kernS, int kernB,
+                     const ProductDesign& design);
+  std::string algebra() const override;
+
+protected:
+  bool simUpdate(const Touch& t, double& ldDs, double& zz) override;
+  void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) override;
+  void simFlip(const Touch& t) override;
+  void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
+
+private:
+  ProductDesign dz_;
+  arma::mat Y_;                      // ys as an I x J matrix
+  Buf2<arma::mat> Ux_, Ut_, Ax_, Yt_;
+  Buf2<arma::vec> lx_, lt_, c_, ct_, w_, g_;
+  arma::mat Rx_, Rt_, Rxf_, An_;     // workspaces
+};
+
+// The algebra for the data at hand: Kronecker on a product design unless
+// `algebra` is ALG_DENSE, else dense.
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
-                                          double nugget);
+                                          double nugget, int kernS = KF_POWEXP,
+                                          int kernB = KF_POWEXP, int algebra = ALG_AUTO);
+
+// Bytes the dense algebra may spend on per-dimension caches (dense.cpp).
+extern double fbc_cache_budget;
 
 #endif

@@ -1,15 +1,16 @@
-// The Cholesky log-likelihood of the KOH model through its block structure.
+// The KOH log-likelihood through its block structure (the field side).
 //
-// With y = (yf, ys), residual r = (yf - muB, ys), Ds = Rs(Xs,Xs) + nugget I,
-// Ls = chol(Ds), z = Ls^-1 ys, W = Ls^-1 Rs(Xs,Xk) and
-//   S = sigma2S (Rs(Xk,Xk) - W'W) + sigma2B Rb + sigma2E I   (Schur complement),
-// LS = chol(S), v = LS^-1 (yf - muB - W'z):
+// With y = (yf, ys), Ds = Rs(Xs,Xs) + nugget I, Bs = Rs(Xs,Xk),
+//   Q = Rs(Xk,Xk) - Bs' Ds^-1 Bs,  wz = Bs' Ds^-1 ys,
+//   S = sigma2S Q + sigma2B Rb + sigma2E I   (Schur complement of D in C),
+// LS = chol(S), v = LS^-1 (yf - muB - wz):
 //   log L = -0.5 [ (n+m) log 2pi + m log sigma2S + log|Ds| + log|S|
-//                  + z'z / sigma2S + v'v ].
-// Because every field row shares kappa, Rs(Xs,Xk) = diag(c) Rx with
+//                  + ys' Ds^-1 ys / sigma2S + v'v ].
+// log|Ds|, ys' Ds^-1 ys, Q and wz come from the simulator algebra (dense.cpp,
+// kronecker.cpp). Because every field row shares kappa, Bs = diag(c) Rx with
 // Rx the correlation over the p experimental inputs and
-// c_i = exp(-sum_l thetaS_{p+l} |xs_{i,p+l} - kappa_l|^alphaS_{p+l}), and
-// Rs(Xk,Xk) involves the experimental inputs only.
+// c_i = R_cal(xs_i, kappa) over the q calibration inputs, and Rs(Xk,Xk)
+// involves the experimental inputs only.
 #include "fbc.h"
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
@@ -24,13 +25,23 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_) {
 
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
-                                          double nugget) {
-  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget));
+                                          double nugget, int kernS, int kernB, int algebra) {
+  check_kernel(kernS);
+  check_kernel(kernB);
+  if (algebra != ALG_AUTO && algebra != ALG_DENSE) Rcpp::stop("unknown algebra code %d", algebra);
+  if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
+  if (algebra == ALG_AUTO) {
+    ProductDesign pd;
+    if (product_design(Xs, Xf.n_cols, pd) && kronecker_pays(pd))
+      return std::unique_ptr<Posterior>(
+        new KroneckerPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB, pd));
+  }
+  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget, kernS, kernB));
 }
 
-DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                               const arma::vec& ys, double nugget)
-  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget) {
+SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                               const arma::vec& ys, double nugget, int kernS, int kernB)
+  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(kernS), kernB_(kernB) {
   set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols);
   touch_.reset(p + q, p);
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
@@ -48,33 +59,24 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
   nu_ = first.size();
   Xu_.set_size(nu_, p);
   for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
-  Ps_.resize(p + q); Px_.resize(p); Pfs_.resize(p); Pfb_.resize(p);
+  Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
-    for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
-    for (int k = 0; k < p; ++k) {
-      Px_[k].b[b].zeros(m, nu_); Pfs_[k].b[b].zeros(nu_, nu_); Pfb_[k].b[b].zeros(nu_, nu_);
-    }
-    Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); Rkk_.b[b].zeros(nu_, nu_);
-    W_.b[b].zeros(m, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
+    for (int k = 0; k < p; ++k) { Pfs_[k].b[b].zeros(nu_, nu_); Pfb_[k].b[b].zeros(nu_, nu_); }
+    Rkk_.b[b].zeros(nu_, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
     LS_.b[b].zeros(n, n);
-    z_.b[b].zeros(m); c_.b[b].zeros(m); wz_.b[b].zeros(nu_);
+    wz_.b[b].zeros(nu_);
   }
   u_.zeros(n);
-  ptrS_.resize(p + q); ptrX_.resize(p); ptrF_.resize(p); ptrB_.resize(p);
-  Gs_.resize(p + q); Gx_.resize(p); Gf_.resize(p);
-  for (int k = 0; k < p + q; ++k) {
-    Gs_[k].zeros(m, m);
-    log_dist(Xs.col(k), Xs.col(k), Gs_[k], true);
-  }
+  ptrF_.resize(p); ptrB_.resize(p);
+  Gf_.resize(p);
   for (int k = 0; k < p; ++k) {
-    Gx_[k].zeros(m, nu_); Gf_[k].zeros(nu_, nu_);
-    log_dist(Xs.col(k), Xu_.col(k), Gx_[k], false);
-    log_dist(Xu_.col(k), Xu_.col(k), Gf_[k], true);
+    Gf_[k].zeros(nu_, nu_);
+    kernel_dist(kernS_, Xu_.col(k), Xu_.col(k), Gf_[k], true);
   }
 }
 
 // Add what a move of parameter j touches to t.
-void DensePosterior::add_touch(int j, Touch& t) const {
+void SchurPosterior::add_touch(int j, Touch& t) const {
   if (j < iThetaS) {                       // kappa
     t.cChange = t.cross = t.field = true;
   } else if (j < iThetaB) {                // thetaS, alphaS
@@ -82,7 +84,7 @@ void DensePosterior::add_touch(int j, Touch& t) const {
     const int k = alpha ? j - iAlphaS : j - iThetaS;
     if (alpha) t.simPow[k] = 1;
     t.simCorr = t.cross = t.field = true;
-    if (k < p) t.expDim = true; else t.cChange = true;
+    if (k < p) t.expDim = true; else t.calDim = t.cChange = true;
   } else if (j < iSigma2S) {               // thetaB, alphaB
     const bool alpha = j >= iAlphaB;
     const int k = alpha ? j - iAlphaB : j - iThetaB;
@@ -93,7 +95,7 @@ void DensePosterior::add_touch(int j, Touch& t) const {
   }                                        // muB: only the residual moves
 }
 
-bool DensePosterior::init(const arma::vec& phi0) {
+bool SchurPosterior::init(const arma::vec& phi0) {
   phi = phi0;
   Touch all; all.everything(p + q, p);
   double ll = evaluate(all);
@@ -102,7 +104,7 @@ bool DensePosterior::init(const arma::vec& phi0) {
   return true;
 }
 
-double DensePosterior::propose(const std::vector<int>& idx, const arma::vec& values) {
+double SchurPosterior::propose(const std::vector<int>& idx, const arma::vec& values) {
   const int k = idx.size();
   oldIdx_ = idx;
   oldVal_.set_size(k);
@@ -117,7 +119,7 @@ double DensePosterior::propose(const std::vector<int>& idx, const arma::vec& val
 
 // C -> c C: log|Ds| and z'z are unchanged, S -> c S (LS -> sqrt(c) LS,
 // log|S| + n log c, v'v / c) and sigma2S -> c sigma2S.
-double DensePosterior::proposeScale(double c) {
+double SchurPosterior::proposeScale(double c) {
   oldIdx_.assign({iSigma2S, iSigma2B, iSigma2E});
   oldVal_ = {phi[iSigma2S], phi[iSigma2B], phi[iSigma2E]};
   touch_.reset(p + q, p);
@@ -134,7 +136,7 @@ double DensePosterior::proposeScale(double c) {
   return ll;
 }
 
-void DensePosterior::accept() {
+void SchurPosterior::accept() {
   if (touch_.scale) {
     const double c = phi[iSigma2S] / oldVal_[0];
     LS_.alt() = std::sqrt(c) * LS_.cur();
@@ -142,11 +144,11 @@ void DensePosterior::accept() {
   flip(touch_);
 }
 
-void DensePosterior::reject() {
+void SchurPosterior::reject() {
   for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
 }
 
-void DensePosterior::muBQuadratic(double& aa, double& ab) const {
+void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
   arma::vec a(n, arma::fill::ones);
   arma::vec b(n);
   const arma::vec& wz = wz_.cur();
@@ -157,142 +159,108 @@ void DensePosterior::muBQuadratic(double& aa, double& ab) const {
   ab = arma::dot(a, b);
 }
 
-// GP conditional through the block factors: g = Ls^-1 ks,
-// h = LS^-1 (kf - W'g), mean = mu0 + g'z / s2S + h'v, var = v0 - g'g / s2S - h'h
-// (ks and kf already carry their variances; v = LS^-1 (yf - muB - W'z)).
-void DensePosterior::condition(const arma::mat& ks, const arma::mat& kf, double mu0,
-                               double v0, double* mean, double* var) {
-  const double s2S = phi[iSigma2S];
-  const arma::vec& z = z_.cur();
-  const arma::vec& wz = wz_.cur();
+// GP conditional of a target with covariance ks = s2S k with ys and kf with
+// yf (k = Rs(Xs, xk*), xk* = (x*, kappa)), prior mean mu0 and variance v0,
+// through the blocks of C: with a = k' Ds^-1 ys, b = k' Ds^-1 k,
+// g = Bs' Ds^-1 k (the algebra's simCondition), h = LS^-1 (kf - s2S g),
+// v = LS^-1 (yf - muB - wz):
+//   mean = mu0 + a + h'v,   var = v0 - s2S b - h'h.
+// Targets, by type: 1 field (eta + delta + eps), 2 mean (eta + delta),
+// 3 simulator (eta), 4 bias (delta, ks = 0):
+//   kf = s2S Rs(Xk, xk*) [types 1-3] + s2B Rb(Xf, x*) [types 1, 2, 4].
+void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var) {
+  const int b = Xnew.n_rows;
+  const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E], muB = phi[iMuB];
+  double mu0 = muB, v0 = s2B;
+  switch (type) {
+    case 1: v0 = s2S + s2B + s2E; break;
+    case 2: v0 = s2S + s2B; break;
+    case 3: mu0 = 0.0; v0 = s2S; break;
+    default: break;
+  }
+  const bool simPart = type != 4, biasPart = type != 3;
+  // covariances with the distinct field rows (Rs(Xk, xk*) involves the
+  // experimental inputs only: the calibration inputs coincide)
+  arma::mat Kf(nu_, b, arma::fill::zeros), G;
+  arma::vec a(b, arma::fill::zeros), bb(b, arma::fill::zeros);
+  if (simPart) {
+    Kf = s2S * corr_matrix(Xu_, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
+                           phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+    simCondition(Xnew, a, bb, G);
+    Kf -= s2S * G;
+  }
+  if (biasPart)
+    Kf += s2B * corr_matrix(Xu_, Xnew, phi.subvec(iThetaB, iAlphaB - 1),
+                            phi.subvec(iAlphaB, iSigma2S - 1), kernB_);
   arma::vec v(n);
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - phi[iMuB] - wz[grp_[i]];
+  const arma::vec& wz = wz_.cur();
+  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
   solve_lower(LS_.cur(), v);
-  G_ = ks;
-  solve_lower(Ls_.cur(), G_);
-  const arma::mat T = W_.cur().t() * G_;  // distinct field rows
-  A_ = kf;
-  for (arma::uword c = 0; c < A_.n_cols; ++c)
-    for (int i = 0; i < n; ++i) A_(i, c) -= T(grp_[i], c);
-  solve_lower(LS_.cur(), A_);
-  for (arma::uword c = 0; c < G_.n_cols; ++c) {
-    const double* g = G_.colptr(c);
-    const double* h = A_.colptr(c);
-    double gz = 0.0, gg = 0.0, hv = 0.0, hh = 0.0;
-    for (arma::uword k = 0; k < G_.n_rows; ++k) { gz += g[k] * z[k]; gg += g[k] * g[k]; }
+  arma::mat H(n, b);
+  for (int c = 0; c < b; ++c)
+    for (int i = 0; i < n; ++i) H(i, c) = Kf(grp_[i], c);
+  solve_lower(LS_.cur(), H);
+  for (int c = 0; c < b; ++c) {
+    const double* h = H.colptr(c);
+    double hv = 0.0, hh = 0.0;
     for (int k = 0; k < n; ++k) { hv += h[k] * v[k]; hh += h[k] * h[k]; }
-    mean[c] = mu0 + gz / s2S + hv;
-    var[c] = v0 - gg / s2S - hh;
+    mean[c] = mu0 + a[c] + hv;
+    var[c] = v0 - s2S * bb[c] - hh;
   }
 }
 
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
-double DensePosterior::evaluate(const Touch& t) {
+double SchurPosterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E];
   // D = sigma2S Ds is positive definite only for sigma2S > 0.
   if (!(s2S > 0)) return R_NegInf;
-  const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
-  const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
-  const bool simCorr = t.simCorr, expDim = t.expDim, cChange = t.cChange;
-  const bool biasCorr = t.biasCorr, cross = t.cross, field = t.field;
 
-  // Simulator block: Ds = Rs(Xs,Xs) + nugget I, Ls = chol(Ds), z = Ls^-1 ys.
-  const arma::mat* Ls = &Ls_.cur();
-  const arma::vec* z = &z_.cur();
+  // Simulator block (the algebra's).
   double ldDs = ldDs_.cur(), zz = zz_.cur();
-  if (simCorr) {
-    std::vector<const arma::mat*>& P = ptrS_;
-    for (int k = 0; k < p + q; ++k) {
-      const bool redo = t.simPow[k];
-      if (redo) pow_from_log(Gs_[k], alphaS[k], Ps_[k].alt(), true);
-      P[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
-    }
-    arma::mat& L = Ls_.alt();
-    corr_from_pows(P, thetaS, L, true);
-    for (int i = 0; i < m; ++i) L.at(i, i) += nugget_;
-    if (!chol_lower(L)) return R_NegInf;
-    ldDs = logdet_chol(L);
-    arma::vec& zn = z_.alt();
-    zn = ys_;
-    solve_lower(L, zn);
-    zz = arma::dot(zn, zn);
-    Ls = &L; z = &zn;
-  }
+  if (!simUpdate(t, ldDs, zz)) return R_NegInf;
 
-  // Experimental-input parts of Rs(Xs,Xk) and Rs(Xk,Xk).
-  const arma::mat* Rx = &Rx_.cur();
+  // Experimental-input part of Rs(Xk,Xk).
   const arma::mat* Rkk = &Rkk_.cur();
-  if (expDim) {
-    std::vector<const arma::mat*>& Px = ptrX_;
+  if (t.expDim) {
+    const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + p - 1);
     std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.simPow[k];
-      if (redo) {
-        pow_from_log(Gx_[k], alphaS[k], Px_[k].alt(), false);
-        pow_from_log(Gf_[k], alphaS[k], Pfs_[k].alt(), true);
-      }
-      Px[k] = redo ? &Px_[k].alt() : &Px_[k].cur();
+      if (redo) kernel_term(kernS_, Gf_[k], alphaS[k], Pfs_[k].alt(), true);
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
     }
-    const arma::vec th = thetaS.head(p);
-    corr_from_pows(Px, th, Rx_.alt(), false);
-    corr_from_pows(Pf, th, Rkk_.alt(), true);
-    Rx = &Rx_.alt(); Rkk = &Rkk_.alt();
+    kernel_combine(kernS_, Pf, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
+    Rkk = &Rkk_.alt();
   }
 
-  // Calibration-input factor c_i.
-  const arma::vec* c = &c_.cur();
-  if (cChange) {
-    arma::vec& cn = c_.alt();
-    cn.zeros();
-    for (int l = 0; l < q; ++l) {
-      const double kap = phi[iKappa + l], th = thetaS[p + l], al = alphaS[p + l];
-      const double* xs = Xs_.colptr(p + l);
-      for (int i = 0; i < m; ++i) cn[i] += th * std::pow(std::fabs(xs[i] - kap), al);
-    }
-    for (int i = 0; i < m; ++i) cn[i] = std::exp(-cn[i]);
-    c = &cn;
-  }
-
-  // W = Ls^-1 diag(c) Rx, wz = W'z, Q = Rkk - W'W (lower).
+  // Q = Rkk - Bs' Ds^-1 Bs (lower) and wz = Bs' Ds^-1 ys.
   const arma::mat* Q = &Q_.cur();
   const arma::vec* wz = &wz_.cur();
-  if (cross) {
-    arma::mat& Wn = W_.alt();
-    for (int j = 0; j < nu_; ++j) {
-      const double* rx = Rx->colptr(j);
-      double* w = Wn.colptr(j);
-      for (int i = 0; i < m; ++i) w[i] = (*c)[i] * rx[i];
-    }
-    solve_lower(*Ls, Wn);
-    arma::vec& wzn = wz_.alt();
-    for (int j = 0; j < nu_; ++j) wzn[j] = arma::dot(Wn.col(j), *z);
-    arma::mat& Qn = Q_.alt();
-    Qn = *Rkk;
-    syrk_lower(Wn, -1.0, 1.0, Qn);
-    Q = &Qn; wz = &wzn;
+  if (t.cross) {
+    simCross(t, *Rkk, Q_.alt(), wz_.alt());
+    Q = &Q_.alt(); wz = &wz_.alt();
   }
 
   // Bias correlation Rb over the experimental inputs.
   const arma::mat* Rb = &Rb_.cur();
-  if (biasCorr) {
+  if (t.biasCorr) {
     const arma::vec thetaB = phi.subvec(iThetaB, iAlphaB - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
     std::vector<const arma::mat*>& P = ptrB_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.biasPow[k];
-      if (redo) pow_from_log(Gf_[k], alphaB[k], Pfb_[k].alt(), true);
+      if (redo) kernel_term(kernB_, Gf_[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
-    corr_from_pows(P, thetaB, Rb_.alt(), true);
+    kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
     Rb = &Rb_.alt();
   }
 
   // Schur complement S and its factor.
   const arma::mat* LS = &LS_.cur();
   double ldS = ldS_.cur();
-  if (field) {
+  if (t.field) {
     // S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) + s2E [i = j], from the
     // lower triangles of the distinct-row Q and Rb
     arma::mat& S = LS_.alt();
@@ -325,22 +293,16 @@ double DensePosterior::evaluate(const Touch& t) {
 }
 
 // Make the scratch buffers written by evaluate(t) current.
-void DensePosterior::flip(const Touch& t) {
-  const bool simCorr = t.simCorr, expDim = t.expDim, cChange = t.cChange;
-  const bool biasCorr = t.biasCorr, cross = t.cross, field = t.field || t.scale;
-  for (int k = 0; k < p + q; ++k)
-    if (t.simPow[k]) {
-      Ps_[k].flip();
-      if (k < p) { Px_[k].flip(); Pfs_[k].flip(); }
-    }
-  for (int k = 0; k < p; ++k)
+void SchurPosterior::flip(const Touch& t) {
+  simFlip(t);
+  for (int k = 0; k < p; ++k) {
+    if (t.simPow[k]) Pfs_[k].flip();
     if (t.biasPow[k]) Pfb_[k].flip();
-  if (simCorr) { Ls_.flip(); z_.flip(); }
-  if (expDim) { Rx_.flip(); Rkk_.flip(); }
-  if (cChange) c_.flip();
-  if (cross) { W_.flip(); Q_.flip(); wz_.flip(); }
-  if (biasCorr) Rb_.flip();
-  if (field) LS_.flip();
+  }
+  if (t.expDim) Rkk_.flip();
+  if (t.cross) { Q_.flip(); wz_.flip(); }
+  if (t.biasCorr) Rb_.flip();
+  if (t.field || t.scale) LS_.flip();
   ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip();
 }
 
@@ -351,14 +313,15 @@ void DensePosterior::flip(const Touch& t) {
 // propose() of the group's changed coordinates); 0 moves it alone.
 // scale: when sigma2S, sigma2B, sigma2E all change by one factor, move them
 // by proposeScale(). decoys: before each move, propose another value and
-// reject it.
+// reject it. kernS, kernB: correlation families; algebra: 0 auto, 1 dense.
 // [[Rcpp::export(.loglik_path)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
                                 const arma::mat& Xs, const arma::vec& ys,
                                 const arma::mat& phis, double nugget,
                                 SEXP groups = R_NilValue,
-                                bool decoys = false, bool scale = false) {
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget);
+                                bool decoys = false, bool scale = false,
+                                int kernS = 1, int kernB = 1, int algebra = 0) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
   Posterior& post = *pp;
   Rcpp::NumericVector out(phis.n_rows, NA_REAL);
   if (!post.init(phis.row(0).t())) return out;

@@ -235,11 +235,12 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
                       const arma::mat& Xs, const arma::vec& ys,
                       const Rcpp::List& prior, const Rcpp::List& moves,
                       const Rcpp::List& state, int nIter, int nBurn, int thinning,
-                      double nugget, SEXP progress) {
+                      double nugget, SEXP progress, int kernS = 1, int kernB = 1,
+                      int algebra = 0) {
   Rcpp::RNGScope rngScope;
   Priors pr{prior["family"], prior["transform"], prior["p1"], prior["p2"],
             prior["a"], prior["b"], prior["lconst"]};
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
   Posterior& post = *pp;
   const int d = post.d;
   if (!post.init(Rcpp::as<arma::vec>(state["phi"])))
@@ -434,7 +435,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
 // Log-likelihood at one parameter vector, computed from scratch.
 // [[Rcpp::export(.fbc_loglik)]]
 double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                  const arma::vec& ys, const arma::vec& phi, double nugget) {
-  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget);
+                  const arma::vec& ys, const arma::vec& phi, double nugget,
+                  int kernS = 1, int kernB = 1, int algebra = 0) {
+  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
   return post->init(phi) ? post->logLik() : R_NegInf;
 }

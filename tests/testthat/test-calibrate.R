@@ -122,3 +122,27 @@ test_that("run lengths whose draws cannot be stored are refused with the memory 
   options(FBC.memory_limit = 1e6)
   expect_error(calibrate(ballSim, ballField), "2.5 MB")
 })
+
+test_that("large dense problems move each kappa and the simulator block once a sweep", {
+  p <- 2; q <- 2
+  sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q),
+                                p2 = rep(1.1, q)), set_hyperPriors(),
+                           list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+  small <- FBC:::sampler_moves("blocks", sp)
+  large <- FBC:::sampler_moves("blocks", sp, large = TRUE)
+  expect_identical(large$blocks, small$blocks)  # kappa1, kappa2, simulator, bias
+  expect_identical(small$repeats, c(3L, 3L, 2L, 2L))
+  expect_identical(large$repeats, c(1L, 1L, 1L, 2L))
+  expect_identical(FBC:::sampler_moves("single", sp, large = TRUE)$blocks, list())
+  # the schedule follows the size and the algebra (product designs keep it)
+  expect_true(FBC:::large_dense(500, list(name = "dense")))
+  expect_false(FBC:::large_dense(499, list(name = "dense")))
+  expect_false(FBC:::large_dense(4000, list(name = "Kronecker")))
+  set.seed(4)
+  X <- matrix(runif(500 * 2), 500)
+  sim <- cbind(y = sin(3 * X[, 1]) + X[, 2], x = X[, 1], t = X[, 2])
+  field <- cbind(y = sin(3 * c(0.2, 0.5, 0.8)) + 0.5, x = c(0.2, 0.5, 0.8))
+  fit <- suppressMessages(calibrate(sim, field, nMCMC = 4, nBurn = 2, thinning = 1, nChains = 1))
+  expect_identical(fit$settings$simAlgebra$name, "dense")
+  expect_identical(fit$settings$moves$repeats, c(1L, 1L, 2L))
+})

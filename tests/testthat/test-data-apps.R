@@ -135,3 +135,32 @@ test_that("kinetics: calibrated field mean falls within the field data's spread"
   late <- tt > 2.5
   expect_true(all(5 * exp(-fit$estimates["kappa1", "median"] * tt[late]) < lo[late]))
 })
+
+test_that("decay data follow the documented generating function, grid and truth", {
+  eta <- function(x, t1, t2) t1 * exp(-t2 * x)
+  expect_equal(dim(decaySim), c(4000L, 4L))
+  expect_equal(colnames(decaySim), c("y", "x", "t1", "t2"))
+  expect_equal(dim(decayField), c(30L, 2L))
+  expect_equal(colnames(decayField), c("y", "x"))
+  s <- as.data.frame(decaySim)
+  expect_equal(s$y, eta(s$x, s$t1, s$t2), tolerance = 1e-12)
+  # 80 runs of 50 rows: every run at the times 0, 3/49, ..., 3, one setting
+  # per run, the settings a Latin hypercube over [1, 3] x [0.2, 1.5]
+  run <- rep(1:80, each = 50)
+  expect_equal(s$x, rep(seq(0, 3, length.out = 50), 80), tolerance = 1e-14)
+  expect_true(all(tapply(s$t1, run, function(v) length(unique(v))) == 1))
+  t1 <- s$t1[!duplicated(run)]; t2 <- s$t2[!duplicated(run)]
+  expect_setequal(floor((t1 - 1) / 2 * 80), 0:79)
+  expect_setequal(floor((t2 - 0.2) / 1.3 * 80), 0:79)
+  # a product design: the Kronecker algebra applies (50 times x 80 settings)
+  expect_identical(FBC:::.sim_algebra(unname(decaySim[, -1]), 1L), c(50L, 80L))
+  # field = eta at kappa = (2, 0.7) + N(0, 0.03^2) noise, off the time grid
+  f <- as.data.frame(decayField)
+  expect_true(all(f$x >= 0 & f$x <= 3))
+  expect_false(any(f$x %in% s$x))
+  r <- f$y - eta(f$x, 2, 0.7)
+  expect_lt(abs(mean(r)), 3 * 0.03 / sqrt(30))
+  expect_gt(sd(r), 0.02)
+  expect_lt(sd(r), 0.04)
+  expect_gt(sqrt(mean((f$y - eta(f$x, 1.5, 0.7))^2)), 5 * sqrt(mean(r^2)))
+})

@@ -1,0 +1,155 @@
+// The dense simulator algebra: Ds = Rs(Xs,Xs) + nugget I, Ls = chol(Ds),
+// z = Ls^-1 ys, W = Ls^-1 Bs with Bs = Rs(Xs,Xk) = diag(c) Rx:
+//   log|Ds| = 2 sum log diag(Ls),  ys' Ds^-1 ys = z'z,
+//   Q = Rkk - W'W,  wz = W'z.
+// While 3 (p + q) m^2 doubles fit in fbc_cache_budget bytes, the
+// per-dimension log-distances and power matrices of Rs(Xs,Xs) and Rx are
+// kept (a move of thetaS_k then costs no exp per dimension); beyond it the
+// correlation is formed on the fly with the same operations (the same
+// numbers), reading the packed log-distances of the first min(p + q, 4)
+// inputs (at most 2 m (m + 1) doubles: no logs for those), so the algebra
+// holds about 4 m x m doubles (Ls, its proposal, the packed caches) plus
+// O((p + n) m) whatever p + q is.
+#include "fbc.h"
+
+double fbc_cache_budget = 16.0 * 1024 * 1024;
+
+// Set the cache budget (bytes); returns the previous one. For tests and
+// benchmarks: a budget of 0 forces the on-the-fly path.
+// [[Rcpp::export(.fbc_cache_budget)]]
+double fbc_cache_budget_r(double bytes = -1) {
+  const double old = fbc_cache_budget;
+  if (bytes >= 0) fbc_cache_budget = bytes;
+  return old;
+}
+
+DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                               const arma::vec& ys, double nugget, int kernS, int kernB)
+  : SchurPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB) {
+  cached_ = 3.0 * (p + q) * (double) m * m * sizeof(double) <= fbc_cache_budget;
+  for (int b = 0; b < 2; ++b) {
+    Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); W_.b[b].zeros(m, nu_);
+    z_.b[b].zeros(m); c_.b[b].zeros(m);
+  }
+  if (!cached_) {
+    const int K = std::min(p + q, 4);
+    Gp_.resize(K); ptrG_.resize(K);
+    for (int k = 0; k < K; ++k) {
+      kernel_dist_packed(kernS_, Xs.col(k), Gp_[k]);
+      ptrG_[k] = Gp_[k].data();
+    }
+    return;
+  }
+  Ps_.resize(p + q); Px_.resize(p);
+  for (int b = 0; b < 2; ++b) {
+    for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
+    for (int k = 0; k < p; ++k) Px_[k].b[b].zeros(m, nu_);
+  }
+  ptrS_.resize(p + q); ptrX_.resize(p);
+  Gs_.resize(p + q); Gx_.resize(p);
+  for (int k = 0; k < p + q; ++k) {
+    Gs_[k].zeros(m, m);
+    kernel_dist(kernS_, Xs.col(k), Xs.col(k), Gs_[k], true);
+  }
+  for (int k = 0; k < p; ++k) {
+    Gx_[k].zeros(m, nu_);
+    kernel_dist(kernS_, Xs.col(k), Xu_.col(k), Gx_[k], false);
+  }
+}
+
+bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
+  const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
+  const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
+  // Ds, Ls = chol(Ds), z = Ls^-1 ys.
+  if (t.simCorr) {
+    arma::mat& L = Ls_.alt();
+    if (cached_) {
+      for (int k = 0; k < p + q; ++k) {
+        const bool redo = t.simPow[k];
+        if (redo) kernel_term(kernS_, Gs_[k], alphaS[k], Ps_[k].alt(), true);
+        ptrS_[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
+      }
+      kernel_combine(kernS_, ptrS_, thetaS, L, true);
+    } else {
+      kernel_corr_self(kernS_, Xs_, p + q, thetaS.memptr(), alphaS.memptr(), ptrG_, L);
+    }
+    for (int i = 0; i < m; ++i) L.at(i, i) += nugget_;
+    if (!chol_lower(L)) return false;
+    ldDs = logdet_chol(L);
+    arma::vec& zn = z_.alt();
+    zn = ys_;
+    solve_lower(L, zn);
+    zz = arma::dot(zn, zn);
+  }
+  // Experimental-input part Rx of Rs(Xs,Xk).
+  if (t.expDim) {
+    if (cached_) {
+      for (int k = 0; k < p; ++k) {
+        const bool redo = t.simPow[k];
+        if (redo) kernel_term(kernS_, Gx_[k], alphaS[k], Px_[k].alt(), false);
+        ptrX_[k] = redo ? &Px_[k].alt() : &Px_[k].cur();
+      }
+      const arma::vec th = thetaS.head(p);
+      kernel_combine(kernS_, ptrX_, th, Rx_.alt(), false);
+    } else {
+      kernel_corr(kernS_, Xs_, Xu_, p, thetaS.memptr(), alphaS.memptr(), Rx_.alt(), false);
+    }
+  }
+  // Calibration-input factor c_i = R_cal(xs_i, kappa).
+  if (t.cChange)
+    kernel_corr_point(kernS_, Xs_, p, q, phi.memptr() + iKappa, thetaS.memptr() + p,
+                      alphaS.memptr() + p, c_.alt());
+  return true;
+}
+
+// W = Ls^-1 diag(c) Rx, wz = W'z, Q = Rkk - W'W (lower).
+void DensePosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
+                              arma::vec& wz) {
+  const arma::mat& Ls = t.simCorr ? Ls_.alt() : Ls_.cur();
+  const arma::vec& z = t.simCorr ? z_.alt() : z_.cur();
+  const arma::mat& Rx = t.expDim ? Rx_.alt() : Rx_.cur();
+  const arma::vec& c = t.cChange ? c_.alt() : c_.cur();
+  arma::mat& Wn = W_.alt();
+  for (int j = 0; j < nu_; ++j) {
+    const double* rx = Rx.colptr(j);
+    double* w = Wn.colptr(j);
+    for (int i = 0; i < m; ++i) w[i] = c[i] * rx[i];
+  }
+  solve_lower(Ls, Wn);
+  for (int j = 0; j < nu_; ++j) wz[j] = arma::dot(Wn.col(j), z);
+  Q = Rkk;
+  syrk_lower(Wn, -1.0, 1.0, Q);
+}
+
+void DensePosterior::simFlip(const Touch& t) {
+  if (cached_)
+    for (int k = 0; k < p + q; ++k)
+      if (t.simPow[k]) {
+        Ps_[k].flip();
+        if (k < p) Px_[k].flip();
+      }
+  if (t.simCorr) { Ls_.flip(); z_.flip(); }
+  if (t.expDim) Rx_.flip();
+  if (t.cChange) c_.flip();
+  if (t.cross) W_.flip();
+}
+
+// K = Ls^-1 Rs(Xs, xk*): a = K'z, b = colsums(K^2), G = W'K.
+void DensePosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+                                  arma::mat& G) {
+  const int nb = Xnew.n_rows;
+  arma::mat xk(nb, p + q);
+  xk.cols(0, p - 1) = Xnew;
+  for (int j = 0; j < q; ++j) xk.col(p + j).fill(phi[iKappa + j]);
+  K_ = corr_matrix(Xs_, xk, phi.subvec(iThetaS, iAlphaS - 1), phi.subvec(iAlphaS, iThetaB - 1),
+                   kernS_);
+  solve_lower(Ls_.cur(), K_);
+  const arma::vec& z = z_.cur();
+  for (int c = 0; c < nb; ++c) {
+    const double* k = K_.colptr(c);
+    double kz = 0.0, kk = 0.0;
+    for (int i = 0; i < m; ++i) { kz += k[i] * z[i]; kk += k[i] * k[i]; }
+    a[c] = kz; b[c] = kk;
+  }
+  G = W_.cur().t() * K_;
+}

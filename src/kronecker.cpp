@@ -1,0 +1,188 @@
+// The Kronecker simulator algebra on a product design: the m = I J
+// simulator rows are every combination of I experimental settings Xg and J
+// calibration settings Tg (any row order), so with Y the I x J reshaping of
+// ys, Rx = Rs(Xg,Xg) over the p experimental inputs, Rt = Rs(Tg,Tg) over the
+// q calibration inputs and their eigendecompositions Rx = Ux diag(lx) Ux',
+// Rt = Ut diag(lt) Ut':
+//   Ds = Rx (x) Rt + nugget I = (Ux (x) Ut) diag(lam) (Ux (x) Ut)',
+//   lam_ij = lx_i lt_j + nugget (the nugget stays exact),
+//   log|Ds| = sum_ij log lam_ij,  ys' Ds^-1 ys = sum_ij Yt_ij^2 / lam_ij,
+//   Yt = Ux' Y Ut.
+// Every field row shares kappa, so column u of Bs = Rs(Xs,Xk) is the
+// Kronecker vector Rxf[, u] (x) c with Rxf = Rs(Xg, Xu) and c_j = R_cal(Tg_j,
+// kappa); with Ax = Ux' Rxf and ct = Ut' c,
+//   Bs' Ds^-1 Bs = Ax' diag(w) Ax,  w_i = sum_j ct_j^2 / lam_ij,
+//   Bs' Ds^-1 ys = Ax' g,           g_i = sum_j ct_j Yt_ij / lam_ij:
+// a kappa move costs O(J^2 + I J + I nu^2), a move of an experimental-input
+// correlation parameter one I x I eigendecomposition, a calibration-input
+// one a J x J eigendecomposition; nothing of size m x m is ever formed.
+#include "fbc.h"
+#include <map>
+
+// Exact-equality key of a row segment.
+static std::vector<double> row_key(const arma::mat& X, arma::uword r, int c0, int K) {
+  std::vector<double> key(K);
+  for (int k = 0; k < K; ++k) key[k] = X.at(r, c0 + k);
+  return key;
+}
+
+bool product_design(const arma::mat& Xs, int p, ProductDesign& out) {
+  const int m = Xs.n_rows, q = Xs.n_cols - p;
+  if (p < 1 || q < 1 || m < 4) return false;
+  std::map<std::vector<double>, int> xs, ts;
+  std::vector<int> ix(m), jt(m);
+  for (int r = 0; r < m; ++r) {
+    auto a = xs.emplace(row_key(Xs, r, 0, p), (int) xs.size());
+    auto b = ts.emplace(row_key(Xs, r, p, q), (int) ts.size());
+    ix[r] = a.first->second;
+    jt[r] = b.first->second;
+  }
+  const int I = xs.size(), J = ts.size();
+  if ((double) I * J != (double) m || I < 2 || J < 2) return false;
+  // m rows, I J combinations, none twice: every combination once
+  std::vector<char> seen((size_t) I * J, 0);
+  for (int r = 0; r < m; ++r) {
+    char& s = seen[(size_t) jt[r] * I + ix[r]];
+    if (s) return false;
+    s = 1;
+  }
+  out.I = I; out.J = J; out.ix = ix; out.jt = jt;
+  out.Xg.set_size(I, p); out.Tg.set_size(J, q);
+  for (int r = 0; r < m; ++r) {
+    out.Xg.row(ix[r]) = Xs(r, arma::span(0, p - 1));
+    out.Tg.row(jt[r]) = Xs(r, arma::span(p, p + q - 1));
+  }
+  return true;
+}
+
+// The Kronecker algebra pays when its two eigendecompositions (about
+// 9 (I^3 + J^3) flops) cost less than one Cholesky factor of the m x m
+// block (m^3 / 3): from 4 settings of each on.
+bool kronecker_pays(const ProductDesign& pd) {
+  const double I = pd.I, J = pd.J;
+  return 27.0 * (I * I * I + J * J * J) <= I * I * I * J * J * J;
+}
+
+// The product design of Xs when the Kronecker algebra would be used
+// (algebra 0, auto): c(I, J); otherwise integer(0).
+// [[Rcpp::export(.sim_algebra)]]
+Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0) {
+  ProductDesign pd;
+  if (algebra == ALG_AUTO && product_design(Xs, p, pd) && kronecker_pays(pd))
+    return Rcpp::IntegerVector::create(pd.I, pd.J);
+  return Rcpp::IntegerVector(0);
+}
+
+KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
+                                       const arma::mat& Xs, const arma::vec& ys, double nugget,
+                                       int kernS, int kernB, const ProductDesign& design)
+  : SchurPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB), dz_(design) {
+  const int I = dz_.I, J = dz_.J;
+  Y_.zeros(I, J);
+  for (int r = 0; r < m; ++r) Y_(dz_.ix[r], dz_.jt[r]) = ys[r];
+  for (int b = 0; b < 2; ++b) {
+    Ux_.b[b].zeros(I, I); Ut_.b[b].zeros(J, J); Ax_.b[b].zeros(I, nu_); Yt_.b[b].zeros(I, J);
+    lx_.b[b].zeros(I); lt_.b[b].zeros(J); c_.b[b].zeros(J); ct_.b[b].zeros(J);
+    w_.b[b].zeros(I); g_.b[b].zeros(I);
+  }
+  Rx_.zeros(I, I); Rt_.zeros(J, J); Rxf_.zeros(I, nu_);
+}
+
+std::string KroneckerPosterior::algebra() const {
+  return "Kronecker " + std::to_string(dz_.I) + " x " + std::to_string(dz_.J);
+}
+
+bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
+  const double* thetaS = phi.memptr() + iThetaS;
+  const double* alphaS = phi.memptr() + iAlphaS;
+  const int I = dz_.I, J = dz_.J;
+  const bool xMove = t.simCorr && t.expDim, tMove = t.simCorr && t.calDim;
+  if (xMove) {
+    kernel_corr(kernS_, dz_.Xg, dz_.Xg, p, thetaS, alphaS, Rx_, false);
+    if (!arma::eig_sym(lx_.alt(), Ux_.alt(), Rx_)) return false;
+    kernel_corr(kernS_, dz_.Xg, Xu_, p, thetaS, alphaS, Rxf_, false);
+    Ax_.alt() = Ux_.alt().t() * Rxf_;
+  }
+  if (tMove) {
+    kernel_corr(kernS_, dz_.Tg, dz_.Tg, q, thetaS + p, alphaS + p, Rt_, false);
+    if (!arma::eig_sym(lt_.alt(), Ut_.alt(), Rt_)) return false;
+  }
+  const arma::mat& Ux = xMove ? Ux_.alt() : Ux_.cur();
+  const arma::vec& lx = xMove ? lx_.alt() : lx_.cur();
+  const arma::mat& Ut = tMove ? Ut_.alt() : Ut_.cur();
+  const arma::vec& lt = tMove ? lt_.alt() : lt_.cur();
+  if (t.simCorr) {
+    double ld = 0.0;
+    for (int j = 0; j < J; ++j)
+      for (int i = 0; i < I; ++i) {
+        const double l = lx[i] * lt[j] + nugget_;
+        if (!(l > 0)) return false;
+        ld += std::log(l);
+      }
+    arma::mat& Yt = Yt_.alt();
+    Yt = Ux.t() * Y_ * Ut;
+    double s = 0.0;
+    for (int j = 0; j < J; ++j) {
+      const double* y = Yt.colptr(j);
+      for (int i = 0; i < I; ++i) s += y[i] * y[i] / (lx[i] * lt[j] + nugget_);
+    }
+    ldDs = ld; zz = s;
+  }
+  if (t.cChange) {
+    kernel_corr_point(kernS_, dz_.Tg, 0, q, phi.memptr() + iKappa, thetaS + p, alphaS + p,
+                      c_.alt());
+    ct_.alt() = Ut.t() * c_.alt();
+  }
+  if (t.cross) {
+    const arma::vec& ct = t.cChange ? ct_.alt() : ct_.cur();
+    const arma::mat& Yt = t.simCorr ? Yt_.alt() : Yt_.cur();
+    arma::vec& w = w_.alt();
+    arma::vec& g = g_.alt();
+    w.zeros(); g.zeros();
+    for (int j = 0; j < J; ++j) {
+      const double cj = ct[j], lj = lt[j];
+      const double* y = Yt.colptr(j);
+      for (int i = 0; i < I; ++i) {
+        const double r = cj / (lx[i] * lj + nugget_);
+        w[i] += cj * r;
+        g[i] += y[i] * r;
+      }
+    }
+  }
+  return true;
+}
+
+// Q = Rkk - Ax' diag(w) Ax (lower), wz = Ax' g.
+void KroneckerPosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
+                                  arma::vec& wz) {
+  const arma::mat& Ax = (t.simCorr && t.expDim) ? Ax_.alt() : Ax_.cur();
+  const arma::vec& w = w_.alt();
+  const arma::vec& g = g_.alt();
+  wz = Ax.t() * g;
+  arma::mat B = Ax;
+  B.each_col() %= arma::sqrt(w);
+  Q = Rkk;
+  syrk_lower(B, -1.0, 1.0, Q);
+}
+
+void KroneckerPosterior::simFlip(const Touch& t) {
+  if (t.simCorr && t.expDim) { Ux_.flip(); lx_.flip(); Ax_.flip(); }
+  if (t.simCorr && t.calDim) { Ut_.flip(); lt_.flip(); }
+  if (t.simCorr) Yt_.flip();
+  if (t.cChange) { c_.flip(); ct_.flip(); }
+  if (t.cross) { w_.flip(); g_.flip(); }
+}
+
+// k_c = rx_c (x) c with rx_c = Rs(Xg, Xnew_c) and an_c = Ux' rx_c:
+//   a_c = an_c' g,  b_c = sum_i an_ic^2 w_i,  G = Ax' diag(w) An.
+void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+                                      arma::mat& G) {
+  const arma::vec& w = w_.cur();
+  const arma::vec& g = g_.cur();
+  An_ = Ux_.cur().t() * corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
+                                    phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+  a = An_.t() * g;
+  b = (arma::square(An_).t()) * w;
+  An_.each_col() %= w;
+  G = Ax_.cur().t() * An_;
+}
