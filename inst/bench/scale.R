@@ -104,7 +104,7 @@ helpers <- function() {
     data.frame(case = name, n = n, m = m, algebra = fit$settings$simAlgebra$name,
                sweeps = per * chunks, `ms/sweep` = stats::median(ms),
                `chol ms` = stats::median(ch), ratio = stats::median(ms / ch),
-               `peak MB` = peak_mb(), check.names = FALSE)
+               `peak MB` = peak_mb(), blas = FBC:::blas_kind(), check.names = FALSE)
   }
   `%||%` <- function(x, y) if (is.null(x)) y else x
   converged <- function(name, step = 2000, maxSweeps = 40000, quick = FALSE) {
@@ -149,7 +149,7 @@ helpers <- function() {
                `CPU s` = total, `max rhat` = max(est$rhat, na.rm = TRUE),
                `min ess` = min(est$ess, na.rm = TRUE),
                `90% kappa` = cover(fit), truth = paste(pr$truth, collapse = ", "),
-               `peak MB` = peak_mb(), check.names = FALSE)
+               `peak MB` = peak_mb(), blas = FBC:::blas_kind(), check.names = FALSE)
   }
   environment()
 }
