@@ -170,8 +170,8 @@
 #' detect chains stuck in different places. The burn-in of 2000 sweeps lets
 #' the joint proposals take the posterior's shape (with 1000 the ESS per
 #' sweep of the simulator block was about half). On the ball data, seeds 1,
-#' 77 and 2024 gave every parameter R-hat <= 1.0021 and bulk ESS >= 2190
-#' (`kappa`'s about 7600-8500), in 24-26 CPU seconds for the four chains one
+#' 77 and 2024 gave every parameter R-hat <= 1.0021 and bulk ESS >= 1999
+#' (`kappa`'s about 7200-8300), in 26-27 CPU seconds for the four chains one
 #' after the other (FBC 0.1.0's one-at-a-time default: R-hat <= 1.008 and
 #' ESS >= 640 in 35 s). In `inst/bench/mixing.R` the default sampler's
 #' slowest parameter gains about 100 effective draws per CPU second on the
