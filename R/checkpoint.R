@@ -358,7 +358,7 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   }
   from <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
   target <- rep_len(as.integer(target), n)
-  job <- list(dat = dat, spec = list(table = spec$table), moves = moves, nBurn = nBurn,
+  job <- list(dat = dat, spec = list(table = spec$table, model = spec$model), moves = moves, nBurn = nBurn,
               thinning = thinning, target = target, from = from,
               dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
               token = basename(tempfile("")), sampler = fbc_sampler_hook(),

@@ -254,6 +254,10 @@ test_that("a mismatched or corrupt checkpoint is refused and nothing is overwrit
     calibrate(ballSim, ballField, nMCMC = 300, nBurn = 50, thinning = 2, nChains = 2,
               kappaP1 = 2, checkpoint = dir)
   })
+  # another correlation family is another run
+  expect_snapshot(error = TRUE, transform = hide, {
+    do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir, kernelS = "matern52"), args))
+  })
   expect_identical(dir_md5(dir), md5)
   # a truncated chain file
   f <- file.path(dir, "chain-2.rds")
