@@ -358,3 +358,22 @@ test_that("the sequential progress bar follows all chains to the end", {
   expect_match(out, "600/600 terminated")
   expect_silent(calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 2))
 })
+
+test_that("a run with another correlation family checkpoints and comes back with its columns", {
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  args <- list(ballSim, ballField, nMCMC = 120, nBurn = 60, thinning = 2, nChains = 2,
+               kernelS = "matern32", checkpoint = dir)
+  set.seed(4)
+  fit <- do.call(calibrate, args)
+  expect_false("alphaS1" %in% colnames(fit$Phi))
+  # the finished run's directory gives the fit back, kernels and all
+  expect_message(again <- do.call(calibrate, args), "Resuming")
+  expect_identical(again$Phi, fit$Phi)
+  expect_identical(again$settings$kernelS, "matern32")
+  # the default kernels are not written into the fingerprint, so
+  # checkpoints written before the kernels existed still match
+  id <- FBC:::run_identity(ballSim, ballField, fit$spec,
+                           list(nMCMC = 1, kernelS = "powexp", kernelB = "powexp"))
+  expect_named(id$settings, "nMCMC")
+})
