@@ -281,6 +281,14 @@ test_that("every correlation family: Kronecker log-likelihoods and moves equal t
       joint <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, groups = groups,
                             decoys = TRUE, kernS = kS, kernB = kB)
       expect_equal(joint, dense, tolerance = 1e-8)
+      # predictions through the Kronecker factors: the dense GP conditional
+      Xn <- matrix(runif(3 * p), 3, p)
+      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[2, , drop = FALSE], Xn, 1L, 1e-6, 500L,
+                           kS, kB)
+      ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[2, ], Xn, "field", kernS = kk[1],
+                           kernB = kk[2])
+      expect_equal(drop(kron$mean), ref$mean, tolerance = 1e-8)
+      expect_equal(drop(kron$var), ref$var, tolerance = 1e-8)
     }
   }
 })
