@@ -10,10 +10,38 @@
 #' \eqn{y_s} at inputs \eqn{(x_s, t_s)},
 #' \deqn{y_f = \eta(x_f, \kappa) + \delta(x_f) + \epsilon, \quad y_s = \eta(x_s, t_s),}
 #' \eqn{\eta \sim GP(0, \sigma^2_S R_s)}, \eqn{\delta \sim GP(\mu_B, \sigma^2_B R_b)},
-#' \eqn{\epsilon \sim N(0, \sigma^2_E)}, with power-exponential correlations
-#' \eqn{R(x, x') = \prod_k \exp(-\theta_k |x_k - x'_k|^{\alpha_k})} (see
-#' [correlation()]). The log posterior is evaluated through Cholesky factors of
-#' the blocks of the joint covariance (never an explicit inverse).
+#' \eqn{\epsilon \sim N(0, \sigma^2_E)}, with separable correlations
+#' \eqn{R(x, x') = \prod_k r(|x_k - x'_k|)} of the family chosen for each GP
+#' (see [correlation()] and "Correlation families"). The log posterior is
+#' evaluated through Cholesky factors of the blocks of the joint covariance
+#' (never an explicit inverse).
+#'
+#' @section Correlation families:
+#' `kernelS` and `kernelB` choose the family of the simulator GP
+#' \eqn{\eta} and of the bias GP \eqn{\delta}, separately, with
+#' \eqn{d = |x_k - x'_k|} and \eqn{h = \sqrt{\theta_k} d} per input:
+#' * `"powexp"` (the default, the vignette's): \eqn{\exp(-\theta d^\alpha)},
+#'   with a smoothness \eqn{\alpha \in [1, 2]} per input that is sampled
+#'   (`alphaS`, `alphaB`);
+#' * `"gaussian"`: \eqn{\exp(-\theta d^2)};
+#' * `"matern32"`: \eqn{(1 + \sqrt{3} h) \exp(-\sqrt{3} h)};
+#' * `"matern52"`: \eqn{(1 + \sqrt{5} h + 5 h^2 / 3) \exp(-\sqrt{5} h)}.
+#'
+#' Every family is \eqn{1 - c\,\theta d^2 + \dots} near 0 (\eqn{c = 1, 3/2,
+#' 5/6}; the power exponential at \eqn{\alpha = 2}), so \eqn{\theta} keeps its
+#' meaning and its default prior. The last three have no smoothness
+#' parameter: with them `alphaS` (or `alphaB`) is not sampled and is not a
+#' column of `Phi` (nor of `vars`, `estimates`, `acceptance`, `proposalSD`,
+#' [as_draws_df()][fbc-draws] or `coef()`), and its entry of `indices` is
+#' `integer(0)`; `plot(fit, "alphaS")` is then an error. A prior given for it
+#' in `hypers` is ignored with a warning. When the power exponential's
+#' smoothness piles up at 2 (a smooth simulator, [convergence_messages()]
+#' says so), a smooth family is the clean choice: the Gaussian is that
+#' limit, and the Matérn 5/2 (the robust default of RobustCalibration) is as
+#' smooth for practical purposes with far better conditioned correlation
+#' matrices; on smooth functional outputs it removes the stuck chains the
+#' power exponential near \eqn{\alpha = 2} can give. Every family has the
+#' same caching and speed (`inst/bench/RESULTS-scale.md`).
 #'
 #' @section Scaling:
 #' Each simulator input column is mapped to `[0, 1]` by its minimum and
@@ -229,6 +257,9 @@
 #'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
 #'   units), else `calibrate()` refuses it and names the arguments to give.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
+#' @param kernelS,kernelB Correlation family of the simulator GP and of the
+#'   bias GP: `"powexp"` (default), `"gaussian"`, `"matern32"` or
+#'   `"matern52"` (see "Correlation families").
 #' @param showProgress Show a progress bar over all chains (on any plan: the
 #'   workers report through \pkg{progressr}) with the time left and each
 #'   chain's acceptance rate after burn-in (mean over its parameters).
@@ -246,12 +277,18 @@
 #' @param checkpointEvery Seconds between a chain's checkpoints (it also
 #'   saves when it stops); `0` saves after every piece of 50 iterations.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
-#'   draw, chains stacked), `chain` (the chain of each row), `estimates`
-#'   (posterior summaries with `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars`, `data`,
-#'   `scale`, `indices`, `priorFns`, `proposalSD`, `call`, `settings`
+#'   draw, chains stacked; one column per parameter, in the order `kappa`,
+#'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
+#'   `muB`, without `alphaS`/`alphaB` for a family that has no smoothness),
+#'   `chain` (the chain of each row), `estimates` (posterior summaries with
+#'   `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars` (the names
+#'   of `Phi`'s columns), `data`, `scale`, `indices` (for each parameter
+#'   class, the columns of `Phi` holding it: `integer(0)` for a smoothness
+#'   that is not sampled), `priorFns`, `proposalSD`, `call`, `settings`
 #'   (MCMC sizes, nugget, run time, checkpoint directory, `algebra` and the
-#'   `simAlgebra` used) and `state` (`chains`: where each chain
-#'   stopped, its adapted proposal scales and acceptance; `interrupted`).
+#'   `simAlgebra` used, `kernelS`, `kernelB`) and `state` (`chains`: where
+#'   each chain stopped, its adapted proposal scales and acceptance, over
+#'   the sampler's full parameter vector; `interrupted`).
 #' @export
 #' @examples
 #' set.seed(1)
@@ -273,10 +310,15 @@
 #'                    checkpoint = dir)
 #' identical(fit$Phi, again$Phi)
 #' unlink(dir, recursive = TRUE)
+#' # a Matern 5/2 simulator GP: no alphaS to sample
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
+#'                  kernelS = "matern52")
+#' colnames(fit$Phi)
 calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
-                      kappaP2 = 1.1, hypers = set_hyperPriors(),
-                      showProgress = FALSE, sampler = c("blocks", "single"),
+                      kappaP2 = 1.1, hypers = set_hyperPriors(), kernelS = "powexp",
+                      kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense"), checkpoint = NULL,
                       checkpointEvery = 60) {
   call <- match.call()
@@ -319,6 +361,9 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
+  kernelS <- check_kernel(kernelS, "kernelS")
+  kernelB <- check_kernel(kernelB, "kernelB")
+  hypers <- kernel_hypers(hypers, kernelS, kernelB)
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
@@ -330,7 +375,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
-  spec$model <- list(kernS = kernel_codes[["powexp"]], kernB = kernel_codes[["powexp"]],
+  spec$model <- list(kernS = kernel_codes[[kernelS]], kernB = kernel_codes[[kernelB]],
                      algebra = if (algebra == "dense") 1L else 0L)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
@@ -340,7 +385,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   seeds <- chain_seeds(nChains)
   starts <- lapply(inits, function(x) chain_start(initial_state(x, spec), length(x), 0L))
   settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
-                   nugget = fbc_nugget, sampler = sampler)
+                   nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB)
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -365,7 +410,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   settings <- c(settings[c("nMCMC", "nBurn", "thinning")],
                 list(nChains = length(results), nugget = fbc_nugget, sampler = sampler,
                      moves = moves, time = elapsed, checkpoint = checkpoint,
-                     algebra = algebra, simAlgebra = simAlgebra))
+                     algebra = algebra, simAlgebra = simAlgebra, kernelS = kernelS,
+                     kernelB = kernelB))
   new_fbc_chains(results, dat, spec, scale, call, settings = settings)
 }
 
@@ -376,8 +422,63 @@ large_dense <- function(m, simAlgebra) {
   identical(simAlgebra$name, "dense") && m >= fbc_large_m
 }
 
-# Correlation family codes (src/fbc.h, KernelFamily).
-kernel_codes <- c(powexp = 1L)
+# The hyperparameter priors with the smoothness of a GP whose family has
+# none (see ?correlation) fixed (at 2, a value the compiled kernels ignore):
+# it is not sampled, and phi_columns() leaves it out of Phi. A prior the
+# user gave for it is ignored, with a warning naming the arguments.
+kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
+  default <- set_hyperPriors()
+  for (cls in c("alphaS", "alphaB")) {
+    kernel <- if (cls == "alphaS") kernelS else kernelB
+    if (kernel_smooth(kernel)) next
+    given <- !mapply(identical, hypers[[cls]], default[[cls]])
+    if (any(given)) {
+      args <- paste0("`", cls, c("Dist", "Init", "P1", "P2")[given], "`")
+      K <- paste0("kernel", substr(cls, 6, 6))
+      cli::cli_warn(c(
+        sprintf("`%s = \"%s\"` has no smoothness parameter: %s of `hypers` %s ignored.",
+                K, kernel, paste(args, collapse = ", "), if (length(args) > 1L) "are" else "is"),
+        i = sprintf("`%s` is not sampled with this family. Drop %s from `set_hyperPriors()`, or use `%s = \"powexp\"` to sample it.",
+                    cls, if (length(args) > 1L) "these arguments" else "this argument", K)
+      ), call = call)
+    }
+    hypers[[cls]] <- list(dist = "fixed", init = 2, p1 = NA_real_, p2 = NA_real_)
+  }
+  hypers
+}
+
+# The columns of phi (the sampler's parameter vector, param_names()) that
+# Phi holds: all but the smoothness of a GP whose family has none.
+phi_columns <- function(spec) {
+  mc <- model_codes(spec)
+  drop <- c(if (!kernel_smooth(mc$kernS)) "alphaS", if (!kernel_smooth(mc$kernB)) "alphaB")
+  which(!spec$classes %in% drop)
+}
+
+# For each parameter class, the columns of Phi holding it (integer(0) for a
+# smoothness that is not sampled).
+phi_indices <- function(spec) {
+  cls <- spec$classes[phi_columns(spec)]
+  stats::setNames(lapply(param_classes, function(k) which(cls == k)), param_classes)
+}
+
+# The prior table and classes of Phi's columns.
+phi_spec <- function(fit) {
+  cols <- phi_columns(fit$spec)
+  list(table = fit$spec$table[cols, , drop = FALSE], classes = fit$spec$classes[cols],
+       cols = cols)
+}
+
+# Rows `rows` of fit$Phi as full parameter vectors on the sampler's scale
+# (kappa on [0, 1], the columns Phi leaves out at their fixed values): what
+# the compiled entry points take. Every path from draws to the compiled code
+# (predict(), the checks, the conflict check) goes through here.
+sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
+  spec <- fit$spec
+  out <- matrix(spec$init, length(rows), length(spec$init), byrow = TRUE)
+  out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$scale)
+  out
+}
 
 # The model codes the compiled entry points take after their usual
 # arguments (kernS, kernB: correlation families of the simulator and bias

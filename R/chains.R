@@ -127,11 +127,14 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
   p <- scale$p
   q <- scale$q
   cal <- p + seq_len(q)
+  # Phi holds the columns of phi that are parameters of the model (not the
+  # smoothness of a family without one): phi_columns()
+  cols <- phi_columns(spec)
   pieces <- lapply(seq_along(results), function(k) {
     r <- results[[k]]
     kept <- seq_len(r$kept)
-    Phi <- r$draws[kept, , drop = FALSE]
-    colnames(Phi) <- spec$vars
+    Phi <- r$draws[kept, cols, drop = FALSE]
+    colnames(Phi) <- spec$vars[cols]
     Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2,
                                      scale$xmax[cal] - scale$xmin[cal], "*"),
                                2, scale$xmin[cal], "+")
@@ -180,8 +183,8 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
   Phi <- do.call(rbind, lapply(pieces, `[[`, "Phi"))
   rownames(Phi) <- NULL
   chain <- rep(seq_along(pieces), vapply(pieces, function(x) nrow(x$Phi), integer(1)))
-  acc <- Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states)
-  proposalSD <- exp(Reduce(`+`, lapply(states, function(s) s$logsd)) / length(states))
+  acc <- (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols]
+  proposalSD <- exp(Reduce(`+`, lapply(states, function(s) s$logsd)) / length(states))[cols]
   structure(list(
     Phi = Phi,
     chain = chain,
@@ -189,10 +192,10 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     logPost = unlist(lapply(pieces, `[[`, "logPost")),
     priors = spec$priors,
     acceptance = acc,
-    vars = spec$vars,
+    vars = spec$vars[cols],
     data = dat,
     scale = scale,
-    indices = param_indices(p, q),
+    indices = phi_indices(spec),
     priorFns = spec$fns,
     proposalSD = proposalSD,
     call = call,

@@ -109,7 +109,12 @@ read_checkpoint_file <- function(path, what, id = NULL, call = parent.frame()) {
 
 # What makes a run the same run: data and priors as the sampler sees them,
 # and the settings.
+# The default kernels are left out, so that checkpoints written before the
+# kernels existed still match a default run.
 run_identity <- function(sim, field, spec, settings) {
+  default <- names(settings) %in% c("kernelS", "kernelB") &
+    vapply(settings, identical, logical(1), "powexp")
+  settings <- settings[!default]
   list(sim = unname(sim), field = unname(field),
        priors = list(table = spec$table, init = spec$init, logsd = spec$logsd),
        settings = settings)
@@ -131,6 +136,10 @@ identity_differences <- function(old, new, vars) {
   for (s in union(names(old$settings), names(new$settings))) {
     a <- old$settings[[s]]
     b <- new$settings[[s]]
+    if (s %in% c("kernelS", "kernelB")) {  # left out when the default
+      a <- a %||% "powexp"
+      b <- b %||% "powexp"
+    }
     if (!identical(a, b)) {
       fmt <- function(x) if (is.atomic(x) && length(x) == 1L) format(x) else "another value"
       out <- c(out, sprintf("`%s` is %s in the checkpoint and %s now.", s, fmt(a), fmt(b)))
@@ -358,7 +367,7 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   }
   from <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
   target <- rep_len(as.integer(target), n)
-  job <- list(dat = dat, spec = list(table = spec$table), moves = moves, nBurn = nBurn,
+  job <- list(dat = dat, spec = list(table = spec$table, model = spec$model), moves = moves, nBurn = nBurn,
               thinning = thinning, target = target, from = from,
               dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
               token = basename(tempfile("")), sampler = fbc_sampler_hook(),

@@ -53,11 +53,13 @@ prior_conflicts <- function(fit) {
   empty <- data.frame(var = character(), class = character(), side = character(),
                       cdf = numeric(), median = numeric(), dataValue = numeric(),
                       atBound = logical(), bound = numeric(), priorValue = numeric())
-  tab <- fit$spec$table
-  if (is.null(tab) || nrow(fit$Phi) < 2L) return(empty)
+  if (is.null(fit$spec$table) || nrow(fit$Phi) < 2L) return(empty)
+  ps <- phi_spec(fit)
+  tab <- ps$table
   fam <- names(prior_families)[match(tab$family, prior_families)]
-  phis <- sampler_scale(fit$Phi, fit$scale)
-  map <- phis[which.max(fit$logPost), ]
+  full <- sampler_draws(fit)
+  phis <- full[, ps$cols, drop = FALSE]
+  map <- full[which.max(fit$logPost), ]
   piled <- bound_piling(fit)$var
   support <- param_support(fit)
   out <- list()
@@ -74,7 +76,7 @@ prior_conflicts <- function(fit) {
     sdw <- stats::sd(w)
     ll <- function(wv) {
       phi <- map
-      phi[j] <- from_walk(wv, tab$transform[j])
+      phi[ps$cols[j]] <- from_walk(wv, tab$transform[j])
       fit_loglik(fit, phi)
     }
     w3 <- wmed + dir * fbc_conflict_sds * sdw
@@ -89,8 +91,8 @@ prior_conflicts <- function(fit) {
                           tol = 0.1 * sdw)$maximum
     uL <- from_walk(wL, tab$transform[j])
     valueL <- tab$a[j] + tab$b[j] * uL  # in the prior's units
-    if (fit$spec$classes[j] == "kappa") {
-      k <- match(fit$vars[j], fit$vars[fit$spec$classes == "kappa"])
+    if (ps$classes[j] == "kappa") {
+      k <- match(fit$vars[j], fit$vars[ps$classes == "kappa"])
       lo <- fit$scale$xmin[fit$scale$p + k]
       reported <- lo + (fit$scale$xmax[fit$scale$p + k] - lo) * uL
     } else {
@@ -99,7 +101,7 @@ prior_conflicts <- function(fit) {
     bound <- sup_j[if (dir < 0) 1L else 2L]
     atBound <- all(is.finite(sup_j)) && abs(reported - bound) <= fbc_pile_band * diff(sup_j)
     out[[length(out) + 1L]] <- data.frame(
-      var = fit$vars[j], class = fit$spec$classes[j], side = if (dir < 0) "lower" else "upper",
+      var = fit$vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
       atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL
     )
@@ -107,7 +109,8 @@ prior_conflicts <- function(fit) {
   if (length(out)) do.call(rbind, out) else empty
 }
 
-# A looser prior for the flagged members `js` of one class, each of the same
+# A looser prior for the flagged members `js` (positions in phi, as in
+# fit$spec$vars) of one class, each of the same
 # kind with the data's value (`values`, in the prior's units) near its
 # centre, or fixed at a bound the data press against (`bounds`, NA when
 # none); other members keep their priors. Returns the text of an R call, or
@@ -171,14 +174,14 @@ r_vec <- function(v) {
 format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific = abs(x) < 1e-4 && x != 0),
                                  character(1))
 
-# The convergence_messages() text: one message per class of parameters.
-conflict_messages <- function(fit) {
-  cf <- prior_conflicts(fit)
+# The convergence_messages() text: one message per class of parameters
+# (`cf`: the rows of prior_conflicts()).
+conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
   tab <- fit$spec$table
   vapply(unique(cf$class), function(cls) {
     rows <- cf[cf$class == cls, , drop = FALSE]
     one <- nrow(rows) == 1L
-    j <- match(rows$var, fit$vars)
+    j <- match(rows$var, fit$spec$vars)
     dist <- names(prior_families)[match(tab$family[j], prior_families)]
     priors <- unique(sprintf("%s(%s, %s)", dist, format_num(tab$p1[j]), format_num(tab$p2[j])))
     prob <- ifelse(rows$side == "lower", rows$cdf, 1 - rows$cdf)
@@ -205,7 +208,7 @@ conflict_messages <- function(fit) {
     } else {
       sprintf("the prior, not the data, sets %s", vars)
     }
-    sugg <- suggest_prior(fit, match(rows$var, fit$vars), rows$priorValue,
+    sugg <- suggest_prior(fit, match(rows$var, fit$spec$vars), rows$priorValue,
                           ifelse(rows$atBound, rows$bound, NA_real_))
     advice <- if (cls == "kappa" && all(rows$atBound)) {
       " Widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
@@ -213,6 +216,10 @@ conflict_messages <- function(fit) {
       " Loosen or re-centre this prior and calibrate again."
     } else if (cls == "kappa") {
       sprintf(" Loosen %s, e.g. `%s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else if (all(rows$atBound) && cls %in% c("alphaS", "alphaB") && all(rows$bound == 2)) {
+      sprintf(" Consider %s, or fixing %s, e.g. `hypers = %s`.",
+              sub("^use", "using", smooth_kernel_hint(cls)),
+              if (nrow(rows) == 1L) "it" else "them", sugg)
     } else if (all(rows$atBound)) {
       sprintf(" Consider fixing %s, e.g. `hypers = %s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
     } else {

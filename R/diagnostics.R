@@ -33,18 +33,19 @@ chain_diagnostics <- function(Phi, chain) {
 # Support of every parameter in the units of Phi (kappa native), as a
 # two-column matrix of lower and upper bounds.
 param_support <- function(x) {
-  tab <- x$spec$table
+  ps <- phi_spec(x)
+  tab <- ps$table
   fam <- names(prior_families)[match(tab$family, prior_families)]
   d <- nrow(tab)
   lo <- hi <- numeric(d)
   for (j in seq_len(d)) {
-    cls <- x$spec$classes[j]
+    cls <- ps$classes[j]
     s <- family_support(fam[j], tab$p1[j], tab$p2[j])
     dom <- switch(class_domain[[cls]], real = c(-Inf, Inf), positive = c(0, Inf),
                   unit12 = c(1, 2))
     s <- c(max(s[1], dom[1]), min(s[2], dom[2]))
     if (cls == "kappa") {
-      k <- match(x$vars[j], x$vars[x$spec$classes == "kappa"])
+      k <- match(x$vars[j], x$vars[ps$classes == "kappa"])
       lo0 <- x$scale$xmin[x$scale$p + k]
       rng <- x$scale$xmax[x$scale$p + k] - lo0
       # prior argument a + b * u, u = (kappa - lo0) / rng
@@ -60,7 +61,7 @@ param_support <- function(x) {
 # data.frame(var, bound, share). Fixed parameters are skipped.
 bound_piling <- function(x) {
   sup <- param_support(x)
-  fixed <- x$spec$table$family == prior_families[["fixed"]]
+  fixed <- phi_spec(x)$table$family == prior_families[["fixed"]]
   out <- list()
   for (j in seq_along(x$vars)) {
     if (fixed[j] || !all(is.finite(sup[j, ]))) next
@@ -75,6 +76,14 @@ bound_piling <- function(x) {
   if (length(out)) do.call(rbind, out) else data.frame(var = character(), bound = numeric(), share = numeric())
 }
 
+# The advice for a power-exponential smoothness at 2: a smooth family,
+# whose correlation matrices are better conditioned than exp(-theta d^2) with
+# a tiny nugget and which has no smoothness to sample.
+smooth_kernel_hint <- function(cls) {
+  K <- if (cls == "alphaS") "kernelS" else "kernelB"
+  sprintf("use a smooth correlation family, `%s = \"matern52\"` (or `\"gaussian\"`, alpha = 2) in calibrate()", K)
+}
+
 #' Convergence warnings for a calibration
 #'
 #' Checks the chains of an `fbc` object and returns the warnings worth
@@ -87,6 +96,13 @@ bound_piling <- function(x) {
 #' 0.5% of the support's width from it), such as a smoothness \eqn{\alpha} at
 #' 2 or a calibration parameter at the edge of its prior range, and
 #' prior-data conflicts.
+#'
+#' A power-exponential smoothness piling up at 2 says the response is smooth:
+#' the advice is then a smooth correlation family, `kernelS = "matern52"`
+#' (or `"gaussian"`, the power exponential at \eqn{\alpha = 2}) in
+#' [calibrate()] (`kernelB` for \eqn{\alpha_B}), which has no smoothness to
+#' sample and, for the Matérn, better conditioned correlation matrices (see
+#' [correlation()]); fixing \eqn{\alpha} at 2 is the other way.
 #'
 #' @section Prior-data conflict:
 #' A parameter is flagged when its prior, not the data, sets it: (1) its
@@ -152,11 +168,13 @@ convergence_messages <- function(x) {
   pile <- bound_piling(x)
   for (i in seq_len(nrow(pile))) {
     v <- pile$var[i]
-    cls <- x$spec$classes[match(v, x$vars)]
+    cls <- x$spec$classes[match(v, x$spec$vars)]
     hint <- switch(cls,
-      alphaS = , alphaB = sprintf(
-        "The data favour this smoothness; consider fixing it (e.g. `%sDist = \"fixed\", %sInit = %g` in set_hyperPriors()).",
-        cls, cls, pile$bound[i]),
+      alphaS = , alphaB = paste0(
+        "The data favour this smoothness; ",
+        if (pile$bound[i] == 2) paste0(smooth_kernel_hint(cls), ", or fix it") else "consider fixing it",
+        sprintf(" (e.g. `%sDist = \"fixed\", %sInit = %g` in set_hyperPriors()).",
+                cls, cls, pile$bound[i])),
       kappa = "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb.",
       "Check that this prior's support is wide enough."
     )

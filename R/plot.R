@@ -52,6 +52,13 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[x$indices[[parameter]]]
+  if (!length(vars)) {
+    K <- if (parameter == "alphaS") "kernelS" else "kernelB"
+    cli::cli_abort(c(
+      "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$settings[[K]]}\"} has no smoothness parameter.",
+      i = "Only the power exponential ({.code {K} = \"powexp\"}) samples a smoothness; see {.help FBC::correlation}."
+    ))
+  }
   labels <- param_labels(x, vars)
   if (type == "density") plot_density(x, vars, labels, xlab) else plot_trace(x, vars, labels, xlab)
 }
@@ -65,7 +72,7 @@ param_labels <- function(x, vars) {
   p <- x$scale$p
   q <- x$scale$q
   inputs <- c(nm$inputs, nm$calibration)
-  cls <- x$spec$classes[match(vars, x$vars)]
+  cls <- x$spec$classes[match(vars, x$spec$vars)]
   k <- suppressWarnings(as.integer(sub("^[A-Za-z]+([0-9]+)$", "\\1", vars)))
   out <- vars
   ok <- !is.na(k)
@@ -83,7 +90,7 @@ param_labels <- function(x, vars) {
 # Axis title for the values of a class: the input's name for a single
 # calibration parameter, its units otherwise.
 value_label <- function(x, vars) {
-  cls <- x$spec$classes[match(vars[1], x$vars)]
+  cls <- x$spec$classes[match(vars[1], x$spec$vars)]
   if (cls == "kappa") {
     cal <- x$scale$names$calibration
     if (length(vars) == 1L && length(cal) == x$scale$q) {

@@ -57,7 +57,7 @@ ppc_field <- function(fit, ndraws = 500) {
   sc <- fit$scale
   dat <- fit$data
   rows <- check_rows(fit, "Bayesian", ndraws)
-  phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
+  phis <- sampler_draws(fit, rows)
   mc <- model_codes(fit$spec)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
                       fit$settings$nugget %||% fbc_nugget, 500L, mc$kernS, mc$kernB, mc$algebra)

@@ -114,7 +114,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   Xn <- scale_inputs(X, sc, seq_len(sc$p))
 
   rows <- if (method == "MAP") which.max(object$logPost) else draw_rows(nrow(object$Phi), ndraws)
-  phis <- sampler_scale(object$Phi[rows, , drop = FALSE], sc)
+  phis <- sampler_draws(object, rows)
   N <- nrow(Xn)
   M <- length(rows)
   code <- match(type, c("field", "mean", "simulator", "bias"))

@@ -1,7 +1,9 @@
 #' Print a calibration
 #'
 #' Shows a compact header (data sizes, the names of the calibration inputs,
-#' the MCMC settings, the range of the acceptance rates and the algebra of
+#' the MCMC settings, the range of the acceptance rates, the correlation
+#' families of the simulator and bias GPs (`kernelS`, `kernelB` of
+#' [calibrate()]) and the algebra of
 #' the simulator block: Kronecker on a product design, else dense; see
 #' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
@@ -37,6 +39,8 @@ print.fbc <- function(x, digits = 3, ...) {
     cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
                 if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
   }
+  cat(sprintf("  kernels: simulator %s, bias %s\n", s$kernelS %||% "powexp",
+              s$kernelB %||% "powexp"))
   alg <- s$simAlgebra
   if (!is.null(alg)) {
     cat(sprintf("  algebra: %s\n", if (identical(alg$name, "Kronecker"))

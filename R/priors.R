@@ -140,9 +140,12 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' Gaussian(0, 1).
 #'
 #' @param thetaSDist,thetaSInit,thetaSP1,thetaSP2 Simulator GP correlation scales.
-#' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in `[1, 2]`.
+#' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in
+#'   `[1, 2]` (power-exponential family only: with another `kernelS` in
+#'   [calibrate()] it is not a parameter and these are ignored, with a warning).
 #' @param thetaBDist,thetaBInit,thetaBP1,thetaBP2 Bias GP correlation scales.
-#' @param alphaBDist,alphaBInit,alphaBP1,alphaBP2 Bias GP smoothness, in `[1, 2]`.
+#' @param alphaBDist,alphaBInit,alphaBP1,alphaBP2 Bias GP smoothness, in
+#'   `[1, 2]` (power exponential only, as for `alphaS` with `kernelB`).
 #' @param sigma2SDist,sigma2SInit,sigma2SP1,sigma2SP2 Simulator GP marginal variance.
 #' @param sigma2BDist,sigma2BInit,sigma2BP1,sigma2BP2 Bias GP marginal variance.
 #' @param sigma2EDist,sigma2EInit,sigma2EP1,sigma2EP2 Measurement error variance.

@@ -40,7 +40,7 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
                  args = "nMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
   moves <- s$moves %||% sampler_moves(s$sampler %||% "single", object$spec)
-  d <- length(object$vars)
+  d <- length(object$spec$vars)  # the sampler's parameters (see phi_columns())
   starts <- lapply(states, function(st) chain_start(st$sampler, d))
   target <- vapply(starts, function(st) st$iter0, integer(1)) + as.integer(nMCMC)
   results <- run_chains(object$data, object$spec, starts, chain_seeds(length(starts)), moves,

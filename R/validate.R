@@ -81,9 +81,9 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   m <- length(ys)
   fold <- emulator_folds(folds, m)
   rows <- check_rows(fit, method, ndraws)
-  phis <- sampler_scale(fit$Phi[rows, , drop = FALSE], sc)
+  phis <- sampler_draws(fit, rows)
   nugget <- fit$settings$nugget %||% fbc_nugget
-  sig <- match("sigma2S", fit$vars)
+  sig <- match("sigma2S", fit$spec$vars)
 
   D <- nrow(phis)
   means <- vars <- matrix(0, m, D)
@@ -120,11 +120,12 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
 }
 
 # The simulator correlation R_s(X, Y) at parameter vector `phi` (the
-# sampler's scale). Every simulator correlation of the checks goes through
-# here, so a new correlation family needs one change.
+# sampler's scale, every column: sampler_draws()), in the fit's family.
+# Every simulator correlation of the checks goes through here.
 sim_corr <- function(fit, X, Y, phi) {
-  idx <- fit$indices %||% param_indices(fit$scale$p, fit$scale$q)
-  .corr_matrix(X, Y, as.numeric(phi[idx$thetaS]), as.numeric(phi[idx$alphaS]))
+  idx <- param_indices(fit$scale$p, fit$scale$q)
+  .corr_matrix(X, Y, as.numeric(phi[idx$thetaS]), as.numeric(phi[idx$alphaS]),
+               model_codes(fit$spec)$kernS)
 }
 
 # Held-out predictive of every element of y ~ N(0, K): leave-one-out when

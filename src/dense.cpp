@@ -2,9 +2,11 @@
 // z = Ls^-1 ys, W = Ls^-1 Bs with Bs = Rs(Xs,Xk) = diag(c) Rx:
 //   log|Ds| = 2 sum log diag(Ls),  ys' Ds^-1 ys = z'z,
 //   Q = Rkk - W'W,  wz = W'z.
-// While 3 (p + q) m^2 doubles fit in fbc_cache_budget bytes, the
-// per-dimension log-distances and power matrices of Rs(Xs,Xs) and Rx are
-// kept (a move of thetaS_k then costs no exp per dimension); beyond it the
+// While 3 (p + q) m^2 doubles fit in fbc_cache_budget bytes ((p + q) m^2 for
+// a family without a smoothness, whose terms are the distances themselves),
+// the per-dimension log-distances (or distances) and power matrices of
+// Rs(Xs,Xs) and Rx are kept (a move of thetaS_k then costs no exp per
+// dimension); beyond it the
 // correlation is formed on the fly with the same operations (the same
 // numbers), reading the packed log-distances of the first min(p + q, 4)
 // inputs (at most 2 m (m + 1) doubles: no logs for those), so the algebra
@@ -26,7 +28,10 @@ double fbc_cache_budget_r(double bytes = -1) {
 DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                                const arma::vec& ys, double nugget, int kernS, int kernB)
   : SchurPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB) {
-  cached_ = 3.0 * (p + q) * (double) m * m * sizeof(double) <= fbc_cache_budget;
+  // per input: the distances and, for a family with a smoothness, two power
+  // matrices (current and proposal)
+  const bool smooth = kernel_smooth(kernS_);
+  cached_ = (smooth ? 3.0 : 1.0) * (p + q) * (double) m * m * sizeof(double) <= fbc_cache_budget;
   for (int b = 0; b < 2; ++b) {
     Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); W_.b[b].zeros(m, nu_);
     z_.b[b].zeros(m); c_.b[b].zeros(m);
@@ -40,10 +45,12 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
     }
     return;
   }
-  Ps_.resize(p + q); Px_.resize(p);
-  for (int b = 0; b < 2; ++b) {
-    for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
-    for (int k = 0; k < p; ++k) Px_[k].b[b].zeros(m, nu_);
+  if (smooth) {
+    Ps_.resize(p + q); Px_.resize(p);
+    for (int b = 0; b < 2; ++b) {
+      for (int k = 0; k < p + q; ++k) Ps_[k].b[b].zeros(m, m);
+      for (int k = 0; k < p; ++k) Px_[k].b[b].zeros(m, nu_);
+    }
   }
   ptrS_.resize(p + q); ptrX_.resize(p);
   Gs_.resize(p + q); Gx_.resize(p);
@@ -66,6 +73,7 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
     if (cached_) {
       for (int k = 0; k < p + q; ++k) {
         const bool redo = t.simPow[k];
+        if (Ps_.empty()) { ptrS_[k] = &Gs_[k]; continue; }  // no smoothness: P = G
         if (redo) kernel_term(kernS_, Gs_[k], alphaS[k], Ps_[k].alt(), true);
         ptrS_[k] = redo ? &Ps_[k].alt() : &Ps_[k].cur();
       }
@@ -86,6 +94,7 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
     if (cached_) {
       for (int k = 0; k < p; ++k) {
         const bool redo = t.simPow[k];
+        if (Px_.empty()) { ptrX_[k] = &Gx_[k]; continue; }
         if (redo) kernel_term(kernS_, Gx_[k], alphaS[k], Px_[k].alt(), false);
         ptrX_[k] = redo ? &Px_[k].alt() : &Px_[k].cur();
       }
@@ -122,7 +131,7 @@ void DensePosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q
 }
 
 void DensePosterior::simFlip(const Touch& t) {
-  if (cached_)
+  if (cached_ && !Ps_.empty())
     for (int k = 0; k < p + q; ++k)
       if (t.simPow[k]) {
         Ps_[k].flip();

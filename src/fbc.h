@@ -4,8 +4,8 @@
 //   C = [ A  B' ]   A = sigma2S Rs(Xk,Xk) + sigma2B Rb(Xf,Xf) + sigma2E I_n
 //       [ B  D  ]   B = sigma2S Rs(Xs,Xk),  D = sigma2S (Rs(Xs,Xs) + nugget I_m)
 // with separable correlations R(x,x') = prod_k r(|x_k - x'_k|; theta_k, alpha_k)
-// whose one-dimensional family r is chosen per GP (kernels.cpp; today the
-// power exponential r = exp(-theta |d|^alpha) only).
+// whose one-dimensional family r is chosen per GP (kernels.cpp: power
+// exponential, Gaussian, Matern 3/2, Matern 5/2).
 // Everything is evaluated through the Schur complement S = A - B' D^-1 B;
 // the simulator block D is the algebra's business (dense Cholesky, or
 // Kronecker eigendecompositions on a product design).
@@ -30,7 +30,7 @@ enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2 };
 
 // Correlation family codes, one per GP; R/calibrate.R keeps the same table
 // (kernel_codes()).
-enum KernelFamily { KF_POWEXP = 1 };
+enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4 };
 
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
@@ -47,8 +47,13 @@ double from_walk(int transform, double w);
 // The first K columns of X and Y are the inputs; theta and alpha point to K
 // values. `lower`: X == Y and only the lower triangle is wanted.
 void check_kernel(int kern);
+// Does the family have a smoothness alpha? (Only the power exponential:
+// for the others alpha is ignored, and a cached term is the distance cache
+// itself, so callers point at G instead of calling kernel_term.)
+bool kernel_smooth(int kern);
 // Cached per-dimension path (dense algebra, small m): G = kernel_dist(a, b)
-// once, P = kernel_term(G, alpha) when alpha moves, R = kernel_combine(P, theta).
+// once, P = kernel_term(G, alpha) when alpha moves (P = G for the families
+// without a smoothness), R = kernel_combine(P, theta).
 void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& G, bool lower);
 void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& P, bool lower);
 void kernel_combine(int kern, const std::vector<const arma::mat*>& P, const arma::vec& theta,
@@ -212,6 +217,7 @@ private:
   arma::vec oldVal_;
   std::vector<Buf2<arma::mat> > Pfs_, Pfb_;
   std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
+  std::vector<arma::mat> Gfb_; // ... for the bias GP's family when it differs
   std::vector<const arma::mat*> ptrF_, ptrB_;
   Buf2<arma::mat> Rkk_, Q_, Rb_, LS_;
   Buf2<arma::vec> wz_;

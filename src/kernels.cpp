@@ -79,14 +79,68 @@ double log_jacobian(int transform, double x) {
 
 // ---- The kernel module ---------------------------------------------------
 // Every correlation of both GPs is computed by the functions below, for the
-// family code `kern` of that GP. Separable families:
-//   R(x, x') = prod_k r(|x_k - x'_k|; theta_k, alpha_k);
-//   power exponential (KF_POWEXP): r(d) = exp(-theta d^alpha).
-// A new family adds its case to each function (and its code in R).
+// family code `kern` of that GP. Separable families,
+//   R(x, x') = prod_k r(d_k),  d_k = |x_k - x'_k|,  h_k = sqrt(theta_k) d_k:
+//   power exponential (KF_POWEXP):  r = exp(-theta d^alpha);
+//   Gaussian (KF_GAUSSIAN):         r = exp(-theta d^2);
+//   Matern 3/2 (KF_MATERN32):       r = (1 + sqrt(3) h) exp(-sqrt(3) h);
+//   Matern 5/2 (KF_MATERN52):       r = (1 + sqrt(5) h + 5 h^2 / 3) exp(-sqrt(5) h).
+// All are 1 - c theta d^2 + ... near 0 (c = 1, 3/2, 5/6) but the power
+// exponential with alpha < 2. Every function works through the same three
+// per-dimension steps, so the cached and on-the-fly paths give the same
+// numbers: a fixed value g(d) (dist_of: log d, d^2 or d), a term t(g, alpha)
+// (term_of: exp(alpha g) for the power exponential, g for the others) and
+// an accumulation over dimensions with coefficient c(theta) (coef_of),
+// finished once per entry (finish_of):
+//   power exponential, Gaussian: s += theta t,  r = exp(-s);
+//   Matern:  a = sqrt(3 or 5) sqrt(theta) t,  s += a,  w *= poly(a),
+//            r = w exp(-s)  (poly(a) = 1 + a, or 1 + a + a^2 / 3).
+// A new family adds its case to these helpers and to check_kernel().
 
 void check_kernel(int kern) {
-  if (kern != KF_POWEXP) Rcpp::stop("unknown correlation family code %d", kern);
+  if (kern < KF_POWEXP || kern > KF_MATERN52)
+    Rcpp::stop("unknown correlation family code %d", kern);
 }
+
+bool kernel_smooth(int kern) { return kern == KF_POWEXP; }
+
+template <int F> static inline double dist_of(double d) {
+  if (F == KF_POWEXP) return std::log(std::fabs(d));
+  if (F == KF_GAUSSIAN) { const double a = std::fabs(d); return a * a; }
+  return std::fabs(d);
+}
+template <int F> static inline double term_of(double g, double alpha) {
+  return F == KF_POWEXP ? std::exp(alpha * g) : g;
+}
+template <int F> static inline double coef_of(double theta) {
+  if (F == KF_MATERN32) return std::sqrt(3.0 * theta);
+  if (F == KF_MATERN52) return std::sqrt(5.0 * theta);
+  return theta;
+}
+// s: the sum in the exponent; w: the Matern polynomial product.
+template <int F> static inline void accum_of(double c, double t, double& s, double& w) {
+  const double a = c * t;
+  s += a;
+  if (F == KF_MATERN32) w *= 1.0 + a;
+  if (F == KF_MATERN52) w *= 1.0 + a + a * a / 3.0;
+}
+template <int F> static inline double finish_of(double s, double w) {
+  if (F == KF_POWEXP || F == KF_GAUSSIAN) return std::exp(-s);
+  // w exp(-s) <= 1; beyond exp(-700) w could overflow in products of many
+  // dimensions: go through logs there
+  return s < 700.0 ? w * std::exp(-s) : std::exp(std::log(w) - s);
+}
+static inline bool matern(int kern) { return kern == KF_MATERN32 || kern == KF_MATERN52; }
+
+// Calls fn<F>(args...) for the family code kern.
+#define KERNEL_DISPATCH(kern, fn, ...)                         \
+  switch (kern) {                                              \
+  case KF_POWEXP: fn<KF_POWEXP>(__VA_ARGS__); break;           \
+  case KF_GAUSSIAN: fn<KF_GAUSSIAN>(__VA_ARGS__); break;       \
+  case KF_MATERN32: fn<KF_MATERN32>(__VA_ARGS__); break;       \
+  case KF_MATERN52: fn<KF_MATERN52>(__VA_ARGS__); break;       \
+  default: check_kernel(kern);                                 \
+  }
 
 // P(i,j) = |a_i - b_j|^alpha (pow; exact squares and absolute values).
 static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma::mat& out) {
@@ -101,69 +155,95 @@ static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma:
   }
 }
 
-// Per-dimension cache of what does not move. Power exponential:
-// G(i,j) = log |a_i - b_j| (-Inf where they coincide), so that a move of
-// alpha needs an exp per entry instead of a pow.
-void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
-  check_kernel(kern);
+// Per-dimension cache of what does not move: G(i,j) = g(a_i - b_j) (power
+// exponential: log |a_i - b_j|, -Inf where they coincide, so that a move of
+// alpha needs an exp per entry instead of a pow).
+template <int F>
+static void kernel_dist_t(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
   const arma::uword na = a.n_elem, nb = b.n_elem;
   for (arma::uword j = 0; j < nb; ++j) {
     double* col = out.colptr(j);
     const double bj = b[j];
-    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = std::log(std::fabs(a[i] - bj));
+    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = dist_of<F>(a[i] - bj);
   }
 }
+void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
+  KERNEL_DISPATCH(kern, kernel_dist_t, a, b, out, lower);
+}
 
-// The alpha-dependent part from the cache. Power exponential:
-// P(i,j) = |a_i - b_j|^alpha = exp(alpha G(i,j)).
+// The alpha-dependent part from the cache: P(i,j) = exp(alpha G(i,j)) =
+// |a_i - b_j|^alpha for the power exponential; the families without a
+// smoothness have none (P = G: callers use G itself, see kernel_smooth()).
 void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& out, bool lower) {
   check_kernel(kern);
   const arma::uword nr = G.n_rows, nc = G.n_cols;
+  const bool pe = kern == KF_POWEXP;
   for (arma::uword j = 0; j < nc; ++j) {
     const double* g = G.colptr(j);
     double* col = out.colptr(j);
-    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] = std::exp(alpha * g[i]);
+    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] = pe ? std::exp(alpha * g[i]) : g[i];
   }
 }
 
-// The correlation from the terms. Power exponential:
-// R(i,j) = exp(-sum_k theta_k P_k(i,j)).
-void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
-                    const arma::vec& theta, arma::mat& out, bool lower) {
-  check_kernel(kern);
+// The correlation from the terms: R(i,j) = finish(accumulate_k over
+// coef(theta_k) P_k(i,j)); power exponential: exp(-sum_k theta_k P_k(i,j)).
+// `w` is a workspace for the Matern products.
+template <int F>
+static void kernel_combine_t(const std::vector<const arma::mat*>& P, const arma::vec& theta,
+                             arma::mat& out, bool lower) {
   const arma::uword nr = out.n_rows, nc = out.n_cols, K = P.size();
+  std::vector<double> w(matern(F) ? nr : 0);
   for (arma::uword j = 0; j < nc; ++j) {
     double* col = out.colptr(j);
     const arma::uword i0 = lower ? j : 0;
     for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
+    if (matern(F)) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
     for (arma::uword k = 0; k < K; ++k) {
       const double* pk = P[k]->colptr(j);
-      const double t = theta[k];
-      for (arma::uword i = i0; i < nr; ++i) col[i] += t * pk[i];
+      const double c = coef_of<F>(theta[k]);
+      if (matern(F)) {
+        for (arma::uword i = i0; i < nr; ++i) accum_of<F>(c, pk[i], col[i], w[i]);
+      } else {
+        for (arma::uword i = i0; i < nr; ++i) col[i] += c * pk[i];
+      }
     }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = std::exp(-col[i]);
+    for (arma::uword i = i0; i < nr; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
   }
+}
+void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
+                    const arma::vec& theta, arma::mat& out, bool lower) {
+  KERNEL_DISPATCH(kern, kernel_combine_t, P, theta, out, lower);
 }
 
 // kernel_combine(kernel_term(kernel_dist(...))) with no per-dimension
 // storage: the same operations in the same order, so the same numbers.
 // Power exponential: R(i,j) = exp(-sum_k theta_k exp(alpha_k log|X_ik - Y_jk|)).
-void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
-                 const double* alpha, arma::mat& out, bool lower) {
-  check_kernel(kern);
+template <int F>
+static void kernel_corr_t(const arma::mat& X, const arma::mat& Y, int K, const double* theta,
+                          const double* alpha, arma::mat& out, bool lower) {
   const arma::uword nr = X.n_rows, nc = Y.n_rows;
+  std::vector<double> w(matern(F) ? nr : 0);
   for (arma::uword j = 0; j < nc; ++j) {
     double* col = out.colptr(j);
     const arma::uword i0 = lower ? j : 0;
     for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
+    if (matern(F)) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
     for (int k = 0; k < K; ++k) {
       const double* x = X.colptr(k);
-      const double yj = Y.at(j, k), t = theta[k], a = alpha[k];
-      for (arma::uword i = i0; i < nr; ++i)
-        col[i] += t * std::exp(a * std::log(std::fabs(x[i] - yj)));
+      const double yj = Y.at(j, k), c = coef_of<F>(theta[k]), a = alpha[k];
+      if (matern(F)) {
+        for (arma::uword i = i0; i < nr; ++i)
+          accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - yj), a), col[i], w[i]);
+      } else {
+        for (arma::uword i = i0; i < nr; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - yj), a);
+      }
     }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = std::exp(-col[i]);
+    for (arma::uword i = i0; i < nr; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
   }
+}
+void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
+                 const double* alpha, arma::mat& out, bool lower) {
+  KERNEL_DISPATCH(kern, kernel_corr_t, X, Y, K, theta, alpha, out, lower);
 }
 
 // Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),
@@ -171,68 +251,101 @@ void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const 
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
 
 // kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles).
-void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
-  check_kernel(kern);
+template <int F>
+static void kernel_dist_packed_t(const arma::vec& a, std::vector<double>& G) {
   const size_t m = a.n_elem;
   G.resize(m * (m + 1) / 2);
   for (size_t j = 0; j < m; ++j) {
     double* g = G.data() + packed_offset(j, m);
     const double aj = a[j];
-    for (size_t i = j; i < m; ++i) g[i - j] = std::log(std::fabs(a[i] - aj));
+    for (size_t i = j; i < m; ++i) g[i - j] = dist_of<F>(a[i] - aj);
   }
+}
+void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
+  KERNEL_DISPATCH(kern, kernel_dist_packed_t, a, G);
 }
 
 // kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()
 // caches G[k] where given (non-null), on the fly elsewhere: the same numbers.
-void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
-                      const double* alpha, const std::vector<const double*>& G,
-                      arma::mat& out) {
-  check_kernel(kern);
+template <int F>
+static void kernel_corr_self_t(const arma::mat& X, int K, const double* theta,
+                               const double* alpha, const std::vector<const double*>& G,
+                               arma::mat& out) {
   const size_t m = X.n_rows;
+  std::vector<double> w(matern(F) ? m : 0);
   for (size_t j = 0; j < m; ++j) {
     double* col = out.colptr(j);
     for (size_t i = j; i < m; ++i) col[i] = 0.0;
+    if (matern(F)) for (size_t i = j; i < m; ++i) w[i] = 1.0;
     for (int k = 0; k < K; ++k) {
-      const double t = theta[k], a = alpha[k];
+      const double c = coef_of<F>(theta[k]), a = alpha[k];
       if (k < (int) G.size() && G[k]) {
         const double* g = G[k] + packed_offset(j, m) - j;
-        for (size_t i = j; i < m; ++i) col[i] += t * std::exp(a * g[i]);
+        if (matern(F)) {
+          for (size_t i = j; i < m; ++i) accum_of<F>(c, term_of<F>(g[i], a), col[i], w[i]);
+        } else {
+          for (size_t i = j; i < m; ++i) col[i] += c * term_of<F>(g[i], a);
+        }
       } else {
         const double* x = X.colptr(k);
         const double xj = x[j];
-        for (size_t i = j; i < m; ++i) col[i] += t * std::exp(a * std::log(std::fabs(x[i] - xj)));
+        if (matern(F)) {
+          for (size_t i = j; i < m; ++i)
+            accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - xj), a), col[i], w[i]);
+        } else {
+          for (size_t i = j; i < m; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - xj), a);
+        }
       }
     }
-    for (size_t i = j; i < m; ++i) col[i] = std::exp(-col[i]);
+    for (size_t i = j; i < m; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
   }
+}
+void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
+                      const double* alpha, const std::vector<const double*>& G,
+                      arma::mat& out) {
+  KERNEL_DISPATCH(kern, kernel_corr_self_t, X, K, theta, alpha, G, out);
 }
 
 // out_i = prod_l r(|X(i, col0 + l) - point_l|; theta_l, alpha_l), l < K.
 // Power exponential: exp(-sum_l theta_l |X(i, col0 + l) - point_l|^alpha_l).
-void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
-                       const double* theta, const double* alpha, arma::vec& out) {
-  check_kernel(kern);
+template <int F>
+static void kernel_corr_point_t(const arma::mat& X, int col0, int K, const double* point,
+                                const double* theta, const double* alpha, arma::vec& out) {
   const int nr = X.n_rows;
   out.zeros();
+  std::vector<double> w(matern(F) ? nr : 0, 1.0);
   for (int l = 0; l < K; ++l) {
-    const double kap = point[l], th = theta[l], al = alpha[l];
+    const double kap = point[l], c = coef_of<F>(theta[l]), al = alpha[l];
     const double* xs = X.colptr(col0 + l);
-    for (int i = 0; i < nr; ++i) out[i] += th * std::pow(std::fabs(xs[i] - kap), al);
+    for (int i = 0; i < nr; ++i) {
+      const double t = F == KF_POWEXP ? std::pow(std::fabs(xs[i] - kap), al)
+                                      : dist_of<F>(xs[i] - kap);
+      if (matern(F)) accum_of<F>(c, t, out[i], w[i]); else out[i] += c * t;
+    }
   }
-  for (int i = 0; i < nr; ++i) out[i] = std::exp(-out[i]);
+  for (int i = 0; i < nr; ++i) out[i] = finish_of<F>(out[i], matern(F) ? w[i] : 1.0);
+}
+void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
+                       const double* theta, const double* alpha, arma::vec& out) {
+  KERNEL_DISPATCH(kern, kernel_corr_point_t, X, col0, K, point, theta, alpha, out);
 }
 
 // R(X, Y)_{ij} = prod_k r(|X_ik - Y_jk|; theta_k, alpha_k).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
                       const arma::vec& theta, const arma::vec& alpha, int kern) {
   check_kernel(kern);
-  arma::mat out(X.n_rows, Y.n_rows, arma::fill::zeros);
-  arma::mat P(X.n_rows, Y.n_rows);
-  for (arma::uword k = 0; k < X.n_cols; ++k) {
-    pow_dist(X.col(k), Y.col(k), alpha[k], P);
-    out += theta[k] * P;
+  if (kern == KF_POWEXP) {
+    arma::mat out(X.n_rows, Y.n_rows, arma::fill::zeros);
+    arma::mat P(X.n_rows, Y.n_rows);
+    for (arma::uword k = 0; k < X.n_cols; ++k) {
+      pow_dist(X.col(k), Y.col(k), alpha[k], P);
+      out += theta[k] * P;
+    }
+    return arma::exp(-out);
   }
-  return arma::exp(-out);
+  arma::mat out(X.n_rows, Y.n_rows);
+  kernel_corr(kern, X, Y, X.n_cols, theta.memptr(), alpha.memptr(), out, false);
+  return out;
 }
 
 // [[Rcpp::export(.corr_matrix)]]

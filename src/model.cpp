@@ -61,7 +61,11 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
   Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
-    for (int k = 0; k < p; ++k) { Pfs_[k].b[b].zeros(nu_, nu_); Pfb_[k].b[b].zeros(nu_, nu_); }
+    for (int k = 0; k < p; ++k) {
+      // power matrices only for a family with a smoothness (else P = G)
+      if (kernel_smooth(kernS_)) Pfs_[k].b[b].zeros(nu_, nu_);
+      if (kernel_smooth(kernB_)) Pfb_[k].b[b].zeros(nu_, nu_);
+    }
     Rkk_.b[b].zeros(nu_, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
     LS_.b[b].zeros(n, n);
     wz_.b[b].zeros(nu_);
@@ -72,6 +76,14 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   for (int k = 0; k < p; ++k) {
     Gf_[k].zeros(nu_, nu_);
     kernel_dist(kernS_, Xu_.col(k), Xu_.col(k), Gf_[k], true);
+  }
+  // the bias GP's distance cache, when its family caches another g(d)
+  if (kernB_ != kernS_) {
+    Gfb_.resize(p);
+    for (int k = 0; k < p; ++k) {
+      Gfb_[k].zeros(nu_, nu_);
+      kernel_dist(kernB_, Xu_.col(k), Xu_.col(k), Gfb_[k], true);
+    }
   }
 }
 
@@ -227,6 +239,7 @@ double SchurPosterior::evaluate(const Touch& t) {
     std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.simPow[k];
+      if (!kernel_smooth(kernS_)) { Pf[k] = &Gf_[k]; continue; }
       if (redo) kernel_term(kernS_, Gf_[k], alphaS[k], Pfs_[k].alt(), true);
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
     }
@@ -248,9 +261,11 @@ double SchurPosterior::evaluate(const Touch& t) {
     const arma::vec thetaB = phi.subvec(iThetaB, iAlphaB - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
     std::vector<const arma::mat*>& P = ptrB_;
+    const std::vector<arma::mat>& Gb = Gfb_.empty() ? Gf_ : Gfb_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.biasPow[k];
-      if (redo) kernel_term(kernB_, Gf_[k], alphaB[k], Pfb_[k].alt(), true);
+      if (!kernel_smooth(kernB_)) { P[k] = &Gb[k]; continue; }
+      if (redo) kernel_term(kernB_, Gb[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);

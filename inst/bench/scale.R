@@ -4,7 +4,11 @@
 # Run after installing FBC, choosing the parts by argument:
 #   Rscript inst/bench/scale.R sweep            # ms/sweep of all three cases (minutes)
 #   Rscript inst/bench/scale.R functional       # the functional converged runs (defaults,
-#                                               #   then alphaS = 2; or functional-alpha2 alone)
+#                                               #   alphaS = 2, kernelS = "gaussian" and
+#                                               #   "matern52"; or functional-alpha2,
+#                                               #   functional-gaussian, functional-matern52 alone)
+#   Rscript inst/bench/scale.R kernels          # ms/sweep of every correlation family on the
+#                                               #   ball data, the functional problem and m = 1000
 #   Rscript inst/bench/scale.R m1000            # converged run at m = 1000 (hours
 #   Rscript inst/bench/scale.R m2000            #   on the reference BLAS)
 #   Rscript inst/bench/scale.R sweep functional m1000 m2000   # everything
@@ -16,7 +20,10 @@
 #               q = 2, n = 30; y = t1 exp(-t2 x), field at (2, 0.7) + noise
 #               (a product design: the Kronecker algebra); its converged
 #               run is repeated with alphaS fixed at 2, as print() advises
-#               when the smoothness piles up at that bound
+#               when the smoothness piles up at that bound, and with the
+#               smooth simulator families kernelS = "gaussian" and "matern52"
+#   ball        ballSim/ballField (m = 100, n = 63; the dense algebra with
+#               cached per-dimension matrices), in the kernels part only
 #   m1000/m2000 p = q = 2, n = 60, m = 1000 or 2000 runs of a smooth
 #               simulator at a Latin hypercube, field at (0.3, 0.7) with a
 #               small bias and noise (the dense algebra)
@@ -36,7 +43,8 @@ args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
 parts <- setdiff(args, "quick")
 if (!length(parts)) parts <- "sweep"
-known <- c("sweep", "functional", "functional-alpha2", "m1000", "m2000")
+known <- c("sweep", "kernels", "functional", "functional-alpha2", "functional-gaussian",
+           "functional-matern52", "m1000", "m2000")
 if (length(bad <- setdiff(parts, known))) {
   stop("unknown part(s): ", paste(bad, collapse = ", "), "; use ", paste(known, collapse = ", "))
 }
@@ -74,23 +82,34 @@ helpers <- function() {
                         x1 = xf[, 1], x2 = xf[, 2])
     list(sim = sim, field = field, truth = c(0.3, 0.7))
   }
-  problem <- function(name) {
-    switch(name,
-      functional = list(sim = FBC::decaySim, field = FBC::decayField, truth = c(2, 0.7)),
+  # `kernel`: the correlation family of both GPs (the kernels part)
+  problem <- function(name, kernel = NULL) {
+    decay <- list(sim = FBC::decaySim, field = FBC::decayField, truth = c(2, 0.7))
+    pr <- switch(name,
+      ball = list(sim = FBC::ballSim, field = FBC::ballField, truth = 9.81),
+      functional = decay,
       # as print() advises when alphaS piles up at its bound 2
-      `functional-alpha2` = list(sim = FBC::decaySim, field = FBC::decayField, truth = c(2, 0.7),
-                                 hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2)),
+      `functional-alpha2` = c(decay, list(hypers = set_hyperPriors(alphaSDist = "fixed",
+                                                                   alphaSInit = 2))),
+      `functional-gaussian` = c(decay, list(kernelS = "gaussian")),
+      `functional-matern52` = c(decay, list(kernelS = "matern52")),
       m1000 = synthetic_problem(60, 1000),
       m2000 = synthetic_problem(60, 2000))
+    if (!is.null(kernel)) pr$kernelS <- pr$kernelB <- kernel
+    pr
+  }
+  fit_args <- function(pr) {
+    list(pr$sim, pr$field, hypers = pr$hypers %||% set_hyperPriors(),
+         kernelS = pr$kernelS %||% "powexp", kernelB = pr$kernelB %||% "powexp")
   }
   # ms per default sweep after nAdapt adapting sweeps, in chunks with
   # chol(n + m) timed in between
-  sweep_cost <- function(name, nAdapt, nSweep, chunks) {
-    pr <- problem(name)
+  sweep_cost <- function(name, nAdapt, nSweep, chunks, kernel = NULL) {
+    pr <- problem(name, kernel)
     n <- nrow(pr$field); m <- nrow(pr$sim)
     set.seed(2)
-    fit <- suppressMessages(calibrate(pr$sim, pr$field, nMCMC = nAdapt + 2, nBurn = nAdapt,
-                                      thinning = 1, nChains = 1))
+    fit <- suppressMessages(do.call(calibrate, c(fit_args(pr), list(
+      nMCMC = nAdapt + 2, nBurn = nAdapt, thinning = 1, nChains = 1))))
     state <- fit$state$chains[[1]]$sampler
     per <- max(1, ceiling(nSweep / chunks))
     ms <- ch <- numeric(chunks)
@@ -101,7 +120,8 @@ helpers <- function() {
       state <- res$state
       ch[i] <- t_chol(n + m, budget = 0.5)
     }
-    data.frame(case = name, n = n, m = m, algebra = fit$settings$simAlgebra$name,
+    data.frame(case = name, kernel = kernel %||% "powexp", n = n, m = m,
+               algebra = fit$settings$simAlgebra$name,
                sweeps = per * chunks, `ms/sweep` = stats::median(ms),
                `chol ms` = stats::median(ch), ratio = stats::median(ms / ch),
                `peak MB` = peak_mb(), blas = FBC:::blas_kind(), check.names = FALSE)
@@ -112,9 +132,9 @@ helpers <- function() {
     set.seed(2024)
     t0 <- cpu()
     fit <- suppressMessages(if (quick) {
-      calibrate(pr$sim, pr$field, nMCMC = 400, nBurn = 200, hypers = pr$hypers %||% set_hyperPriors())
+      do.call(calibrate, c(fit_args(pr), list(nMCMC = 400, nBurn = 200)))
     } else {
-      calibrate(pr$sim, pr$field, hypers = pr$hypers %||% set_hyperPriors())
+      do.call(calibrate, fit_args(pr))
     })
     first <- cpu() - t0
     firstFit <- fit
@@ -200,8 +220,26 @@ if ("sweep" %in% parts) {
   show(do.call(rbind, rows))
 }
 
-runs <- c(if ("functional" %in% parts) c("functional", "functional-alpha2"),
-          intersect(c("functional-alpha2", "m1000", "m2000"), parts))
+if ("kernels" %in% parts) {
+  cat("\n== Cost of one default sweep per correlation family (both GPs) ==\n")
+  spec <- list(ball = c(nAdapt = 500, nSweep = 2000, chunks = 4),
+               functional = c(nAdapt = 500, nSweep = 2000, chunks = 4),
+               m1000 = c(nAdapt = 60, nSweep = 40, chunks = 4))
+  if (quick) spec <- lapply(spec, function(s) stats::setNames(pmax(2, round(s / c(10, 10, 2))), names(s)))
+  rows <- list()
+  for (nm in names(spec)) for (k in c("powexp", "gaussian", "matern32", "matern52")) {
+    s <- spec[[nm]]
+    rows[[length(rows) + 1L]] <- in_fresh_process(
+      function(nm, s, k) sweep_cost(nm, s[["nAdapt"]], s[["nSweep"]], s[["chunks"]], kernel = k),
+      nm = nm, s = s, k = k)
+  }
+  show(do.call(rbind, rows))
+}
+
+runs <- c(if ("functional" %in% parts) c("functional", "functional-alpha2", "functional-gaussian",
+                                         "functional-matern52"),
+          intersect(c("functional-alpha2", "functional-gaussian", "functional-matern52",
+                      "m1000", "m2000"), parts))
 runs <- unique(runs)
 for (nm in runs) {
   cat(sprintf("\n== Time to a converged posterior: %s ==\n", nm))

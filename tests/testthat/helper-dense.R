@@ -1,15 +1,33 @@
 # Plain-R reference implementations used as independent checks of the
 # compiled code: dense covariance, dense Cholesky log-likelihood.
 
-# R(X, Y) = prod_k exp(-theta_k |x_k - y_k|^alpha_k), one outer() per input.
-dense_corr <- function(X, Y, theta, alpha) {
+# R(X, Y) = prod_k r(|x_k - y_k|), one outer() per input, with r written
+# from the formulas of ?correlation (h = sqrt(theta) d):
+#   powexp exp(-theta d^alpha), gaussian exp(-theta d^2),
+#   matern32 (1 + sqrt(3) h) exp(-sqrt(3) h),
+#   matern52 (1 + sqrt(5) h + 5 h^2 / 3) exp(-sqrt(5) h).
+dense_corr <- function(X, Y, theta, alpha, kernel = "powexp") {
   X <- as.matrix(X); Y <- as.matrix(Y)
-  expo <- matrix(0, nrow(X), nrow(Y))
-  for (k in seq_len(ncol(X))) {
-    expo <- expo + theta[k] * abs(outer(X[, k], Y[, k], "-"))^alpha[k]
+  r1 <- function(d, theta, alpha) {
+    h <- sqrt(theta) * d
+    switch(kernel,
+      powexp = exp(-theta * d^alpha),
+      gaussian = exp(-theta * d^2),
+      matern32 = (1 + sqrt(3) * h) * exp(-sqrt(3) * h),
+      matern52 = (1 + sqrt(5) * h + 5 * h^2 / 3) * exp(-sqrt(5) * h))
   }
-  exp(-expo)
+  out <- matrix(1, nrow(X), nrow(Y))
+  for (k in seq_len(ncol(X))) {
+    out <- out * r1(abs(outer(X[, k], Y[, k], "-")), theta[k], alpha[k])
+  }
+  out
 }
+
+# The kernel names and the codes the compiled entry points take.
+kernel_code <- function(kernel) {
+  c(powexp = 1L, gaussian = 2L, matern32 = 3L, matern52 = 4L)[[kernel]]
+}
+all_kernels <- c("powexp", "gaussian", "matern32", "matern52")
 
 # Unpacks phi (scaled space, kappa on [0, 1]) into named pieces.
 unpack_phi <- function(phi, p, q) {
@@ -21,24 +39,26 @@ unpack_phi <- function(phi, p, q) {
 }
 
 # The full (n + m) x (n + m) covariance of y = (yf, ys) (vignette 2.4).
-dense_cov <- function(Xf, Xs, phi, nugget = 1e-6) {
+# kernS, kernB: the simulator and bias GPs' correlation families.
+dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp") {
   n <- nrow(Xf); m <- nrow(Xs); p <- ncol(Xf); q <- ncol(Xs) - p
   th <- unpack_phi(phi, p, q)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   X <- rbind(Xk, Xs)
-  C <- th$sigma2S * dense_corr(X, X, th$thetaS, th$alphaS)
+  C <- th$sigma2S * dense_corr(X, X, th$thetaS, th$alphaS, kernS)
   f <- seq_len(n); s <- n + seq_len(m)
   C[s, s] <- C[s, s] + th$sigma2S * nugget * diag(m)
-  C[f, f] <- C[f, f] + th$sigma2B * dense_corr(Xf, Xf, th$thetaB, th$alphaB) +
+  C[f, f] <- C[f, f] + th$sigma2B * dense_corr(Xf, Xf, th$thetaB, th$alphaB, kernB) +
     th$sigma2E * diag(n)
   C
 }
 
 # Gaussian log-likelihood of (yf, ys) via one dense Cholesky factor.
-dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6) {
+dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
+                         kernB = "powexp") {
   p <- ncol(Xf); q <- ncol(Xs) - p
   th <- unpack_phi(phi, p, q)
-  C <- dense_cov(Xf, Xs, phi, nugget)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB)
   r <- c(yf - th$muB, ys)
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)

@@ -1,15 +1,17 @@
 # Plain-R GP conditional of a prediction target given y = (yf, ys), built from
 # the dense joint covariance (helper-dense.R) with one explicit solve per
 # target: mean = mu* + k' C^-1 (y - mu), var = v* - k' C^-1 k (scaled space).
-dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6) {
+# kernS, kernB: correlation families (dense_corr()).
+dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
+                          kernB = "powexp") {
   p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
   th <- unpack_phi(phi, p, q)
-  C <- dense_cov(Xf, Xs, phi, nugget)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
-  ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS)
-  kbias <- rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB),
+  ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS, kernS)
+  kbias <- rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB, kernB),
                  matrix(0, m, nrow(Xnew)))
   k <- switch(type, field = , mean = ksim + kbias, simulator = ksim, bias = kbias)
   mu0 <- if (type == "simulator") 0 else th$muB
@@ -20,8 +22,10 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6) {
 }
 
 # A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
-# at `phi` (sampler scale), so each retained draw equals phi.
-fixed_fit <- function(phi, seed = 11) {
+# at `phi` (sampler scale), so each retained draw equals phi; kernelS,
+# kernelB: correlation families (a family without a smoothness gets no
+# alpha prior: its alpha is not a parameter).
+fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp") {
   d <- random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed)
   # native units: inputs stretched, response shifted/scaled
   sim <- cbind(y = 3 + 2 * d$ys, x1 = 10 * d$Xs[, 1], x2 = d$Xs[, 2] - 5, t = 4 * d$Xs[, 3])
@@ -29,15 +33,18 @@ fixed_fit <- function(phi, seed = 11) {
   sc <- FBC:::fbc_scale(sim, 2)
   th <- unpack_phi(phi, 2, 1)
   kap <- sc$xmin[3] + th$kappa * (sc$xmax[3] - sc$xmin[3])
-  hyp <- set_hyperPriors(
+  args <- list(
     thetaSDist = "fixed", thetaSInit = th$thetaS, alphaSDist = "fixed", alphaSInit = th$alphaS,
     thetaBDist = "fixed", thetaBInit = th$thetaB, alphaBDist = "fixed", alphaBInit = th$alphaB,
     sigma2SDist = "fixed", sigma2SInit = th$sigma2S, sigma2BDist = "fixed",
     sigma2BInit = th$sigma2B, sigma2EDist = "fixed", sigma2EInit = th$sigma2E,
     muBDist = "fixed", muBInit = th$muB)
+  if (kernelS != "powexp") args[c("alphaSDist", "alphaSInit")] <- NULL
+  if (kernelB != "powexp") args[c("alphaBDist", "alphaBInit")] <- NULL
+  hyp <- do.call(set_hyperPriors, args)
   # the random field inputs overhang the random design: the warning is expected
   suppressWarnings(
     calibrate(sim, field, nMCMC = 6, nBurn = 2, thinning = 2, kappaDist = "fixed",
-              kappaInit = kap, hypers = hyp),
+              kappaInit = kap, hypers = hyp, kernelS = kernelS, kernelB = kernelB),
     classes = "fbc_extrapolation")
 }

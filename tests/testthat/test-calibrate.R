@@ -146,3 +146,72 @@ test_that("large dense problems move each kappa and the simulator block once a s
   expect_identical(fit$settings$simAlgebra$name, "dense")
   expect_identical(fit$settings$moves$repeats, c(1L, 1L, 2L))
 })
+
+test_that("a family without a smoothness: Phi, vars and indices leave alpha out, and every path follows", {
+  set.seed(31)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2,
+                   kernelS = "matern52", kernelB = "matern32")
+  keep <- c("kappa1", "thetaS1", "thetaS2", "thetaB1", "sigma2S", "sigma2B", "sigma2E", "muB")
+  expect_identical(colnames(fit$Phi), keep)
+  expect_identical(fit$vars, keep)
+  expect_identical(rownames(fit$estimates), keep)
+  expect_identical(names(fit$acceptance), keep)
+  expect_identical(names(fit$proposalSD), keep)
+  expect_identical(fit$indices$alphaS, integer(0))
+  expect_identical(fit$indices$alphaB, integer(0))
+  expect_identical(fit$indices$thetaS, 2:3)
+  expect_identical(fit$indices$muB, 8L)
+  expect_identical(fit$settings[c("kernelS", "kernelB")], list(kernelS = "matern52", kernelB = "matern32"))
+  # the sampler's vector keeps fixed alpha slots
+  expect_length(fit$spec$vars, 11)
+  full <- FBC:::sampler_draws(fit, 1:3)
+  expect_identical(dim(full), c(3L, 11L))
+  expect_true(all(full[, c(4, 5, 7)] == 2))
+  # the retained log-likelihoods are the plain-R Matern ones (the chains ran
+  # with the families asked for), and logPost adds the priors of Phi's columns
+  i <- 5
+  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+                     FBC:::sampler_draws(fit, i)[1, ], kernS = "matern52", kernB = "matern32")
+  expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
+  lp <- sum(vapply(fit$vars, function(v) fit$priorFns[[v]](fit$Phi[i, v]), 0))
+  expect_equal(fit$logPost[i], ll + lp, tolerance = 1e-8)
+  # conversions, summaries, messages
+  expect_identical(names(coef(fit)), keep)
+  expect_identical(rownames(summary(fit)), keep)
+  d <- posterior::as_draws_df(fit)
+  expect_identical(posterior::variables(d), c(keep, "lp__"))
+  skip_if_not_installed("coda")
+  expect_identical(coda::varnames(coda::as.mcmc.list(fit)), keep)
+  expect_type(convergence_messages(fit), "character")
+  expect_output(print(fit), "kernels: simulator matern52, bias matern32")
+  # update() continues the chains with the same columns
+  up <- update(fit, nMCMC = 40)
+  expect_identical(colnames(up$Phi), keep)
+  expect_identical(nrow(up$Phi), nrow(fit$Phi) + 40L)
+  expect_identical(up$Phi[up$chain == 1, ][seq_len(sum(fit$chain == 1)), ],
+                   fit$Phi[fit$chain == 1, ])
+  ll <- dense_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
+                     FBC:::sampler_draws(up, nrow(up$Phi))[1, ], kernS = "matern52",
+                     kernB = "matern32")
+  expect_equal(up$logLik[nrow(up$Phi)], ll, tolerance = 1e-8)
+  # plots
+  expect_s3_class(plot(fit, "thetaS"), "ggplot")
+  expect_s3_class(plot(fit, "thetaB", type = "trace"), "ggplot")
+  expect_snapshot(error = TRUE, plot(fit, "alphaS"))
+  expect_snapshot(error = TRUE, plot(fit, "alphaB"))
+})
+
+test_that("the kernels are checked, and alpha priors with a family without one are flagged", {
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kernelS = "matern"))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, kernelB = 2))
+  set.seed(1)
+  expect_snapshot(
+    fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
+                     kernelS = "gaussian",
+                     hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2,
+                                              alphaBInit = 1.5))
+  )
+  # the bias GP keeps its power exponential and the alphaB given
+  expect_identical(fit$vars[fit$indices$alphaB], "alphaB1")
+  expect_identical(fit$indices$alphaS, integer(0))
+})

@@ -254,6 +254,10 @@ test_that("a mismatched or corrupt checkpoint is refused and nothing is overwrit
     calibrate(ballSim, ballField, nMCMC = 300, nBurn = 50, thinning = 2, nChains = 2,
               kappaP1 = 2, checkpoint = dir)
   })
+  # another correlation family is another run
+  expect_snapshot(error = TRUE, transform = hide, {
+    do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir, kernelS = "matern52"), args))
+  })
   expect_identical(dir_md5(dir), md5)
   # a truncated chain file
   f <- file.path(dir, "chain-2.rds")
@@ -353,4 +357,23 @@ test_that("the sequential progress bar follows all chains to the end", {
   expect_match(out, "0/600 created")
   expect_match(out, "600/600 terminated")
   expect_silent(calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 2))
+})
+
+test_that("a run with another correlation family checkpoints and comes back with its columns", {
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  args <- list(ballSim, ballField, nMCMC = 120, nBurn = 60, thinning = 2, nChains = 2,
+               kernelS = "matern32", checkpoint = dir)
+  set.seed(4)
+  fit <- do.call(calibrate, args)
+  expect_false("alphaS1" %in% colnames(fit$Phi))
+  # the finished run's directory gives the fit back, kernels and all
+  expect_message(again <- do.call(calibrate, args), "Resuming")
+  expect_identical(again$Phi, fit$Phi)
+  expect_identical(again$settings$kernelS, "matern32")
+  # the default kernels are not written into the fingerprint, so
+  # checkpoints written before the kernels existed still match
+  id <- FBC:::run_identity(ballSim, ballField, fit$spec,
+                           list(nMCMC = 1, kernelS = "powexp", kernelB = "powexp"))
+  expect_named(id$settings, "nMCMC")
 })

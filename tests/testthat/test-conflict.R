@@ -118,3 +118,13 @@ test_that("suggestions keep the other members of a class and give the family's c
   expect_s3_class(eval(parse(text = s)), "fbc_hypers")
   expect_true(is.na(FBC:::suggest_prior(fit, 1, 0.5)))  # kappa's stretched beta
 })
+
+test_that("a smoothness the likelihood pushes to 2 gets the smooth families as advice", {
+  fit <- small_fit(nChains = 1)
+  # a prior_conflicts() row as it comes for alphaS2 at its bound 2
+  cf <- data.frame(var = "alphaS2", class = "alphaS", side = "upper", cdf = 0.995,
+                   median = 1.99, dataValue = 2, atBound = TRUE, bound = 2, priorValue = 2)
+  msg <- FBC:::conflict_messages(fit, cf)
+  expect_match(msg, "kernelS = \"matern52\"", fixed = TRUE)
+  expect_snapshot(writeLines(strwrap(msg, 78)))
+})

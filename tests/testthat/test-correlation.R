@@ -27,6 +27,41 @@ test_that("correlation() equals the plain-R double loop", {
   expect_equal(correlation(1:3, theta = 1, alpha = 2), exp(-outer(1:3, 1:3, "-")^2))
 })
 
+test_that("each family equals its formula (plain R, ?correlation)", {
+  set.seed(12)
+  X <- matrix(runif(24), 8, 3)
+  Y <- matrix(runif(15), 5, 3)
+  th <- c(0.5, 3, 10)
+  for (k in c("gaussian", "matern32", "matern52")) {
+    expect_equal(correlation(X, Y, th, kernel = k), dense_corr(X, Y, th, NULL, k),
+                 tolerance = 1e-14)
+  }
+  # one dimension, written out: h = sqrt(theta) d
+  d <- c(0, 0.1, 0.5, 1, 3)
+  h <- sqrt(2) * d
+  one <- function(k) correlation(d, 0, theta = 2, kernel = k)[, 1]
+  expect_equal(one("gaussian"), exp(-2 * d^2))
+  expect_equal(one("matern32"), (1 + sqrt(3) * h) * exp(-sqrt(3) * h))
+  expect_equal(one("matern52"), (1 + sqrt(5) * h + 5 * h^2 / 3) * exp(-sqrt(5) * h))
+  # the Gaussian is the power exponential at alpha = 2
+  expect_equal(correlation(X, Y, th, kernel = "gaussian"), correlation(X, Y, th, alpha = 2))
+  # near 0 each is 1 - c theta d^2 with c = 1, 3/2, 5/6
+  e <- 1e-4
+  curv <- vapply(c("gaussian", "matern32", "matern52"), function(k)
+    (1 - correlation(e, 0, theta = 2, kernel = k)[1, 1]) / (2 * e^2), numeric(1))
+  expect_equal(unname(curv), c(1, 3 / 2, 5 / 6), tolerance = 1e-3)
+  # far apart: no overflow in the Matern products, the correlation goes to 0
+  expect_identical(correlation(c(0, 1e6), theta = rep(1e4, 1), kernel = "matern52")[2, 1], 0)
+})
+
+test_that("alpha is needed by the power exponential only", {
+  X <- matrix(runif(6), 3, 2)
+  expect_snapshot(error = TRUE, correlation(X, theta = 1))
+  expect_snapshot(correlation(X, theta = 1, alpha = 2, kernel = "matern32") -> r)
+  expect_equal(r, correlation(X, theta = 1, kernel = "matern32"))
+  expect_snapshot(error = TRUE, correlation(X, theta = 1, kernel = "matern"))
+})
+
 test_that("correlation() explains bad input", {
   X <- matrix(runif(6), 3, 2)
   expect_snapshot(error = TRUE, correlation(X, matrix(1, 2, 3), theta = 1, alpha = 2))

@@ -62,6 +62,8 @@ test_that("draws piling up at a bound are reported with a hint", {
   expect_equal(pile$share, c(0.3, 1))
   msg <- convergence_messages(x)
   expect_match(msg, "100% of the draws of alphaS1 lie at its bound 2.*alphaSDist = \"fixed\"", all = FALSE)
+  # at 2 the smooth families are the first advice
+  expect_snapshot(writeLines(strwrap(grep("alphaS1", msg, value = TRUE), 78)))
   expect_match(msg, "30% of the draws of kappa1 lie at its bound 13.959", all = FALSE)
 })
 

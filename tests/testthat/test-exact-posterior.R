@@ -79,6 +79,37 @@ test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
   expect_lt(ks, 0.06)
 })
 
+test_that("Matern families: kappa draws match the grid posterior on the ball data", {
+  # the reference: dense_loglik() with the Matern formulas of ?correlation
+  # written in plain R (helper-dense.R), times the Beta(1.1, 1.1) prior
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(1.5, 0.2), thetaBDist = "fixed", thetaBInit = 2,
+    sigma2SDist = "fixed", sigma2SInit = 3.5, sigma2BDist = "fixed", sigma2BInit = 0.9,
+    sigma2EDist = "fixed", sigma2EInit = 0.15, muBDist = "fixed", muBInit = 0.2)
+  set.seed(12)
+  fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
+                   nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern32")
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaB1", "sigma2S",
+                                        "sigma2B", "sigma2E", "muB"))
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  lo <- fit$scale$xmin[2]
+  rng <- fit$scale$xmax[2] - lo
+  u <- seq(0, 1, length.out = 101)
+  lp <- vapply(u, function(k) {
+    phi[1] <- k
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern32")
+  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
+  dens <- exp(lp - max(lp))
+  kappa <- lo + rng * u
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  ref <- grid_quantile(kappa, dens, probs)
+  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
+  expect_lt(max(abs(got - ref)) / stats::sd(fit$Phi[, "kappa1"]), 0.15)
+  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
+  expect_lt(ks, 0.06)
+})
+
 test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
   # data drawn from the model itself (dense_cov) at kappa = (0.3, 0.7)
   set.seed(5)

@@ -253,3 +253,42 @@ test_that("the dense algebra's on-the-fly correlation gives the cached path's nu
     expect_equal(pf, pc, tolerance = 1e-12)
   }
 })
+
+test_that("every correlation family: Kronecker log-likelihoods and moves equal the dense ones", {
+  # dense_loglik() with the families of ?correlation written in plain R
+  # (helper-dense.R); the dense algebra gives the same numbers
+  pairs <- list(c("gaussian", "matern52"), c("matern32", "gaussian"),
+                c("matern52", "matern32"), c("matern52", "powexp"))
+  for (s in designs[c(2, 3)]) {
+    p <- s[["p"]]; q <- s[["q"]]
+    d <- product_data(s[["I"]], s[["J"]], p, q, n = 5, seed = 70 + sum(s))
+    idx <- FBC:::param_indices(p, q)
+    for (kk in pairs) {
+      kS <- kernel_code(kk[1]); kB <- kernel_code(kk[2])
+      phis <- kron_path(random_phi(p, q), p, q)
+      dense <- apply(phis, 1, function(phi)
+        dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, kk[1], kk[2]))
+      expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, kS, kB), dense[1],
+                   tolerance = 1e-8)
+      expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, kS, kB, algebra = 1L),
+                   dense[1], tolerance = 1e-8)
+      path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE,
+                           kernS = kS, kernB = kB)
+      expect_equal(path, dense, tolerance = 1e-8)
+      groups <- integer(ncol(phis))
+      groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
+      groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
+      joint <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, groups = groups,
+                            decoys = TRUE, kernS = kS, kernB = kB)
+      expect_equal(joint, dense, tolerance = 1e-8)
+      # predictions through the Kronecker factors: the dense GP conditional
+      Xn <- matrix(runif(3 * p), 3, p)
+      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[2, , drop = FALSE], Xn, 1L, 1e-6, 500L,
+                           kS, kB)
+      ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[2, ], Xn, "field", kernS = kk[1],
+                           kernB = kk[2])
+      expect_equal(drop(kron$mean), ref$mean, tolerance = 1e-8)
+      expect_equal(drop(kron$var), ref$var, tolerance = 1e-8)
+    }
+  }
+})

@@ -178,3 +178,74 @@ test_that("a covariance that is not positive definite gives -Inf, not a crash", 
   sigma2E <- FBC:::param_indices(p, q)$sigma2E
   expect_lt(res$acceptance[sigma2E], 0.6)  # the negative proposals were rejected
 })
+
+# Pairs of correlation families (simulator, bias) covering each family on
+# each GP, mixed with the power exponential and with each other.
+kernel_pairs <- list(c("gaussian", "matern32"), c("matern32", "matern52"),
+                     c("matern52", "gaussian"), c("powexp", "matern52"),
+                     c("matern32", "powexp"))
+
+test_that("every correlation family: the block log-likelihood equals the dense one", {
+  # dense_loglik() builds the covariance from dense_corr(), written from the
+  # formulas of ?correlation (helper-dense.R)
+  for (s in sizes[c(2, 4)]) {
+    p <- s[["p"]]; q <- s[["q"]]
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 50 + sum(s))
+    for (kk in kernel_pairs) {
+      phi <- random_phi(p, q)
+      block <- .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6,
+                           kernel_code(kk[1]), kernel_code(kk[2]))
+      dense <- dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, kk[1], kk[2])
+      expect_equal(block, dense, tolerance = 1e-8)
+    }
+  }
+})
+
+test_that("every correlation family: cached, on-the-fly and joint-move paths equal the dense log-likelihood", {
+  old <- .fbc_cache_budget()
+  on.exit(.fbc_cache_budget(old))
+  # p + q = 5 puts 4 inputs in packed caches and 1 on the fly
+  for (s in list(sizes[[2]], sizes[[4]], c(n = 5, m = 16, p = 2, q = 3))) {
+    p <- s[["p"]]; q <- s[["q"]]
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 60 + sum(s))
+    dat$Xf <- dat$Xf[c(seq_len(s[["n"]]), 1, 3), , drop = FALSE]  # replicates
+    dat$yf <- c(dat$yf, rnorm(2))
+    idx <- FBC:::param_indices(p, q)
+    groups <- integer(length(random_phi(p, q)))
+    groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
+    groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
+    for (kk in kernel_pairs) {
+      kS <- kernel_code(kk[1]); kB <- kernel_code(kk[2])
+      phis <- one_move_path(random_phi(p, q), p, q)
+      dense <- apply(phis, 1, function(phi)
+        dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, kk[1], kk[2]))
+      cached <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE,
+                             kernS = kS, kernB = kB)
+      expect_equal(cached, dense, tolerance = 1e-8)
+      joint <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, groups = groups,
+                            decoys = TRUE, kernS = kS, kernB = kB)
+      expect_equal(joint, dense, tolerance = 1e-8)
+      .fbc_cache_budget(0)
+      fly <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE,
+                          kernS = kS, kernB = kB)
+      .fbc_cache_budget(old)
+      # the on-the-fly path does the cached path's operations: the same numbers
+      expect_equal(fly, cached, tolerance = 1e-12)
+    }
+  }
+})
+
+test_that("a family without a smoothness ignores alpha", {
+  dat <- random_koh_data(6, 15, 2, 1, seed = 70)
+  idx <- FBC:::param_indices(2, 1)
+  set.seed(70)
+  phi <- random_phi(2, 1)
+  other <- phi
+  other[c(idx$alphaS, idx$alphaB)] <- 1.3
+  for (k in 2:4) {
+    expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, k, k),
+                     .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, other, 1e-6, k, k))
+  }
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, 5L, 1L),
+               "unknown correlation family")
+})

@@ -34,6 +34,19 @@ test_that("with fixed parameters the check is the dense predictive at the field 
   expect_equal(colnames(pp$x), c("x1", "x2"))
 })
 
+test_that("a Matern fit: the check is the dense predictive in its families", {
+  set.seed(4)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi, kernelS = "matern32", kernelB = "matern52")
+  sc <- fit$scale
+  d <- fit$data
+  ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phi, d$Xf, "field", kernS = "matern32",
+                       kernB = "matern52")
+  pp <- ppc_field(fit, ndraws = 3)
+  expect_equal(pp$obs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
+  expect_equal(pp$obs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+})
+
 test_that("several draws: the numbers come from the mixture of the draws' predictives", {
   set.seed(3)
   phi <- random_phi(2, 1)

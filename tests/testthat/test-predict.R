@@ -26,6 +26,27 @@ test_that("with every parameter fixed, predict() is the dense GP conditional (al
   }
 })
 
+test_that("every correlation family: predict() is the dense GP conditional", {
+  # dense_predict() with the families of ?correlation written in plain R
+  set.seed(4)
+  phi <- random_phi(2, 1)
+  for (kk in list(c("gaussian", "matern32"), c("matern52", "gaussian"),
+                  c("matern32", "matern52"))) {
+    fit <- fixed_fit(phi, kernelS = kk[1], kernelB = kk[2])
+    sc <- fit$scale
+    # the smoothness is not a parameter: no alpha columns
+    expect_false(any(grepl("^alpha", colnames(fit$Phi))))
+    for (type in c("field", "simulator", "bias")) {
+      ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+                           scaled_new(Xnew, sc), type, kernS = kk[1], kernB = kk[2])
+      shift <- if (type == "bias") 0 else sc$ymean
+      pr <- predict(fit, Xnew, method = "MAP", type = type)
+      expect_equal(pr$pred, shift + sc$ysd * ref$mean, tolerance = 1e-8)
+      expect_equal(pr$se, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+    }
+  }
+})
+
 test_that("the Bayesian method combines per-draw conditionals by total variance and mixture quantiles", {
   set.seed(3)
   phi <- random_phi(2, 1)

@@ -4,9 +4,9 @@
 # K_BB - K_B,-B K_-B^-1 K_-B,B, with K = sigma2S (R_s + nugget I).
 
 # Held-out predictive of every run by refitting without it (or its fold).
-refit_heldout <- function(Xs, ys, th, fold, nugget = 1e-6) {
+refit_heldout <- function(Xs, ys, th, fold, nugget = 1e-6, kernel = "powexp") {
   m <- nrow(Xs)
-  K <- th$sigma2S * (dense_corr(Xs, Xs, th$thetaS, th$alphaS) + nugget * diag(m))
+  K <- th$sigma2S * (dense_corr(Xs, Xs, th$thetaS, th$alphaS, kernel) + nugget * diag(m))
   mean <- var <- numeric(m)
   for (k in unique(fold)) {
     B <- which(fold == k)
@@ -157,4 +157,23 @@ test_that("the simulator correlation goes through sim_corr()", {
   X <- fit$data$Xs
   expect_equal(FBC:::sim_corr(fit, X, X[1:4, ], phi), dense_corr(X, X[1:4, ], th$thetaS, th$alphaS),
                tolerance = 1e-12)
+})
+
+test_that("a Matern emulator: held-out predictions equal explicit refits in its family", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi, kernelS = "matern52", kernelB = "gaussian")
+  sc <- fit$scale
+  th <- unpack_phi(phi, 2, 1)
+  m <- length(fit$data$ys)
+  X <- fit$data$Xs
+  expect_equal(FBC:::sim_corr(fit, X, X[1:4, ], FBC:::sampler_draws(fit, 1)[1, ]),
+               dense_corr(X, X[1:4, ], th$thetaS, NULL, "matern52"), tolerance = 1e-12)
+  for (cs in list(list(folds = NULL, labels = seq_len(m)),
+                  list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1))) {
+    ref <- refit_heldout(X, fit$data$ys, th, cs$labels, kernel = "matern52")
+    v <- validate_emulator(fit, method = "MAP", folds = cs$folds)
+    expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
+    expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+  }
 })
