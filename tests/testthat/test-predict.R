@@ -182,7 +182,9 @@ test_that("ndraws uses evenly spaced draws over all chains; NULL uses them all",
   })
 })
 
-test_that("points in blocks give exactly the answers of one block", {
+# Equal to rounding, not bit for bit: an optimized BLAS (OpenBLAS) takes
+# other kernel paths for other block shapes, so the last bits may differ.
+test_that("points in blocks give the answers of one block", {
   set.seed(21)
   fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
   h <- seq(0.3, 4.1, length.out = 23)
@@ -190,13 +192,13 @@ test_that("points in blocks give exactly the answers of one block", {
   old <- options(FBC.predict_block = 4)  # 6 blocks, the last one of 3 points
   on.exit(options(old))
   blocked <- predict(fit, h, draws = TRUE, level = 0.8)
-  expect_identical(blocked, one)
-  expect_identical(predict(fit, h, method = "MAP"), {
+  expect_equal(blocked, one, tolerance = 1e-12)
+  expect_equal(predict(fit, h, method = "MAP"), {
     options(FBC.predict_block = NULL); predict(fit, h, method = "MAP")
-  })
+  }, tolerance = 1e-12)
   # with a progress bar forced on, the same numbers
   options(FBC.predict_block = 5, FBC.progress = TRUE, cli.progress_show_after = 0)
-  expect_identical(suppressMessages(predict(fit, h, draws = TRUE, level = 0.8)), one)
+  expect_equal(suppressMessages(predict(fit, h, draws = TRUE, level = 0.8)), one, tolerance = 1e-12)
   options(FBC.progress = NULL, cli.progress_show_after = NULL, FBC.predict_block = NULL)
   # block sizes: bounded by the memory budget, >= 500 points otherwise
   expect_equal(FBC:::predict_block_size(5000, 1000), 500L)
