@@ -11,6 +11,8 @@
 #                                               #   ball data, the functional problem and m = 1000
 #   Rscript inst/bench/scale.R m1000            # converged run at m = 1000 (hours
 #   Rscript inst/bench/scale.R m2000            #   on the reference BLAS)
+#   Rscript inst/bench/scale.R m1000-gaussian   # the same with kernelS = "gaussian", as
+#   Rscript inst/bench/scale.R m2000-gaussian   #   print() advises when alphaS piles at 2
 #   Rscript inst/bench/scale.R sweep functional m1000 m2000   # everything
 # Add `quick` for a smoke test (few sweeps, short converged runs). Each part
 # runs in a fresh R process (callr), so its peak memory is its own.
@@ -44,7 +46,7 @@ quick <- "quick" %in% args
 parts <- setdiff(args, "quick")
 if (!length(parts)) parts <- "sweep"
 known <- c("sweep", "kernels", "functional", "functional-alpha2", "functional-gaussian",
-           "functional-matern52", "m1000", "m2000")
+           "functional-matern52", "m1000", "m2000", "m1000-gaussian", "m2000-gaussian")
 if (length(bad <- setdiff(parts, known))) {
   stop("unknown part(s): ", paste(bad, collapse = ", "), "; use ", paste(known, collapse = ", "))
 }
@@ -94,7 +96,10 @@ helpers <- function() {
       `functional-gaussian` = c(decay, list(kernelS = "gaussian")),
       `functional-matern52` = c(decay, list(kernelS = "matern52")),
       m1000 = synthetic_problem(60, 1000),
-      m2000 = synthetic_problem(60, 2000))
+      m2000 = synthetic_problem(60, 2000),
+      # as print() advises when alphaS piles up at 2 (it does for this smooth simulator)
+      `m1000-gaussian` = c(synthetic_problem(60, 1000), list(kernelS = "gaussian")),
+      `m2000-gaussian` = c(synthetic_problem(60, 2000), list(kernelS = "gaussian")))
     if (!is.null(kernel)) pr$kernelS <- pr$kernelB <- kernel
     pr
   }
@@ -239,7 +244,7 @@ if ("kernels" %in% parts) {
 runs <- c(if ("functional" %in% parts) c("functional", "functional-alpha2", "functional-gaussian",
                                          "functional-matern52"),
           intersect(c("functional-alpha2", "functional-gaussian", "functional-matern52",
-                      "m1000", "m2000"), parts))
+                      "m1000", "m2000", "m1000-gaussian", "m2000-gaussian"), parts))
 runs <- unique(runs)
 for (nm in runs) {
   cat(sprintf("\n== Time to a converged posterior: %s ==\n", nm))
