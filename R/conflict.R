@@ -9,6 +9,11 @@ fbc_conflict_tail <- 0.01
 # draw) still rises this many posterior sds beyond the median, away from the
 # prior's bulk.
 fbc_conflict_sds <- 3
+# ... by at least this much (log-likelihood units, a likelihood ratio of
+# about 7) at its peak over its value at the median: a likelihood that only
+# creeps up on a plateau (a bias GP scale going to 0 along an input the bias
+# does not vary with) leaves the choice to the prior, which is no conflict.
+fbc_conflict_gain <- 2
 
 # CDF of a prior family in the units the family is written in (NA for the
 # improper and fixed ones).
@@ -48,11 +53,14 @@ fit_loglik <- function(fit, phi) {
 # prior CDF at the posterior median, the median, the value where the
 # likelihood alone peaks (`dataValue`, kappa in its own units; `priorValue`
 # in the prior's units), and whether that is a bound of the support
-# (`atBound`, `bound`).
-prior_conflicts <- function(fit) {
+# (`atBound`, `bound`), or the likelihood has no peak but rises to a limit
+# (`rising`: `dataValue` is then where it comes within 1 of the limit).
+# `loglik(fit, phi)`: the data's log-likelihood (a seam for tests).
+prior_conflicts <- function(fit, loglik = fit_loglik) {
   empty <- data.frame(var = character(), class = character(), side = character(),
                       cdf = numeric(), median = numeric(), dataValue = numeric(),
-                      atBound = logical(), bound = numeric(), priorValue = numeric())
+                      atBound = logical(), bound = numeric(), priorValue = numeric(),
+                      rising = logical())
   if (is.null(fit$spec$table) || nrow(fit$Phi) < 2L) return(empty)
   ps <- phi_spec(fit)
   tab <- ps$table
@@ -77,7 +85,7 @@ prior_conflicts <- function(fit) {
     ll <- function(wv) {
       phi <- map
       phi[ps$cols[j]] <- from_walk(wv, tab$transform[j])
-      fit_loglik(fit, phi)
+      loglik(fit, phi)
     }
     w3 <- wmed + dir * fbc_conflict_sds * sdw
     if (!(ll(w3 + dir * 0.1 * sdw) > ll(w3))) next
@@ -89,6 +97,15 @@ prior_conflicts <- function(fit) {
     }
     wL <- stats::optimize(function(v) max(ll(v), -1e300), sort(c(w3, far)), maximum = TRUE,
                           tol = 0.1 * sdw)$maximum
+    llL <- ll(wL)
+    if (llL - ll(wmed) < fbc_conflict_gain) next
+    # as high at the end of the search: no peak but a limit (a GP scale going
+    # to 0, the optimum anywhere on a plateau); report where the likelihood
+    # comes within 1 of it
+    rising <- ll(far) >= llL - 0.05
+    if (rising) {
+      wL <- stats::uniroot(function(v) ll(v) - (llL - 1), sort(c(wmed, wL)), tol = 0.01 * sdw)$root
+    }
     uL <- from_walk(wL, tab$transform[j])
     valueL <- tab$a[j] + tab$b[j] * uL  # in the prior's units
     if (ps$classes[j] == "kappa") {
@@ -103,7 +120,8 @@ prior_conflicts <- function(fit) {
     out[[length(out) + 1L]] <- data.frame(
       var = fit$vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
-      atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL
+      atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL,
+      rising = rising && !atBound
     )
   }
   if (length(out)) do.call(rbind, out) else empty
@@ -171,7 +189,7 @@ r_vec <- function(v) {
   txt <- if (is.character(v)) paste0("\"", v, "\"") else format_num(v)
   if (length(v) == 1L) txt else paste0("c(", paste(txt, collapse = ", "), ")")
 }
-format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific = abs(x) < 1e-4 && x != 0),
+format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific = (abs(x) < 1e-4 || abs(x) >= 1e5) && x != 0),
                                  character(1))
 
 # The convergence_messages() text: one message per class of parameters
@@ -190,12 +208,18 @@ conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
       if (rows$side[1] == "lower") " below" else " above"
     } else ""
     peak <- if (all(rows$atBound)) {
-      sprintf("at the bound %s", paste(unique(format_num(rows$bound)), collapse = ", "))
+      sprintf("peaks at the bound %s", paste(unique(format_num(rows$bound)), collapse = ", "))
+    } else if (all(rows$rising %||% FALSE)) {
+      positive <- cls %in% c("thetaS", "thetaB", "sigma2S", "sigma2B", "sigma2E")
+      sprintf("keeps rising %s (it comes within 1 log-likelihood unit of its limit %s %s)",
+              if (rows$side[1] == "lower" && positive) "towards 0" else "without bound",
+              if (rows$side[1] == "lower") "below about" else "above about",
+              paste(format_num(rows$dataValue), collapse = ", "))
     } else {
-      sprintf("near %s", paste(format_num(rows$dataValue), collapse = ", "))
+      sprintf("peaks near %s", paste(format_num(rows$dataValue), collapse = ", "))
     }
     parts <- sprintf(
-      "%s posterior median%s, %s, sit%s in the far %s of %s %s prior%s (prior probability %s%s), while the likelihood alone (the other parameters at the MAP draw) peaks %s",
+      "%s posterior median%s, %s, sit%s in the far %s of %s %s prior%s (prior probability %s%s), while the likelihood alone (the other parameters at the MAP draw) %s",
       if (one) "its" else "their", if (one) "" else "s",
       paste(format(signif(rows$median, 3)), collapse = ", "), if (one) "s" else "",
       side, if (one) "its" else "their", paste(priors, collapse = ", "), if (one) "" else "s",

@@ -110,7 +110,11 @@ smooth_kernel_hint <- function(cls) {
 #' or above 0.99), and (2) the data pull further out: with the other
 #' parameters at the MAP draw, the log-likelihood still increases 3
 #' posterior standard deviations (on the sampler's walk scale: log for
-#' positive parameters) beyond the median, away from the prior. The message
+#' positive parameters) beyond the median, away from the prior, and (3) at
+#' its peak there it is at least 2 log-likelihood units above its value at
+#' the median (a likelihood that only creeps up on a plateau, as a bias GP
+#' scale `thetaB` does towards 0 along an input the bias does not vary
+#' with, leaves the choice to the prior: no conflict). The message
 #' gives the value where that likelihood peaks and a looser prior with that
 #' value near its centre, as a call to [set_hyperPriors()] (an inverse-gamma
 #' or gamma prior with shape at most 1.1 and median at that value; a wider

@@ -128,3 +128,40 @@ test_that("a smoothness the likelihood pushes to 2 gets the smooth families as a
   expect_match(msg, "kernelS = \"matern52\"", fixed = TRUE)
   expect_snapshot(writeLines(strwrap(msg, 78)))
 })
+
+test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as such", {
+  d <- small_noise_data(frac = 0.1)
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
+  # every parameter fixed except thetaB1, log-normal around 0.05: in the
+  # lower 1% tail of its gamma(1.1, 0.1) prior
+  base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
+            thetaB1 = 0.05, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
+  Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
+  Phi[, "thetaB1"] <- exp(qnorm(ppoints(400), log(0.05), 0.25))
+  fit$Phi <- Phi
+  fit$chain <- rep(1:4, each = 100)
+  fit$logPost <- -abs(seq_len(400) - 200.5)
+  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  expect_lt(pgamma(0.05, 1.1, rate = 0.1), 0.01)
+  j <- match("thetaB1", fit$spec$vars)
+  # a likelihood with no peak: -theta / 0.01, whose limit 0 at theta -> 0 it
+  # comes within 1 of below theta = 0.01 (5 units above its value at 0.05)
+  plateau <- function(fit, phi) -phi[[j]] / 0.01
+  cf <- FBC:::prior_conflicts(fit, loglik = plateau)
+  expect_equal(cf$var, "thetaB1")
+  expect_true(cf$rising)
+  expect_equal(cf$dataValue, 0.01, tolerance = 0.01)
+  msg <- FBC:::conflict_messages(fit, cf)
+  expect_match(msg, "keeps rising towards 0 (it comes within 1 log-likelihood unit of its limit below about 0.01)",
+               fixed = TRUE)
+  expect_match(msg, "thetaBP2 = 79", fixed = TRUE)  # gamma(1.1) median 0.01: rate qgamma(0.5, 1.1) / 0.01 = 79.03
+  # a likelihood that gains less than 2 units beyond the median: no conflict
+  creep <- function(fit, phi) -phi[[j]] / 0.05
+  expect_equal(nrow(FBC:::prior_conflicts(fit, loglik = creep)), 0L)
+  # one with a peak (at 0.002) is reported at its peak, not as rising
+  peak <- function(fit, phi) -50 * (log(phi[[j]]) - log(0.002))^2
+  cf <- FBC:::prior_conflicts(fit, loglik = peak)
+  expect_false(cf$rising)
+  expect_equal(cf$dataValue, 0.002, tolerance = 0.02)
+})
