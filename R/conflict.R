@@ -99,29 +99,36 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
                           tol = 0.1 * sdw)$maximum
     llL <- ll(wL)
     if (llL - ll(wmed) < fbc_conflict_gain) next
-    # as high at the end of the search: no peak but a limit (a GP scale going
-    # to 0, the optimum anywhere on a plateau); report where the likelihood
-    # comes within 1 of it
-    rising <- ll(far) >= llL - 0.05
-    if (rising) {
-      wL <- stats::uniroot(function(v) ll(v) - (llL - 1), sort(c(wmed, wL)), tol = 0.01 * sdw)$root
+    # the value in the prior's units (`value`) and as reported (kappa in its
+    # own units)
+    at <- function(w) {
+      u <- from_walk(w, tab$transform[j])
+      value <- tab$a[j] + tab$b[j] * u
+      reported <- if (ps$classes[j] == "kappa") {
+        k <- match(fit$vars[j], fit$vars[ps$classes == "kappa"])
+        lo <- fit$scale$xmin[fit$scale$p + k]
+        lo + (fit$scale$xmax[fit$scale$p + k] - lo) * u
+      } else value
+      list(value = value, reported = reported)
     }
-    uL <- from_walk(wL, tab$transform[j])
-    valueL <- tab$a[j] + tab$b[j] * uL  # in the prior's units
-    if (ps$classes[j] == "kappa") {
-      k <- match(fit$vars[j], fit$vars[ps$classes == "kappa"])
-      lo <- fit$scale$xmin[fit$scale$p + k]
-      reported <- lo + (fit$scale$xmax[fit$scale$p + k] - lo) * uL
-    } else {
-      reported <- valueL
-    }
+    peak <- at(wL)
     bound <- sup_j[if (dir < 0) 1L else 2L]
-    atBound <- all(is.finite(sup_j)) && abs(reported - bound) <= fbc_pile_band * diff(sup_j)
+    atBound <- all(is.finite(sup_j)) && abs(peak$reported - bound) <= fbc_pile_band * diff(sup_j)
+    # away from a finite bound and as high at the end of the search: no peak
+    # but a limit (a GP scale going to 0, the optimum anywhere on a
+    # plateau); report where the likelihood comes within 1 of it
+    rising <- !atBound && ll(far) >= llL - 0.05
+    if (rising) {
+      peak <- at(stats::uniroot(function(v) ll(v) - (llL - 1), sort(c(wmed, wL)),
+                                tol = 0.01 * sdw)$root)
+    }
+    valueL <- peak$value
+    reported <- peak$reported
     out[[length(out) + 1L]] <- data.frame(
       var = fit$vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
       atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL,
-      rising = rising && !atBound
+      rising = rising
     )
   }
   if (length(out)) do.call(rbind, out) else empty

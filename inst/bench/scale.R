@@ -200,7 +200,7 @@ cat(sprintf("FBC %s scale benchmark, %s\n", utils::packageVersion("FBC"),
             format(Sys.time(), "%Y-%m-%d %H:%M")))
 si <- utils::sessionInfo()
 cat(sprintf("%s; %s; %d cores; BLAS: %s (%s); load average %s\n", R.version.string, si$running,
-            parallel::detectCores(), basename(si$BLAS), FBC:::blas_kind(),
+            as.integer(parallelly::availableCores()), basename(si$BLAS), FBC:::blas_kind(),
             tryCatch(paste(strsplit(readLines("/proc/loadavg"), " ")[[1]][1:3], collapse = " "),
                      error = function(e) "?")))
 t_start <- proc.time()[[3]]

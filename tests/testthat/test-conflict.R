@@ -159,6 +159,23 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   # a likelihood that gains less than 2 units beyond the median: no conflict
   creep <- function(fit, phi) -phi[[j]] / 0.05
   expect_equal(nrow(FBC:::prior_conflicts(fit, loglik = creep)), 0L)
+  # a likelihood rising to a finite bound (a smoothness to 2) peaks at the
+  # bound: it is not reported as rising
+  Phi[, "thetaB1"] <- 0.05
+  Phi[, "alphaB1"] <- 1 + plogis(qnorm(ppoints(400), qlogis(0.99), 0.3))
+  fit$Phi <- Phi
+  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  ja <- match("alphaB1", fit$spec$vars)
+  toBound <- function(fit, phi) -500 * (2 - phi[[ja]])
+  cf <- FBC:::prior_conflicts(fit, loglik = toBound)
+  expect_equal(cf$var, "alphaB1")
+  expect_true(cf$atBound)
+  expect_false(cf$rising)
+  expect_match(FBC:::conflict_messages(fit, cf), "peaks at the bound 2", fixed = TRUE)
+  Phi[, "alphaB1"] <- 1.8
+  Phi[, "thetaB1"] <- exp(qnorm(ppoints(400), log(0.05), 0.25))
+  fit$Phi <- Phi
+  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
   # one with a peak (at 0.002) is reported at its peak, not as rising
   peak <- function(fit, phi) -50 * (log(phi[[j]]) - log(0.002))^2
   cf <- FBC:::prior_conflicts(fit, loglik = peak)
