@@ -15,6 +15,31 @@ small_noise_data <- function(frac = 0.1, seed = 10) {
   list(sim = sim, field = field)
 }
 
+# A fit of the small-noise data with 400 draws built by hand: every
+# parameter at `base` (with `at` replacing some values) except `vary`,
+# log-normal around its value (sd 0.25 on the log scale); 4 chains of 100,
+# the MAP row the middle one.
+hand_base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
+               thetaB1 = 1, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
+hand_built_fit <- function(vary, at = NULL) {
+  d <- small_noise_data(frac = 0.1)
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
+  base <- hand_base
+  base[names(at)] <- at
+  Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
+  Phi[, vary] <- exp(qnorm(ppoints(400), log(base[[vary]]), 0.25))
+  fit$chain <- rep(1:4, each = 100)
+  fit$logPost <- -abs(seq_len(400) - 200.5)
+  with_draws(fit, Phi)
+}
+# The fit with draws `Phi` (same chains) and their estimates.
+with_draws <- function(fit, Phi) {
+  fit$Phi <- Phi
+  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  fit
+}
+
 test_that("prior CDFs integrate the prior densities", {
   cases <- list(list("uniform", -1, 2, 0.5), list("gaussian", 1, 2, 0.3), list("gamma", 1.1, 0.1, 3),
                 list("beta", 2, 5, 0.2), list("lognormal", 0, 1, 2), list("logistic", 1, 0.5, 0.2),
@@ -67,19 +92,9 @@ test_that("no conflict on the ball data with the default priors", {
 })
 
 test_that("the conflict message, on draws built by hand", {
-  d <- small_noise_data(frac = 0.1)
-  set.seed(1)
-  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
-  # 400 draws: every parameter at a fixed value except sigma2E, log-normal
-  # around 0.16; the MAP row is the middle one
-  base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
-            thetaB1 = 1, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
-  Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
-  Phi[, "sigma2E"] <- exp(qnorm(ppoints(400), log(0.16), 0.25))
-  fit$Phi <- Phi
-  fit$chain <- rep(1:4, each = 100)
-  fit$logPost <- -abs(seq_len(400) - 200.5)
-  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  # every parameter fixed except sigma2E, log-normal around 0.16
+  fit <- hand_built_fit("sigma2E")
+  Phi <- fit$Phi
   cf <- FBC:::prior_conflicts(fit)
   expect_equal(cf$var, "sigma2E")
   # the peak of the likelihood in sigma2E, the others at the MAP row, by a grid
@@ -130,19 +145,10 @@ test_that("a smoothness the likelihood pushes to 2 gets the smooth families as a
 })
 
 test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as such", {
-  d <- small_noise_data(frac = 0.1)
-  set.seed(1)
-  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
   # every parameter fixed except thetaB1, log-normal around 0.05: in the
   # lower 1% tail of its gamma(1.1, 0.1) prior
-  base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
-            thetaB1 = 0.05, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
-  Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
-  Phi[, "thetaB1"] <- exp(qnorm(ppoints(400), log(0.05), 0.25))
-  fit$Phi <- Phi
-  fit$chain <- rep(1:4, each = 100)
-  fit$logPost <- -abs(seq_len(400) - 200.5)
-  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  fit <- hand_built_fit("thetaB1", at = c(thetaB1 = 0.05))
+  Phi <- fit$Phi
   expect_lt(pgamma(0.05, 1.1, rate = 0.1), 0.01)
   j <- match("thetaB1", fit$spec$vars)
   # a likelihood with no peak: -theta / 0.01, whose limit 0 at theta -> 0 it
@@ -161,21 +167,17 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   expect_equal(nrow(FBC:::prior_conflicts(fit, loglik = creep)), 0L)
   # a likelihood rising to a finite bound (a smoothness to 2) peaks at the
   # bound: it is not reported as rising
-  Phi[, "thetaB1"] <- 0.05
-  Phi[, "alphaB1"] <- 1 + plogis(qnorm(ppoints(400), qlogis(0.99), 0.3))
-  fit$Phi <- Phi
-  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  Pb <- Phi
+  Pb[, "thetaB1"] <- 0.05
+  Pb[, "alphaB1"] <- 1 + plogis(qnorm(ppoints(400), qlogis(0.99), 0.3))
+  fitB <- with_draws(fit, Pb)
   ja <- match("alphaB1", fit$spec$vars)
   toBound <- function(fit, phi) -500 * (2 - phi[[ja]])
-  cf <- FBC:::prior_conflicts(fit, loglik = toBound)
+  cf <- FBC:::prior_conflicts(fitB, loglik = toBound)
   expect_equal(cf$var, "alphaB1")
   expect_true(cf$atBound)
   expect_false(cf$rising)
-  expect_match(FBC:::conflict_messages(fit, cf), "peaks at the bound 2", fixed = TRUE)
-  Phi[, "alphaB1"] <- 1.8
-  Phi[, "thetaB1"] <- exp(qnorm(ppoints(400), log(0.05), 0.25))
-  fit$Phi <- Phi
-  fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
+  expect_match(FBC:::conflict_messages(fitB, cf), "peaks at the bound 2", fixed = TRUE)
   # one with a peak (at 0.002) is reported at its peak, not as rising
   peak <- function(fit, phi) -50 * (log(phi[[j]]) - log(0.002))^2
   cf <- FBC:::prior_conflicts(fit, loglik = peak)
