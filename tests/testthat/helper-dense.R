@@ -78,3 +78,23 @@ random_phi <- function(p, q) {
   c(runif(q), rgamma(p + q, 2, 2), runif(p + q, 1.1, 1.95), rgamma(p, 2, 2),
     runif(p, 1.1, 1.95), rgamma(3, 2, 2) + 0.05, rnorm(1))
 }
+
+# The default sampler's joint moves along the path `phis` (rejected decoys
+# before every move): (thetaS, alphaS, sigma2S), (thetaB, alphaB, sigma2B),
+# and sigma2S, sigma2B, sigma2E scaled by one factor (up 1.7, then 0.3, then
+# back); the compiled log-likelihoods against dense_loglik() at every row.
+expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6) {
+  idx <- FBC:::param_indices(p, q)
+  groups <- integer(ncol(phis))
+  groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
+  groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
+  sig <- c(idx$sigma2S, idx$sigma2B, idx$sigma2E)
+  scaled <- phis[c(1, 1, 1), ]
+  scaled[2, sig] <- scaled[1, sig] * 1.7
+  scaled[3, sig] <- scaled[2, sig] * 0.3
+  phis2 <- rbind(phis, scaled, phis[2, ], scaled[3, ])
+  dense2 <- apply(phis2, 1, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, nugget))
+  block <- FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis2, nugget, groups = groups,
+                              decoys = TRUE, scale = TRUE)
+  testthat::expect_equal(block, dense2, tolerance = 1e-8)
+}

@@ -63,19 +63,7 @@ test_that("the cached one-move path equals the dense log-likelihood at every row
     # alphaB, sigma2B), and sigma2S, sigma2B, sigma2E scaled by one factor
     decoy <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE)
     expect_equal(decoy, dense, tolerance = 1e-8)
-    idx <- FBC:::param_indices(p, q)
-    groups <- integer(ncol(phis))
-    groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
-    groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
-    sig <- c(idx$sigma2S, idx$sigma2B, idx$sigma2E)
-    scaled <- phis[c(1, 1, 1), ]
-    scaled[2, sig] <- scaled[1, sig] * 1.7
-    scaled[3, sig] <- scaled[2, sig] * 0.3
-    phis2 <- rbind(phis, scaled, phis[2, ], scaled[3, ])
-    dense2 <- apply(phis2, 1, function(phi) dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6))
-    block <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis2, 1e-6, groups = groups,
-                          decoys = TRUE, scale = TRUE)
-    expect_equal(block, dense2, tolerance = 1e-8)
+    expect_joint_moves_dense(dat, phis, p, q)
   }
 })
 
