@@ -48,6 +48,30 @@ marginal_quantile_error <- function(draws, dens, j, x, probs = c(0.1, 0.25, 0.5,
   max(abs(got - ref)) / stats::sd(draws)
 }
 
+# A q = 1 fit's kappa draws (every other parameter fixed, at the chain's
+# last state) against the posterior on a 101-point grid: dense_loglik()
+# with the kernels' plain-R formulas, times the Beta(1.1, 1.1) prior in the
+# scaled kappa; quantiles within 0.15 posterior sd, KS statistic < 0.06.
+expect_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp") {
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  lo <- fit$scale$xmin[2]
+  rng <- fit$scale$xmax[2] - lo
+  u <- seq(0, 1, length.out = 101)
+  lp <- vapply(u, function(k) {
+    phi[1] <- k
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB)
+  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
+  dens <- exp(lp - max(lp))
+  kappa <- lo + rng * u
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  ref <- grid_quantile(kappa, dens, probs)
+  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
+  expect_lt(max(abs(got - ref)) / stats::sd(fit$Phi[, "kappa1"]), 0.15)
+  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
+  expect_lt(ks, 0.06)
+}
+
 test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
   hyp <- all_fixed(thetaS = c(3.6, 0.42), alphaS = 1.95, thetaB = 2, alphaB = 1.8,
                    sigma2S = 3.3, sigma2B = 0.9, sigma2E = 0.15, muB = 0.2)
@@ -58,25 +82,8 @@ test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
   expect_equal(unname(fit$Phi[1, -1]), c(3.6, 0.42, 1.95, 1.95, 2, 1.8, 3.3, 0.9, 0.15, 0.2))
   expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
   expect_true(all(is.na(fit$acceptance[-1])))
-  d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  lo <- fit$scale$xmin[2]
-  rng <- fit$scale$xmax[2] - lo
-  u <- seq(0, 1, length.out = 101)
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
-    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget)
-  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  kappa <- lo + rng * u
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- grid_quantile(kappa, dens, probs)
-  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
-  post_sd <- stats::sd(fit$Phi[, "kappa1"])
   # about 2000 nearly independent draws: quantile errors ~ 0.03-0.05 sd
-  expect_lt(max(abs(got - ref)) / post_sd, 0.15)
-  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
-  expect_lt(ks, 0.06)
+  expect_kappa_grid(fit)
 })
 
 test_that("Matern families: kappa draws match the grid posterior on the ball data", {
@@ -91,23 +98,7 @@ test_that("Matern families: kappa draws match the grid posterior on the ball dat
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern32")
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaB1", "sigma2S",
                                         "sigma2B", "sigma2E", "muB"))
-  d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  lo <- fit$scale$xmin[2]
-  rng <- fit$scale$xmax[2] - lo
-  u <- seq(0, 1, length.out = 101)
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
-    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern32")
-  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  kappa <- lo + rng * u
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- grid_quantile(kappa, dens, probs)
-  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
-  expect_lt(max(abs(got - ref)) / stats::sd(fit$Phi[, "kappa1"]), 0.15)
-  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
-  expect_lt(ks, 0.06)
+  expect_kappa_grid(fit, "matern52", "matern32")
 })
 
 test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
