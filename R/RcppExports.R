@@ -17,19 +17,19 @@
     .Call(`_FBC_sim_algebra`, Xs, p, algebra)
 }
 
-.loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE, scale = FALSE, kernS = 1L, kernB = 1L, algebra = 0L) {
-    .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, kernS, kernB, algebra)
+.loglik_path_c <- function(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model) {
+    .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }
 
-.fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L, algebra = 0L) {
-    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS, kernB, algebra)
+.fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model) {
+    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model)
 }
 
-.fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS = 1L, kernB = 1L, algebra = 0L) {
-    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS, kernB, algebra)
+.fbc_sample_c <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model) {
+    .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model)
 }
 
-.fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget, kernS = 1L, kernB = 1L, algebra = 0L) {
-    .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, kernS, kernB, algebra)
+.fbc_loglik_c <- function(Xf, yf, Xs, ys, phi, nugget, model) {
+    .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 

@@ -86,10 +86,10 @@
 #' `sampler = "single"` is the vignette's sampler: parameters are updated one
 #' at a time in the order of `Phi`'s columns, and during burn-in each
 #' proposal's log standard deviation moves every 50 iterations by
-#' \eqn{\pm 1/\sqrt{b}} (batch `b`) towards an acceptance rate of 0.44. It
-#' is FBC 0.1.0's sampler, move for move; the draws for a given seed differ
-#' from 0.1.0's only because each chain's random stream is now derived from
-#' the seed differently (see "Several chains").
+#' \eqn{\pm \min(0.5, 1/\sqrt{b})} (batch `b`) towards an acceptance rate
+#' of 0.44: the one adaptation rule of every adapted move (FBC 0.1.0 moved
+#' single sites by \eqn{\pm 1/\sqrt{b}}, so the first three batches differ
+#' and so do the draws for a given seed; the moves are 0.1.0's).
 #'
 #' `sampler = "blocks"` (the default) makes, in each sweep:
 #' * three moves of each \eqn{\kappa_l} (a \eqn{\kappa} move needs no
@@ -122,9 +122,15 @@
 #' running covariance of the burn-in draws (Haario et al. 2001), estimated
 #' afresh from the middle of burn-in so that the drift from the starting
 #' point does not inflate it, and \eqn{s} adapts towards acceptance 0.234
-#' (0.44 for one parameter). The `acceptance` of a block's parameters is that
-#' of its joint move (1 for `muB`'s exact draw);
-#' `state$chains[[k]]$scaleAcceptance` is the scale move's.
+#' (0.44 for one parameter) by the same rule. The `acceptance` of a block's
+#' parameters is that of its joint move (1 for `muB`'s exact draw), and
+#' `proposalSD` the proposal's marginal step on the walk's scale (for a joint
+#' move \eqn{e^s} times the spread \eqn{L} gives the parameter; `NA` for an
+#' exact draw or a fixed parameter). `print()` reports each move by name
+#' (`kappa1`, `sim`, `bias`, `sigma2E`, `muB`, `scale`) with its acceptance
+#' over the retained sweeps of all chains;
+#' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
+#' scales, and `state$chains[[k]]$scaleAcceptance` the scale move's rate.
 #' `inst/bench/mixing.R` measures both samplers and Stan's NUTS on the same
 #' model (see "Defaults").
 #'
@@ -375,8 +381,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   spec <- build_priors(kappaSpec, hypers, scale, p, q)
-  spec$model <- list(kernS = kernel_codes[[kernelS]], kernB = kernel_codes[[kernelB]],
-                     algebra = if (algebra == "dense") 1L else 0L)
+  spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
+                               algebra = if (algebra == "dense") 1L else 0L)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -428,13 +434,14 @@ large_dense <- function(m, simAlgebra) {
 # user gave for it is ignored, with a warning naming the arguments.
 kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   default <- set_hyperPriors()
-  for (cls in c("alphaS", "alphaB")) {
-    kernel <- if (cls == "alphaS") kernelS else kernelB
-    if (kernel_smooth(kernel)) next
+  kernels <- c(kernelS = kernelS, kernelB = kernelB)
+  for (cls in smooth_classes) {
+    kernel <- kernels[[kernel_arg(cls)]]
+    if (kernel_has_alpha(kernel)) next
     given <- !mapply(identical, hypers[[cls]], default[[cls]])
     if (any(given)) {
       args <- paste0("`", cls, c("Dist", "Init", "P1", "P2")[given], "`")
-      K <- paste0("kernel", substr(cls, 6, 6))
+      K <- kernel_arg(cls)
       cli::cli_warn(c(
         sprintf("`%s = \"%s\"` has no smoothness parameter: %s of `hypers` %s ignored.",
                 K, kernel, paste(args, collapse = ", "), if (length(args) > 1L) "are" else "is"),
@@ -448,11 +455,11 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
 }
 
 # The columns of phi (the sampler's parameter vector, param_names()) that
-# Phi holds: all but the smoothness of a GP whose family has none.
+# Phi holds: all but the classes these correlation families do not have
+# (absent_classes()).
 phi_columns <- function(spec) {
   mc <- model_codes(spec)
-  drop <- c(if (!kernel_smooth(mc$kernS)) "alphaS", if (!kernel_smooth(mc$kernB)) "alphaB")
-  which(!spec$classes %in% drop)
+  which(!spec$classes %in% absent_classes(mc$kernS, mc$kernB))
 }
 
 # For each parameter class, the columns of Phi holding it (integer(0) for a
@@ -478,15 +485,6 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
   out <- matrix(spec$init, length(rows), length(spec$init), byrow = TRUE)
   out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$scale)
   out
-}
-
-# The model codes the compiled entry points take after their usual
-# arguments (kernS, kernB: correlation families of the simulator and bias
-# GPs; algebra: 0 auto, 1 dense), with the defaults for objects made before
-# they existed.
-model_codes <- function(spec) {
-  mc <- spec$model
-  list(kernS = mc$kernS %||% 1L, kernB = mc$kernB %||% 1L, algebra = mc$algebra %||% 0L)
 }
 
 # Which algebra the compiled code uses for the simulator block: the
@@ -540,25 +538,10 @@ scale_data <- function(sim, field, scale) {
   )
 }
 
-# Parameter names in the order of phi.
-param_names <- function(p, q) {
-  c(paste0("kappa", seq_len(q)), paste0("thetaS", seq_len(p + q)),
-    paste0("alphaS", seq_len(p + q)), paste0("thetaB", seq_len(p)),
-    paste0("alphaB", seq_len(p)), "sigma2S", "sigma2B", "sigma2E", "muB")
-}
-
-param_indices <- function(p, q) {
-  sizes <- c(kappa = q, thetaS = p + q, alphaS = p + q, thetaB = p, alphaB = p,
-             sigma2S = 1, sigma2B = 1, sigma2E = 1, muB = 1)
-  ends <- cumsum(sizes)
-  stats::setNames(lapply(seq_along(sizes), function(i) seq.int(ends[i] - sizes[i] + 1, ends[i])),
-                  names(sizes))
-}
-
 # Expands every class to one row per parameter: the C++ prior table, the
 # initial values on the sampler's scale and the initial proposal SDs.
 build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) {
-  sizes <- lengths(param_indices(p, q))
+  sizes <- class_sizes(p, q)
   priors <- list(kappa = kappaSpec)
   for (cls in param_classes[-1]) {
     priors[[cls]] <- check_class_spec(hypers[[cls]], cls, sizes[[cls]], call = call)
@@ -614,10 +597,9 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) 
   }
   table <- do.call(rbind, rows)
   vars <- param_names(p, q)
-  cls_of <- rep(param_classes, lengths(param_indices(p, q)))
-  sd0 <- c(kappa = 0.1, thetaS = 0.5, alphaS = 0.5, thetaB = 0.5, alphaB = 0.5,
-           sigma2S = 0.3, sigma2B = 0.3, sigma2E = 0.3, muB = 0.1)
-  list(table = table, init = init, logsd = log(unname(sd0[cls_of])), vars = vars,
+  cls_of <- param_class_of(p, q)
+  sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
+  list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale))
 }
 
@@ -651,11 +633,12 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
   }
   args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
                nIter, nBurn, thinning, fbc_nugget, progress)
-  # the model codes only where they differ from the defaults, so a sampler
-  # hook written for the twelve usual arguments keeps working
-  mc <- model_codes(spec)
-  extra <- mc[unlist(mc) != c(1L, 1L, 0L)]
-  do.call(sampler, c(args, extra))
+  # the model only where it differs from the default one of these data, so
+  # a sampler hook written for the twelve usual arguments keeps working
+  model <- model_codes(spec)
+  p <- ncol(dat$Xf)
+  default <- compiled_model(p, ncol(dat$Xs) - p)
+  do.call(sampler, c(args, if (!identical(model, default)) list(model = model)))
 }
 
 # The state a chain starts from: parameters `init` (sampler's scale), the
@@ -663,42 +646,6 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
 # rest (adaptation sums, blocks) and returns the state it stopped in.
 initial_state <- function(init, spec) {
   list(phi = unname(init), logsd = unname(spec$logsd), iter = 0L, batch = 0L)
-}
-
-# The moves of each sampler (see "Sampler" in ?calibrate): index vectors of
-# the jointly moved blocks (1-based, in phi) and how often each moves per
-# sweep, the scale move, the exact muB draw. `large`: a large simulator
-# block on the dense algebra, where a move of the simulator block costs a
-# Cholesky factor of it and a kappa move an m x m x n triangular solve:
-# each moves once a sweep.
-sampler_moves <- function(sampler, spec, large = FALSE) {
-  if (sampler == "single") {
-    return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE))
-  }
-  fam <- names(prior_families)[match(spec$table$family, prior_families)]
-  free <- fam != "fixed"
-  cls <- spec$classes
-  block <- function(classes) {
-    idx <- which(cls %in% classes & free)
-    if (length(idx) >= 2L) idx
-  }
-  # each free kappa alone (a one-parameter block: its walk scale adapts like
-  # the joint ones'), three moves a sweep (one when `large`): a kappa move
-  # needs no m x m factorization, and kappa is what the user came for
-  kappa <- lapply(which(cls == "kappa" & free), identity)
-  joint <- list(sim = block(c("thetaS", "alphaS", "sigma2S")),
-                bias = block(c("thetaB", "alphaB", "sigma2B")))
-  joint <- joint[lengths(joint) > 0L]
-  sig <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
-  mu <- which(cls == "muB")
-  rep_kappa <- if (large) 1L else 3L
-  rep_joint <- as.integer(ifelse(names(joint) == "sim" & large, 1L, 2L))
-  list(
-    blocks = c(kappa, unname(joint)),
-    repeats = c(rep(rep_kappa, length(kappa)), rep_joint),
-    scale = all(free[sig]),
-    gibbsMuB = free[mu] && fam[mu] == "gaussian" && spec$table$a[mu] == 0 && spec$table$b[mu] == 1
-  )
 }
 
 # The compiled sampler. Tests replace it (options(FBC.sampler = f)) by a

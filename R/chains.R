@@ -44,18 +44,15 @@ dispersed_inits <- function(nChains, dat, spec) {
         next
       }
       v <- prior_quantile(stats::runif(1, 0.1, 0.9), fam[j], tab$p1[j], tab$p2[j])
-      if (spec$classes[j] == "kappa") {
-        # the prior's argument is a + b * u with u the sampler's value
-        v <- (v - tab$a[j]) / tab$b[j]
-      }
-      x[j] <- v
+      # the prior's argument is a + b * u with u the sampler's value (kappa:
+      # native units against [0, 1]; a = 0, b = 1 elsewhere)
+      x[j] <- (v - tab$a[j]) / tab$b[j]
     }
     x
   }
   ok <- function(x) {
-    mc <- model_codes(spec)
-    is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget, mc$kernS, mc$kernB,
-                          mc$algebra)) &&
+    is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget,
+                          model = model_codes(spec))) &&
       all(is.finite(mapply(function(j) log_prior_row(tab, j, x[j]), seq_len(d))))
   }
   out <- vector("list", nChains)
@@ -184,7 +181,11 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
   rownames(Phi) <- NULL
   chain <- rep(seq_along(pieces), vapply(pieces, function(x) nrow(x$Phi), integer(1)))
   acc <- (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols]
-  proposalSD <- exp(Reduce(`+`, lapply(states, function(s) s$logsd)) / length(states))[cols]
+  # the proposal actually made, per parameter (blocks included): the
+  # geometric mean over the chains
+  fixed <- spec$table$family == prior_families[["fixed"]]
+  logSD <- lapply(states, function(s) log(proposal_sd(s$sampler, spec$vars, fixed)))
+  proposalSD <- exp(Reduce(`+`, logSD) / length(states))[cols]
   structure(list(
     Phi = Phi,
     chain = chain,

@@ -43,9 +43,8 @@ from_walk <- function(w, transform) {
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
   d <- fit$data
-  mc <- model_codes(fit$spec)
   ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget,
-                    mc$kernS, mc$kernB, mc$algebra)
+                    model = model_codes(fit$spec))
   if (is.finite(ll)) ll else -Inf
 }
 
@@ -217,7 +216,7 @@ conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
     peak <- if (all(rows$atBound)) {
       sprintf("peaks at the bound %s", paste(unique(format_num(rows$bound)), collapse = ", "))
     } else if (all(rows$rising %||% FALSE)) {
-      positive <- cls %in% c("thetaS", "thetaB", "sigma2S", "sigma2B", "sigma2E")
+      positive <- class_domain[[cls]] == "positive"
       sprintf("keeps rising %s (it comes within 1 log-likelihood unit of its limit %s %s)",
               if (rows$side[1] == "lower" && positive) "towards 0" else "without bound",
               if (rows$side[1] == "lower") "below about" else "above about",
@@ -232,7 +231,7 @@ conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
       side, if (one) "its" else "their", paste(priors, collapse = ", "), if (one) "" else "s",
       paste(format(signif(prob, 1)), collapse = ", "), where, peak)
     vars <- paste(rows$var, collapse = ", ")
-    verdict <- if (all(rows$atBound) && cls %in% c("alphaS", "alphaB")) {
+    verdict <- if (all(rows$atBound) && cls %in% smooth_classes) {
       "the data favour this smoothness"
     } else if (all(rows$atBound) && cls == "kappa") {
       "the posterior wants values outside the prior's range"
@@ -247,7 +246,7 @@ conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
       " Loosen or re-centre this prior and calibrate again."
     } else if (cls == "kappa") {
       sprintf(" Loosen %s, e.g. `%s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
-    } else if (all(rows$atBound) && cls %in% c("alphaS", "alphaB") && all(rows$bound == 2)) {
+    } else if (all(rows$atBound) && cls %in% smooth_classes && all(rows$bound == 2)) {
       sprintf(" Consider %s, or fixing %s, e.g. `hypers = %s`.",
               sub("^use", "using", smooth_kernel_hint(cls)),
               if (nrow(rows) == 1L) "it" else "them", sugg)

@@ -69,7 +69,7 @@ correlation <- function(X, Y = NULL, theta, alpha = NULL, kernel = "powexp") {
   if (!is.numeric(theta) || any(!is.finite(theta)) || any(theta < 0)) {
     cli::cli_abort("{.arg theta} must be non-negative and finite.")
   }
-  if (kernel_smooth(kernel)) {
+  if (kernel_has_alpha(kernel)) {
     if (is.null(alpha)) {
       cli::cli_abort("{.arg alpha} must be given for the {.val {kernel}} family (its smoothness, in (0, 2]).")
     }
@@ -98,7 +98,7 @@ kernel_name <- function(kernel) {
 
 # Does the family have a smoothness parameter alpha? (Only the power
 # exponential; name or code.)
-kernel_smooth <- function(kernel) identical(kernel_name(kernel), "powexp")
+kernel_has_alpha <- function(kernel) identical(kernel_name(kernel), "powexp")
 
 # A family name, checked.
 check_kernel <- function(kernel, arg, call = parent.frame()) {

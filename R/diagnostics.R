@@ -80,7 +80,7 @@ bound_piling <- function(x) {
 # whose correlation matrices are better conditioned than exp(-theta d^2) with
 # a tiny nugget and which has no smoothness to sample.
 smooth_kernel_hint <- function(cls) {
-  K <- if (cls == "alphaS") "kernelS" else "kernelB"
+  K <- kernel_arg(cls)
   sprintf("use a smooth correlation family, `%s = \"matern52\"` (or `\"gaussian\"`, alpha = 2) in calibrate()", K)
 }
 

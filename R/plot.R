@@ -53,7 +53,7 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[x$indices[[parameter]]]
   if (!length(vars)) {
-    K <- if (parameter == "alphaS") "kernelS" else "kernelB"
+    K <- kernel_arg(parameter)
     cli::cli_abort(c(
       "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$settings[[K]]}\"} has no smoothness parameter.",
       i = "Only the power exponential ({.code {K} = \"powexp\"}) samples a smoothness; see {.help FBC::correlation}."
@@ -81,7 +81,7 @@ param_labels <- function(x, vars) {
     out[kap] <- paste0(nm$calibration[k[kap]], " (", vars[kap], ")")
   }
   if (length(inputs) == p + q) {
-    per <- ok & cls %in% c("thetaS", "alphaS", "thetaB", "alphaB")
+    per <- ok & cls %in% per_input_classes
     out[per] <- paste0(vars[per], " (", inputs[k[per]], ")")
   }
   stats::setNames(out, vars)

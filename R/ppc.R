@@ -58,9 +58,8 @@ ppc_field <- function(fit, ndraws = 500) {
   dat <- fit$data
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_draws(fit, rows)
-  mc <- model_codes(fit$spec)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
-                      fit$settings$nugget %||% fbc_nugget, 500L, mc$kernS, mc$kernB, mc$algebra)
+                      fit$settings$nugget %||% fbc_nugget, 500L, model = model_codes(fit$spec))
   m <- sc$ymean + sc$ysd * res$mean         # n x D
   s <- sc$ysd * sqrt(pmax(res$var, 0))
   n <- nrow(m)

@@ -119,7 +119,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   M <- length(rows)
   code <- match(type, c("field", "mean", "simulator", "bias"))
   nugget <- object$settings$nugget %||% fbc_nugget
-  mc <- model_codes(object$spec)
+  model <- model_codes(object$spec)
   shift <- if (type == "bias") 0 else sc$ymean
   z <- stats::qnorm((1 + level) / 2)
 
@@ -141,8 +141,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   for (r0 in starts) {
     idx <- seq.int(r0, min(N, r0 + B - 1L))
     res <- .fbc_predict(object$data$Xf, object$data$yf, object$data$Xs, object$data$ys,
-                        phis, Xn[idx, , drop = FALSE], code, nugget, 500L,
-                        mc$kernS, mc$kernB, mc$algebra)
+                        phis, Xn[idx, , drop = FALSE], code, nugget, 500L, model = model)
     m <- shift + sc$ysd * res$mean
     s <- sc$ysd * sqrt(pmax(res$var, 0))
     res <- NULL

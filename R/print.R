@@ -34,10 +34,19 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
               s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
-  acc <- x$acceptance[!is.na(x$acceptance)]
-  if (length(acc)) {
-    cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
-                if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
+  mv <- move_report(x)
+  if (!is.null(mv) && nrow(mv)) {
+    # each move by name with its acceptance (targets: 0.44 for one
+    # parameter, 0.234 for a joint move; an exact draw always accepts)
+    what <- ifelse(mv$kind == "gibbs", "exact", sprintf("%.2f", mv$acceptance))
+    cat(paste(strwrap(paste0(mv$move, " ", what, collapse = ", "), width = getOption("width") - 4L,
+                      initial = "  acceptance: ", prefix = "    "), collapse = "\n"), "\n", sep = "")
+  } else {
+    acc <- x$acceptance[!is.na(x$acceptance)]
+    if (length(acc)) {
+      cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
+                  if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
+    }
   }
   cat(sprintf("  kernels: simulator %s, bias %s\n", s$kernelS %||% "powexp",
               s$kernelB %||% "powexp"))

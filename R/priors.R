@@ -6,16 +6,6 @@ prior_families <- c(
   jeffreys = 10L, fixed = 11L
 )
 
-# Parameter classes in the order of phi, with the domain of each class and
-# the scale its random walk runs on (0 identity, 1 log, 2 logit of x - 1).
-param_classes <- c("kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                   "sigma2S", "sigma2B", "sigma2E", "muB")
-class_domain <- c(kappa = "real", thetaS = "positive", alphaS = "unit12",
-                  thetaB = "positive", alphaB = "unit12", sigma2S = "positive",
-                  sigma2B = "positive", sigma2E = "positive", muB = "real")
-class_transform <- c(kappa = 0L, thetaS = 1L, alphaS = 2L, thetaB = 1L, alphaB = 2L,
-                     sigma2S = 1L, sigma2B = 1L, sigma2E = 1L, muB = 0L)
-
 # Support of a family as c(lower, upper).
 family_support <- function(dist, p1, p2) {
   switch(dist,

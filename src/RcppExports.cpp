@@ -65,8 +65,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // loglik_path
-Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale, int kernS, int kernB, int algebra);
-RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
+Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale, const Rcpp::List& model);
+RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -79,16 +79,14 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< SEXP >::type groups(groupsSEXP);
     Rcpp::traits::input_parameter< bool >::type decoys(decoysSEXP);
     Rcpp::traits::input_parameter< bool >::type scale(scaleSEXP);
-    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
-    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
-    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
-    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, kernS, kernB, algebra));
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(loglik_path(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_predict
-Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, int kernS, int kernB, int algebra);
-RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
+Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -101,16 +99,14 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type type(typeSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< int >::type block(blockSEXP);
-    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
-    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
-    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS, kernB, algebra));
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_sample
-Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress, int kernS, int kernB, int algebra);
-RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
+Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -126,16 +122,14 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type thinning(thinningSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< SEXP >::type progress(progressSEXP);
-    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
-    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
-    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS, kernB, algebra));
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_loglik
-double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget, int kernS, int kernB, int algebra);
-RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
+double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -145,10 +139,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type phi(phiSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
-    Rcpp::traits::input_parameter< int >::type kernS(kernSSEXP);
-    Rcpp::traits::input_parameter< int >::type kernB(kernBSEXP);
-    Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget, kernS, kernB, algebra));
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget, model));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -158,10 +150,10 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
-    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 12},
-    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},
-    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 15},
-    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 9},
+    {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
+    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 10},
+    {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
+    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {NULL, NULL, 0}
 };
 

@@ -26,8 +26,8 @@ double fbc_cache_budget_r(double bytes = -1) {
 }
 
 DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                               const arma::vec& ys, double nugget, int kernS, int kernB)
-  : SchurPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB) {
+                               const arma::vec& ys, double nugget, const Model& model)
+  : SchurPosterior(Xf, yf, Xs, ys, nugget, model) {
   // per input: the distances and, for a family with a smoothness, two power
   // matrices (current and proposal)
   const bool smooth = kernel_smooth(kernS_);
@@ -65,8 +65,8 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
 }
 
 bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
-  const arma::vec thetaS = phi.subvec(iThetaS, iAlphaS - 1);
-  const arma::vec alphaS = phi.subvec(iAlphaS, iThetaB - 1);
+  const arma::vec thetaS = phi.subvec(iThetaS, iThetaS + p + q - 1);
+  const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + p + q - 1);
   // Ds, Ls = chol(Ds), z = Ls^-1 ys.
   if (t.simCorr) {
     arma::mat& L = Ls_.alt();
@@ -150,7 +150,7 @@ void DensePosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec
   arma::mat xk(nb, p + q);
   xk.cols(0, p - 1) = Xnew;
   for (int j = 0; j < q; ++j) xk.col(p + j).fill(phi[iKappa + j]);
-  K_ = corr_matrix(Xs_, xk, phi.subvec(iThetaS, iAlphaS - 1), phi.subvec(iAlphaS, iThetaB - 1),
+  K_ = corr_matrix(Xs_, xk, phi.subvec(iThetaS, iThetaS + p + q - 1), phi.subvec(iAlphaS, iAlphaS + p + q - 1),
                    kernS_);
   solve_lower(Ls_.cur(), K_);
   const arma::vec& z = z_.cur();

@@ -36,6 +36,36 @@ enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52
 // whenever the simulator design allows it, or always the dense one.
 enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
 
+// Parameter classes of the model. Where each lives in phi is not assumed
+// here: R's model description (R/model.R, model_classes) owns the layout and
+// hands the offsets and lengths over by name (read_model()).
+enum ParamClass {
+  PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
+  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_COUNT
+};
+
+// Where each class lives in phi: offset[c], length[c] (0-based), and for
+// every position j of phi its class cls[j] and its place within the class
+// pos[j] (thetaS and alphaS: the p experimental inputs, then the q
+// calibration inputs; thetaB, alphaB: the p experimental inputs).
+struct Layout {
+  int offset[PC_COUNT], length[PC_COUNT];
+  int d = 0;
+  std::vector<int> cls, pos;
+};
+
+// The model as the compiled entry points receive it from R (model_codes()
+// in R/model.R): correlation families of the two GPs, the algebra choice
+// and the layout of phi.
+struct Model {
+  int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO;
+  Layout layout;
+};
+// Reads list(kernS, kernB, algebra, offset, length) (offset and length
+// integer vectors named by class) and checks that the layout tiles phi
+// with the lengths p and q imply.
+Model read_model(const Rcpp::List& model, int p, int q);
+
 // kernels.cpp: priors and walks ---------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
 double log_jacobian(int transform, double x);
@@ -128,13 +158,14 @@ struct Touch {
 // recomputes only the blocks it touches. This is the one interface the
 // sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
 // it is chosen by make_posterior().
-// Parameter vector phi (length d = 4p + 3q + 4), scaled space, kappa on [0,1]:
-//   kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p],
-//   sigma2S, sigma2B, sigma2E, muB.
+// Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
+// kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
+// sigma2B, sigma2E, muB at the offsets of `layout` (iKappa ... iMuB).
 class Posterior {
 public:
   virtual ~Posterior() {}
   int n, m, p, q, d;
+  Layout layout;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB;
   arma::vec phi;  // current parameters
 
@@ -165,7 +196,7 @@ public:
   virtual std::string algebra() const = 0;
 
 protected:
-  void set_sizes(int n_, int m_, int p_, int q_);
+  void set_sizes(int n_, int m_, int p_, int q_, const Layout& lay);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 };
@@ -188,7 +219,7 @@ public:
 
 protected:
   SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                 const arma::vec& ys, double nugget, int kernS, int kernB);
+                 const arma::vec& ys, double nugget, const Model& model);
   const arma::mat& Xf_; const arma::vec& yf_;
   const arma::mat& Xs_; const arma::vec& ys_;
   double nugget_;
@@ -235,7 +266,7 @@ private:
 class DensePosterior : public SchurPosterior {
 public:
   DensePosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                 const arma::vec& ys, double nugget, int kernS, int kernB);
+                 const arma::vec& ys, double nugget, const Model& model);
   std::string algebra() const override { return cached_ ? "dense (cached)" : "dense"; }
 
 protected:
@@ -276,7 +307,7 @@ bool kronecker_pays(const ProductDesign& pd);
 class KroneckerPosterior : public SchurPosterior {
 public:
   KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                     const arma::vec& ys, double nugget, int kernS, int kernB,
+                     const arma::vec& ys, double nugget, const Model& model,
                      const ProductDesign& design);
   std::string algebra() const override;
 
@@ -295,11 +326,14 @@ private:
 };
 
 // The algebra for the data at hand: Kronecker on a product design unless
-// `algebra` is ALG_DENSE, else dense.
+// `model.algebra` is ALG_DENSE, else dense.
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
-                                          double nugget, int kernS = KF_POWEXP,
-                                          int kernB = KF_POWEXP, int algebra = ALG_AUTO);
+                                          double nugget, const Model& model);
+// ... with the model as R hands it over (read_model()).
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget, const Rcpp::List& model);
 
 // Bytes the dense algebra may spend on per-dimension caches (dense.cpp).
 extern double fbc_cache_budget;

@@ -75,8 +75,8 @@ Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0) {
 
 KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
                                        const arma::mat& Xs, const arma::vec& ys, double nugget,
-                                       int kernS, int kernB, const ProductDesign& design)
-  : SchurPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB), dz_(design) {
+                                       const Model& model, const ProductDesign& design)
+  : SchurPosterior(Xf, yf, Xs, ys, nugget, model), dz_(design) {
   const int I = dz_.I, J = dz_.J;
   Y_.zeros(I, J);
   for (int r = 0; r < m; ++r) Y_(dz_.ix[r], dz_.jt[r]) = ys[r];

@@ -15,34 +15,79 @@
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
-void Posterior::set_sizes(int n_, int m_, int p_, int q_) {
+void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Layout& lay) {
   n = n_; m = m_; p = p_; q = q_;
-  iKappa = 0; iThetaS = q; iAlphaS = iThetaS + p + q; iThetaB = iAlphaS + p + q;
-  iAlphaB = iThetaB + p; iSigma2S = iAlphaB + p; iSigma2B = iSigma2S + 1;
-  iSigma2E = iSigma2B + 1; iMuB = iSigma2E + 1; d = iMuB + 1;
+  layout = lay;
+  d = lay.d;
+  iKappa = lay.offset[PC_KAPPA]; iThetaS = lay.offset[PC_THETAS];
+  iAlphaS = lay.offset[PC_ALPHAS]; iThetaB = lay.offset[PC_THETAB];
+  iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
+  iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
+  iMuB = lay.offset[PC_MUB];
   phi.zeros(d);
+}
+
+Model read_model(const Rcpp::List& model, int p, int q) {
+  static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
+                                        "sigma2S", "sigma2B", "sigma2E", "muB"};
+  // what each class expands over: q, p + q, p or one
+  const int want[PC_COUNT] = {q, p + q, p + q, p, p, 1, 1, 1, 1};
+  Model out;
+  out.kernS = Rcpp::as<int>(model["kernS"]);
+  out.kernB = Rcpp::as<int>(model["kernB"]);
+  out.algebra = Rcpp::as<int>(model["algebra"]);
+  const Rcpp::IntegerVector off = model["offset"], len = model["length"];
+  Layout& lay = out.layout;
+  lay.d = 0;
+  for (int c = 0; c < PC_COUNT; ++c) {
+    lay.offset[c] = off[names[c]];
+    lay.length[c] = len[names[c]];
+    if (lay.length[c] != want[c])
+      Rcpp::stop("the layout gives %s %d entries where the data need %d", names[c],
+                 lay.length[c], want[c]);
+    lay.d += lay.length[c];
+  }
+  lay.cls.assign(lay.d, -1);
+  lay.pos.assign(lay.d, -1);
+  for (int c = 0; c < PC_COUNT; ++c)
+    for (int k = 0; k < lay.length[c]; ++k) {
+      const int j = lay.offset[c] + k;
+      if (j < 0 || j >= lay.d || lay.cls[j] >= 0)
+        Rcpp::stop("the layout's classes overlap or leave phi");
+      lay.cls[j] = c; lay.pos[j] = k;
+    }
+  return out;
 }
 
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
-                                          double nugget, int kernS, int kernB, int algebra) {
-  check_kernel(kernS);
-  check_kernel(kernB);
-  if (algebra != ALG_AUTO && algebra != ALG_DENSE) Rcpp::stop("unknown algebra code %d", algebra);
+                                          double nugget, const Model& model) {
+  check_kernel(model.kernS);
+  check_kernel(model.kernB);
+  if (model.algebra != ALG_AUTO && model.algebra != ALG_DENSE)
+    Rcpp::stop("unknown algebra code %d", model.algebra);
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
-  if (algebra == ALG_AUTO) {
+  if (model.algebra == ALG_AUTO) {
     ProductDesign pd;
     if (product_design(Xs, Xf.n_cols, pd) && kronecker_pays(pd))
-      return std::unique_ptr<Posterior>(
-        new KroneckerPosterior(Xf, yf, Xs, ys, nugget, kernS, kernB, pd));
+      return std::unique_ptr<Posterior>(new KroneckerPosterior(Xf, yf, Xs, ys, nugget, model, pd));
   }
-  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget, kernS, kernB));
+  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget, model));
+}
+
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget, const Rcpp::List& model) {
+  if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
+  return make_posterior(Xf, yf, Xs, ys, nugget,
+                        read_model(model, Xf.n_cols, Xs.n_cols - Xf.n_cols));
 }
 
 SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                               const arma::vec& ys, double nugget, int kernS, int kernB)
-  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(kernS), kernB_(kernB) {
-  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols);
+                               const arma::vec& ys, double nugget, const Model& model)
+  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(model.kernS),
+    kernB_(model.kernB) {
+  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model.layout);
   touch_.reset(p + q, p);
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
   // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
@@ -87,24 +132,32 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   }
 }
 
-// Add what a move of parameter j touches to t.
+// Add what a move of parameter j touches to t (by j's class in the layout).
 void SchurPosterior::add_touch(int j, Touch& t) const {
-  if (j < iThetaS) {                       // kappa
+  const int k = layout.pos[j];
+  switch (layout.cls[j]) {
+  case PC_KAPPA:
     t.cChange = t.cross = t.field = true;
-  } else if (j < iThetaB) {                // thetaS, alphaS
-    const bool alpha = j >= iAlphaS;
-    const int k = alpha ? j - iAlphaS : j - iThetaS;
-    if (alpha) t.simPow[k] = 1;
+    break;
+  case PC_ALPHAS:
+    t.simPow[k] = 1;
+    // fall through
+  case PC_THETAS:
     t.simCorr = t.cross = t.field = true;
     if (k < p) t.expDim = true; else t.calDim = t.cChange = true;
-  } else if (j < iSigma2S) {               // thetaB, alphaB
-    const bool alpha = j >= iAlphaB;
-    const int k = alpha ? j - iAlphaB : j - iThetaB;
-    if (alpha) t.biasPow[k] = 1;
+    break;
+  case PC_ALPHAB:
+    t.biasPow[k] = 1;
+    // fall through
+  case PC_THETAB:
     t.biasCorr = t.field = true;
-  } else if (j < iMuB) {                   // sigma2S, sigma2B, sigma2E
+    break;
+  case PC_SIGMA2S: case PC_SIGMA2B: case PC_SIGMA2E:
     t.field = true;
-  }                                        // muB: only the residual moves
+    break;
+  default:  // muB: only the residual moves
+    break;
+  }
 }
 
 bool SchurPosterior::init(const arma::vec& phi0) {
@@ -202,8 +255,8 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     Kf -= s2S * G;
   }
   if (biasPart)
-    Kf += s2B * corr_matrix(Xu_, Xnew, phi.subvec(iThetaB, iAlphaB - 1),
-                            phi.subvec(iAlphaB, iSigma2S - 1), kernB_);
+    Kf += s2B * corr_matrix(Xu_, Xnew, phi.subvec(iThetaB, iThetaB + p - 1),
+                            phi.subvec(iAlphaB, iAlphaB + p - 1), kernB_);
   arma::vec v(n);
   const arma::vec& wz = wz_.cur();
   for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
@@ -258,8 +311,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   // Bias correlation Rb over the experimental inputs.
   const arma::mat* Rb = &Rb_.cur();
   if (t.biasCorr) {
-    const arma::vec thetaB = phi.subvec(iThetaB, iAlphaB - 1);
-    const arma::vec alphaB = phi.subvec(iAlphaB, iSigma2S - 1);
+    const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
+    const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
     std::vector<const arma::mat*>& P = ptrB_;
     const std::vector<arma::mat>& Gb = Gfb_.empty() ? Gf_ : Gfb_;
     for (int k = 0; k < p; ++k) {
@@ -328,15 +381,14 @@ void SchurPosterior::flip(const Touch& t) {
 // propose() of the group's changed coordinates); 0 moves it alone.
 // scale: when sigma2S, sigma2B, sigma2E all change by one factor, move them
 // by proposeScale(). decoys: before each move, propose another value and
-// reject it. kernS, kernB: correlation families; algebra: 0 auto, 1 dense.
-// [[Rcpp::export(.loglik_path)]]
+// reject it. model: the model description (read_model()).
+// [[Rcpp::export(.loglik_path_c)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
                                 const arma::mat& Xs, const arma::vec& ys,
                                 const arma::mat& phis, double nugget,
-                                SEXP groups = R_NilValue,
-                                bool decoys = false, bool scale = false,
-                                int kernS = 1, int kernB = 1, int algebra = 0) {
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
+                                SEXP groups, bool decoys, bool scale,
+                                const Rcpp::List& model) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   Rcpp::NumericVector out(phis.n_rows, NA_REAL);
   if (!post.init(phis.row(0).t())) return out;
@@ -363,16 +415,15 @@ Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
   for (arma::uword r = 1; r < phis.n_rows; ++r) {
     const arma::vec row = phis.row(r).t();
     if (scale) {
-      const int a = post.iSigma2S;
-      const double c = row[a] / post.phi[a];
+      const int v[3] = {post.iSigma2S, post.iSigma2B, post.iSigma2E};
+      const double c = row[v[0]] / post.phi[v[0]];
       bool same = c != 1.0;
-      for (int j = a; j < a + 3; ++j)
-        same = same && std::fabs(row[j] / post.phi[j] - c) < 1e-12 * c;
+      for (int j : v) same = same && std::fabs(row[j] / post.phi[j] - c) < 1e-12 * c;
       if (same) {
         if (decoys) { post.proposeScale(1.3); post.reject(); }
         if (!std::isfinite(post.proposeScale(c))) { post.reject(); return out; }
         post.accept();
-        for (int j = a; j < a + 3; ++j) post.phi[j] = row[j];  // exact values
+        for (int j : v) post.phi[j] = row[j];  // exact values
       }
     }
     for (int g = 1; g <= nG; ++g) {

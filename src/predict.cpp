@@ -9,16 +9,16 @@
 //   2 mean:      eta(xk*) + delta(x*),       prior mean muB, variance s2S + s2B
 //   3 simulator: eta(xk*),                   prior mean 0,   variance s2S
 //   4 bias:      delta(x*),                  prior mean muB, variance s2B
-// New points are processed `block` rows at a time.
+// New points are processed `block` rows at a time; `model` is the model
+// description (read_model()).
 #include "fbc.h"
 
-// [[Rcpp::export(.fbc_predict)]]
+// [[Rcpp::export(.fbc_predict_c)]]
 Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                        const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew,
-                       int type, double nugget, int block, int kernS = 1, int kernB = 1,
-                       int algebra = 0) {
+                       int type, double nugget, int block, const Rcpp::List& model) {
   if (type < 1 || type > 4) Rcpp::stop("type must be 1, 2, 3 or 4");
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   const int p = post.p, N = Xnew.n_rows, M = phis.n_rows;
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);

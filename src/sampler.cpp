@@ -8,15 +8,14 @@
 //   accepted with
 //     log r = log L(phi*) + log p(x*) - log L(phi) - log p(x)
 //             + log|dx/dw|(x*) - log|dx/dw|(x);
-//   during burn-in its log SD moves every 50 sweeps by +-1/sqrt(batch)
-//   towards acceptance 0.44;
+//   during burn-in its log SD adapts towards acceptance 0.44 (the one
+//   adaptation rule below);
 // * block (at the block's first parameter): all its parameters move at once,
 //   w* = w + exp(s) L e, e ~ N(0, I), with the same acceptance ratio summed
 //   over the block. L starts as diag(proposal SDs) and, after 100 burn-in
 //   sweeps, becomes the Cholesky factor of the running covariance of w over
-//   burn-in (refreshed every 50 sweeps, Haario et al. 2001); s moves by
-//   +-min(0.5, 1/sqrt(b)) per batch b towards acceptance 0.234 (0.44 for one
-//   parameter);
+//   burn-in (refreshed every 50 sweeps, Haario et al. 2001); s adapts towards
+//   acceptance 0.234 (0.44 for one parameter);
 // * muB (gaussian prior N(m0, s0^2)): drawn exactly from its full conditional,
 //   log L being Gaussian in muB (Posterior::muBQuadratic): precision
 //   a'a + 1/s0^2, mean (a'b + m0/s0^2) / precision;
@@ -24,6 +23,13 @@
 //   c = exp(e), e ~ N(0, exp(2 s)): a joint random walk on their logs, whose
 //   likelihood needs no factorization (C -> c C); log r adds the three prior
 //   ratios and the Jacobian 3e. s adapts towards 0.44 like a single site.
+// One adaptation rule for every adapted scale: at the end of burn-in batch b
+// (every 50 sweeps), log s moves by +min(0.5, 1/sqrt(b)) when the batch's
+// acceptance rate is above the move's target, by -min(0.5, 1/sqrt(b))
+// otherwise (adapt_step()).
+// Every move has one shape (Move: step() proposes and accepts or rejects,
+// adapt() ends a burn-in batch); the schedule is the list of moves in sweep
+// order, and each move's acceptance and adapted scale is reported by name.
 // Every adapted scale is frozen after burn-in, so the retained draws come
 // from one valid kernel. The sampler's whole state (parameters, proposals,
 // adaptation sums, batch counters) goes in and comes out as a list: a run
@@ -51,13 +57,18 @@ struct Priors {
   }
 };
 
+// The one adaptation rule (see the top): log s after burn-in batch `batch`
+// whose acceptance rate was `rate`.
+static double adapt_step(double logscale, double rate, double target, int batch) {
+  return logscale + (rate > target ? 1 : -1) * std::min(0.5, 1.0 / std::sqrt((double) batch));
+}
+
 // An adaptive joint random walk over some parameters (see the top).
 struct Block {
   std::vector<int> idx;
-  int repeats = 1;  // moves per sweep
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
-  double logscale = 0, accBatch = 0, accKept = 0;
+  double logscale = 0, accBatch = 0;
   int n = 0, batch = 0, restart = 0;
   bool shaped = false;
 
@@ -104,12 +115,12 @@ struct Block {
     for (int a = 0; a < k; ++a)
       for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
   }
-  // End of a burn-in batch: scale towards the target acceptance, shape L.
-  void adapt() {
+  // End of a burn-in batch with acceptance rate `rate`: scale towards the
+  // target acceptance, shape L.
+  void adapt(double rate) {
     const int k = idx.size();
     ++batch;
-    const double target = k == 1 ? 0.44 : 0.234;
-    logscale += (accBatch / BATCH > target ? 1 : -1) * std::min(0.5, 1.0 / std::sqrt((double) batch));
+    logscale = adapt_step(logscale, rate, k == 1 ? 0.44 : 0.234, batch);
     if (n >= 2 * BATCH) {
       tmp = cov / (n - 1);
       const double eps = 1e-10 * (1 + arma::max(tmp.diag()));
@@ -127,120 +138,184 @@ struct Block {
 struct Chain {
   Posterior& post;
   const Priors& pr;
-  arma::vec logsd, lp, accBatch, accKept;
+  arma::vec logsd, lp, accBatch;  // accBatch: single sites' acceptances this batch
   std::vector<Block> blocks;
-  std::vector<int> blockAt;  // blockAt[j]: block starting at parameter j, else -1
-  std::vector<char> inBlock;
-  bool scaleMove = false, gibbsMuB = false;
-  double scaleLogsd = std::log(0.1), scaleAccBatch = 0, scaleAccKept = 0;
+  double scaleLogsd = std::log(0.1), scaleAccBatch = 0;
   int scaleBatch = 0, iter = 0, batch = 0;
   double ll = 0;
   Chain(Posterior& p, const Priors& r) : post(p), pr(r) {}
 };
 
-// Single-site random-walk Metropolis move of parameter j.
-static bool move_single(Chain& ch, int j) {
-  Posterior& post = ch.post;
-  const int tr = ch.pr.transform[j];
-  const double x = post.phi[j];
-  const double xNew = from_walk(tr, to_walk(tr, x) + std::exp(ch.logsd[j]) * R::norm_rand());
-  const double lpNew = ch.pr(j, xNew);
-  if (!std::isfinite(lpNew)) return false;
-  const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
-  if (!std::isfinite(jac)) return false;
-  const double llNew = post.propose(j, xNew);
-  const double logr = llNew + lpNew - ch.ll - ch.lp[j] + jac;
-  if (std::isfinite(llNew) && std::log(R::unif_rand()) < logr) {
-    post.accept();
-    ch.ll = llNew; ch.lp[j] = lpNew;
-    return true;
-  }
-  post.reject();
-  return false;
-}
+// A move: one exact Metropolis-Hastings (or Gibbs) update of some
+// parameters given the rest. step() proposes and accepts or rejects
+// (true: accepted); adapt() ends a burn-in batch of BATCH sweeps with the
+// batch's acceptance rate; logScale() is the adapted proposal scale
+// reported for it. The sweep makes `repeats` steps of each move in the
+// schedule's order.
+struct Move {
+  std::string name;
+  std::vector<int> idx;     // the parameters it moves (0-based, in phi)
+  int repeats = 1;
+  double accPiece = 0;      // acceptances / repeats over this call's retained sweeps
+  double accepted = 0, tries = 0;  // over retained sweeps of every piece of the run
+  virtual ~Move() {}
+  virtual bool step(Chain& ch) = 0;
+  // after repeat `rep` of sweep `it` (burn-in or not): what the move learns
+  virtual void after(bool, int, int) {}
+  // acceptances / repeats in the current batch, where the chain's state keeps them
+  virtual double& batchCount(Chain& ch) = 0;
+  virtual void adapt(Chain&) {}
+  virtual double logScale(const Chain&) const { return NA_REAL; }
+  virtual const char* kind() const = 0;
+};
 
-// Joint random-walk move of a block (w* = w + exp(s) L e).
-static bool move_block(Chain& ch, Block& b) {
-  Posterior& post = ch.post;
-  const int k = b.idx.size();
-  for (int i = 0; i < k; ++i) b.e[i] = R::norm_rand();
-  const double sc = std::exp(b.logscale);
-  double lpDiff = 0, jac = 0;
-  for (int i = 0; i < k; ++i) {
-    const int j = b.idx[i], tr = ch.pr.transform[j];
-    b.w[i] = to_walk(tr, post.phi[j]);
-    double step = 0;
-    for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
-    b.wNew[i] = b.w[i] + sc * step;
-    b.vals[i] = from_walk(tr, b.wNew[i]);
-    b.lpNew[i] = ch.pr(j, b.vals[i]);
-    lpDiff += b.lpNew[i] - ch.lp[j];
-    jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
+// Single-site random-walk Metropolis move of parameter j.
+struct SiteMove : Move {
+  int j;
+  explicit SiteMove(int j_) : j(j_) { idx = {j_}; }
+  const char* kind() const override { return "single"; }
+  bool step(Chain& ch) override {
+    Posterior& post = ch.post;
+    const int tr = ch.pr.transform[j];
+    const double x = post.phi[j];
+    const double xNew = from_walk(tr, to_walk(tr, x) + std::exp(ch.logsd[j]) * R::norm_rand());
+    const double lpNew = ch.pr(j, xNew);
+    if (!std::isfinite(lpNew)) return false;
+    const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
+    if (!std::isfinite(jac)) return false;
+    const double llNew = post.propose(j, xNew);
+    const double logr = llNew + lpNew - ch.ll - ch.lp[j] + jac;
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < logr) {
+      post.accept();
+      ch.ll = llNew; ch.lp[j] = lpNew;
+      return true;
+    }
+    post.reject();
+    return false;
   }
-  if (!std::isfinite(lpDiff) || !std::isfinite(jac)) return false;
-  const double llNew = post.propose(b.idx, b.vals);
-  if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
-    post.accept();
-    ch.ll = llNew;
-    for (int i = 0; i < k; ++i) { ch.lp[b.idx[i]] = b.lpNew[i]; b.w[i] = b.wNew[i]; }
-    return true;
+  double& batchCount(Chain& ch) override { return ch.accBatch[j]; }
+  void adapt(Chain& ch) override {
+    ch.logsd[j] = adapt_step(ch.logsd[j], ch.accBatch[j] / BATCH, 0.44, ch.batch);
   }
-  post.reject();
-  return false;
-}
+  double logScale(const Chain& ch) const override { return ch.logsd[j]; }
+};
+
+// Joint random-walk move of a block (w* = w + exp(s) L e); it records the
+// burn-in draws that shape L.
+struct BlockMove : Move {
+  Block& b;
+  BlockMove(Block& b_, int rep) : b(b_) { idx = b_.idx; repeats = rep; }
+  const char* kind() const override { return idx.size() == 1 ? "walk" : "joint"; }
+  bool step(Chain& ch) override {
+    Posterior& post = ch.post;
+    const int k = b.idx.size();
+    for (int i = 0; i < k; ++i) b.e[i] = R::norm_rand();
+    const double sc = std::exp(b.logscale);
+    double lpDiff = 0, jac = 0;
+    for (int i = 0; i < k; ++i) {
+      const int j = b.idx[i], tr = ch.pr.transform[j];
+      b.w[i] = to_walk(tr, post.phi[j]);
+      double step = 0;
+      for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
+      b.wNew[i] = b.w[i] + sc * step;
+      b.vals[i] = from_walk(tr, b.wNew[i]);
+      b.lpNew[i] = ch.pr(j, b.vals[i]);
+      lpDiff += b.lpNew[i] - ch.lp[j];
+      jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
+    }
+    if (!std::isfinite(lpDiff) || !std::isfinite(jac)) return false;
+    const double llNew = post.propose(b.idx, b.vals);
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
+      post.accept();
+      ch.ll = llNew;
+      for (int i = 0; i < k; ++i) { ch.lp[b.idx[i]] = b.lpNew[i]; b.w[i] = b.wNew[i]; }
+      return true;
+    }
+    post.reject();
+    return false;
+  }
+  // burn-in: the walk's position joins the running covariance (afresh from
+  // the restart sweep on)
+  void after(bool burn, int it, int rep) override {
+    if (!burn) return;
+    if (it == b.restart && rep == 0) b.forget();
+    b.record();
+  }
+  double& batchCount(Chain&) override { return b.accBatch; }
+  void adapt(Chain&) override { b.adapt(b.accBatch / BATCH); }
+  double logScale(const Chain&) const override { return b.logscale; }
+};
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
-static void move_muB(Chain& ch) {
-  Posterior& post = ch.post;
-  const int j = post.iMuB;
-  double aa, ab;
-  post.muBQuadratic(aa, ab);
-  const double m0 = ch.pr.p1[j], s0 = ch.pr.p2[j];
-  const double prec = aa + 1.0 / (s0 * s0);
-  const double mu = (ab + m0 / (s0 * s0)) / prec + R::norm_rand() / std::sqrt(prec);
-  const double llNew = post.propose(j, mu);
-  post.accept();
-  ch.ll = llNew;
-  ch.lp[j] = ch.pr(j, mu);
-}
-
-// sigma2S, sigma2B, sigma2E multiplied by one factor c = exp(e).
-static bool move_scale(Chain& ch) {
-  Posterior& post = ch.post;
-  const double e = std::exp(ch.scaleLogsd) * R::norm_rand(), c = std::exp(e);
-  double lpNew[3], lpDiff = 0;
-  for (int i = 0; i < 3; ++i) {
-    const int j = post.iSigma2S + i;
-    lpNew[i] = ch.pr(j, post.phi[j] * c);
-    lpDiff += lpNew[i] - ch.lp[j];
-  }
-  if (!std::isfinite(lpDiff)) return false;
-  const double llNew = post.proposeScale(c);
-  if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + 3 * e) {
+struct GibbsMuBMove : Move {
+  explicit GibbsMuBMove(int j) { idx = {j}; }
+  const char* kind() const override { return "gibbs"; }
+  double& batchCount(Chain& ch) override { return ch.accBatch[idx[0]]; }
+  bool step(Chain& ch) override {
+    Posterior& post = ch.post;
+    const int j = idx[0];
+    double aa, ab;
+    post.muBQuadratic(aa, ab);
+    const double m0 = ch.pr.p1[j], s0 = ch.pr.p2[j];
+    const double prec = aa + 1.0 / (s0 * s0);
+    const double mu = (ab + m0 / (s0 * s0)) / prec + R::norm_rand() / std::sqrt(prec);
+    const double llNew = post.propose(j, mu);
     post.accept();
     ch.ll = llNew;
-    for (int i = 0; i < 3; ++i) ch.lp[post.iSigma2S + i] = lpNew[i];
+    ch.lp[j] = ch.pr(j, mu);
     return true;
   }
-  post.reject();
-  return false;
-}
+};
+
+// sigma2S, sigma2B, sigma2E multiplied by one factor c = exp(e).
+struct ScaleMove : Move {
+  explicit ScaleMove(const Posterior& post) {
+    idx = {post.iSigma2S, post.iSigma2B, post.iSigma2E};
+    name = "scale";
+  }
+  const char* kind() const override { return "scale"; }
+  bool step(Chain& ch) override {
+    Posterior& post = ch.post;
+    const double e = std::exp(ch.scaleLogsd) * R::norm_rand(), c = std::exp(e);
+    double lpNew[3], lpDiff = 0;
+    for (int i = 0; i < 3; ++i) {
+      const int j = idx[i];
+      lpNew[i] = ch.pr(j, post.phi[j] * c);
+      lpDiff += lpNew[i] - ch.lp[j];
+    }
+    if (!std::isfinite(lpDiff)) return false;
+    const double llNew = post.proposeScale(c);
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + 3 * e) {
+      post.accept();
+      ch.ll = llNew;
+      for (int i = 0; i < 3; ++i) ch.lp[idx[i]] = lpNew[i];
+      return true;
+    }
+    post.reject();
+    return false;
+  }
+  double& batchCount(Chain& ch) override { return ch.scaleAccBatch; }
+  void adapt(Chain& ch) override {
+    ++ch.scaleBatch;
+    ch.scaleLogsd = adapt_step(ch.scaleLogsd, ch.scaleAccBatch / BATCH, 0.44, ch.scaleBatch);
+  }
+  double logScale(const Chain& ch) const override { return ch.scaleLogsd; }
+};
 
 static double list_num(const Rcpp::List& s, const char* name, double dflt) {
   return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
 }
 
-// [[Rcpp::export(.fbc_sample)]]
+// [[Rcpp::export(.fbc_sample_c)]]
 Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
                       const arma::mat& Xs, const arma::vec& ys,
                       const Rcpp::List& prior, const Rcpp::List& moves,
                       const Rcpp::List& state, int nIter, int nBurn, int thinning,
-                      double nugget, SEXP progress, int kernS = 1, int kernB = 1,
-                      int algebra = 0) {
+                      double nugget, SEXP progress, const Rcpp::List& model) {
   Rcpp::RNGScope rngScope;
   Priors pr{prior["family"], prior["transform"], prior["p1"], prior["p2"],
             prior["a"], prior["b"], prior["lconst"]};
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   const int d = post.d;
   if (!post.init(Rcpp::as<arma::vec>(state["phi"])))
@@ -253,18 +328,15 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   ch.batch = (int) list_num(state, "batch", 0);
   ch.accBatch = state.containsElementNamed("accBatch") ?
     Rcpp::as<arma::vec>(state["accBatch"]) : arma::vec(d, arma::fill::zeros);
-  ch.accKept.zeros(d);
-  ch.scaleMove = Rcpp::as<bool>(moves["scale"]);
-  ch.gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
-  if (ch.gibbsMuB && !(pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
-                       pr.b[post.iMuB] == 1))
+  const bool scaleMove = Rcpp::as<bool>(moves["scale"]);
+  const bool gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
+  if (gibbsMuB && !(pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
+                    pr.b[post.iMuB] == 1))
     Rcpp::stop("the exact muB move needs a gaussian prior on muB");
   ch.scaleLogsd = list_num(state, "scaleLogsd", std::log(0.1));
   ch.scaleAccBatch = list_num(state, "scaleAccBatch", 0);
   ch.scaleBatch = (int) list_num(state, "scaleBatch", 0);
 
-  std::vector<int> free;
-  for (int j = 0; j < d; ++j) if (pr.family[j] != PF_FIXED) free.push_back(j);
   // Blocks: continue the adapted ones of `state`, else start the ones of `moves`.
   const Rcpp::List blockSpec = moves["blocks"];
   const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
@@ -278,6 +350,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
   const bool haveBlocks = blockState.size() > 0 && blockState.size() == blockSpec.size();
   ch.blocks.resize(blockSpec.size());
+  std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
+  std::vector<char> inBlock(d, 0);
   for (int b = 0; b < blockSpec.size(); ++b) {
     if (haveBlocks) {
       ch.blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
@@ -290,23 +364,57 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     const Rcpp::IntegerVector ix = blockSpec[b];
     if ((int) ch.blocks[b].idx.size() != ix.size())
       Rcpp::stop("the block proposal to continue from has the wrong size");
-    if (repeats.size() > b) ch.blocks[b].repeats = std::max(1, repeats[b]);
     ch.blocks[b].restart = restartAt;
-  }
-  ch.blockAt.assign(d, -1);
-  ch.inBlock.assign(d, 0);
-  for (int b = 0; b < (int) ch.blocks.size(); ++b) {
     for (int j : ch.blocks[b].idx) {
-      if (j < 0 || j >= d || pr.family[j] == PF_FIXED || ch.inBlock[j])
+      if (j < 0 || j >= d || pr.family[j] == PF_FIXED || inBlock[j])
         Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
-      ch.inBlock[j] = 1;
+      inBlock[j] = 1;
     }
-    ch.blockAt[ch.blocks[b].idx[0]] = b;
+    blockAt[ch.blocks[b].idx[0]] = b;
   }
-  if (ch.scaleMove)
-    for (int i = 0; i < 3; ++i)
-      if (pr.family[post.iSigma2S + i] == PF_FIXED)
+  if (scaleMove)
+    for (int j : {post.iSigma2S, post.iSigma2B, post.iSigma2E})
+      if (pr.family[j] == PF_FIXED)
         Rcpp::stop("the scale move needs sigma2S, sigma2B and sigma2E all sampled");
+
+  // The schedule: the moves in sweep order. Each free parameter in the
+  // order of phi: its block's move at the block's first parameter, the
+  // exact muB draw, or a single-site move; then the scale move.
+  SEXP bn = Rf_getAttrib(blockSpec, R_NamesSymbol);
+  const Rcpp::CharacterVector blockNames = Rf_isNull(bn) ?
+    Rcpp::CharacterVector(blockSpec.size()) : Rcpp::CharacterVector(bn);
+  const Rcpp::CharacterVector params = moves.containsElementNamed("params") ?
+    Rcpp::as<Rcpp::CharacterVector>(moves["params"]) : Rcpp::CharacterVector(0);
+  auto param_name = [&](int j) {
+    return params.size() == d ? std::string(params[j]) : "phi" + std::to_string(j + 1);
+  };
+  std::vector<std::unique_ptr<Move> > schedule;
+  for (int j = 0; j < d; ++j) {
+    if (pr.family[j] == PF_FIXED) continue;
+    if (inBlock[j]) {
+      if (blockAt[j] < 0) continue;
+      const int b = blockAt[j];
+      schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
+      const std::string nm(blockNames[b]);
+      schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
+    } else if (j == post.iMuB && gibbsMuB) {
+      schedule.emplace_back(new GibbsMuBMove(j));
+      schedule.back()->name = param_name(j);
+    } else {
+      schedule.emplace_back(new SiteMove(j));
+      schedule.back()->name = param_name(j);
+    }
+  }
+  if (scaleMove) schedule.emplace_back(new ScaleMove(post));
+  // each move's retained acceptances so far (earlier pieces of this run)
+  if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
+    const Rcpp::List old = state["moves"];
+    const Rcpp::CharacterVector nm = old["name"];
+    const Rcpp::NumericVector acc = old["accepted"], tries = old["tries"];
+    for (auto& mv : schedule)
+      for (int i = 0; i < nm.size(); ++i)
+        if (mv->name == std::string(nm[i])) { mv->accepted = acc[i]; mv->tries = tries[i]; }
+  }
 
   ch.lp.set_size(d);
   for (int j = 0; j < d; ++j) ch.lp[j] = pr(j, post.phi[j]);
@@ -321,7 +429,6 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   Rcpp::NumericMatrix draws(nKeep, d);
   Rcpp::NumericVector logPost(nKeep), logLik(nKeep);
   int kept = 0, nPost = 0;
-  double scaleAccKept = 0;
   bool interrupted = false;
 
   SEXP bar = R_NilValue;
@@ -330,55 +437,31 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
 
   for (int it = it0 + 1; it <= it1; ++it) {
     const bool burn = it <= nBurn;
-    for (int j : free) {
-      if (ch.inBlock[j]) {
-        if (ch.blockAt[j] < 0) continue;
-        Block& b = ch.blocks[ch.blockAt[j]];
-        for (int r = 0; r < b.repeats; ++r) {
-          if (move_block(ch, b)) {
-            b.accBatch += 1.0 / b.repeats;
-            if (!burn) b.accKept += 1.0 / b.repeats;
-            for (int k : b.idx) ch.accBatch[k] += 1.0 / b.repeats;  // progress bar only
-          }
-          if (burn) {
-            if (it == b.restart && r == 0) b.forget();
-            b.record();
-          }
+    for (auto& mv : schedule) {
+      for (int r = 0; r < mv->repeats; ++r) {
+        const bool acc = mv->step(ch);
+        mv->after(burn, it, r);
+        if (acc) mv->batchCount(ch) += 1.0 / mv->repeats;
+        if (!burn) {
+          mv->tries += 1;
+          if (acc) { mv->accepted += 1; mv->accPiece += 1.0 / mv->repeats; }
         }
-      } else if (j == post.iMuB && ch.gibbsMuB) {
-        move_muB(ch);
-        ch.accBatch[j] += 1;
-        if (!burn) ch.accKept[j] += 1;
-      } else if (move_single(ch, j)) {
-        ch.accBatch[j] += 1;
-        if (!burn) ch.accKept[j] += 1;
       }
-    }
-    if (ch.scaleMove && move_scale(ch)) {
-      ch.scaleAccBatch += 1;
-      if (!burn) scaleAccKept += 1;
     }
     if (!burn) ++nPost;
 
     if (it % BATCH == 0) {
       ++ch.batch;
-      if (burn) {
-        const double delta = 1.0 / std::sqrt((double) ch.batch);
-        for (int j : free)
-          if (!ch.inBlock[j] && !(j == post.iMuB && ch.gibbsMuB))
-            ch.logsd[j] += (ch.accBatch[j] / BATCH > 0.44) ? delta : -delta;
-        for (Block& b : ch.blocks) b.adapt();
-        if (ch.scaleMove) {
-          ++ch.scaleBatch;
-          ch.scaleLogsd += (ch.scaleAccBatch / BATCH > 0.44 ? 1 : -1) *
-            std::min(0.5, 1.0 / std::sqrt((double) ch.scaleBatch));
-        }
-      }
+      if (burn)
+        for (auto& mv : schedule) mv->adapt(ch);
       if (!Rf_isNull(bar) && user_interrupted()) interrupted = true;
       if (!Rf_isNull(bar) && !interrupted) {
         double lo = 1, mean = 0;
-        for (int j : free) { lo = std::min(lo, ch.accBatch[j] / BATCH); mean += ch.accBatch[j] / BATCH; }
-        if (!free.empty()) mean /= free.size();
+        for (auto& mv : schedule) {
+          const double rate = mv->batchCount(ch) / BATCH;
+          lo = std::min(lo, rate); mean += rate;
+        }
+        if (!schedule.empty()) mean /= schedule.size();
         std::snprintf(status, sizeof status, "%s | acceptance min %.2f mean %.2f",
                       burn ? "burn-in" : "sampling", lo, mean);
         cli_progress_set_status(bar, status);
@@ -407,10 +490,35 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   }
   if (!Rf_isNull(bar)) { cli_progress_done(bar); UNPROTECT(1); }
 
+  // acceptance of each parameter: that of the move that moves it
   Rcpp::NumericVector acceptance(d, NA_REAL);
-  for (int j : free) acceptance[j] = nPost > 0 ? ch.accKept[j] / nPost : NA_REAL;
-  for (const Block& b : ch.blocks)
-    for (int j : b.idx) acceptance[j] = nPost > 0 ? b.accKept / nPost : NA_REAL;
+  double scaleAcceptance = NA_REAL;
+  for (auto& mv : schedule) {
+    const double a = nPost > 0 ? mv->accPiece / nPost : NA_REAL;
+    if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
+    else for (int j : mv->idx) acceptance[j] = a;
+  }
+  // the per-move report (the schedule, by name) travels in the state, so
+  // that its counts add up over the pieces of a run
+  const int nm = schedule.size();
+  Rcpp::CharacterVector mvName(nm), mvKind(nm), mvParams(nm);
+  Rcpp::IntegerVector mvRepeats(nm);
+  Rcpp::NumericVector mvAcc(nm), mvTries(nm), mvScale(nm);
+  for (int i = 0; i < nm; ++i) {
+    const Move& mv = *schedule[i];
+    mvName[i] = mv.name; mvKind[i] = mv.kind(); mvRepeats[i] = mv.repeats;
+    std::string ps;
+    for (size_t k = 0; k < mv.idx.size(); ++k) ps += (k ? "," : "") + param_name(mv.idx[k]);
+    mvParams[i] = ps;
+    mvAcc[i] = mv.accepted; mvTries[i] = mv.tries;
+    const double ls = mv.logScale(ch);
+    mvScale[i] = ISNA(ls) ? NA_REAL : std::exp(ls);
+  }
+  Rcpp::List movesOut = Rcpp::List::create(
+    Rcpp::Named("name") = mvName, Rcpp::Named("kind") = mvKind,
+    Rcpp::Named("params") = mvParams, Rcpp::Named("repeats") = mvRepeats,
+    Rcpp::Named("accepted") = mvAcc, Rcpp::Named("tries") = mvTries,
+    Rcpp::Named("scale") = mvScale);
 
   Rcpp::List blocksOut(ch.blocks.size());
   for (size_t b = 0; b < ch.blocks.size(); ++b) blocksOut[b] = ch.blocks[b].write();
@@ -422,21 +530,22 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     Rcpp::Named("blocks") = blocksOut,
     Rcpp::Named("scaleLogsd") = ch.scaleLogsd,
     Rcpp::Named("scaleAccBatch") = ch.scaleAccBatch,
-    Rcpp::Named("scaleBatch") = ch.scaleBatch);
+    Rcpp::Named("scaleBatch") = ch.scaleBatch,
+    Rcpp::Named("moves") = movesOut);
   return Rcpp::List::create(
     Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
     Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
     Rcpp::Named("acceptance") = acceptance,
-    Rcpp::Named("scaleAcceptance") = (ch.scaleMove && nPost > 0) ? scaleAccKept / nPost : NA_REAL,
+    Rcpp::Named("scaleAcceptance") = scaleAcceptance,
     Rcpp::Named("done") = ch.iter - it0, Rcpp::Named("nPost") = nPost,
     Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = stateOut);
 }
 
 // Log-likelihood at one parameter vector, computed from scratch.
-// [[Rcpp::export(.fbc_loglik)]]
+// [[Rcpp::export(.fbc_loglik_c)]]
 double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                   const arma::vec& ys, const arma::vec& phi, double nugget,
-                  int kernS = 1, int kernB = 1, int algebra = 0) {
-  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, kernS, kernB, algebra);
+                  const Rcpp::List& model) {
+  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, model);
   return post->init(phi) ? post->logLik() : R_NegInf;
 }

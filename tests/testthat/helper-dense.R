@@ -29,13 +29,10 @@ kernel_code <- function(kernel) {
 }
 all_kernels <- c("powexp", "gaussian", "matern32", "matern52")
 
-# Unpacks phi (scaled space, kappa on [0, 1]) into named pieces.
+# Unpacks phi (scaled space, kappa on [0, 1]) into named pieces, one per
+# parameter class, at the positions FBC's model description gives.
 unpack_phi <- function(phi, p, q) {
-  i <- 0
-  take <- function(k) { v <- phi[i + seq_len(k)]; i <<- i + k; v }
-  list(kappa = take(q), thetaS = take(p + q), alphaS = take(p + q),
-       thetaB = take(p), alphaB = take(p), sigma2S = take(1), sigma2B = take(1),
-       sigma2E = take(1), muB = take(1))
+  lapply(FBC:::param_indices(p, q), function(i) phi[i])
 }
 
 # The full (n + m) x (n + m) covariance of y = (yf, ys) (vignette 2.4).
@@ -73,10 +70,21 @@ random_koh_data <- function(n, m, p, q, seed) {
   list(Xf = Xf, yf = rnorm(n), Xs = Xs, ys = rnorm(m))
 }
 
-# A random parameter vector inside every domain.
+# A random parameter vector inside every domain: each class drawn by its
+# domain in FBC's model description (kappa uniform on [0, 1], positive
+# classes Gamma(2, 2) (+ 0.05 for the variances), smoothness on [1.1, 1.95],
+# the bias mean N(0, 1)).
 random_phi <- function(p, q) {
-  c(runif(q), rgamma(p + q, 2, 2), runif(p + q, 1.1, 1.95), rgamma(p, 2, 2),
-    runif(p, 1.1, 1.95), rgamma(3, 2, 2) + 0.05, rnorm(1))
+  idx <- FBC:::param_indices(p, q)
+  phi <- numeric(sum(lengths(idx)))
+  for (cls in names(idx)) {
+    k <- length(idx[[cls]])
+    phi[idx[[cls]]] <- switch(FBC:::class_domain[[cls]],
+      real = if (cls == "kappa") runif(k) else rnorm(k),
+      positive = rgamma(k, 2, 2) + if (grepl("^sigma2", cls)) 0.05 else 0,
+      unit12 = runif(k, 1.1, 1.95))
+  }
+  phi
 }
 
 # The default sampler's joint moves along the path `phis` (rejected decoys

@@ -237,3 +237,50 @@ test_that("a family without a smoothness ignores alpha", {
   expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, 5L, 1L),
                "unknown correlation family")
 })
+
+# The compiled core takes the layout of phi from R's model description
+# (R/model.R) and assumes no order of the classes: the same parameters laid
+# out in another order give the same log-likelihood, moves and predictions.
+test_that("the compiled core reads the layout it is given, in any class order", {
+  p <- 2; q <- 2
+  dat <- random_koh_data(8, 20, p, q, seed = 11)
+  idx <- FBC:::param_indices(p, q)
+  model <- FBC:::compiled_model(p, q)
+  # the classes in reverse order: muB first, kappa last
+  rev_cls <- rev(names(idx))
+  len <- lengths(idx)[rev_cls]
+  perm <- unlist(idx[rev_cls], use.names = FALSE)   # new position -> old position
+  model2 <- model
+  model2$offset[rev_cls] <- as.integer(cumsum(len) - len)
+  set.seed(4)
+  phis <- t(replicate(4, random_phi(p, q)))
+  for (r in seq_len(nrow(phis))) {
+    expect_equal(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phis[r, perm], 1e-6, model = model2),
+                 dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phis[r, ], 1e-6), tolerance = 1e-8)
+  }
+  # cached moves along a path (every class, decoys rejected on the way)
+  path <- one_move_path(phis[1, ], p, q)
+  expect_equal(.loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, path[, perm, drop = FALSE], 1e-6,
+                            decoys = TRUE, model = model2),
+               .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, path, 1e-6, decoys = TRUE),
+               tolerance = 1e-10)
+  Xn <- matrix(runif(6), 3, p)
+  for (type in 1:4) {
+    expect_equal(.fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis[1:2, perm], Xn, type, 1e-6,
+                              500L, model = model2),
+                 .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis[1:2, ], Xn, type, 1e-6, 500L),
+                 tolerance = 1e-10)
+  }
+})
+
+test_that("a layout that does not fit the data is refused", {
+  dat <- random_koh_data(5, 12, 1, 1, seed = 3)
+  phi <- random_phi(1, 1)
+  bad <- FBC:::compiled_model(1, 2)       # two calibration inputs for data with one
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = bad),
+               "kappa 2 entries where the data need 1")
+  overlap <- FBC:::compiled_model(1, 1)
+  overlap$offset[["muB"]] <- 0L
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = overlap),
+               "overlap")
+})

@@ -7,8 +7,13 @@ test_that("print() shows the header and the table and returns the fit invisibly"
   expect_match(out[2], "n = 63 field, m = 100 simulator runs; p = 1, q = 1", fixed = TRUE)
   expect_match(out[3], "kappa1 = g", fixed = TRUE)
   expect_match(out[4], "150 iterations, 50 burn-in, thinning 2 -> 50 draws", fixed = TRUE)
-  acc <- range(fit$acceptance, na.rm = TRUE)
-  expect_match(out[5], sprintf("acceptance: %.2f to %.2f", acc[1], acc[2]), fixed = TRUE)
+  # every move by name with its acceptance (that of the parameters it moves)
+  acc <- fit$acceptance
+  line <- paste(out[5:6], collapse = " ")
+  expect_match(line, sprintf("acceptance: kappa1 %.2f, sim %.2f, bias %.2f, sigma2E %.2f, muB exact",
+                             acc[["kappa1"]], acc[["thetaS1"]], acc[["thetaB1"]], acc[["sigma2E"]]),
+               fixed = TRUE)
+  expect_match(line, sprintf("scale %.2f", fit$state$chains[[1]]$scaleAcceptance), fixed = TRUE)
   expect_true(all(vapply(fit$vars, function(v) any(startsWith(out, paste0(v, " "))), logical(1))))
 })
 

@@ -1,0 +1,144 @@
+# The model description: every parameter class of the KOH model, in one
+# table that all code reads (the parameter layout, priors' domains, walks,
+# initial proposal scales, the sampler's moves, Phi's columns, plot labels,
+# the conflict check, checkpoints' identity and the tests' helpers). Adding a
+# class is one row here plus the code that computes with it.
+#
+# Columns:
+#   class    name, in the vignette's notation; its parameters are named
+#            class1, class2, ... (muB, sigma2S ...: one parameter, no index)
+#   over     what the class expands over: "calibration" (one per
+#            calibration input, q), "inputs" (one per simulator input,
+#            p + q: experimental then calibration), "experimental" (p), "one"
+#   domain   "real", "positive" or "unit12" ([1, 2])
+#   walk     the scale its random walk runs on: "identity", "log",
+#            "logit12" (logit of x - 1)
+#   sd0      initial proposal SD on that scale
+#   move     the move of sampler = "blocks" it belongs to: "each" (one move
+#            per parameter, repeated), "sim", "bias" (joint moves of the
+#            simulator and bias GPs), "single" (single site), "gibbs" (an
+#            exact draw when its prior allows, else single site)
+#   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
+#   smooth   the GP ("S" or "B") whose family decides whether the class is
+#            a parameter at all (a smoothness), "" when it always is
+#   label    how plots and messages name the class
+model_classes <- data.frame(
+  class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "sigma2S", "sigma2B", "sigma2E", "muB"),
+  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "one"),
+  domain = c("real", "positive", "unit12", "positive", "unit12", "positive", "positive", "positive", "real"),
+  walk   = c("identity", "log", "logit12", "log", "logit12", "log", "log", "log", "identity"),
+  sd0    = c(0.1, 0.5, 0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.1),
+  move   = c("each", "sim", "sim", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
+  smooth = c("", "", "S", "", "B", "", "", "", ""),
+  label  = c("calibration parameter", "simulator GP scale", "simulator GP smoothness",
+             "bias GP scale", "bias GP smoothness", "simulator GP variance",
+             "bias GP variance", "measurement error variance", "bias GP mean"),
+  stringsAsFactors = FALSE
+)
+
+# The smoothness classes (parameters only for a family that has one), the
+# argument of calibrate() choosing that family, and the classes with one
+# parameter per input (labelled with the input's name).
+smooth_classes <- model_classes$class[model_classes$smooth != ""]
+kernel_arg <- function(cls) paste0("kernel", model_classes$smooth[match(cls, model_classes$class)])
+per_input_classes <- model_classes$class[model_classes$over %in% c("inputs", "experimental")]
+
+# Codes of the walks in the compiled core (src/fbc.h, enum Transform).
+walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L)
+
+# Lookups by class, all read off the table.
+param_classes <- model_classes$class
+class_domain <- stats::setNames(model_classes$domain, model_classes$class)
+class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
+
+# How many parameters each class has with p experimental and q calibration
+# inputs (named by class, in the table's order).
+class_sizes <- function(p, q) {
+  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L)
+  stats::setNames(as.integer(n[model_classes$over]), model_classes$class)
+}
+
+# The layout of phi, the sampler's parameter vector: for each class, its
+# 1-based positions (a named list; integer(0) for an empty class).
+param_indices <- function(p, q) {
+  sizes <- class_sizes(p, q)
+  ends <- unname(cumsum(sizes))
+  stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
+                  names(sizes))
+}
+
+# Parameter names in the order of phi: the class name, with an index when
+# the class expands over inputs.
+param_names <- function(p, q) {
+  sizes <- class_sizes(p, q)
+  unlist(lapply(seq_along(sizes), function(i) {
+    cls <- names(sizes)[i]
+    if (model_classes$over[i] == "one") cls else paste0(cls, seq_len(sizes[i]))
+  }), use.names = FALSE)
+}
+
+# The class of each parameter of phi.
+param_class_of <- function(p, q) rep(model_classes$class, class_sizes(p, q))
+
+# The classes that are not parameters for these correlation families: the
+# smoothness of a GP whose family has none (see ?correlation).
+absent_classes <- function(kernS, kernB) {
+  has <- c(S = kernel_has_alpha(kernS), B = kernel_has_alpha(kernB))
+  model_classes$class[model_classes$smooth %in% names(has)[!has]]
+}
+
+# The layout as the compiled core receives it (read_model() in src/model.cpp):
+# 0-based offsets and lengths named by class.
+layout_codes <- function(p, q) {
+  idx <- param_indices(p, q)
+  len <- lengths(idx)
+  ends <- cumsum(len)
+  list(offset = stats::setNames(as.integer(ends - len), names(idx)),
+       length = stats::setNames(as.integer(len), names(idx)))
+}
+
+# The model description the compiled entry points take: the correlation
+# families of the simulator and bias GPs (kernel_codes()), the algebra
+# (0 auto, 1 dense) and the layout of phi.
+compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L) {
+  c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra)),
+    layout_codes(p, q))
+}
+
+# The compiled model of a fit's spec (spec$model, built by calibrate()); for
+# objects made before it held the layout, built from their classes, with the
+# default codes where those are missing too.
+model_codes <- function(spec) {
+  mc <- spec$model
+  if (!is.null(mc$offset)) return(mc)
+  cls <- spec$classes
+  compiled_model(sum(cls == "thetaB"), sum(cls == "kappa"), mc$kernS %||% 1L,
+                 mc$kernB %||% 1L, mc$algebra %||% 0L)
+}
+
+# The compiled entry points, each with the model description attached. The
+# first arguments are the scaled data; kernS, kernB and algebra give the
+# model codes, or `model` a whole compiled_model().
+.fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget, kernS = 1L, kernB = 1L, algebra = 0L,
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_loglik_c(Xf, yf, Xs, ys, phi, nugget, model)
+}
+
+.fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget,
+                        progress, kernS = 1L, kernB = 1L, algebra = 0L,
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_sample_c(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model)
+}
+
+.fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
+                         algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model)
+}
+
+.loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,
+                         scale = FALSE, kernS = 1L, kernB = 1L, algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .loglik_path_c(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
+}

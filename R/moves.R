@@ -1,0 +1,85 @@
+# The sampler's moves: the schedule each sampler runs (sampler_moves(), read
+# off the model description's `move` column) and what the compiled sampler
+# reports of each move (move_report(), proposal_sd()). The compiled side
+# (src/sampler.cpp) runs the schedule: one Move per entry, in the order of
+# phi, then the scale move.
+
+# The moves of each sampler (see "Sampler" in ?calibrate), read off the
+# model description's `move` column: index vectors of the jointly moved
+# blocks (1-based, in phi; named by move) and how often each moves per
+# sweep, the scale move (the `scaled` classes), the exact draw of the
+# "gibbs" class. `large`: a large simulator block on the dense algebra,
+# where a move of the simulator block costs a Cholesky factor of it and a
+# kappa move an m x m x n triangular solve: each moves once a sweep.
+sampler_moves <- function(sampler, spec, large = FALSE) {
+  if (sampler == "single") {
+    return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
+                params = spec$vars))
+  }
+  fam <- names(prior_families)[match(spec$table$family, prior_families)]
+  free <- fam != "fixed"
+  row <- match(spec$classes, model_classes$class)
+  move <- model_classes$move[row]
+  # each free parameter of an "each" class alone (a one-parameter block: its
+  # walk scale adapts like the joint ones'), three moves a sweep (one when
+  # `large`): a kappa move needs no m x m factorization, and kappa is what
+  # the user came for
+  each <- which(move == "each" & free)
+  each <- stats::setNames(as.list(each), spec$vars[each])
+  joint <- lapply(c(sim = "sim", bias = "bias"), function(m) {
+    idx <- which(move == m & free)
+    if (length(idx) >= 2L) idx
+  })
+  joint <- joint[lengths(joint) > 0L]
+  scaled <- which(model_classes$scaled[row])
+  gibbs <- which(move == "gibbs")
+  rep_each <- if (large) 1L else 3L
+  rep_joint <- as.integer(ifelse(names(joint) == "sim" & large, 1L, 2L))
+  list(
+    blocks = c(each, joint),
+    repeats = c(rep(rep_each, length(each)), rep_joint),
+    scale = all(free[scaled]),
+    gibbsMuB = all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &
+                     spec$table$b[gibbs] == 1),
+    params = spec$vars
+  )
+}
+
+# The report of a fit's moves, one row per move of the schedule: its kind
+# ("walk": a one-parameter adapted walk, "joint", "single", "gibbs",
+# "scale"), the parameters it moves, its repeats per sweep, its acceptance
+# rate over the retained sweeps of all chains (accepted / tries), and its
+# adapted proposal scale (exp(s) of its walk; for a "single" move its SD on
+# the walk's scale), the geometric mean over the chains. NULL for fits made
+# before moves were reported.
+move_report <- function(fit) {
+  ms <- lapply(fit$state$chains, function(s) s$sampler$moves)
+  if (any(vapply(ms, is.null, logical(1)))) return(NULL)
+  first <- ms[[1]]
+  sum_of <- function(field) Reduce(`+`, lapply(ms, `[[`, field))
+  scale <- exp(Reduce(`+`, lapply(ms, function(m) log(m$scale))) / length(ms))
+  data.frame(move = first$name, kind = first$kind, parameters = first$params,
+             repeats = first$repeats,
+             acceptance = ifelse(sum_of("tries") > 0, sum_of("accepted") / sum_of("tries"), NA_real_),
+             scale = scale, stringsAsFactors = FALSE)
+}
+
+# The proposal SD of each parameter of phi on its walk's scale, from a
+# chain's sampler state: exp(logsd) for a single-site move; for a joint or
+# one-parameter adapted move exp(s) times the SD its shape L gives the
+# parameter (sqrt of the row sums of L^2): the marginal step of the
+# proposal actually made. NA for a parameter drawn exactly (gibbs) or not
+# moved (fixed).
+proposal_sd <- function(state, vars, fixed) {
+  sd <- stats::setNames(exp(state$logsd), vars)
+  for (b in state$blocks) {
+    sd[b$index] <- exp(b$logscale) * sqrt(rowSums(as.matrix(b$chol)^2))
+  }
+  m <- state$moves
+  if (!is.null(m)) {
+    gibbs <- m$kind == "gibbs"
+    sd[match(m$params[gibbs], vars)] <- NA_real_
+  }
+  sd[fixed] <- NA_real_
+  sd
+}
