@@ -143,7 +143,11 @@ struct Chain {
   double scaleLogsd = std::log(0.1), scaleAccBatch = 0;
   int scaleBatch = 0, iter = 0, batch = 0;
   double ll = 0;
+  Rcpp::CharacterVector params;  // parameter names (R's spec$vars), for the report
   Chain(Posterior& p, const Priors& r) : post(p), pr(r) {}
+  std::string param_name(int j) const {
+    return params.size() == post.d ? std::string(params[j]) : "phi" + std::to_string(j + 1);
+  }
 };
 
 // A move: one exact Metropolis-Hastings (or Gibbs) update of some
@@ -306,6 +310,185 @@ static double list_num(const Rcpp::List& s, const char* name, double dflt) {
   return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
 }
 
+typedef std::vector<std::unique_ptr<Move> > Schedule;
+
+// The chain's adapted state from `state` (an earlier piece's, or the
+// initial one of R's initial_state(): then the defaults below).
+static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
+  ch.logsd = Rcpp::as<arma::vec>(state["logsd"]);
+  ch.iter = (int) list_num(state, "iter", 0);
+  ch.batch = (int) list_num(state, "batch", 0);
+  ch.accBatch = state.containsElementNamed("accBatch") ?
+    Rcpp::as<arma::vec>(state["accBatch"]) : arma::vec(d, arma::fill::zeros);
+  ch.scaleLogsd = list_num(state, "scaleLogsd", std::log(0.1));
+  ch.scaleAccBatch = list_num(state, "scaleAccBatch", 0);
+  ch.scaleBatch = (int) list_num(state, "scaleBatch", 0);
+}
+
+// The schedule of `moves` (R's sampler_moves()): the moves in sweep order.
+// Each free parameter in the order of phi gets its block's move at the
+// block's first parameter (the block continued from `state` when it has
+// one, else started), the exact muB draw, or a single-site move; then the
+// scale move. Each move's retained counts so far come from `state`.
+static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::List& state,
+                              int nBurn) {
+  const Posterior& post = ch.post;
+  const Priors& pr = ch.pr;
+  const int d = post.d;
+  const bool scaleMove = Rcpp::as<bool>(moves["scale"]);
+  const bool gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
+  if (gibbsMuB && !(pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
+                    pr.b[post.iMuB] == 1))
+    Rcpp::stop("the exact muB move needs a gaussian prior on muB");
+  if (scaleMove)
+    for (int j : {post.iSigma2S, post.iSigma2B, post.iSigma2E})
+      if (pr.family[j] == PF_FIXED)
+        Rcpp::stop("the scale move needs sigma2S, sigma2B and sigma2E all sampled");
+
+  const Rcpp::List blockSpec = moves["blocks"];
+  const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
+    Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
+  // The joint proposals' covariance is estimated afresh from the middle of
+  // burn-in (when burn-in has at least 400 sweeps), so the first sweeps'
+  // drift from the starting point does not inflate it.
+  const int restartAt = nBurn >= 400 ? nBurn / 2 : 0;
+  Rcpp::List blockState;
+  if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
+    blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
+  const bool haveBlocks = blockState.size() > 0 && blockState.size() == blockSpec.size();
+  ch.blocks.resize(blockSpec.size());
+  std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
+  std::vector<char> inBlock(d, 0);
+  for (int b = 0; b < blockSpec.size(); ++b) {
+    const Rcpp::IntegerVector ix = blockSpec[b];
+    if (haveBlocks) {
+      ch.blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
+    } else {
+      std::vector<int> idx(ix.begin(), ix.end());
+      for (int& j : idx) j -= 1;
+      ch.blocks[b].start(idx, ch.logsd);
+    }
+    if ((int) ch.blocks[b].idx.size() != ix.size())
+      Rcpp::stop("the block proposal to continue from has the wrong size");
+    ch.blocks[b].restart = restartAt;
+    for (int j : ch.blocks[b].idx) {
+      if (j < 0 || j >= d || pr.family[j] == PF_FIXED || inBlock[j])
+        Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
+      inBlock[j] = 1;
+    }
+    blockAt[ch.blocks[b].idx[0]] = b;
+  }
+
+  SEXP bn = Rf_getAttrib(blockSpec, R_NamesSymbol);
+  const Rcpp::CharacterVector blockNames = Rf_isNull(bn) ?
+    Rcpp::CharacterVector(blockSpec.size()) : Rcpp::CharacterVector(bn);
+  Schedule schedule;
+  for (int j = 0; j < d; ++j) {
+    if (pr.family[j] == PF_FIXED) continue;
+    if (inBlock[j]) {
+      if (blockAt[j] < 0) continue;
+      const int b = blockAt[j];
+      schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
+      const std::string nm(blockNames[b]);
+      schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
+    } else if (j == post.iMuB && gibbsMuB) {
+      schedule.emplace_back(new GibbsMuBMove(j));
+      schedule.back()->name = ch.param_name(j);
+    } else {
+      schedule.emplace_back(new SiteMove(j));
+      schedule.back()->name = ch.param_name(j);
+    }
+  }
+  if (scaleMove) schedule.emplace_back(new ScaleMove(post));
+  if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
+    const Rcpp::List old = state["moves"];
+    const Rcpp::CharacterVector nm = old["name"];
+    const Rcpp::NumericVector acc = old["accepted"], tries = old["tries"];
+    for (auto& mv : schedule)
+      for (int i = 0; i < nm.size(); ++i)
+        if (mv->name == std::string(nm[i])) { mv->accepted = acc[i]; mv->tries = tries[i]; }
+  }
+  return schedule;
+}
+
+// One sweep: `repeats` steps of every move in the schedule's order.
+static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
+  for (auto& mv : schedule) {
+    for (int r = 0; r < mv->repeats; ++r) {
+      const bool acc = mv->step(ch);
+      mv->after(burn, it, r);
+      if (acc) mv->batchCount(ch) += 1.0 / mv->repeats;
+      if (!burn) {
+        mv->tries += 1;
+        if (acc) { mv->accepted += 1; mv->accPiece += 1.0 / mv->repeats; }
+      }
+    }
+  }
+}
+
+// The end of a batch of BATCH sweeps: adapt every move during burn-in, set
+// the progress bar's status, start the next batch's counts.
+static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar) {
+  ++ch.batch;
+  if (burn)
+    for (auto& mv : schedule) mv->adapt(ch);
+  if (!Rf_isNull(bar)) {
+    double lo = 1, mean = 0;
+    for (auto& mv : schedule) {
+      const double rate = mv->batchCount(ch) / BATCH;
+      lo = std::min(lo, rate); mean += rate;
+    }
+    if (!schedule.empty()) mean /= schedule.size();
+    char status[128];
+    std::snprintf(status, sizeof status, "%s | acceptance min %.2f mean %.2f",
+                  burn ? "burn-in" : "sampling", lo, mean);
+    cli_progress_set_status(bar, status);
+  }
+  ch.accBatch.zeros();
+  for (Block& b : ch.blocks) b.accBatch = 0;
+  ch.scaleAccBatch = 0;
+}
+
+// The per-move report: name, kind, parameters, repeats, retained
+// acceptances and tries over every piece so far, adapted scale exp(s).
+static Rcpp::List move_report(const Chain& ch, const Schedule& schedule) {
+  const int nm = schedule.size();
+  Rcpp::CharacterVector name(nm), kind(nm), params(nm);
+  Rcpp::IntegerVector repeats(nm);
+  Rcpp::NumericVector accepted(nm), tries(nm), scale(nm);
+  for (int i = 0; i < nm; ++i) {
+    const Move& mv = *schedule[i];
+    name[i] = mv.name; kind[i] = mv.kind(); repeats[i] = mv.repeats;
+    std::string ps;
+    for (size_t k = 0; k < mv.idx.size(); ++k) ps += (k ? "," : "") + ch.param_name(mv.idx[k]);
+    params[i] = ps;
+    accepted[i] = mv.accepted; tries[i] = mv.tries;
+    const double ls = mv.logScale(ch);
+    scale[i] = ISNA(ls) ? NA_REAL : std::exp(ls);
+  }
+  return Rcpp::List::create(
+    Rcpp::Named("name") = name, Rcpp::Named("kind") = kind, Rcpp::Named("params") = params,
+    Rcpp::Named("repeats") = repeats, Rcpp::Named("accepted") = accepted,
+    Rcpp::Named("tries") = tries, Rcpp::Named("scale") = scale);
+}
+
+// The chain's whole state, for the next piece (read_chain(), make_schedule()).
+static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule) {
+  Rcpp::List blocks(ch.blocks.size());
+  for (size_t b = 0; b < ch.blocks.size(); ++b) blocks[b] = ch.blocks[b].write();
+  const arma::vec& phi = ch.post.phi;
+  return Rcpp::List::create(
+    Rcpp::Named("phi") = Rcpp::NumericVector(phi.begin(), phi.end()),
+    Rcpp::Named("logsd") = Rcpp::NumericVector(ch.logsd.begin(), ch.logsd.end()),
+    Rcpp::Named("iter") = ch.iter, Rcpp::Named("batch") = ch.batch,
+    Rcpp::Named("accBatch") = Rcpp::NumericVector(ch.accBatch.begin(), ch.accBatch.end()),
+    Rcpp::Named("blocks") = blocks,
+    Rcpp::Named("scaleLogsd") = ch.scaleLogsd,
+    Rcpp::Named("scaleAccBatch") = ch.scaleAccBatch,
+    Rcpp::Named("scaleBatch") = ch.scaleBatch,
+    Rcpp::Named("moves") = move_report(ch, schedule));
+}
+
 // [[Rcpp::export(.fbc_sample_c)]]
 Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
                       const arma::mat& Xs, const arma::vec& ys,
@@ -323,98 +506,10 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   if (thinning < 1) Rcpp::stop("thinning must be at least 1");
 
   Chain ch(post, pr);
-  ch.logsd = Rcpp::as<arma::vec>(state["logsd"]);
-  ch.iter = (int) list_num(state, "iter", 0);
-  ch.batch = (int) list_num(state, "batch", 0);
-  ch.accBatch = state.containsElementNamed("accBatch") ?
-    Rcpp::as<arma::vec>(state["accBatch"]) : arma::vec(d, arma::fill::zeros);
-  const bool scaleMove = Rcpp::as<bool>(moves["scale"]);
-  const bool gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
-  if (gibbsMuB && !(pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
-                    pr.b[post.iMuB] == 1))
-    Rcpp::stop("the exact muB move needs a gaussian prior on muB");
-  ch.scaleLogsd = list_num(state, "scaleLogsd", std::log(0.1));
-  ch.scaleAccBatch = list_num(state, "scaleAccBatch", 0);
-  ch.scaleBatch = (int) list_num(state, "scaleBatch", 0);
-
-  // Blocks: continue the adapted ones of `state`, else start the ones of `moves`.
-  const Rcpp::List blockSpec = moves["blocks"];
-  const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
-    Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
-  // The joint proposals' covariance is estimated afresh from the middle of
-  // burn-in (when burn-in has at least 400 sweeps), so the first sweeps'
-  // drift from the starting point does not inflate it.
-  const int restartAt = nBurn >= 400 ? nBurn / 2 : 0;
-  Rcpp::List blockState;
-  if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
-    blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
-  const bool haveBlocks = blockState.size() > 0 && blockState.size() == blockSpec.size();
-  ch.blocks.resize(blockSpec.size());
-  std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
-  std::vector<char> inBlock(d, 0);
-  for (int b = 0; b < blockSpec.size(); ++b) {
-    if (haveBlocks) {
-      ch.blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
-    } else {
-      const Rcpp::IntegerVector ix = blockSpec[b];
-      std::vector<int> idx(ix.begin(), ix.end());
-      for (int& j : idx) j -= 1;
-      ch.blocks[b].start(idx, ch.logsd);
-    }
-    const Rcpp::IntegerVector ix = blockSpec[b];
-    if ((int) ch.blocks[b].idx.size() != ix.size())
-      Rcpp::stop("the block proposal to continue from has the wrong size");
-    ch.blocks[b].restart = restartAt;
-    for (int j : ch.blocks[b].idx) {
-      if (j < 0 || j >= d || pr.family[j] == PF_FIXED || inBlock[j])
-        Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
-      inBlock[j] = 1;
-    }
-    blockAt[ch.blocks[b].idx[0]] = b;
-  }
-  if (scaleMove)
-    for (int j : {post.iSigma2S, post.iSigma2B, post.iSigma2E})
-      if (pr.family[j] == PF_FIXED)
-        Rcpp::stop("the scale move needs sigma2S, sigma2B and sigma2E all sampled");
-
-  // The schedule: the moves in sweep order. Each free parameter in the
-  // order of phi: its block's move at the block's first parameter, the
-  // exact muB draw, or a single-site move; then the scale move.
-  SEXP bn = Rf_getAttrib(blockSpec, R_NamesSymbol);
-  const Rcpp::CharacterVector blockNames = Rf_isNull(bn) ?
-    Rcpp::CharacterVector(blockSpec.size()) : Rcpp::CharacterVector(bn);
-  const Rcpp::CharacterVector params = moves.containsElementNamed("params") ?
-    Rcpp::as<Rcpp::CharacterVector>(moves["params"]) : Rcpp::CharacterVector(0);
-  auto param_name = [&](int j) {
-    return params.size() == d ? std::string(params[j]) : "phi" + std::to_string(j + 1);
-  };
-  std::vector<std::unique_ptr<Move> > schedule;
-  for (int j = 0; j < d; ++j) {
-    if (pr.family[j] == PF_FIXED) continue;
-    if (inBlock[j]) {
-      if (blockAt[j] < 0) continue;
-      const int b = blockAt[j];
-      schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
-      const std::string nm(blockNames[b]);
-      schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
-    } else if (j == post.iMuB && gibbsMuB) {
-      schedule.emplace_back(new GibbsMuBMove(j));
-      schedule.back()->name = param_name(j);
-    } else {
-      schedule.emplace_back(new SiteMove(j));
-      schedule.back()->name = param_name(j);
-    }
-  }
-  if (scaleMove) schedule.emplace_back(new ScaleMove(post));
-  // each move's retained acceptances so far (earlier pieces of this run)
-  if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
-    const Rcpp::List old = state["moves"];
-    const Rcpp::CharacterVector nm = old["name"];
-    const Rcpp::NumericVector acc = old["accepted"], tries = old["tries"];
-    for (auto& mv : schedule)
-      for (int i = 0; i < nm.size(); ++i)
-        if (mv->name == std::string(nm[i])) { mv->accepted = acc[i]; mv->tries = tries[i]; }
-  }
+  if (moves.containsElementNamed("params"))
+    ch.params = Rcpp::as<Rcpp::CharacterVector>(moves["params"]);
+  read_chain(ch, state, d);
+  Schedule schedule = make_schedule(ch, moves, state, nBurn);
 
   ch.lp.set_size(d);
   for (int j = 0; j < d; ++j) ch.lp[j] = pr(j, post.phi[j]);
@@ -433,44 +528,15 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
 
   SEXP bar = R_NilValue;
   if (!Rf_isNull(progress)) bar = PROTECT(cli_progress_bar(nIter, progress));
-  char status[128];
 
   for (int it = it0 + 1; it <= it1; ++it) {
     const bool burn = it <= nBurn;
-    for (auto& mv : schedule) {
-      for (int r = 0; r < mv->repeats; ++r) {
-        const bool acc = mv->step(ch);
-        mv->after(burn, it, r);
-        if (acc) mv->batchCount(ch) += 1.0 / mv->repeats;
-        if (!burn) {
-          mv->tries += 1;
-          if (acc) { mv->accepted += 1; mv->accPiece += 1.0 / mv->repeats; }
-        }
-      }
-    }
+    sweep(ch, schedule, burn, it);
     if (!burn) ++nPost;
-
     if (it % BATCH == 0) {
-      ++ch.batch;
-      if (burn)
-        for (auto& mv : schedule) mv->adapt(ch);
       if (!Rf_isNull(bar) && user_interrupted()) interrupted = true;
-      if (!Rf_isNull(bar) && !interrupted) {
-        double lo = 1, mean = 0;
-        for (auto& mv : schedule) {
-          const double rate = mv->batchCount(ch) / BATCH;
-          lo = std::min(lo, rate); mean += rate;
-        }
-        if (!schedule.empty()) mean /= schedule.size();
-        std::snprintf(status, sizeof status, "%s | acceptance min %.2f mean %.2f",
-                      burn ? "burn-in" : "sampling", lo, mean);
-        cli_progress_set_status(bar, status);
-      }
-      ch.accBatch.zeros();
-      for (Block& b : ch.blocks) b.accBatch = 0;
-      ch.scaleAccBatch = 0;
+      end_batch(ch, schedule, burn, interrupted ? R_NilValue : bar);
     }
-
     if (it > nBurn && (it - nBurn) % thinning == 0 && kept < nKeep) {
       for (int j = 0; j < d; ++j) draws(kept, j) = post.phi[j];
       logLik[kept] = ch.ll;
@@ -498,47 +564,13 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
     else for (int j : mv->idx) acceptance[j] = a;
   }
-  // the per-move report (the schedule, by name) travels in the state, so
-  // that its counts add up over the pieces of a run
-  const int nm = schedule.size();
-  Rcpp::CharacterVector mvName(nm), mvKind(nm), mvParams(nm);
-  Rcpp::IntegerVector mvRepeats(nm);
-  Rcpp::NumericVector mvAcc(nm), mvTries(nm), mvScale(nm);
-  for (int i = 0; i < nm; ++i) {
-    const Move& mv = *schedule[i];
-    mvName[i] = mv.name; mvKind[i] = mv.kind(); mvRepeats[i] = mv.repeats;
-    std::string ps;
-    for (size_t k = 0; k < mv.idx.size(); ++k) ps += (k ? "," : "") + param_name(mv.idx[k]);
-    mvParams[i] = ps;
-    mvAcc[i] = mv.accepted; mvTries[i] = mv.tries;
-    const double ls = mv.logScale(ch);
-    mvScale[i] = ISNA(ls) ? NA_REAL : std::exp(ls);
-  }
-  Rcpp::List movesOut = Rcpp::List::create(
-    Rcpp::Named("name") = mvName, Rcpp::Named("kind") = mvKind,
-    Rcpp::Named("params") = mvParams, Rcpp::Named("repeats") = mvRepeats,
-    Rcpp::Named("accepted") = mvAcc, Rcpp::Named("tries") = mvTries,
-    Rcpp::Named("scale") = mvScale);
-
-  Rcpp::List blocksOut(ch.blocks.size());
-  for (size_t b = 0; b < ch.blocks.size(); ++b) blocksOut[b] = ch.blocks[b].write();
-  Rcpp::List stateOut = Rcpp::List::create(
-    Rcpp::Named("phi") = Rcpp::NumericVector(post.phi.begin(), post.phi.end()),
-    Rcpp::Named("logsd") = Rcpp::NumericVector(ch.logsd.begin(), ch.logsd.end()),
-    Rcpp::Named("iter") = ch.iter, Rcpp::Named("batch") = ch.batch,
-    Rcpp::Named("accBatch") = Rcpp::NumericVector(ch.accBatch.begin(), ch.accBatch.end()),
-    Rcpp::Named("blocks") = blocksOut,
-    Rcpp::Named("scaleLogsd") = ch.scaleLogsd,
-    Rcpp::Named("scaleAccBatch") = ch.scaleAccBatch,
-    Rcpp::Named("scaleBatch") = ch.scaleBatch,
-    Rcpp::Named("moves") = movesOut);
   return Rcpp::List::create(
     Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
     Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
     Rcpp::Named("acceptance") = acceptance,
     Rcpp::Named("scaleAcceptance") = scaleAcceptance,
     Rcpp::Named("done") = ch.iter - it0, Rcpp::Named("nPost") = nPost,
-    Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = stateOut);
+    Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = write_chain(ch, schedule));
 }
 
 // Log-likelihood at one parameter vector, computed from scratch.
