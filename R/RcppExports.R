@@ -5,6 +5,10 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
+.fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {
+    .Call(`_FBC_fbc_heldout`, Xf, yf, Xs, ys, phis, nugget, fold, model)
+}
+
 .log_prior <- function(x, family, p1, p2) {
     .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
 }

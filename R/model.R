@@ -142,3 +142,8 @@ model_codes <- function(spec) {
                          model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
   .loglik_path_c(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }
+
+.fbc_heldout <- function(Xf, yf, Xs, ys, phis, nugget, fold, kernS = 1L, kernB = 1L, algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_heldout_c(Xf, yf, Xs, ys, phis, nugget, fold, model)
+}

@@ -12,10 +12,12 @@
 #' zero mean and covariance \eqn{K = \sigma^2_S (R_s + \nu I)} on the scaled
 #' space of [calibrate()] (\eqn{\nu} the nugget, `fit$settings$nugget`). The
 #' field data play no part. For one draw of the parameters, with
-#' \eqn{Q = K^{-1}} and \eqn{a = Q y_s} computed from one Cholesky factor of
-#' \eqn{K}, the closed-form identities of GP regression give the held-out
-#' predictive of every run without refitting (Rasmussen and Williams 2006,
-#' section 5.4.2):
+#' \eqn{Q = K^{-1}} and \eqn{a = Q y_s} computed by the fit's simulator
+#' algebra (see "Simulator algebra" in [calibrate()]: from the Cholesky factor
+#' of \eqn{K}, or on a product design from the eigendecompositions of its two
+#' factors, without any `m x m` matrix), the closed-form identities of GP
+#' regression give the held-out predictive of every run without refitting
+#' (Rasmussen and Williams 2006, section 5.4.2):
 #' * leave-one-out: mean \eqn{y_i - a_i / Q_{ii}}, variance \eqn{1 / Q_{ii}};
 #' * a fold \eqn{B} held out: mean \eqn{y_B - (Q_{BB})^{-1} a_B},
 #'   covariance \eqn{(Q_{BB})^{-1}}, of which each run's marginal is used.
@@ -54,8 +56,9 @@
 #' @param method `"Bayesian"` (a mixture over `ndraws` posterior draws) or
 #'   `"MAP"` (the draw with the highest log posterior).
 #' @param ndraws For `method = "Bayesian"`, how many draws to use (all when
-#'   fewer are retained). Each costs one Cholesky factor and one inverse of
-#'   the `m x m` simulator covariance.
+#'   fewer are retained). Each costs one factorization of the simulator
+#'   covariance by the fit's algebra (on the dense one: a Cholesky factor
+#'   and a triangular inverse of the `m x m` matrix).
 #' @param folds `NULL` (default), a number of folds, or one fold label per
 #'   simulator run (see "Folds").
 #' @return An object of class `fbc_validation`: a list with `runs` (a data
@@ -83,17 +86,12 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   rows <- check_rows(fit, method, ndraws)
   phis <- sampler_draws(fit, rows)
   nugget <- fit$settings$nugget %||% fbc_nugget
-  sig <- match("sigma2S", fit$spec$vars)
-
+  labels <- if (is.null(fold)) seq_len(m) else match(fold, unique(fold))
+  cv <- .fbc_heldout(fit$data$Xf, fit$data$yf, fit$data$Xs, ys, phis, nugget, labels,
+                     model = model_codes(fit$spec))
+  means <- cv$mean
+  vars <- cv$var
   D <- nrow(phis)
-  means <- vars <- matrix(0, m, D)
-  for (d in seq_len(D)) {
-    K <- sim_corr(fit, fit$data$Xs, fit$data$Xs, phis[d, ])
-    diag(K) <- diag(K) + nugget
-    cv <- gp_heldout(K, ys, fold)
-    means[, d] <- cv$mean
-    vars[, d] <- phis[d, sig] * cv$var  # sigma2S cancels in the mean
-  }
   mu <- rowMeans(means)
   v <- rowMeans(vars) + rowMeans((means - mu)^2)
   sds <- sqrt(vars)
@@ -117,36 +115,6 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
     nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
     response = sc$names$response %||% "response"
   ), class = "fbc_validation")
-}
-
-# The simulator correlation R_s(X, Y) at parameter vector `phi` (the
-# sampler's scale, every column: sampler_draws()), in the fit's family.
-# Every simulator correlation of the checks goes through here.
-sim_corr <- function(fit, X, Y, phi) {
-  idx <- param_indices(fit$scale$p, fit$scale$q)
-  .corr_matrix(X, Y, as.numeric(phi[idx$thetaS]), as.numeric(phi[idx$alphaS]),
-               model_codes(fit$spec)$kernS)
-}
-
-# Held-out predictive of every element of y ~ N(0, K): leave-one-out when
-# `fold` is NULL, else one fold at a time (see ?validate_emulator). One
-# Cholesky factor of K; Q = K^-1 from it. Returns list(mean, var).
-gp_heldout <- function(K, y, fold = NULL) {
-  U <- chol(K)
-  Q <- chol2inv(U)
-  a <- drop(Q %*% y)
-  if (is.null(fold)) {
-    d <- diag(Q)
-    return(list(mean = y - a / d, var = 1 / d))
-  }
-  mean <- var <- numeric(length(y))
-  for (k in unique(fold)) {
-    B <- which(fold == k)
-    S <- chol2inv(chol(Q[B, B, drop = FALSE]))  # covariance of y_B given the rest
-    mean[B] <- y[B] - drop(S %*% a[B])
-    var[B] <- diag(S)
-  }
-  list(mean = mean, var = var)
 }
 
 # Above this many simulator runs, validate_emulator() uses 10 folds.

@@ -22,6 +22,24 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// fbc_heldout
+Rcpp::List fbc_heldout(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& fold, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_heldout(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP foldSEXP, SEXP modelSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
+    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type fold(foldSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_heldout(Xf, yf, Xs, ys, phis, nugget, fold, model));
+    return rcpp_result_gen;
+END_RCPP
+}
 // log_prior_vec
 Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family, double p1, double p2);
 RcppExport SEXP _FBC_log_prior_vec(SEXP xSEXP, SEXP familySEXP, SEXP p1SEXP, SEXP p2SEXP) {
@@ -147,6 +165,7 @@ END_RCPP
 
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
+    {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

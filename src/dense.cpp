@@ -162,3 +162,16 @@ void DensePosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec
   }
   G = W_.cur().t() * K_;
 }
+
+// Li = Ls^-1 (a triangular inverse), so Ds^-1 = Li' Li: a = Li' z and
+// (Ds^-1)_BB = Li_B' Li_B with Li_B the columns B of Li.
+void DensePosterior::simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                                std::vector<arma::mat>& QBB) {
+  const arma::mat Li = arma::inv(arma::trimatl(Ls_.cur()));
+  a = Li.t() * z_.cur();
+  QBB.resize(folds.size());
+  for (size_t k = 0; k < folds.size(); ++k) {
+    const arma::mat LB = Li.cols(arma::conv_to<arma::uvec>::from(folds[k]));
+    QBB[k] = LB.t() * LB;
+  }
+}

@@ -192,6 +192,12 @@ public:
   // inputs Xnew (rows, scaled) and type 1 field, 2 mean, 3 simulator,
   // 4 bias, the conditional mean and variance of the target given y.
   virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var) = 0;
+  // The held-out predictive of the simulator runs from the simulator GP
+  // alone (covariance sigma2S Ds, scaled space) at the current state, one
+  // fold of 0-based runs at a time (heldout.cpp); false if a fold's block
+  // is not positive definite.
+  virtual bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
+                       arma::vec& var) = 0;
   // A short description of the algebra (for tests and messages).
   virtual std::string algebra() const = 0;
 
@@ -216,6 +222,8 @@ public:
   void reject() override;
   void muBQuadratic(double& aa, double& ab) const override;
   void condition(const arma::mat& Xnew, int type, double* mean, double* var) override;
+  bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
+               arma::vec& var) override;
 
 protected:
   SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
@@ -241,6 +249,10 @@ protected:
   // a_c = k_c' Ds^-1 ys, b_c = k_c' Ds^-1 k_c, G = Rs(Xs,Xk)' Ds^-1 K (nu x b).
   virtual void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
                             arma::mat& G) = 0;
+  // at the current state, what the held-out formulas need from Ds^-1:
+  // a = Ds^-1 ys and, per fold B (0-based runs), QBB[k] = (Ds^-1)_BB.
+  virtual void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                          std::vector<arma::mat>& QBB) = 0;
 
 private:
   Touch touch_;
@@ -274,6 +286,8 @@ protected:
   void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) override;
   void simFlip(const Touch& t) override;
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
+  void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                  std::vector<arma::mat>& QBB) override;
 
 private:
   bool cached_;
@@ -316,6 +330,8 @@ protected:
   void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) override;
   void simFlip(const Touch& t) override;
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
+  void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                  std::vector<arma::mat>& QBB) override;
 
 private:
   ProductDesign dz_;

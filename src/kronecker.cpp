@@ -186,3 +186,42 @@ void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma:
   An_.each_col() %= w;
   G = Ax_.cur().t() * An_;
 }
+
+// Ds^-1 = (Ux (x) Ut) diag(1 / lam) (Ux (x) Ut)'; with Li_ab = 1 / lam_ab
+// and run r at (i, j) = (ix_r, jt_r):
+//   a_r = [Ux (Yt % Li) Ut']_ij,
+//   (Ds^-1)_rr = [(Ux % Ux) Li (Ut % Ut)']_ij                 (a fold of one run),
+//   (Ds^-1)_rs = [Ux M_s Ut']_ij, M_s = (Ux_{i_s,.}' Ut_{j_s,.}) % Li (column s):
+// O(I^2 J + I J^2), and O(I^2 J + |B| J) per run of a larger fold B;
+// nothing of size m x m is formed.
+void KroneckerPosterior::simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                                    std::vector<arma::mat>& QBB) {
+  const arma::mat& Ux = Ux_.cur();
+  const arma::mat& Ut = Ut_.cur();
+  const arma::vec& lx = lx_.cur();
+  const arma::vec& lt = lt_.cur();
+  const std::vector<int>& ix = dz_.ix;
+  const std::vector<int>& jt = dz_.jt;
+  arma::mat Li(dz_.I, dz_.J);
+  for (int j = 0; j < dz_.J; ++j)
+    for (int i = 0; i < dz_.I; ++i) Li(i, j) = 1.0 / (lx[i] * lt[j] + nugget_);
+  const arma::mat A = Ux * (Yt_.cur() % Li) * Ut.t();
+  a.set_size(m);
+  for (int r = 0; r < m; ++r) a[r] = A(ix[r], jt[r]);
+  arma::mat Dg, P;
+  for (const std::vector<int>& B : folds)
+    if (B.size() == 1) { Dg = arma::square(Ux) * Li * arma::square(Ut).t(); break; }
+  QBB.resize(folds.size());
+  for (size_t k = 0; k < folds.size(); ++k) {
+    const std::vector<int>& B = folds[k];
+    const int nb = B.size();
+    arma::mat& Q = QBB[k];
+    Q.set_size(nb, nb);
+    if (nb == 1) { Q(0, 0) = Dg(ix[B[0]], jt[B[0]]); continue; }
+    for (int c = 0; c < nb; ++c) {
+      const int s = B[c];
+      P = Ux * ((Ux.row(ix[s]).t() * Ut.row(jt[s])) % Li);
+      for (int b = 0; b < nb; ++b) Q(b, c) = arma::dot(P.row(ix[B[b]]), Ut.row(jt[B[b]]));
+    }
+  }
+}

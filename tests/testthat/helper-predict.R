@@ -24,9 +24,10 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
 # A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
 # at `phi` (sampler scale), so each retained draw equals phi; kernelS,
 # kernelB: correlation families (a family without a smoothness gets no
-# alpha prior: its alpha is not a parameter).
-fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp") {
-  d <- random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed)
+# alpha prior: its alpha is not a parameter). `d`: other data on the scaled
+# space (p = 2, q = 1), as random_koh_data() returns them.
+fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
+                      d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed)) {
   # native units: inputs stretched, response shifted/scaled
   sim <- cbind(y = 3 + 2 * d$ys, x1 = 10 * d$Xs[, 1], x2 = d$Xs[, 2] - 5, t = 4 * d$Xs[, 3])
   field <- cbind(y = 3 + 2 * d$yf, x1 = 10 * d$Xf[, 1], x2 = d$Xf[, 2] - 5)

@@ -2,6 +2,8 @@
 # written with dense_corr() (helper-dense.R) and base R's solve(): the GP
 # conditional of y_B given y_-B, mean K_B,-B K_-B^-1 y_-B and covariance
 # K_BB - K_B,-B K_-B^-1 K_-B,B, with K = sigma2S (R_s + nugget I).
+# The compiled held-out predictives (.fbc_heldout(), through the dense or
+# the Kronecker algebra) are checked against these plain-R dense solves.
 
 # Held-out predictive of every run by refitting without it (or its fold).
 refit_heldout <- function(Xs, ys, th, fold, nugget = 1e-6, kernel = "powexp") {
@@ -149,16 +151,6 @@ test_that("print and plot of a validation", {
   expect_no_error(ggplot2::ggplot_build(p))
 })
 
-test_that("the simulator correlation goes through sim_corr()", {
-  set.seed(3)
-  phi <- random_phi(2, 1)
-  fit <- fixed_fit(phi)
-  th <- unpack_phi(phi, 2, 1)
-  X <- fit$data$Xs
-  expect_equal(FBC:::sim_corr(fit, X, X[1:4, ], phi), dense_corr(X, X[1:4, ], th$thetaS, th$alphaS),
-               tolerance = 1e-12)
-})
-
 test_that("a Matern emulator: held-out predictions equal explicit refits in its family", {
   set.seed(5)
   phi <- random_phi(2, 1)
@@ -167,11 +159,65 @@ test_that("a Matern emulator: held-out predictions equal explicit refits in its 
   th <- unpack_phi(phi, 2, 1)
   m <- length(fit$data$ys)
   X <- fit$data$Xs
-  expect_equal(FBC:::sim_corr(fit, X, X[1:4, ], FBC:::sampler_draws(fit, 1)[1, ]),
-               dense_corr(X, X[1:4, ], th$thetaS, NULL, "matern52"), tolerance = 1e-12)
   for (cs in list(list(folds = NULL, labels = seq_len(m)),
                   list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1))) {
     ref <- refit_heldout(X, fit$data$ys, th, cs$labels, kernel = "matern52")
+    v <- validate_emulator(fit, method = "MAP", folds = cs$folds)
+    expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
+    expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+  }
+})
+
+# A product design on the scaled space (p = 2, q = 1): every combination of
+# I experimental settings and J calibration settings, rows shuffled, random
+# responses and n field points (the Kronecker algebra's case).
+product_koh_data <- function(I, J, n, seed) {
+  set.seed(seed)
+  Xg <- matrix(runif(I * 2), I, 2)
+  tg <- runif(J)
+  g <- expand.grid(i = seq_len(I), j = seq_len(J))[sample(I * J), ]
+  list(Xf = matrix(runif(n * 2), n, 2), yf = rnorm(n), Xs = unname(cbind(Xg[g$i, ], tg[g$j])),
+       ys = rnorm(I * J))
+}
+
+test_that("compiled held-out predictives equal dense refits on the dense and Kronecker algebras", {
+  designs <- list(scattered = random_koh_data(n = 6, m = 30, p = 2, q = 1, seed = 4),
+                  product = product_koh_data(5, 7, n = 6, seed = 4))
+  expect_length(.sim_algebra(designs$scattered$Xs, 2L), 0)       # dense
+  expect_identical(.sim_algebra(designs$product$Xs, 2L), c(5L, 7L))  # Kronecker 5 x 7
+  for (d in designs) {
+    m <- nrow(d$Xs)
+    set.seed(6)
+    phis <- rbind(random_phi(2, 1), random_phi(2, 1))
+    # leave-one-out, 4 even folds, and uneven folds mixing single runs and blocks
+    for (fold in list(seq_len(m), (seq_len(m) - 1) %% 4 + 1, c(3:1, rep(4:6, length.out = m - 3)))) {
+      res <- .fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, fold)
+      for (i in 1:2) {
+        ref <- refit_heldout(d$Xs, d$ys, unpack_phi(phis[i, ], 2, 1), fold)
+        expect_equal(res$mean[, i], ref$mean, tolerance = 1e-8)
+        expect_equal(res$var[, i], ref$var, tolerance = 1e-8)
+      }
+      # the dense algebra forced on the product design: the same numbers
+      expect_equal(.fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, fold, algebra = 1L), res,
+                   tolerance = 1e-8)
+    }
+  }
+  d <- designs$product
+  expect_error(.fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, rep(2L, 35)), "each used")
+})
+
+test_that("validate_emulator() on a product design goes through the Kronecker algebra", {
+  set.seed(3)
+  phi <- random_phi(2, 1)
+  fit <- fixed_fit(phi, d = product_koh_data(5, 7, n = 7, seed = 11))
+  expect_identical(fit$settings$simAlgebra, list(name = "Kronecker", dims = c(5L, 7L)))
+  sc <- fit$scale
+  th <- unpack_phi(phi, 2, 1)
+  m <- length(fit$data$ys)
+  for (cs in list(list(folds = NULL, labels = seq_len(m)),
+                  list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1),
+                  list(folds = rep(c("a", "b"), c(30, 5)), labels = rep(1:2, c(30, 5))))) {
+    ref <- refit_heldout(fit$data$Xs, fit$data$ys, th, cs$labels)
     v <- validate_emulator(fit, method = "MAP", folds = cs$folds)
     expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
     expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
