@@ -271,7 +271,7 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
   fit <- calibrate(pr$sim, pr$field, nMCMC = 12000, nBurn = 1000, thinning = 2, nChains = 2,
                    kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
   ix <- c(fit$indices$thetaB, fit$indices$sigma2B)
-  expect_identical(fit$settings$moves$blocks, list(ix))
+  expect_identical(fit$settings$moves$blocks, list(bias = ix))
   expect_equal(fit$acceptance[["thetaB1"]], fit$acceptance[["sigma2B"]])
   d <- fit$data
   phi <- fit$state$chains[[1]]$last
