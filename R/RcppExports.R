@@ -5,10 +5,6 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
-.log_prior <- function(x, family, p1, p2) {
-    .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
-}
-
 .corr_matrix <- function(X, Y, theta, alpha, kernel = 1L) {
     .Call(`_FBC_corr_matrix_r`, X, Y, theta, alpha, kernel)
 }
@@ -23,6 +19,10 @@
 
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L, algebra = 0L) {
     .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS, kernB, algebra)
+}
+
+.log_prior <- function(x, family, p1, p2) {
+    .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
 }
 
 .fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS = 1L, kernB = 1L, algebra = 0L) {

@@ -36,8 +36,10 @@ enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52
 // whenever the simulator design allows it, or always the dense one.
 enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
 
-// kernels.cpp: priors and walks ---------------------------------------------
+// priors.cpp -----------------------------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
+
+// transforms.cpp: the walks ---------------------------------------------------
 double log_jacobian(int transform, double x);
 double to_walk(int transform, double x);
 double from_walk(int transform, double w);
@@ -78,7 +80,7 @@ void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const doub
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = KF_POWEXP);
 
-// kernels.cpp: dense linear algebra -----------------------------------------
+// linalg.cpp: dense linear algebra -------------------------------------------
 // In-place lower Cholesky (LAPACK dpotrf); returns false when not PD.
 bool chol_lower(arma::mat& A);
 // log|A| from its lower Cholesky factor.
