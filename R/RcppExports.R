@@ -25,6 +25,10 @@
     .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
 }
 
+.prior_codes <- function() {
+    .Call(`_FBC_prior_codes`)
+}
+
 .fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS = 1L, kernB = 1L, algebra = 0L) {
     .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, kernS, kernB, algebra)
 }

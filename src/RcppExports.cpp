@@ -108,6 +108,16 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// prior_codes
+Rcpp::IntegerVector prior_codes();
+RcppExport SEXP _FBC_prior_codes() {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    rcpp_result_gen = Rcpp::wrap(prior_codes());
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_sample
 Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress, int kernS, int kernB, int algebra);
 RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP kernSSEXP, SEXP kernBSEXP, SEXP algebraSEXP) {
@@ -160,6 +170,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 12},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
+    {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 15},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 9},
     {NULL, NULL, 0}

@@ -19,7 +19,8 @@
 #include <memory>
 #include <vector>
 
-// Prior family codes; R/priors.R keeps the same table (prior_families()).
+// Prior family codes, named in prior_codes() (priors.cpp), which the registry
+// of R/priors.R is checked against when the package loads.
 enum PriorFamily {
   PF_UNIFORM = 1, PF_GAUSSIAN, PF_GAMMA, PF_BETA, PF_LOGNORMAL, PF_LOGISTIC,
   PF_BETASHIFT, PF_EXPONENTIAL, PF_INVGAMMA, PF_JEFFREYS, PF_FIXED

@@ -47,3 +47,16 @@ Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family,
   for (R_xlen_t i = 0; i < x.size(); ++i) out[i] = log_prior(family, x[i], p1, p2);
   return out;
 }
+
+// The family codes by name, the one place C++ spells the families' names: the
+// registry in R/priors.R must give each family the same code (the package
+// checks it when it loads, check_prior_codes()).
+// [[Rcpp::export(.prior_codes)]]
+Rcpp::IntegerVector prior_codes() {
+  using Rcpp::_;
+  return Rcpp::IntegerVector::create(
+      _["uniform"] = PF_UNIFORM, _["gaussian"] = PF_GAUSSIAN, _["gamma"] = PF_GAMMA,
+      _["beta"] = PF_BETA, _["lognormal"] = PF_LOGNORMAL, _["logistic"] = PF_LOGISTIC,
+      _["betashift"] = PF_BETASHIFT, _["exponential"] = PF_EXPONENTIAL,
+      _["inversegamma"] = PF_INVGAMMA, _["jeffreys"] = PF_JEFFREYS, _["fixed"] = PF_FIXED);
+}
