@@ -10,3 +10,8 @@
 #' @importFrom Rcpp sourceCpp
 #' @importFrom cli cli_abort cli_warn
 "_PACKAGE"
+
+.onLoad <- function(libname, pkgname) {
+  # the compiled core switches on the registry's prior family codes
+  check_prior_codes()
+}

@@ -9,10 +9,6 @@
     .Call(`_FBC_fbc_heldout`, Xf, yf, Xs, ys, phis, nugget, fold, model)
 }
 
-.log_prior <- function(x, family, p1, p2) {
-    .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
-}
-
 .corr_matrix <- function(X, Y, theta, alpha, kernel = 1L) {
     .Call(`_FBC_corr_matrix_r`, X, Y, theta, alpha, kernel)
 }
@@ -27,6 +23,14 @@
 
 .fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model) {
     .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model)
+}
+
+.log_prior <- function(x, family, p1, p2) {
+    .Call(`_FBC_log_prior_vec`, x, family, p1, p2)
+}
+
+.prior_codes <- function() {
+    .Call(`_FBC_prior_codes`)
 }
 
 .fbc_sample_c <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model) {

@@ -6,22 +6,6 @@
 # a run is reproduced by set.seed() whatever future::plan() is active, and
 # sequential, multisession, cluster or batchtools plans give the same draws.
 
-# Quantile function of a prior family in the units the family is written in.
-prior_quantile <- function(u, dist, p1, p2) {
-  switch(dist,
-    uniform = stats::qunif(u, p1, p2),
-    gaussian = stats::qnorm(u, p1, p2),
-    gamma = stats::qgamma(u, p1, rate = p2),
-    beta = stats::qbeta(u, p1, p2),
-    lognormal = stats::qlnorm(u, p1, p2),
-    logistic = stats::qlogis(u, p1, p2),
-    betashift = 1 + stats::qbeta(u, p1, p2),
-    exponential = stats::qexp(u, p1),
-    inversegamma = p2 / stats::qgamma(1 - u, p1, rate = 1),
-    NA_real_ # jeffreys (improper) and fixed have no quantile function
-  )
-}
-
 # Starting points on the sampler's scale, one per chain (a list). Chain 1
 # starts at `spec$init` (the documented or user-given initial values); the
 # others draw every sampled parameter from its prior, restricted to the

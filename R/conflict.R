@@ -15,23 +15,6 @@ fbc_conflict_sds <- 3
 # does not vary with) leaves the choice to the prior, which is no conflict.
 fbc_conflict_gain <- 2
 
-# CDF of a prior family in the units the family is written in (NA for the
-# improper and fixed ones).
-prior_cdf <- function(x, dist, p1, p2) {
-  switch(dist,
-    uniform = stats::punif(x, p1, p2),
-    gaussian = stats::pnorm(x, p1, p2),
-    gamma = stats::pgamma(x, p1, rate = p2),
-    beta = stats::pbeta(x, p1, p2),
-    lognormal = stats::plnorm(x, p1, p2),
-    logistic = stats::plogis(x, p1, p2),
-    betashift = stats::pbeta(x - 1, p1, p2),
-    exponential = stats::pexp(x, p1),
-    inversegamma = stats::pgamma(p2 / x, p1, lower.tail = FALSE),
-    NA_real_
-  )
-}
-
 # The sampler's walk scale (calibrate(), "Sampler") and back.
 to_walk <- function(x, transform) {
   switch(as.character(transform), `0` = x, `1` = log(x), `2` = stats::qlogis(x - 1))
@@ -71,7 +54,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
   support <- param_support(fit)
   out <- list()
   for (j in seq_along(fit$vars)) {
-    if (fam[j] %in% c("fixed", "jeffreys") || fit$vars[j] %in% piled) next
+    if (!prior_registry[[fam[j]]]$proper || fit$vars[j] %in% piled) next
     sup_j <- support[j, ]
     x <- phis[, j]
     if (stats::var(x) == 0) next

@@ -1,21 +1,120 @@
-# Prior families, their codes in the C++ core (src/fbc.h) and their checks.
+# Prior families: the registry, one entry per family, and their checks.
 
-prior_families <- c(
-  uniform = 1L, gaussian = 2L, gamma = 3L, beta = 4L, lognormal = 5L,
-  logistic = 6L, betashift = 7L, exponential = 8L, inversegamma = 9L,
-  jeffreys = 10L, fixed = 11L
+# One prior family. `code`: its code in the C++ core (PriorFamily in
+# src/fbc.h, named by .prior_codes(); check_prior_codes() compares the two).
+# `params`: what p1 and p2 mean (the table of prior_builder()); a parameter
+# not named is unused. `need`: what each named parameter must be, "finite" or
+# "positive"; `ordered`: p1 < p2 as well. `support(p1, p2)`: c(lower, upper).
+# `cdf(x, p1, p2)`, `quantile(u, p1, p2)`: in the family's own units, NULL
+# for a family that is not proper. `center(p1, p2)`: a value inside the
+# support to start from when no initial value is given.
+prior_entry <- function(code, params = character(), need = character(), ordered = FALSE,
+                        support = function(p1, p2) c(-Inf, Inf), cdf = NULL,
+                        quantile = NULL, center) {
+  list(code = code, params = params, need = need, ordered = ordered, support = support,
+       cdf = cdf, quantile = quantile, center = center, proper = !is.null(cdf))
+}
+
+positive_support <- function(p1, p2) c(0, Inf)
+
+prior_registry <- list(
+  uniform = prior_entry(1L,
+    params = c(p1 = "lower bound", p2 = "upper bound"),
+    need = c(p1 = "finite", p2 = "finite"), ordered = TRUE,
+    support = function(p1, p2) c(p1, p2),
+    cdf = function(x, p1, p2) stats::punif(x, p1, p2),
+    quantile = function(u, p1, p2) stats::qunif(u, p1, p2),
+    center = function(p1, p2) (p1 + p2) / 2),
+  gaussian = prior_entry(2L,
+    params = c(p1 = "mean", p2 = "standard deviation"),
+    need = c(p1 = "finite", p2 = "positive"),
+    cdf = function(x, p1, p2) stats::pnorm(x, p1, p2),
+    quantile = function(u, p1, p2) stats::qnorm(u, p1, p2),
+    center = function(p1, p2) p1),
+  gamma = prior_entry(3L,
+    params = c(p1 = "shape", p2 = "rate"),
+    need = c(p1 = "positive", p2 = "positive"),
+    support = positive_support,
+    cdf = function(x, p1, p2) stats::pgamma(x, p1, rate = p2),
+    quantile = function(u, p1, p2) stats::qgamma(u, p1, rate = p2),
+    center = function(p1, p2) p1 / p2),
+  beta = prior_entry(4L,
+    params = c(p1 = "shape1", p2 = "shape2"),
+    need = c(p1 = "positive", p2 = "positive"),
+    support = function(p1, p2) c(0, 1),
+    cdf = function(x, p1, p2) stats::pbeta(x, p1, p2),
+    quantile = function(u, p1, p2) stats::qbeta(u, p1, p2),
+    center = function(p1, p2) p1 / (p1 + p2)),
+  lognormal = prior_entry(5L,
+    params = c(p1 = "meanlog", p2 = "sdlog"),
+    need = c(p1 = "finite", p2 = "positive"),
+    support = positive_support,
+    cdf = function(x, p1, p2) stats::plnorm(x, p1, p2),
+    quantile = function(u, p1, p2) stats::qlnorm(u, p1, p2),
+    center = function(p1, p2) exp(p1)),
+  logistic = prior_entry(6L,
+    params = c(p1 = "location", p2 = "scale"),
+    need = c(p1 = "finite", p2 = "positive"),
+    cdf = function(x, p1, p2) stats::plogis(x, p1, p2),
+    quantile = function(u, p1, p2) stats::qlogis(u, p1, p2),
+    center = function(p1, p2) p1),
+  # a beta shifted to [1, 2]
+  betashift = prior_entry(7L,
+    params = c(p1 = "shape1", p2 = "shape2"),
+    need = c(p1 = "positive", p2 = "positive"),
+    support = function(p1, p2) c(1, 2),
+    cdf = function(x, p1, p2) stats::pbeta(x - 1, p1, p2),
+    quantile = function(u, p1, p2) 1 + stats::qbeta(u, p1, p2),
+    center = function(p1, p2) 1 + p1 / (p1 + p2)),
+  exponential = prior_entry(8L,
+    params = c(p1 = "rate"), need = c(p1 = "positive"),
+    support = positive_support,
+    cdf = function(x, p1, p2) stats::pexp(x, p1),
+    quantile = function(u, p1, p2) stats::qexp(u, p1),
+    center = function(p1, p2) 1 / p1),
+  # X ~ InvGamma(shape a, scale b)  <=>  1/X ~ Gamma(a, rate = b)
+  inversegamma = prior_entry(9L,
+    params = c(p1 = "shape", p2 = "scale"),
+    need = c(p1 = "positive", p2 = "positive"),
+    support = positive_support,
+    cdf = function(x, p1, p2) stats::pgamma(p2 / x, p1, lower.tail = FALSE),
+    quantile = function(u, p1, p2) p2 / stats::qgamma(1 - u, p1, rate = 1),
+    center = function(p1, p2) p2 / (p1 + 1)),
+  # density 1/x on x > 0, improper
+  jeffreys = prior_entry(10L, support = positive_support, center = function(p1, p2) 1),
+  # not sampled: kept at its initial value (log density 0)
+  fixed = prior_entry(11L, center = function(p1, p2) NA_real_)
 )
 
-# Support of a family as c(lower, upper).
-family_support <- function(dist, p1, p2) {
-  switch(dist,
-    uniform = c(p1, p2),
-    beta = c(0, 1),
-    betashift = c(1, 2),
-    gamma = , lognormal = , exponential = , inversegamma = , jeffreys = c(0, Inf),
-    c(-Inf, Inf)
-  )
+# The codes by name, as the compiled core takes them.
+prior_families <- vapply(prior_registry, `[[`, integer(1), "code")
+
+# The compiled core switches on the codes of the registry: they must agree
+# with its table (`compiled`), name for name.
+check_prior_codes <- function(compiled = .prior_codes()) {
+  if (!identical(compiled, prior_families)) {
+    both <- union(names(prior_families), names(compiled))
+    differ <- both[!mapply(identical, prior_families[both], compiled[both])]
+    cli::cli_abort(c(
+      "The prior family codes of the registry (R/priors.R) and of the compiled core (src/priors.cpp) differ.",
+      x = "They differ for {.val {differ}}."
+    ))
+  }
+  invisible(TRUE)
 }
+
+# Support, cdf, quantile and center of a family (see prior_entry()); the
+# cdf and quantile are NA for a family that is not proper.
+family_support <- function(dist, p1, p2) prior_registry[[dist]]$support(p1, p2)
+prior_cdf <- function(x, dist, p1, p2) {
+  f <- prior_registry[[dist]]
+  if (f$proper) f$cdf(x, p1, p2) else NA_real_
+}
+prior_quantile <- function(u, dist, p1, p2) {
+  f <- prior_registry[[dist]]
+  if (f$proper) f$quantile(u, p1, p2) else NA_real_
+}
+prior_center <- function(dist, p1, p2) prior_registry[[dist]]$center(p1, p2)
 
 #' Build a log prior density
 #'
@@ -64,39 +163,48 @@ check_prior <- function(dist, p1, p2, arg, parg = arg, call = parent.frame()) {
       x = "Got {.val {format_value(dist)}}."
     ), call = call)
   }
-  bad <- function(what) {
+  f <- prior_registry[[dist]]
+  given <- list(p1 = p1, p2 = p2)[names(f$need)]
+  ok <- function(v, need) {
+    is.numeric(v) && length(v) == 1L && is.finite(v) && (need == "finite" || v > 0)
+  }
+  if (!all(mapply(ok, given, f$need)) || (f$ordered && !(p1 < p2))) {
     cli::cli_abort(c(
-      "Impossible parameters {.arg {parg}} for the {.val {dist}} prior: {what}.",
+      "Impossible parameters {.arg {parg}} for the {.val {dist}} prior: {prior_rule(dist)}.",
       x = "Got p1 = {format_value(p1)} and p2 = {format_value(p2)}."
     ), call = call)
   }
-  num <- function(v) is.numeric(v) && length(v) == 1L && is.finite(v)
-  pos <- function(v) num(v) && v > 0
-  switch(dist,
-    uniform = if (!num(p1) || !num(p2) || p1 >= p2) bad("p1 (lower) must be below p2 (upper), both finite"),
-    gaussian = , lognormal = , logistic =
-      if (!num(p1) || !pos(p2)) bad("p1 must be finite and p2 (the spread) positive"),
-    gamma = , beta = , betashift = , inversegamma =
-      if (!pos(p1) || !pos(p2)) bad("both shape/scale parameters must be positive"),
-    exponential = if (!pos(p1)) bad("p1 (the rate) must be positive")
-  )
   invisible(TRUE)
 }
+
+# What a family's parameters must be, in the words of prior_builder()'s table:
+# "p1 (shape) and p2 (rate) must be positive".
+prior_rule <- function(dist) {
+  f <- prior_registry[[dist]]
+  what <- paste0(names(f$params), " (", f$params, ")")
+  need <- unname(f$need)
+  if (f$ordered) return(sprintf("%s must be below %s, both %s", what[1], what[2], need[1]))
+  if (length(unique(need)) == 1L) return(sprintf("%s must be %s", paste(what, collapse = " and "), need[1]))
+  sprintf("%s must be %s and %s %s", what[1], need[1], what[2], need[2])
+}
+
+# Does a family's support not depend on its parameters?
+support_known <- function(dist) !anyNA(family_support(dist, NA_real_, NA_real_))
 
 # Does the family's support fit inside the parameter class's domain?
 check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
   domain <- class_domain[[cls]]
   if (dist == "fixed" || domain == "real") return(invisible(TRUE))
-  s <- family_support(dist, p1, p2)
-  ok <- switch(domain,
-    positive = s[1] >= 0,
-    unit12 = s[1] >= 1 && s[2] <= 2
-  )
-  if (!ok) {
-    allowed <- switch(domain,
-      positive = "gamma, lognormal, exponential, inversegamma, jeffreys, beta, betashift, uniform on [0, upper] or fixed",
-      unit12 = "betashift, uniform within [1, 2] or fixed"
-    )
+  lim <- switch(domain, positive = c(0, Inf), unit12 = c(1, 2))
+  inside <- function(s) s[1] >= lim[1] && s[2] <= lim[2]
+  if (!inside(family_support(dist, p1, p2))) {
+    # every family whose support fits, those whose support is their
+    # parameters (the uniform) within the domain, and fixed
+    known <- Filter(support_known, setdiff(names(prior_registry), "fixed"))
+    fits <- Filter(function(d) inside(family_support(d, NA_real_, NA_real_)), known)
+    within <- switch(domain, positive = "on [0, upper]", unit12 = "within [1, 2]")
+    given <- paste(setdiff(names(prior_registry), c(known, "fixed")), within)
+    allowed <- paste(paste(c(fits, given), collapse = ", "), "or fixed")
     what <- switch(domain, positive = "positive", unit12 = "in [1, 2]")
     cli::cli_abort(c(
       "The {.val {dist}} prior in {.arg {arg}} does not fit {.field {cls}}, which must be {what}.",
@@ -162,7 +270,7 @@ set_hyperPriors <- function(
     is_missing <- function(arg) eval(call("missing", as.name(paste0(cls, arg))), env)
     dist <- get(paste0(cls, "Dist"), env)
     # a family that cannot fit the class is the first thing to say
-    for (d in unique(dist[is.character(dist) & dist %in% setdiff(names(prior_families), "uniform")])) {
+    for (d in Filter(support_known, unique(dist[is.character(dist) & dist %in% names(prior_registry)]))) {
       check_support(d, NA, NA, cls, arg = paste0(cls, "Dist"), call = env)
     }
     check_family_switch(get(paste0(cls, "Dist"), env), defaults[[paste0(cls, "Dist")]],
@@ -190,22 +298,6 @@ print.fbc_hypers <- function(x, ...) {
   invisible(x)
 }
 
-# The parameters a family uses, and what each means (the table of
-# prior_builder()).
-family_params <- function(dist) {
-  switch(dist,
-    uniform = c(p1 = "lower bound", p2 = "upper bound"),
-    gaussian = c(p1 = "mean", p2 = "standard deviation"),
-    gamma = c(p1 = "shape", p2 = "rate"),
-    beta = , betashift = c(p1 = "shape1", p2 = "shape2"),
-    lognormal = c(p1 = "meanlog", p2 = "sdlog"),
-    logistic = c(p1 = "location", p2 = "scale"),
-    exponential = c(p1 = "rate"),
-    inversegamma = c(p1 = "shape", p2 = "scale"),
-    character()
-  )
-}
-
 # A prior family switched away from its argument's default while the family
 # parameters were left at their defaults (`missingP1`, `missingP2`): those
 # belong to the default family and would silently mean something else (Beta's
@@ -213,8 +305,8 @@ family_params <- function(dist) {
 check_family_switch <- function(dist, default, missingP1, missingP2, prefix, units = NULL,
                                  call = parent.frame()) {
   if (!is.character(dist)) return(invisible(TRUE))
-  for (d in unique(dist[!is.na(dist) & dist != default & dist %in% names(prior_families)])) {
-    need <- family_params(d)
+  for (d in unique(dist[!is.na(dist) & dist != default & dist %in% names(prior_registry)])) {
+    need <- prior_registry[[d]]$params
     miss <- c(p1 = missingP1, p2 = missingP2)[names(need)]
     if (!any(miss)) next
     args <- paste0(prefix, toupper(names(need)))
@@ -302,15 +394,5 @@ prior_row <- function(dist, p1, p2, cls, a = 0, b = 1, lconst = 0) {
     family = prior_families[[dist]], transform = class_transform[[cls]],
     p1 = if (is.na(p1)) 0 else p1, p2 = if (is.na(p2)) 0 else p2,
     a = a, b = b, lconst = lconst
-  )
-}
-
-# A value inside the prior's support to start from when no init is given.
-prior_center <- function(dist, p1, p2) {
-  switch(dist,
-    uniform = (p1 + p2) / 2, gaussian = , logistic = p1,
-    gamma = p1 / p2, beta = p1 / (p1 + p2), lognormal = exp(p1),
-    betashift = 1 + p1 / (p1 + p2), exponential = 1 / p1,
-    inversegamma = p2 / (p1 + 1), jeffreys = 1, NA_real_
   )
 }

@@ -40,20 +40,6 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
-// log_prior_vec
-Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family, double p1, double p2);
-RcppExport SEXP _FBC_log_prior_vec(SEXP xSEXP, SEXP familySEXP, SEXP p1SEXP, SEXP p2SEXP) {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    Rcpp::traits::input_parameter< const Rcpp::NumericVector& >::type x(xSEXP);
-    Rcpp::traits::input_parameter< int >::type family(familySEXP);
-    Rcpp::traits::input_parameter< double >::type p1(p1SEXP);
-    Rcpp::traits::input_parameter< double >::type p2(p2SEXP);
-    rcpp_result_gen = Rcpp::wrap(log_prior_vec(x, family, p1, p2));
-    return rcpp_result_gen;
-END_RCPP
-}
 // corr_matrix_r
 arma::mat corr_matrix_r(const arma::mat& X, const arma::mat& Y, const arma::vec& theta, const arma::vec& alpha, int kernel);
 RcppExport SEXP _FBC_corr_matrix_r(SEXP XSEXP, SEXP YSEXP, SEXP thetaSEXP, SEXP alphaSEXP, SEXP kernelSEXP) {
@@ -122,6 +108,30 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// log_prior_vec
+Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family, double p1, double p2);
+RcppExport SEXP _FBC_log_prior_vec(SEXP xSEXP, SEXP familySEXP, SEXP p1SEXP, SEXP p2SEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const Rcpp::NumericVector& >::type x(xSEXP);
+    Rcpp::traits::input_parameter< int >::type family(familySEXP);
+    Rcpp::traits::input_parameter< double >::type p1(p1SEXP);
+    Rcpp::traits::input_parameter< double >::type p2(p2SEXP);
+    rcpp_result_gen = Rcpp::wrap(log_prior_vec(x, family, p1, p2));
+    return rcpp_result_gen;
+END_RCPP
+}
+// prior_codes
+Rcpp::IntegerVector prior_codes();
+RcppExport SEXP _FBC_prior_codes() {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    rcpp_result_gen = Rcpp::wrap(prior_codes());
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_sample
 Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const Rcpp::List& prior, const Rcpp::List& moves, const Rcpp::List& state, int nIter, int nBurn, int thinning, double nugget, SEXP progress, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_sample(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP priorSEXP, SEXP movesSEXP, SEXP stateSEXP, SEXP nIterSEXP, SEXP nBurnSEXP, SEXP thinningSEXP, SEXP nuggetSEXP, SEXP progressSEXP, SEXP modelSEXP) {
@@ -166,11 +176,12 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
-    {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 10},
+    {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
+    {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {NULL, NULL, 0}

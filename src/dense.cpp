@@ -30,7 +30,7 @@ DensePosterior::DensePosterior(const arma::mat& Xf, const arma::vec& yf, const a
   : SchurPosterior(Xf, yf, Xs, ys, nugget, model) {
   // per input: the distances and, for a family with a smoothness, two power
   // matrices (current and proposal)
-  const bool smooth = kernel_smooth(kernS_);
+  const bool smooth = kernel_has_alpha(kernS_);
   cached_ = (smooth ? 3.0 : 1.0) * (p + q) * (double) m * m * sizeof(double) <= fbc_cache_budget;
   for (int b = 0; b < 2; ++b) {
     Ls_.b[b].zeros(m, m); Rx_.b[b].zeros(m, nu_); W_.b[b].zeros(m, nu_);

@@ -19,7 +19,8 @@
 #include <memory>
 #include <vector>
 
-// Prior family codes; R/priors.R keeps the same table (prior_families()).
+// Prior family codes, named in prior_codes() (priors.cpp), which the registry
+// of R/priors.R is checked against when the package loads.
 enum PriorFamily {
   PF_UNIFORM = 1, PF_GAUSSIAN, PF_GAMMA, PF_BETA, PF_LOGNORMAL, PF_LOGISTIC,
   PF_BETASHIFT, PF_EXPONENTIAL, PF_INVGAMMA, PF_JEFFREYS, PF_FIXED
@@ -66,8 +67,10 @@ struct Model {
 // with the lengths p and q imply.
 Model read_model(const Rcpp::List& model, int p, int q);
 
-// kernels.cpp: priors and walks ---------------------------------------------
+// priors.cpp -----------------------------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
+
+// transforms.cpp: the walks ---------------------------------------------------
 double log_jacobian(int transform, double x);
 double to_walk(int transform, double x);
 double from_walk(int transform, double w);
@@ -80,7 +83,7 @@ void check_kernel(int kern);
 // Does the family have a smoothness alpha? (Only the power exponential:
 // for the others alpha is ignored, and a cached term is the distance cache
 // itself, so callers point at G instead of calling kernel_term.)
-bool kernel_smooth(int kern);
+bool kernel_has_alpha(int kern);
 // Cached per-dimension path (dense algebra, small m): G = kernel_dist(a, b)
 // once, P = kernel_term(G, alpha) when alpha moves (P = G for the families
 // without a smoothness), R = kernel_combine(P, theta).
@@ -108,7 +111,7 @@ void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const doub
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = KF_POWEXP);
 
-// kernels.cpp: dense linear algebra -----------------------------------------
+// linalg.cpp: dense linear algebra -------------------------------------------
 // In-place lower Cholesky (LAPACK dpotrf); returns false when not PD.
 bool chol_lower(arma::mat& A);
 // log|A| from its lower Cholesky factor.

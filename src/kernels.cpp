@@ -1,83 +1,6 @@
-// Kernels: prior log-densities, walk transformations, the kernel module (every
-// correlation of both GPs) and the dense linear algebra (LAPACK/BLAS on preallocated
-// storage) shared by the sampler and prediction.
+// The kernel module: every correlation of both GPs, for the family chosen per GP.
 #include "fbc.h"
 
-// log p(x) for a prior family; -Inf outside the support.
-//   uniform(a, b) 1/(b-a); gaussian(mean, sd); gamma(shape, rate);
-//   beta(s1, s2); lognormal(meanlog, sdlog); logistic(location, scale);
-//   betashift = beta(s1, s2) of x - 1; exponential(rate);
-//   inversegamma(shape a, scale b) b^a/Gamma(a) x^-(a+1) exp(-b/x);
-//   jeffreys 1/x (x > 0); fixed: log 1 = 0.
-double log_prior(int family, double x, double p1, double p2) {
-  const double ninf = R_NegInf;
-  if (ISNAN(x)) return ninf;
-  switch (family) {
-  case PF_UNIFORM:
-    return (x >= p1 && x <= p2) ? -std::log(p2 - p1) : ninf;
-  case PF_GAUSSIAN:
-    return R::dnorm(x, p1, p2, 1);
-  case PF_GAMMA:
-    return x > 0 ? R::dgamma(x, p1, 1.0 / p2, 1) : ninf;
-  case PF_BETA:
-    return (x >= 0 && x <= 1) ? R::dbeta(x, p1, p2, 1) : ninf;
-  case PF_LOGNORMAL:
-    return x > 0 ? R::dlnorm(x, p1, p2, 1) : ninf;
-  case PF_LOGISTIC:
-    return R::dlogis(x, p1, p2, 1);
-  case PF_BETASHIFT:
-    return (x >= 1 && x <= 2) ? R::dbeta(x - 1.0, p1, p2, 1) : ninf;
-  case PF_EXPONENTIAL:
-    return x >= 0 ? R::dexp(x, 1.0 / p1, 1) : ninf;
-  case PF_INVGAMMA:
-    return x > 0 ? p1 * std::log(p2) - R::lgammafn(p1) - (p1 + 1.0) * std::log(x) - p2 / x
-                 : ninf;
-  case PF_JEFFREYS:
-    return x > 0 ? -std::log(x) : ninf;
-  case PF_FIXED:
-    return 0.0;
-  }
-  Rcpp::stop("unknown prior family code %d", family);
-}
-
-// Vectorised log prior for R's prior_builder(): x is in the prior's units.
-// [[Rcpp::export(.log_prior)]]
-Rcpp::NumericVector log_prior_vec(const Rcpp::NumericVector& x, int family,
-                                  double p1, double p2) {
-  Rcpp::NumericVector out(x.size());
-  for (R_xlen_t i = 0; i < x.size(); ++i) out[i] = log_prior(family, x[i], p1, p2);
-  return out;
-}
-
-// Random-walk scale w for a parameter x: identity, w = log x, or
-// w = log((x - 1) / (2 - x)) for alpha in (1, 2).
-double to_walk(int transform, double x) {
-  switch (transform) {
-  case TR_LOG: return std::log(x);
-  case TR_LOGIT12: return std::log((x - 1.0) / (2.0 - x));
-  default: return x;
-  }
-}
-
-double from_walk(int transform, double w) {
-  switch (transform) {
-  case TR_LOG: return std::exp(w);
-  case TR_LOGIT12: return 1.0 + 1.0 / (1.0 + std::exp(-w));
-  default: return w;
-  }
-}
-
-// log |dx/dw|: the Jacobian that makes a symmetric walk on w target p(x):
-// log x for the log walk, log((x - 1)(2 - x)) for the logit walk.
-double log_jacobian(int transform, double x) {
-  switch (transform) {
-  case TR_LOG: return std::log(x);
-  case TR_LOGIT12: return std::log((x - 1.0) * (2.0 - x));
-  default: return 0.0;
-  }
-}
-
-// ---- The kernel module ---------------------------------------------------
 // Every correlation of both GPs is computed by the functions below, for the
 // family code `kern` of that GP. Separable families,
 //   R(x, x') = prod_k r(d_k),  d_k = |x_k - x'_k|,  h_k = sqrt(theta_k) d_k:
@@ -102,7 +25,7 @@ void check_kernel(int kern) {
     Rcpp::stop("unknown correlation family code %d", kern);
 }
 
-bool kernel_smooth(int kern) { return kern == KF_POWEXP; }
+bool kernel_has_alpha(int kern) { return kern == KF_POWEXP; }
 
 template <int F> static inline double dist_of(double d) {
   if (F == KF_POWEXP) return std::log(std::fabs(d));
@@ -173,7 +96,7 @@ void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& ou
 
 // The alpha-dependent part from the cache: P(i,j) = exp(alpha G(i,j)) =
 // |a_i - b_j|^alpha for the power exponential; the families without a
-// smoothness have none (P = G: callers use G itself, see kernel_smooth()).
+// smoothness have none (P = G: callers use G itself, see kernel_has_alpha()).
 void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& out, bool lower) {
   check_kernel(kern);
   const arma::uword nr = G.n_rows, nc = G.n_cols;
@@ -352,34 +275,4 @@ arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
 arma::mat corr_matrix_r(const arma::mat& X, const arma::mat& Y,
                         const arma::vec& theta, const arma::vec& alpha, int kernel = 1) {
   return corr_matrix(X, Y, theta, alpha, kernel);
-}
-
-bool chol_lower(arma::mat& A) {
-  char uplo = 'L';
-  arma::blas_int n = A.n_rows, info = 0;
-  arma::lapack::potrf(&uplo, &n, A.memptr(), &n, &info);
-  return info == 0;
-}
-
-double logdet_chol(const arma::mat& L) {
-  double s = 0.0;
-  for (arma::uword i = 0; i < L.n_rows; ++i) s += std::log(L.at(i, i));
-  return 2.0 * s;
-}
-
-static void trsm_lower(const arma::mat& L, double* B, arma::blas_int nrhs) {
-  char uplo = 'L', trans = 'N', diag = 'N';
-  arma::blas_int n = L.n_rows, info = 0;
-  arma::lapack::trtrs(&uplo, &trans, &diag, &n, &nrhs, L.memptr(), &n, B, &n, &info);
-}
-
-void solve_lower(const arma::mat& L, arma::vec& x) { trsm_lower(L, x.memptr(), 1); }
-void solve_lower(const arma::mat& L, arma::mat& X) {
-  trsm_lower(L, X.memptr(), X.n_cols);
-}
-
-void syrk_lower(const arma::mat& A, double alpha, double beta, arma::mat& C) {
-  char uplo = 'L', trans = 'T';
-  arma::blas_int n = A.n_cols, k = A.n_rows;
-  arma::blas::syrk(&uplo, &trans, &n, &k, &alpha, A.memptr(), &k, &beta, C.memptr(), &n);
 }

@@ -108,8 +108,8 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p; ++k) {
       // power matrices only for a family with a smoothness (else P = G)
-      if (kernel_smooth(kernS_)) Pfs_[k].b[b].zeros(nu_, nu_);
-      if (kernel_smooth(kernB_)) Pfb_[k].b[b].zeros(nu_, nu_);
+      if (kernel_has_alpha(kernS_)) Pfs_[k].b[b].zeros(nu_, nu_);
+      if (kernel_has_alpha(kernB_)) Pfb_[k].b[b].zeros(nu_, nu_);
     }
     Rkk_.b[b].zeros(nu_, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
     LS_.b[b].zeros(n, n);
@@ -292,7 +292,7 @@ double SchurPosterior::evaluate(const Touch& t) {
     std::vector<const arma::mat*>& Pf = ptrF_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.simPow[k];
-      if (!kernel_smooth(kernS_)) { Pf[k] = &Gf_[k]; continue; }
+      if (!kernel_has_alpha(kernS_)) { Pf[k] = &Gf_[k]; continue; }
       if (redo) kernel_term(kernS_, Gf_[k], alphaS[k], Pfs_[k].alt(), true);
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
     }
@@ -317,7 +317,7 @@ double SchurPosterior::evaluate(const Touch& t) {
     const std::vector<arma::mat>& Gb = Gfb_.empty() ? Gf_ : Gfb_;
     for (int k = 0; k < p; ++k) {
       const bool redo = t.biasPow[k];
-      if (!kernel_smooth(kernB_)) { P[k] = &Gb[k]; continue; }
+      if (!kernel_has_alpha(kernB_)) { P[k] = &Gb[k]; continue; }
       if (redo) kernel_term(kernB_, Gb[k], alphaB[k], Pfb_[k].alt(), true);
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }

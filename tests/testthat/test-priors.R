@@ -15,10 +15,85 @@ test_that("each prior family matches R's d* function", {
     jeffreys = list(NA, NA, ifelse(x > 0, -log(x), -Inf)),
     fixed = list(NA, NA, rep(0, length(x)))
   ))
+  expect_setequal(names(ref), names(FBC:::prior_registry))
   for (fam in names(ref)) {
     r <- ref[[fam]]
     f <- prior_builder(fam, r[[1]], r[[2]])
     expect_equal(f(x), r[[3]], tolerance = 1e-12, info = fam)
+  }
+})
+
+test_that("the registry's family codes are the compiled core's", {
+  expect_identical(FBC:::.prior_codes(), FBC:::prior_families)
+  expect_true(FBC:::check_prior_codes())
+  # fits store the codes: they are those of every earlier version
+  expect_identical(unname(FBC:::prior_families), 1:11)
+  # a table that drifted is refused, naming the families that differ
+  expect_snapshot(error = TRUE, {
+    FBC:::check_prior_codes(replace(FBC:::.prior_codes(), "gamma", 12L))
+    FBC:::check_prior_codes(FBC:::.prior_codes()[-11])
+  })
+  expect_error(FBC:::.log_prior(1, 12L, 0, 1), "unknown prior family code 12")
+})
+
+# Parameters for every family (those of the d* test above).
+family_pars <- list(uniform = c(-1, 2.5), gaussian = c(0.4, 1.7), gamma = c(1.1, 0.1),
+                    beta = c(2, 5), lognormal = c(0.2, 0.8), logistic = c(1, 0.5),
+                    betashift = c(5, 2), exponential = c(1.3, NA), inversegamma = c(1.5, 1.5),
+                    jeffreys = c(NA, NA), fixed = c(NA, NA))
+
+test_that("each proper family's cdf and quantile invert each other and match its density", {
+  reg <- FBC:::prior_registry
+  expect_setequal(names(family_pars), names(reg))
+  expect_identical(names(Filter(function(f) !f$proper, reg)), c("jeffreys", "fixed"))
+  u <- c(0.001, 0.1, 0.37, 0.5, 0.9, 0.999)
+  for (fam in names(Filter(function(f) f$proper, reg))) {
+    p <- family_pars[[fam]]
+    q <- FBC:::prior_quantile(u, fam, p[1], p[2])
+    expect_equal(FBC:::prior_cdf(q, fam, p[1], p[2]), u, tolerance = 1e-10, info = fam)
+    # the mass between two quantiles, integrating the compiled density: the
+    # cdf is in the units (rate, scale) the sampler's density uses
+    f <- prior_builder(fam, p[1], p[2])
+    mass <- integrate(function(x) exp(f(x)), q[2], q[5], rel.tol = 1e-10)$value
+    expect_equal(mass, 0.8, tolerance = 1e-8, info = fam)
+  }
+  expect_identical(FBC:::prior_cdf(1, "jeffreys", NA, NA), NA_real_)
+  expect_identical(FBC:::prior_quantile(0.5, "fixed", NA, NA), NA_real_)
+})
+
+test_that("each family's support is where its compiled density is finite", {
+  eps <- 1e-6
+  for (fam in setdiff(names(family_pars), "fixed")) {
+    p <- family_pars[[fam]]
+    s <- FBC:::family_support(fam, p[1], p[2])
+    f <- prior_builder(fam, p[1], p[2])
+    inside <- c(if (is.finite(s[1])) s[1] + eps else -1e3,
+                if (is.finite(s[2])) s[2] - eps else 1e3)
+    expect_true(all(is.finite(f(inside))), info = fam)
+    outside <- c(s[1] - eps, s[2] + eps)[is.finite(s)]
+    expect_equal(f(outside), rep(-Inf, length(outside)), info = fam)
+    # the default start lies inside too
+    expect_true(is.finite(f(FBC:::prior_center(fam, p[1], p[2]))), info = fam)
+  }
+  # fixed: log density 0 everywhere, no start of its own
+  expect_equal(FBC:::family_support("fixed", NA, NA), c(-Inf, Inf))
+  expect_identical(FBC:::prior_center("fixed", NA, NA), NA_real_)
+})
+
+test_that("the registry's parameter names are those of prior_builder()'s help table", {
+  rd <- paste(as.character(tools::Rd_db("FBC")[["prior_builder.Rd"]]), collapse = "")
+  for (fam in names(FBC:::prior_registry)) {
+    row <- regmatches(rd, regexpr(sprintf('\\\\code\\{"%s"\\}[^\n]*', fam), rd))
+    cells <- trimws(strsplit(row, "\\\\tab")[[1]][-1])
+    expect_length(cells, 2)
+    params <- FBC:::prior_registry[[fam]]$params
+    for (k in 1:2) {
+      want <- params[paste0("p", k)]
+      if (is.na(want)) want <- "(unused)"
+      # the cell starts with the name as a whole word
+      expect_identical(substr(cells[k], 1, nchar(want)), unname(want), info = fam)
+      expect_false(grepl("^[[:alnum:]]", substring(cells[k], nchar(want) + 1)), info = fam)
+    }
   }
 })
 
