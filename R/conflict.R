@@ -44,7 +44,7 @@ from_walk <- function(w, transform) {
 fit_loglik <- function(fit, phi) {
   d <- fit$data
   mc <- model_codes(fit$spec)
-  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget,
+  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget,
                     mc$kernS, mc$kernB, mc$algebra)
   if (is.finite(ll)) ll else -Inf
 }
@@ -61,8 +61,9 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
                       cdf = numeric(), median = numeric(), dataValue = numeric(),
                       atBound = logical(), bound = numeric(), priorValue = numeric(),
                       rising = logical())
-  if (is.null(fit$spec$table) || nrow(fit$Phi) < 2L) return(empty)
+  if (nrow(fit$Phi) < 2L) return(empty)
   ps <- phi_spec(fit)
+  vars <- phi_vars(fit$spec)
   tab <- ps$table
   fam <- names(prior_families)[match(tab$family, prior_families)]
   full <- sampler_draws(fit)
@@ -71,8 +72,8 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
   piled <- bound_piling(fit)$var
   support <- param_support(fit)
   out <- list()
-  for (j in seq_along(fit$vars)) {
-    if (fam[j] %in% c("fixed", "jeffreys") || fit$vars[j] %in% piled) next
+  for (j in seq_along(vars)) {
+    if (fam[j] %in% c("fixed", "jeffreys") || vars[j] %in% piled) next
     sup_j <- support[j, ]
     x <- phis[, j]
     if (stats::var(x) == 0) next
@@ -105,7 +106,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
       u <- from_walk(w, tab$transform[j])
       value <- tab$a[j] + tab$b[j] * u
       reported <- if (ps$classes[j] == "kappa") {
-        k <- match(fit$vars[j], fit$vars[ps$classes == "kappa"])
+        k <- match(vars[j], vars[ps$classes == "kappa"])
         lo <- fit$scale$xmin[fit$scale$p + k]
         lo + (fit$scale$xmax[fit$scale$p + k] - lo) * u
       } else value
@@ -125,7 +126,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
     valueL <- peak$value
     reported <- peak$reported
     out[[length(out) + 1L]] <- data.frame(
-      var = fit$vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
+      var = vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
       atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL,
       rising = rising
@@ -147,7 +148,7 @@ suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
   fams <- names(prior_families)[match(tab$family[members], prior_families)]
   p1 <- tab$p1[members]
   p2 <- tab$p2[members]
-  init <- fit$priors[[cls]]$init %||% rep(NA_real_, length(members))
+  init <- fit$spec$priors[[cls]]$init
   for (i in seq_along(js)) {
     j <- js[i]
     k <- match(j, members)
