@@ -242,8 +242,6 @@ upgrade_fit <- function(x, call) {
   }
   # format 0: every fit made before the version existed. What each earlier
   # version left out:
-  p <- x$scale$p
-  q <- x$scale$q
   spec <- x$spec
   s <- x$settings
   sc <- x$scale
@@ -251,18 +249,13 @@ upgrade_fit <- function(x, call) {
   #   exponential on both GPs, the algebra chosen by the design)
   if (is.null(spec$model)) spec$model <- list(kernS = 1L, kernB = 1L, algebra = 0L)
   # - the column names' use (before columns were matched by name: by
-  #   position) and, in the first versions, the names themselves
+  #   position)
   if (is.null(sc$named)) sc$named <- FALSE
-  if (is.null(sc$names)) {
-    sc$names <- list(response = "y", inputs = paste0("x", seq_len(p)),
-                     calibration = paste0("t", seq_len(q)))
-  }
   # - the settings of later options, at what the run did: one chain, the
   #   single-site sampler (0.1.0's thetaS/alphaS block move, `blockSim`, is
-  #   not continued: update() goes on with single-site moves), the default
-  #   nugget, the power exponential, the design's algebra
+  #   not continued: update() goes on with single-site moves), the power
+  #   exponential, the design's algebra
   s$nChains <- s$nChains %||% 1L
-  s$nugget <- s$nugget %||% fbc_nugget
   if (is.null(s$moves)) {
     s$sampler <- s$sampler %||% "single"
     s$moves <- sampler_moves(s$sampler, spec)
@@ -271,7 +264,7 @@ upgrade_fit <- function(x, call) {
   s$kernelS <- s$kernelS %||% "powexp"
   s$kernelB <- s$kernelB %||% "powexp"
   s$algebra <- s$algebra %||% "auto"
-  s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, p, spec$model)
+  s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, sc$p, spec$model)
   # - the chains (before several chains: one, its state at the top of
   #   `state`)
   chain <- x$chain %||% rep(1L, nrow(x$Phi))
@@ -284,11 +277,13 @@ upgrade_fit <- function(x, call) {
   }
   # - the sampler's state (before the sampler took its state in and gave
   #   it back: where the chain stopped, its proposal scales and the
-  #   adaptation batch), the scale move's acceptance (no scale move then)
+  #   adaptation batch; 0.1.0's `block` goes with `blockSim`), the scale
+  #   move's acceptance (no scale move then)
   chains <- lapply(chains, function(st) {
     if (is.null(st$sampler)) {
       st$sampler <- list(phi = unname(st$last), logsd = unname(st$logsd),
-                         iter = as.integer(st$done), batch = as.integer(st$batch %||% 0L))
+                         iter = as.integer(st$done), batch = as.integer(st$batch))
+      st$block <- NULL
     }
     if (is.null(st$scaleAcceptance)) st$scaleAcceptance <- NA_real_
     st
