@@ -292,9 +292,14 @@
 #'   class, the columns of `Phi` holding it: `integer(0)` for a smoothness
 #'   that is not sampled), `priorFns`, `proposalSD`, `call`, `settings`
 #'   (MCMC sizes, nugget, run time, checkpoint directory, `algebra` and the
-#'   `simAlgebra` used, `kernelS`, `kernelB`) and `state` (`chains`: where
+#'   `simAlgebra` used, `kernelS`, `kernelB`), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
-#'   the sampler's full parameter vector; `interrupted`).
+#'   the sampler's full parameter vector; `interrupted`), `spec` (the model
+#'   description the copies `priors`, `vars`, `indices` and `priorFns` come
+#'   from) and `version` (`fbc`: the version of FBC that made it; `format`:
+#'   the object's format). A fit saved by an earlier FBC is brought to the
+#'   current format by every function that takes one, and an
+#'   earlier version's checkpoint directory resumes.
 #' @export
 #' @examples
 #' set.seed(1)

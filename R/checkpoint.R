@@ -56,7 +56,7 @@ chain_seeds <- function(n) {
 
 # Where chain k starts this call: its sampler state, the iteration its run
 # (calibrate() or update()) started at, and what it has kept since then.
-chain_start <- function(state, d, iter0 = state$iter %||% 0L) {
+chain_start <- function(state, d, iter0 = state$iter) {
   list(state = state, iter0 = as.integer(iter0), draws = matrix(0, 0, d),
        logPost = numeric(), logLik = numeric(), accSum = rep(0, d),
        scaleAccSum = 0, nPost = 0L, finished = FALSE)
@@ -88,11 +88,11 @@ chain_file <- function(dir, k, ext = "rds") file.path(dir, sprintf("chain-%d.%s"
 # should be, is refused with the way out.
 read_checkpoint_file <- function(path, what, id = NULL, call = parent.frame()) {
   obj <- tryCatch(readRDS(path), error = function(e) NULL, warning = function(w) NULL)
-  ok <- is.list(obj) && identical(obj$format, fbc_checkpoint_format) &&
-    (is.null(id) || identical(obj$id, id))
+  known <- is.list(obj) && is_count(obj$format) && obj$format <= fbc_checkpoint_format
+  ok <- known && (is.null(id) || identical(obj$id, id))
   if (!ok) {
     why <- if (!is.list(obj)) "it is corrupt or truncated" else
-      if (!identical(obj$format, fbc_checkpoint_format)) "it was written by another version of FBC" else
+      if (!known) "it was written by another version of FBC" else
         "it belongs to another run"
     fix <- if (what == "run") {
       "Remove the directory (or use another) to start a new run."
@@ -104,7 +104,7 @@ read_checkpoint_file <- function(path, what, id = NULL, call = parent.frame()) {
       i = fix, i = "Nothing was changed."
     ), call = call)
   }
-  obj
+  upgrade_fbc(obj, call = call)
 }
 
 # What makes a run the same run: data and priors as the sampler sees them,

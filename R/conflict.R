@@ -26,7 +26,7 @@ from_walk <- function(w, transform) {
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
   d <- fit$data
-  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget %||% fbc_nugget,
+  ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget,
                     model = model_codes(fit$spec))
   if (is.finite(ll)) ll else -Inf
 }
@@ -43,8 +43,9 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
                       cdf = numeric(), median = numeric(), dataValue = numeric(),
                       atBound = logical(), bound = numeric(), priorValue = numeric(),
                       rising = logical())
-  if (is.null(fit$spec$table) || nrow(fit$Phi) < 2L) return(empty)
+  if (nrow(fit$Phi) < 2L) return(empty)
   ps <- phi_spec(fit)
+  vars <- phi_vars(fit$spec)
   tab <- ps$table
   fam <- names(prior_families)[match(tab$family, prior_families)]
   full <- sampler_draws(fit)
@@ -53,8 +54,8 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
   piled <- bound_piling(fit)$var
   support <- param_support(fit)
   out <- list()
-  for (j in seq_along(fit$vars)) {
-    if (!prior_registry[[fam[j]]]$proper || fit$vars[j] %in% piled) next
+  for (j in seq_along(vars)) {
+    if (!prior_registry[[fam[j]]]$proper || vars[j] %in% piled) next
     sup_j <- support[j, ]
     x <- phis[, j]
     if (stats::var(x) == 0) next
@@ -87,7 +88,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
       u <- from_walk(w, tab$transform[j])
       value <- tab$a[j] + tab$b[j] * u
       reported <- if (ps$classes[j] == "kappa") {
-        k <- match(fit$vars[j], fit$vars[ps$classes == "kappa"])
+        k <- match(vars[j], vars[ps$classes == "kappa"])
         lo <- fit$scale$xmin[fit$scale$p + k]
         lo + (fit$scale$xmax[fit$scale$p + k] - lo) * u
       } else value
@@ -107,7 +108,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
     valueL <- peak$value
     reported <- peak$reported
     out[[length(out) + 1L]] <- data.frame(
-      var = fit$vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
+      var = vars[j], class = ps$classes[j], side = if (dir < 0) "lower" else "upper",
       cdf = u, median = stats::median(fit$Phi[, j]), dataValue = reported,
       atBound = atBound, bound = if (atBound) bound else NA_real_, priorValue = valueL,
       rising = rising
@@ -129,7 +130,7 @@ suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
   fams <- names(prior_families)[match(tab$family[members], prior_families)]
   p1 <- tab$p1[members]
   p2 <- tab$p2[members]
-  init <- fit$priors[[cls]]$init %||% rep(NA_real_, length(members))
+  init <- fit$spec$priors[[cls]]$init
   for (i in seq_along(js)) {
     j <- js[i]
     k <- match(j, members)

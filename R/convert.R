@@ -37,6 +37,7 @@ NULL
 as.mcmc.list.fbc <- function(x, ...) {
   check_dots_empty(..., fn = as.mcmc.list.fbc, name = "as.mcmc.list", action = "warn")
   rlang_check_installed("coda")
+  x <- check_fbc(x, "x")
   s <- x$settings
   out <- lapply(chain_draws(x), function(m) {
     coda::mcmc(m, start = s$nBurn + s$thinning, thin = s$thinning)
@@ -55,7 +56,7 @@ as_draws.fbc <- function(x, ...) {
 #' @exportS3Method posterior::as_draws_df
 as_draws_df.fbc <- function(x, ...) {
   check_dots_empty(..., fn = as_draws_df.fbc, name = "as_draws_df", action = "warn")
-  ms <- chain_draws(x, lp = TRUE)
+  ms <- chain_draws(check_fbc(x, "x"), lp = TRUE)
   df <- do.call(rbind, lapply(seq_along(ms), function(k) {
     d <- as.data.frame(ms[[k]])
     d$.chain <- k

@@ -35,6 +35,7 @@ chain_diagnostics <- function(Phi, chain) {
 param_support <- function(x) {
   ps <- phi_spec(x)
   tab <- ps$table
+  vars <- phi_vars(x$spec)
   fam <- names(prior_families)[match(tab$family, prior_families)]
   d <- nrow(tab)
   lo <- hi <- numeric(d)
@@ -45,7 +46,7 @@ param_support <- function(x) {
                   unit12 = c(1, 2))
     s <- c(max(s[1], dom[1]), min(s[2], dom[2]))
     if (cls == "kappa") {
-      k <- match(x$vars[j], x$vars[ps$classes == "kappa"])
+      k <- match(vars[j], vars[ps$classes == "kappa"])
       lo0 <- x$scale$xmin[x$scale$p + k]
       rng <- x$scale$xmax[x$scale$p + k] - lo0
       # prior argument a + b * u, u = (kappa - lo0) / rng
@@ -62,15 +63,16 @@ param_support <- function(x) {
 bound_piling <- function(x) {
   sup <- param_support(x)
   fixed <- phi_spec(x)$table$family == prior_families[["fixed"]]
+  vars <- phi_vars(x$spec)
   out <- list()
-  for (j in seq_along(x$vars)) {
+  for (j in seq_along(vars)) {
     if (fixed[j] || !all(is.finite(sup[j, ]))) next
     v <- x$Phi[, j]
     band <- fbc_pile_band * (sup[j, 2] - sup[j, 1])
     share <- c(mean(v <= sup[j, 1] + band), mean(v >= sup[j, 2] - band))
     k <- which.max(share)
     if (share[k] >= fbc_pile_share) {
-      out[[length(out) + 1]] <- data.frame(var = x$vars[j], bound = sup[j, k], share = share[k])
+      out[[length(out) + 1]] <- data.frame(var = vars[j], bound = sup[j, k], share = share[k])
     }
   }
   if (length(out)) do.call(rbind, out) else data.frame(var = character(), bound = numeric(), share = numeric())
@@ -140,17 +142,15 @@ smooth_kernel_hint <- function(cls) {
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
 #' convergence_messages(fit)
 convergence_messages <- function(x) {
-  if (!inherits(x, "fbc")) {
-    cli::cli_abort("{.arg x} must be an {.cls fbc} object, not {.obj_type_friendly {x}}.")
-  }
+  x <- check_fbc(x, "x")
   est <- x$estimates
   msgs <- character()
-  nChains <- length(unique(x$chain %||% 1L))
+  nChains <- length(unique(x$chain))
   if (isTRUE(x$state$interrupted)) {
     msgs <- c(msgs, "The run was interrupted before the end; continue it with `update(fit, nMCMC = ...)`.")
   }
-  rhat <- est$rhat %||% rep(NA_real_, nrow(est))
-  ess <- est$ess %||% rep(NA_real_, nrow(est))
+  rhat <- est$rhat
+  ess <- est$ess
   bad <- which(rhat > fbc_rhat_max)
   if (length(bad)) {
     msgs <- c(msgs, sprintf(

@@ -42,6 +42,7 @@
 #' plot(fit, type = "fits", xlab = "height (m)")
 plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...) {
   check_dots_empty(..., fn = plot.fbc, name = "plot")
+  x <- check_fbc(x, "x")
   type <- match_choice(type, c("density", "trace", "fits"), "type")
   if (type == "fits") return(plot_fits(x, xlab))
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
@@ -51,7 +52,7 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
     ))
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
-  vars <- colnames(x$Phi)[x$indices[[parameter]]]
+  vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
   if (!length(vars)) {
     K <- kernel_arg(parameter)
     cli::cli_abort(c(
@@ -120,7 +121,7 @@ support_density <- function(draws, lo = -Inf, hi = Inf, n = 256L) {
 
 plot_density <- function(x, vars, labels, xlab) {
   sup <- param_support(x)
-  rownames(sup) <- x$vars
+  rownames(sup) <- phi_vars(x$spec)
   post <- list()
   prior <- list()
   for (v in vars) {
@@ -135,7 +136,7 @@ plot_density <- function(x, vars, labels, xlab) {
       post[[v]] <- data.frame(parameter = labels[[v]], value = d$x, density = d$y)
     }
     grid <- seq(grid[1], grid[length(grid)], length.out = 256)
-    dens <- exp(x$priorFns[[v]](grid))
+    dens <- exp(x$spec$fns[[v]](grid))
     prior[[v]] <- data.frame(parameter = labels[[v]], value = grid, density = dens)
   }
   post <- do.call(rbind, post)
@@ -159,7 +160,7 @@ plot_density <- function(x, vars, labels, xlab) {
 
 plot_trace <- function(x, vars, labels, xlab) {
   nd <- nrow(x$Phi)
-  chain <- if (is.null(x$chain)) rep(1L, nd) else x$chain
+  chain <- x$chain
   iter <- stats::ave(seq_len(nd), chain, FUN = seq_along)
   df <- do.call(rbind, lapply(vars, function(v) {
     data.frame(parameter = labels[[v]], draw = iter, value = unname(x$Phi[, v]),
@@ -204,7 +205,7 @@ plot_fits <- function(x, xlab) {
     ggplot2::geom_point(ggplot2::aes(y = .data$fitted), colour = "steelblue", shape = 17) +
     ggplot2::geom_point(ggplot2::aes(y = .data$observed), colour = "firebrick") +
     ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") +
-    ggplot2::labs(x = if (p == 1L) xlab else NULL, y = sc$names$response %||% "response",
+    ggplot2::labs(x = if (p == 1L) xlab else NULL, y = sc$names$response,
                   title = "Field data (red) and MAP fits with 95% intervals (blue)") +
     ggplot2::theme_bw()
 }

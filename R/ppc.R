@@ -52,14 +52,14 @@
 #' plot(pp)
 #' plot(pp, type = "density")
 ppc_field <- function(fit, ndraws = 500) {
-  check_fbc(fit)
+  fit <- check_fbc(fit)
   ndraws <- check_count(ndraws, "ndraws")
   sc <- fit$scale
   dat <- fit$data
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_draws(fit, rows)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
-                      fit$settings$nugget %||% fbc_nugget, 500L, model = model_codes(fit$spec))
+                      fit$settings$nugget, 500L, model = model_codes(fit$spec))
   m <- sc$ymean + sc$ysd * res$mean         # n x D
   s <- sc$ysd * sqrt(pmax(res$var, 0))
   n <- nrow(m)
@@ -82,7 +82,7 @@ ppc_field <- function(fit, ndraws = 500) {
   outside <- stats::setNames(vapply(levels_, function(l) mean(abs(p - 0.5) > l / 2), numeric(1)),
                              paste0(100 * levels_, "%"))
   structure(list(y = y, yrep = yrep, x = X, obs = obs, outside = outside, ndraws = D,
-                 response = sc$names$response %||% "response"),
+                 response = sc$names$response),
             class = "fbc_ppc")
 }
 

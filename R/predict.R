@@ -101,6 +101,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
                         type = c("field", "mean", "simulator", "bias"),
                         level = 0.95, draws = FALSE, ndraws = 1000, ...) {
   check_dots_empty(..., fn = predict.fbc, name = "predict")
+  object <- check_fbc(object, "object")
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
   type <- match_choice(type, c("field", "mean", "simulator", "bias"), "type")
   if (!is.numeric(level) || length(level) != 1L || is.na(level) || level <= 0 || level >= 1) {
@@ -118,7 +119,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   N <- nrow(Xn)
   M <- length(rows)
   code <- match(type, c("field", "mean", "simulator", "bias"))
-  nugget <- object$settings$nugget %||% fbc_nugget
+  nugget <- object$settings$nugget
   model <- model_codes(object$spec)
   shift <- if (type == "bias") 0 else sc$ymean
   z <- stats::qnorm((1 + level) / 2)

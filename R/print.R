@@ -20,6 +20,7 @@
 #' @export
 print.fbc <- function(x, digits = 3, ...) {
   check_dots_empty(..., fn = print.fbc, name = "print", action = "warn")
+  x <- check_fbc(x, "x")
   s <- x$settings
   sc <- x$scale
   cat("<fbc> Full Bayesian calibration (Kennedy-O'Hagan)\n")
@@ -30,7 +31,7 @@ print.fbc <- function(x, digits = 3, ...) {
     cat(sprintf("  calibration: %s\n",
                 paste0("kappa", seq_len(sc$q), " = ", cal, collapse = ", ")))
   }
-  chains <- if (is.null(x$chain)) 1L else length(unique(x$chain))
+  chains <- length(unique(x$chain))
   cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
               s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
@@ -48,14 +49,11 @@ print.fbc <- function(x, digits = 3, ...) {
                   if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
     }
   }
-  cat(sprintf("  kernels: simulator %s, bias %s\n", s$kernelS %||% "powexp",
-              s$kernelB %||% "powexp"))
+  cat(sprintf("  kernels: simulator %s, bias %s\n", s$kernelS, s$kernelB))
   alg <- s$simAlgebra
-  if (!is.null(alg)) {
-    cat(sprintf("  algebra: %s\n", if (identical(alg$name, "Kronecker"))
-      sprintf("Kronecker, %d x %d (experimental x calibration settings)", alg$dims[1], alg$dims[2])
-      else "dense"))
-  }
+  cat(sprintf("  algebra: %s\n", if (identical(alg$name, "Kronecker"))
+    sprintf("Kronecker, %d x %d (experimental x calibration settings)", alg$dims[1], alg$dims[2])
+    else "dense"))
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")
     stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")

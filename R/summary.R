@@ -22,6 +22,7 @@
 #' coef(fit, stat = "median")["kappa1"]
 summary.fbc <- function(object, ...) {
   check_dots_empty(..., fn = summary.fbc, name = "summary")
+  object <- check_fbc(object, "object")
   structure(object$estimates, class = c("summary.fbc", "data.frame"))
 }
 
@@ -50,5 +51,6 @@ print.summary.fbc <- function(x, digits = 3, ...) {
 coef.fbc <- function(object, stat = c("mean", "median"), ...) {
   check_dots_empty(..., fn = coef.fbc, name = "coef")
   stat <- match_choice(stat, c("mean", "median"), "stat")
+  object <- check_fbc(object, "object")
   stats::setNames(object$estimates[[stat]], rownames(object$estimates))
 }

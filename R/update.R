@@ -26,24 +26,21 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
   check_flag(showProgress, "showProgress")
+  object <- check_fbc(object, "object")
   s <- object$settings
   states <- object$state$chains
-  if (is.null(states)) {
-    cli::cli_abort("{.arg object} has no per-chain state to continue from (made by an older FBC?).")
-  }
   if (nMCMC %/% s$thinning < 1L) {
     cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
   }
-  check_run_size(max(vapply(states, function(st) as.numeric(st$kept %||% 0), numeric(1))) +
+  check_run_size(max(vapply(states, function(st) as.numeric(st$kept), numeric(1))) +
                    nMCMC %/% s$thinning,
-                 length(object$vars), length(states), iters = as.numeric(s$nMCMC) + nMCMC,
+                 ncol(object$Phi), length(states), iters = as.numeric(s$nMCMC) + nMCMC,
                  args = "nMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
-  moves <- s$moves %||% sampler_moves(s$sampler %||% "single", object$spec)
   d <- length(object$spec$vars)  # the sampler's parameters (see phi_columns())
   starts <- lapply(states, function(st) chain_start(st$sampler, d))
   target <- vapply(starts, function(st) st$iter0, integer(1)) + as.integer(nMCMC)
-  results <- run_chains(object$data, object$spec, starts, chain_seeds(length(starts)), moves,
+  results <- run_chains(object$data, object$spec, starts, chain_seeds(length(starts)), s$moves,
                         target = target, nBurn = s$nBurn, thinning = s$thinning,
                         showProgress = showProgress)
   elapsed <- proc.time()[["elapsed"]] - t0

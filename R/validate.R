@@ -174,12 +174,14 @@ cat_warning <- function(msg) {
   cat(paste0("! ", paste(lines, collapse = "\n")), "\n", sep = "")
 }
 
+# The gate of every function that takes a fit: refuses what is not one and
+# returns it in the current format (upgrade_fbc(), in fit.R).
 check_fbc <- function(x, arg = "fit", call = parent.frame()) {
   if (!inherits(x, "fbc")) {
     cli::cli_abort("{.arg {arg}} must be an {.cls fbc} object from {.fn calibrate}, not {.obj_type_friendly {x}}.",
                    call = call)
   }
-  invisible(x)
+  upgrade_fbc(x, call = call)
 }
 
 #' @export

@@ -34,7 +34,7 @@ test_that("the default ball calibration covers g = 9.81", {
   expect_s3_class(fit, "fbc")
   expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars", "data",
                       "scale", "indices", "priorFns", "proposalSD", "call", "settings",
-                      "logLik", "state", "spec"))
+                      "logLik", "state", "spec", "version"))
   expect_equal(rownames(fit$estimates), fit$vars)
   expect_equal(fit$estimates["kappa1", "median"], median(fit$Phi[, "kappa1"]))
   expect_equal(fit$estimates["kappa1", "lwr80"], unname(quantile(fit$Phi[, "kappa1"], 0.1)))

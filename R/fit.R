@@ -1,0 +1,319 @@
+# The fit object (class "fbc"), made by calibrate() and update().
+#
+# new_fbc() is its one constructor: it takes the parts, derives the
+# user-facing copies of the model description (`priors`, `vars`, `indices`,
+# `priorFns`, documented in ?calibrate) from `spec`, stamps the format
+# version and validates. Package code reads `spec` (phi_vars(),
+# phi_indices(), spec$fns, spec$priors), not those copies.
+#
+# validate_fbc() checks the structure. upgrade_fbc() brings a fit or a
+# checkpoint file written by an earlier FBC to the current format; every
+# function that receives a fit goes through it (check_fbc()), and the
+# checkpoint loader (read_checkpoint_file()) too.
+
+# Format of the fit: fit$version$format. Fits made before it existed have
+# no `version` (format 0) and are upgraded by what they lack.
+fbc_fit_format <- 1L
+
+# ------------------------------------------------------------ constructor ----
+
+new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, scale, spec,
+                    settings, state, call, estimates = estimate_table(Phi, chain)) {
+  x <- structure(list(
+    Phi = Phi,
+    chain = chain,
+    estimates = estimates,
+    logPost = logPost,
+    priors = spec$priors,
+    acceptance = acceptance,
+    vars = phi_vars(spec),
+    data = data,
+    scale = scale,
+    indices = phi_indices(spec),
+    priorFns = spec$fns,
+    proposalSD = proposalSD,
+    call = call,
+    settings = settings,
+    logLik = logLik,
+    state = state,
+    spec = spec,
+    version = list(fbc = as.character(utils::packageVersion("FBC")), format = fbc_fit_format)
+  ), class = "fbc")
+  validate_fbc(x)
+}
+
+# The names of Phi's columns: the sampler's parameters (spec$vars) but the
+# smoothness of a family without one (phi_columns()).
+phi_vars <- function(spec) spec$vars[phi_columns(spec)]
+
+# Assembles an fbc object from a list of chain results (each as returned by
+# .fbc_sample, draws on the sampler's scale). `prev` is an earlier fbc object
+# whose draws the new ones are appended to (update()), or NULL.
+new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NULL) {
+  p <- scale$p
+  q <- scale$q
+  cal <- p + seq_len(q)
+  # Phi holds the columns of phi that are parameters of the model (not the
+  # smoothness of a family without one): phi_columns()
+  cols <- phi_columns(spec)
+  pieces <- lapply(seq_along(results), function(k) {
+    r <- results[[k]]
+    kept <- seq_len(r$kept)
+    Phi <- r$draws[kept, cols, drop = FALSE]
+    colnames(Phi) <- spec$vars[cols]
+    Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2,
+                                     scale$xmax[cal] - scale$xmin[cal], "*"),
+                               2, scale$xmin[cal], "+")
+    list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
+  })
+  states <- lapply(results, function(r) {
+    names(r$acceptance) <- spec$vars
+    logsd <- stats::setNames(r$state$logsd, spec$vars)
+    list(last = r$state$phi, logsd = logsd, done = r$done, nPost = r$nPost,
+         interrupted = r$interrupted, acceptance = r$acceptance,
+         scaleAcceptance = r$scaleAcceptance, kept = r$kept, sampler = r$state)
+  })
+  if (!is.null(prev)) {
+    # append chain k's new draws after its old ones
+    old <- split_chains(prev)
+    pieces <- lapply(seq_along(pieces), function(k) {
+      list(Phi = rbind(old[[k]]$Phi, pieces[[k]]$Phi),
+           logPost = c(old[[k]]$logPost, pieces[[k]]$logPost),
+           logLik = c(old[[k]]$logLik, pieces[[k]]$logLik))
+    })
+    states <- lapply(seq_along(states), function(k) {
+      s <- states[[k]]
+      o <- prev$state$chains[[k]]
+      # acceptance over all post-burn-in iterations
+      nNew <- s$nPost
+      nOld <- o$postDone
+      if (nNew > 0) {
+        s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
+        if (!is.na(o$scaleAcceptance) && !is.na(s$scaleAcceptance))
+          s$scaleAcceptance <- (o$scaleAcceptance * nOld + s$scaleAcceptance * nNew) / (nOld + nNew)
+      } else {
+        s$acceptance <- o$acceptance
+        s$scaleAcceptance <- o$scaleAcceptance
+      }
+      s$postDone <- nOld + nNew
+      s$done <- o$done + s$done
+      s$kept <- o$kept + s$kept
+      s
+    })
+  } else {
+    states <- lapply(states, function(s) {
+      s$postDone <- s$nPost
+      s
+    })
+  }
+  Phi <- do.call(rbind, lapply(pieces, `[[`, "Phi"))
+  rownames(Phi) <- NULL
+  chain <- rep(seq_along(pieces), vapply(pieces, function(x) nrow(x$Phi), integer(1)))
+  # the proposal actually made, per parameter (blocks included): the
+  # geometric mean over the chains
+  fixed <- spec$table$family == prior_families[["fixed"]]
+  logSD <- lapply(states, function(s) log(proposal_sd(s$sampler, spec$vars, fixed)))
+  new_fbc(
+    Phi = Phi, chain = chain,
+    logPost = unlist(lapply(pieces, `[[`, "logPost")),
+    logLik = unlist(lapply(pieces, `[[`, "logLik")),
+    acceptance = (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols],
+    proposalSD = exp(Reduce(`+`, logSD) / length(states))[cols],
+    data = dat, scale = scale, spec = spec, settings = settings,
+    state = list(chains = states,
+                 interrupted = any(vapply(states, `[[`, logical(1), "interrupted"))),
+    call = call
+  )
+}
+
+# The draws of each chain: list of list(Phi, logPost, logLik).
+split_chains <- function(x) {
+  lapply(sort(unique(x$chain)), function(k) {
+    i <- x$chain == k
+    list(Phi = x$Phi[i, , drop = FALSE], logPost = x$logPost[i], logLik = x$logLik[i])
+  })
+}
+
+# -------------------------------------------------------------- validator ----
+
+# Checks the structure of an fbc object; returns it (invisibly) or aborts
+# with one line per problem found.
+validate_fbc <- function(x, arg = "x", call = parent.frame()) {
+  bad <- fbc_problems(x)
+  if (length(bad)) {
+    cli::cli_abort(c(
+      "{.arg {arg}} is not a valid {.cls fbc} object:",
+      stats::setNames(bad, rep("x", length(bad)))
+    ), call = call)
+  }
+  invisible(x)
+}
+
+# The problems of an fbc object, in words (character(0) when none). A check
+# runs only when the parts it reads are sound, so one fault is reported
+# once.
+fbc_problems <- function(x) {
+  if (!inherits(x, "fbc") || !is.list(x)) return("It is not a list of class {.cls fbc}.")
+  need <- c("Phi", "chain", "estimates", "logPost", "acceptance", "data", "scale",
+            "proposalSD", "settings", "logLik", "state", "spec", "version")
+  miss <- setdiff(need, names(x))
+  if (length(miss)) return(sprintf("`%s` is missing.", miss))
+  out <- character()
+  v <- x$version
+  if (!is.list(v) || !is_count(v$format) || !is.character(v$fbc)) {
+    out <- c(out, "`version` must be a list with `fbc` (a version string) and `format` (an integer).")
+  }
+  Phi <- x$Phi
+  if (!is.matrix(Phi) || !is.numeric(Phi)) return(c(out, "`Phi` must be a numeric matrix."))
+  # the draws: one value of each per row of Phi, one state per chain
+  n <- nrow(Phi)
+  for (el in c("chain", "logPost", "logLik")) {
+    if (length(x[[el]]) != n) {
+      out <- c(out, sprintf("`%s` has %d values for the %d rows of `Phi`.", el, length(x[[el]]), n))
+    }
+  }
+  chains <- x$state$chains
+  K <- length(chains)
+  if (!is.list(chains) || !K) {
+    out <- c(out, "`state$chains` must hold one state per chain.")
+  } else if (length(x$chain) == n) {
+    if (!all(x$chain %in% seq_len(K)) || !all(seq_len(K) %in% x$chain)) {
+      out <- c(out, sprintf("`chain` must number the rows of `Phi` by chain, 1 to %d (one per state in `state$chains`), each at least once.", K))
+    } else {
+      kept <- vapply(chains, function(st) as.numeric(st$kept %||% NA), numeric(1))
+      rows <- tabulate(x$chain, K)
+      for (k in which(is.na(kept) | kept != rows)) {
+        out <- c(out, sprintf("`state$chains[[%d]]` kept %s draws; `chain` has %d rows of chain %d.",
+                              k, format(kept[k]), rows[k], k))
+      }
+    }
+  }
+  # the model: Phi's columns and everything per parameter follow `spec`
+  spec <- x$spec
+  miss <- setdiff(c("table", "init", "logsd", "vars", "classes", "priors", "fns", "model"), names(spec))
+  if (length(miss)) return(c(out, sprintf("`spec$%s` is missing.", miss)))
+  d <- length(spec$vars)
+  if (nrow(spec$table) != d || length(spec$init) != d || length(spec$classes) != d) {
+    return(c(out, sprintf("`spec$table`, `spec$init` and `spec$classes` must describe the %d parameters of `spec$vars`.", d)))
+  }
+  vars <- phi_vars(spec)
+  if (!identical(colnames(Phi), vars)) {
+    out <- c(out, sprintf("`Phi` has columns %s; the model's parameters are %s.",
+                          format_names(colnames(Phi)), format_names(vars)))
+  }
+  for (el in c("acceptance", "proposalSD")) {
+    if (length(x[[el]]) != length(vars)) {
+      out <- c(out, sprintf("`%s` has %d values for the model's %d parameters.", el, length(x[[el]]), length(vars)))
+    }
+  }
+  if (!is.data.frame(x$estimates) || !identical(rownames(x$estimates), vars)) {
+    out <- c(out, "`estimates` must be a data frame with one row per parameter of the model.")
+  }
+  for (k in seq_len(if (is.list(chains)) K else 0L)) {
+    s <- chains[[k]]$sampler
+    if (!is.list(s) || length(s$phi) != d || length(s$logsd) != d || !is_count(s$iter)) {
+      out <- c(out, sprintf("`state$chains[[%d]]$sampler` must be a sampler state: `phi` and `logsd` of length %d, `iter`.", k, d))
+    }
+  }
+  out
+}
+
+# A whole number, 0 or more.
+is_count <- function(x) is.numeric(x) && length(x) == 1L && !is.na(x) && x >= 0 && x == round(x)
+
+# Names for a message: "a, b, c" or "none".
+format_names <- function(x) if (length(x)) paste(x, collapse = ", ") else "none"
+
+# ---------------------------------------------------------------- upgrade ----
+
+# Brings an object written by an earlier FBC up to the current format: a
+# fit (class "fbc") or the contents of a checkpoint file (run.rds,
+# chain-<k>.rds: see checkpoint.R). A current object is returned as is; one
+# from a newer FBC is refused. Each step is what an earlier version did not
+# write, filled in as that version behaved.
+upgrade_fbc <- function(x, call = parent.frame()) {
+  if (inherits(x, "fbc")) upgrade_fit(x, call) else upgrade_checkpoint(x, call)
+}
+
+upgrade_fit <- function(x, call) {
+  format <- if (is.null(x$version)) 0L else x$version$format
+  if (identical(format, fbc_fit_format)) return(x)
+  if (!is_count(format) || format > fbc_fit_format) {
+    cli::cli_abort(c(
+      "This {.cls fbc} object was made by a newer FBC ({x$version$fbc}, format {format}); this is FBC {utils::packageVersion('FBC')} (format {fbc_fit_format}).",
+      i = "Update FBC to use it."
+    ), call = call)
+  }
+  # format 0: every fit made before the version existed. What each earlier
+  # version left out:
+  spec <- x$spec
+  s <- x$settings
+  sc <- x$scale
+  # - the model codes (before the kernels and algebras: the power
+  #   exponential on both GPs, the algebra chosen by the design)
+  if (is.null(spec$model)) spec$model <- list(kernS = 1L, kernB = 1L, algebra = 0L)
+  # - the layout of phi in the model description (before R handed it to the
+  #   compiled core: the one layout there was)
+  spec$model <- model_codes(spec)
+  # - the column names' use (before columns were matched by name: by
+  #   position)
+  if (is.null(sc$named)) sc$named <- FALSE
+  # - the settings of later options, at what the run did: one chain, the
+  #   single-site sampler (0.1.0's thetaS/alphaS block move, `blockSim`, is
+  #   not continued: update() goes on with single-site moves), the power
+  #   exponential, the design's algebra
+  s$nChains <- s$nChains %||% 1L
+  if (is.null(s$moves)) {
+    s$sampler <- s$sampler %||% "single"
+    s$moves <- sampler_moves(s$sampler, spec)
+    s$blockSim <- NULL
+  }
+  # - the moves' parameter names (before each move was reported by name)
+  s$moves$params <- s$moves$params %||% spec$vars
+  s$kernelS <- s$kernelS %||% "powexp"
+  s$kernelB <- s$kernelB %||% "powexp"
+  s$algebra <- s$algebra %||% "auto"
+  s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, sc$p, spec$model)
+  # - the chains (before several chains: one, its state at the top of
+  #   `state`)
+  chain <- x$chain %||% rep(1L, nrow(x$Phi))
+  chains <- x$state$chains
+  if (is.null(chains)) {
+    st <- x$state
+    chains <- list(list(last = st$last, logsd = st$logsd, batch = st$batch, done = st$done,
+                        interrupted = isTRUE(st$interrupted), acceptance = x$acceptance,
+                        kept = nrow(x$Phi), postDone = max(0, st$done - s$nBurn)))
+  }
+  # - the sampler's state (before the sampler took its state in and gave
+  #   it back: where the chain stopped, its proposal scales and the
+  #   adaptation batch; 0.1.0's `block` goes with `blockSim`), the scale
+  #   move's acceptance (no scale move then)
+  chains <- lapply(chains, function(st) {
+    if (is.null(st$sampler)) {
+      st$sampler <- list(phi = unname(st$last), logsd = unname(st$logsd),
+                         iter = as.integer(st$done), batch = as.integer(st$batch))
+      st$block <- NULL
+    }
+    if (is.null(st$scaleAcceptance)) st$scaleAcceptance <- NA_real_
+    st
+  })
+  # - R-hat and ESS (before several chains)
+  est <- x$estimates
+  if (is.null(est$rhat) || is.null(est$ess)) est <- estimate_table(x$Phi, chain)
+  new_fbc(
+    Phi = x$Phi, chain = chain, logPost = x$logPost, logLik = x$logLik,
+    acceptance = x$acceptance, proposalSD = x$proposalSD, data = x$data, scale = sc,
+    spec = spec, settings = s,
+    state = list(chains = chains, interrupted = any(vapply(chains, function(st) isTRUE(st$interrupted), logical(1)))),
+    call = x$call, estimates = est
+  )
+}
+
+# The contents of a checkpoint file of format `x$format` (at most
+# fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format
+# 1 is the only one written so far (checkpoints came with it): no step yet.
+# The run's identity (run_identity()) is never rewritten: it must match the
+# call that resumes the run.
+upgrade_checkpoint <- function(x, call) {
+  x
+}

@@ -1,0 +1,161 @@
+# The fit object (R/fit.R): constructor, validator, version and the upgrade
+# of fits and checkpoints written by earlier versions. The old objects in
+# fixtures/ were written by those versions themselves (see
+# fixtures/make-old-fits.R): ff9b582 (the first calibrate(), one chain),
+# 2617448 (FBC 0.1.0), fa818f9 (just before the kernels merge, with a
+# checkpoint directory). Each is a run of the ball data with set.seed(7),
+# nMCMC = 300, nBurn = 100, thinning = 2 (two chains but for ff9b582).
+
+old_fit <- function(commit) readRDS(test_path("fixtures", sprintf("fit-%s.rds", commit)))
+old_args <- list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
+
+test_that("a fresh fit carries the current version and its copies of the model description", {
+  set.seed(2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 1L))
+  expect_identical(FBC:::validate_fbc(fit), fit)
+  # a current fit passes the gate untouched
+  expect_identical(FBC:::upgrade_fbc(fit), fit)
+  # the user-facing copies come from spec
+  expect_identical(fit$vars, colnames(fit$Phi))
+  expect_identical(fit$indices, FBC:::phi_indices(fit$spec))
+  expect_identical(fit$priors, fit$spec$priors)
+  expect_identical(fit$priorFns, fit$spec$fns)
+  # update() rebuilds it through the same constructor
+  up <- update(fit, nMCMC = 20)
+  expect_identical(up$version, fit$version)
+  expect_identical(up$Phi[up$chain == 1, ][1:20, ], fit$Phi[fit$chain == 1, ])
+})
+
+test_that("validate_fbc() refuses broken objects, naming what is wrong", {
+  set.seed(2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
+  short <- fit
+  short$chain <- short$chain[-1]
+  short$logLik <- short$logLik[-(1:2)]
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(short))
+  gone <- fit
+  gone[c("logLik", "version")] <- NULL
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(gone))
+  cols <- fit
+  cols$Phi <- cols$Phi[, -4]
+  cols$state$chains[[2]]$kept <- 3L
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(cols))
+  nospec <- fit
+  nospec$spec$model <- NULL
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(nospec))
+  state <- fit
+  state$state$chains[[1]]$sampler$logsd <- 1
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(state))
+  renum <- fit
+  renum$chain[renum$chain == 2] <- 3L
+  expect_snapshot(error = TRUE, FBC:::validate_fbc(renum))
+  # a fit from a newer FBC is refused by the gate of every entry point
+  newer <- fit
+  newer$version <- list(fbc = "9.0.0", format = 99L)
+  expect_snapshot(error = TRUE, summary(newer), transform = function(x) {
+    gsub("this is FBC [0-9.]+", "this is FBC <version>", x)
+  })
+})
+
+test_that("fits of earlier versions upgrade, validate and keep their draws", {
+  for (commit in c("ff9b582", "2617448", "fa818f9")) {
+    old <- old_fit(commit)
+    expect_null(old$version)
+    fit <- FBC:::upgrade_fbc(old)
+    expect_identical(fit$version$format, 1L)
+    expect_identical(FBC:::validate_fbc(fit), fit)
+    expect_identical(fit$Phi, old$Phi)
+    expect_identical(fit$logPost, old$logPost)
+    expect_identical(fit$logLik, old$logLik)
+    expect_identical(fit$spec$model, list(kernS = 1L, kernB = 1L, algebra = 0L))
+    expect_identical(fit$settings[c("kernelS", "kernelB", "nugget")],
+                     list(kernelS = "powexp", kernelB = "powexp", nugget = 1e-6))
+    # every chain continues from where it stopped: iteration 300
+    for (st in fit$state$chains) {
+      expect_identical(st$sampler$iter, 300L)
+      expect_identical(st$sampler$phi, unname(st$last))
+    }
+  }
+  # the first version: one chain and no R-hat; its state becomes chain 1's
+  first <- FBC:::upgrade_fbc(old_fit("ff9b582"))
+  expect_identical(first$chain, rep(1L, 100))
+  expect_identical(first$state$chains[[1]]$kept, 100L)
+  expect_identical(first$state$chains[[1]]$postDone, 200)
+  expect_identical(first$estimates[, 1:8], old_fit("ff9b582")$estimates)
+  expect_equal(first$estimates$ess, FBC:::chain_diagnostics(first$Phi, first$chain)$ess)
+  # before the sampler state (0.1.0) the run was single-site
+  expect_identical(FBC:::upgrade_fbc(old_fit("2617448"))$settings$moves,
+                   list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE))
+  # a fit with a sampler state keeps its moves and adapted blocks
+  b <- old_fit("fa818f9")
+  expect_identical(FBC:::upgrade_fbc(b)$settings$moves, b$settings$moves)
+  expect_identical(FBC:::upgrade_fbc(b)$state$chains[[2]]$sampler, b$state$chains[[2]]$sampler)
+})
+
+test_that("print, summary, predict, plot and update work on the fits of earlier versions", {
+  for (commit in c("ff9b582", "2617448", "fa818f9")) {
+    old <- old_fit(commit)
+    out <- capture.output(print(old))
+    expect_match(out[1], "<fbc>", fixed = TRUE)
+    expect_true("  kernels: simulator powexp, bias powexp" %in% out)
+    expect_true("  algebra: dense" %in% out)
+    expect_s3_class(summary(old), "summary.fbc")
+    expect_identical(rownames(summary(old)), colnames(old$Phi))
+    expect_identical(coef(old), stats::setNames(old$estimates$mean, colnames(old$Phi)))
+    expect_s3_class(plot(old), "ggplot")
+    expect_s3_class(plot(old, "thetaS", type = "trace"), "ggplot")
+    expect_s3_class(plot(old, type = "fits"), "ggplot")
+    expect_equal(nrow(posterior::as_draws_df(old)), nrow(old$Phi))
+    expect_type(convergence_messages(old), "character")
+    expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
+    set.seed(3)
+    up <- update(old, nMCMC = 100)
+    expect_identical(up$version$format, 1L)
+    K <- length(unique(up$chain))
+    expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
+    expect_identical(up$settings$nMCMC, 400L)
+    for (k in seq_len(K)) {
+      expect_identical(unname(up$Phi[up$chain == k, ][1:100, ]),
+                       unname(old$Phi[FBC:::upgrade_fbc(old)$chain == k, ]))
+      expect_identical(up$state$chains[[k]]$sampler$iter, 400L)
+    }
+  }
+  # predictions of an old fit are the old version's own (its predict(),
+  # saved by make-old-fits.R; ff9b582 had no predict())
+  for (commit in c("2617448", "fa818f9")) {
+    old <- old_fit(commit)
+    ref <- readRDS(test_path("fixtures", sprintf("predict-%s.rds", commit)))
+    h <- c(1, 2.5, 4)
+    map <- predict(old, h, method = "MAP")
+    expect_equal(map[c("pred", "se", "lower", "upper")], ref$map[c("pred", "se", "lower", "upper")],
+                 tolerance = 1e-10)
+    bayes <- predict(old, h)
+    expect_equal(bayes[c("pred", "se")], ref$bayes[c("pred", "se")], tolerance = 1e-10)
+    expect_equal(bayes[c("lower", "upper")], ref$bayes[c("lower", "upper")], tolerance = 1e-6)
+  }
+})
+
+test_that("a checkpoint written before the kernels resumes to that version's uninterrupted draws", {
+  dir <- tempfile("ck-old-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  dir.create(dir)
+  file.copy(list.files(test_path("fixtures", "checkpoint-fa818f9"), full.names = TRUE), dir)
+  # chain 1 was stopped at iteration 150; chain 2 had not started
+  expect_equal(ck_iter(dir, 1), 150)
+  expect_false(file.exists(file.path(dir, "chain-2.rds")))
+  set.seed(999)  # the checkpoint has the streams
+  expect_message(
+    fit <- do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
+    "iterations 150 and 0"
+  )
+  # the uninterrupted run of that version with the same seed
+  expect_same_draws(fit, FBC:::upgrade_fbc(old_fit("fa818f9")))
+  expect_identical(fit$version$format, 1L)
+  # a checkpoint file of a newer format is refused, nothing changed
+  run <- readRDS(file.path(dir, "run.rds"))
+  run$format <- FBC:::fbc_checkpoint_format + 1L
+  saveRDS(run, file.path(dir, "run.rds"))
+  expect_error(do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
+               "written by another version of FBC")
+})
