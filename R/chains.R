@@ -1,6 +1,6 @@
-# Several chains through the future framework.
+# Several chains: their starting points and what their results say.
 #
-# Each chain is one future (run_chains() in checkpoint.R) with its own
+# Each chain is one future (run_chains() in run.R) with its own
 # L'Ecuyer-CMRG stream drawn from the caller's RNG state (chain_seeds()), and
 # the compiled sampler draws from whatever RNG the evaluating process has. So
 # a run is reproduced by set.seed() whatever future::plan() is active, and
@@ -59,7 +59,7 @@ log_prior_row <- function(tab, j, x) {
 
 # Package-level flag: a chain interrupted with Ctrl-C in this process sets
 # it so that the chains of the same call that have not started yet are
-# skipped (sequential plan; see run_chains() in checkpoint.R).
+# skipped (sequential plan; see run_chains() in run.R).
 fbc_run <- new.env(parent = emptyenv())
 fbc_run$stop <- FALSE
 

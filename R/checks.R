@@ -195,3 +195,15 @@ check_dots_empty <- function(..., fn, name, cls = "fbc", action = c("abort", "wa
     cli::cli_warn(msg, class = "fbc_unused_dots", call = call)
   }
 }
+
+# One of `choices` (the first when `x` is the default vector).
+match_choice <- function(x, choices, arg, call = parent.frame()) {
+  if (identical(x, choices)) return(choices[1])
+  if (!is.character(x) || length(x) != 1L || is.na(x) || !(x %in% choices)) {
+    cli::cli_abort(
+      "{.arg {arg}} must be one of {.or {.val {choices}}}, not {.val {format_value(x)}}.",
+      call = call
+    )
+  }
+  x
+}

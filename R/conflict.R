@@ -15,14 +15,6 @@ fbc_conflict_sds <- 3
 # does not vary with) leaves the choice to the prior, which is no conflict.
 fbc_conflict_gain <- 2
 
-# The sampler's walk scale (calibrate(), "Sampler") and back.
-to_walk <- function(x, transform) {
-  switch(as.character(transform), `0` = x, `1` = log(x), `2` = stats::qlogis(x - 1))
-}
-from_walk <- function(w, transform) {
-  switch(as.character(transform), `0` = w, `1` = exp(w), `2` = 1 + stats::plogis(w))
-}
-
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
   d <- fit$data

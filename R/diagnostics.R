@@ -187,3 +187,19 @@ convergence_messages <- function(x) {
   }
   c(msgs, conflict_messages(x))
 }
+
+# Posterior summary of each column of Phi, with the rank-normalised split
+# R-hat and the bulk ESS over the chains given by `chain` (see diagnostics.R).
+estimate_table <- function(Phi, chain = rep(1L, nrow(Phi))) {
+  qs <- function(x) stats::quantile(x, c(0.5, 0.25, 0.75, 0.1, 0.9), names = FALSE)
+  out <- t(apply(Phi, 2, function(x) {
+    qq <- qs(x)
+    c(mean = mean(x), median = qq[1], mode = pmode(x), lwr50 = qq[2], upr50 = qq[3],
+      lwr80 = qq[4], upr80 = qq[5], sd = stats::sd(x))
+  }))
+  out <- as.data.frame(out)
+  diag <- chain_diagnostics(Phi, chain)
+  out$rhat <- diag$rhat
+  out$ess <- diag$ess
+  out
+}

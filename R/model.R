@@ -147,3 +147,26 @@ model_codes <- function(spec) {
                          model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
   .fbc_heldout_c(Xf, yf, Xs, ys, phis, nugget, fold, model)
 }
+
+# The dense algebra with at least this many simulator runs gets the
+# large-problem move schedule (sampler_moves(large = TRUE)).
+fbc_large_m <- 500L
+large_dense <- function(m, simAlgebra) {
+  identical(simAlgebra$name, "dense") && m >= fbc_large_m
+}
+
+# Which algebra the compiled code uses for the simulator block: the
+# Kronecker one on a product design (`dims`: I experimental x J calibration
+# settings), else the dense one.
+sim_algebra_info <- function(dat, p, model) {
+  dims <- .sim_algebra(dat$Xs, p, model$algebra %||% 0L)
+  if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
+}
+
+# The sampler's walk scale (calibrate(), "Sampler") and back.
+to_walk <- function(x, transform) {
+  switch(as.character(transform), `0` = x, `1` = log(x), `2` = stats::qlogis(x - 1))
+}
+from_walk <- function(w, transform) {
+  switch(as.character(transform), `0` = w, `1` = exp(w), `2` = 1 + stats::plogis(w))
+}

@@ -193,15 +193,6 @@ predict_block_size <- function(N, M) {
   as.integer(max(1, min(cap, max(500, ceiling(N / 20)), N)))
 }
 
-# Parameter draws in the sampler's parameterisation: kappa back to [0, 1].
-sampler_scale <- function(Phi, scale) {
-  q <- scale$q
-  cal <- scale$p + seq_len(q)
-  Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2, scale$xmin[cal], "-"),
-                             2, scale$xmax[cal] - scale$xmin[cal], "/")
-  unname(Phi)
-}
-
 # Quantile `prob` of the equal-weight Gaussian mixture sum_i N(mu[, i], sd[, i]^2) / M,
 # for every row at once: the root of F(x) = mean_i Phi((x - mu_i) / sd_i) - prob,
 # by Newton's method (F' = mean_i phi((x - mu_i) / sd_i) / sd_i) inside a
@@ -319,14 +310,3 @@ check_newdata <- function(newdata, scale, call = parent.frame()) {
   unname(newdata)
 }
 
-# One of `choices` (the first when `x` is the default vector).
-match_choice <- function(x, choices, arg, call = parent.frame()) {
-  if (identical(x, choices)) return(choices[1])
-  if (!is.character(x) || length(x) != 1L || is.na(x) || !(x %in% choices)) {
-    cli::cli_abort(
-      "{.arg {arg}} must be one of {.or {.val {choices}}}, not {.val {format_value(x)}}.",
-      call = call
-    )
-  }
-  x
-}

@@ -29,7 +29,7 @@ enum PriorFamily {
 // Transformation on which a parameter's random walk runs.
 enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2 };
 
-// Correlation family codes, one per GP; R/calibrate.R keeps the same table
+// Correlation family codes, one per GP; R/correlation.R keeps the same table
 // (kernel_codes()).
 enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4 };
 

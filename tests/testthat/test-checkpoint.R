@@ -1,4 +1,4 @@
-# Checkpoints, resume, interrupts and progress (R/checkpoint.R). The
+# Checkpoints, resume, interrupts and progress (R/checkpoint.R, R/run.R). The
 # property tested throughout: a run stopped anywhere (imitated Ctrl-C,
 # SIGKILL of the session or of a worker) and resumed from its checkpoint
 # directory gives exactly the draws of an uninterrupted run with the same

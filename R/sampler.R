@@ -1,8 +1,10 @@
-# The sampler's moves: the schedule each sampler runs (sampler_moves(), read
-# off the model description's `move` column) and what the compiled sampler
-# reports of each move (move_report(), proposal_sd()). The compiled side
-# (src/sampler.cpp) runs the schedule: one Move per entry, in the order of
-# phi, then the scale move.
+# The sampler: the compiled sampler called for one piece of a chain
+# (sample_chain()), its initial state, and its moves: the schedule each
+# sampler runs (sampler_moves(), read off the model description's `move`
+# column) and what the compiled sampler reports of each move
+# (move_report(), proposal_sd()). The compiled side (src/sampler.cpp) runs
+# the schedule: one Move per entry, in the order of phi, then the scale
+# move.
 
 # The moves of each sampler (see "Sampler" in ?calibrate), read off the
 # model description's `move` column: index vectors of the jointly moved
@@ -83,3 +85,35 @@ proposal_sd <- function(state, vars, fixed) {
   sd[fixed] <- NA_real_
   sd
 }
+
+# Runs the compiled sampler for `nIter` further sweeps from `state` (the
+# sampler's whole state on its own scale: see initial_state()); sweeps up to
+# `nBurn` (counted from the chain's start) adapt the proposals. An interrupt
+# (Ctrl-C) is reported in the result (`interrupted`, `done`, `kept`), not as
+# a condition: the caller decides what to say.
+sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showProgress,
+                         sampler = fbc_sampler_hook()) {
+  progress <- if (showProgress) {
+    list(name = "Calibrating", clear = TRUE, show_after = 0,
+         format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
+  }
+  args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
+               nIter, nBurn, thinning, fbc_nugget, progress)
+  # the model only where it differs from the default one of these data, so
+  # a sampler hook written for the twelve usual arguments keeps working
+  model <- model_codes(spec)
+  p <- ncol(dat$Xf)
+  default <- compiled_model(p, ncol(dat$Xs) - p)
+  do.call(sampler, c(args, if (!identical(model, default)) list(model = model)))
+}
+
+# The state a chain starts from: parameters `init` (sampler's scale), the
+# initial proposal SDs, no iteration done. The compiled sampler fills in the
+# rest (adaptation sums, blocks) and returns the state it stopped in.
+initial_state <- function(init, spec) {
+  list(phi = unname(init), logsd = unname(spec$logsd), iter = 0L, batch = 0L)
+}
+
+# The compiled sampler. Tests replace it (options(FBC.sampler = f)) by a
+# wrapper that imitates a Ctrl-C, to check what an interrupted run returns.
+fbc_sampler_hook <- function() getOption("FBC.sampler", .fbc_sample)

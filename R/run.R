@@ -1,0 +1,415 @@
+# Running the chains: each chain one future (any future::plan()), in pieces,
+# with checkpoints (R/checkpoint.R), clean interrupts and progress.
+#
+# A chain runs in pieces that end at multiples of `fbc_piece` sweeps
+# (counted from the chain's start), whatever the plan, the checkpoint
+# interval or the interruptions. Each piece is one call of the compiled
+# sampler, which takes the chain's whole state in and gives it back, and
+# draws from R's RNG; so a chain continued from the state and the RNG state
+# saved at a piece boundary makes exactly the draws it would have made
+# without stopping. (The boundaries must not move: the sampler recomputes
+# its cached factors from scratch at the start of a call, and a factor
+# updated in closed form over many sweeps differs from a fresh one in the
+# last bits.)
+
+fbc_piece <- 50L
+
+# One L'Ecuyer-CMRG stream per chain: streams 1..n after a seed made from one
+# integer drawn from the session's RNG (which is left advanced by that draw,
+# so consecutive calls differ and set.seed() reproduces a call).
+chain_seeds <- function(n) {
+  s <- sample.int(.Machine$integer.max, 1L)
+  genv <- globalenv()
+  old <- genv$.Random.seed
+  on.exit(assign(".Random.seed", old, envir = genv))
+  set.seed(s, kind = "L'Ecuyer-CMRG")
+  seed <- genv$.Random.seed
+  out <- vector("list", n)
+  for (k in seq_len(n)) {
+    seed <- parallel::nextRNGStream(seed)
+    out[[k]] <- seed
+  }
+  out
+}
+
+# Where chain k starts this call: its sampler state, the iteration its run
+# (calibrate() or update()) started at, and what it has kept since then.
+chain_start <- function(state, d, iter0 = state$iter) {
+  list(state = state, iter0 = as.integer(iter0), draws = matrix(0, 0, d),
+       logPost = numeric(), logLik = numeric(), accSum = rep(0, d),
+       scaleAccSum = 0, nPost = 0L, finished = FALSE)
+}
+
+# Number of draws kept over iterations (from, to] (see src/sampler.cpp).
+kept_between <- function(from, to, nBurn, thinning) {
+  k <- function(it) if (it > nBurn) (it - nBurn) %/% thinning else 0L
+  as.integer(k(to) - k(from))
+}
+
+# A run directory of its own for a call under a parallel plan without
+# `checkpoint`: workers on this machine see it (stop file, checkpoints for
+# Ctrl-C); remote workers do not, and run without it.
+temp_run <- function(every) {
+  dir <- tempfile("fbc-run-")
+  dir.create(dir)
+  list(dir = dir, id = basename(dir), every = every, user = FALSE, resumed = FALSE)
+}
+
+# A chain's result (as the compiled sampler returns one) from its checkpoint.
+result_from_start <- function(start, interrupted) {
+  d <- length(start$state$phi)
+  nPost <- start$nPost
+  list(draws = start$draws, logPost = start$logPost, logLik = start$logLik,
+       kept = nrow(start$draws),
+       acceptance = if (nPost > 0) start$accSum / nPost else rep(NA_real_, d),
+       scaleAcceptance = if (nPost > 0) start$scaleAccSum / nPost else NA_real_,
+       done = start$state$iter - start$iter0, nPost = nPost,
+       interrupted = interrupted, state = start$state)
+}
+
+# Runs chain k from `start` to iteration `job$target[k]` in pieces (see the
+# top); evaluated by a future, on any backend. Between pieces: saves a
+# checkpoint when `job$every` seconds have passed (and at the end), reports
+# progress, and stops early when the main session asks (STOP file), when
+# the main session is gone (same host), or on an interrupt in this process.
+# Returns the chain's result over its whole run (from start$iter0).
+run_chain <- function(job, k, start) {
+  dir <- job$dir
+  files <- !is.null(dir) && dir.exists(dir)
+  if (!is.null(dir) && !files && job$user) {
+    stop(sprintf("the checkpoint directory %s is not visible from the worker on %s: put it on storage the workers share",
+                 dir, Sys.info()[["nodename"]]), call. = FALSE)
+  }
+  host <- Sys.info()[["nodename"]]
+  if (files) {
+    pidFile <- chain_file(dir, k, "pid")
+    writeLines(c(as.character(Sys.getpid()), host, job$token), pidFile)
+    on.exit(unlink(pidFile), add = TRUE)
+  }
+  ownerHere <- identical(host, job$owner$host) && job$owner$pid != Sys.getpid()
+  genv <- globalenv()
+  d <- length(start$state$phi)
+  target <- job$target[k]
+  nAll <- kept_between(start$iter0, target, job$nBurn, job$thinning)
+  draws <- matrix(NA_real_, nAll, d)
+  logPost <- logLik <- rep(NA_real_, nAll)
+  n0 <- nrow(start$draws)
+  if (n0) {
+    draws[seq_len(n0), ] <- start$draws
+    logPost[seq_len(n0)] <- start$logPost
+    logLik[seq_len(n0)] <- start$logLik
+  }
+  # `cur` is replaced whole after each piece, so an interrupt at any point
+  # leaves the last consistent piece boundary
+  cur <- list(state = start$state, kept = n0, accSum = start$accSum,
+              scaleAccSum = start$scaleAccSum, nPost = start$nPost, seed = genv$.Random.seed)
+  snapshot <- function() {
+    kept <- seq_len(cur$kept)
+    list(state = cur$state, iter0 = start$iter0,
+         draws = draws[kept, , drop = FALSE], logPost = logPost[kept], logLik = logLik[kept],
+         accSum = cur$accSum, scaleAccSum = cur$scaleAccSum, nPost = cur$nPost,
+         finished = cur$state$iter >= target)
+  }
+  save <- function() {
+    write_atomic(list(format = fbc_checkpoint_format, id = job$id, chain = k,
+                      start = snapshot(), seed = cur$seed, host = host,
+                      pid = Sys.getpid(), time = Sys.time()), chain_file(dir, k))
+  }
+  stopAsked <- function() {
+    (files && file.exists(file.path(dir, "STOP"))) ||
+      (ownerHere && !isTRUE(tools::pskill(job$owner$pid, 0L)))
+  }
+  tick <- function(force = FALSE) {
+    if (is.null(job$progress)) return(invisible())
+    now <- proc.time()[["elapsed"]]
+    if (!force && now - lastTick < 0.25) return(invisible())
+    lastTick <<- now
+    acc <- if (cur$nPost > 0) mean(cur$accSum / cur$nPost, na.rm = TRUE) else NA_real_
+    job$progress(amount = 0, fbcChain = k, fbcDone = cur$state$iter - job$from[k],
+                 fbcAcceptance = acc, fbcBurn = cur$state$iter <= job$nBurn)
+  }
+  lastSave <- lastTick <- proc.time()[["elapsed"]]
+  status <- "done"
+  status <- tryCatch({
+    repeat {
+      # a Ctrl-C that reached this process (a terminal sends it to the
+      # workers too) while no R code checked for it stays pending until
+      # something does; Sys.sleep() does, here, inside the handler, rather
+      # than later in the future's own code, which would lose the result
+      Sys.sleep(0.001)
+      it <- cur$state$iter
+      if (it >= target) break
+      if (stopAsked()) { status <- "stopped"; break }
+      n <- min(target, (it %/% fbc_piece + 1L) * fbc_piece) - it
+      assign(".Random.seed", cur$seed, envir = genv)
+      r <- sample_chain(job$dat, job$spec, cur$state, job$moves, n, job$nBurn,
+                        job$thinning, FALSE, sampler = job$sampler)
+      seed <- genv$.Random.seed
+      if (r$kept > 0) {
+        idx <- cur$kept + seq_len(r$kept)
+        draws[idx, ] <- r$draws[seq_len(r$kept), , drop = FALSE]
+        logPost[idx] <- r$logPost[seq_len(r$kept)]
+        logLik[idx] <- r$logLik[seq_len(r$kept)]
+      }
+      post <- r$nPost > 0
+      cur <- list(state = r$state, kept = cur$kept + r$kept,
+                  accSum = if (post) cur$accSum + r$acceptance * r$nPost else cur$accSum,
+                  scaleAccSum = if (post) cur$scaleAccSum + r$scaleAcceptance * r$nPost else cur$scaleAccSum,
+                  nPost = cur$nPost + r$nPost, seed = seed)
+      if (isTRUE(r$interrupted)) { status <- "interrupted"; break }
+      now <- proc.time()[["elapsed"]]
+      if (files && (now - lastSave >= job$every) && cur$state$iter < target) {
+        save()
+        lastSave <- now
+      }
+      tick()
+    }
+    status
+  }, interrupt = function(e) "interrupted")
+  if (status == "interrupted") fbc_run$stop <- TRUE
+  if (files) save()
+  tick(force = TRUE)
+  res <- result_from_start(snapshot(), interrupted = status != "done")
+  res$status <- status
+  res
+}
+
+# Is the current plan one that evaluates futures in this process?
+plan_is_sequential <- function() {
+  inherits(future::plan("next"), c("sequential", "uniprocess"))
+}
+
+free_workers <- function() {
+  tryCatch(future::nbrOfFreeWorkers(), error = function(e) Inf)
+}
+
+# Runs chain k of `starts` (see chain_start()) to iteration `target[k]`, one
+# future per chain with chain k's random stream `seeds[[k]]`, on whatever
+# plan is set. `run` is the run directory (open_checkpoint(), temp_run())
+# or NULL. Returns the list of chain results (NULL for a chain that never
+# started after an interrupt).
+#
+# Ctrl-C in the main session: the workers are asked to stop (STOP file) and
+# their results collected, so they return their draws and the session stays
+# in step with its workers; a second Ctrl-C (or a worker that cannot be
+# reached) kills this run's worker processes on this machine and restarts
+# the plan's workers, and the chains come back as far as their checkpoints.
+run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
+                       showProgress, run = NULL, every = 60) {
+  n <- length(starts)
+  sequential <- plan_is_sequential()
+  if (is.null(run) && !sequential) {
+    run <- temp_run(every)
+    on.exit(unlink(run$dir, recursive = TRUE), add = TRUE)
+  }
+  fbc_run$stop <- FALSE
+  on.exit(fbc_run$stop <- FALSE, add = TRUE)
+  if (!is.null(run)) {
+    unlink(file.path(run$dir, "STOP"))
+    unlink(list.files(run$dir, pattern = "^chain-[0-9]+[.]pid$", full.names = TRUE))
+  }
+  from <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
+  target <- rep_len(as.integer(target), n)
+  job <- list(dat = dat, spec = list(table = spec$table, model = spec$model), moves = moves, nBurn = nBurn,
+              thinning = thinning, target = target, from = from,
+              dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
+              token = basename(tempfile("")), sampler = fbc_sampler_hook(),
+              owner = list(pid = Sys.getpid(), host = Sys.info()[["nodename"]]),
+              progress = NULL)
+
+  results <- vector("list", n)
+  bar <- NULL
+  todo <- which(!vapply(starts, function(s) isTRUE(s$finished), logical(1)))
+  for (k in setdiff(seq_len(n), todo)) results[[k]] <- result_from_start(starts[[k]], FALSE)
+  if (showProgress && length(todo)) {
+    if (n > 1L) {
+      workers <- future::nbrOfWorkers()
+      cli::cli_inform("Running {n} chain{?s} of {max(target)} iterations on {workers} worker{?s}.")
+    }
+    bar <- progress_bar(n, target - from, nBurn)
+    job$progress <- progressr::progressor(steps = sum(target - from), enable = TRUE,
+                                          initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
+  }
+  futures <- vector("list", n)
+  launching <- 0L
+  dirty <- FALSE
+  failed <- integer()
+  errors <- list()
+  launch <- function(k) {
+    expr <- bquote(.(run_chain)(job, .(k), start))
+    make <- function() {
+      future::future(expr, substitute = FALSE, seed = seeds[[k]], packages = "FBC",
+                     globals = list(job = job, start = starts[[k]]),
+                     label = sprintf("FBC chain %d", k))
+    }
+    # not with interrupts suspended: launching waits for the worker to
+    # answer, and a Ctrl-C must always get through; a launch cut short by
+    # Ctrl-C may leave that worker out of step, so the plan is restarted
+    launching <<- k
+    futures[[k]] <<- make()
+    launching <<- 0L
+  }
+  # the sequential plan runs the chains here, without futures, each with
+  # its own stream; the session's RNG state is left as it was
+  runHere <- function(k) {
+    genv <- globalenv()
+    old <- genv$.Random.seed
+    on.exit(assign(".Random.seed", old, envir = genv))
+    assign(".Random.seed", seeds[[k]], envir = genv)
+    results[[k]] <<- run_chain(job, k, starts[[k]])
+  }
+  # collects the futures that are resolved; FALSE while some still run
+  collect <- function() {
+    for (k in which(!vapply(futures, is.null, logical(1)))) {
+      if (!is.null(results[[k]]) || k %in% failed) next
+      f <- futures[[k]]
+      res <- suspendInterrupts(tryCatch(
+        if (future::resolved(f)) list(value = future::value(f)) else NULL,
+        FutureError = function(e) list(died = e),
+        error = function(e) list(error = e)
+      ))
+      if (is.null(res)) next
+      if (!is.null(res$died)) {
+        failed <<- c(failed, k)
+      } else if (!is.null(res$error)) {
+        failed <<- c(failed, k)
+        errors[[length(errors) + 1L]] <<- res$error
+      } else {
+        results[[k]] <<- res$value
+      }
+    }
+    launched <- which(!vapply(futures, is.null, logical(1)))
+    all(!vapply(results[launched], is.null, logical(1)) | launched %in% failed)
+  }
+  onProgress <- function(c) {
+    if (is.null(c$fbcChain)) return()
+    if (!is.null(bar)) bar$update(c$fbcChain, c$fbcDone, c$fbcAcceptance, c$fbcBurn)
+    if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
+  }
+  interrupted <- FALSE
+  tryCatch(withCallingHandlers({
+    for (k in todo) {
+      if (isTRUE(fbc_run$stop)) break
+      if (sequential) {
+        runHere(k)
+        next
+      }
+      while (free_workers() < 1) {
+        collect()
+        Sys.sleep(0.05)
+      }
+      launch(k)
+      collect()
+      if (length(errors)) break
+    }
+    while (!length(errors) && !collect()) Sys.sleep(0.05)
+  }, progression = onProgress), interrupt = function(e) {
+    interrupted <<- TRUE
+    dirty <<- launching > 0L
+  })
+  hard <- FALSE
+  if (interrupted || length(errors)) {
+    hard <- withCallingHandlers(
+      stop_chains(run, collect, sequential, quiet = !interrupted),
+      progression = function(c) if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
+    )
+  }
+  if (!is.null(bar)) bar$done()
+  if (length(errors)) stop(errors[[1]])
+  # a dead worker's connection, or one a Ctrl-C cut short, is useless
+  if ((length(failed) || dirty) && !hard) reset_plan()
+  # a chain whose worker died, or that the interrupt cut short, comes back
+  # as far as its checkpoint
+  for (k in seq_len(n)) {
+    if (!is.null(results[[k]])) next
+    f <- if (!is.null(run)) chain_file(run$dir, k)
+    if (!is.null(f) && file.exists(f)) {
+      ck <- tryCatch(readRDS(f), error = function(e) NULL)
+      if (is.list(ck) && identical(ck$id, run$id)) {
+        results[[k]] <- result_from_start(ck$start, interrupted = TRUE)
+        results[[k]]$status <- if (k %in% failed) "died" else "interrupted"
+      }
+    }
+    if (is.null(results[[k]]) && k %in% failed) {
+      results[[k]] <- result_from_start(starts[[k]], interrupted = TRUE)
+      results[[k]]$status <- "died"
+    }
+  }
+  results
+}
+
+# After Ctrl-C: ask the workers to stop at their next piece and collect
+# them; on a second Ctrl-C, kill this run's workers on this machine and
+# restart the plan's workers (returns TRUE then).
+stop_chains <- function(run, collect, sequential, quiet = FALSE) {
+  if (sequential) return(FALSE)
+  if (!is.null(run)) file.create(file.path(run$dir, "STOP"))
+  if (!quiet) {
+    cli::cli_inform(c("!" = "Interrupted: stopping the chains at their next checkpoint (press Ctrl-C again to kill the workers)."))
+  }
+  hard <- FALSE
+  tryCatch(
+    while (!collect()) Sys.sleep(0.05),
+    interrupt = function(e) hard <<- TRUE
+  )
+  if (hard) {
+    kill_workers(run)
+    reset_plan()
+  }
+  hard
+}
+
+# Kills the processes on this machine that run this call's chains.
+kill_workers <- function(run) {
+  if (is.null(run)) return(invisible())
+  host <- Sys.info()[["nodename"]]
+  for (f in list.files(run$dir, pattern = "^chain-[0-9]+[.]pid$", full.names = TRUE)) {
+    x <- tryCatch(readLines(f, warn = FALSE), error = function(e) character())
+    pid <- suppressWarnings(as.integer(x[1]))
+    if (length(x) >= 2L && !is.na(pid) && identical(x[2], host) && pid != Sys.getpid()) {
+      tools::pskill(pid, tools::SIGKILL)
+    }
+  }
+  invisible()
+}
+
+# Restarts the workers of the current plan (after a worker died or was
+# killed, its connection is useless): setting the same plan again stops
+# the old workers and launches new ones.
+reset_plan <- function() {
+  if (plan_is_sequential()) return(invisible())
+  stack <- future::plan("list")
+  tryCatch(suppressWarnings(future::plan(stack, substitute = FALSE, .skip = FALSE)),
+           error = function(e) cli::cli_warn(c(
+             "Could not restart the future plan's workers: {conditionMessage(e)}",
+             i = "Call {.code future::plan()} again before the next run."
+           )))
+  invisible()
+}
+
+# One progress bar for all chains: sweeps done over all, time left and each
+# chain's acceptance rate (mean over its parameters, after burn-in).
+progress_bar <- function(n, total, nBurn, .envir = parent.frame()) {
+  done <- rep(0, n)
+  acc <- rep(NA_real_, n)
+  burn <- rep(TRUE, n)
+  id <- cli::cli_progress_bar(
+    name = "Calibrating", total = sum(total), clear = TRUE, auto_terminate = FALSE,
+    .envir = .envir,
+    format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}"
+  )
+  status <- function() {
+    a <- ifelse(burn, "burn-in", ifelse(is.na(acc), "-", sprintf("%.2f", acc)))
+    paste("acceptance", paste(a, collapse = " "))
+  }
+  list(
+    update = function(k, d, a, b) {
+      done[k] <<- d
+      acc[k] <<- a
+      burn[k] <<- isTRUE(b)
+      try(cli::cli_progress_update(id = id, set = sum(done), status = status(), .envir = .envir),
+          silent = TRUE)
+    },
+    done = function() try(cli::cli_progress_done(id = id, .envir = .envir), silent = TRUE)
+  )
+}

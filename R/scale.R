@@ -1,0 +1,55 @@
+# Scaling: inputs mapped to [0, 1] by the simulator design's range, responses
+# standardised by the simulator response (see ?calibrate, "Scaling"), and
+# back.
+
+# Relative nugget added to the diagonal of the simulator correlation matrix.
+fbc_nugget <- 1e-6
+
+# Min/max of each simulator input, mean/sd of the simulator response.
+# `named`: whether the columns were matched by name (then predict() matches
+# newdata's columns by name too).
+fbc_scale <- function(sim, p, named = FALSE, call = parent.frame()) {
+  X <- sim[, -1, drop = FALSE]
+  xmin <- apply(X, 2, min)
+  xmax <- apply(X, 2, max)
+  const <- which(xmax == xmin)
+  if (length(const)) {
+    nm <- colnames(sim)[const + 1L] %||% paste0("column ", const + 1L)
+    cli::cli_abort(c(
+      "Every input column of {.arg sim} must vary over the simulator design.",
+      x = "{.val {nm}} {?is/are} constant."
+    ), call = call)
+  }
+  ys <- sim[, 1]
+  if (stats::sd(ys) == 0) {
+    cli::cli_abort("The simulator response (first column of {.arg sim}) is constant.", call = call)
+  }
+  names_ <- usable_names(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
+  list(xmin = unname(xmin), xmax = unname(xmax), ymean = mean(ys), ysd = stats::sd(ys),
+       p = p, q = ncol(sim) - 1L - p, named = named,
+       names = list(response = names_[1], inputs = names_[1L + seq_len(p)],
+                    calibration = names_[-seq_len(p + 1L)]))
+}
+
+scale_inputs <- function(X, scale, cols) {
+  sweep(sweep(X, 2, scale$xmin[cols], "-"), 2, scale$xmax[cols] - scale$xmin[cols], "/")
+}
+
+scale_data <- function(sim, field, scale) {
+  p <- scale$p
+  list(
+    Xf = unname(scale_inputs(field[, -1, drop = FALSE], scale, seq_len(p))),
+    yf = unname((field[, 1] - scale$ymean) / scale$ysd),
+    Xs = unname(scale_inputs(sim[, -1, drop = FALSE], scale, seq_len(ncol(sim) - 1L))),
+    ys = unname((sim[, 1] - scale$ymean) / scale$ysd)
+  )
+}
+
+# Parameter draws in the sampler's parameterisation: kappa back to [0, 1].
+sampler_scale <- function(Phi, scale) {
+  q <- scale$q
+  cal <- scale$p + seq_len(q)
+  Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2, scale$xmin[cal], "-"),
+                             2, scale$xmax[cal] - scale$xmin[cal], "/")
+  unname(Phi)
+}
