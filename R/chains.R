@@ -23,8 +23,9 @@ dispersed_inits <- function(nChains, dat, spec) {
     x <- spec$init
     for (j in seq_len(d)) {
       if (fam[j] == "fixed") next
-      if (fam[j] == "jeffreys") {
-        x[j] <- x[j] * exp(stats::rnorm(1, 0, 0.5))
+      if (!prior_registry[[fam[j]]]$proper) {
+        # no quantiles to draw from: jitter the start on the walk's scale
+        x[j] <- from_walk(to_walk(x[j], tab$transform[j]) + stats::rnorm(1, 0, 0.5), tab$transform[j])
         next
       }
       v <- prior_quantile(stats::runif(1, 0.1, 0.9), fam[j], tab$p1[j], tab$p2[j])

@@ -76,7 +76,7 @@
 #' v
 #' plot(v)
 validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds = NULL) {
-  check_fbc(fit)
+  fit <- check_fbc(fit)
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
   ndraws <- check_count(ndraws, "ndraws")
   sc <- fit$scale
@@ -85,7 +85,7 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   fold <- emulator_folds(folds, m)
   rows <- check_rows(fit, method, ndraws)
   phis <- sampler_draws(fit, rows)
-  nugget <- fit$settings$nugget %||% fbc_nugget
+  nugget <- fit$settings$nugget
   labels <- if (is.null(fold)) seq_len(m) else match(fold, unique(fold))
   cv <- .fbc_heldout(fit$data$Xf, fit$data$yf, fit$data$Xs, ys, phis, nugget, labels,
                      model = model_codes(fit$spec))
@@ -113,7 +113,7 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
     runs = runs, coverage = coverage, rmse = rmse, rmseRel = rmse / sc$ysd,
     shareZ3 = mean(abs(z) > 3), method = method, ndraws = D,
     nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
-    response = sc$names$response %||% "response"
+    response = sc$names$response
   ), class = "fbc_validation")
 }
 
