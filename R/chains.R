@@ -37,7 +37,7 @@ dispersed_inits <- function(nChains, dat, spec) {
   }
   ok <- function(x) {
     is.finite(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, x, fbc_nugget,
-                          model = model_codes(spec))) &&
+                          model = spec$model)) &&
       all(is.finite(mapply(function(j) log_prior_row(tab, j, x[j]), seq_len(d))))
   }
   out <- vector("list", nChains)

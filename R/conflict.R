@@ -19,7 +19,7 @@ fbc_conflict_gain <- 2
 fit_loglik <- function(fit, phi) {
   d <- fit$data
   ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget,
-                    model = model_codes(fit$spec))
+                    model = fit$spec$model)
   if (is.finite(ll)) ll else -Inf
 }
 

@@ -196,6 +196,13 @@ fbc_problems <- function(x) {
   if (nrow(spec$table) != d || length(spec$init) != d || length(spec$classes) != d) {
     return(c(out, sprintf("`spec$table`, `spec$init` and `spec$classes` must describe the %d parameters of `spec$vars`.", d)))
   }
+  # the layout the compiled core gets is the model description's for these
+  # data (R/model.R)
+  sc <- x$scale
+  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q))) {
+    return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d and q = %d (offset and length by class).",
+                          sc$p, sc$q)))
+  }
   vars <- phi_vars(spec)
   if (!identical(colnames(Phi), vars)) {
     out <- c(out, sprintf("`Phi` has columns %s; the model's parameters are %s.",
@@ -251,10 +258,11 @@ upgrade_fit <- function(x, call) {
   sc <- x$scale
   # - the model codes (before the kernels and algebras: the power
   #   exponential on both GPs, the algebra chosen by the design)
-  if (is.null(spec$model)) spec$model <- list(kernS = 1L, kernB = 1L, algebra = 0L)
-  # - the layout of phi in the model description (before R handed it to the
-  #   compiled core: the one layout there was)
-  spec$model <- model_codes(spec)
+  # - and the layout of phi (before R handed it to the compiled core: the
+  #   one layout there was, which the model description still gives)
+  mc <- spec$model
+  spec$model <- compiled_model(sc$p, sc$q, mc$kernS %||% 1L, mc$kernB %||% 1L,
+                               mc$algebra %||% 0L)
   # - the column names' use (before columns were matched by name: by
   #   position)
   if (is.null(sc$named)) sc$named <- FALSE

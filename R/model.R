@@ -106,17 +106,6 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L) {
     layout_codes(p, q))
 }
 
-# The compiled model of a fit's spec (spec$model, built by calibrate()); for
-# objects made before it held the layout, built from their classes, with the
-# default codes where those are missing too.
-model_codes <- function(spec) {
-  mc <- spec$model
-  if (!is.null(mc$offset)) return(mc)
-  cls <- spec$classes
-  compiled_model(sum(cls == "thetaB"), sum(cls == "kappa"), mc$kernS %||% 1L,
-                 mc$kernB %||% 1L, mc$algebra %||% 0L)
-}
-
 # The compiled entry points, each with the model description attached. The
 # first arguments are the scaled data; kernS, kernB and algebra give the
 # model codes, or `model` a whole compiled_model().
@@ -159,7 +148,7 @@ large_dense <- function(m, simAlgebra) {
 # Kronecker one on a product design (`dims`: I experimental x J calibration
 # settings), else the dense one.
 sim_algebra_info <- function(dat, p, model) {
-  dims <- .sim_algebra(dat$Xs, p, model$algebra %||% 0L)
+  dims <- .sim_algebra(dat$Xs, p, model$algebra)
   if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
 }
 

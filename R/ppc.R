@@ -59,7 +59,7 @@ ppc_field <- function(fit, ndraws = 500) {
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_draws(fit, rows)
   res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
-                      fit$settings$nugget, 500L, model = model_codes(fit$spec))
+                      fit$settings$nugget, 500L, model = fit$spec$model)
   m <- sc$ymean + sc$ysd * res$mean         # n x D
   s <- sc$ysd * sqrt(pmax(res$var, 0))
   n <- nrow(m)

@@ -120,7 +120,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   M <- length(rows)
   code <- match(type, c("field", "mean", "simulator", "bias"))
   nugget <- object$settings$nugget
-  model <- model_codes(object$spec)
+  model <- object$spec$model
   shift <- if (type == "bias") 0 else sc$ymean
   z <- stats::qnorm((1 + level) / 2)
 

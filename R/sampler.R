@@ -101,7 +101,7 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
                nIter, nBurn, thinning, fbc_nugget, progress)
   # the model only where it differs from the default one of these data, so
   # a sampler hook written for the twelve usual arguments keeps working
-  model <- model_codes(spec)
+  model <- spec$model
   p <- ncol(dat$Xf)
   default <- compiled_model(p, ncol(dat$Xs) - p)
   do.call(sampler, c(args, if (!identical(model, default)) list(model = model)))

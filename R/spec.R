@@ -33,7 +33,7 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
 # Phi holds: all but the classes these correlation families do not have
 # (absent_classes()).
 phi_columns <- function(spec) {
-  mc <- model_codes(spec)
+  mc <- spec$model
   which(!spec$classes %in% absent_classes(mc$kernS, mc$kernB))
 }
 
@@ -124,7 +124,8 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) 
   cls_of <- param_class_of(p, q)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
-       classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale))
+       classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
+       model = compiled_model(p, q))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -88,7 +88,7 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   nugget <- fit$settings$nugget
   labels <- if (is.null(fold)) seq_len(m) else match(fold, unique(fold))
   cv <- .fbc_heldout(fit$data$Xf, fit$data$yf, fit$data$Xs, ys, phis, nugget, labels,
-                     model = model_codes(fit$spec))
+                     model = fit$spec$model)
   means <- cv$mean
   vars <- cv$var
   D <- nrow(phis)

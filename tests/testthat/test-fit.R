@@ -50,6 +50,10 @@ test_that("validate_fbc() refuses broken objects, naming what is wrong", {
   renum <- fit
   renum$chain[renum$chain == 2] <- 3L
   expect_snapshot(error = TRUE, FBC:::validate_fbc(renum))
+  # a layout of phi other than the model description's for these data
+  moved <- fit
+  moved$spec$model$offset[["muB"]] <- 0L
+  expect_error(FBC:::validate_fbc(moved), "layout of phi for p = 1 and q = 1")
   # a fit from a newer FBC is refused by the gate of every entry point
   newer <- fit
   newer$version <- list(fbc = "9.0.0", format = 99L)
