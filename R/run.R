@@ -230,97 +230,115 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
     job$progress <- progressr::progressor(steps = sum(target - from), enable = TRUE,
                                           initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
   }
-  futures <- vector("list", n)
-  launching <- 0L
-  dirty <- FALSE
-  failed <- integer()
-  errors <- list()
-  launch <- function(k) {
-    expr <- bquote(.(run_chain)(job, .(k), start))
-    make <- function() {
-      future::future(expr, substitute = FALSE, seed = seeds[[k]], packages = "FBC",
-                     globals = list(job = job, start = starts[[k]]),
-                     label = sprintf("FBC chain %d", k))
-    }
-    # not with interrupts suspended: launching waits for the worker to
-    # answer, and a Ctrl-C must always get through; a launch cut short by
-    # Ctrl-C may leave that worker out of step, so the plan is restarted
-    launching <<- k
-    futures[[k]] <<- make()
-    launching <<- 0L
-  }
-  # the sequential plan runs the chains here, without futures, each with
-  # its own stream; the session's RNG state is left as it was
-  runHere <- function(k) {
-    genv <- globalenv()
-    old <- genv$.Random.seed
-    on.exit(assign(".Random.seed", old, envir = genv))
-    assign(".Random.seed", seeds[[k]], envir = genv)
-    results[[k]] <<- run_chain(job, k, starts[[k]])
-  }
-  # collects the futures that are resolved; FALSE while some still run
-  collect <- function() {
-    for (k in which(!vapply(futures, is.null, logical(1)))) {
-      if (!is.null(results[[k]]) || k %in% failed) next
-      f <- futures[[k]]
-      res <- suspendInterrupts(tryCatch(
-        if (future::resolved(f)) list(value = future::value(f)) else NULL,
-        FutureError = function(e) list(died = e),
-        error = function(e) list(error = e)
-      ))
-      if (is.null(res)) next
-      if (!is.null(res$died)) {
-        failed <<- c(failed, k)
-      } else if (!is.null(res$error)) {
-        failed <<- c(failed, k)
-        errors[[length(errors) + 1L]] <<- res$error
-      } else {
-        results[[k]] <<- res$value
-      }
-    }
-    launched <- which(!vapply(futures, is.null, logical(1)))
-    all(!vapply(results[launched], is.null, logical(1)) | launched %in% failed)
-  }
-  onProgress <- function(c) {
-    if (is.null(c$fbcChain)) return()
-    if (!is.null(bar)) bar$update(c$fbcChain, c$fbcDone, c$fbcAcceptance, c$fbcBurn)
-    if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
-  }
-  interrupted <- FALSE
+  # the run's shared state: the futures launched, the results collected,
+  # the chains whose worker died or failed, and what an interrupt needs to
+  # know (the chain being launched)
+  rs <- new.env(parent = emptyenv())
+  rs$futures <- vector("list", n)
+  rs$results <- results
+  rs$failed <- integer()
+  rs$errors <- list()
+  rs$launching <- 0L
+  interrupted <- dirty <- FALSE
   tryCatch(withCallingHandlers({
     for (k in todo) {
       if (isTRUE(fbc_run$stop)) break
       if (sequential) {
-        runHere(k)
+        run_chain_here(rs, job, k, starts[[k]], seeds[[k]])
         next
       }
       while (free_workers() < 1) {
-        collect()
+        collect_chains(rs)
         Sys.sleep(0.05)
       }
-      launch(k)
-      collect()
-      if (length(errors)) break
+      launch_chain(rs, job, k, starts[[k]], seeds[[k]])
+      collect_chains(rs)
+      if (length(rs$errors)) break
     }
-    while (!length(errors) && !collect()) Sys.sleep(0.05)
-  }, progression = onProgress), interrupt = function(e) {
+    while (!length(rs$errors) && !collect_chains(rs)) Sys.sleep(0.05)
+  }, progression = progress_handler(bar)), interrupt = function(e) {
     interrupted <<- TRUE
-    dirty <<- launching > 0L
+    dirty <<- rs$launching > 0L
   })
   hard <- FALSE
-  if (interrupted || length(errors)) {
+  if (interrupted || length(rs$errors)) {
     hard <- withCallingHandlers(
-      stop_chains(run, collect, sequential, quiet = !interrupted),
-      progression = function(c) if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
+      stop_chains(run, function() collect_chains(rs), sequential, quiet = !interrupted),
+      progression = progress_handler(NULL, all = TRUE)
     )
   }
   if (!is.null(bar)) bar$done()
-  if (length(errors)) stop(errors[[1]])
+  if (length(rs$errors)) stop(rs$errors[[1]])
   # a dead worker's connection, or one a Ctrl-C cut short, is useless
-  if ((length(failed) || dirty) && !hard) reset_plan()
-  # a chain whose worker died, or that the interrupt cut short, comes back
-  # as far as its checkpoint
-  for (k in seq_len(n)) {
+  if ((length(rs$failed) || dirty) && !hard) reset_plan()
+  recover_chains(rs$results, rs$failed, run, starts)
+}
+
+# Launches chain k as a future with its own stream. Not with interrupts
+# suspended: launching waits for the worker to answer, and a Ctrl-C must
+# always get through; a launch cut short by Ctrl-C may leave that worker out
+# of step (rs$launching says which), so the plan is restarted.
+launch_chain <- function(rs, job, k, start, seed) {
+  expr <- bquote(.(run_chain)(job, .(k), start))
+  rs$launching <- k
+  rs$futures[[k]] <- future::future(expr, substitute = FALSE, seed = seed, packages = "FBC",
+                                    globals = list(job = job, start = start),
+                                    label = sprintf("FBC chain %d", k))
+  rs$launching <- 0L
+}
+
+# The sequential plan runs chain k here, without a future, with its own
+# stream; the session's RNG state is left as it was.
+run_chain_here <- function(rs, job, k, start, seed) {
+  genv <- globalenv()
+  old <- genv$.Random.seed
+  on.exit(assign(".Random.seed", old, envir = genv))
+  assign(".Random.seed", seed, envir = genv)
+  rs$results[[k]] <- run_chain(job, k, start)
+}
+
+# Collects the futures that are resolved into rs$results (a worker that
+# died or a chain that failed into rs$failed, its error into rs$errors);
+# TRUE when every launched chain is in.
+collect_chains <- function(rs) {
+  for (k in which(!vapply(rs$futures, is.null, logical(1)))) {
+    if (!is.null(rs$results[[k]]) || k %in% rs$failed) next
+    f <- rs$futures[[k]]
+    res <- suspendInterrupts(tryCatch(
+      if (future::resolved(f)) list(value = future::value(f)) else NULL,
+      FutureError = function(e) list(died = e),
+      error = function(e) list(error = e)
+    ))
+    if (is.null(res)) next
+    if (!is.null(res$died)) {
+      rs$failed <- c(rs$failed, k)
+    } else if (!is.null(res$error)) {
+      rs$failed <- c(rs$failed, k)
+      rs$errors[[length(rs$errors) + 1L]] <- res$error
+    } else {
+      rs$results[[k]] <- res$value
+    }
+  }
+  launched <- which(!vapply(rs$futures, is.null, logical(1)))
+  all(!vapply(rs$results[launched], is.null, logical(1)) | launched %in% rs$failed)
+}
+
+# The handler of the workers' progress conditions: the bar (NULL: none)
+# shows the chains', which go no further; `all`: every progression is
+# muffled, the chains' or not (while stopping).
+progress_handler <- function(bar, all = FALSE) {
+  function(c) {
+    if (!all && is.null(c$fbcChain)) return()
+    if (!is.null(bar)) bar$update(c$fbcChain, c$fbcDone, c$fbcAcceptance, c$fbcBurn)
+    if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
+  }
+}
+
+# A chain whose worker died, or that an interrupt cut short, comes back as
+# far as its checkpoint in the run's directory (else from its start,
+# marked as died).
+recover_chains <- function(results, failed, run, starts) {
+  for (k in seq_along(results)) {
     if (!is.null(results[[k]])) next
     f <- if (!is.null(run)) chain_file(run$dir, k)
     if (!is.null(f) && file.exists(f)) {
