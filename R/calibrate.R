@@ -16,6 +16,25 @@
 #' evaluated through Cholesky factors of the blocks of the joint covariance
 #' (never an explicit inverse).
 #'
+#' @section Discrepancy models:
+#' `discrepancy` chooses the model of the simulator's discrepancy
+#' \eqn{\delta}:
+#' * `"gp"` (the default, the vignette's): the Kennedy-O'Hagan bias GP
+#'   above, with parameters `thetaB`, `alphaB`, `sigma2B` and `muB`;
+#' * `"none"`: no discrepancy, \eqn{y_f = \eta(x_f, \kappa) + \epsilon}. The
+#'   bias GP has no parameters: none in `Phi` (nor in `vars`, `estimates`,
+#'   `indices`, whose bias entries are `integer(0)`), no bias moves, and
+#'   `kernelB` is not used. A prior given for a bias parameter in `hypers`
+#'   is ignored with a warning. [predict.fbc()]'s types keep their meaning:
+#'   the bias is exactly 0, so `"mean"` is `"simulator"` and `"field"` adds
+#'   \eqn{\sigma^2_E}.
+#'
+#' Without a discrepancy the field data inform \eqn{\kappa} only through
+#' the simulator: the interval is narrower, and right only when the
+#' simulator can match the field. With the bias GP, \eqn{\kappa} and the
+#' bias are confounded (Kennedy and O'Hagan 2001; on the ball data the
+#' interval for `g` is most of the design's range).
+#'
 #' @section Correlation families:
 #' `kernelS` and `kernelB` choose the family of the simulator GP
 #' \eqn{\eta} and of the bias GP \eqn{\delta}, separately, with
@@ -99,11 +118,13 @@
 #'   `sigma2S`, whose range and scale trade off), each costing one
 #'   factorisation of the simulator block;
 #' * two joint moves of the bias GP's parameters (`thetaB`, `alphaB`,
-#'   `sigma2B`), which touch only the field block;
+#'   `sigma2B`), which touch only the field block (none under
+#'   `discrepancy = "none"`);
 #' * a single-site move of `sigma2E`;
 #' * an exact draw of `muB` from its Gaussian full conditional (Gibbs; when
-#'   its prior is gaussian, else a random walk);
-#' * a move multiplying `sigma2S`, `sigma2B` and `sigma2E` by one factor:
+#'   its prior is gaussian, else a random walk; none without a bias);
+#' * a move multiplying `sigma2S`, `sigma2B` and `sigma2E` (without a bias:
+#'   `sigma2S` and `sigma2E`) by one factor:
 #'   the whole covariance scales, so its log-determinant and quadratic form
 #'   follow in closed form with no factorisation.
 #'
@@ -263,6 +284,8 @@
 #'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
 #'   units), else `calibrate()` refuses it and names the arguments to give.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
+#' @param discrepancy The discrepancy model: `"gp"` (the default, the bias
+#'   GP) or `"none"` (no discrepancy); see "Discrepancy models".
 #' @param kernelS,kernelB Correlation family of the simulator GP and of the
 #'   bias GP: `"powexp"` (default), `"gaussian"`, `"matern32"` or
 #'   `"matern52"` (see "Correlation families").
@@ -285,14 +308,15 @@
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
-#'   `muB`, without `alphaS`/`alphaB` for a family that has no smoothness),
+#'   `muB`, without `alphaS`/`alphaB` for a family that has no smoothness
+#'   and without the bias's parameters under `discrepancy = "none"`),
 #'   `chain` (the chain of each row), `estimates` (posterior summaries with
 #'   `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars` (the names
 #'   of `Phi`'s columns), `data`, `scale`, `indices` (for each parameter
 #'   class, the columns of `Phi` holding it: `integer(0)` for a smoothness
 #'   that is not sampled), `priorFns`, `proposalSD`, `call`, `settings`
 #'   (MCMC sizes, nugget, run time, checkpoint directory, `algebra` and the
-#'   `simAlgebra` used, `kernelS`, `kernelB`), `state` (`chains`: where
+#'   `simAlgebra` used, `kernelS`, `kernelB`, `discrepancy`), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
 #'   the sampler's full parameter vector; `interrupted`), `spec` (the model
 #'   description the copies `priors`, `vars`, `indices` and `priorFns` come
@@ -326,9 +350,15 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
 #'                  kernelS = "matern52")
 #' colnames(fit$Phi)
+#' # no discrepancy: y_f = eta(x, kappa) + eps, no bias parameters
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
+#'                  discrepancy = "none")
+#' colnames(fit$Phi)
 calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
-                      kappaP2 = 1.1, hypers = set_hyperPriors(), kernelS = "powexp",
+                      kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "none"),
+                      kernelS = "powexp",
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense"), checkpoint = NULL,
                       checkpointEvery = 60) {
@@ -363,7 +393,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
     )
   }
-  check_run_size((nMCMC - nBurn) %/% thinning, length(param_names(p, q)), nChains,
+  discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy")
+  check_run_size((nMCMC - nBurn) %/% thinning, length(param_names(p, q, discrepancy)), nChains,
                  iters = nMCMC, args = c("nMCMC", "nChains"))
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
@@ -374,7 +405,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   }
   kernelS <- check_kernel(kernelS, "kernelS")
   kernelB <- check_kernel(kernelB, "kernelB")
-  hypers <- kernel_hypers(hypers, kernelS, kernelB)
+  hypers <- discrepancy_hypers(kernel_hypers(hypers, kernelS, kernelB), discrepancy)
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
@@ -385,9 +416,9 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   kappaSpec <- check_class_spec(
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
-  spec <- build_priors(kappaSpec, hypers, scale, p, q)
+  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
-                               algebra = if (algebra == "dense") 1L else 0L)
+                               algebra = if (algebra == "dense") 1L else 0L, discrepancy)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -396,7 +427,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   seeds <- chain_seeds(nChains)
   starts <- lapply(inits, function(x) chain_start(initial_state(x, spec), length(x), 0L))
   settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
-                   nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB)
+                   nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB,
+                   discrepancy = discrepancy)
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -422,7 +454,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                 list(nChains = length(results), nugget = fbc_nugget, sampler = sampler,
                      moves = moves, time = elapsed, checkpoint = checkpoint,
                      algebra = algebra, simAlgebra = simAlgebra, kernelS = kernelS,
-                     kernelB = kernelB))
+                     kernelB = kernelB, discrepancy = discrepancy))
   new_fbc_chains(results, dat, spec, scale, call, settings = settings)
 }
 

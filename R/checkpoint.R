@@ -63,13 +63,17 @@ read_checkpoint_file <- function(path, what, id = NULL, call = parent.frame()) {
   upgrade_fbc(obj, call = call)
 }
 
+# The settings a run's identity leaves out at their defaults (the kernels,
+# the discrepancy model), so that checkpoints written before the setting
+# existed still match a default run.
+identity_defaults <- list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp")
+
 # What makes a run the same run: data and priors as the sampler sees them,
-# and the settings.
-# The default kernels are left out, so that checkpoints written before the
-# kernels existed still match a default run.
+# and the settings (but identity_defaults at their defaults).
 run_identity <- function(sim, field, spec, settings) {
-  default <- names(settings) %in% c("kernelS", "kernelB") &
-    vapply(settings, identical, logical(1), "powexp")
+  default <- vapply(names(settings), function(s) {
+    s %in% names(identity_defaults) && identical(settings[[s]], identity_defaults[[s]])
+  }, logical(1))
   settings <- settings[!default]
   list(sim = unname(sim), field = unname(field),
        priors = list(table = spec$table, init = spec$init, logsd = spec$logsd),
@@ -92,9 +96,9 @@ identity_differences <- function(old, new, vars) {
   for (s in union(names(old$settings), names(new$settings))) {
     a <- old$settings[[s]]
     b <- new$settings[[s]]
-    if (s %in% c("kernelS", "kernelB")) {  # left out when the default
-      a <- a %||% "powexp"
-      b <- b %||% "powexp"
+    if (s %in% names(identity_defaults)) {  # left out when the default
+      a <- a %||% identity_defaults[[s]]
+      b <- b %||% identity_defaults[[s]]
     }
     if (!identical(a, b)) {
       fmt <- function(x) if (is.atomic(x) && length(x) == 1L) format(x) else "another value"

@@ -12,8 +12,9 @@
 # checkpoint loader (read_checkpoint_file()) too.
 
 # Format of the fit: fit$version$format. Fits made before it existed have
-# no `version` (format 0) and are upgraded by what they lack.
-fbc_fit_format <- 1L
+# no `version` (format 0), format 1 fits no discrepancy model; both are
+# upgraded by what they lack.
+fbc_fit_format <- 2L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -199,9 +200,14 @@ fbc_problems <- function(x) {
   # the layout the compiled core gets is the model description's for these
   # data (R/model.R)
   sc <- x$scale
-  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q))) {
-    return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d and q = %d (offset and length by class).",
-                          sc$p, sc$q)))
+  disc <- discrepancy_name(spec$model$discrepancy)
+  if (length(disc) != 1L || is.na(disc)) {
+    return(c(out, sprintf("`spec$model$discrepancy` must be a discrepancy code (%s).",
+                          paste(sprintf("%d for %s", discrepancy_codes, names(discrepancy_codes)), collapse = ", "))))
+  }
+  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc))) {
+    return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
+                          sc$p, sc$q, disc)))
   }
   vars <- phi_vars(spec)
   if (!identical(colnames(Phi), vars)) {
@@ -251,8 +257,9 @@ upgrade_fit <- function(x, call) {
       i = "Update FBC to use it."
     ), call = call)
   }
-  # format 0: every fit made before the version existed. What each earlier
-  # version left out:
+  # format 0: every fit made before the version existed; format 1: before
+  # the discrepancy models. What each earlier version left out (a step
+  # changes nothing a fit already has):
   spec <- x$spec
   s <- x$settings
   sc <- x$scale
@@ -260,9 +267,11 @@ upgrade_fit <- function(x, call) {
   #   exponential on both GPs, the algebra chosen by the design)
   # - and the layout of phi (before R handed it to the compiled core: the
   #   one layout there was, which the model description still gives)
+  # - the discrepancy model (format 1, before the choice: the bias GP)
   mc <- spec$model
   spec$model <- compiled_model(sc$p, sc$q, mc$kernS %||% 1L, mc$kernB %||% 1L,
-                               mc$algebra %||% 0L)
+                               mc$algebra %||% 0L,
+                               discrepancy_name(mc$discrepancy %||% discrepancy_codes[["gp"]]))
   # - the column names' use (before columns were matched by name: by
   #   position)
   if (is.null(sc$named)) sc$named <- FALSE
@@ -280,6 +289,7 @@ upgrade_fit <- function(x, call) {
   s$moves$params <- s$moves$params %||% spec$vars
   s$kernelS <- s$kernelS %||% "powexp"
   s$kernelB <- s$kernelB %||% "powexp"
+  s$discrepancy <- s$discrepancy %||% "gp"
   s$algebra <- s$algebra %||% "auto"
   s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, sc$p, spec$model)
   # - the chains (before several chains: one, its state at the top of

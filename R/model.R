@@ -21,6 +21,8 @@
 #   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
+#   bias     part of the discrepancy (the bias GP): no parameters under
+#            calibrate(discrepancy = "none")
 #   label    how plots and messages name the class
 model_classes <- data.frame(
   class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "sigma2S", "sigma2B", "sigma2E", "muB"),
@@ -31,6 +33,7 @@ model_classes <- data.frame(
   move   = c("each", "sim", "sim", "bias", "bias", "sim", "bias", "single", "gibbs"),
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
   smooth = c("", "", "S", "", "B", "", "", "", ""),
+  bias   = c(FALSE, FALSE, FALSE, TRUE, TRUE, FALSE, TRUE, FALSE, TRUE),
   label  = c("calibration parameter", "simulator GP scale", "simulator GP smoothness",
              "bias GP scale", "bias GP smoothness", "simulator GP variance",
              "bias GP variance", "measurement error variance", "bias GP mean"),
@@ -52,17 +55,25 @@ param_classes <- model_classes$class
 class_domain <- stats::setNames(model_classes$domain, model_classes$class)
 class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
 
+# The discrepancy models of calibrate(discrepancy =) and their codes in the
+# compiled core (src/fbc.h, enum Discrepancy).
+discrepancy_codes <- c(gp = 0L, none = 1L)
+discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
+
 # How many parameters each class has with p experimental and q calibration
-# inputs (named by class, in the table's order).
-class_sizes <- function(p, q) {
+# inputs under the discrepancy model `discrepancy` (named by class, in the
+# table's order; the bias classes have none without a bias).
+class_sizes <- function(p, q, discrepancy = "gp") {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L)
-  stats::setNames(as.integer(n[model_classes$over]), model_classes$class)
+  n <- as.integer(n[model_classes$over])
+  n[model_classes$bias & discrepancy == "none"] <- 0L
+  stats::setNames(n, model_classes$class)
 }
 
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
-param_indices <- function(p, q) {
-  sizes <- class_sizes(p, q)
+param_indices <- function(p, q, discrepancy = "gp") {
+  sizes <- class_sizes(p, q, discrepancy)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -70,16 +81,20 @@ param_indices <- function(p, q) {
 
 # Parameter names in the order of phi: the class name, with an index when
 # the class expands over inputs.
-param_names <- function(p, q) {
-  sizes <- class_sizes(p, q)
+param_names <- function(p, q, discrepancy = "gp") {
+  sizes <- class_sizes(p, q, discrepancy)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
-    if (model_classes$over[i] == "one") cls else paste0(cls, seq_len(sizes[i]))
+    if (sizes[i] == 0L) character(0)
+    else if (model_classes$over[i] == "one") cls
+    else paste0(cls, seq_len(sizes[i]))
   }), use.names = FALSE)
 }
 
 # The class of each parameter of phi.
-param_class_of <- function(p, q) rep(model_classes$class, class_sizes(p, q))
+param_class_of <- function(p, q, discrepancy = "gp") {
+  rep(model_classes$class, class_sizes(p, q, discrepancy))
+}
 
 # The classes that are not parameters for these correlation families: the
 # smoothness of a GP whose family has none (see ?correlation).
@@ -90,8 +105,8 @@ absent_classes <- function(kernS, kernB) {
 
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
-layout_codes <- function(p, q) {
-  idx <- param_indices(p, q)
+layout_codes <- function(p, q, discrepancy = "gp") {
+  idx <- param_indices(p, q, discrepancy)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -100,10 +115,12 @@ layout_codes <- function(p, q) {
 
 # The model description the compiled entry points take: the correlation
 # families of the simulator and bias GPs (kernel_codes()), the algebra
-# (0 auto, 1 dense) and the layout of phi.
-compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L) {
-  c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra)),
-    layout_codes(p, q))
+# (0 auto, 1 dense), the discrepancy model (discrepancy_codes) and the
+# layout of phi.
+compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp") {
+  c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
+         discrepancy = discrepancy_codes[[discrepancy]]),
+    layout_codes(p, q, discrepancy))
 }
 
 # The compiled entry points, each with the model description attached. The

@@ -24,7 +24,8 @@
 #' @param x An `fbc` object from [calibrate()].
 #' @param parameter The parameter class: one of `"kappa"`, `"thetaS"`,
 #'   `"alphaS"`, `"thetaB"`, `"alphaB"`, `"sigma2S"`, `"sigma2B"`,
-#'   `"sigma2E"`, `"muB"`.
+#'   `"sigma2E"`, `"muB"` (the bias's classes only with a bias GP, the
+#'   smoothness classes only for a family that has one).
 #' @param type `"density"`, `"trace"` or `"fits"`.
 #' @param xlab For `"fits"`, the names of the experimental inputs (one per
 #'   input; default the column names of the field data, else `x1`, ..., `xp`).
@@ -53,6 +54,12 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
+  if (!length(vars) && parameter %in% model_classes$class[model_classes$bias]) {
+    cli::cli_abort(c(
+      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} has no bias GP.",
+      i = "Use {.code discrepancy = \"gp\"} in {.fn calibrate} to sample the bias."
+    ))
+  }
   if (!length(vars)) {
     K <- kernel_arg(parameter)
     cli::cli_abort(c(

@@ -1,9 +1,11 @@
 #' Print a calibration
 #'
-#' Shows a compact header (data sizes, the names of the calibration inputs,
-#' the MCMC settings, the range of the acceptance rates, the correlation
-#' families of the simulator and bias GPs (`kernelS`, `kernelB` of
-#' [calibrate()]) and the algebra of
+#' Shows a compact header (the discrepancy model: Kennedy-O'Hagan's bias GP
+#' or none, see `discrepancy` in [calibrate()]; data sizes, the names of the
+#' calibration inputs, the MCMC settings, the range of the acceptance rates,
+#' the correlation families of the simulator and bias GPs (`kernelS`,
+#' `kernelB` of [calibrate()]; the bias's only when there is one) and the
+#' algebra of
 #' the simulator block: Kronecker on a product design, else dense; see
 #' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
@@ -23,7 +25,9 @@ print.fbc <- function(x, digits = 3, ...) {
   x <- check_fbc(x, "x")
   s <- x$settings
   sc <- x$scale
-  cat("<fbc> Full Bayesian calibration (Kennedy-O'Hagan)\n")
+  gp <- s$discrepancy == "gp"
+  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n",
+              if (gp) "Kennedy-O'Hagan" else "no discrepancy: y_f = eta(x, kappa) + eps"))
   cat(sprintf("  data: n = %d field, m = %d simulator runs; p = %d, q = %d\n",
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
   cal <- sc$names$calibration
@@ -49,7 +53,7 @@ print.fbc <- function(x, digits = 3, ...) {
                   if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
     }
   }
-  cat(sprintf("  kernels: simulator %s, bias %s\n", s$kernelS, s$kernelB))
+  cat(sprintf("  kernels: simulator %s%s\n", s$kernelS, if (gp) paste(", bias", s$kernelB) else ""))
   alg <- s$simAlgebra
   cat(sprintf("  algebra: %s\n", if (identical(alg$name, "Kronecker"))
     sprintf("Kronecker, %d x %d (experimental x calibration settings)", alg$dims[1], alg$dims[2])

@@ -29,6 +29,28 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   hypers
 }
 
+# The hyperparameter priors of a model without a bias (discrepancy =
+# "none"): the bias classes have no parameters, so a prior the user gave
+# for one is ignored, with a warning naming the arguments.
+discrepancy_hypers <- function(hypers, discrepancy, call = parent.frame()) {
+  if (discrepancy == "gp") return(hypers)
+  default <- set_hyperPriors()
+  bias <- model_classes$class[model_classes$bias]
+  given <- unlist(lapply(bias, function(cls) {
+    g <- !mapply(identical, hypers[[cls]], default[[cls]])
+    sprintf("`%s%s`", cls, c("Dist", "Init", "P1", "P2")[g])
+  }))
+  if (length(given)) {
+    cli::cli_warn(c(
+      sprintf("`discrepancy = \"%s\"` has no bias GP: %s of `hypers` %s ignored.", discrepancy,
+              paste(given, collapse = ", "), if (length(given) > 1L) "are" else "is"),
+      i = "Use `discrepancy = \"gp\"` to sample the bias."
+    ), call = call)
+  }
+  hypers[bias] <- list(NULL)
+  hypers
+}
+
 # The columns of phi (the sampler's parameter vector, param_names()) that
 # Phi holds: all but the classes these correlation families do not have
 # (absent_classes()).
@@ -63,11 +85,14 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 }
 
 # Expands every class to one row per parameter: the C++ prior table, the
-# initial values on the sampler's scale and the initial proposal SDs.
-build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) {
-  sizes <- class_sizes(p, q)
+# initial values on the sampler's scale and the initial proposal SDs. The
+# classes without parameters under `discrepancy` have no prior.
+build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp",
+                         call = parent.frame()) {
+  sizes <- class_sizes(p, q, discrepancy)
+  classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
-  for (cls in param_classes[-1]) {
+  for (cls in classes[-1]) {
     priors[[cls]] <- check_class_spec(hypers[[cls]], cls, sizes[[cls]], call = call)
   }
   cal <- p + seq_len(q)
@@ -94,7 +119,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) 
       }
     }
   }
-  for (cls in param_classes[-1]) {
+  for (cls in classes[-1]) {
     s <- priors[[cls]]
     miss <- is.na(s$init)
     priors[[cls]]$init[miss] <- as.numeric(unlist(Map(prior_center, s$dist[miss], s$p1[miss], s$p2[miss])))
@@ -102,7 +127,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) 
 
   rows <- list()
   init <- numeric(0)
-  for (cls in param_classes) {
+  for (cls in classes) {
     s <- priors[[cls]]
     for (j in seq_along(s$dist)) {
       if (cls == "kappa") {
@@ -120,12 +145,12 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, call = parent.frame()) 
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q)
-  cls_of <- param_class_of(p, q)
+  vars <- param_names(p, q, discrepancy)
+  cls_of <- param_class_of(p, q, discrepancy)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
-       model = compiled_model(p, q))
+       model = compiled_model(p, q, discrepancy = discrepancy))
 }
 
 # One log-density function per parameter, in the units it is reported in.

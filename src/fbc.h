@@ -37,6 +37,10 @@ enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52
 // whenever the simulator design allows it, or always the dense one.
 enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
 
+// The discrepancy model (R/model.R, discrepancy_codes): the KOH bias GP, or
+// none (then the bias classes have length 0 in the layout).
+enum Discrepancy { DS_GP = 0, DS_NONE = 1 };
+
 // Parameter classes of the model. Where each lives in phi is not assumed
 // here: R's model description (R/model.R, model_classes) owns the layout and
 // hands the offsets and lengths over by name (read_model()).
@@ -55,16 +59,16 @@ struct Layout {
   std::vector<int> cls, pos;
 };
 
-// The model as the compiled entry points receive it from R (model_codes()
-// in R/model.R): correlation families of the two GPs, the algebra choice
-// and the layout of phi.
+// The model as the compiled entry points receive it from R
+// (compiled_model() in R/model.R): correlation families of the two GPs, the
+// algebra choice, the discrepancy model and the layout of phi.
 struct Model {
-  int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO;
+  int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
 };
-// Reads list(kernS, kernB, algebra, offset, length) (offset and length
-// integer vectors named by class) and checks that the layout tiles phi
-// with the lengths p and q imply.
+// Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
+// and length integer vectors named by class) and checks that the layout
+// tiles phi with the lengths p, q and the discrepancy model imply.
 Model read_model(const Rcpp::List& model, int p, int q);
 
 // priors.cpp -----------------------------------------------------------------
@@ -145,7 +149,7 @@ struct Touch {
   bool biasCorr = false;  // thetaB/alphaB moved
   bool cross = false;     // Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk) and Rs(Xs,Xk)' Ds^-1 ys
   bool field = false;     // the Schur complement S and its factor
-  bool scale = false;     // sigma2S, sigma2B, sigma2E multiplied by one factor
+  bool scale = false;     // the variances multiplied by one factor
   void reset(int nSim, int nBias) {
     simPow.assign(nSim, 0); biasPow.assign(nBias, 0);
     simCorr = expDim = calDim = cChange = biasCorr = cross = field = scale = false;
@@ -164,12 +168,16 @@ struct Touch {
 // Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
 // kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
 // sigma2B, sigma2E, muB at the offsets of `layout` (iKappa ... iMuB).
+// Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB have length
+// 0: their offsets are never read.
 class Posterior {
 public:
   virtual ~Posterior() {}
   int n, m, p, q, d;
   Layout layout;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB;
+  bool bias;                // the model has the bias GP
+  std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 
   // Set phi and compute every block; false if a covariance is not PD.
@@ -182,8 +190,9 @@ public:
     one_[0] = j; oneVal_[0] = value;
     return propose(one_, oneVal_);
   }
-  // Log-likelihood with sigma2S, sigma2B and sigma2E all multiplied by c:
-  // C(c) = c C, so log|C| and the quadratic form follow in closed form.
+  // Log-likelihood with the variances `scaled` (sigma2S, sigma2B if any,
+  // sigma2E) all multiplied by c: C(c) = c C, so log|C| and the quadratic
+  // form follow in closed form.
   virtual double proposeScale(double c) = 0;
   virtual void accept() = 0;
   virtual void reject() = 0;
@@ -205,13 +214,14 @@ public:
   virtual std::string algebra() const = 0;
 
 protected:
-  void set_sizes(int n_, int m_, int p_, int q_, const Layout& lay);
+  void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 };
 
 // Everything but the simulator block: the field block, its Schur
-// complement S = sigma2S Q + sigma2B Rb + sigma2E I with
+// complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a
+// bias) with
 // Q = Rs(Xk,Xk) - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk), the residual and the moves'
 // bookkeeping (model.cpp). The simulator algebra behind it supplies
 // log|Ds|, ys' Ds^-1 ys, Q and Rs(Xs,Xk)' Ds^-1 ys through the sim*() hooks.

@@ -3,7 +3,8 @@
 // With y = (yf, ys), Ds = Rs(Xs,Xs) + nugget I, Bs = Rs(Xs,Xk),
 //   Q = Rs(Xk,Xk) - Bs' Ds^-1 Bs,  wz = Bs' Ds^-1 ys,
 //   S = sigma2S Q + sigma2B Rb + sigma2E I   (Schur complement of D in C),
-// LS = chol(S), v = LS^-1 (yf - muB - wz):
+// LS = chol(S), v = LS^-1 (yf - muB - wz); without a bias (discrepancy
+// "none") S = sigma2S Q + sigma2E I and v = LS^-1 (yf - wz):
 //   log L = -0.5 [ (n+m) log 2pi + m log sigma2S + log|Ds| + log|S|
 //                  + ys' Ds^-1 ys / sigma2S + v'v ].
 // log|Ds|, ys' Ds^-1 ys, Q and wz come from the simulator algebra (dense.cpp,
@@ -15,27 +16,37 @@
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
-void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Layout& lay) {
+void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   n = n_; m = m_; p = p_; q = q_;
+  const Layout& lay = model.layout;
   layout = lay;
+  bias = model.discrepancy == DS_GP;
   d = lay.d;
   iKappa = lay.offset[PC_KAPPA]; iThetaS = lay.offset[PC_THETAS];
   iAlphaS = lay.offset[PC_ALPHAS]; iThetaB = lay.offset[PC_THETAB];
   iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
   iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
   iMuB = lay.offset[PC_MUB];
+  scaled.clear();
+  for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
+    if (lay.length[c] > 0) scaled.push_back(lay.offset[c]);
   phi.zeros(d);
 }
 
 Model read_model(const Rcpp::List& model, int p, int q) {
   static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
                                         "sigma2S", "sigma2B", "sigma2E", "muB"};
-  // what each class expands over: q, p + q, p or one
-  const int want[PC_COUNT] = {q, p + q, p + q, p, p, 1, 1, 1, 1};
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
+  out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
+  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE)
+    Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
+  // what each class expands over: q, p + q, p or one; the bias classes
+  // (thetaB, alphaB, sigma2B, muB) nothing without a bias
+  const int b = out.discrepancy == DS_GP ? 1 : 0;
+  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, 1, b};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -87,7 +98,7 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
                                const arma::vec& ys, double nugget, const Model& model)
   : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(model.kernS),
     kernB_(model.kernB) {
-  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model.layout);
+  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
   touch_.reset(p + q, p);
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
   // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
@@ -185,11 +196,14 @@ double SchurPosterior::propose(const std::vector<int>& idx, const arma::vec& val
 // C -> c C: log|Ds| and z'z are unchanged, S -> c S (LS -> sqrt(c) LS,
 // log|S| + n log c, v'v / c) and sigma2S -> c sigma2S.
 double SchurPosterior::proposeScale(double c) {
-  oldIdx_.assign({iSigma2S, iSigma2B, iSigma2E});
-  oldVal_ = {phi[iSigma2S], phi[iSigma2B], phi[iSigma2E]};
+  oldIdx_ = scaled;
+  oldVal_.set_size(scaled.size());
+  for (size_t i = 0; i < scaled.size(); ++i) {
+    oldVal_[i] = phi[scaled[i]];
+    phi[scaled[i]] *= c;
+  }
   touch_.reset(p + q, p);
   touch_.scale = true;
-  phi[iSigma2S] *= c; phi[iSigma2B] *= c; phi[iSigma2E] *= c;
   const double s2S = phi[iSigma2S];
   if (!(s2S > 0) || !std::isfinite(c)) return R_NegInf;
   const double ldDs = ldDs_.cur(), zz = zz_.cur();
@@ -203,7 +217,7 @@ double SchurPosterior::proposeScale(double c) {
 
 void SchurPosterior::accept() {
   if (touch_.scale) {
-    const double c = phi[iSigma2S] / oldVal_[0];
+    const double c = phi[oldIdx_[0]] / oldVal_[0];  // sigma2S comes first
     LS_.alt() = std::sqrt(c) * LS_.cur();
   }
   flip(touch_);
@@ -233,9 +247,11 @@ void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
 // Targets, by type: 1 field (eta + delta + eps), 2 mean (eta + delta),
 // 3 simulator (eta), 4 bias (delta, ks = 0):
 //   kf = s2S Rs(Xk, xk*) [types 1-3] + s2B Rb(Xf, x*) [types 1, 2, 4].
+// Without a bias, s2B = muB = 0: the bias is exactly 0 (mean and variance).
 void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var) {
   const int b = Xnew.n_rows;
-  const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E], muB = phi[iMuB];
+  const double s2S = phi[iSigma2S], s2E = phi[iSigma2E];
+  const double s2B = bias ? phi[iSigma2B] : 0.0, muB = bias ? phi[iMuB] : 0.0;
   double mu0 = muB, v0 = s2B;
   switch (type) {
     case 1: v0 = s2S + s2B + s2E; break;
@@ -243,7 +259,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     case 3: mu0 = 0.0; v0 = s2S; break;
     default: break;
   }
-  const bool simPart = type != 4, biasPart = type != 3;
+  const bool simPart = type != 4, biasPart = type != 3 && bias;
   // covariances with the distinct field rows (Rs(Xk, xk*) involves the
   // experimental inputs only: the calibration inputs coincide)
   arma::mat Kf(nu_, b, arma::fill::zeros), G;
@@ -277,7 +293,8 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double SchurPosterior::evaluate(const Touch& t) {
-  const double s2S = phi[iSigma2S], s2B = phi[iSigma2B], s2E = phi[iSigma2E];
+  const double s2S = phi[iSigma2S], s2E = phi[iSigma2E];
+  const double s2B = bias ? phi[iSigma2B] : 0.0;
   // D = sigma2S Ds is positive definite only for sigma2S > 0.
   if (!(s2S > 0)) return R_NegInf;
 
@@ -308,9 +325,9 @@ double SchurPosterior::evaluate(const Touch& t) {
     Q = &Q_.alt(); wz = &wz_.alt();
   }
 
-  // Bias correlation Rb over the experimental inputs.
+  // Bias correlation Rb over the experimental inputs (none without a bias).
   const arma::mat* Rb = &Rb_.cur();
-  if (t.biasCorr) {
+  if (t.biasCorr && bias) {
     const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
     std::vector<const arma::mat*>& P = ptrB_;
@@ -330,7 +347,7 @@ double SchurPosterior::evaluate(const Touch& t) {
   double ldS = ldS_.cur();
   if (t.field) {
     // S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) + s2E [i = j], from the
-    // lower triangles of the distinct-row Q and Rb
+    // lower triangles of the distinct-row Q and Rb (no Rb without a bias)
     arma::mat& S = LS_.alt();
     for (int j = 0; j < n; ++j) {
       const int gj = grp_[j];
@@ -338,7 +355,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       for (int i = j; i < n; ++i) {
         const int gi = grp_[i];
         const int r = std::max(gi, gj), c = std::min(gi, gj);
-        sc[i] = s2S * Q->at(r, c) + s2B * Rb->at(r, c);
+        sc[i] = s2S * Q->at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
       }
       sc[j] += s2E;
     }
@@ -348,7 +365,7 @@ double SchurPosterior::evaluate(const Touch& t) {
   }
 
   // Residual of the field block given the simulator block.
-  const double muB = phi[iMuB];
+  const double muB = bias ? phi[iMuB] : 0.0;
   for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[grp_[j]];
   solve_lower(*LS, u_);
   const double vv = arma::dot(u_, u_);
@@ -379,8 +396,8 @@ void SchurPosterior::flip(const Touch& t) {
 // row, so that the cached block updates can be checked against a dense
 // formula. `groups[j]` > 0 puts parameter j in a group moved jointly (one
 // propose() of the group's changed coordinates); 0 moves it alone.
-// scale: when sigma2S, sigma2B, sigma2E all change by one factor, move them
-// by proposeScale(). decoys: before each move, propose another value and
+// scale: when the scaled variances (Posterior::scaled) all change by one
+// factor, move them by proposeScale(). decoys: before each move, propose another value and
 // reject it. model: the model description (read_model()).
 // [[Rcpp::export(.loglik_path_c)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
@@ -415,7 +432,7 @@ Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
   for (arma::uword r = 1; r < phis.n_rows; ++r) {
     const arma::vec row = phis.row(r).t();
     if (scale) {
-      const int v[3] = {post.iSigma2S, post.iSigma2B, post.iSigma2E};
+      const std::vector<int>& v = post.scaled;
       const double c = row[v[0]] / post.phi[v[0]];
       bool same = c != 1.0;
       for (int j : v) same = same && std::fabs(row[j] / post.phi[j] - c) < 1e-12 * c;

@@ -18,11 +18,12 @@
 //   acceptance 0.234 (0.44 for one parameter);
 // * muB (gaussian prior N(m0, s0^2)): drawn exactly from its full conditional,
 //   log L being Gaussian in muB (Posterior::muBQuadratic): precision
-//   a'a + 1/s0^2, mean (a'b + m0/s0^2) / precision;
-// * scale (after the sweep): sigma2S, sigma2B, sigma2E all multiplied by
-//   c = exp(e), e ~ N(0, exp(2 s)): a joint random walk on their logs, whose
-//   likelihood needs no factorization (C -> c C); log r adds the three prior
-//   ratios and the Jacobian 3e. s adapts towards 0.44 like a single site.
+//   a'a + 1/s0^2, mean (a'b + m0/s0^2) / precision (no muB without a bias);
+// * scale (after the sweep): the k variances that exist (sigma2S, sigma2B
+//   with a bias, sigma2E) all multiplied by c = exp(e), e ~ N(0, exp(2 s)):
+//   a joint random walk on their logs, whose likelihood needs no
+//   factorization (C -> c C); log r adds the k prior ratios and the
+//   Jacobian k e. s adapts towards 0.44 like a single site.
 // One adaptation rule for every adapted scale: at the end of burn-in batch b
 // (every 50 sweeps), log s moves by +min(0.5, 1/sqrt(b)) when the batch's
 // acceptance rate is above the move's target, by -min(0.5, 1/sqrt(b))
@@ -271,28 +272,31 @@ struct GibbsMuBMove : Move {
   }
 };
 
-// sigma2S, sigma2B, sigma2E multiplied by one factor c = exp(e).
+// The variances that exist (sigma2S, sigma2B with a bias, sigma2E)
+// multiplied by one factor c = exp(e): Jacobian c^k for k variances.
 struct ScaleMove : Move {
   explicit ScaleMove(const Posterior& post) {
-    idx = {post.iSigma2S, post.iSigma2B, post.iSigma2E};
+    idx = post.scaled;
     name = "scale";
   }
   const char* kind() const override { return "scale"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const double e = std::exp(ch.scaleLogsd) * R::norm_rand(), c = std::exp(e);
-    double lpNew[3], lpDiff = 0;
-    for (int i = 0; i < 3; ++i) {
+    const int k = idx.size();
+    std::vector<double> lpNew(k);
+    double lpDiff = 0;
+    for (int i = 0; i < k; ++i) {
       const int j = idx[i];
       lpNew[i] = ch.pr(j, post.phi[j] * c);
       lpDiff += lpNew[i] - ch.lp[j];
     }
     if (!std::isfinite(lpDiff)) return false;
     const double llNew = post.proposeScale(c);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + 3 * e) {
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + k * e) {
       post.accept();
       ch.ll = llNew;
-      for (int i = 0; i < 3; ++i) ch.lp[idx[i]] = lpNew[i];
+      for (int i = 0; i < k; ++i) ch.lp[idx[i]] = lpNew[i];
       return true;
     }
     post.reject();
@@ -337,13 +341,13 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   const int d = post.d;
   const bool scaleMove = Rcpp::as<bool>(moves["scale"]);
   const bool gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
-  if (gibbsMuB && !(pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
+  if (gibbsMuB && !(post.bias && pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
                     pr.b[post.iMuB] == 1))
     Rcpp::stop("the exact muB move needs a gaussian prior on muB");
   if (scaleMove)
-    for (int j : {post.iSigma2S, post.iSigma2B, post.iSigma2E})
+    for (int j : post.scaled)
       if (pr.family[j] == PF_FIXED)
-        Rcpp::stop("the scale move needs sigma2S, sigma2B and sigma2E all sampled");
+        Rcpp::stop("the scale move needs the variances (sigma2S, sigma2B, sigma2E) all sampled");
 
   const Rcpp::List blockSpec = moves["blocks"];
   const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
@@ -391,7 +395,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
       const std::string nm(blockNames[b]);
       schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
-    } else if (j == post.iMuB && gibbsMuB) {
+    } else if (post.bias && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j));
       schedule.back()->name = ch.param_name(j);
     } else {

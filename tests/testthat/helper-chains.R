@@ -30,7 +30,7 @@ run_sampler <- function(dat, sp, sampler, nIter, nBurn, thinning, state = NULL) 
   moves <- FBC:::sampler_moves(sampler, sp)
   state <- state %||% FBC:::initial_state(sp$init, sp)
   FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), moves, state,
-                    nIter, nBurn, thinning, 1e-6, NULL)
+                    nIter, nBurn, thinning, 1e-6, NULL, model = sp$model)
 }
 `%||%` <- function(x, y) if (is.null(x)) y else x
 

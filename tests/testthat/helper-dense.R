@@ -30,33 +30,38 @@ kernel_code <- function(kernel) {
 all_kernels <- c("powexp", "gaussian", "matern32", "matern52")
 
 # Unpacks phi (scaled space, kappa on [0, 1]) into named pieces, one per
-# parameter class, at the positions FBC's model description gives.
-unpack_phi <- function(phi, p, q) {
-  lapply(FBC:::param_indices(p, q), function(i) phi[i])
+# parameter class, at the positions FBC's model description gives (under
+# discrepancy "none" the bias classes are empty).
+unpack_phi <- function(phi, p, q, discrepancy = "gp") {
+  lapply(FBC:::param_indices(p, q, discrepancy), function(i) phi[i])
 }
 
 # The full (n + m) x (n + m) covariance of y = (yf, ys) (vignette 2.4).
-# kernS, kernB: the simulator and bias GPs' correlation families.
-dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp") {
+# kernS, kernB: the simulator and bias GPs' correlation families;
+# discrepancy "none": no bias block (y_f = eta(x, kappa) + eps).
+dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp",
+                      discrepancy = "gp") {
   n <- nrow(Xf); m <- nrow(Xs); p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q)
+  th <- unpack_phi(phi, p, q, discrepancy)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   X <- rbind(Xk, Xs)
   C <- th$sigma2S * dense_corr(X, X, th$thetaS, th$alphaS, kernS)
   f <- seq_len(n); s <- n + seq_len(m)
   C[s, s] <- C[s, s] + th$sigma2S * nugget * diag(m)
-  C[f, f] <- C[f, f] + th$sigma2B * dense_corr(Xf, Xf, th$thetaB, th$alphaB, kernB) +
-    th$sigma2E * diag(n)
+  C[f, f] <- C[f, f] + th$sigma2E * diag(n)
+  if (discrepancy == "gp") {
+    C[f, f] <- C[f, f] + th$sigma2B * dense_corr(Xf, Xf, th$thetaB, th$alphaB, kernB)
+  }
   C
 }
 
 # Gaussian log-likelihood of (yf, ys) via one dense Cholesky factor.
 dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
-                         kernB = "powexp") {
+                         kernB = "powexp", discrepancy = "gp") {
   p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q)
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB)
-  r <- c(yf - th$muB, ys)
+  th <- unpack_phi(phi, p, q, discrepancy)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
+  r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)
   -0.5 * (length(r) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
@@ -73,9 +78,9 @@ random_koh_data <- function(n, m, p, q, seed) {
 # A random parameter vector inside every domain: each class drawn by its
 # domain in FBC's model description (kappa uniform on [0, 1], positive
 # classes Gamma(2, 2) (+ 0.05 for the variances), smoothness on [1.1, 1.95],
-# the bias mean N(0, 1)).
-random_phi <- function(p, q) {
-  idx <- FBC:::param_indices(p, q)
+# the bias mean N(0, 1)); no bias classes under discrepancy "none".
+random_phi <- function(p, q, discrepancy = "gp") {
+  idx <- FBC:::param_indices(p, q, discrepancy)
   phi <- numeric(sum(lengths(idx)))
   for (cls in names(idx)) {
     k <- length(idx[[cls]])
@@ -91,8 +96,10 @@ random_phi <- function(p, q) {
 # before every move): (thetaS, alphaS, sigma2S), (thetaB, alphaB, sigma2B),
 # and sigma2S, sigma2B, sigma2E scaled by one factor (up 1.7, then 0.3, then
 # back); the compiled log-likelihoods against dense_loglik() at every row.
-expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6) {
-  idx <- FBC:::param_indices(p, q)
+# Under discrepancy "none" there is no bias block and the scale move
+# multiplies sigma2S and sigma2E.
+expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6, discrepancy = "gp") {
+  idx <- FBC:::param_indices(p, q, discrepancy)
   groups <- integer(ncol(phis))
   groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
   groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
@@ -101,8 +108,11 @@ expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6) {
   scaled[2, sig] <- scaled[1, sig] * 1.7
   scaled[3, sig] <- scaled[2, sig] * 0.3
   phis2 <- rbind(phis, scaled, phis[2, ], scaled[3, ])
-  dense2 <- apply(phis2, 1, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, nugget))
+  dense2 <- apply(phis2, 1, function(phi) {
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, nugget, discrepancy = discrepancy)
+  })
   block <- FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis2, nugget, groups = groups,
-                              decoys = TRUE, scale = TRUE)
+                              decoys = TRUE, scale = TRUE,
+                              model = FBC:::compiled_model(p, q, discrepancy = discrepancy))
   testthat::expect_equal(block, dense2, tolerance = 1e-8)
 }

@@ -1,18 +1,23 @@
 # Plain-R GP conditional of a prediction target given y = (yf, ys), built from
 # the dense joint covariance (helper-dense.R) with one explicit solve per
 # target: mean = mu* + k' C^-1 (y - mu), var = v* - k' C^-1 k (scaled space).
-# kernS, kernB: correlation families (dense_corr()).
+# kernS, kernB: correlation families (dense_corr()); discrepancy "none": no
+# bias (its mean and variance 0).
 dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
-                          kernB = "powexp") {
+                          kernB = "powexp", discrepancy = "gp") {
   p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
-  th <- unpack_phi(phi, p, q)
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB)
+  th <- unpack_phi(phi, p, q, discrepancy)
+  if (discrepancy == "none") th[c("muB", "sigma2B")] <- list(0, 0)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
   ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS, kernS)
-  kbias <- rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB, kernB),
-                 matrix(0, m, nrow(Xnew)))
+  kbias <- if (discrepancy == "gp") {
+    rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB, kernB), matrix(0, m, nrow(Xnew)))
+  } else {
+    matrix(0, n + m, nrow(Xnew))
+  }
   k <- switch(type, field = , mean = ksim + kbias, simulator = ksim, bias = kbias)
   mu0 <- if (type == "simulator") 0 else th$muB
   v0 <- switch(type, field = th$sigma2S + th$sigma2B + th$sigma2E,

@@ -22,8 +22,8 @@ designs <- list(c(I = 6, J = 5, p = 1, q = 1), c(I = 5, J = 7, p = 2, q = 1),
 
 # A path from phi0 that moves every class and every dimension, one at a
 # time, then everything at once, then back.
-kron_path <- function(phi0, p, q) {
-  idx <- FBC:::param_indices(p, q)
+kron_path <- function(phi0, p, q, discrepancy = "gp") {
+  idx <- FBC:::param_indices(p, q, discrepancy)
   rows <- list(phi0)
   move <- function(j, value) {
     phi <- rows[[length(rows)]]
@@ -36,14 +36,14 @@ kron_path <- function(phi0, p, q) {
     move(idx$alphaS[k], runif(1, 1.1, 1.95))
     move(idx$kappa[1], runif(1))
   }
-  for (k in seq_len(p)) {
+  for (k in seq_len(length(idx$thetaB))) {  # p with a bias, else none
     move(idx$thetaB[k], rgamma(1, 2, 2))
     move(idx$alphaB[k], runif(1, 1.1, 1.95))
   }
   for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
-  move(idx$muB, rnorm(1))
+  for (j in idx$muB) move(j, rnorm(1))
   move(idx$alphaS[1], 2)
-  rows[[length(rows) + 1]] <- random_phi(p, q)
+  rows[[length(rows) + 1]] <- random_phi(p, q, discrepancy)
   rows[[length(rows) + 1]] <- phi0
   do.call(rbind, rows)
 }

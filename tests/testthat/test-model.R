@@ -21,8 +21,8 @@ test_that("the block log-likelihood from scratch equals the dense one", {
 # change several), visiting every class and every dimension: kappa,
 # thetaS/alphaS in the experimental and the calibration dimensions,
 # thetaB/alphaB, each variance and muB, then back to the start.
-one_move_path <- function(phi0, p, q) {
-  idx <- FBC:::param_indices(p, q)
+one_move_path <- function(phi0, p, q, discrepancy = "gp") {
+  idx <- FBC:::param_indices(p, q, discrepancy)
   rows <- list(phi0)
   move <- function(j, value) {
     phi <- rows[[length(rows)]]
@@ -35,15 +35,15 @@ one_move_path <- function(phi0, p, q) {
     move(idx$alphaS[k], runif(1, 1.1, 1.95))
     move(idx$kappa[1], runif(1))  # kappa after each simulator change
   }
-  for (k in seq_len(p)) {
+  for (k in seq_len(length(idx$thetaB))) {  # p with a bias, else none
     move(idx$thetaB[k], rgamma(1, 2, 2))
     move(idx$alphaB[k], runif(1, 1.1, 1.95))
   }
   for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
-  move(idx$muB, rnorm(1))
+  for (j in idx$muB) move(j, rnorm(1))
   move(idx$alphaS[p + q], 2)  # alpha = 2 and 1 take special branches
-  move(idx$alphaB[1], 1)
-  rows[[length(rows) + 1]] <- random_phi(p, q)  # every coordinate at once
+  for (j in idx$alphaB[1]) move(j, 1)
+  rows[[length(rows) + 1]] <- random_phi(p, q, discrepancy)  # every coordinate at once
   rows[[length(rows) + 1]] <- phi0
   do.call(rbind, rows)
 }
@@ -283,4 +283,73 @@ test_that("a layout that does not fit the data is refused", {
   overlap$offset[["muB"]] <- 0L
   expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = overlap),
                "overlap")
+})
+
+# discrepancy = "none": y_f = eta(x, kappa) + eps, no bias classes in phi.
+# The compiled log-likelihood against dense_loglik(discrepancy = "none")
+# (no bias block, no muB), from scratch and along cached move paths.
+test_that("without a discrepancy the block log-likelihood equals the dense one", {
+  for (s in sizes) {
+    p <- s[["p"]]; q <- s[["q"]]
+    none <- FBC:::compiled_model(p, q, discrepancy = "none")
+    expect_identical(none$discrepancy, 1L)
+    expect_identical(unname(none$length[c("thetaB", "alphaB", "sigma2B", "muB")]), rep(0L, 4))
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 50 + sum(s))
+    for (r in 1:5) {
+      phi <- random_phi(p, q, "none")
+      expect_length(phi, q + 2 * (p + q) + 2)
+      expect_equal(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = none),
+                   dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, discrepancy = "none"),
+                   tolerance = 1e-8)
+    }
+    # cached moves of every class with rejected decoys; joint simulator
+    # moves and the scale move of (sigma2S, sigma2E); replicated inputs
+    dat$Xf <- dat$Xf[c(seq_len(s[["n"]]), 2, 1), , drop = FALSE]
+    dat$yf <- c(dat$yf, rnorm(2))
+    phis <- one_move_path(random_phi(p, q, "none"), p, q, "none")
+    dense <- apply(phis, 1, function(phi) {
+      dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, discrepancy = "none")
+    })
+    path <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE, model = none)
+    expect_equal(path, dense, tolerance = 1e-8)
+    expect_joint_moves_dense(dat, phis, p, q, discrepancy = "none")
+  }
+})
+
+test_that("the compiled core refuses a layout of another discrepancy model", {
+  dat <- random_koh_data(5, 12, 1, 1, seed = 3)
+  gp <- FBC:::compiled_model(1, 1)
+  gp$discrepancy <- 1L  # "none" with the bias classes laid out
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1), 1e-6, model = gp),
+               "thetaB 1 entries where the data need 0")
+  none <- FBC:::compiled_model(1, 1, discrepancy = "none")
+  none$discrepancy <- 0L  # the bias GP without its classes
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
+                           model = none),
+               "thetaB 0 entries where the data need 1")
+  none$discrepancy <- 2L
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
+                           model = none),
+               "unknown discrepancy code 2")
+})
+
+test_that("without a discrepancy the sampler retains dense log-likelihoods and has no bias moves", {
+  p <- 2; q <- 1
+  dat <- random_koh_data(8, 20, p, q, seed = 17)
+  sp <- FBC:::build_priors(list(dist = "beta", init = NA, p1 = 1.1, p2 = 1.1), set_hyperPriors(),
+                           list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
+                           p, q, "none")
+  expect_identical(sp$vars, c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1", "alphaS2",
+                              "alphaS3", "sigma2S", "sigma2E"))
+  mv <- FBC:::sampler_moves("blocks", sp)
+  expect_identical(names(mv$blocks), c("kappa1", "sim"))
+  expect_true(mv$scale)
+  expect_false(mv$gibbsMuB)
+  set.seed(5)
+  res <- run_sampler(dat, sp, "blocks", 260L, 200L, 4L)
+  expect_true(res$scaleAcceptance > 0 && res$scaleAcceptance < 1)
+  dense <- apply(res$draws, 1, function(phi) {
+    dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, discrepancy = "none")
+  })
+  expect_equal(res$logLik, dense, tolerance = 1e-8)
 })
