@@ -29,15 +29,17 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
 # A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
 # at `phi` (sampler scale), so each retained draw equals phi; kernelS,
 # kernelB: correlation families (a family without a smoothness gets no
-# alpha prior: its alpha is not a parameter). `d`: other data on the scaled
-# space (p = 2, q = 1), as random_koh_data() returns them.
+# alpha prior: its alpha is not a parameter); discrepancy: "gp" or "none"
+# (phi then has no bias classes). `d`: other data on the scaled space
+# (p = 2, q = 1), as random_koh_data() returns them.
 fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
-                      d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed)) {
+                      d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed),
+                      discrepancy = "gp") {
   # native units: inputs stretched, response shifted/scaled
   sim <- cbind(y = 3 + 2 * d$ys, x1 = 10 * d$Xs[, 1], x2 = d$Xs[, 2] - 5, t = 4 * d$Xs[, 3])
   field <- cbind(y = 3 + 2 * d$yf, x1 = 10 * d$Xf[, 1], x2 = d$Xf[, 2] - 5)
   sc <- FBC:::fbc_scale(sim, 2)
-  th <- unpack_phi(phi, 2, 1)
+  th <- unpack_phi(phi, 2, 1, discrepancy)
   kap <- sc$xmin[3] + th$kappa * (sc$xmax[3] - sc$xmin[3])
   args <- list(
     thetaSDist = "fixed", thetaSInit = th$thetaS, alphaSDist = "fixed", alphaSInit = th$alphaS,
@@ -47,10 +49,12 @@ fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
     muBDist = "fixed", muBInit = th$muB)
   if (kernelS != "powexp") args[c("alphaSDist", "alphaSInit")] <- NULL
   if (kernelB != "powexp") args[c("alphaBDist", "alphaBInit")] <- NULL
+  if (discrepancy == "none") args[grepl("^(thetaB|alphaB|sigma2B|muB)", names(args))] <- NULL
   hyp <- do.call(set_hyperPriors, args)
   # the random field inputs overhang the random design: the warning is expected
   suppressWarnings(
     calibrate(sim, field, nMCMC = 6, nBurn = 2, thinning = 2, kappaDist = "fixed",
-              kappaInit = kap, hypers = hyp, kernelS = kernelS, kernelB = kernelB),
+              kappaInit = kap, hypers = hyp, kernelS = kernelS, kernelB = kernelB,
+              discrepancy = discrepancy),
     classes = "fbc_extrapolation")
 }

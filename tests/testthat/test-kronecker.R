@@ -101,6 +101,39 @@ test_that("Kronecker moves (single, joint, scale, rejected decoys) keep the dens
   }
 })
 
+test_that("without a discrepancy: Kronecker log-likelihoods, moves and predictions equal the dense ones", {
+  for (s in designs) {
+    p <- s[["p"]]; q <- s[["q"]]
+    none <- FBC:::compiled_model(p, q, discrepancy = "none")
+    noneDense <- FBC:::compiled_model(p, q, algebra = 1L, discrepancy = "none")
+    d <- product_data(s[["I"]], s[["J"]], p, q, n = 5, seed = 90 + sum(s))
+    d$Xf <- d$Xf[c(1:5, 2), , drop = FALSE]  # a replicated field input
+    d$yf <- c(d$yf, rnorm(1))
+    dense_none <- function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = "none")
+    for (r in 1:3) {
+      phi <- random_phi(p, q, "none")
+      expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = none), dense_none(phi),
+                   tolerance = 1e-8)
+    }
+    phis <- kron_path(random_phi(p, q, "none"), p, q, "none")
+    path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = none)
+    expect_equal(path, apply(phis, 1, dense_none), tolerance = 1e-8)
+    expect_joint_moves_dense(d, phis, p, q, discrepancy = "none")
+    Xn <- matrix(runif(4 * p), 4, p)
+    for (t in 1:4) {
+      type <- c("field", "mean", "simulator", "bias")[t]
+      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, t, 1e-6, 2L, model = none)
+      for (i in 1:2) {
+        ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn, type, discrepancy = "none")
+        expect_equal(kron$mean[, i], ref$mean, tolerance = 1e-8)
+        expect_equal(kron$var[, i], ref$var, tolerance = 1e-8)
+      }
+      expect_equal(kron, .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, t, 1e-6, 500L,
+                                      model = noneDense), tolerance = 1e-8)
+    }
+  }
+})
+
 test_that("the sampler on a product design retains dense log-likelihoods", {
   # accept and reject paths of every move of both samplers
   p <- 1; q <- 2

@@ -47,6 +47,30 @@ test_that("every correlation family: predict() is the dense GP conditional", {
   }
 })
 
+test_that("without a discrepancy predict() is the dense GP conditional; the bias is exactly 0", {
+  # dense_predict(discrepancy = "none"): no bias block, no muB
+  set.seed(6)
+  phi <- random_phi(2, 1, "none")
+  fit <- fixed_fit(phi, discrepancy = "none")
+  sc <- fit$scale
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1",
+                                        "alphaS2", "alphaS3", "sigma2S", "sigma2E"))
+  out <- list()
+  for (type in c("field", "mean", "simulator", "bias")) {
+    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+                         scaled_new(Xnew, sc), type, discrepancy = "none")
+    shift <- if (type == "bias") 0 else sc$ymean
+    out[[type]] <- pr <- predict(fit, Xnew, method = "MAP", type = type)
+    expect_equal(pr$pred, shift + sc$ysd * ref$mean, tolerance = 1e-8)
+    expect_equal(pr$se, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+  }
+  expect_identical(out$bias$pred, rep(0, 5))
+  expect_identical(out$bias$se, rep(0, 5))
+  expect_equal(out$mean, out$simulator, tolerance = 1e-12)
+  # the field adds the measurement error variance (scaled space: sigma2E)
+  expect_equal(out$field$se^2, out$mean$se^2 + sc$ysd^2 * phi[length(phi)], tolerance = 1e-10)
+})
+
 test_that("the Bayesian method combines per-draw conditionals by total variance and mixture quantiles", {
   set.seed(3)
   phi <- random_phi(2, 1)
