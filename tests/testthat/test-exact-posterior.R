@@ -52,15 +52,17 @@ marginal_quantile_error <- function(draws, dens, j, x, probs = c(0.1, 0.25, 0.5,
 # last state) against the posterior on a 101-point grid: dense_loglik()
 # with the kernels' plain-R formulas, times the Beta(1.1, 1.1) prior in the
 # scaled kappa; quantiles within 0.15 posterior sd, KS statistic < 0.06.
-expect_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp") {
+# `u`: the grid (finer for a narrow posterior); the fit's discrepancy model.
+expect_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
+                              u = seq(0, 1, length.out = 101)) {
   d <- fit$data
   phi <- fit$state$chains[[1]]$last
   lo <- fit$scale$xmin[2]
   rng <- fit$scale$xmax[2] - lo
-  u <- seq(0, 1, length.out = 101)
   lp <- vapply(u, function(k) {
     phi[1] <- k
-    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB)
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB,
+                 discrepancy = fit$settings$discrepancy)
   }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
   dens <- exp(lp - max(lp))
   kappa <- lo + rng * u
@@ -99,6 +101,20 @@ test_that("Matern families: kappa draws match the grid posterior on the ball dat
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaB1", "sigma2S",
                                         "sigma2B", "sigma2E", "muB"))
   expect_kappa_grid(fit, "matern52", "matern32")
+})
+
+test_that("without a discrepancy, kappa draws match the grid posterior on the ball data", {
+  # the reference: dense_loglik(discrepancy = "none") (no bias block) times
+  # the Beta(1.1, 1.1) prior; the posterior is narrow, so a fine grid
+  hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(3.6, 0.42), alphaSDist = "fixed",
+                         alphaSInit = 1.95, sigma2SDist = "fixed", sigma2SInit = 3.3,
+                         sigma2EDist = "fixed", sigma2EInit = 0.15)
+  set.seed(13)
+  fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
+                   nChains = 1, hypers = hyp, discrepancy = "none")
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
+                                        "sigma2S", "sigma2E"))
+  expect_kappa_grid(fit, u = seq(0, 1, length.out = 1001))
 })
 
 test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
@@ -255,6 +271,44 @@ test_that("the scale move and single-site variance moves match the 3-D grid post
     # ESS of several hundred to thousands: quantile errors ~0.05 sd; grid
     # spacing 0.2 on the log scale adds ~0.03 sd
     expect_lt(max(abs(got - ref)) / stats::sd(x), 0.2, label = names(ix)[a])
+  }
+})
+
+test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches the 2-D grid posterior", {
+  # sigma2S, sigma2E free (InvGamma(3, 1), (3, 0.2)), everything else fixed,
+  # no bias: the scale move multiplies the two variances that exist, with
+  # Jacobian 2e (a Jacobian of 3e would shift these marginals)
+  pr <- small_model_problem(27)
+  hyp <- set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(1.5, 3), alphaSDist = "fixed", alphaSInit = 1.9,
+    sigma2SDist = "inversegamma", sigma2SInit = 1, sigma2SP1 = 3, sigma2SP2 = 1,
+    sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 3, sigma2EP2 = 0.2
+  )
+  set.seed(28)
+  fit <- suppressWarnings(  # field inputs past the random design: expected
+    calibrate(pr$sim, pr$field, nMCMC = 16000, nBurn = 1000, thinning = 3, nChains = 2,
+              kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, discrepancy = "none"),
+    classes = "fbc_extrapolation")
+  expect_true(fit$settings$moves$scale)
+  expect_identical(FBC:::move_report(fit)$parameters[FBC:::move_report(fit)$move == "scale"],
+                   "sigma2S,sigma2E")
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  ix <- unlist(fit$indices[c("sigma2S", "sigma2E")])
+  lg <- seq(-4.5, 2.5, length.out = 71)
+  g <- exp(lg)
+  shape <- c(3, 3); rate <- c(1, 0.2)
+  lp <- outer(seq_along(g), seq_along(g), Vectorize(function(i, j) {
+    phi[ix] <- g[c(i, j)]
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, discrepancy = "none") +
+      sum(shape * log(rate) - lgamma(shape) - (shape + 1) * log(g[c(i, j)]) - rate / g[c(i, j)]) +
+      sum(lg[c(i, j)])  # density of log sigma2 on the log grid
+  }))
+  dens <- exp(lp - max(lp))
+  for (a in 1:2) {
+    err <- marginal_quantile_error(log(fit$Phi[, ix[a]]), dens, a, lg)
+    # ESS in the thousands: quantile errors ~0.05 sd; grid spacing 0.1
+    expect_lt(err, 0.2, label = names(ix)[a])
   }
 })
 
