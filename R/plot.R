@@ -54,7 +54,8 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
-  if (!length(vars) && parameter %in% model_classes$class[model_classes$bias]) {
+  if (!length(vars) && x$settings$discrepancy == "none" &&
+      parameter %in% model_classes$class[model_classes$bias]) {
     cli::cli_abort(c(
       "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} has no bias GP.",
       i = "Use {.code discrepancy = \"gp\"} in {.fn calibrate} to sample the bias."

@@ -58,6 +58,77 @@ test_that("set.seed() reproduces a run and the inputs are not modified", {
   expect_false(identical(a$Phi, d$Phi))
 })
 
+test_that("the default discrepancy model gives the draws it gave before the choice existed", {
+  # reference: the same call with FBC at commit 62c9243 (before
+  # `discrepancy`): its Phi[100, ] and sum(Phi), to 12 significant digits
+  set.seed(7)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1)
+  expect_identical(fit$settings$discrepancy, "gp")
+  expect_equal(unname(fit$Phi[100, ]),
+               c(7.79832811351, 3.14605375608, 0.362741566864, 1.99967461794, 1.99987846678,
+                 0.588393759571, 1.57226685352, 3.95411184451, 0.596029356555, 0.153550863944,
+                 0.73174816915), tolerance = 1e-11)
+  expect_equal(sum(fit$Phi), 2526.33110293876, tolerance = 1e-13)
+  set.seed(7)
+  expect_identical(calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1,
+                             discrepancy = "gp")$Phi, fit$Phi)
+})
+
+test_that("discrepancy = \"none\": no bias parameters anywhere, and every path follows", {
+  set.seed(32)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2,
+                   discrepancy = "none")
+  keep <- c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S", "sigma2E")
+  expect_identical(colnames(fit$Phi), keep)
+  expect_identical(fit$spec$vars, keep)
+  expect_identical(rownames(fit$estimates), keep)
+  expect_identical(names(fit$proposalSD), keep)
+  for (cls in c("thetaB", "alphaB", "sigma2B", "muB")) expect_identical(fit$indices[[cls]], integer(0))
+  expect_identical(fit$settings$discrepancy, "none")
+  expect_identical(fit$spec$model$discrepancy, 1L)
+  # no bias moves; the scale move multiplies sigma2S and sigma2E
+  mv <- FBC:::move_report(fit)
+  expect_identical(mv$move, c("kappa1", "sim", "sigma2E", "scale"))
+  expect_false(fit$settings$moves$gibbsMuB)
+  # the retained log-likelihoods are the plain-R ones without a bias block
+  i <- 7
+  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+                     FBC:::sampler_draws(fit, i)[1, ], discrepancy = "none")
+  expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
+  # print, plots, checks
+  expect_output(print(fit), "no discrepancy: y_f = eta\\(x, kappa\\) \\+ eps")
+  expect_output(print(fit), "kernels: simulator powexp\n")
+  expect_s3_class(plot(fit, "sigma2E"), "ggplot")
+  expect_s3_class(plot(fit, type = "fits"), "ggplot")
+  expect_snapshot(error = TRUE, plot(fit, "sigma2B"))
+  expect_type(convergence_messages(fit), "character")
+  expect_s3_class(FBC:::prior_conflicts(fit), "data.frame")
+  expect_s3_class(ppc_field(fit), "fbc_ppc")
+  expect_s3_class(validate_emulator(fit, method = "MAP"), "fbc_validation")
+  # update() continues the chains with the same columns and model
+  up <- update(fit, nMCMC = 40)
+  expect_identical(colnames(up$Phi), keep)
+  expect_identical(up$settings$discrepancy, "none")
+  expect_identical(up$Phi[up$chain == 1, ][seq_len(sum(fit$chain == 1)), ],
+                   fit$Phi[fit$chain == 1, ])
+  last <- nrow(up$Phi)
+  expect_equal(up$logLik[last],
+               dense_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
+                            FBC:::sampler_draws(up, last)[1, ], discrepancy = "none"),
+               tolerance = 1e-8)
+})
+
+test_that("the discrepancy model is checked, and bias priors without a bias are flagged", {
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, discrepancy = "sgasp"))
+  set.seed(1)
+  expect_snapshot(
+    fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
+                     discrepancy = "none", hypers = set_hyperPriors(sigma2BDist = "fixed",
+                                                                    sigma2BInit = 1e-6))
+  )
+  expect_false("sigma2B" %in% colnames(fit$Phi))
+})
+
 test_that("logPost is the log-likelihood plus the log priors of the draw", {
   set.seed(9)
   fit <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 10)
