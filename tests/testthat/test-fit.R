@@ -12,7 +12,7 @@ old_args <- list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 1L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 2L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
@@ -25,6 +25,31 @@ test_that("a fresh fit carries the current version and its copies of the model d
   up <- update(fit, nMCMC = 20)
   expect_identical(up$version, fit$version)
   expect_identical(up$Phi[up$chain == 1, ][1:20, ], fit$Phi[fit$chain == 1, ])
+})
+
+test_that("a fit of format 1 (before the discrepancy models) upgrades to the bias GP", {
+  set.seed(2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
+  old <- fit
+  old$version$format <- 1L
+  old$settings$discrepancy <- NULL
+  old$spec$model$discrepancy <- NULL
+  up <- FBC:::upgrade_fbc(old)
+  expect_identical(up$settings$discrepancy, "gp")
+  expect_identical(up$spec$model, fit$spec$model)
+  expect_identical(up$Phi, fit$Phi)
+  expect_identical(up$version$format, 2L)
+  # a fit without a bias validates; its layout is the "none" one
+  set.seed(2)
+  none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
+                    discrepancy = "none")
+  expect_identical(FBC:::validate_fbc(none), none)
+  expect_identical(none$spec$model, FBC:::compiled_model(1, 1, discrepancy = "none"))
+  other <- none
+  other$spec$model$discrepancy <- 0L
+  expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
+  other$spec$model$discrepancy <- 5L
+  expect_error(FBC:::validate_fbc(other), "must be a discrepancy code \\(0 for gp, 1 for none\\)")
 })
 
 test_that("validate_fbc() refuses broken objects, naming what is wrong", {
@@ -53,7 +78,7 @@ test_that("validate_fbc() refuses broken objects, naming what is wrong", {
   # a layout of phi other than the model description's for these data
   moved <- fit
   moved$spec$model$offset[["muB"]] <- 0L
-  expect_error(FBC:::validate_fbc(moved), "layout of phi for p = 1 and q = 1")
+  expect_error(FBC:::validate_fbc(moved), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
   # a fit from a newer FBC is refused by the gate of every entry point
   newer <- fit
   newer$version <- list(fbc = "9.0.0", format = 99L)
@@ -67,7 +92,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 1L)
+    expect_identical(fit$version$format, 2L)
     expect_identical(FBC:::validate_fbc(fit), fit)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
@@ -75,8 +100,8 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     # the power exponential on both GPs, the design's algebra, and the one
     # layout of phi there was (the ball data: p = q = 1)
     expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
-    expect_identical(fit$settings[c("kernelS", "kernelB", "nugget")],
-                     list(kernelS = "powexp", kernelB = "powexp", nugget = 1e-6))
+    expect_identical(fit$settings[c("kernelS", "kernelB", "nugget", "discrepancy")],
+                     list(kernelS = "powexp", kernelB = "powexp", nugget = 1e-6, discrepancy = "gp"))
     # every chain continues from where it stopped: iteration 300
     for (st in fit$state$chains) {
       expect_identical(st$sampler$iter, 300L)
@@ -120,7 +145,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 1L)
+    expect_identical(up$version$format, 2L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -173,7 +198,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 1L)
+  expect_identical(fit$version$format, 2L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L
