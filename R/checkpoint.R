@@ -85,7 +85,10 @@ identity_differences <- function(old, new, vars) {
   out <- character()
   if (!identical(old$sim, new$sim)) out <- c(out, "{.arg sim} differs from the checkpoint's simulator runs.")
   if (!identical(old$field, new$field)) out <- c(out, "{.arg field} differs from the checkpoint's field data.")
-  if (!identical(old$priors, new$priors)) {
+  if (!identical(nrow(old$priors$table), nrow(new$priors$table))) {
+    out <- c(out, sprintf("The model has %d parameters in the checkpoint and %d now.",
+                          nrow(old$priors$table), nrow(new$priors$table)))
+  } else if (!identical(old$priors, new$priors)) {
     rows <- vapply(seq_along(vars), function(j) {
       !identical(old$priors$table[j, ], new$priors$table[j, ]) ||
         !identical(old$priors$init[j], new$priors$init[j])

@@ -259,6 +259,11 @@ test_that("a mismatched or corrupt checkpoint is refused and nothing is overwrit
     do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir, kernelS = "matern52"), args))
   })
   expect_identical(dir_md5(dir), md5)
+  # so is another discrepancy model
+  expect_snapshot(error = TRUE, transform = hide, {
+    do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir, discrepancy = "none"), args))
+  })
+  expect_identical(dir_md5(dir), md5)
   # a truncated chain file
   f <- file.path(dir, "chain-2.rds")
   writeBin(readBin(f, "raw", 100), f)
@@ -376,4 +381,26 @@ test_that("a run with another correlation family checkpoints and comes back with
   id <- FBC:::run_identity(ballSim, ballField, fit$spec,
                            list(nMCMC = 1, kernelS = "powexp", kernelB = "powexp"))
   expect_named(id$settings, "nMCMC")
+})
+
+test_that("a run without a discrepancy checkpoints, resumes, and is refused by a \"gp\" call", {
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  args <- list(ballSim, ballField, nMCMC = 120, nBurn = 60, thinning = 2, nChains = 2,
+               discrepancy = "none", checkpoint = dir)
+  set.seed(4)
+  fit <- do.call(calibrate, args)
+  expect_false("sigma2B" %in% colnames(fit$Phi))
+  expect_message(again <- do.call(calibrate, args), "Resuming")
+  expect_identical(again$Phi, fit$Phi)
+  expect_identical(again$settings$discrepancy, "none")
+  # the identity holds the discrepancy model when it is not the default;
+  # the default is left out, so checkpoints written before it still match
+  expect_identical(FBC:::run_identity(ballSim, ballField, fit$spec,
+                                      list(nMCMC = 1, discrepancy = "none"))$settings,
+                   list(nMCMC = 1, discrepancy = "none"))
+  expect_named(FBC:::run_identity(ballSim, ballField, fit$spec,
+                                  list(nMCMC = 1, discrepancy = "gp"))$settings, "nMCMC")
+  args$discrepancy <- NULL
+  expect_error(do.call(calibrate, args), "`discrepancy` is none in the checkpoint and gp now")
 })
