@@ -23,9 +23,9 @@
 #'   above, with parameters `thetaB`, `alphaB`, `sigma2B` and `muB`;
 #' * `"none"`: no discrepancy, \eqn{y_f = \eta(x_f, \kappa) + \epsilon}. The
 #'   bias GP has no parameters: none in `Phi` (nor in `vars`, `estimates`,
-#'   `indices`, whose bias entries are `integer(0)`), no bias moves, and
-#'   `kernelB` is not used. A prior given for a bias parameter in `hypers`
-#'   is ignored with a warning. [predict.fbc()]'s types keep their meaning:
+#'   `indices`, whose bias entries are `integer(0)`), no bias moves. A
+#'   prior given for a bias parameter in `hypers`, or a `kernelB`, is
+#'   ignored with a warning. [predict.fbc()]'s types keep their meaning:
 #'   the bias is exactly 0, so `"mean"` is `"simulator"` and `"field"` adds
 #'   \eqn{\sigma^2_E}.
 #'
@@ -405,7 +405,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   }
   kernelS <- check_kernel(kernelS, "kernelS")
   kernelB <- check_kernel(kernelB, "kernelB")
-  hypers <- discrepancy_hypers(kernel_hypers(hypers, kernelS, kernelB), discrepancy)
+  hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB), kernelS, kernelB)
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)

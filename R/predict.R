@@ -29,6 +29,11 @@
 #'   \eqn{k_f = \sigma^2_B R_b(X_f, x^*)}, \eqn{k_s = 0}, \eqn{\mu^* = \mu_B},
 #'   \eqn{v^* = \sigma^2_B}.
 #'
+#' A fit without a discrepancy (`calibrate(discrepancy = "none")`) has
+#' \eqn{\sigma^2_B = \mu_B = 0} in these formulas: `"bias"` is exactly 0
+#' with standard error 0, `"mean"` equals `"simulator"`, and `"field"` adds
+#' \eqn{\sigma^2_E}.
+#'
 #' \eqn{C^{-1}} is never formed: the Cholesky factors of the simulator block
 #' and of its Schur complement are computed once per draw and shared by a
 #' block of new points (see "Memory and time"). Results are

@@ -11,6 +11,7 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   default <- set_hyperPriors()
   kernels <- c(kernelS = kernelS, kernelB = kernelB)
   for (cls in smooth_classes) {
+    if (is.null(hypers[[cls]])) next  # no such class in this model (discrepancy_hypers())
     kernel <- kernels[[kernel_arg(cls)]]
     if (kernel_has_alpha(kernel)) next
     given <- !mapply(identical, hypers[[cls]], default[[cls]])
@@ -31,9 +32,14 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
 
 # The hyperparameter priors of a model without a bias (discrepancy =
 # "none"): the bias classes have no parameters, so a prior the user gave
-# for one is ignored, with a warning naming the arguments.
-discrepancy_hypers <- function(hypers, discrepancy, call = parent.frame()) {
+# for one, or a bias correlation family, is ignored with a warning naming
+# the arguments.
+discrepancy_hypers <- function(hypers, discrepancy, kernelB, call = parent.frame()) {
   if (discrepancy == "gp") return(hypers)
+  if (kernelB != "powexp") {
+    cli::cli_warn(sprintf("`kernelB = \"%s\"` is not used: `discrepancy = \"%s\"` has no bias GP.",
+                          kernelB, discrepancy), call = call)
+  }
   default <- set_hyperPriors()
   bias <- model_classes$class[model_classes$bias]
   given <- unlist(lapply(bias, function(cls) {

@@ -127,6 +127,11 @@ test_that("the discrepancy model is checked, and bias priors without a bias are 
                                                                     sigma2BInit = 1e-6))
   )
   expect_false("sigma2B" %in% colnames(fit$Phi))
+  expect_snapshot(
+    fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
+                     discrepancy = "none", kernelB = "matern32")
+  )
+  expect_identical(fit$indices$alphaB, integer(0))
 })
 
 test_that("logPost is the log-likelihood plus the log priors of the draw", {
