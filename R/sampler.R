@@ -10,9 +10,10 @@
 # model description's `move` column: index vectors of the jointly moved
 # blocks (1-based, in phi; named by move) and how often each moves per
 # sweep, the scale move (the `scaled` classes that have parameters), the
-# exact draw of the "gibbs" class (when it has a parameter). `large`: a large simulator block on the dense algebra,
-# where a move of the simulator block costs a Cholesky factor of it and a
-# kappa move an m x m x n triangular solve: each moves once a sweep.
+# exact draw of the "gibbs" class (when it has a parameter). `large`: a
+# large simulator block on the dense algebra, where a move of the simulator
+# block costs a Cholesky factor of it and a kappa move an m x m x n
+# triangular solve: each moves once a sweep.
 sampler_moves <- function(sampler, spec, large = FALSE) {
   if (sampler == "single") {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
@@ -41,8 +42,9 @@ sampler_moves <- function(sampler, spec, large = FALSE) {
     blocks = c(each, joint),
     repeats = c(rep(rep_each, length(each)), rep_joint),
     scale = all(free[scaled]),
-    gibbsMuB = length(gibbs) > 0L && all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &
-                     spec$table$b[gibbs] == 1),
+    gibbsMuB = length(gibbs) > 0L &&
+      all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &
+            spec$table$b[gibbs] == 1),
     params = spec$vars
   )
 }

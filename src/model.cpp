@@ -397,8 +397,8 @@ void SchurPosterior::flip(const Touch& t) {
 // formula. `groups[j]` > 0 puts parameter j in a group moved jointly (one
 // propose() of the group's changed coordinates); 0 moves it alone.
 // scale: when the scaled variances (Posterior::scaled) all change by one
-// factor, move them by proposeScale(). decoys: before each move, propose another value and
-// reject it. model: the model description (read_model()).
+// factor, move them by proposeScale(). decoys: before each move, propose
+// another value and reject it. model: the model description (read_model()).
 // [[Rcpp::export(.loglik_path_c)]]
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
                                 const arma::mat& Xs, const arma::vec& ys,
