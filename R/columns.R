@@ -330,8 +330,10 @@ kappa_beyond_messages <- function(x) {
 warn_kappa_beyond <- function(x, rows, call = parent.frame()) {
   b <- kappa_beyond(x, rows)
   if (is.null(b)) return(invisible(FALSE))
-  lines <- sprintf("%s: %s of the draws used, from %s to %s; the simulator design covers %s",
-                   b$label, fmt_share(b$share), fmt_num(b$lower), fmt_num(b$upper), b$range)
+  at <- ifelse(b$lower == b$upper, paste("at", vapply(b$lower, fmt_num, "")),
+               sprintf("from %s to %s", vapply(b$lower, fmt_num, ""), vapply(b$upper, fmt_num, "")))
+  lines <- sprintf("%s: %s of the draws used, %s; the simulator design covers %s",
+                   b$label, fmt_share(b$share), at, b$range)
   cli::cli_warn(c(
     "The prediction uses calibration values beyond the simulator design: there it rests on the emulator's extrapolation.",
     stats::setNames(lines, rep("*", length(lines)))
