@@ -296,12 +296,13 @@ check_kappa_design <- function(kappa, scale, call = parent.frame()) {
 }
 
 # Draws (rows of Phi) with a kappa beyond its design's widened range:
-# data.frame(var, label, range, share, lower, upper) of the calibration
-# parameters with more than `fbc_kappa_beyond_share` of their draws there
-# (lower, upper: the range of those draws).
+# data.frame(var, label, range, share, lower, upper, fixed) of the
+# calibration parameters with more than `fbc_kappa_beyond_share` of their
+# draws there (lower, upper: the range of their draws; fixed: a fixed prior).
 kappa_beyond <- function(x, rows = seq_len(nrow(x$Phi))) {
   des <- kappa_design(x$scale)
   cols <- x$indices$kappa
+  fixed <- phi_spec(x)$table$family[cols] == prior_families[["fixed"]]
   out <- list()
   for (j in seq_along(cols)) {
     v <- x$Phi[rows, cols[j]]
@@ -309,7 +310,7 @@ kappa_beyond <- function(x, rows = seq_len(nrow(x$Phi))) {
     if (mean(far) > fbc_kappa_beyond_share) {
       out[[length(out) + 1L]] <- data.frame(
         var = colnames(x$Phi)[cols[j]], label = des$label[j], range = des$range[j],
-        share = mean(far), lower = min(v), upper = max(v), fixed = stats::var(v) == 0 || length(v) == 1L)
+        share = mean(far), lower = min(v), upper = max(v), fixed = fixed[j])
     }
   }
   if (length(out)) do.call(rbind, out) else NULL
