@@ -1,6 +1,7 @@
 # Reading the user's columns as they meant them: by name when the data carry
-# names, by position otherwise; and saying what the data imply (inputs
-# outside the simulator design, duplicated runs).
+# names (which one is the response included), by position otherwise; and
+# saying what the data imply (inputs and calibration values outside the
+# simulator design, duplicated runs, newdata naming a calibration input).
 
 # Usable column names: present, none missing or empty, none repeated. NULL
 # when the columns are unnamed (the positional contract applies).
@@ -14,10 +15,9 @@ usable_names <- function(x) {
 # response, experimental inputs, calibration inputs. When both carry column
 # names, field's columns are matched by name to sim's response and inputs, in
 # any order; sim's other columns, those field does not have, are the
-# calibration inputs. The response is the one of sim's end columns (first,
-# or last for a sim stored as inputs then output) that field has
-# (response_column()). Otherwise columns are taken by position. Returns
-# list(sim, field, named).
+# calibration inputs; response_column() says which shared column is the
+# response. Otherwise columns are taken by position. Returns list(sim,
+# field, named).
 align_columns <- function(sim, field, call = parent.frame()) {
   sn <- colnames(sim)
   fn <- colnames(field)
@@ -216,18 +216,17 @@ fmt_num <- function(x) format(signif(x, 4), trim = TRUE)
 fbc_kappa_beyond_share <- 0.01
 fbc_kappa_min_mass <- 1e-9
 
-# The design's range of each calibration input, its widened bounds and a
-# names and labels ("g (kappa1)").
+# The design's range of each calibration input, its widened bounds, the
+# inputs' names and labels ("g (kappa1)").
 kappa_design <- function(scale) {
   cal <- scale$p + seq_len(scale$q)
   lo <- scale$xmin[cal]
   hi <- scale$xmax[cal]
   margin <- fbc_field_margin * (hi - lo)
   nm <- scale$names$calibration
-  if (length(nm) != scale$q) nm <- paste0("t", seq_len(scale$q))
   list(lo = lo, hi = hi, lo_wide = lo - margin, hi_wide = hi + margin,
        names = nm, label = sprintf("%s (kappa%d)", nm, seq_len(scale$q)),
-       range = sprintf("%s to %s", fmt_num(lo), fmt_num(hi)))
+       range = sprintf("%s to %s", vapply(lo, fmt_num, ""), vapply(hi, fmt_num, "")))
 }
 
 # At calibrate(): refuses a kappa prior with no support on the design's

@@ -71,3 +71,13 @@ test_that("print() warns about arguments it does not use, and still prints", {
   expect_match(out[1], "<fbc>", fixed = TRUE)
   expect_snapshot(out <- capture.output(print(set_hyperPriors(), all = TRUE)))
 })
+
+test_that("print() names several experimental inputs and the calibration input's design", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))  # columns y, x1, x2, t
+  out <- capture.output(print(fit))
+  expect_identical(out[3], "  response: y; experimental inputs: x1, x2")
+  t <- fit$scale$xmin[3] + c(0, fit$scale$xmax[3] - fit$scale$xmin[3])
+  expect_identical(out[4], sprintf("  calibration input: kappa1 = t (design %s to %s)",
+                                   signif(t[1], 4), signif(t[2], 4)))
+})
