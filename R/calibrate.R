@@ -239,18 +239,26 @@
 #' @section Columns:
 #' When both `sim` and `field` carry column names (matrices with
 #' `colnames()`, data frames), the columns are matched by name, as
-#' [model.frame()] does: the first column of `sim` is the response; the
-#' columns of `field` are that response (under the same name) and the
-#' experimental inputs, in any order; the columns of `sim` that `field` does
-#' not have are the calibration inputs (`kappa1`, ..., `kappaq`, in `sim`'s
-#' order). A column of `field` that `sim` lacks, a `field` without the
-#' response, or a name used twice is refused with the names of both sides.
-#' When either has no usable names (a matrix without column names, or a name
-#' missing), the columns are taken by position: the response first, then the
-#' `p` experimental inputs in the same order in both, then `sim`'s `q`
-#' calibration inputs. The names label the results (`fit$scale$names`,
-#' `print()`, `plot()`), and [predict.fbc()] matches the columns of
-#' `newdata` by name in the same way.
+#' [model.frame()] does: the columns of `field` are the response and the
+#' experimental inputs, in any order, under the names they have in `sim`;
+#' the columns of `sim` that `field` does not have are the calibration
+#' inputs (`kappa1`, ..., `kappaq`, in `sim`'s order). The names alone do not
+#' say which shared column is the response: it is `sim`'s first column when
+#' that is a column of `field` and `sim`'s last column is not (the
+#' documented order: response first, calibration inputs last; `field` in any
+#' order). Otherwise, for a `sim` stored as inputs then output, it is
+#' `field`'s first column when that is `sim`'s first or last column and
+#' `field`'s last column is not the other one (so `sim = ballSim[, c("g",
+#' "h", "t")]` with `ballField` calibrates as `ballSim` does). Any other
+#' case, such as `ballSim[, c("h", "g", "t")]` with `ballField` (either `h`
+#' or `t` could be the response), is refused naming both candidates. A
+#' column of `field` that `sim` lacks, or a name used twice, is refused with
+#' the names of both sides. When either has no usable names (a matrix
+#' without column names, or a name missing), the columns are taken by
+#' position: the response first, then the `p` experimental inputs in the
+#' same order in both, then `sim`'s `q` calibration inputs. The names label
+#' the results (`fit$scale$names`, `print()`, `plot()`), and [predict.fbc()]
+#' matches the columns of `newdata` by name in the same way.
 #'
 #' @section Checks:
 #' Besides refusing malformed data and settings with a message naming the
@@ -261,6 +269,21 @@
 #' they add nothing), refuses run lengths whose retained draws could not be
 #' stored (saying how much memory they would need), and refuses a prior
 #' family given without its own parameters (see `kappaDist`).
+#'
+#' The emulator knows the simulator only over the range of each calibration
+#' input its runs cover (the "design range"); a value of \eqn{\kappa} beyond
+#' it rests on the emulator's extrapolation. The default beta prior is
+#' stretched over that range and never reaches beyond it; a prior given in
+#' the calibration inputs' own units can. `calibrate()` refuses a prior that
+#' puts less than `1e-9` of its mass on the design range (naming the prior
+#' and the range), and warns (class `fbc_extrapolation`) when a prior puts
+#' more than 1% of its mass beyond the design range widened by 5% of its
+#' width on each side (an improper prior: when its support does), saying
+#' where the prior reaches (its support, or its central 99% when the support
+#' is unbounded), or when a fixed \eqn{\kappa} lies beyond it. After the
+#' run, [convergence_messages()] (shown by `print()`) says when more than 1%
+#' of the draws of a calibration parameter lie there, and [predict.fbc()]
+#' warns when the draws it uses do.
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs
@@ -283,6 +306,8 @@
 #'   family must be given its own parameters (e.g. `kappaDist = "gaussian",
 #'   kappaP1 = 9.8, kappaP2 = 1` for a mean and standard deviation in `g`'s
 #'   units), else `calibrate()` refuses it and names the arguments to give.
+#'   A prior reaching beyond the range the simulator design covers warns,
+#'   and one with no support on it is refused (see "Checks").
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
 #' @param discrepancy The discrepancy model: `"gp"` (the default, the bias
 #'   GP) or `"none"` (no discrepancy); see "Discrepancy models".
@@ -416,6 +441,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   kappaSpec <- check_class_spec(
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
+  check_kappa_design(kappaSpec, scale)
   spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = if (algebra == "dense") 1L else 0L, discrepancy)

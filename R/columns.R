@@ -1,6 +1,7 @@
 # Reading the user's columns as they meant them: by name when the data carry
-# names, by position otherwise; and saying what the data imply (inputs
-# outside the simulator design, duplicated runs).
+# names (which one is the response included), by position otherwise; and
+# saying what the data imply (inputs and calibration values outside the
+# simulator design, duplicated runs, newdata naming a calibration input).
 
 # Usable column names: present, none missing or empty, none repeated. NULL
 # when the columns are unnamed (the positional contract applies).
@@ -12,10 +13,11 @@ usable_names <- function(x) {
 
 # Puts the columns of `sim` and `field` in the order calibrate() works in:
 # response, experimental inputs, calibration inputs. When both carry column
-# names, sim's first column is the response and field's columns are matched
-# by name to sim's response and inputs, in any order; sim's other columns,
-# those field does not have, are the calibration inputs. Otherwise columns
-# are taken by position. Returns list(sim, field, named).
+# names, field's columns are matched by name to sim's response and inputs, in
+# any order; sim's other columns, those field does not have, are the
+# calibration inputs; response_column() says which shared column is the
+# response. Otherwise columns are taken by position. Returns list(sim,
+# field, named).
 align_columns <- function(sim, field, call = parent.frame()) {
   sn <- colnames(sim)
   fn <- colnames(field)
@@ -34,25 +36,58 @@ align_columns <- function(sim, field, call = parent.frame()) {
       ), call = call)
     }
   }
-  response <- sn[1]
   extra <- setdiff(fn, sn)
   if (length(extra)) {
     cli::cli_abort(c(
       "The columns of {.arg field} are matched by name to those of {.arg sim}, and {.val {extra}} {?is/are} not in {.arg sim}.",
-      i = "{.arg sim} has {.val {sn}} (response {.val {response}} first); {.arg field} has {.val {fn}}.",
+      i = "{.arg sim} has {.val {sn}}; {.arg field} has {.val {fn}}.",
       i = "Rename the columns, or pass both without column names ({.fn unname}) to match them by position (response first, then the same experimental inputs)."
     ), call = call)
   }
-  if (!response %in% fn) {
-    cli::cli_abort(c(
-      "{.arg field} has no column {.val {response}}, the response (first column) of {.arg sim}.",
-      i = "{.arg field} has {.val {fn}}; name its response column {.val {response}}."
-    ), call = call)
-  }
-  inputs <- setdiff(sn[-1], setdiff(sn[-1], fn))  # sim's order
-  calib <- setdiff(sn[-1], fn)
+  response <- response_column(sn, fn, call = call)
+  inputs <- setdiff(sn, c(response, setdiff(sn, fn)))  # sim's order
+  calib <- setdiff(sn, fn)
   list(sim = sim[, c(response, inputs, calib), drop = FALSE],
        field = field[, c(response, inputs), drop = FALSE], named = TRUE)
+}
+
+# The response among named columns. field holds the response and the
+# experimental inputs, sim those and the calibration inputs, so the names
+# alone say which columns are inputs to calibrate, not which shared column
+# is the response. sim's response is at one of its ends: first (the
+# documented order) or last (a sim stored as inputs then output).
+# * sim's first column in field and its last not (the documented order,
+#   calibration inputs last): the first, whatever field's order;
+# * otherwise field's first column (field's documented order), when it is
+#   one of sim's ends and field's last column is not the other.
+# Anything else is refused, naming both ends: the readings left are mirror
+# images ((h, g, t) with field (t, h) against (t, g, h) with field (h, t)),
+# and neither can be chosen safely. A sim without a calibration input keeps
+# its first column (calibrate() refuses it).
+response_column <- function(sn, fn, call = parent.frame()) {
+  s1 <- sn[1]
+  sL <- sn[length(sn)]
+  calib <- setdiff(sn, fn)
+  if (s1 %in% fn && (!sL %in% fn || !length(calib))) return(s1)
+  cand <- intersect(c(s1, sL), fn)
+  if (!length(cand)) {
+    cli::cli_abort(c(
+      "{.arg field} has neither {.val {s1}} nor {.val {sL}}, the first and last columns of {.arg sim}: one of them must be the response.",
+      i = "{.arg sim} has {.val {sn}}; {.arg field} has {.val {fn}}.",
+      i = "Put the response first in {.arg sim} and give {.arg field} a column of that name."
+    ), call = call)
+  }
+  other <- setdiff(c(s1, sL), fn[1])
+  if (fn[1] %in% c(s1, sL) && !identical(other, fn[length(fn)])) return(fn[1])
+  reorder <- vapply(cand, function(r) {
+    sprintf("`sim[, c(%s)]` if \"%s\" is the response", paste0("\"", c(r, setdiff(sn, c(r, calib)), calib), "\"", collapse = ", "), r)
+  }, character(1))
+  cli::cli_abort(c(
+    "Cannot tell which column is the response: {.val {s1}} (first column of {.arg sim}) or {.val {sL}} (last column of {.arg sim}).",
+    i = "The response is a column of both {.arg sim} and {.arg field}: first in {.arg sim} (or last, for a simulator stored as inputs then output), and first in {.arg field} when the order of {.arg sim} does not say; {.arg field} has {.val {fn}}.",
+    i = "Put the response first in {.arg sim} and the calibration inputs last: {paste(reorder, collapse = ', or ')}.",
+    i = if (!s1 %in% fn) "If {.val {s1}} is the response, {.arg field} needs a column of that name."
+  ), call = call)
 }
 
 # Columns of `newdata` for predict(): by name when both the fit and newdata
@@ -166,3 +201,160 @@ inform_duplicated_runs <- function(sim, call = parent.frame()) {
 }
 
 fmt_num <- function(x) format(signif(x, 4), trim = TRUE)
+
+# Calibration values beyond the simulator design. The emulator knows the
+# simulator only over the range its runs cover for each calibration input;
+# a kappa beyond it rests on the emulator's extrapolation. As for field
+# inputs, a sliver of `fbc_field_margin` of the design's width beyond it is
+# tolerated. A prior reaches beyond the design when it puts more than
+# `fbc_kappa_beyond_share` of its mass beyond that widened range (an
+# improper prior: when its support does); the posterior, when more than
+# that share of its draws lie there. A prior that puts less than
+# `fbc_kappa_min_mass` of its mass on the design's range has no support
+# there: refused. The default beta prior is stretched over the design's
+# range and never reaches beyond it.
+fbc_kappa_beyond_share <- 0.01
+fbc_kappa_min_mass <- 1e-9
+
+# The design's range of each calibration input, its widened bounds, the
+# inputs' names and labels ("g (kappa1)").
+kappa_design <- function(scale) {
+  cal <- scale$p + seq_len(scale$q)
+  lo <- scale$xmin[cal]
+  hi <- scale$xmax[cal]
+  margin <- fbc_field_margin * (hi - lo)
+  nm <- scale$names$calibration
+  list(lo = lo, hi = hi, lo_wide = lo - margin, hi_wide = hi + margin,
+       names = nm, label = sprintf("%s (kappa%d)", nm, seq_len(scale$q)),
+       range = sprintf("%s to %s", vapply(lo, fmt_num, ""), vapply(hi, fmt_num, "")))
+}
+
+# At calibrate(): refuses a kappa prior with no support on the design's
+# range (naming kappaDist, kappaP1, kappaP2 and the range) and warns about a
+# prior reaching beyond it, or a fixed kappa beyond it. `kappa` holds the
+# checked dist, init, p1, p2 (native units) of each calibration parameter.
+check_kappa_design <- function(kappa, scale, call = parent.frame()) {
+  des <- kappa_design(scale)
+  none <- beyond <- character()
+  for (j in seq_len(scale$q)) {
+    d <- kappa$dist[j]
+    p1 <- kappa$p1[j]
+    p2 <- kappa$p2[j]
+    if (d == "beta") next  # stretched over the design's range
+    if (d == "fixed") {
+      v <- kappa$init[j]
+      if (!is.na(v) && (v < des$lo_wide[j] || v > des$hi_wide[j])) {
+        beyond <- c(beyond, sprintf("%s: the simulator design covers %s; %s is fixed at %s",
+                                    des$label[j], des$range[j], des$names[j], fmt_num(v)))
+      }
+      next
+    }
+    f <- prior_registry[[d]]
+    sup <- f$support(p1, p2)
+    pars <- c(p1 = p1, p2 = p2)[names(f$params)]
+    what <- sprintf("the %s prior%s", d, if (length(pars)) {
+      sprintf(" (%s)", paste(f$params, "=", vapply(pars, fmt_num, ""), collapse = ", "))
+    } else " (improper)")
+    if (f$proper) {
+      finite <- all(is.finite(sup))
+      reach <- if (finite) sup else f$quantile(c(0.005, 0.995), p1, p2)
+      on <- f$cdf(des$hi[j], p1, p2) - f$cdf(des$lo[j], p1, p2)
+      out <- 1 - (f$cdf(des$hi_wide[j], p1, p2) - f$cdf(des$lo_wide[j], p1, p2))
+      far <- out > fbc_kappa_beyond_share
+      desc <- sprintf("puts %s of its mass beyond it, %s %s to %s", fmt_share(out),
+                      if (finite) "reaching" else "its central 99% reaching",
+                      fmt_num(reach[1]), fmt_num(reach[2]))
+    } else {
+      on <- if (min(sup[2], des$hi[j]) > max(sup[1], des$lo[j])) 1 else 0
+      far <- sup[1] < des$lo_wide[j] || sup[2] > des$hi_wide[j]
+      desc <- sprintf("reaches %s to %s", fmt_num(sup[1]), fmt_num(sup[2]))
+    }
+    line <- sprintf("%s: the simulator design covers %s; %s %s", des$label[j], des$range[j],
+                    what, desc)
+    if (on < fbc_kappa_min_mass) {
+      none <- c(none, line)
+    } else if (far) {
+      beyond <- c(beyond, line)
+    }
+  }
+  if (length(none)) {
+    cli::cli_abort(c(
+      "The prior of {cli::qty(length(none))}{?a calibration parameter/calibration parameters} has no support on the range the simulator design covers.",
+      stats::setNames(none, rep("x", length(none))),
+      i = "The emulator knows the simulator only where it was run: give {.arg kappaDist}, {.arg kappaP1} and {.arg kappaP2} a prior on that range (the default beta prior is stretched over it), or extend the simulator design."
+    ), call = call)
+  }
+  if (length(beyond)) {
+    cli::cli_warn(c(
+      "Calibration values beyond the simulator design: where the posterior goes there, it rests on the emulator's extrapolation.",
+      stats::setNames(beyond, rep("*", length(beyond))),
+      i = "{.fn print} and {.fn convergence_messages} say how much of the posterior lies beyond; keep the prior (or the fixed value) within the design's range (the default beta prior is stretched over it) or extend the simulator design."
+    ), class = "fbc_extrapolation", call = call)
+  }
+  invisible(length(beyond) > 0L)
+}
+
+# Draws (rows of Phi) with a kappa beyond its design's widened range:
+# data.frame(var, label, range, share, lower, upper, fixed) of the
+# calibration parameters with more than `fbc_kappa_beyond_share` of their
+# draws there (lower, upper: the range of their draws; fixed: a fixed prior).
+kappa_beyond <- function(x, rows = seq_len(nrow(x$Phi))) {
+  des <- kappa_design(x$scale)
+  cols <- x$indices$kappa
+  fixed <- phi_spec(x)$table$family[cols] == prior_families[["fixed"]]
+  out <- list()
+  for (j in seq_along(cols)) {
+    v <- x$Phi[rows, cols[j]]
+    far <- v < des$lo_wide[j] | v > des$hi_wide[j]
+    if (mean(far) > fbc_kappa_beyond_share) {
+      out[[length(out) + 1L]] <- data.frame(
+        var = colnames(x$Phi)[cols[j]], label = des$label[j], range = des$range[j],
+        share = mean(far), lower = min(v), upper = max(v), fixed = fixed[j])
+    }
+  }
+  if (length(out)) do.call(rbind, out) else NULL
+}
+
+# The posterior's kappa beyond the design, as convergence_messages() says it.
+kappa_beyond_messages <- function(x) {
+  b <- kappa_beyond(x)
+  if (is.null(b)) return(character())
+  ifelse(b$fixed,
+         sprintf("%s is fixed at %s, beyond the simulator design's %s: the fit and its predictions rest on the emulator's extrapolation. Fix it within the design or extend the simulator design.",
+                 b$label, fmt_num(b$lower), b$range),
+         sprintf("%s of the draws of %s lie beyond the simulator design's %s (the draws range from %s to %s): there the posterior rests on the emulator's extrapolation. Narrow the prior to the design's range or extend the simulator design.",
+                 fmt_share(b$share), b$label, b$range, fmt_num(b$lower), fmt_num(b$upper)))
+}
+
+# At predict(): the draws used with a kappa beyond the design.
+warn_kappa_beyond <- function(x, rows, call = parent.frame()) {
+  b <- kappa_beyond(x, rows)
+  if (is.null(b)) return(invisible(FALSE))
+  at <- ifelse(b$lower == b$upper, paste("at", vapply(b$lower, fmt_num, "")),
+               sprintf("from %s to %s", vapply(b$lower, fmt_num, ""), vapply(b$upper, fmt_num, "")))
+  lines <- sprintf("%s: %s of the draws used, %s; the simulator design covers %s",
+                   b$label, fmt_share(b$share), at, b$range)
+  cli::cli_warn(c(
+    "The prediction uses calibration values beyond the simulator design: there it rests on the emulator's extrapolation.",
+    stats::setNames(lines, rep("*", length(lines)))
+  ), class = "fbc_extrapolation", call = call)
+  invisible(TRUE)
+}
+
+# A share as a percentage: "37%", "< 1%" below 1% (never "0%" for a share above 0).
+fmt_share <- function(x) ifelse(x > 0 & x < 0.01, "< 1%", sprintf("%.0f%%", 100 * x))
+
+# Columns of `newdata` named like a calibration input: predict() predicts at
+# the posterior draws of kappa (the simulator too: eta(x, kappa) at each
+# draw), so a value given there would be ignored. Refused, saying why.
+refuse_calibration_columns <- function(nm, scale, call = parent.frame()) {
+  if (!isTRUE(scale$named) || is.null(nm)) return(invisible(TRUE))
+  cal <- intersect(scale$names$calibration, nm)
+  if (!length(cal)) return(invisible(TRUE))
+  keep <- paste0("\"", scale$names$inputs, "\"", collapse = ", ")
+  cli::cli_abort(c(
+    "{.arg newdata} has {cli::qty(length(cal))}{?a column/columns} {.val {cal}} named like {?a calibration input/calibration inputs}, which {.fn predict} cannot set.",
+    i = "Every prediction, {.code type = \"simulator\"} included, is made at the posterior draws of the calibration parameters (the calibrated simulator is {.code eta(x, kappa)} at each draw), so {cli::qty(length(cal))}{?this column/these columns} would be ignored.",
+    i = "Drop {cli::qty(length(cal))}{?it/them} ({.code newdata[, c({keep})]}) to predict at the calibrated values; {.fn validate_emulator} shows how the emulator predicts the simulator runs."
+  ), call = call)
+}

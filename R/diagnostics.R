@@ -96,8 +96,11 @@ smooth_kernel_hint <- function(cls) {
 #' its two halves), a run interrupted before the end, and parameters whose
 #' draws pile up at a bound of their support (at least 20% of the draws within
 #' 0.5% of the support's width from it), such as a smoothness \eqn{\alpha} at
-#' 2 or a calibration parameter at the edge of its prior range, and
-#' prior-data conflicts.
+#' 2 or a calibration parameter at the edge of its prior range, calibration
+#' parameters with more than 1% of their draws beyond the range the
+#' simulator design covers (by more than 5% of its width; there the
+#' posterior rests on the emulator's extrapolation: see "Checks" in
+#' [calibrate()]), and prior-data conflicts.
 #'
 #' A power-exponential smoothness piling up at 2 says the response is smooth:
 #' the advice is then a smooth correlation family, `kernelS = "matern52"`
@@ -185,7 +188,7 @@ convergence_messages <- function(x) {
     msgs <- c(msgs, sprintf("%.0f%% of the draws of %s lie at its bound %g. %s",
                             100 * pile$share[i], v, pile$bound[i], hint))
   }
-  c(msgs, conflict_messages(x))
+  c(msgs, kappa_beyond_messages(x), conflict_messages(x))
 }
 
 # Posterior summary of each column of Phi, with the rank-normalised split

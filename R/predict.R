@@ -69,13 +69,24 @@
 #' 1000 draws), which does not fit in the blocks' budget: use it with a
 #' moderate `ndraws`.
 #'
+#' @section Calibration values beyond the design:
+#' When more than 1% of the draws used put a calibration parameter beyond the
+#' range the simulator design covers for it (by more than 5% of that range's
+#' width), `predict()` warns (class `fbc_extrapolation`), naming the
+#' parameter, the share of draws and their range: there the prediction rests
+#' on the emulator's extrapolation (see "Checks" in [calibrate()]).
+#'
 #' @param object An `fbc` object from [calibrate()].
 #' @param newdata New experimental inputs in their own units: a numeric matrix
 #'   or data frame with the `p` experimental input columns (a vector when
 #'   `p = 1`). When the calibration's data carried column names (see
 #'   "Columns" in [calibrate()]) and `newdata` does too, its columns are
 #'   matched by name, in any order, and other columns are ignored; an
-#'   unnamed matrix gives the inputs by position.
+#'   unnamed matrix gives the inputs by position. A column named like a
+#'   calibration input is refused: every prediction, `type = "simulator"`
+#'   included, is made at the posterior draws of \eqn{\kappa}, so a value
+#'   given there could not be used (drop the column; [validate_emulator()]
+#'   shows how the emulator predicts the simulator runs).
 #' @param method `"Bayesian"` (average over the posterior draws: see
 #'   `ndraws`) or `"MAP"` (the draw with the highest log posterior).
 #' @param type What to predict: `"field"` (a new field observation),
@@ -120,6 +131,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   Xn <- scale_inputs(X, sc, seq_len(sc$p))
 
   rows <- if (method == "MAP") which.max(object$logPost) else draw_rows(nrow(object$Phi), ndraws)
+  warn_kappa_beyond(object, rows)
   phis <- sampler_draws(object, rows)
   N <- nrow(Xn)
   M <- length(rows)
@@ -266,6 +278,8 @@ mixture_quantile <- function(mu, sd, prob, tol = 1e-10) {
 # order of the fit's inputs (matched by name when both carry names).
 check_newdata <- function(newdata, scale, call = parent.frame()) {
   p <- scale$p
+  refuse_calibration_columns(if (is.data.frame(newdata)) names(newdata) else colnames(newdata),
+                             scale, call = call)
   if (is.data.frame(newdata) && isTRUE(scale$named) && all(scale$names$inputs %in% names(newdata))) {
     newdata <- newdata[scale$names$inputs]  # other columns (say the response) are not needed
   }

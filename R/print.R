@@ -1,17 +1,19 @@
 #' Print a calibration
 #'
 #' Shows a compact header (the discrepancy model: Kennedy-O'Hagan's bias GP
-#' or none, see `discrepancy` in [calibrate()]; data sizes, the names of the
-#' calibration inputs, the MCMC settings, the range of the acceptance rates,
-#' the correlation families of the simulator and bias GPs (`kernelS`,
-#' `kernelB` of [calibrate()]; the bias's only when there is one) and the
-#' algebra of
+#' or none, see `discrepancy` in [calibrate()]; data sizes; the names of the
+#' response, the experimental inputs and the calibration inputs, with the
+#' range the simulator design covers for each calibration input; the MCMC
+#' settings, the acceptance rates, the correlation families of the
+#' simulator and bias GPs (`kernelS`, `kernelB` of [calibrate()]; the
+#' bias's only when there is one) and the algebra of
 #' the simulator block: Kronecker on a product design, else dense; see
 #' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
-#' 400, one chain only, an interrupted run, draws piling up at a bound, a
-#' prior-data conflict), each
+#' 400, one chain only, an interrupted run, draws piling up at a bound,
+#' calibration parameters beyond the simulator design, a prior-data
+#' conflict), each
 #' with what to do.
 #'
 #' @param x An `fbc` object from [calibrate()].
@@ -30,11 +32,12 @@ print.fbc <- function(x, digits = 3, ...) {
               if (gp) "Kennedy-O'Hagan" else "no discrepancy: y_f = eta(x, kappa) + eps"))
   cat(sprintf("  data: n = %d field, m = %d simulator runs; p = %d, q = %d\n",
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
-  cal <- sc$names$calibration
-  if (length(cal) == sc$q) {
-    cat(sprintf("  calibration: %s\n",
-                paste0("kappa", seq_len(sc$q), " = ", cal, collapse = ", ")))
-  }
+  cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
+              if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
+  des <- kappa_design(sc)
+  cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
+              paste0("kappa", seq_len(sc$q), " = ", des$names, " (design ",
+                     des$range, ")", collapse = ", ")))
   chains <- length(unique(x$chain))
   cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
               s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),

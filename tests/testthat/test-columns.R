@@ -11,6 +11,16 @@ short_fit <- function(sim = ballSim, field = ballField, seed = 1) {
     })
 }
 
+# short_fit() with other kappa priors
+short_fit_prior <- function(..., seed = 1) {
+  set.seed(seed)
+  withCallingHandlers(
+    calibrate(ballSim, ballField, nMCMC = 120, nBurn = 60, thinning = 2, nChains = 1, ...),
+    warning = function(w) {
+      if (grepl("ESS has been capped", conditionMessage(w))) invokeRestart("muffleWarning")
+    })
+}
+
 test_that("field columns in another order calibrate exactly as in the documented order", {
   a <- short_fit()
   # (h, t) instead of (t, h), as a matrix and as a data frame
@@ -19,11 +29,40 @@ test_that("field columns in another order calibrate exactly as in the documented
   expect_identical(b$Phi, a$Phi)
   expect_identical(d$Phi, a$Phi)
   expect_identical(b$data, a$data)
-  # sim with the calibration input before the experimental one: same model
-  e <- short_fit(sim = ballSim[, c("t", "g", "h")], field = ballField[, c("h", "t")])
+  # sim with the calibration input first and the response last: same model
+  e <- short_fit(sim = ballSim[, c("g", "h", "t")])
   expect_identical(e$Phi, a$Phi)
   expect_identical(e$scale$names, list(response = "t", inputs = "h", calibration = "g"))
   expect_true(e$scale$named)
+  expect_output(print(e), "response: t; experimental input: h", fixed = TRUE)
+})
+
+test_that("a sim stored as inputs then output calibrates as in the documented order", {
+  # p = 2: sim (x1, x2, t, y), field (y, x1, x2): y is sim's last column and
+  # field's first, x1 (sim's first) is not field's last
+  d <- random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = 11)
+  sim <- cbind(y = d$ys, x1 = d$Xs[, 1], x2 = d$Xs[, 2], t = d$Xs[, 3])
+  field <- cbind(y = d$yf, x1 = d$Xf[, 1], x2 = d$Xf[, 2])
+  fit2 <- function(s, f) suppressWarnings(short_fit(s, f), classes = "fbc_extrapolation")
+  a <- fit2(sim, field)
+  b <- fit2(sim[, c("x1", "x2", "t", "y")], field)
+  expect_identical(b$Phi, a$Phi)
+  # inputs in another order (x2 first: thetaS1 is x2's), as a data frame
+  f2 <- field[, c("y", "x2", "x1")]
+  expect_identical(fit2(as.data.frame(sim[, c("x2", "x1", "t", "y")]), f2)$Phi,
+                   fit2(sim[, c("y", "x2", "x1", "t")], f2)$Phi)
+  expect_identical(b$scale$names, list(response = "y", inputs = c("x1", "x2"), calibration = "t"))
+})
+
+test_that("a response the names cannot identify is refused, naming both candidates", {
+  # (h, g, t) with (t, h) and its mirror (t, g, h) with (h, t): either of
+  # the shared columns could be the response
+  expect_snapshot(error = TRUE, {
+    calibrate(ballSim[, c("h", "g", "t")], ballField)
+    calibrate(ballSim[, c("t", "g", "h")], ballField[, c("h", "t")])
+    calibrate(ballSim[, c("g", "h", "t")], ballField[, c("h", "t")])
+    calibrate(cbind(ballSim, x = 1:100)[, c("t", "h", "x", "g")], data.frame(h = 1:3, x = 1:3))
+  })
 })
 
 test_that("the default ball fit gives the same g posterior from a (h, t) field", {
@@ -124,4 +163,74 @@ test_that("nothing the user passed in is modified", {
   expect_identical(hyp, hyp0)
   expect_identical(nd, nd0)
   expect_identical(fit, fit0)
+})
+
+test_that("newdata columns named like a calibration input are refused, saying why", {
+  fit <- short_fit()
+  expect_snapshot(error = TRUE, {
+    predict(fit, data.frame(h = c(1, 2), g = 9.8), type = "simulator")
+    predict(fit, ballSim)
+  })
+  # without the column, the same points predict as before
+  expect_identical(predict(fit, data.frame(h = c(1, 2), t = 0)), predict(fit, c(1, 2)))
+})
+
+# the design range of g in ballSim, and its 5% margin
+g_lo <- min(ballSim[, "g"])
+g_hi <- max(ballSim[, "g"])
+g_margin <- 0.05 * (g_hi - g_lo)
+
+test_that("a kappa prior reaching beyond the simulator design warns, saying where", {
+  expect_snapshot(x <- short_fit_prior(kappaDist = "gaussian", kappaP1 = 9.8, kappaP2 = 3))
+  expect_snapshot(x <- short_fit_prior(kappaDist = "uniform", kappaP1 = 5, kappaP2 = 15))
+  # the 15% of the warning: the Gaussian's mass beyond the widened range
+  beyond <- pnorm(g_lo - g_margin, 9.8, 3) + pnorm(g_hi + g_margin, 9.8, 3, lower.tail = FALSE)
+  expect_equal(round(100 * beyond), 15)
+  # within the design, or beyond it by a negligible share of the mass: silent
+  expect_no_warning(short_fit_prior(kappaDist = "uniform", kappaP1 = 7, kappaP2 = 13))
+  expect_no_warning(short_fit_prior(kappaDist = "gaussian", kappaP1 = 10, kappaP2 = 1))
+  expect_no_warning(short_fit_prior(kappaDist = "fixed", kappaInit = 9.8))
+})
+
+test_that("a kappa prior with no support on the simulator design is refused", {
+  expect_snapshot(error = TRUE, {
+    calibrate(ballSim, ballField, kappaDist = "uniform", kappaP1 = 15, kappaP2 = 20)
+    calibrate(ballSim, ballField, kappaDist = "gaussian", kappaP1 = 100, kappaP2 = 1)
+  })
+  # a uniform touching the design at its maximum has no mass on it either
+  expect_error(calibrate(ballSim, ballField, kappaDist = "uniform", kappaP1 = g_hi, kappaP2 = 20),
+               "no support")
+})
+
+test_that("a fixed kappa beyond the design is said at the call, in print() and by predict()", {
+  expect_snapshot(fit <- short_fit_prior(kappaDist = "fixed", kappaInit = 16))
+  msgs <- convergence_messages(fit)
+  expect_identical(grep("beyond the simulator design", msgs, value = TRUE), sprintf(
+    "g (kappa1) is fixed at 16, beyond the simulator design's %s to %s: the fit and its predictions rest on the emulator's extrapolation. Fix it within the design or extend the simulator design.",
+    signif(g_lo, 4), signif(g_hi, 4)))
+  expect_output(print(fit), "g (kappa1) is fixed at 16", fixed = TRUE)
+  expect_snapshot(p <- predict(fit, c(1, 2), method = "MAP"))
+})
+
+test_that("the posterior mass beyond the design is counted from the draws", {
+  set.seed(4)
+  fit <- suppressWarnings(
+    calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 2, kappaDist = "gaussian",
+              kappaP1 = 9.8, kappaP2 = 3),
+    classes = "fbc_extrapolation")
+  g <- fit$Phi[, "kappa1"]
+  far <- g < g_lo - g_margin | g > g_hi + g_margin
+  expect_gt(mean(far), 0.01)  # this run does put mass beyond
+  msg <- grep("beyond the simulator design", convergence_messages(fit), value = TRUE)
+  expect_identical(msg, sprintf(
+    "%.0f%% of the draws of g (kappa1) lie beyond the simulator design's %s to %s (the draws range from %s to %s): there the posterior rests on the emulator's extrapolation. Narrow the prior to the design's range or extend the simulator design.",
+    100 * mean(far), signif(g_lo, 4), signif(g_hi, 4), signif(min(g), 4), signif(max(g), 4)))
+  # predict() counts the draws it uses: all of them here
+  w <- tryCatch(predict(fit, 1, ndraws = NULL), warning = function(w) w)
+  expect_s3_class(w, "fbc_extrapolation")
+  expect_match(conditionMessage(w), sprintf("%.0f%% of the draws used", 100 * mean(far)), fixed = TRUE)
+  # the default beta prior stays within the design: nothing to say
+  a <- short_fit()
+  expect_length(grep("beyond the simulator design", convergence_messages(a)), 0L)
+  expect_no_warning(predict(a, 1))
 })

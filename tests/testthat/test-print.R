@@ -5,11 +5,15 @@ test_that("print() shows the header and the table and returns the fit invisibly"
   expect_false(res$visible)
   expect_identical(res$value, fit)
   expect_match(out[2], "n = 63 field, m = 100 simulator runs; p = 1, q = 1", fixed = TRUE)
-  expect_match(out[3], "kappa1 = g", fixed = TRUE)
-  expect_match(out[4], "150 iterations, 50 burn-in, thinning 2 -> 50 draws", fixed = TRUE)
+  # the response, the experimental and calibration inputs by name; g's
+  # design range is that of ballSim's g column
+  expect_identical(out[3], "  response: t; experimental input: h")
+  expect_identical(out[4], sprintf("  calibration input: kappa1 = g (design %s to %s)",
+                                   signif(min(ballSim[, "g"]), 4), signif(max(ballSim[, "g"]), 4)))
+  expect_match(out[5], "150 iterations, 50 burn-in, thinning 2 -> 50 draws", fixed = TRUE)
   # every move by name with its acceptance (that of the parameters it moves)
   acc <- fit$acceptance
-  line <- paste(out[5:6], collapse = " ")
+  line <- paste(out[6:7], collapse = " ")
   expect_match(line, sprintf("acceptance: kappa1 %.2f, sim %.2f, bias %.2f, sigma2E %.2f, muB exact",
                              acc[["kappa1"]], acc[["thetaS1"]], acc[["thetaB1"]], acc[["sigma2E"]]),
                fixed = TRUE)
@@ -23,7 +27,7 @@ test_that("print() copes with extra estimate columns and several chains", {
   fit$estimates$nChains <- 2L
   fit$chain <- rep(1:2, length.out = nrow(fit$Phi))
   out <- capture.output(print(fit))
-  expect_match(out[4], "from 2 chains", fixed = TRUE)
+  expect_match(out[5], "from 2 chains", fixed = TRUE)
   expect_true(any(grepl("nChains", out)))
 })
 
@@ -66,4 +70,14 @@ test_that("print() warns about arguments it does not use, and still prints", {
   expect_snapshot(out <- capture.output(print(fit, row.names = FALSE)))
   expect_match(out[1], "<fbc>", fixed = TRUE)
   expect_snapshot(out <- capture.output(print(set_hyperPriors(), all = TRUE)))
+})
+
+test_that("print() names several experimental inputs and the calibration input's design", {
+  set.seed(3)
+  fit <- fixed_fit(random_phi(2, 1))  # columns y, x1, x2, t
+  out <- capture.output(print(fit))
+  expect_identical(out[3], "  response: y; experimental inputs: x1, x2")
+  t <- fit$scale$xmin[3] + c(0, fit$scale$xmax[3] - fit$scale$xmin[3])
+  expect_identical(out[4], sprintf("  calibration input: kappa1 = t (design %s to %s)",
+                                   signif(t[1], 4), signif(t[2], 4)))
 })
