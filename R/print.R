@@ -8,7 +8,8 @@
 #' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
-#' 400, one chain only, an interrupted run, draws piling up at a bound, a
+#' 400, one chain only, an interrupted run, a chain that never moved, draws
+#' piling up at a bound, a posterior pressing against its prior's bound, a
 #' prior-data conflict), each
 #' with what to do.
 #'
