@@ -51,7 +51,7 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
     cli::cli_abort(c(
       "{.arg parameter} must be one parameter class: {.or {.val {param_classes}}}.",
-      x = "Got {.val {format_value(parameter)}}."
+      x = "Got {format_choice(parameter)}."
     ))
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")

@@ -160,7 +160,7 @@ check_prior <- function(dist, p1, p2, arg, parg = arg, call = parent.frame()) {
       !dist %in% names(prior_families)) {
     cli::cli_abort(c(
       "{.arg {arg}} must be one of {.or {.val {names(prior_families)}}}.",
-      x = "Got {.val {format_value(dist)}}."
+      x = "Got {format_choice(dist)}."
     ), call = call)
   }
   f <- prior_registry[[dist]]
