@@ -14,7 +14,7 @@
 #' with what to do.
 #'
 #' @param x An `fbc` object from [calibrate()].
-#' @param digits Significant digits for the table.
+#' @param digits Significant digits for the table: a whole number, at least 1.
 #' @param ... Not used: an argument given here gives a warning (other code
 #'   may pass arguments meant for other methods).
 #' @return `x`, invisibly.
@@ -22,6 +22,7 @@
 print.fbc <- function(x, digits = 3, ...) {
   check_dots_empty(..., fn = print.fbc, name = "print", action = "warn")
   x <- check_fbc(x, "x")
+  digits <- check_count(digits, "digits")
   s <- x$settings
   sc <- x$scale
   cat("<fbc> Full Bayesian calibration (Kennedy-O'Hagan)\n")

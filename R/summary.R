@@ -31,6 +31,7 @@ summary.fbc <- function(object, ...) {
 #' @param digits Significant digits.
 #' @export
 print.summary.fbc <- function(x, digits = 3, ...) {
+  digits <- check_count(digits, "digits")
   check_dots_empty(..., fn = print.summary.fbc, name = "print", cls = "summary.fbc", action = "warn")
   df <- as.data.frame(unclass(x), stringsAsFactors = FALSE)
   attr(df, "row.names") <- attr(x, "row.names")

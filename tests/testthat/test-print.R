@@ -67,3 +67,17 @@ test_that("print() warns about arguments it does not use, and still prints", {
   expect_match(out[1], "<fbc>", fixed = TRUE)
   expect_snapshot(out <- capture.output(print(set_hyperPriors(), all = TRUE)))
 })
+
+test_that("print()'s digits is checked, and used", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 1)
+  expect_snapshot(error = TRUE, {
+    print(fit, digits = "3")
+    print(fit, digits = 0)
+    print(summary(fit), digits = NA)
+  })
+  out <- capture.output(print(summary(fit), digits = 5))
+  med <- signif(fit$estimates["sigma2E", "median"], 5)
+  expect_match(out[grep("^sigma2E", out)], formatC(med, digits = 5, format = "fg", flag = "#"),
+               fixed = TRUE, all = FALSE)
+})
