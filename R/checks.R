@@ -65,14 +65,14 @@ format_bytes <- function(x) {
 
 check_flag <- function(x, arg = caller_arg(x), call = parent.frame()) {
   if (!is.logical(x) || length(x) != 1L || is.na(x)) {
-    cli::cli_abort("{.arg {arg}} must be {.code TRUE} or {.code FALSE}.", call = call)
+    cli::cli_abort("{.arg {arg}} must be {.code TRUE} or {.code FALSE}, not {format_value(x, typed = TRUE)}.", call = call)
   }
   x
 }
 
 check_string <- function(x, arg = caller_arg(x), call = parent.frame()) {
   if (!is.character(x) || length(x) != 1L || is.na(x)) {
-    cli::cli_abort("{.arg {arg}} must be a single string.", call = call)
+    cli::cli_abort("{.arg {arg}} must be a single string, not {format_value(x, typed = TRUE)}.", call = call)
   }
   x
 }
@@ -133,17 +133,43 @@ caller_arg <- function(x) {
   deparse(substitute(x, parent.frame()))
 }
 
-format_value <- function(x) {
+# A value for a message, with its type when that may be what is wrong: a
+# string is quoted and called one ("300" given for a count), a vector or
+# another object is named by its type and length. A single number is shown
+# as it is, or as "the number 0.5" when `typed` (where a string was expected).
+format_value <- function(x, typed = FALSE) {
   if (is.null(x)) return("NULL")
-  if (length(x) != 1L) return(paste0("a vector of length ", length(x)))
+  if (length(x) != 1L || !is.atomic(x) || is.object(x)) {
+    what <- if (is.object(x)) paste0("a <", class(x)[1], "> object")
+            else if (is.character(x)) "a character vector" else if (is.numeric(x)) "a numeric vector"
+            else if (is.logical(x)) "a logical vector" else if (is.list(x)) "a list"
+            else if (is.function(x)) "a function" else paste("an object of type", typeof(x))
+    return(if (is.function(x)) what else paste0(what, " of length ", length(x)))
+  }
+  if (is.na(x)) return("NA")
+  if (is.character(x)) return(sprintf("the string \"%s\"", x))
+  if (typed && is.numeric(x)) return(paste("the number", format(x)))
   format(x)
 }
 
-# `sampler` is "blocks" or "single"; the old `blockSim` flag maps onto it.
+# A value given where one of a few names was expected: a string quoted, as
+# the names are; anything else with its type (format_value(typed = TRUE)).
+format_choice <- function(x) {
+  if (is.character(x) && length(x) == 1L && !is.na(x)) sprintf("\"%s\"", x) else format_value(x, typed = TRUE)
+}
+
+# `sampler` is "blocks" or "single"; the old `blockSim` flag maps onto it,
+# unless `sampler` is given too (not its default vector) and says otherwise.
 check_sampler <- function(sampler, blockSim = NULL, call = parent.frame()) {
   if (!is.null(blockSim)) {
     check_flag(blockSim, "blockSim", call = call)
     new <- if (blockSim) "blocks" else "single"
+    if (!identical(sampler, c("blocks", "single")) && !identical(sampler, new)) {
+      cli::cli_abort(c(
+        "{.arg blockSim} = {blockSim} and {.arg sampler} = {format_choice(sampler)} disagree.",
+        i = "{.arg blockSim} is deprecated: give {.arg sampler} only."
+      ), call = call)
+    }
     cli::cli_warn(c(
       "{.arg blockSim} is deprecated; use {.code sampler = \"{new}\"}.",
       i = "The default sampler ({.val blocks}) moves {.code thetaS}, {.code alphaS} and {.code sigma2S} jointly, and more (see {.help FBC::calibrate})."
@@ -151,7 +177,7 @@ check_sampler <- function(sampler, blockSim = NULL, call = parent.frame()) {
     return(new)
   }
   if (!is.character(sampler) || length(sampler) < 1L || anyNA(sampler)) {
-    cli::cli_abort("{.arg sampler} must be {.val blocks} or {.val single}, not {format_value(sampler)}.", call = call)
+    cli::cli_abort("{.arg sampler} must be {.val blocks} or {.val single}, not {format_choice(sampler)}.", call = call)
   }
   if (length(sampler) > 1L) sampler <- sampler[1L]
   if (!sampler %in% c("blocks", "single")) {
@@ -201,7 +227,7 @@ match_choice <- function(x, choices, arg, call = parent.frame()) {
   if (identical(x, choices)) return(choices[1])
   if (!is.character(x) || length(x) != 1L || is.na(x) || !(x %in% choices)) {
     cli::cli_abort(
-      "{.arg {arg}} must be one of {.or {.val {choices}}}, not {.val {format_value(x)}}.",
+      "{.arg {arg}} must be one of {.or {.val {choices}}}, not {format_choice(x)}.",
       call = call
     )
   }

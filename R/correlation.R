@@ -105,7 +105,7 @@ check_kernel <- function(kernel, arg, call = parent.frame()) {
   if (!is.character(kernel) || length(kernel) != 1L || is.na(kernel) ||
       !kernel %in% names(kernel_codes)) {
     cli::cli_abort(
-      "{.arg {arg}} must be one of {.or {.val {names(kernel_codes)}}}, not {.val {format_value(kernel)}}.",
+      "{.arg {arg}} must be one of {.or {.val {names(kernel_codes)}}}, not {format_choice(kernel)}.",
       call = call
     )
   }

@@ -7,6 +7,13 @@ fbc_ess_min <- 400
 # draws lie within `fbc_pile_band` times the width of its support from it.
 fbc_pile_band <- 0.005
 fbc_pile_share <- 0.2
+# A posterior "presses against" a bound its prior sets (inside the
+# parameter's domain: a uniform prior's edge, a calibration input's prior
+# range) when its density there (support_density(), reflected at the bound)
+# is at least `fbc_press_peak` of its highest value and at least
+# `fbc_press_flat` times a flat density over the prior's range.
+fbc_press_peak <- 0.5
+fbc_press_flat <- 3
 
 # Draws of each chain side by side (iterations x chains). Chains of unequal
 # length (after an interrupt) are cut to the shortest.
@@ -78,6 +85,55 @@ bound_piling <- function(x) {
   if (length(out)) do.call(rbind, out) else data.frame(var = character(), bound = numeric(), share = numeric())
 }
 
+# Parameters whose posterior presses against a finite bound of their prior
+# that lies inside the domain of their class (see fbc_press_peak), leaving
+# out those already piling up there: data.frame(var, bound). The domain's own
+# bounds (0 for a variance, 1 and 2 for a smoothness) are left to
+# bound_piling(): a posterior falling from 0 is an answer there, not a
+# truncation by the prior.
+bound_pressing <- function(x, piled = bound_piling(x)) {
+  sup <- param_support(x)
+  ps <- phi_spec(x)
+  fixed <- ps$table$family == prior_families[["fixed"]]
+  vars <- phi_vars(x$spec)
+  out <- list()
+  for (j in seq_along(vars)) {
+    v <- x$Phi[, j]
+    if (fixed[j] || vars[j] %in% piled$var || stats::var(v) == 0) next
+    dom <- switch(class_domain[[ps$classes[j]]], real = c(-Inf, Inf), positive = c(0, Inf),
+                  unit12 = c(1, 2))
+    d <- support_density(v, sup[j, 1], sup[j, 2])
+    flat <- if (all(is.finite(sup[j, ]))) 1 / (sup[j, 2] - sup[j, 1]) else 0
+    ends <- c(d$y[1], d$y[length(d$y)])
+    at <- c(d$x[1] == sup[j, 1], d$x[length(d$x)] == sup[j, 2]) & sup[j, ] > dom[1] &
+      sup[j, ] < dom[2] & ends >= fbc_press_peak * max(d$y) & ends >= fbc_press_flat * flat
+    if (any(at)) {
+      k <- which(at)[which.max(ends[at])]
+      out[[length(out) + 1]] <- data.frame(var = vars[j], bound = unname(sup[j, k]))
+    }
+  }
+  if (length(out)) do.call(rbind, out) else data.frame(var = character(), bound = numeric())
+}
+
+# Sampled (not fixed) parameters that a chain never moved: all its draws of
+# the parameter are equal. data.frame(var, chain, draws, value).
+stuck_chains <- function(x) {
+  fixed <- phi_spec(x)$table$family == prior_families[["fixed"]]
+  vars <- phi_vars(x$spec)
+  out <- list()
+  for (k in sort(unique(x$chain))) {
+    rows <- x$chain == k
+    if (sum(rows) < 2L) next
+    for (j in which(!fixed)) {
+      v <- x$Phi[rows, j]
+      if (all(v == v[1])) {
+        out[[length(out) + 1]] <- data.frame(var = vars[j], chain = k, draws = sum(rows), value = v[1])
+      }
+    }
+  }
+  if (length(out)) do.call(rbind, out) else data.frame(var = character(), chain = integer(), draws = integer(), value = numeric())
+}
+
 # The advice for a power-exponential smoothness at 2: a smooth family,
 # whose correlation matrices are better conditioned than exp(-theta d^2) with
 # a tiny nugget and which has no smoothness to sample.
@@ -96,7 +152,12 @@ smooth_kernel_hint <- function(cls) {
 #' its two halves), a run interrupted before the end, and parameters whose
 #' draws pile up at a bound of their support (at least 20% of the draws within
 #' 0.5% of the support's width from it), such as a smoothness \eqn{\alpha} at
-#' 2 or a calibration parameter at the edge of its prior range, calibration
+#' 2 or a calibration parameter at the edge of its prior range, a posterior
+#' pressing against a bound set by its prior (a uniform prior's edge inside
+#' the parameter's domain, where the posterior density is at least half its
+#' highest and three times a flat density over the prior's range), a chain that
+#' never moved a sampled parameter (all its draws equal: a stuck chain, whose
+#' R-hat and ESS would otherwise look like a fixed parameter's), calibration
 #' parameters with more than 1% of their draws beyond the range the
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
@@ -172,6 +233,13 @@ convergence_messages <- function(x) {
   if (nChains == 1L) {
     msgs <- c(msgs, "Only one chain: R-hat compares its two halves only. Use `nChains = 4` to check that independent chains agree.")
   }
+  stuck <- stuck_chains(x)
+  for (k in unique(stuck$chain)) {
+    st <- stuck[stuck$chain == k, ]
+    msgs <- c(msgs, sprintf(
+      "Chain %d never moved %s in its %d draws: it is stuck (every proposal rejected), not converged, and R-hat and ESS cannot be trusted. Rerun with another seed or a longer burn-in (`nBurn`), and check the priors and initial values.",
+      k, paste(sprintf("%s (at %s)", st$var, signif(st$value, 4)), collapse = " and "), st$draws[1]))
+  }
   pile <- bound_piling(x)
   for (i in seq_len(nrow(pile))) {
     v <- pile$var[i]
@@ -187,6 +255,19 @@ convergence_messages <- function(x) {
     )
     msgs <- c(msgs, sprintf("%.0f%% of the draws of %s lie at its bound %g. %s",
                             100 * pile$share[i], v, pile$bound[i], hint))
+  }
+  press <- bound_pressing(x, pile)
+  for (i in seq_len(nrow(press))) {
+    v <- press$var[i]
+    cls <- x$spec$classes[match(v, x$spec$vars)]
+    hint <- if (cls == "kappa") {
+      "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
+    } else {
+      sprintf("Widen its prior (`%sDist`, `%sP1`, `%sP2` in set_hyperPriors()) unless this bound is known.", cls, cls, cls)
+    }
+    msgs <- c(msgs, sprintf(
+      "The posterior of %s presses against its prior's bound %g (its density is highest there): the prior, not the data, sets this edge. %s",
+      v, press$bound[i], hint))
   }
   c(msgs, kappa_beyond_messages(x), conflict_messages(x))
 }

@@ -7,7 +7,10 @@
 #'   of a calibration parameter's prior range or 0 for a variance, is
 #'   reflected back inside, and nothing is drawn outside), with the prior
 #'   density in the same units overlaid (dashed) and the posterior mode as a
-#'   vertical line;
+#'   vertical line. A fixed parameter has no density: its facet is labelled
+#'   `"fixed at"` its value and shows that value; an improper prior (such as
+#'   `"jeffreys"`) has no density to draw and is left out, as the caption
+#'   says;
 #' * `"trace"`: the retained draws of every parameter of a class against the
 #'   iteration, to judge mixing;
 #' * `"fits"`: the field observations, the MAP fitted values
@@ -49,7 +52,7 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
     cli::cli_abort(c(
       "{.arg parameter} must be one parameter class: {.or {.val {param_classes}}}.",
-      x = "Got {.val {format_value(parameter)}}."
+      x = "Got {format_choice(parameter)}."
     ))
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
@@ -130,31 +133,38 @@ support_density <- function(draws, lo = -Inf, hi = Inf, n = 256L) {
 plot_density <- function(x, vars, labels, xlab) {
   sup <- param_support(x)
   rownames(sup) <- phi_vars(x$spec)
+  fam <- names(prior_families)[match(phi_spec(x)$table$family, prior_families)]
+  names(fam) <- rownames(sup)
+  fixed <- vars[fam[vars] == "fixed"]
+  improper <- vars[!fam[vars] %in% "fixed" & !vapply(fam[vars], function(f) prior_registry[[f]]$proper, logical(1))]
+  # a fixed parameter has no density: its facet says so and shows its value
+  labels[fixed] <- sprintf("%s, fixed at %s", labels[fixed], format(signif(x$Phi[1, fixed], 4)))
   post <- list()
   prior <- list()
-  for (v in vars) {
-    draws <- x$Phi[, v]
-    r <- range(draws)
-    if (r[1] == r[2]) {  # a fixed parameter: no density, the mode line only
-      grid <- r[1] + c(-1, 1) * max(abs(r[1]) * 0.1, 0.1)
-      post[[v]] <- data.frame(parameter = labels[[v]], value = numeric(0), density = numeric(0))
-    } else {
-      d <- support_density(draws, sup[v, 1], sup[v, 2])
-      grid <- d$x
-      post[[v]] <- data.frame(parameter = labels[[v]], value = d$x, density = d$y)
+  for (v in setdiff(vars, fixed)) {
+    d <- support_density(x$Phi[, v], sup[v, 1], sup[v, 2])
+    post[[v]] <- data.frame(parameter = labels[[v]], value = d$x, density = d$y)
+    # an improper prior has no density to draw
+    if (!v %in% improper) {
+      grid <- seq(d$x[1], d$x[length(d$x)], length.out = 256)
+      prior[[v]] <- data.frame(parameter = labels[[v]], value = grid,
+                               density = exp(x$spec$fns[[v]](grid)))
     }
-    grid <- seq(grid[1], grid[length(grid)], length.out = 256)
-    dens <- exp(x$spec$fns[[v]](grid))
-    prior[[v]] <- data.frame(parameter = labels[[v]], value = grid, density = dens)
   }
-  post <- do.call(rbind, post)
-  prior <- do.call(rbind, prior)
+  empty <- data.frame(parameter = character(), value = numeric(), density = numeric())
+  post <- do.call(rbind, c(list(empty), post))
+  prior <- do.call(rbind, c(list(empty), prior))
   prior <- prior[is.finite(prior$density), , drop = FALSE]
   modes <- data.frame(parameter = unname(labels[vars]), mode = x$estimates[vars, "mode"])
   lev <- unname(labels[vars])
   post$parameter <- factor(post$parameter, lev)
   prior$parameter <- factor(prior$parameter, lev)
   modes$parameter <- factor(modes$parameter, lev)
+  notes <- c(
+    if (length(fixed)) sprintf("%s: fixed, no density.", paste(fixed, collapse = ", ")),
+    if (length(improper)) sprintf("%s: improper %s prior, not drawn.",
+                                  paste(improper, collapse = ", "), paste(unique(fam[improper]), collapse = ", "))
+  )
   ggplot2::ggplot(mapping = ggplot2::aes(x = .data$value, y = .data$density)) +
     ggplot2::geom_area(data = post, stat = "identity", fill = "steelblue", alpha = 0.35, colour = "steelblue") +
     ggplot2::geom_line(data = prior, linetype = "dashed", colour = "grey30") +
@@ -162,7 +172,8 @@ plot_density <- function(x, vars, labels, xlab) {
                         colour = "firebrick") +
     ggplot2::facet_wrap(ggplot2::vars(.data$parameter), scales = "free") +
     ggplot2::labs(x = xlab %||% value_label(x, vars), y = "density",
-                  title = "Posterior (shaded), prior (dashed) and posterior mode") +
+                  title = "Posterior (shaded), prior (dashed) and posterior mode",
+                  caption = if (length(notes)) paste(notes, collapse = " ") else NULL) +
     ggplot2::theme_bw()
 }
 

@@ -105,7 +105,8 @@
 #' @return A list with `pred`, `se`, `lower` and `upper` (one value per row of
 #'   `newdata`, in the response's units) and, when `draws = TRUE`, `draws`: a
 #'   matrix with one row per new point and one column per draw used. The
-#'   attribute `draw_rows` gives the rows of `object$Phi` used.
+#'   attribute `draw_rows` gives the rows of `object$Phi` used. Its class,
+#'   `fbc_prediction`, prints the first 20 points as a table.
 #' @export
 #' @examples
 #' set.seed(1)
@@ -183,7 +184,28 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   out <- list(pred = pred, se = se, lower = lower, upper = upper)
   if (draws) out$draws <- D
   attr(out, "draw_rows") <- rows
+  class(out) <- c("fbc_prediction", "list")
   out
+}
+
+#' @export
+print.fbc_prediction <- function(x, digits = 4, ...) {
+  check_dots_empty(..., fn = print.fbc_prediction, name = "print", cls = "fbc_prediction",
+                   action = "warn")
+  digits <- check_count(digits, "digits")
+  n <- length(x$pred)
+  D <- length(attr(x, "draw_rows"))
+  cat(sprintf("<fbc_prediction> %d point%s from %d posterior draw%s\n", n, if (n == 1L) "" else "s",
+              D, if (D == 1L) "" else "s"))
+  shown <- min(n, 20L)
+  tab <- data.frame(pred = x$pred, se = x$se, lower = x$lower, upper = x$upper)
+  print(utils::head(tab, shown), digits = digits)
+  if (n > shown) cat(sprintf("... %d more point%s: see `$pred`, `$se`, `$lower`, `$upper`\n",
+                             n - shown, if (n - shown == 1L) "" else "s"))
+  if (!is.null(x$draws)) {
+    cat(sprintf("$draws: the per-draw predictive means, %d x %d\n", nrow(x$draws), ncol(x$draws)))
+  }
+  invisible(x)
 }
 
 # Rows of Phi used by the Bayesian prediction: all, or `ndraws` evenly

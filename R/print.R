@@ -11,13 +11,14 @@
 #' [calibrate()]) and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
-#' 400, one chain only, an interrupted run, draws piling up at a bound,
+#' 400, one chain only, an interrupted run, a chain that never moved, draws
+#' piling up at a bound, a posterior pressing against its prior's bound,
 #' calibration parameters beyond the simulator design, a prior-data
 #' conflict), each
 #' with what to do.
 #'
 #' @param x An `fbc` object from [calibrate()].
-#' @param digits Significant digits for the table.
+#' @param digits Significant digits for the table: a whole number, at least 1.
 #' @param ... Not used: an argument given here gives a warning (other code
 #'   may pass arguments meant for other methods).
 #' @return `x`, invisibly.
@@ -25,6 +26,7 @@
 print.fbc <- function(x, digits = 3, ...) {
   check_dots_empty(..., fn = print.fbc, name = "print", action = "warn")
   x <- check_fbc(x, "x")
+  digits <- check_count(digits, "digits")
   s <- x$settings
   sc <- x$scale
   gp <- s$discrepancy == "gp"

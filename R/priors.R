@@ -160,7 +160,7 @@ check_prior <- function(dist, p1, p2, arg, parg = arg, call = parent.frame()) {
       !dist %in% names(prior_families)) {
     cli::cli_abort(c(
       "{.arg {arg}} must be one of {.or {.val {names(prior_families)}}}.",
-      x = "Got {.val {format_value(dist)}}."
+      x = "Got {format_choice(dist)}."
     ), call = call)
   }
   f <- prior_registry[[dist]]
@@ -291,11 +291,29 @@ print.fbc_hypers <- function(x, ...) {
   cat("<fbc hyperparameter priors>\n")
   for (cls in names(x)) {
     s <- x[[cls]]
-    cat(sprintf("  %-8s %s(%s, %s), init %s\n", cls, paste(s$dist, collapse = "/"),
-                paste(format(s$p1), collapse = "/"), paste(format(s$p2), collapse = "/"),
-                paste(format(s$init), collapse = "/")))
+    n <- max(lengths(s))
+    one <- vapply(seq_len(n), function(i) {
+      at <- function(v) v[(i - 1L) %% length(v) + 1L]
+      format_prior(at(s$dist), at(s$p1), at(s$p2), at(s$init))
+    }, character(1))
+    # one per input when they differ
+    if (length(unique(one)) > 1L) one <- paste0("[", seq_len(n), "] ", one)
+    cat(sprintf("  %-8s %s\n", cls, paste(unique(one), collapse = "; ")))
   }
   invisible(x)
+}
+
+# One prior as print.fbc_hypers() shows it: the family with the parameters it
+# uses, named as in prior_builder()'s table (those of another family, left
+# from the default, are not shown), and the initial value ("default": the
+# family's centre); a fixed parameter by its value.
+format_prior <- function(dist, p1, p2, init) {
+  if (identical(dist, "fixed")) return(sprintf("fixed at %s", format(init)))
+  f <- prior_registry[[dist]]
+  vals <- c(p1 = p1, p2 = p2)[names(f$params)]
+  fam <- if (length(vals)) sprintf("%s(%s)", dist, paste(f$params, format(vals), collapse = ", ")) else dist
+  sprintf("%s%s, init %s", fam, if (f$proper) "" else " (improper)",
+          if (is.na(init)) "default" else format(init))
 }
 
 # A prior family switched away from its argument's default while the family

@@ -31,6 +31,7 @@ summary.fbc <- function(object, ...) {
 #' @param digits Significant digits.
 #' @export
 print.summary.fbc <- function(x, digits = 3, ...) {
+  digits <- check_count(digits, "digits")
   check_dots_empty(..., fn = print.summary.fbc, name = "print", cls = "summary.fbc", action = "warn")
   df <- as.data.frame(unclass(x), stringsAsFactors = FALSE)
   attr(df, "row.names") <- attr(x, "row.names")
@@ -44,13 +45,67 @@ print.summary.fbc <- function(x, digits = 3, ...) {
 }
 
 #' @rdname summary.fbc
-#' @param stat `"mean"` (default) or `"median"`: which posterior summary
-#'   `coef()` returns.
+#' @param stat `"mean"` (default), `"median"` or `"mode"` (see [pmode()]):
+#'   which posterior summary `coef()` returns.
 #' @return `coef()`: a named numeric vector, one value per parameter.
 #' @export
-coef.fbc <- function(object, stat = c("mean", "median"), ...) {
+coef.fbc <- function(object, stat = c("mean", "median", "mode"), ...) {
   check_dots_empty(..., fn = coef.fbc, name = "coef")
-  stat <- match_choice(stat, c("mean", "median"), "stat")
+  stat <- match_choice(stat, c("mean", "median", "mode"), "stat")
   object <- check_fbc(object, "object")
   stats::setNames(object$estimates[[stat]], rownames(object$estimates))
+}
+
+#' Fitted values and residuals of a calibration
+#'
+#' `fitted()` gives the calibrated model's prediction of the field response
+#' at each field observation's inputs: the predictive mean of
+#' [predict.fbc()] (`type = "field"`) given all the data, averaged over up
+#' to 1000 posterior draws (`method = "Bayesian"`) or at the MAP draw
+#' (`method = "MAP"`, as `plot(fit, type = "fits")` shows). `residuals()`
+#' is the observed field response minus these. Both are in the response's
+#' units, one value per row of the field data, in its order. The
+#' observations are part of the data each prediction is conditioned on, so
+#' these residuals are smaller than out-of-sample errors; [ppc_field()]
+#' checks the observations against their predictive distributions.
+#'
+#' `as.matrix()` returns the retained draws, `x$Phi`: one row per draw
+#' (chains stacked, their ids in `x$chain`), one column per parameter.
+#'
+#' @param object,x An `fbc` object from [calibrate()].
+#' @param method `"Bayesian"` (default) or `"MAP"`, as in [predict.fbc()].
+#' @param ... Not used: an argument given here is an error.
+#' @return `fitted()`, `residuals()`: a numeric vector, one value per field
+#'   observation. `as.matrix()`: a draws x parameters matrix.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' head(fitted(fit, method = "MAP"))
+#' sd(residuals(fit, method = "MAP"))
+#' dim(as.matrix(fit))
+fitted.fbc <- function(object, method = c("Bayesian", "MAP"), ...) {
+  check_dots_empty(..., fn = fitted.fbc, name = "fitted")
+  object <- check_fbc(object, "object")
+  method <- match_choice(method, c("Bayesian", "MAP"), "method")
+  sc <- object$scale
+  X <- unscale_inputs(object$data$Xf, sc, seq_len(sc$p))
+  stats::predict(object, X, method = method, type = "field")$pred
+}
+
+#' @rdname fitted.fbc
+#' @export
+residuals.fbc <- function(object, method = c("Bayesian", "MAP"), ...) {
+  check_dots_empty(..., fn = residuals.fbc, name = "residuals")
+  object <- check_fbc(object, "object")
+  method <- match_choice(method, c("Bayesian", "MAP"), "method")
+  sc <- object$scale
+  sc$ymean + sc$ysd * object$data$yf - fitted.fbc(object, method = method)
+}
+
+#' @rdname fitted.fbc
+#' @export
+as.matrix.fbc <- function(x, ...) {
+  check_dots_empty(..., fn = as.matrix.fbc, name = "as.matrix")
+  check_fbc(x, "x")$Phi
 }

@@ -49,7 +49,8 @@
 #' large `|z|` mean the emulator is overconfident (`print()` says so when the
 #' 95% coverage is below 0.85 or at least 3 runs, and 2%, have `|z| > 3`);
 #' coverage well above
-#' nominal means it is too cautious. Leave-one-out is optimistic when runs
+#' nominal means it is too cautious, unless some runs are far off (`|z| > 3`):
+#' then the errors are uneven, and `print()` says that instead. Leave-one-out is optimistic when runs
 #' sit very close to each other: then use folds of neighbouring runs.
 #'
 #' @param fit An `fbc` object from [calibrate()].
@@ -213,6 +214,11 @@ validation_verdict <- function(x) {
     return("The emulator is overconfident: its intervals miss too many runs. Look at the plot for where (an input range, a corner of the design), and consider more runs there or a longer run of the sampler.")
   }
   if (cov50 > 0.85) {
+    far <- sum(abs(x$runs$z) > 3)
+    if (far > 0) {
+      return(sprintf("Most runs sit well inside their intervals (50%% coverage %.2f), yet %d run%s beyond 3 sd: the errors are uneven, not just cautious. Look at the plot for where (an input range, a corner of the design), and consider more runs there.",
+                     cov50, far, if (far == 1) " lies" else "s lie"))
+    }
     return("The emulator's intervals are much wider than its errors: it is too cautious (often harmless; check sigma2S and thetaS).")
   }
   character()

@@ -92,3 +92,61 @@ test_that("R-hat and ESS use chains cut to a common length", {
 test_that("convergence_messages() wants an fbc object", {
   expect_snapshot(error = TRUE, convergence_messages(list()))
 })
+
+test_that("a chain that never moves a sampled parameter is reported, a fixed parameter is not", {
+  fit <- small_fit(nChains = 2, hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2))
+  set.seed(1)
+  Phi <- iid_draws(fit, 4, 500)
+  Phi[, c("alphaS1", "alphaS2")] <- 2  # fixed: constant in every chain
+  x <- with_draws(fit, Phi, rep(1:4, each = 500))
+  expect_equal(nrow(FBC:::stuck_chains(x)), 0)
+  expect_equal(convergence_messages(x), character())
+  # chain 3 stuck at its start for kappa1 and thetaS1
+  Phi[1001:1500, "kappa1"] <- 9.5
+  Phi[1001:1500, "thetaS1"] <- 0.25
+  y <- with_draws(fit, Phi, rep(1:4, each = 500))
+  st <- FBC:::stuck_chains(y)
+  expect_equal(st$var, c("kappa1", "thetaS1"))
+  expect_equal(st$chain, c(3, 3))
+  expect_equal(st$value, c(9.5, 0.25))
+  msg <- convergence_messages(y)
+  expect_snapshot(writeLines(strwrap(grep("never moved", msg, value = TRUE), 78)))
+  # all chains stuck: R-hat and ESS are NA, as for a fixed parameter, but the
+  # message says it
+  Phi[, "sigma2E"] <- 0.3
+  z <- with_draws(fit, Phi, rep(1:4, each = 500))
+  expect_true(is.na(z$estimates["sigma2E", "rhat"]))
+  expect_length(grep("^Chain [1-4] never moved .*sigma2E", convergence_messages(z)), 4)
+})
+
+test_that("a posterior pressing against its prior's bound is reported", {
+  fit <- small_fit(nChains = 1, kappaDist = "uniform", kappaP1 = 7, kappaP2 = 12, kappaInit = 9)
+  set.seed(3)
+  Phi <- iid_draws(fit, 4, 500)
+  chain <- rep(1:4, each = 500)
+  # falling away from 12 with scale 0.5: its density is highest at 12 (2, against
+  # a flat 0.2 over [7, 12]); only 5% of the draws within 0.5% of the range
+  Phi[, "kappa1"] <- 12 - stats::rexp(2000, 2)
+  x <- with_draws(fit, Phi, chain)
+  expect_equal(nrow(FBC:::bound_piling(x)), 0)
+  expect_equal(FBC:::bound_pressing(x), data.frame(var = "kappa1", bound = 12))
+  msg <- convergence_messages(x)
+  expect_snapshot(writeLines(strwrap(grep("presses", msg, value = TRUE), 78)))
+  # near the bound but not against it, and flat over the range: no message
+  Phi[, "kappa1"] <- stats::rnorm(2000, 11, 0.2)
+  expect_equal(nrow(FBC:::bound_pressing(with_draws(fit, Phi, chain))), 0)
+  Phi[, "kappa1"] <- stats::runif(2000, 7, 12)
+  expect_equal(nrow(FBC:::bound_pressing(with_draws(fit, Phi, chain))), 0)
+  # a variance falling from 0, its domain's bound, is not the prior's doing
+  Phi[, "sigma2E"] <- stats::rexp(2000, 20)
+  expect_equal(nrow(FBC:::bound_pressing(with_draws(fit, Phi, chain))), 0)
+})
+
+test_that("sigma2E held at a uniform prior's lower edge: ppc_field()'s hint and convergence_messages() agree", {
+  fit <- small_fit(nChains = 1, hypers = set_hyperPriors(
+    sigma2EDist = "uniform", sigma2EP1 = 0.5, sigma2EP2 = 1, sigma2EInit = 0.7))
+  expect_output(print(ppc_field(fit)), "see convergence_messages")
+  expect_equal(FBC:::bound_pressing(fit), data.frame(var = "sigma2E", bound = 0.5))
+  expect_match(convergence_messages(fit),
+               "The posterior of sigma2E presses against its prior's bound 0.5", all = FALSE)
+})

@@ -123,3 +123,26 @@ test_that("a posterior pressed against its prior bound is drawn inside it", {
   # the plain estimate would spill past 9
   expect_gt(max(stats::density(fit$Phi[, "kappa1"])$x), 9)
 })
+
+test_that("a fixed parameter is shown as its value; an improper prior is not drawn", {
+  # print()'s advice for alphaS at 2, followed; sigma2E under Jeffreys' 1/x
+  set.seed(9)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1,
+                   hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2,
+                                            sigma2EDist = "jeffreys", sigma2EInit = 0.2))
+  p <- plot(fit, "alphaS")
+  expect_identical(levels(p$layers[[3]]$data$parameter),
+                   c("alphaS1 (h), fixed at 2", "alphaS2 (g), fixed at 2"))
+  expect_equal(nrow(p$layers[[1]]$data), 0)  # no posterior density
+  expect_equal(nrow(p$layers[[2]]$data), 0)  # no prior density
+  expect_equal(ggplot2::layer_data(p, 3)$xintercept, c(2, 2))
+  expect_identical(p$labels$caption, "alphaS1, alphaS2: fixed, no density.")
+  expect_equal(nrow(ggplot2::ggplot_build(p)$layout$layout), 2)
+  expect_s3_class(plot(fit, "alphaS", type = "trace"), "ggplot")
+
+  pe <- plot(fit, "sigma2E")
+  expect_gt(nrow(ggplot2::layer_data(pe, 1)), 0)  # the posterior is drawn
+  expect_equal(nrow(pe$layers[[2]]$data), 0)      # 1/x is not a density
+  expect_identical(pe$labels$caption, "sigma2E: improper jeffreys prior, not drawn.")
+  expect_null(plot(fit, "sigma2S")$labels$caption)
+})

@@ -5,6 +5,10 @@ test_that("pmode() returns the mean of the fullest bin", {
   # two bins over [0, 10]: [0, 5) is the fuller one
   expect_equal(pmode(x, breaks = 2), mean(x[x < 5]))
   expect_equal(pmode(rep(3, 5)), 3)
+  # one value: itself (nclass.FD() fails on it)
+  expect_equal(pmode(2.5), 2.5)
+  expect_equal(pmode(c(NA, 7, Inf)), 7)
+  expect_equal(pmode(4, breaks = 3), 4)
 })
 
 test_that("pmode() finds the mode of known distributions", {

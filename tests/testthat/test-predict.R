@@ -249,3 +249,23 @@ test_that("mixture quantiles solve the mixture's distribution function, also far
     expect_equal(rowMeans(pnorm(q, mu, sd)), rep(p, 4), tolerance = 1e-10)
   }
 })
+
+test_that("a prediction prints as a table, without the rows of the draws it used", {
+  set.seed(21)
+  fit <- calibrate(ballSim, ballField, nMCMC = 80, nBurn = 40, thinning = 2, nChains = 2)
+  h <- seq(0.5, 4, length.out = 25)
+  pr <- predict(fit, h, draws = TRUE)
+  expect_s3_class(pr, "fbc_prediction")
+  expect_equal(length(attr(pr, "draw_rows")), nrow(fit$Phi))  # 40 draws
+  out <- capture.output(print(pr))
+  expect_identical(out[1], "<fbc_prediction> 25 points from 40 posterior draws")
+  expect_false(any(grepl("draw_rows|attr", out)))
+  expect_length(out, 1 + 21 + 2)  # header, 20 rows under the column names, 2 notes
+  expect_identical(out[23:24], c("... 5 more points: see `$pred`, `$se`, `$lower`, `$upper`",
+                                 "$draws: the per-draw predictive means, 25 x 40"))
+  map <- predict(fit, h[1:3], method = "MAP")
+  expect_snapshot(print(map, digits = 3))
+  # still a list of its parts
+  expect_identical(as.data.frame(map)$upper, map$upper)
+  expect_snapshot(error = TRUE, print(pr, digits = "3"))
+})

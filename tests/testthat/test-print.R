@@ -81,3 +81,17 @@ test_that("print() names several experimental inputs and the calibration input's
   expect_identical(out[4], sprintf("  calibration input: kappa1 = t (design %s to %s)",
                                    signif(t[1], 4), signif(t[2], 4)))
 })
+
+test_that("print()'s digits is checked, and used", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 1)
+  expect_snapshot(error = TRUE, {
+    print(fit, digits = "3")
+    print(fit, digits = 0)
+    print(summary(fit), digits = NA)
+  })
+  out <- capture.output(print(summary(fit), digits = 5))
+  med <- signif(fit$estimates["sigma2E", "median"], 5)
+  expect_match(out[grep("^sigma2E", out)], formatC(med, digits = 5, format = "fg", flag = "#"),
+               fixed = TRUE, all = FALSE)
+})

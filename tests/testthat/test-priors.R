@@ -170,3 +170,18 @@ test_that("a prior family switched without its own parameters is refused, naming
   # N(9.8, 1) in g's units, not the Beta's 1.1, 1.1
   expect_equal(fit$priorFns$kappa1(c(8, 10)), dnorm(c(8, 10), 9.8, 1, log = TRUE))
 })
+
+test_that("printed priors show each family with its own parameters", {
+  expect_snapshot(print(set_hyperPriors()))
+  # switched to families that take no parameters: the default family's are not shown
+  h <- set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2, sigma2EDist = "jeffreys",
+                       sigma2EInit = 0.2, thetaSDist = "lognormal", thetaSP1 = 0, thetaSP2 = 2,
+                       thetaSInit = NA, thetaBDist = c("gamma", "fixed"), thetaBInit = c(1, 0.5))
+  out <- capture.output(print(h))
+  expect_identical(grep("alphaS", out, value = TRUE), "  alphaS   fixed at 2")
+  expect_identical(grep("sigma2E", out, value = TRUE), "  sigma2E  jeffreys (improper), init 0.2")
+  expect_identical(grep("thetaS", out, value = TRUE),
+                   "  thetaS   lognormal(meanlog 0, sdlog 2), init default")
+  expect_identical(grep("thetaB", out, value = TRUE),
+                   "  thetaB   [1] gamma(shape 1.1, rate 0.1), init 1; [2] fixed at 0.5")
+})

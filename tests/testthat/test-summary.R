@@ -14,13 +14,36 @@ test_that("summary() returns the estimates table, classed, extra columns kept", 
   expect_true(any(grepl("^kappa1 ", out)))
 })
 
-test_that("coef() gives posterior means or medians of every column of Phi", {
+test_that("coef() gives posterior means, medians or modes of every column of Phi", {
   set.seed(5)
   fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
-  # reference: column summaries of the draws in base R
+  # reference: column summaries of the draws in base R (and pmode())
   expect_equal(coef(fit), colMeans(fit$Phi))
   expect_equal(coef(fit, stat = "median"), apply(fit$Phi, 2, median))
-  expect_snapshot(error = TRUE, coef(fit, stat = "mode"))
+  expect_equal(coef(fit, stat = "mode"), apply(fit$Phi, 2, pmode))
+  expect_snapshot(error = TRUE, coef(fit, stat = "MAP"))
+})
+
+test_that("as.matrix(), fitted() and residuals() are the draws and the calibrated fits", {
+  set.seed(5)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
+  expect_identical(as.matrix(fit), fit$Phi)
+  expect_identical(dim(as.matrix(fit)), c(200L, 11L))  # 4 chains x (150 - 50) / 2 draws, 11 parameters
+  # reference: predict() at the field inputs, as plot(type = "fits") shows
+  map <- predict(fit, ballField[, "h"], method = "MAP")$pred
+  expect_equal(fitted(fit, method = "MAP"), map)
+  expect_equal(residuals(fit, method = "MAP"), unname(ballField[, "t"]) - map)
+  bayes <- predict(fit, ballField[, "h"])$pred
+  expect_equal(fitted(fit), bayes)
+  expect_equal(resid(fit), unname(ballField[, "t"]) - bayes)
+  # a calibrated model fits the ball data to about its noise (sd ~0.1 s)
+  expect_lt(sd(residuals(fit)), 0.2)
+  expect_length(fitted(fit), nrow(ballField))
+  expect_snapshot(error = TRUE, {
+    fitted(fit, type = "simulator")
+    residuals(fit, method = "mode")
+    as.matrix(fit, chain = 1)
+  })
 })
 
 test_that("summary() and coef() refuse unknown arguments; print() of the summary warns", {

@@ -223,3 +223,14 @@ test_that("validate_emulator() on a product design goes through the Kronecker al
     expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
   }
 })
+
+test_that("wide intervals are called cautious only when no run is far off", {
+  # sigma2S ten times too large: intervals sqrt(10) times too wide
+  wide <- validate_emulator(gp_truth_fit(10), method = "MAP")
+  expect_gt(wide$coverage[["50%"]], 0.85)
+  expect_equal(sum(abs(wide$runs$z) > 3), 0)
+  expect_match(FBC:::validation_verdict(wide), "too cautious")
+  # two runs far off (fewer than the 3 that make it overconfident)
+  wide$runs$z[c(5, 9)] <- c(4.2, -3.5)
+  expect_snapshot(writeLines(strwrap(FBC:::validation_verdict(wide), 78)))
+})
