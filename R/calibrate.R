@@ -389,6 +389,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       checkpointEvery = 60) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
+  check_experimental_input(field)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
   cols <- align_columns(sim, field)
   sim <- cols$sim
@@ -474,6 +475,9 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                         thinning = thinning, showProgress = showProgress, run = run,
                         every = checkpointEvery)
   elapsed <- proc.time()[["elapsed"]] - t0
+  # the directory as used (absolute): workers and later sessions may start
+  # elsewhere
+  if (!is.null(run)) checkpoint <- run$dir
   results <- check_chain_results(results, nMCMC, checkpoint = checkpoint)
 
   settings <- c(settings[c("nMCMC", "nBurn", "thinning")],

@@ -233,3 +233,21 @@ match_choice <- function(x, choices, arg, call = parent.frame()) {
   }
   x
 }
+
+# Field data with the response alone (no experimental input: a few scalar
+# observations of a simulator whose inputs are all calibration inputs) are
+# refused by name: the model's bias GP and the field rows of the emulator
+# are functions of the experimental inputs, and FBC has no model without
+# one yet. (A constant input column is no way round it: the scaling needs
+# every input to vary over the simulator design.)
+check_experimental_input <- function(field, call = parent.frame()) {
+  if ((is.matrix(field) || is.data.frame(field)) && ncol(field) == 1L) {
+    cli::cli_abort(c(
+      "{.arg field} has the response only: FBC needs at least one experimental input, a column that {.arg field} and {.arg sim} share.",
+      i = "The discrepancy GP and the emulator's field predictions are functions of the experimental inputs (p >= 1); a simulator whose inputs are all calibration inputs (p = 0) is not supported yet.",
+      i = "If the observations were made at settings of some input (a time, a position, a condition), give that input in both {.arg field} and {.arg sim}."
+    ), call = call)
+  }
+  invisible(TRUE)
+}
+

@@ -180,7 +180,7 @@ warn_newdata_outside <- function(X, object, call = parent.frame()) {
 inform_duplicated_runs <- function(sim, call = parent.frame()) {
   X <- sim[, -1, drop = FALSE]
   dup <- duplicated(X)
-  if (!any(dup)) return(invisible(FALSE))
+  if (!any(dup)) return(inform_near_duplicates(X, call = call))
   key <- apply(X, 1, function(r) paste(format(r, digits = 17), collapse = "\r"))
   groups <- split(seq_len(nrow(X)), key)
   groups <- groups[lengths(groups) > 1L]
@@ -196,6 +196,31 @@ inform_duplicated_runs <- function(sim, call = parent.frame()) {
     } else {
       "They add no information; the nugget keeps the covariance invertible."
     }
+  ), call = call)
+  invisible(TRUE)
+}
+
+# Runs closer than the nugget can carry: inputs that agree to within
+# fbc_near_runs of each input's design range but are not identical. Their
+# correlation is 1 to about 1e-12, far inside the relative nugget (1e-6),
+# so they act as one run whose responses must agree; a message says where
+# (rows found by rounding the scaled inputs to that grid, O(m)).
+fbc_near_runs <- 1e-7
+
+inform_near_duplicates <- function(X, call = parent.frame()) {
+  rng <- apply(X, 2, function(v) diff(range(v)))
+  rng[rng == 0] <- 1
+  U <- sweep(sweep(X, 2, apply(X, 2, min), "-"), 2, rng, "/")
+  key <- apply(round(U / fbc_near_runs), 1, paste, collapse = "\r")
+  near <- duplicated(key) | duplicated(key, fromLast = TRUE)
+  if (!any(near)) return(invisible(FALSE))
+  groups <- split(which(near), key[near])
+  shown <- paste(vapply(utils::head(groups, 5), paste, character(1), collapse = " and "),
+                 collapse = "; ")
+  if (length(groups) > 5L) shown <- paste0(shown, "; ...")
+  cli::cli_inform(c(
+    i = "{.arg sim} has {length(groups)} group{?s} of runs whose inputs differ by less than {fbc_near_runs} of each input's range: rows {shown}.",
+    " " = "The emulator treats such runs as one (their correlation is 1 far inside its tiny nugget): their responses must agree, and they add no information."
   ), call = call)
   invisible(TRUE)
 }

@@ -24,6 +24,7 @@ fbc_scale <- function(sim, p, named = FALSE, call = parent.frame()) {
   if (stats::sd(ys) == 0) {
     cli::cli_abort("The simulator response (first column of {.arg sim}) is constant.", call = call)
   }
+  warn_nearly_constant(ys, call = call)
   names_ <- usable_names(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
   list(xmin = unname(xmin), xmax = unname(xmax), ymean = mean(ys), ysd = stats::sd(ys),
        p = p, q = ncol(sim) - 1L - p, named = named,
@@ -53,3 +54,21 @@ sampler_scale <- function(Phi, scale) {
                              2, scale$xmax[cal] - scale$xmin[cal], "/")
   unname(Phi)
 }
+
+# Relative spread of the simulator response below which it is nearly
+# constant: standardising by its sd then magnifies rounding (a double holds
+# about 16 digits), and the emulator fits noise.
+fbc_constant_spread <- 1e-8
+
+# Warns when the simulator response's sd is tiny against its level.
+warn_nearly_constant <- function(ys, call = parent.frame()) {
+  spread <- stats::sd(ys) / max(abs(ys))
+  if (spread < fbc_constant_spread) {
+    cli::cli_warn(c(
+      "The simulator response is nearly constant: its sd is {signif(spread, 2)} of its largest absolute value.",
+      i = "FBC standardises the response by its sd, which here magnifies rounding in its last digits: check that {.arg sim}'s response column is the intended output, or subtract its constant part."
+    ), call = call)
+  }
+  invisible(spread)
+}
+

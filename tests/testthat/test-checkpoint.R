@@ -33,6 +33,20 @@ test_that("a chain in pieces makes the draws of the uninterrupted chain", {
   expect_identical(again$state, two$state)
 })
 
+test_that("a relative checkpoint directory is kept as the absolute one used", {
+  base <- tempfile("ck-wd-")
+  dir.create(base)
+  on.exit(unlink(base, recursive = TRUE), add = TRUE)
+  old <- setwd(base)
+  on.exit(setwd(old), add = TRUE)
+  set.seed(ck_seed)
+  fit <- do.call(calibrate, c(list(ballSim, ballField, checkpoint = "run1"), ck_args))
+  # the same directory from anywhere: workers and later sessions may start
+  # in another working directory
+  expect_identical(fit$settings$checkpoint, normalizePath(file.path(base, "run1")))
+  expect_true(file.exists(file.path(fit$settings$checkpoint, "run.rds")))
+})
+
 test_that("an interrupted run resumes from its checkpoint to the uninterrupted draws", {
   ref <- ck_reference()
   dir <- tempfile("ck-")

@@ -33,3 +33,10 @@ test_that("blockSim maps onto sampler, and is refused when an explicit sampler d
   expect_identical(FBC:::check_sampler("single"), "single")
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, sampler = "single", blockSim = TRUE))
 })
+
+test_that("field data without an experimental input (p = 0) are refused naming the need", {
+  # a simulator whose only input is a calibration input, observed as scalars
+  sim <- data.frame(y = sin(1:20), t = 1:20)
+  expect_snapshot(error = TRUE, calibrate(sim, data.frame(y = c(0.1, 0.2))))
+  expect_snapshot(error = TRUE, calibrate(as.matrix(sim), matrix(c(0.1, 0.2), ncol = 1)))
+})

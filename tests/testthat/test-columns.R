@@ -234,3 +234,15 @@ test_that("the posterior mass beyond the design is counted from the draws", {
   expect_length(grep("beyond the simulator design", convergence_messages(a)), 0L)
   expect_no_warning(predict(a, 1))
 })
+
+test_that("runs closer than the nugget can carry are reported, distinct designs are not", {
+  # rows 1 and 2 differ by 1e-9 in h (range ~ 3.6): 3e-10 of the range
+  s <- ballSim
+  s[2, c("h", "g")] <- s[1, c("h", "g")] + c(1e-9, 0)
+  s[2, "t"] <- s[1, "t"] + 1e-12
+  expect_message(FBC:::inform_duplicated_runs(s), "rows 1 and 2", fixed = TRUE)
+  # a difference of 1e-3 of the range is a real run
+  s[2, "h"] <- s[1, "h"] + 1e-3 * diff(range(s[, "h"]))
+  expect_no_message(FBC:::inform_duplicated_runs(s))
+  expect_no_message(FBC:::inform_duplicated_runs(ballSim))
+})

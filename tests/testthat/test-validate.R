@@ -234,3 +234,19 @@ test_that("wide intervals are called cautious only when no run is far off", {
   wide$runs$z[c(5, 9)] <- c(4.2, -3.5)
   expect_snapshot(writeLines(strwrap(FBC:::validation_verdict(wide), 78)))
 })
+
+test_that("validation in blocks of draws equals one call, and shows progress when asked", {
+  # 23 draws: blocks of 10, 10 and 3 give the numbers of one compiled call
+  set.seed(8)
+  fit <- calibrate(ballSim, ballField, nMCMC = 120, nBurn = 20, thinning = 2, nChains = 1)
+  phis <- FBC:::sampler_draws(fit, 1:23)
+  d <- fit$data
+  one <- .fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, fit$settings$nugget, seq_along(d$ys),
+                      model = fit$spec$model)
+  old <- options(FBC.progress = TRUE)
+  on.exit(options(old), add = TRUE)
+  blocks <- FBC:::heldout_draws(fit, phis, seq_along(d$ys))
+  # each draw is computed alone either way (to 1e-12: other BLASes may round
+  # differently with other shapes)
+  expect_equal(blocks, one[c("mean", "var")], tolerance = 1e-12)
+})
