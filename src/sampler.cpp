@@ -275,8 +275,10 @@ struct GibbsMuBMove : Move {
 // The variances that exist (sigma2S, sigma2B with a bias, sigma2E)
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
 struct ScaleMove : Move {
+  std::vector<double> lpNew;  // the proposal's log priors (workspace)
   explicit ScaleMove(const Posterior& post) {
     idx = post.scaled;
+    lpNew.resize(idx.size());
     name = "scale";
   }
   const char* kind() const override { return "scale"; }
@@ -284,7 +286,6 @@ struct ScaleMove : Move {
     Posterior& post = ch.post;
     const double e = std::exp(ch.scaleLogsd) * R::norm_rand(), c = std::exp(e);
     const int k = idx.size();
-    std::vector<double> lpNew(k);
     double lpDiff = 0;
     for (int i = 0; i < k; ++i) {
       const int j = idx[i];
