@@ -2,7 +2,8 @@
 # table that all code reads (the parameter layout, priors' domains, walks,
 # initial proposal scales, the sampler's moves, Phi's columns, plot labels,
 # the conflict check, checkpoints' identity and the tests' helpers). Adding a
-# class is one row here plus the code that computes with it.
+# class is one row here, its default prior in set_hyperPriors(), its name in
+# src/fbc.h (ParamClass) and read_model(), and the code that computes with it.
 #
 # Columns:
 #   class    name, in the vignette's notation; its parameters are named
@@ -23,7 +24,6 @@
 #            a parameter at all (a smoothness), "" when it always is
 #   bias     part of the discrepancy (the bias GP): no parameters under
 #            calibrate(discrepancy = "none")
-#   label    how plots and messages name the class
 model_classes <- data.frame(
   class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "sigma2S", "sigma2B", "sigma2E", "muB"),
   over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "one"),
@@ -34,9 +34,6 @@ model_classes <- data.frame(
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
   smooth = c("", "", "S", "", "B", "", "", "", ""),
   bias   = c(FALSE, FALSE, FALSE, TRUE, TRUE, FALSE, TRUE, FALSE, TRUE),
-  label  = c("calibration parameter", "simulator GP scale", "simulator GP smoothness",
-             "bias GP scale", "bias GP smoothness", "simulator GP variance",
-             "bias GP variance", "measurement error variance", "bias GP mean"),
   stringsAsFactors = FALSE
 )
 

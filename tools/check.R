@@ -9,11 +9,13 @@ out <- tempfile("fbc-check-")
 dir.create(out)
 desc <- read.dcf("DESCRIPTION")
 tarball <- file.path(out, sprintf("%s_%s.tar.gz", desc[, "Package"], desc[, "Version"]))
-build_status <- system2(R, c("CMD", "build", "--no-manual", shQuote(normalizePath("."))))
-# R CMD build writes the tarball into the working directory
-built <- sprintf("%s_%s.tar.gz", desc[, "Package"], desc[, "Version"])
-if (build_status != 0 || !file.exists(built)) stop("R CMD build failed")
-file.rename(built, tarball)
+# R CMD build writes the tarball into the working directory: build in `out`
+# (nothing is left in the checkout, whatever file system each is on)
+pkg <- normalizePath(".")
+old <- setwd(out)
+build_status <- system2(R, c("CMD", "build", "--no-manual", shQuote(pkg)))
+setwd(old)
+if (build_status != 0 || !file.exists(tarball)) stop("R CMD build failed")
 # no time server is reachable on CI machines; Suggests that are missing
 # (bayesplot, loo) only skip the examples and tests that use them
 env <- c("_R_CHECK_SYSTEM_CLOCK_=0", "_R_CHECK_FORCE_SUGGESTS_=false", "NOT_CRAN=true")
