@@ -219,6 +219,21 @@
 #' directory must be on storage the workers share (on a cluster, not a
 #' node's local disk); see `vignette("clusters", package = "FBC")`.
 #'
+#' @section Stopping when converged:
+#' With `converge = TRUE` (or `converge = until_converged(...)`) the chains
+#' run `nMCMC` sweeps (burn-in included), then the draws are checked, and
+#' while some sampled parameter has R-hat of 1.01 or more or bulk ESS below
+#' 400, every chain runs `every` (500) sweeps further and the draws are
+#' checked again, up to `maxMCMC` (50000) sweeps per chain. The chains
+#' continue their own random streams, and each check reads the draws up to
+#' its sweep count only: the run is one run of a data-dependent length,
+#' reproduced by [set.seed()] on any plan and resumed from a checkpoint to
+#' the same end. Burn-in is not extended. A short first stretch (say
+#' `nMCMC = 2000, nBurn = 1000`) then stops near the shortest run that meets
+#' the thresholds instead of the defaults' 8000 sweeps; `print()` says how
+#' many checks it took and whether the rule was met, and
+#' `fit$settings$converge` keeps it. [update.fbc()] takes the same rule.
+#'
 #' @section Defaults:
 #' `nChains = 4`, `nMCMC = 8000`, `nBurn = 2000`, `thinning = 2`: 4 x 3000 =
 #' 12000 retained draws. Four chains are the usual minimum for R-hat to
@@ -330,6 +345,11 @@
 #'   a checkpoint of the same run, the run is resumed from it.
 #' @param checkpointEvery Seconds between a chain's checkpoints (it also
 #'   saves when it stops); `0` saves after every piece of 50 iterations.
+#' @param converge `FALSE` (the default) runs `nMCMC` sweeps per chain.
+#'   `TRUE`, or a rule from [until_converged()], runs `nMCMC` sweeps and then
+#'   more, a few hundred at a time, until every R-hat is below 1.01 and every
+#'   bulk ESS at least 400 (the rule's thresholds), or a ceiling; see
+#'   "Stopping when converged".
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -386,7 +406,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kernelS = "powexp",
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense"), checkpoint = NULL,
-                      checkpointEvery = 60) {
+                      checkpointEvery = 60, converge = FALSE) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
   check_experimental_input(field)
@@ -420,8 +440,11 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     )
   }
   discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy")
-  check_run_size((nMCMC - nBurn) %/% thinning, length(param_names(p, q, discrepancy)), nChains,
-                 iters = nMCMC, args = c("nMCMC", "nChains"))
+  converge <- check_converge(converge)
+  check_ceiling(converge, nMCMC)
+  longest <- max(nMCMC, converge$maxMCMC)
+  check_run_size((longest - nBurn) %/% thinning, length(param_names(p, q, discrepancy)), nChains,
+                 iters = longest, args = c(if (is.null(converge)) "nMCMC" else "maxMCMC", "nChains"))
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   check_checkpoint(checkpoint, checkpointEvery)
@@ -456,6 +479,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
                    nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB,
                    discrepancy = discrepancy)
+  # a run under a rule is another run (its length depends on the rule)
+  if (!is.null(converge)) settings$converge <- unclass(converge)
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -470,21 +495,22 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       cli::cli_inform("Resuming the run in {.file {checkpoint}}: {cli::qty(length(at))}chain{?s} at iteration{?s} {at} of {nMCMC}.")
     }
   }
-  t0 <- proc.time()[["elapsed"]]
-  results <- run_chains(dat, spec, starts, seeds, moves, target = nMCMC, nBurn = nBurn,
-                        thinning = thinning, showProgress = showProgress, run = run,
-                        every = checkpointEvery)
-  elapsed <- proc.time()[["elapsed"]] - t0
   # the directory as used (absolute): workers and later sessions may start
   # elsewhere
   if (!is.null(run)) checkpoint <- run$dir
-  results <- check_chain_results(results, nMCMC, checkpoint = checkpoint)
-
-  settings <- c(settings[c("nMCMC", "nBurn", "thinning")],
-                list(nChains = length(results), nugget = fbc_nugget, sampler = sampler,
-                     moves = moves, time = elapsed, checkpoint = checkpoint,
-                     algebra = algebra, simAlgebra = simAlgebra, kernelS = kernelS,
-                     kernelB = kernelB, discrepancy = discrepancy))
-  new_fbc_chains(results, dat, spec, scale, call, settings = settings)
+  t0 <- proc.time()[["elapsed"]]
+  here <- environment()
+  assemble <- function(results, target) {
+    results <- check_chain_results(results, max(target), checkpoint = checkpoint, call = here)
+    settings <- list(nMCMC = max(target), nBurn = nBurn, thinning = thinning,
+                     nChains = length(results), nugget = fbc_nugget, sampler = sampler,
+                     moves = moves, time = proc.time()[["elapsed"]] - t0,
+                     checkpoint = checkpoint, algebra = algebra, simAlgebra = simAlgebra,
+                     kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy)
+    new_fbc_chains(results, dat, spec, scale, call, settings = settings)
+  }
+  run_rounds(starts, seeds, rep(nMCMC, nChains), converge, assemble, nBurn = nBurn,
+             thinning = thinning, showProgress = showProgress, dat = dat, spec = spec,
+             moves = moves, run = run, every = checkpointEvery)
 }
 

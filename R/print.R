@@ -44,6 +44,13 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
               s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
+  cv <- s$converge
+  if (!is.null(cv)) {
+    cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked every %d sweeps: %s\n",
+                cv$rhat, cv$ess, cv$every,
+                if (isTRUE(cv$converged)) sprintf("met at %d sweeps per chain (check %d)", cv$sweeps, cv$checks)
+                else sprintf("not met by %d sweeps per chain (%d checks)", cv$sweeps, cv$checks)))
+  }
   mv <- move_report(x)
   if (!is.null(mv) && nrow(mv)) {
     # each move by name with its acceptance (targets: 0.44 for one

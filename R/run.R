@@ -90,10 +90,12 @@ run_chain <- function(job, k, start) {
   genv <- globalenv()
   d <- length(start$state$phi)
   target <- job$target[k]
-  nAll <- kept_between(start$iter0, target, job$nBurn, job$thinning)
+  n0 <- nrow(start$draws)
+  # a chain resumed beyond this call's target (a later round of a run
+  # under until_converged()) keeps what it has
+  nAll <- max(n0, kept_between(start$iter0, target, job$nBurn, job$thinning))
   draws <- matrix(NA_real_, nAll, d)
   logPost <- logLik <- rep(NA_real_, nAll)
-  n0 <- nrow(start$draws)
   if (n0) {
     draws[seq_len(n0), ] <- start$draws
     logPost[seq_len(n0)] <- start$logPost
@@ -171,6 +173,8 @@ run_chain <- function(job, k, start) {
   tick(force = TRUE)
   res <- result_from_start(snapshot(), interrupted = status != "done")
   res$status <- status
+  # where its stream stands: a further round continues it (run_rounds())
+  res$seed <- cur$seed
   res
 }
 
@@ -220,7 +224,10 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   results <- vector("list", n)
   bar <- NULL
   todo <- which(!vapply(starts, function(s) isTRUE(s$finished), logical(1)))
-  for (k in setdiff(seq_len(n), todo)) results[[k]] <- result_from_start(starts[[k]], FALSE)
+  for (k in setdiff(seq_len(n), todo)) {
+    results[[k]] <- result_from_start(starts[[k]], FALSE)
+    results[[k]]$seed <- seeds[[k]]
+  }
   if (showProgress && length(todo)) {
     if (n > 1L) {
       workers <- future::nbrOfWorkers()

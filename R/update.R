@@ -8,7 +8,13 @@
 #'
 #' @param object An `fbc` object from [calibrate()] (or from `update()`).
 #' @param nMCMC Number of further iterations (sweeps) per chain. Every
-#'   `thinning`-th is kept, with the `thinning` of the original run.
+#'   `thinning`-th is kept, with the `thinning` of the original run. Under
+#'   `converge`, the first stretch (by default the rule's `every`).
+#' @param converge `FALSE` (the default) runs `nMCMC` sweeps more. `TRUE`,
+#'   or a rule from [until_converged()], runs `nMCMC` sweeps more and then
+#'   `every` at a time until every R-hat and bulk ESS, over the old and new
+#'   draws, meet the rule, or a chain has run the rule's `maxMCMC` sweeps in
+#'   all (counted from its start in [calibrate()]).
 #' @param showProgress Show a progress bar over all chains (see [calibrate()]).
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
@@ -22,49 +28,61 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
 #' fit <- update(fit, nMCMC = 400)
 #' table(fit$chain)
-update.fbc <- function(object, nMCMC, showProgress = FALSE, ...) {
+update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
+  converge <- check_converge(converge)
+  if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
   check_flag(showProgress, "showProgress")
   object <- check_fbc(object, "object")
   s <- object$settings
   states <- object$state$chains
+  if (!is.null(converge)) {
+    done <- max(vapply(states, function(st) as.numeric(st$sampler$iter), numeric(1)))
+    check_ceiling(converge, done + nMCMC, arg = "nMCMC")
+  }
   if (nMCMC %/% s$thinning < 1L) {
     cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
   }
+  further <- if (is.null(converge)) nMCMC else converge$maxMCMC - as.numeric(s$nMCMC)
   check_run_size(max(vapply(states, function(st) as.numeric(st$kept), numeric(1))) +
-                   nMCMC %/% s$thinning,
-                 ncol(object$Phi), length(states), iters = as.numeric(s$nMCMC) + nMCMC,
-                 args = "nMCMC", thin = FALSE)
+                   further %/% s$thinning,
+                 ncol(object$Phi), length(states), iters = as.numeric(s$nMCMC) + further,
+                 args = if (is.null(converge)) "nMCMC" else "maxMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
   d <- length(object$spec$vars)  # the sampler's parameters (see phi_columns())
   starts <- lapply(states, function(st) chain_start(st$sampler, d))
   target <- vapply(starts, function(st) st$iter0, integer(1)) + as.integer(nMCMC)
-  results <- run_chains(object$data, object$spec, starts, chain_seeds(length(starts)), s$moves,
-                        target = target, nBurn = s$nBurn, thinning = s$thinning,
-                        showProgress = showProgress)
-  elapsed <- proc.time()[["elapsed"]] - t0
-  # a chain skipped after an interrupt adds nothing and stays where it was
-  for (k in seq_along(results)) {
-    if (is.null(results[[k]])) {
-      st <- states[[k]]
-      results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
-                           logLik = numeric(), kept = 0L, acceptance = st$acceptance,
-                           scaleAcceptance = st$scaleAcceptance, done = 0L, nPost = 0L,
-                           interrupted = TRUE, state = st$sampler)
+  here <- environment()
+  assemble <- function(results, target) {
+    # a chain skipped after an interrupt adds nothing and stays where it was
+    for (k in seq_along(results)) {
+      if (is.null(results[[k]])) {
+        st <- states[[k]]
+        results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
+                             logLik = numeric(), kept = 0L, acceptance = st$acceptance,
+                             scaleAcceptance = st$scaleAcceptance, done = 0L, nPost = 0L,
+                             interrupted = TRUE, state = st$sampler)
+      }
     }
+    interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))
+    further <- max(target - iter0)
+    if (any(interrupted)) {
+      ids <- which(interrupted)
+      its <- vapply(results, function(r) as.integer(r$done), integer(1))[interrupted]
+      cli::cli_warn(c(
+        "Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {further} further iterations.",
+        i = "Returning all draws retained so far; continue with {.code update(fit, nMCMC = ...)}."
+      ), call = here)
+    }
+    s$nMCMC <- s$nMCMC + further
+    s$time <- s$time + proc.time()[["elapsed"]] - t0
+    s$converge <- NULL
+    new_fbc_chains(results, object$data, object$spec, object$scale, object$call, s,
+                   prev = object)
   }
-  interrupted <- vapply(results, function(r) isTRUE(r$interrupted), logical(1))
-  if (any(interrupted)) {
-    ids <- which(interrupted)
-    its <- vapply(results, function(r) as.integer(r$done), integer(1))[interrupted]
-    cli::cli_warn(c(
-      "Interrupted: {cli::qty(length(ids))}chain{?s} {ids} stopped after {its} of {nMCMC} further iterations.",
-      i = "Returning all draws retained so far; continue with {.code update(fit, nMCMC = ...)}."
-    ))
-  }
-  s$nMCMC <- s$nMCMC + nMCMC
-  s$time <- s$time + elapsed
-  new_fbc_chains(results, object$data, object$spec, object$scale, object$call, s,
-                 prev = object)
+  iter0 <- vapply(starts, function(st) st$iter0, integer(1))
+  run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
+             nBurn = s$nBurn, thinning = s$thinning, showProgress = showProgress,
+             dat = object$data, spec = object$spec, moves = s$moves)
 }
