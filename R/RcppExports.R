@@ -17,6 +17,10 @@
     .Call(`_FBC_sim_algebra`, Xs, p, algebra)
 }
 
+.fbc_loo_c <- function(Xf, yf, Xs, ys, phis, nugget, group, model) {
+    .Call(`_FBC_fbc_loo`, Xf, yf, Xs, ys, phis, nugget, group, model)
+}
+
 .loglik_path_c <- function(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model) {
     .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }

@@ -161,7 +161,21 @@ smooth_kernel_hint <- function(cls) {
 #' parameters with more than 1% of their draws beyond the range the
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
-#' [calibrate()]), and prior-data conflicts.
+#' [calibrate()]), calibration parameters confounded with the bias, and
+#' prior-data conflicts.
+#'
+#' @section Confounding:
+#' With a bias GP (`discrepancy = "gp"` or `"sgasp"`), a calibration
+#' parameter is flagged when the field data barely inform it -- its central
+#' 95% posterior interval covers at least 70% of the range the simulator
+#' design covers, or its posterior sd is at least 70% of its prior's --
+#' while the bias carries the signal: the posterior median of `sigma2B`
+#' exceeds that of `sigma2E`. The bias and \eqn{\kappa} are then confounded
+#' (Kennedy and O'Hagan 2001): another calibration explained the data as
+#' well with another bias. The message gives the calls that fit the other
+#' discrepancy models and compare them with [loo.fbc()]. On the ball data
+#' the default fit is flagged (the 95% interval of `g` covers about 90% of
+#' the design's range); its S-GaSP and no-discrepancy fits are not.
 #'
 #' A power-exponential smoothness piling up at 2 says the response is smooth:
 #' the advice is then a smooth correlation family, `kernelS = "matern52"`
@@ -269,7 +283,7 @@ convergence_messages <- function(x) {
       "The posterior of %s presses against its prior's bound %g (its density is highest there): the prior, not the data, sets this edge. %s",
       v, press$bound[i], hint))
   }
-  c(msgs, kappa_beyond_messages(x), conflict_messages(x))
+  c(msgs, kappa_beyond_messages(x), confounding_messages(x), conflict_messages(x))
 }
 
 # Posterior summary of each column of Phi, with the rank-normalised split

@@ -12,9 +12,10 @@
 # checkpoint loader (read_checkpoint_file()) too.
 
 # Format of the fit: fit$version$format. Fits made before it existed have
-# no `version` (format 0), format 1 fits no discrepancy model; both are
-# upgraded by what they lack.
-fbc_fit_format <- 2L
+# no `version` (format 0), format 1 fits no discrepancy model, format 2
+# fits a layout without the S-GaSP scale; all are upgraded by what they
+# lack.
+fbc_fit_format <- 3L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -268,6 +269,8 @@ upgrade_fit <- function(x, call) {
   # - and the layout of phi (before R handed it to the compiled core: the
   #   one layout there was, which the model description still gives)
   # - the discrepancy model (format 1, before the choice: the bias GP)
+  # - the S-GaSP scale in the layout (format 2: a class of length 0 for
+  #   the models it had)
   mc <- spec$model
   spec$model <- compiled_model(sc$p, sc$q, mc$kernS %||% 1L, mc$kernB %||% 1L,
                                mc$algebra %||% 0L,

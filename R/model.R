@@ -22,18 +22,21 @@
 #   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
-#   bias     part of the discrepancy (the bias GP): no parameters under
-#            calibrate(discrepancy = "none")
+#   models   the discrepancy models (calibrate(discrepancy =)) that have
+#            the class, separated by spaces: the bias GP's classes have no
+#            parameters under "none", muB (the bias mean) none under the
+#            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
 model_classes <- data.frame(
-  class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "sigma2S", "sigma2B", "sigma2E", "muB"),
-  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "one"),
-  domain = c("real", "positive", "unit12", "positive", "unit12", "positive", "positive", "positive", "real"),
-  walk   = c("identity", "log", "logit12", "log", "logit12", "log", "log", "log", "identity"),
-  sd0    = c(0.1, 0.5, 0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.1),
-  move   = c("each", "sim", "sim", "bias", "bias", "sim", "bias", "single", "gibbs"),
-  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
-  smooth = c("", "", "S", "", "B", "", "", "", ""),
-  bias   = c(FALSE, FALSE, FALSE, TRUE, TRUE, FALSE, TRUE, FALSE, TRUE),
+  class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
+  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "one", "one"),
+  domain = c("real", "positive", "unit12", "positive", "unit12", "positive", "positive", "positive", "positive", "real"),
+  walk   = c("identity", "log", "logit12", "log", "logit12", "log", "log", "log", "log", "identity"),
+  sd0    = c(0.1, 0.5, 0.5, 0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.1),
+  move   = c("each", "sim", "sim", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
+  smooth = c("", "", "S", "", "B", "", "", "", "", ""),
+  models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp", "sgasp",
+             "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
   stringsAsFactors = FALSE
 )
 
@@ -54,8 +57,32 @@ class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes
 
 # The discrepancy models of calibrate(discrepancy =) and their codes in the
 # compiled core (src/fbc.h, enum Discrepancy).
-discrepancy_codes <- c(gp = 0L, none = 1L)
+discrepancy_codes <- c(gp = 0L, sgasp = 2L, none = 1L)
 discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
+
+# Does each class have parameters under the discrepancy model? (A logical
+# vector over model_classes.)
+class_in_model <- function(discrepancy) {
+  vapply(strsplit(model_classes$models, " ", fixed = TRUE), function(m) discrepancy %in% m,
+         logical(1))
+}
+
+
+# Why the discrepancy model has no parameter of class `cls`, and which
+# models have one (for messages).
+discrepancy_lacks <- function(cls, discrepancy) {
+  if (discrepancy == "none") return("has no bias GP")
+  switch(cls,
+         muB = "has no bias mean (the S-GaSP bias has mean 0)",
+         lambdaZ = "has no S-GaSP scale",
+         "has no such parameter")
+}
+discrepancy_having <- function(cls) {
+  has <- names(discrepancy_codes)[vapply(names(discrepancy_codes), function(d)
+    class_in_model(d)[match(cls, model_classes$class)], logical(1))]
+  sprintf("Use %s in `calibrate()` to sample `%s`.",
+          paste(sprintf("`discrepancy = \"%s\"`", has), collapse = " or "), cls)
+}
 
 # How many parameters each class has with p experimental and q calibration
 # inputs under the discrepancy model `discrepancy` (named by class, in the
@@ -63,7 +90,7 @@ discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepa
 class_sizes <- function(p, q, discrepancy = "gp") {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L)
   n <- as.integer(n[model_classes$over])
-  n[model_classes$bias & discrepancy == "none"] <- 0L
+  n[!class_in_model(discrepancy)] <- 0L
   stats::setNames(n, model_classes$class)
 }
 
@@ -144,6 +171,11 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepan
                          scale = FALSE, kernS = 1L, kernB = 1L, algebra = 0L,
                          model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
   .loglik_path_c(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
+}
+
+.fbc_loo <- function(Xf, yf, Xs, ys, phis, nugget, group,
+                     model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf))) {
+  .fbc_loo_c(Xf, yf, Xs, ys, phis, nugget, group, model)
 }
 
 .fbc_heldout <- function(Xf, yf, Xs, ys, phis, nugget, fold, kernS = 1L, kernB = 1L, algebra = 0L,

@@ -57,11 +57,10 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
-  if (!length(vars) && x$settings$discrepancy == "none" &&
-      parameter %in% model_classes$class[model_classes$bias]) {
+  if (!length(vars) && !class_in_model(x$settings$discrepancy)[match(parameter, model_classes$class)]) {
     cli::cli_abort(c(
-      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} has no bias GP.",
-      i = "Use {.code discrepancy = \"gp\"} in {.fn calibrate} to sample the bias."
+      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} {discrepancy_lacks(parameter, x$settings$discrepancy)}.",
+      i = "{discrepancy_having(parameter)}"
     ))
   }
   if (!length(vars)) {

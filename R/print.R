@@ -1,7 +1,7 @@
 #' Print a calibration
 #'
-#' Shows a compact header (the discrepancy model: Kennedy-O'Hagan's bias GP
-#' or none, see `discrepancy` in [calibrate()]; data sizes; the names of the
+#' Shows a compact header (the discrepancy model: Kennedy-O'Hagan's bias GP,
+#' the S-GaSP or none, see `discrepancy` in [calibrate()]; data sizes; the names of the
 #' response, the experimental inputs and the calibration inputs, with the
 #' range the simulator design covers for each calibration input; the MCMC
 #' settings, the acceptance rates, the correlation families of the
@@ -29,9 +29,11 @@ print.fbc <- function(x, digits = 3, ...) {
   digits <- check_count(digits, "digits")
   s <- x$settings
   sc <- x$scale
-  gp <- s$discrepancy == "gp"
-  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n",
-              if (gp) "Kennedy-O'Hagan" else "no discrepancy: y_f = eta(x, kappa) + eps"))
+  gp <- s$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
+  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", switch(s$discrepancy,
+    gp = "Kennedy-O'Hagan",
+    sgasp = "S-GaSP discrepancy, Gu and Wang 2018",
+    none = "no discrepancy: y_f = eta(x, kappa) + eps")))
   cat(sprintf("  data: n = %d field, m = %d simulator runs; p = %d, q = %d\n",
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,

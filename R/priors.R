@@ -235,7 +235,7 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' Defaults (vignette A.1): correlation scales \eqn{\theta} Gamma(1.1, rate
 #' 0.1); smoothness \eqn{\alpha} Beta(5, 2) shifted to `[1, 2]`; variances
 #' inverse gamma (shape 1.5, scale 1.5); the bias mean \eqn{\mu_b}
-#' Gaussian(0, 1).
+#' Gaussian(0, 1); the S-GaSP scale \eqn{\lambda_z} lognormal(log 20, 1.5).
 #'
 #' @param thetaSDist,thetaSInit,thetaSP1,thetaSP2 Simulator GP correlation scales.
 #' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in
@@ -247,7 +247,15 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' @param sigma2SDist,sigma2SInit,sigma2SP1,sigma2SP2 Simulator GP marginal variance.
 #' @param sigma2BDist,sigma2BInit,sigma2BP1,sigma2BP2 Bias GP marginal variance.
 #' @param sigma2EDist,sigma2EInit,sigma2EP1,sigma2EP2 Measurement error variance.
-#' @param muBDist,muBInit,muBP1,muBP2 Bias GP mean.
+#' @param muBDist,muBInit,muBP1,muBP2 Bias GP mean (not under
+#'   `discrepancy = "sgasp"`, whose bias has mean 0).
+#' @param lambdaZDist,lambdaZInit,lambdaZP1,lambdaZP2 Scale \eqn{\lambda_z}
+#'   of the S-GaSP discrepancy (`discrepancy = "sgasp"` in [calibrate()]
+#'   only): how strongly the bias's L2 norm is shrunk. The default lognormal
+#'   prior has median 20 (meanlog `log(20)`, sdlog 1.5: 95% between about 1
+#'   and 380), around the value RobustCalibration's default rule
+#'   \eqn{\sqrt{n \|\beta L\| \sigma^2_B / \sigma^2_E}} gives on the ball
+#'   and kinetics data; fix it with `lambdaZDist = "fixed", lambdaZInit =`.
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
@@ -262,7 +270,8 @@ set_hyperPriors <- function(
     sigma2SDist = "inversegamma", sigma2SInit = 1, sigma2SP1 = 1.5, sigma2SP2 = 1.5,
     sigma2BDist = "inversegamma", sigma2BInit = 0.1, sigma2BP1 = 1.5, sigma2BP2 = 1.5,
     sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 1.5, sigma2EP2 = 1.5,
-    muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1) {
+    muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1,
+    lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5) {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()
@@ -311,7 +320,7 @@ format_prior <- function(dist, p1, p2, init) {
   if (identical(dist, "fixed")) return(sprintf("fixed at %s", format(init)))
   f <- prior_registry[[dist]]
   vals <- c(p1 = p1, p2 = p2)[names(f$params)]
-  fam <- if (length(vals)) sprintf("%s(%s)", dist, paste(f$params, format(vals), collapse = ", ")) else dist
+  fam <- if (length(vals)) sprintf("%s(%s)", dist, paste(f$params, vapply(vals, format, ""), collapse = ", ")) else dist
   sprintf("%s%s, init %s", fam, if (f$proper) "" else " (improper)",
           if (is.na(init)) "default" else format(init))
 }

@@ -30,30 +30,31 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   hypers
 }
 
-# The hyperparameter priors of a model without a bias (discrepancy =
-# "none"): the bias classes have no parameters, so a prior the user gave
-# for one, or a bias correlation family, is ignored with a warning naming
+# The hyperparameter priors of the discrepancy model: the classes it does
+# not have (the bias GP's under "none", muB under "sgasp", lambdaZ but
+# under "sgasp") have no parameters, so a prior the user gave for one, or a
+# bias correlation family without a bias, is ignored with a warning naming
 # the arguments.
 discrepancy_hypers <- function(hypers, discrepancy, kernelB, call = parent.frame()) {
-  if (discrepancy == "gp") return(hypers)
-  if (kernelB != "powexp") {
+  if (discrepancy == "none" && kernelB != "powexp") {
     cli::cli_warn(sprintf("`kernelB = \"%s\"` is not used: `discrepancy = \"%s\"` has no bias GP.",
                           kernelB, discrepancy), call = call)
   }
   default <- set_hyperPriors()
-  bias <- model_classes$class[model_classes$bias]
-  given <- unlist(lapply(bias, function(cls) {
+  absent <- model_classes$class[!class_in_model(discrepancy)]
+  for (cls in absent) {
     g <- !mapply(identical, hypers[[cls]], default[[cls]])
-    sprintf("`%s%s`", cls, c("Dist", "Init", "P1", "P2")[g])
-  }))
-  if (length(given)) {
-    cli::cli_warn(c(
-      sprintf("`discrepancy = \"%s\"` has no bias GP: %s of `hypers` %s ignored.", discrepancy,
-              paste(given, collapse = ", "), if (length(given) > 1L) "are" else "is"),
-      i = "Use `discrepancy = \"gp\"` to sample the bias."
-    ), call = call)
+    if (any(g)) {
+      given <- sprintf("`%s%s`", cls, c("Dist", "Init", "P1", "P2")[g])
+      cli::cli_warn(c(
+        sprintf("`discrepancy = \"%s\"` %s: %s of `hypers` %s ignored.", discrepancy,
+                discrepancy_lacks(cls, discrepancy), paste(given, collapse = ", "),
+                if (length(given) > 1L) "are" else "is"),
+        i = discrepancy_having(cls)
+      ), call = call)
+    }
   }
-  hypers[bias] <- list(NULL)
+  hypers[absent] <- list(NULL)
   hypers
 }
 

@@ -68,6 +68,24 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// fbc_loo
+Rcpp::NumericMatrix fbc_loo(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& group, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_loo(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupSEXP, SEXP modelSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
+    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type group(groupSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_loo(Xf, yf, Xs, ys, phis, nugget, group, model));
+    return rcpp_result_gen;
+END_RCPP
+}
 // loglik_path
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale, const Rcpp::List& model);
 RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP, SEXP modelSEXP) {
@@ -178,6 +196,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
+    {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 10},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},

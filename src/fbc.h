@@ -37,16 +37,19 @@ enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52
 // whenever the simulator design allows it, or always the dense one.
 enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
 
-// The discrepancy model (R/model.R, discrepancy_codes): the KOH bias GP, or
-// none (then the bias classes have length 0 in the layout).
-enum Discrepancy { DS_GP = 0, DS_NONE = 1 };
+// The discrepancy model (R/model.R, discrepancy_codes): the KOH bias GP,
+// none (then the bias classes have length 0 in the layout), or the scaled
+// GP of Gu and Wang (2018), S-GaSP: the bias GP's correlation R on the nu
+// distinct field inputs replaced by Rz = R - R (R + (nu / lambdaZ) I)^-1 R,
+// with mean 0 (no muB).
+enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
 
 // Parameter classes of the model. Where each lives in phi is not assumed
 // here: R's model description (R/model.R, model_classes) owns the layout and
 // hands the offsets and lengths over by name (read_model()).
 enum ParamClass {
   PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
-  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_COUNT
+  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_COUNT
 };
 
 // Where each class lives in phi: offset[c], length[c] (0-based), and for
@@ -167,16 +170,19 @@ struct Touch {
 // it is chosen by make_posterior().
 // Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
 // kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
-// sigma2B, sigma2E, muB at the offsets of `layout` (iKappa ... iMuB).
-// Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB have length
-// 0: their offsets are never read.
+// sigma2B, sigma2E, muB, lambdaZ at the offsets of `layout` (iKappa ...
+// iLambdaZ). Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB
+// have length 0, and muB has none under S-GaSP (`biasMean` false), lambdaZ
+// only under S-GaSP (`sgasp`): the offsets of empty classes are never read.
 class Posterior {
 public:
   virtual ~Posterior() {}
   int n, m, p, q, d;
   Layout layout;
-  int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB;
-  bool bias;                // the model has the bias GP
+  int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB, iLambdaZ;
+  bool bias;                // the model has a bias GP (KOH or S-GaSP)
+  bool biasMean;            // ... with a mean muB (KOH)
+  bool sgasp;               // ... scaled (S-GaSP)
   std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 
@@ -210,6 +216,11 @@ public:
   // is not positive definite.
   virtual bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
                        arma::vec& var) = 0;
+  // The leave-one-out predictive of the field data at the current state
+  // (loo.cpp): for each group of 0-based field rows, log p(y_G | the other
+  // field rows, y_s) (scaled space), into `logdens`.
+  virtual void fieldLoo(const std::vector<std::vector<int> >& groups,
+                        arma::vec& logdens) const = 0;
   // A short description of the algebra (for tests and messages).
   virtual std::string algebra() const = 0;
 
@@ -237,6 +248,8 @@ public:
   void condition(const arma::mat& Xnew, int type, double* mean, double* var) override;
   bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
                arma::vec& var) override;
+  void fieldLoo(const std::vector<std::vector<int> >& groups,
+                arma::vec& logdens) const override;
 
 protected:
   SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
@@ -282,7 +295,12 @@ private:
   double evaluate(const Touch& t);
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
+  // the bias's correlation with new inputs (see model.cpp)
+  void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const;
+  arma::mat Bz_, Wz_;  // S-GaSP workspaces
 };
+// Rz = R - R (R + (nu / lambda) I)^-1 R over R's lower triangle (model.cpp).
+bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W);
 
 // The dense algebra: the Cholesky factor of the m x m simulator block
 // (dense.cpp). Per-dimension power matrices are cached while they fit in the

@@ -20,13 +20,15 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   n = n_; m = m_; p = p_; q = q_;
   const Layout& lay = model.layout;
   layout = lay;
-  bias = model.discrepancy == DS_GP;
+  bias = model.discrepancy != DS_NONE;
+  sgasp = model.discrepancy == DS_SGASP;
+  biasMean = lay.length[PC_MUB] > 0;
   d = lay.d;
   iKappa = lay.offset[PC_KAPPA]; iThetaS = lay.offset[PC_THETAS];
   iAlphaS = lay.offset[PC_ALPHAS]; iThetaB = lay.offset[PC_THETAB];
   iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
   iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
-  iMuB = lay.offset[PC_MUB];
+  iMuB = lay.offset[PC_MUB]; iLambdaZ = lay.offset[PC_LAMBDAZ];
   scaled.clear();
   for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
     if (lay.length[c] > 0) scaled.push_back(lay.offset[c]);
@@ -35,18 +37,20 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
 
 Model read_model(const Rcpp::List& model, int p, int q) {
   static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                                        "sigma2S", "sigma2B", "sigma2E", "muB"};
+                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ"};
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
   out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
-  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE)
+  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE && out.discrepancy != DS_SGASP)
     Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
   // what each class expands over: q, p + q, p or one; the bias classes
-  // (thetaB, alphaB, sigma2B, muB) nothing without a bias
-  const int b = out.discrepancy == DS_GP ? 1 : 0;
-  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, 1, b};
+  // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
+  // bias, lambdaZ only with the S-GaSP one
+  const int b = out.discrepancy != DS_NONE ? 1 : 0;
+  const int mu = out.discrepancy == DS_GP ? 1 : 0, lz = out.discrepancy == DS_SGASP ? 1 : 0;
+  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, 1, mu, lz};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -160,7 +164,7 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
   case PC_ALPHAB:
     t.biasPow[k] = 1;
     // fall through
-  case PC_THETAB:
+  case PC_THETAB: case PC_LAMBDAZ:
     t.biasCorr = t.field = true;
     break;
   case PC_SIGMA2S: case PC_SIGMA2B: case PC_SIGMA2E:
@@ -238,6 +242,47 @@ void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
   ab = arma::dot(a, b);
 }
 
+// The S-GaSP correlation on the nu distinct field inputs (Gu and Wang 2018,
+// the discretized kernel with the field inputs as the discretization
+// points; RobustCalibration's Get_R_z_new): from R (lower triangle),
+//   Rz = R - R (R + c I)^-1 R,  c = nu / lambda,
+// through L = chol(R + c I), W = L^-1 R: Rz = R - W'W (written over R,
+// lower triangle). False when R + c I is not positive definite.
+bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
+  const int nu = R.n_rows;
+  if (!(lambda > 0) || !std::isfinite(lambda)) return false;
+  R = arma::symmatl(R);
+  B = R;
+  B.diag() += nu / lambda;
+  if (!chol_lower(B)) return false;
+  W = R;
+  solve_lower(B, W);
+  syrk_lower(W, -1.0, 1.0, R);
+  return true;
+}
+
+// The bias GP's correlation between the distinct field inputs and new
+// inputs Xnew (K, nu x b) and at the new inputs themselves (r, b): for the
+// KOH bias K = R(Xu, Xnew), r = 1; for the S-GaSP one the discretized
+// kernel Kz(x, x') = R(x, x') - R(x, Xu) (R + c I)^-1 R(Xu, x'), c = nu /
+// lambdaZ, so with L = chol(R(Xu, Xu) + c I) and H = L^-1 R(Xu, Xnew):
+//   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
+//   r = 1 - colsums(H^2).
+void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const {
+  const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
+  const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
+  K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
+  r.ones(Xnew.n_rows);
+  if (!sgasp) return;
+  const double c = nu_ / phi[iLambdaZ];
+  arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+  L.diag() += c;
+  if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
+  solve_lower(L, K);  // H
+  r -= arma::sum(arma::square(K), 0).t();
+  K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+}
+
 // GP conditional of a target with covariance ks = s2S k with ys and kf with
 // yf (k = Rs(Xs, xk*), xk* = (x*, kappa)), prior mean mu0 and variance v0,
 // through the blocks of C: with a = k' Ds^-1 ys, b = k' Ds^-1 k,
@@ -246,20 +291,20 @@ void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
 //   mean = mu0 + a + h'v,   var = v0 - s2S b - h'h.
 // Targets, by type: 1 field (eta + delta + eps), 2 mean (eta + delta),
 // 3 simulator (eta), 4 bias (delta, ks = 0):
-//   kf = s2S Rs(Xk, xk*) [types 1-3] + s2B Rb(Xf, x*) [types 1, 2, 4].
+//   kf = s2S Rs(Xk, xk*) [types 1-3] + s2B Rb(Xf, x*) [types 1, 2, 4],
+// with prior variance s2S [1-3] + s2B rb(x*) [1, 2, 4] + s2E [1].
 // Without a bias, s2B = muB = 0: the bias is exactly 0 (mean and variance).
+// Under S-GaSP the bias's cross-correlation and variance are the
+// discretized kernel's (biasCross()), and its mean is 0.
 void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var) {
   const int b = Xnew.n_rows;
   const double s2S = phi[iSigma2S], s2E = phi[iSigma2E];
-  const double s2B = bias ? phi[iSigma2B] : 0.0, muB = bias ? phi[iMuB] : 0.0;
-  double mu0 = muB, v0 = s2B;
-  switch (type) {
-    case 1: v0 = s2S + s2B + s2E; break;
-    case 2: v0 = s2S + s2B; break;
-    case 3: mu0 = 0.0; v0 = s2S; break;
-    default: break;
-  }
+  const double s2B = bias ? phi[iSigma2B] : 0.0, muB = biasMean ? phi[iMuB] : 0.0;
   const bool simPart = type != 4, biasPart = type != 3 && bias;
+  const double mu0 = type == 3 ? 0.0 : muB;
+  arma::vec v0(b, arma::fill::zeros);
+  if (simPart) v0 += s2S;
+  if (type == 1) v0 += s2E;
   // covariances with the distinct field rows (Rs(Xk, xk*) involves the
   // experimental inputs only: the calibration inputs coincide)
   arma::mat Kf(nu_, b, arma::fill::zeros), G;
@@ -270,9 +315,13 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     simCondition(Xnew, a, bb, G);
     Kf -= s2S * G;
   }
-  if (biasPart)
-    Kf += s2B * corr_matrix(Xu_, Xnew, phi.subvec(iThetaB, iThetaB + p - 1),
-                            phi.subvec(iAlphaB, iAlphaB + p - 1), kernB_);
+  if (biasPart) {
+    arma::mat Kb;
+    arma::vec rb;
+    biasCross(Xnew, Kb, rb);
+    Kf += s2B * Kb;
+    v0 += s2B * rb;
+  }
   arma::vec v(n);
   const arma::vec& wz = wz_.cur();
   for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
@@ -286,7 +335,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     double hv = 0.0, hh = 0.0;
     for (int k = 0; k < n; ++k) { hv += h[k] * v[k]; hh += h[k] * h[k]; }
     mean[c] = mu0 + a[c] + hv;
-    var[c] = v0 - s2S * bb[c] - hh;
+    var[c] = v0[c] - s2S * bb[c] - hh;
   }
 }
 
@@ -339,6 +388,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
+    if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }
 
@@ -365,7 +415,7 @@ double SchurPosterior::evaluate(const Touch& t) {
   }
 
   // Residual of the field block given the simulator block.
-  const double muB = bias ? phi[iMuB] : 0.0;
+  const double muB = biasMean ? phi[iMuB] : 0.0;
   for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[grp_[j]];
   solve_lower(*LS, u_);
   const double vv = arma::dot(u_, u_);

@@ -342,7 +342,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   const int d = post.d;
   const bool scaleMove = Rcpp::as<bool>(moves["scale"]);
   const bool gibbsMuB = Rcpp::as<bool>(moves["gibbsMuB"]);
-  if (gibbsMuB && !(post.bias && pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
+  if (gibbsMuB && !(post.biasMean && pr.family[post.iMuB] == PF_GAUSSIAN && pr.a[post.iMuB] == 0 &&
                     pr.b[post.iMuB] == 1))
     Rcpp::stop("the exact muB move needs a gaussian prior on muB");
   if (scaleMove)
@@ -396,7 +396,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
       const std::string nm(blockNames[b]);
       schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
-    } else if (post.bias && j == post.iMuB && gibbsMuB) {
+    } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j));
       schedule.back()->name = ch.param_name(j);
     } else {

@@ -36,9 +36,25 @@ unpack_phi <- function(phi, p, q, discrepancy = "gp") {
   lapply(FBC:::param_indices(p, q, discrepancy), function(i) phi[i])
 }
 
+# The bias GP's correlation between the rows of A and of B, for field
+# inputs Xf: R(A, B) for the KOH bias; for the S-GaSP (Gu and Wang 2018) the
+# discretized kernel on the nu distinct field inputs U,
+#   Kz(A, B) = R(A, B) - R(A, U) (R(U, U) + nu / lambdaZ I)^-1 R(U, B).
+bias_kernel_dense <- function(A, B, Xf, th, kernB, discrepancy) {
+  R <- function(X, Y) dense_corr(X, Y, th$thetaB, th$alphaB, kernB)
+  if (discrepancy != "sgasp") return(R(A, B))
+  U <- unique(as.matrix(Xf))
+  nu <- nrow(U)
+  R(A, B) - R(A, U) %*% solve(R(U, U) + nu / th$lambdaZ * diag(nu), R(U, B))
+}
+bias_corr_dense <- function(Xf, th, kernB, discrepancy) {
+  bias_kernel_dense(Xf, Xf, Xf, th, kernB, discrepancy)
+}
+
 # The full (n + m) x (n + m) covariance of y = (yf, ys) (vignette 2.4).
 # kernS, kernB: the simulator and bias GPs' correlation families;
-# discrepancy "none": no bias block (y_f = eta(x, kappa) + eps).
+# discrepancy "none": no bias block (y_f = eta(x, kappa) + eps); "sgasp":
+# the S-GaSP bias block (bias_corr_dense()).
 dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp",
                       discrepancy = "gp") {
   n <- nrow(Xf); m <- nrow(Xs); p <- ncol(Xf); q <- ncol(Xs) - p
@@ -49,8 +65,8 @@ dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "pow
   f <- seq_len(n); s <- n + seq_len(m)
   C[s, s] <- C[s, s] + th$sigma2S * nugget * diag(m)
   C[f, f] <- C[f, f] + th$sigma2E * diag(n)
-  if (discrepancy == "gp") {
-    C[f, f] <- C[f, f] + th$sigma2B * dense_corr(Xf, Xf, th$thetaB, th$alphaB, kernB)
+  if (discrepancy != "none") {
+    C[f, f] <- C[f, f] + th$sigma2B * bias_corr_dense(Xf, th, kernB, discrepancy)
   }
   C
 }
@@ -61,7 +77,7 @@ dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
   p <- ncol(Xf); q <- ncol(Xs) - p
   th <- unpack_phi(phi, p, q, discrepancy)
   C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
-  r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)
+  r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)  # S-GaSP: mean 0
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)
   -0.5 * (length(r) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
@@ -78,7 +94,8 @@ random_koh_data <- function(n, m, p, q, seed) {
 # A random parameter vector inside every domain: each class drawn by its
 # domain in FBC's model description (kappa uniform on [0, 1], positive
 # classes Gamma(2, 2) (+ 0.05 for the variances), smoothness on [1.1, 1.95],
-# the bias mean N(0, 1)); no bias classes under discrepancy "none".
+# the bias mean N(0, 1), the S-GaSP scale 20 x Gamma(2, 2)); no bias
+# classes under discrepancy "none".
 random_phi <- function(p, q, discrepancy = "gp") {
   idx <- FBC:::param_indices(p, q, discrepancy)
   phi <- numeric(sum(lengths(idx)))
@@ -86,7 +103,8 @@ random_phi <- function(p, q, discrepancy = "gp") {
     k <- length(idx[[cls]])
     phi[idx[[cls]]] <- switch(FBC:::class_domain[[cls]],
       real = if (cls == "kappa") runif(k) else rnorm(k),
-      positive = rgamma(k, 2, 2) + if (grepl("^sigma2", cls)) 0.05 else 0,
+      positive = rgamma(k, 2, 2) * (if (cls == "lambdaZ") 20 else 1) +
+        (if (grepl("^sigma2", cls)) 0.05 else 0),
       unit12 = runif(k, 1.1, 1.95))
   }
   phi
@@ -102,7 +120,7 @@ expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6, discrepancy =
   idx <- FBC:::param_indices(p, q, discrepancy)
   groups <- integer(ncol(phis))
   groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
-  groups[c(idx$thetaB, idx$alphaB, idx$sigma2B)] <- 2L
+  groups[c(idx$thetaB, idx$alphaB, idx$lambdaZ, idx$sigma2B)] <- 2L
   sig <- c(idx$sigma2S, idx$sigma2B, idx$sigma2E)
   scaled <- phis[c(1, 1, 1), ]
   scaled[2, sig] <- scaled[1, sig] * 1.7

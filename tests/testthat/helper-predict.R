@@ -2,26 +2,31 @@
 # the dense joint covariance (helper-dense.R) with one explicit solve per
 # target: mean = mu* + k' C^-1 (y - mu), var = v* - k' C^-1 k (scaled space).
 # kernS, kernB: correlation families (dense_corr()); discrepancy "none": no
-# bias (its mean and variance 0).
+# bias (its mean and variance 0); "sgasp": the S-GaSP bias, mean 0, its
+# covariances from the discretized kernel (bias_kernel_dense()).
 dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
                           kernB = "powexp", discrepancy = "gp") {
   p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
   th <- unpack_phi(phi, p, q, discrepancy)
   if (discrepancy == "none") th[c("muB", "sigma2B")] <- list(0, 0)
+  if (discrepancy == "sgasp") th$muB <- 0
   C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
   ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS, kernS)
-  kbias <- if (discrepancy == "gp") {
-    rbind(th$sigma2B * dense_corr(Xf, Xnew, th$thetaB, th$alphaB, kernB), matrix(0, m, nrow(Xnew)))
+  kbias <- if (discrepancy != "none") {
+    rbind(th$sigma2B * bias_kernel_dense(Xf, Xnew, Xf, th, kernB, discrepancy),
+          matrix(0, m, nrow(Xnew)))
   } else {
     matrix(0, n + m, nrow(Xnew))
   }
   k <- switch(type, field = , mean = ksim + kbias, simulator = ksim, bias = kbias)
   mu0 <- if (type == "simulator") 0 else th$muB
-  v0 <- switch(type, field = th$sigma2S + th$sigma2B + th$sigma2E,
-               mean = th$sigma2S + th$sigma2B, simulator = th$sigma2S, bias = th$sigma2B)
+  vb <- if (discrepancy == "none") 0 else
+    th$sigma2B * diag(bias_kernel_dense(Xnew, Xnew, Xf, th, kernB, discrepancy))
+  v0 <- switch(type, field = th$sigma2S + vb + th$sigma2E,
+               mean = th$sigma2S + vb, simulator = th$sigma2S, bias = vb)
   list(mean = drop(mu0 + crossprod(k, solve(C, r))),
        var = v0 - colSums(k * solve(C, k)))
 }
@@ -29,8 +34,8 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
 # A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
 # at `phi` (sampler scale), so each retained draw equals phi; kernelS,
 # kernelB: correlation families (a family without a smoothness gets no
-# alpha prior: its alpha is not a parameter); discrepancy: "gp" or "none"
-# (phi then has no bias classes). `d`: other data on the scaled space
+# alpha prior: its alpha is not a parameter); discrepancy: "gp", "none"
+# (phi then has no bias classes) or "sgasp" (no muB, a lambdaZ). `d`: other data on the scaled space
 # (p = 2, q = 1), as random_koh_data() returns them.
 fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
                       d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed),
@@ -50,6 +55,10 @@ fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
   if (kernelS != "powexp") args[c("alphaSDist", "alphaSInit")] <- NULL
   if (kernelB != "powexp") args[c("alphaBDist", "alphaBInit")] <- NULL
   if (discrepancy == "none") args[grepl("^(thetaB|alphaB|sigma2B|muB)", names(args))] <- NULL
+  if (discrepancy == "sgasp") {
+    args[grepl("^muB", names(args))] <- NULL
+    args[c("lambdaZDist", "lambdaZInit")] <- list("fixed", th$lambdaZ)
+  }
   hyp <- do.call(set_hyperPriors, args)
   # the random field inputs overhang the random design: the warning is expected
   suppressWarnings(

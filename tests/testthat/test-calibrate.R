@@ -119,7 +119,7 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
 })
 
 test_that("the discrepancy model is checked, and bias priors without a bias are flagged", {
-  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, discrepancy = "sgasp"))
+  expect_snapshot(error = TRUE, calibrate(ballSim, ballField, discrepancy = "S-GaSP"))
   set.seed(1)
   expect_snapshot(
     fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
@@ -132,6 +132,19 @@ test_that("the discrepancy model is checked, and bias priors without a bias are 
                      discrepancy = "none", kernelB = "matern32")
   )
   expect_identical(fit$indices$alphaB, integer(0))
+  # the S-GaSP has no bias mean, the KOH bias no S-GaSP scale
+  expect_snapshot(
+    fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
+                     discrepancy = "sgasp", hypers = set_hyperPriors(muBInit = 0.5))
+  )
+  expect_identical(fit$indices$muB, integer(0))
+  expect_identical(colnames(fit$Phi)[fit$indices$lambdaZ], "lambdaZ")
+  expect_snapshot(
+    fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
+                     hypers = set_hyperPriors(lambdaZDist = "fixed", lambdaZInit = 5))
+  )
+  expect_identical(fit$indices$lambdaZ, integer(0))
+  expect_snapshot(error = TRUE, plot(fit, "lambdaZ"))
 })
 
 test_that("logPost is the log-likelihood plus the log priors of the draw", {

@@ -117,6 +117,47 @@ test_that("without a discrepancy, kappa draws match the grid posterior on the ba
   expect_kappa_grid(fit, u = seq(0, 1, length.out = 1001))
 })
 
+test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors (ball data)", {
+  # the reference: dense_loglik(discrepancy = "sgasp"), the S-GaSP bias block
+  # written from Gu and Wang's discretized kernel in plain R
+  # (helper-dense.R), times the priors
+  fixedBias <- list(thetaSDist = "fixed", thetaSInit = c(3.6, 0.42), alphaSDist = "fixed",
+                    alphaSInit = 1.95, thetaBDist = "fixed", thetaBInit = 2,
+                    alphaBDist = "fixed", alphaBInit = 1.8, sigma2SDist = "fixed",
+                    sigma2SInit = 3.3, sigma2BDist = "fixed", sigma2BInit = 0.9,
+                    sigma2EDist = "fixed", sigma2EInit = 0.15)
+  hyp <- do.call(set_hyperPriors, c(fixedBias, list(lambdaZDist = "fixed", lambdaZInit = 20)))
+  set.seed(14)
+  fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
+                   nChains = 1, hypers = hyp, discrepancy = "sgasp")
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
+                                        "thetaB1", "alphaB1", "lambdaZ", "sigma2S", "sigma2B",
+                                        "sigma2E"))
+  expect_kappa_grid(fit, u = seq(0, 1, length.out = 501))
+  # lambdaZ sampled under its default lognormal(log 20, 1.5) prior, kappa
+  # fixed at 8.5: the draws of log(lambdaZ) against the grid posterior of
+  # log(lambdaZ) (density L(e^u) prior(e^u) e^u)
+  hyp <- do.call(set_hyperPriors, fixedBias)
+  set.seed(15)
+  fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
+                   hypers = hyp, discrepancy = "sgasp", kappaDist = "fixed", kappaInit = 8.5)
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  j <- match("lambdaZ", fit$spec$vars)
+  u <- seq(log(0.01), log(1e5), length.out = 801)
+  lp <- vapply(u, function(v) {
+    phi[j] <- exp(v)
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, discrepancy = "sgasp")
+  }, numeric(1)) + stats::dlnorm(exp(u), log(20), 1.5, log = TRUE) + u
+  dens <- exp(lp - max(lp))
+  draws <- log(fit$Phi[, "lambdaZ"])
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  err <- abs(stats::quantile(draws, probs, names = FALSE) - grid_quantile(u, dens, probs))
+  expect_lt(max(err) / stats::sd(draws), 0.15)
+  ks <- suppressWarnings(stats::ks.test(draws, grid_cdf(u, dens))$statistic)
+  expect_lt(ks, 0.06)
+})
+
 test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
   # data drawn from the model itself (dense_cov) at kappa = (0.3, 0.7)
   set.seed(5)

@@ -12,7 +12,7 @@ old_args <- list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 2L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 3L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
@@ -38,7 +38,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   expect_identical(up$settings$discrepancy, "gp")
   expect_identical(up$spec$model, fit$spec$model)
   expect_identical(up$Phi, fit$Phi)
-  expect_identical(up$version$format, 2L)
+  expect_identical(up$version$format, 3L)
   # a fit without a bias validates; its layout is the "none" one
   set.seed(2)
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
@@ -49,7 +49,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   other$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
   other$spec$model$discrepancy <- 5L
-  expect_error(FBC:::validate_fbc(other), "must be a discrepancy code \\(0 for gp, 1 for none\\)")
+  expect_error(FBC:::validate_fbc(other), "must be a discrepancy code \\(0 for gp, 2 for sgasp, 1 for none\\)")
 })
 
 test_that("validate_fbc() refuses broken objects, naming what is wrong", {
@@ -92,7 +92,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 2L)
+    expect_identical(fit$version$format, 3L)
     expect_identical(FBC:::validate_fbc(fit), fit)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
@@ -127,6 +127,27 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
   expect_identical(FBC:::upgrade_fbc(b)$state$chains[[2]]$sampler, b$state$chains[[2]]$sampler)
 })
 
+test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws are unchanged", {
+  # fit-1150ae6.rds: made by FBC at 1150ae6 (make-old-fits.R, seed 7), the
+  # last commit before the S-GaSP scale joined the model description with
+  # length 0 under the KOH bias
+  old <- old_fit("1150ae6")
+  expect_identical(old$version$format, 2L)
+  expect_false("lambdaZ" %in% names(old$spec$model$offset))
+  fit <- FBC:::upgrade_fbc(old)
+  expect_identical(fit$version$format, 3L)
+  expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+  expect_identical(fit$Phi, old$Phi)
+  expect_identical(predict(fit, c(1, 2.5, 4), method = "MAP"),
+                   readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map)
+  # the same call and seed today: the same draws, to the bit
+  set.seed(7)
+  now <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
+  expect_identical(now$Phi, old$Phi)
+  expect_identical(now$logPost, old$logPost)
+  expect_identical(now$state$chains[[2]]$sampler, old$state$chains[[2]]$sampler)
+})
+
 test_that("print, summary, predict, plot and update work on the fits of earlier versions", {
   for (commit in c("ff9b582", "2617448", "fa818f9")) {
     old <- old_fit(commit)
@@ -145,7 +166,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 2L)
+    expect_identical(up$version$format, 3L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -198,7 +219,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 2L)
+  expect_identical(fit$version$format, 3L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L

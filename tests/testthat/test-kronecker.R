@@ -42,6 +42,7 @@ kron_path <- function(phi0, p, q, discrepancy = "gp") {
   }
   for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
   for (j in idx$muB) move(j, rnorm(1))
+  for (j in idx$lambdaZ) move(j, 20 * rgamma(1, 2, 2))  # S-GaSP only
   move(idx$alphaS[1], 2)
   rows[[length(rows) + 1]] <- random_phi(p, q, discrepancy)
   rows[[length(rows) + 1]] <- phi0
@@ -130,6 +131,36 @@ test_that("without a discrepancy: Kronecker log-likelihoods, moves and predictio
       }
       expect_equal(kron, .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, t, 1e-6, 500L,
                                       model = noneDense), tolerance = 1e-8)
+    }
+  }
+})
+
+test_that("under the S-GaSP: Kronecker log-likelihoods, moves and predictions equal the dense ones", {
+  for (s in designs) {
+    p <- s[["p"]]; q <- s[["q"]]
+    sg <- FBC:::compiled_model(p, q, discrepancy = "sgasp")
+    sgDense <- FBC:::compiled_model(p, q, algebra = 1L, discrepancy = "sgasp")
+    d <- product_data(s[["I"]], s[["J"]], p, q, n = 5, seed = 120 + sum(s))
+    d$Xf <- d$Xf[c(1:5, 3), , drop = FALSE]  # a replicated field input
+    d$yf <- c(d$yf, rnorm(1))
+    dense_sg <- function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = "sgasp")
+    phis <- kron_path(random_phi(p, q, "sgasp"), p, q, "sgasp")
+    expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, model = sg), dense_sg(phis[1, ]),
+                 tolerance = 1e-8)
+    path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = sg)
+    expect_equal(path, apply(phis, 1, dense_sg), tolerance = 1e-8)
+    expect_joint_moves_dense(d, phis, p, q, discrepancy = "sgasp")
+    Xn <- rbind(matrix(runif(3 * p), 3, p), d$Xf[2, ])  # one new point on a field input
+    for (t in 1:4) {
+      type <- c("field", "mean", "simulator", "bias")[t]
+      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, t, 1e-6, 2L, model = sg)
+      for (i in 1:2) {
+        ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn, type, discrepancy = "sgasp")
+        expect_equal(kron$mean[, i], ref$mean, tolerance = 1e-8)
+        expect_equal(kron$var[, i], ref$var, tolerance = 1e-8)
+      }
+      expect_equal(kron, .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, t, 1e-6, 500L,
+                                      model = sgDense), tolerance = 1e-8)
     }
   }
 })

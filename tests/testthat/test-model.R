@@ -41,6 +41,7 @@ one_move_path <- function(phi0, p, q, discrepancy = "gp") {
   }
   for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
   for (j in idx$muB) move(j, rnorm(1))
+  for (j in idx$lambdaZ) move(j, 20 * rgamma(1, 2, 2))  # S-GaSP only
   move(idx$alphaS[p + q], 2)  # alpha = 2 and 1 take special branches
   for (j in idx$alphaB[1]) move(j, 1)
   rows[[length(rows) + 1]] <- random_phi(p, q, discrepancy)  # every coordinate at once
@@ -316,6 +317,64 @@ test_that("without a discrepancy the block log-likelihood equals the dense one",
   }
 })
 
+# discrepancy = "sgasp": the bias block is sigma2B Z Rz Z' with the S-GaSP
+# correlation of Gu and Wang (2018) written in plain R from the paper's
+# discretized kernel (bias_corr_dense()), mean 0 (no muB), one lambdaZ. The
+# compiled log-likelihood from scratch and along cached move paths
+# (lambdaZ moved alone and in the bias's joint move), with replicated field
+# inputs (Rz lives on the distinct inputs).
+test_that("under the S-GaSP the block log-likelihood equals the dense one", {
+  for (s in sizes) {
+    p <- s[["p"]]; q <- s[["q"]]
+    sg <- FBC:::compiled_model(p, q, discrepancy = "sgasp")
+    expect_identical(sg$discrepancy, 2L)
+    expect_identical(unname(sg$length[c("thetaB", "sigma2B", "muB", "lambdaZ")]), c(as.integer(p), 1L, 0L, 1L))
+    dat <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 70 + sum(s))
+    for (r in 1:5) {
+      phi <- random_phi(p, q, "sgasp")
+      expect_equal(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = sg),
+                   dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, discrepancy = "sgasp"),
+                   tolerance = 1e-8)
+    }
+    dat$Xf <- dat$Xf[c(seq_len(s[["n"]]), 2, 1, 2), , drop = FALSE]
+    dat$yf <- c(dat$yf, rnorm(3))
+    phis <- one_move_path(random_phi(p, q, "sgasp"), p, q, "sgasp")
+    lz <- FBC:::param_indices(p, q, "sgasp")$lambdaZ
+    more <- phis[rep(nrow(phis), 3), ]
+    more[, lz] <- more[1, lz] * c(0.1, 30, 1)  # strong and weak shrinkage, back
+    phis <- rbind(phis, more)
+    dense <- apply(phis, 1, function(phi) {
+      dense_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, discrepancy = "sgasp")
+    })
+    path <- .loglik_path(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, 1e-6, decoys = TRUE, model = sg)
+    expect_equal(path, dense, tolerance = 1e-8)
+    expect_joint_moves_dense(dat, phis, p, q, discrepancy = "sgasp")
+  }
+})
+
+test_that("the S-GaSP shrinks towards no discrepancy and grows back to the bias GP", {
+  # Rz = (R^-1 + lambda / nu I)^-1: lambda -> 0 gives R (the KOH bias GP
+  # with muB = 0), lambda -> Inf gives 0 (no discrepancy)
+  dat <- random_koh_data(6, 14, 1, 1, seed = 5)
+  phi <- random_phi(1, 1, "sgasp")
+  ix <- FBC:::param_indices(1, 1, "sgasp")
+  gp <- numeric(length(unlist(FBC:::param_indices(1, 1, "gp"))))
+  ig <- FBC:::param_indices(1, 1, "gp")
+  for (cls in setdiff(names(ig), "muB")) gp[ig[[cls]]] <- phi[ix[[cls]]]
+  ll <- function(lambda) {
+    phi[ix$lambdaZ] <- lambda
+    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6,
+                model = FBC:::compiled_model(1, 1, discrepancy = "sgasp"))
+  }
+  expect_equal(ll(1e-9), .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, gp, 1e-6), tolerance = 1e-6)
+  nonePhi <- numeric(length(unlist(FBC:::param_indices(1, 1, "none"))))
+  inn <- FBC:::param_indices(1, 1, "none")
+  for (cls in names(inn)) nonePhi[inn[[cls]]] <- phi[ix[[cls]]]
+  expect_equal(ll(1e12), .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, nonePhi, 1e-6,
+                                     model = FBC:::compiled_model(1, 1, discrepancy = "none")),
+               tolerance = 1e-6)
+})
+
 test_that("the compiled core refuses a layout of another discrepancy model", {
   dat <- random_koh_data(5, 12, 1, 1, seed = 3)
   gp <- FBC:::compiled_model(1, 1)
@@ -327,10 +386,19 @@ test_that("the compiled core refuses a layout of another discrepancy model", {
   expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
                            model = none),
                "thetaB 0 entries where the data need 1")
-  none$discrepancy <- 2L
+  none$discrepancy <- 2L  # the S-GaSP, whose bias GP has classes
   expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
                            model = none),
-               "unknown discrepancy code 2")
+               "thetaB 0 entries where the data need 1")
+  sg <- FBC:::compiled_model(1, 1, discrepancy = "sgasp")
+  sg$discrepancy <- 0L  # the KOH bias: it needs a muB (and no lambdaZ)
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "sgasp"), 1e-6,
+                           model = sg),
+               "muB 0 entries where the data need 1")
+  none$discrepancy <- 7L
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
+                           model = none),
+               "unknown discrepancy code 7")
 })
 
 test_that("without a discrepancy the sampler retains dense log-likelihoods and has no bias moves", {

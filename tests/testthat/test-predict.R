@@ -71,6 +71,29 @@ test_that("without a discrepancy predict() is the dense GP conditional; the bias
   expect_equal(out$field$se^2, out$mean$se^2 + sc$ysd^2 * phi[length(phi)], tolerance = 1e-10)
 })
 
+test_that("under the S-GaSP predict() is the dense GP conditional with the discretized kernel", {
+  # dense_predict(discrepancy = "sgasp"): bias mean 0, covariances from
+  # Kz(x, x') = R(x, x') - R(x, U) (R(U, U) + nu / lambdaZ I)^-1 R(U, x')
+  set.seed(7)
+  phi <- random_phi(2, 1, "sgasp")
+  fit <- fixed_fit(phi, discrepancy = "sgasp")
+  sc <- fit$scale
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1",
+                                        "alphaS2", "alphaS3", "thetaB1", "thetaB2", "alphaB1",
+                                        "alphaB2", "lambdaZ", "sigma2S", "sigma2B", "sigma2E"))
+  Xn <- rbind(Xnew, c(10 * fit$data$Xf[1, 1], fit$data$Xf[1, 2] - 5))  # on a field input
+  for (type in c("field", "mean", "simulator", "bias")) {
+    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+                         scaled_new(Xn, sc), type, discrepancy = "sgasp")
+    shift <- if (type == "bias") 0 else sc$ymean
+    for (method in c("Bayesian", "MAP")) {
+      pr <- predict(fit, Xn, method = method, type = type)
+      expect_equal(pr$pred, shift + sc$ysd * ref$mean, tolerance = 1e-8)
+      expect_equal(pr$se, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+    }
+  }
+})
+
 test_that("the Bayesian method combines per-draw conditionals by total variance and mixture quantiles", {
   set.seed(3)
   phi <- random_phi(2, 1)

@@ -1,0 +1,64 @@
+# The confounding check of convergence_messages(): the calibration
+# parameters barely informed while the bias GP carries the signal.
+#
+# With a bias GP (discrepancy "gp" or "sgasp"), a calibration parameter is
+# flagged when its posterior is nearly what its prior says or spans most of
+# the range the simulator design covers -- its central 95% covers at least
+# `fbc_confound_cover` of the design's range, or its posterior sd is at
+# least `fbc_confound_sd` of its prior's -- while the bias GP's variance
+# exceeds the measurement error's (posterior medians of sigma2B and
+# sigma2E): the field data are explained by the bias rather than by the
+# calibration (Kennedy and O'Hagan 2001; Brynjarsdottir and O'Hagan 2014).
+# The message points to the comparison of discrepancy models by loo().
+
+fbc_confound_cover <- 0.7
+fbc_confound_sd <- 0.7
+
+# The flagged calibration parameters: a data frame with the label, the
+# share of the design's range the 95% interval covers, the ratio of the
+# posterior to the prior sd, and the ratio of sigma2B to sigma2E (medians);
+# NULL when nothing is flagged.
+confounded_kappa <- function(x) {
+  if (identical(x$settings$discrepancy, "none")) return(NULL)
+  Phi <- x$Phi
+  if (!all(c("sigma2B", "sigma2E") %in% colnames(Phi))) return(NULL)
+  ratio <- stats::median(Phi[, "sigma2B"]) / stats::median(Phi[, "sigma2E"])
+  if (!(ratio > 1)) return(NULL)
+  des <- kappa_design(x$scale)
+  ps <- phi_spec(x)
+  fam <- names(prior_families)[match(ps$table$family, prior_families)]
+  out <- NULL
+  for (j in seq_len(x$scale$q)) {
+    col <- which(ps$classes == "kappa")[j]
+    if (fam[col] == "fixed") next
+    k <- Phi[, col]
+    rng <- des$hi[j] - des$lo[j]
+    ci <- stats::quantile(k, c(0.025, 0.975), names = FALSE)
+    cover <- (min(ci[2], des$hi[j]) - max(ci[1], des$lo[j])) / rng
+    tab <- ps$table[col, ]
+    v <- prior_quantile(stats::ppoints(2000), fam[col], tab$p1, tab$p2)
+    sdRatio <- if (all(is.finite(v))) stats::sd(k) / stats::sd(des$lo[j] + rng * (v - tab$a) / tab$b) else NA_real_
+    if (cover >= fbc_confound_cover || isTRUE(sdRatio >= fbc_confound_sd)) {
+      out <- rbind(out, data.frame(label = des$label[j], lower = ci[1], upper = ci[2],
+                                   cover = cover, sdRatio = sdRatio, biasRatio = ratio,
+                                   stringsAsFactors = FALSE))
+    }
+  }
+  out
+}
+
+confounding_messages <- function(x) {
+  b <- confounded_kappa(x)
+  if (is.null(b)) return(character())
+  other <- setdiff(c("gp", "sgasp", "none"), x$settings$discrepancy)
+  fits <- paste(sprintf("`fit_%s <- calibrate(sim, field, discrepancy = \"%s\")`", other, other),
+                collapse = " and ")
+  cmp <- paste(c("loo::loo(fit)", sprintf("loo::loo(fit_%s)", other)), collapse = ", ")
+  sprintf(paste(
+    "%s is barely informed by the field data: its 95%% interval [%s, %s] covers %s of the simulator design's range%s, while the bias GP carries the signal (its variance sigma2B is %s times the measurement error's sigma2E).",
+    "The bias and the calibration are confounded (Kennedy and O'Hagan 2001): under this discrepancy model the data cannot tell them apart.",
+    "Compare the discrepancy models, e.g. %s (with the same data and settings), by `loo::loo_compare(%s)` (see ?loo.fbc)."),
+    b$label, fmt_num(b$lower), fmt_num(b$upper), fmt_share(pmin(b$cover, 1)),
+    ifelse(is.na(b$sdRatio), "", sprintf(" and its sd is %s of its prior's", fmt_share(b$sdRatio))),
+    format(signif(b$biasRatio, 2)), fits, cmp)
+}

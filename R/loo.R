@@ -1,0 +1,88 @@
+#' Leave-one-out cross-validation of a calibration
+#'
+#' Estimates the expected log predictive density of new field data by
+#' Pareto-smoothed importance sampling leave-one-out (PSIS-LOO, package
+#' \pkg{loo}), from the *exact* leave-one-out predictive density of each
+#' field observation given the other field data and every simulator run, at
+#' each posterior draw: the model is a joint Gaussian, so
+#' \eqn{p(y_G \mid y_{-G}, \phi)} has a closed form (the field block of the
+#' inverse covariance is the inverse of the Schur complement; Rasmussen and
+#' Williams 2006, section 5.4.2), computed through the fit's algebra without
+#' refitting. These non-factorized densities are what PSIS needs for a
+#' Gaussian model with correlated errors (Bürkner, Gabry and Vehtari 2021).
+#' [loo::loo_compare()] then compares fits of the same data: discrepancy
+#' models (`calibrate(discrepancy =)`), correlation families, priors.
+#'
+#' @section What is left out:
+#' With `unit = "input"` (the default) every observation made at one field
+#' input (its replicates) is left out together, and the unit of the
+#' comparison is the input: calibrated prediction is about the field at an
+#' input not measured yet. Replicates share the bias at their input, so
+#' leaving one out while its twins stay in lets the bias GP predict it from
+#' them whatever the calibration, which would blur the differences between
+#' discrepancy models. `unit = "observation"` leaves out one observation at a
+#' time. Without replicates the two are the same. Compare fits with the
+#' same `unit`.
+#'
+#' @param x An `fbc` object from [calibrate()].
+#' @param unit `"input"` (default) or `"observation"`: see "What is left out".
+#' @param ndraws How many posterior draws to use, evenly spaced within each
+#'   chain (the same number per chain, for the relative efficiencies); `NULL`
+#'   for all. Each draw costs one evaluation of the likelihood's factors.
+#' @param ... Not used: an argument given here is an error.
+#' @return A `psis_loo` object of \pkg{loo} (see [loo::loo()]), whose
+#'   pointwise elements are the field inputs (or observations) in the order
+#'   of their first row in `field`; log densities are in the response's own
+#'   units. `attr(, "unit")` says which unit was left out.
+#' @exportS3Method loo::loo
+#' @examples
+#' \donttest{
+#' if (requireNamespace("loo", quietly = TRUE)) {
+#'   set.seed(1)
+#'   gp <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000)
+#'   none <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000,
+#'                     discrepancy = "none")
+#'   loo::loo_compare(list(gp = loo::loo(gp), none = loo::loo(none)))
+#' }
+#' }
+loo.fbc <- function(x, unit = c("input", "observation"), ndraws = 4000, ...) {
+  check_dots_empty(..., fn = loo.fbc, name = "loo")
+  x <- check_fbc(x, "x")
+  if (!requireNamespace("loo", quietly = TRUE)) {
+    cli::cli_abort("{.fn loo} for {.cls fbc} objects needs the {.pkg loo} package: {.code install.packages(\"loo\")}.")
+  }
+  unit <- match_choice(unit, c("input", "observation"), "unit")
+  if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
+  rows <- loo_rows(x$chain, ndraws)
+  d <- x$data
+  group <- loo_groups(d$Xf, unit)
+  ll <- .fbc_loo(d$Xf, d$yf, d$Xs, d$ys, sampler_draws(x, rows$rows), x$settings$nugget,
+                 group, model = x$spec$model)
+  # densities in the response's units: y = ymean + ysd * y_scaled
+  ll <- sweep(ll, 2, tabulate(group) * log(x$scale$ysd))
+  r_eff <- loo::relative_eff(exp(ll), chain_id = rows$chain)
+  out <- loo::loo(ll, r_eff = r_eff)
+  attr(out, "unit") <- unit
+  out
+}
+
+# The rows of Phi loo.fbc() uses: at most `ndraws` in all, the same number
+# from each chain (the shortest chain's length at most), evenly spaced
+# within each; and each row's chain.
+loo_rows <- function(chain, ndraws) {
+  ids <- sort(unique(chain))
+  by <- lapply(ids, function(k) which(chain == k))
+  per <- min(lengths(by))
+  if (!is.null(ndraws)) per <- max(1L, min(per, ndraws %/% length(ids)))
+  pick <- unique(as.integer(round(seq(1, min(lengths(by)), length.out = per))))
+  list(rows = unlist(lapply(by, function(i) i[pick])),
+       chain = rep(seq_along(ids), each = length(pick)))
+}
+
+# The group of each field row: its distinct input (numbered in order of
+# first appearance) or itself.
+loo_groups <- function(Xf, unit) {
+  if (unit == "observation") return(seq_len(nrow(Xf)))
+  key <- apply(Xf, 1, function(r) paste(format(r, digits = 17), collapse = "\r"))
+  match(key, unique(key))
+}
