@@ -45,3 +45,11 @@
     .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 
+.vecchia_order <- function(X, w) {
+    .Call(`_FBC_vecchia_order`, X, w)
+}
+
+.vecchia_neighbours <- function(X, ord, w, k) {
+    .Call(`_FBC_vecchia_neighbours`, X, ord, w, k)
+}
+

@@ -53,7 +53,7 @@
 #' interval for `g` is most of the design's range; [convergence_messages()]
 #' says when this happens). The S-GaSP sits between the two. On the ball
 #' data (defaults, `set.seed(1)`) the 95% intervals of `g` are [6.27, 13.49]
-#' (`"gp"`), [6.92, 10.46] (`"sgasp"`) and [7.68, 8.70] (`"none"`);
+#' (`"gp"`), [6.73, 11.30] (`"sgasp"`) and [7.68, 8.70] (`"none"`);
 #' RobustCalibration's plug-in fits give [7.0, 9.9] (S-GaSP) and
 #' [7.8, 8.6] (none). [loo.fbc()] compares the models by exact
 #' leave-one-out predictive densities of the field data.
@@ -115,6 +115,28 @@
 #' product design. `algebra = "dense"` forces the dense algebra (the same
 #' posterior, slower). `print()` and `fit$settings$simAlgebra` say which one
 #' ran; [predict.fbc()] uses the same.
+#'
+#' Beyond a few thousand scattered runs no exact algebra is practical (a
+#' factorization of the \eqn{m \times m} block per sweep). The
+#' nearest-neighbour (Vecchia) approximation (`algebra = "vecchia"`, or
+#' `"auto"` above 3000 runs that are not a product design) replaces the
+#' joint Gaussian of the runs and the field points by a directed graph
+#' (Vecchia 1988; Datta et al. 2016; Katzfuss and Guinness 2021): the runs
+#' in a maximin order of their scaled inputs (Guinness 2018), each
+#' conditioned on its `neighbours` nearest earlier runs, then the field
+#' points \eqn{\eta(x, \kappa)}, each conditioned on its `neighbours`
+#' nearest runs at the current \eqn{\kappa} and on its nearest earlier
+#' field points. A sweep then costs \eqn{O(m k^3)} instead of
+#' \eqn{O(m^3)} and memory \eqn{O(m k)}; no \eqn{m \times m} matrix is
+#' formed. The distances scale each input by \eqn{\theta_k^{1/\alpha}}
+#' from a pilot maximum-likelihood fit of the simulator GP on at most 400
+#' runs (Katzfuss, Guinness and Lawrence 2022), made once before sampling:
+#' every chain, `update()`, [predict.fbc()] and [validate_emulator()] use
+#' the same approximation (`fit$spec$model$vecchia`). The posterior is that
+#' of the approximate model, exact when every node conditions on all its
+#' predecessors (`neighbours` at least \eqn{m}, tested); `print()` says
+#' when it ran, with \eqn{k}. `inst/bench/vecchia.R` measures it against
+#' the exact algebra.
 #'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
@@ -360,8 +382,13 @@
 #' @param sampler `"blocks"` (the default: joint and exact moves, see
 #'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
 #' @param algebra `"auto"` (the default: the Kronecker algebra on a product
-#'   design, else the dense one) or `"dense"` (always the dense one); see
+#'   design, the nearest-neighbour approximation for more than 3000 runs of
+#'   another design, else the dense one), `"dense"` (always the exact dense
+#'   one) or `"vecchia"` (the nearest-neighbour approximation); see
 #'   "Simulator algebra".
+#' @param neighbours For the nearest-neighbour algebra: how many neighbours
+#'   each simulator run and each field point conditions on (a whole number,
+#'   at least 1; more is closer to exact and slower).
 #' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
 #'   `sampler = "single"`, with a warning.
 #' @param checkpoint `NULL` (no checkpoints) or a directory where the chains
@@ -429,7 +456,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "sgasp", "none"),
                       kernelS = "powexp",
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
-                      blockSim = NULL, algebra = c("auto", "dense"), checkpoint = NULL,
+                      blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
+                      neighbours = 30, checkpoint = NULL,
                       checkpointEvery = 60, converge = FALSE) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
@@ -472,7 +500,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   check_checkpoint(checkpoint, checkpointEvery)
-  algebra <- match_choice(algebra, c("auto", "dense"), "algebra")
+  algebra <- match_choice(algebra, c("auto", "dense", "vecchia"), "algebra")
+  neighbours <- check_neighbours(neighbours)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -491,8 +520,13 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   )
   check_kappa_design(kappaSpec, scale)
   spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy)
+  code <- algebra_code(algebra, dat$Xs, p)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
-                               algebra = if (algebra == "dense") 1L else 0L, discrepancy)
+                               algebra = code, discrepancy,
+                               vecchia = if (code == 2L) {
+                                 vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
+                                                neighbours, neighbours)
+                               })
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -503,8 +537,10 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
                    nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB,
                    discrepancy = discrepancy)
-  # a run under a rule is another run (its length depends on the rule)
+  # a run under a rule is another run (its length depends on the rule), as
+  # is one under another approximation
   if (!is.null(converge)) settings$converge <- unclass(converge)
+  if (code == 2L) settings$neighbours <- neighbours
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the

@@ -139,12 +139,15 @@ layout_codes <- function(p, q, discrepancy = "gp") {
 
 # The model description the compiled entry points take: the correlation
 # families of the simulator and bias GPs (kernel_codes()), the algebra
-# (0 auto, 1 dense), the discrepancy model (discrepancy_codes) and the
-# layout of phi.
-compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp") {
+# (0 auto: Kronecker on a product design, else dense; 1 dense; 2 the
+# nearest-neighbour approximation, whose design vecchia_design() makes),
+# the discrepancy model (discrepancy_codes) and the layout of phi.
+compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
+                           vecchia = NULL) {
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
-    layout_codes(p, q, discrepancy))
+    layout_codes(p, q, discrepancy),
+    if (!is.null(vecchia)) list(vecchia = vecchia))
 }
 
 # The compiled entry points, each with the model description attached. The
@@ -187,13 +190,17 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepan
 # large-problem move schedule (sampler_moves(large = TRUE)).
 fbc_large_m <- 500L
 large_dense <- function(m, simAlgebra) {
-  identical(simAlgebra$name, "dense") && m >= fbc_large_m
+  simAlgebra$name %in% c("dense", "Vecchia") && m >= fbc_large_m
 }
 
 # Which algebra the compiled code uses for the simulator block: the
 # Kronecker one on a product design (`dims`: I experimental x J calibration
 # settings), else the dense one.
 sim_algebra_info <- function(dat, p, model) {
+  if (identical(model$algebra, 2L)) {
+    return(list(name = "Vecchia", dims = NULL, k = model$vecchia$k,
+                scaling = model$vecchia$scaling))
+  }
   dims <- .sim_algebra(dat$Xs, p, model$algebra)
   if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
 }

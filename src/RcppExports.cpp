@@ -190,6 +190,32 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// vecchia_order
+Rcpp::IntegerVector vecchia_order(const arma::mat& X, const arma::vec& w);
+RcppExport SEXP _FBC_vecchia_order(SEXP XSEXP, SEXP wSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type X(XSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type w(wSEXP);
+    rcpp_result_gen = Rcpp::wrap(vecchia_order(X, w));
+    return rcpp_result_gen;
+END_RCPP
+}
+// vecchia_neighbours
+Rcpp::IntegerMatrix vecchia_neighbours(const arma::mat& X, const Rcpp::IntegerVector& ord, const arma::vec& w, int k);
+RcppExport SEXP _FBC_vecchia_neighbours(SEXP XSEXP, SEXP ordSEXP, SEXP wSEXP, SEXP kSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type X(XSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type ord(ordSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type w(wSEXP);
+    Rcpp::traits::input_parameter< int >::type k(kSEXP);
+    rcpp_result_gen = Rcpp::wrap(vecchia_neighbours(X, ord, w, k));
+    return rcpp_result_gen;
+END_RCPP
+}
 
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
@@ -203,6 +229,8 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
+    {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
+    {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},
     {NULL, NULL, 0}
 };
 

@@ -35,7 +35,19 @@ enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52
 
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
-enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1 };
+// ALG_VECCHIA: the nearest-neighbour approximation (vecchia.cpp), with the
+// ordering and neighbours the model carries.
+enum AlgebraChoice { ALG_AUTO = 0, ALG_DENSE = 1, ALG_VECCHIA = 2 };
+
+// The Vecchia algebra's design (R/vecchia.R): k neighbours per node among
+// the runs, kf among the field latents, the runs' maximin order (0-based
+// rows of Xs), each position's earlier neighbours (m x k, row-major by
+// position, -1 past the last) and the input scaling w of the distances.
+struct VecchiaDesign {
+  int k = 0, kf = 0;
+  std::vector<int> ord, nbr;
+  arma::vec w;
+};
 
 // The discrepancy model (R/model.R, discrepancy_codes): the KOH bias GP,
 // none (then the bias classes have length 0 in the layout), or the scaled
@@ -68,6 +80,7 @@ struct Layout {
 struct Model {
   int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
+  VecchiaDesign vecchia;  // with algebra ALG_VECCHIA
 };
 // Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
 // and length integer vectors named by class) and checks that the layout
@@ -114,6 +127,9 @@ void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
 // calibration factor of Rs(Xs, Xk): every field row shares kappa).
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
                        const double* theta, const double* alpha, arma::vec& out);
+// kernel_corr(X, X, lower) over the first s rows of X (Vecchia's systems).
+void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
+                      const double* alpha, arma::mat& out);
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = KF_POWEXP);
@@ -298,6 +314,12 @@ private:
   // the bias's correlation with new inputs (see model.cpp)
   void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const;
   arma::mat Bz_, Wz_;  // S-GaSP workspaces
+
+protected:
+  // Q and wz at the current state (Q: lower triangle), for an algebra's
+  // prediction.
+  const arma::mat& curQ() const { return Q_.cur(); }
+  const arma::vec& curWz() const { return wz_.cur(); }
 };
 // Rz = R - R (R + (nu / lambda) I)^-1 R over R's lower triangle (model.cpp).
 bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W);
@@ -370,6 +392,34 @@ private:
   Buf2<arma::mat> Ux_, Ut_, Ax_, Yt_;
   Buf2<arma::vec> lx_, lt_, c_, ct_, w_, g_;
   arma::mat Rx_, Rt_, Rxf_, An_;     // workspaces
+};
+
+// The nearest-neighbour (Vecchia) algebra (vecchia.cpp): the runs and the
+// field latents as nodes of a graph, each conditioned on its nearest
+// predecessors; no m x m matrix is formed.
+class VecchiaPosterior : public SchurPosterior {
+public:
+  VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                   const arma::vec& ys, double nugget, const Model& model);
+  std::string algebra() const override;
+
+protected:
+  bool simUpdate(const Touch& t, double& ldDs, double& zz) override;
+  void simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz) override;
+  void simFlip(const Touch& t) override;
+  void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
+  void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                  std::vector<arma::mat>& QBB) override;
+
+private:
+  VecchiaDesign vd_;
+  std::vector<std::vector<int> > nbrL_;  // each field latent's earlier latents
+  Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa
+  arma::mat Kw_, Xg_;                    // one conditional's system
+  arma::vec rhs_;
+  double conditional(int s, int runs, bool coef);
+  void fieldNeighbours(std::vector<int>& nbrF);
+  int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
 };
 
 // The algebra for the data at hand: Kronecker on a product design unless

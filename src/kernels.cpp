@@ -169,6 +169,33 @@ void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const 
   KERNEL_DISPATCH(kern, kernel_corr_t, X, Y, K, theta, alpha, out, lower);
 }
 
+// kernel_corr(X, X, lower) over the first s rows of X only, into the
+// leading s x s block of out (the Vecchia algebra's small systems).
+template <int F>
+static void kernel_corr_rows_t(const arma::mat& X, int s, int K, const double* theta,
+                               const double* alpha, arma::mat& out) {
+  double w[1024];
+  for (int j = 0; j < s; ++j) {
+    double* col = out.colptr(j);
+    for (int i = j; i < s; ++i) { col[i] = 0.0; w[i] = 1.0; }
+    for (int k = 0; k < K; ++k) {
+      const double* x = X.colptr(k);
+      const double xj = x[j], c = coef_of<F>(theta[k]), a = alpha[k];
+      if (matern(F)) {
+        for (int i = j; i < s; ++i) accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - xj), a), col[i], w[i]);
+      } else {
+        for (int i = j; i < s; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - xj), a);
+      }
+    }
+    for (int i = j; i < s; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
+  }
+}
+void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
+                      const double* alpha, arma::mat& out) {
+  if (s > 1024) Rcpp::stop("at most 1024 rows in a Vecchia conditioning set");
+  KERNEL_DISPATCH(kern, kernel_corr_rows_t, X, s, K, theta, alpha, out);
+}
+
 // Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),
 // i >= j, at packed_offset(j, m) + i - j.
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }

@@ -62,6 +62,30 @@ Model read_model(const Rcpp::List& model, int p, int q) {
                  lay.length[c], want[c]);
     lay.d += lay.length[c];
   }
+  if (out.algebra == ALG_VECCHIA) {
+    if (!model.containsElementNamed("vecchia"))
+      Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
+    const Rcpp::List v = model["vecchia"];
+    VecchiaDesign& vd = out.vecchia;
+    vd.k = Rcpp::as<int>(v["k"]);
+    vd.kf = Rcpp::as<int>(v["kf"]);
+    const Rcpp::IntegerVector ord = v["order"];
+    const Rcpp::IntegerMatrix nbr = v["neighbours"];
+    if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
+      Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
+    vd.w = Rcpp::as<arma::vec>(v["scaling"]);
+    vd.ord.resize(ord.size());
+    vd.nbr.assign((size_t) ord.size() * vd.k, -1);
+    for (int i = 0; i < ord.size(); ++i) {
+      vd.ord[i] = ord[i] - 1;
+      for (int c = 0; c < vd.k; ++c) {
+        const int r = nbr(i, c);
+        if (r == NA_INTEGER || r < 0 || r > ord.size())
+          Rcpp::stop("the Vecchia design's neighbours must be row numbers");
+        vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
+      }
+    }
+  }
   lay.cls.assign(lay.d, -1);
   lay.pos.assign(lay.d, -1);
   for (int c = 0; c < PC_COUNT; ++c)
@@ -79,8 +103,10 @@ std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& 
                                           double nugget, const Model& model) {
   check_kernel(model.kernS);
   check_kernel(model.kernB);
-  if (model.algebra != ALG_AUTO && model.algebra != ALG_DENSE)
+  if (model.algebra != ALG_AUTO && model.algebra != ALG_DENSE && model.algebra != ALG_VECCHIA)
     Rcpp::stop("unknown algebra code %d", model.algebra);
+  if (model.algebra == ALG_VECCHIA)
+    return std::unique_ptr<Posterior>(new VecchiaPosterior(Xf, yf, Xs, ys, nugget, model));
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
   if (model.algebra == ALG_AUTO) {
     ProductDesign pd;

@@ -1,0 +1,383 @@
+// The nearest-neighbour (Vecchia) simulator algebra: an approximation of the
+// joint Gaussian of y = (yf, ys) by a directed acyclic graph (Vecchia 1988;
+// Datta et al. 2016; Katzfuss and Guinness 2021), exact when every node
+// conditions on all its predecessors.
+//
+// Nodes, in order: the m simulator runs in a maximin ordering of their
+// inputs scaled by w (Guinness 2018; Katzfuss, Guinness and Lawrence 2022),
+// then the nu distinct field latents f_j = eta(x_j, kappa). In correlation
+// units (Ds = Rs + nugget I on the runs, no nugget on the latents):
+//   run s_i | its <= k nearest earlier runs N_i:
+//     ys_i = b_i' ys_N + e_i, e_i ~ N(0, d_i),
+//     log|Ds| ~ sum log d_i,  ys' Ds^-1 ys ~ sum e_i^2 / d_i,
+//     Ds^-1 ~ U U',  U[s_i, s_i] = d_i^-1/2, U[N_i, s_i] = -b_i d_i^-1/2;
+//   latent f_j | its k nearest runs N_j at the current kappa (scaled
+//   distance) and its <= kf nearest earlier latents F_j:
+//     f_j = a_j' ys_N + c_j' f_F + e_j, e_j ~ N(0, g_j),
+//   so with M = I - C (C[j, F_j] = c_j, strictly lower) and h_j = a_j' ys_N:
+//     wz = E(f | ys) = M^-1 h,   Q = cov(f | ys) = M^-1 diag(g) M^-T,
+//   which is all the Schur complement needs (model.cpp). A new point is one
+//   more latent after the field latents (simCondition()).
+// Each conditional is read off the Cholesky factor L of the joint
+// correlation of [conditioning set, node]: its last row l and last diagonal
+// entry give the variance (L_ss^2) and the coefficients (L_-s^-T l).
+// Ordering and the runs' neighbours are computed once (in R, through
+// .vecchia_order() and .vecchia_neighbours()) and handed over with the model;
+// the field latents' neighbours among the runs follow kappa.
+#include "fbc.h"
+#include <algorithm>
+#include <numeric>
+
+// In-place lower Cholesky of the leading s x s block of A (leading dimension
+// lda); false when not positive definite. Small matrices: no LAPACK call.
+static bool small_chol(double* A, int s, int lda) {
+  for (int j = 0; j < s; ++j) {
+    double* cj = A + (size_t) j * lda;
+    double d = cj[j];
+    for (int l = 0; l < j; ++l) { const double v = A[(size_t) l * lda + j]; d -= v * v; }
+    if (!(d > 0)) return false;
+    d = std::sqrt(d);
+    cj[j] = d;
+    for (int i = j + 1; i < s; ++i) {
+      double v = cj[i];
+      for (int l = 0; l < j; ++l) v -= A[(size_t) l * lda + i] * A[(size_t) l * lda + j];
+      cj[i] = v / d;
+    }
+  }
+  return true;
+}
+
+// Solves L' x = b in place (L lower, leading s x s block of A): the
+// coefficients of a conditional from its factor's last row.
+static void small_back(const double* A, int s, int lda, double* x) {
+  for (int i = s - 1; i >= 0; --i) {
+    double v = x[i];
+    for (int l = i + 1; l < s; ++l) v -= A[(size_t) i * lda + l] * x[l];
+    x[i] = v / A[(size_t) i * lda + i];
+  }
+}
+
+// Squared scaled distance between row a of X and the point y (first K
+// columns).
+static inline double scaled_d2(const arma::mat& X, arma::uword a, const double* y,
+                               const arma::vec& w, int K) {
+  double s = 0.0;
+  for (int k = 0; k < K; ++k) {
+    const double d = w[k] * (X.at(a, k) - y[k]);
+    s += d * d;
+  }
+  return s;
+}
+
+// The k nearest rows of X (among rows[0 .. nr - 1], or all when rows is
+// null) to the point y, scaled by w: into out (nearest first; fewer when
+// there are fewer rows). `d2` and `idx` are workspaces.
+static void nearest(const arma::mat& X, const int* rows, int nr, const double* y,
+                    const arma::vec& w, int K, int k, std::vector<double>& d2,
+                    std::vector<int>& idx, std::vector<int>& out) {
+  d2.resize(nr); idx.resize(nr);
+  for (int r = 0; r < nr; ++r) {
+    const int a = rows ? rows[r] : r;
+    idx[r] = a;
+    d2[r] = scaled_d2(X, a, y, w, K);
+  }
+  const int kk = std::min(k, nr);
+  std::vector<int> pos(nr);
+  std::iota(pos.begin(), pos.end(), 0);
+  std::partial_sort(pos.begin(), pos.begin() + kk, pos.end(), [&](int a, int b) {
+    return d2[a] < d2[b] || (d2[a] == d2[b] && idx[a] < idx[b]);
+  });
+  out.resize(kk);
+  for (int r = 0; r < kk; ++r) out[r] = idx[pos[r]];
+}
+
+// Maximin ordering of the rows of X scaled by w (Guinness 2018): first the
+// row nearest the centre of the scaled design, then each time the row
+// farthest from all rows taken so far (ties to the lower index). O(m^2 K)
+// time, O(m) memory. 1-based row numbers.
+// [[Rcpp::export(.vecchia_order)]]
+Rcpp::IntegerVector vecchia_order(const arma::mat& X, const arma::vec& w) {
+  const int m = X.n_rows, K = X.n_cols;
+  std::vector<double> centre(K), mind(m, R_PosInf);
+  for (int k = 0; k < K; ++k) centre[k] = arma::mean(X.col(k));
+  std::vector<char> taken(m, 0);
+  Rcpp::IntegerVector out(m);
+  int first = 0;
+  double best = R_PosInf;
+  for (int a = 0; a < m; ++a) {
+    const double d = scaled_d2(X, a, centre.data(), w, K);
+    if (d < best) { best = d; first = a; }
+  }
+  int cur = first;
+  std::vector<double> y(K);
+  for (int t = 0; t < m; ++t) {
+    out[t] = cur + 1;
+    taken[cur] = 1;
+    for (int k = 0; k < K; ++k) y[k] = X.at(cur, k);
+    int next = -1;
+    double far = -1.0;
+    for (int a = 0; a < m; ++a) {
+      if (taken[a]) continue;
+      const double d = scaled_d2(X, a, y.data(), w, K);
+      if (d < mind[a]) mind[a] = d;
+      if (mind[a] > far) { far = mind[a]; next = a; }
+    }
+    cur = next;
+    if (t % 256 == 255) Rcpp::checkUserInterrupt();
+  }
+  return out;
+}
+
+// For the rows of X in the order `ord` (1-based), the k nearest earlier
+// rows of each in the scaled distance (an m x k matrix of 1-based row
+// numbers, nearest first; 0 where a row has fewer than k earlier ones).
+// O(m^2 K / 2) time.
+// [[Rcpp::export(.vecchia_neighbours)]]
+Rcpp::IntegerMatrix vecchia_neighbours(const arma::mat& X, const Rcpp::IntegerVector& ord,
+                                       const arma::vec& w, int k) {
+  const int m = X.n_rows, K = X.n_cols;
+  if (ord.size() != m) Rcpp::stop("the ordering must have %d entries", m);
+  Rcpp::IntegerMatrix out(m, k);
+  std::vector<int> prev(m);
+  for (int i = 0; i < m; ++i) prev[i] = ord[i] - 1;
+  std::vector<double> d2, y(K);
+  std::vector<int> idx, nb;
+  for (int i = 1; i < m; ++i) {
+    const int s = prev[i];
+    for (int c = 0; c < K; ++c) y[c] = X.at(s, c);
+    nearest(X, prev.data(), i, y.data(), w, K, k, d2, idx, nb);
+    for (size_t r = 0; r < nb.size(); ++r) out(i, r) = nb[r] + 1;
+    if (i % 256 == 255) Rcpp::checkUserInterrupt();
+  }
+  return out;
+}
+
+VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                                   const arma::vec& ys, double nugget, const Model& model)
+  : SchurPosterior(Xf, yf, Xs, ys, nugget, model), vd_(model.vecchia) {
+  const int K = p + q;
+  if ((int) vd_.ord.size() != m || (int) vd_.nbr.size() != m * vd_.k || (int) vd_.w.n_elem != K)
+    Rcpp::stop("the Vecchia design does not fit the simulator runs");
+  const int smax = vd_.k + vd_.kf + 1;
+  Kw_.set_size(smax, smax);
+  Xg_.set_size(smax, K);
+  rhs_.set_size(smax);
+  // each field latent's earlier latents: the kf nearest in the scaled
+  // experimental inputs (they share kappa)
+  nbrL_.resize(nu_);
+  std::vector<double> d2;
+  std::vector<int> idx, rows(nu_);
+  std::iota(rows.begin(), rows.end(), 0);
+  const arma::vec wx = vd_.w.head(p);
+  for (int j = 1; j < nu_; ++j) {
+    const arma::rowvec y = Xu_.row(j);
+    nearest(Xu_, rows.data(), j, y.memptr(), wx, p, vd_.kf, d2, idx, nbrL_[j]);
+  }
+  for (int b = 0; b < 2; ++b) { nbrF_.b[b].assign((size_t) nu_ * vd_.k, -1); }
+}
+
+std::string VecchiaPosterior::algebra() const {
+  return "Vecchia (k = " + std::to_string(vd_.k) + ")";
+}
+
+// The conditional of the node in the last of the s rows of Xg_ given the
+// others (the first `runs` of them simulator runs, with the nugget): the
+// factor of their joint correlation in Kw_, coefficients into rhs_[0 .. s-2]
+// (when `coef`), returns the conditional variance (NaN when the factor
+// fails even with a jitter on the latents).
+double VecchiaPosterior::conditional(int s, int runs, bool coef) {
+  const int K = p + q, lda = Kw_.n_rows;
+  const arma::vec thetaS = phi.subvec(iThetaS, iThetaS + K - 1);
+  const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + K - 1);
+  for (double jitter = 0.0; jitter < 1e-3; jitter = jitter == 0.0 ? 1e-10 : 100 * jitter) {
+    kernel_corr_rows(kernS_, Xg_, s, K, thetaS.memptr(), alphaS.memptr(), Kw_);
+    for (int i = 0; i < s; ++i) Kw_.at(i, i) += i < runs ? nugget_ : jitter;
+    if (!small_chol(Kw_.memptr(), s, lda)) continue;
+    if (coef) {
+      for (int l = 0; l < s - 1; ++l) rhs_[l] = Kw_.at(s - 1, l);
+      small_back(Kw_.memptr(), s - 1, lda, rhs_.memptr());
+    }
+    const double d = Kw_.at(s - 1, s - 1);
+    return d * d;
+  }
+  return R_NaN;
+}
+
+// log|Ds| and ys' Ds^-1 ys over the runs' conditionals.
+bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
+  if (!t.simCorr) return true;
+  const int K = p + q, k = vd_.k;
+  double ld = 0.0, qq = 0.0;
+  for (int i = 0; i < m; ++i) {
+    const int* nb = vd_.nbr.data() + (size_t) i * k;
+    int c = 0;
+    while (c < k && nb[c] >= 0) {
+      for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
+      rhs_[c] = ys_[nb[c]];
+      ++c;
+    }
+    const int s = vd_.ord[i];
+    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
+    rhs_[c] = ys_[s];
+    const double v = conditional(c + 1, c + 1, false);
+    if (!(v > 0)) return false;
+    // z = L^-1 [ys_N; ys_s]: its last entry is e / sqrt(d)
+    double* z = rhs_.memptr();
+    for (int r = 0; r <= c; ++r) {
+      double u = z[r];
+      for (int l = 0; l < r; ++l) u -= Kw_.at(r, l) * z[l];
+      z[r] = u / Kw_.at(r, r);
+    }
+    ld += std::log(v);
+    qq += z[c] * z[c];
+  }
+  ldDs = ld; zz = qq;
+  return true;
+}
+
+// The field latents' nearest runs at kappa (into nbrF, nu x k).
+void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF) {
+  const int K = p + q, k = vd_.k;
+  std::vector<double> y(K), d2;
+  std::vector<int> idx, nb;
+  for (int j = 0; j < nu_; ++j) {
+    for (int d = 0; d < p; ++d) y[d] = Xu_.at(j, d);
+    for (int d = 0; d < q; ++d) y[p + d] = phi[iKappa + d];
+    nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, d2, idx, nb);
+    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < (int) nb.size() ? nb[r] : -1;
+  }
+}
+
+// Gathers [runs nb (its first c entries); latents L; the point x] into Xg_
+// (latents and the point at kappa); returns the number of rows.
+int VecchiaPosterior::gather(const int* nb, int c, const std::vector<int>& L, const double* x) {
+  const int K = p + q;
+  int r = 0;
+  for (int a = 0; a < c; ++a, ++r)
+    for (int d = 0; d < K; ++d) Xg_.at(r, d) = Xs_.at(nb[a], d);
+  for (int l : L) {
+    for (int d = 0; d < p; ++d) Xg_.at(r, d) = Xu_.at(l, d);
+    for (int d = 0; d < q; ++d) Xg_.at(r, p + d) = phi[iKappa + d];
+    ++r;
+  }
+  for (int d = 0; d < p; ++d) Xg_.at(r, d) = x[d];
+  for (int d = 0; d < q; ++d) Xg_.at(r, p + d) = phi[iKappa + d];
+  return r + 1;
+}
+
+// wz = M^-1 h and Q = M^-1 diag(g) M^-T (lower) from the latents'
+// conditionals at the current state (see the top).
+void VecchiaPosterior::simCross(const Touch& t, const arma::mat&, arma::mat& Q, arma::vec& wz) {
+  std::vector<int>& nbrF = t.cChange ? nbrF_.alt() : nbrF_.cur();
+  if (t.cChange) fieldNeighbours(nbrF);
+  const int k = vd_.k;
+  arma::mat M(nu_, nu_, arma::fill::eye);
+  arma::vec h(nu_), g(nu_);
+  std::vector<double> x(p);
+  for (int j = 0; j < nu_; ++j) {
+    const int* nb = nbrF.data() + (size_t) j * k;
+    int c = 0;
+    while (c < k && nb[c] >= 0) ++c;
+    const std::vector<int>& L = nbrL_[j];
+    for (int d = 0; d < p; ++d) x[d] = Xu_.at(j, d);
+    const int s = gather(nb, c, L, x.data());
+    double v = conditional(s, c, true);
+    if (!(v >= 0)) v = 0.0;
+    g[j] = v;
+    double hj = 0.0;
+    for (int a = 0; a < c; ++a) hj += rhs_[a] * ys_[nb[a]];
+    h[j] = hj;
+    for (size_t l = 0; l < L.size(); ++l) M(j, L[l]) = -rhs_[c + l];
+  }
+  const arma::mat Mi = arma::solve(arma::trimatl(M), arma::eye(nu_, nu_));
+  wz = Mi * h;
+  Q = Mi * arma::diagmat(g) * Mi.t();
+}
+
+void VecchiaPosterior::simFlip(const Touch& t) {
+  if (t.cChange) nbrF_.flip();
+}
+
+// New points as further latents after the field latents, each conditioned
+// on its k nearest runs and its kf nearest field latents: with coefficients
+// a (runs), c (latents F) and variance g,
+//   E(eta* | ys) = a' ys_N + c' wz_F,  cov(f, eta* | ys) = Q[, F] c,
+//   var(eta* | ys) = c' Q_FF c + g,
+// so a = E, b = 1 - var, G = Rs(Xu, x*) - cov (the dense algebra's
+// quantities, of which these are the exact values when every node conditions
+// on all its predecessors).
+void VecchiaPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+                                    arma::mat& G) {
+  const int nb = Xnew.n_rows, K = p + q, k = vd_.k;
+  const arma::mat Qf = arma::symmatl(curQ());
+  const arma::vec& wz = curWz();
+  G.set_size(nu_, nb);
+  const arma::vec th = phi.subvec(iThetaS, iThetaS + p - 1);
+  const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p - 1);
+  const arma::mat Rx = corr_matrix(Xu_, Xnew, th, al, kernS_);
+  std::vector<double> y(K), d2, dl;
+  std::vector<int> idx, near, L, rows(nu_);
+  std::iota(rows.begin(), rows.end(), 0);
+  const arma::vec wx = vd_.w.head(p);
+  for (int c = 0; c < nb; ++c) {
+    for (int d = 0; d < p; ++d) y[d] = Xnew.at(c, d);
+    for (int d = 0; d < q; ++d) y[p + d] = phi[iKappa + d];
+    nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, d2, idx, near);
+    nearest(Xu_, rows.data(), nu_, y.data(), wx, p, vd_.kf, dl, idx, L);
+    const int cr = near.size();
+    const int s = gather(near.data(), cr, L, y.data());
+    double v = conditional(s, cr, true);
+    if (!(v >= 0)) v = 0.0;
+    double mean = 0.0;
+    for (int r = 0; r < cr; ++r) mean += rhs_[r] * ys_[near[r]];
+    arma::vec cf(L.size());
+    for (size_t l = 0; l < L.size(); ++l) { cf[l] = rhs_[cr + l]; mean += cf[l] * wz[L[l]]; }
+    const arma::uvec F = arma::conv_to<arma::uvec>::from(L);
+    const arma::vec cov = Qf.cols(F) * cf;
+    const double var = arma::dot(cf, Qf.submat(F, F) * cf) + v;
+    a[c] = mean;
+    b[c] = 1.0 - var;
+    G.col(c) = Rx.col(c) - cov;
+  }
+}
+
+// Ds^-1 ~ U U' from the runs' conditionals: a = U U' ys, and per fold B
+// (Ds^-1)_BB = sum over columns of U of the outer products of their
+// entries in B.
+void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
+                                  std::vector<arma::mat>& QBB) {
+  const int K = p + q, k = vd_.k;
+  std::vector<int> fold(m, -1), at(m, -1);
+  QBB.assign(folds.size(), arma::mat());
+  for (size_t f = 0; f < folds.size(); ++f) {
+    QBB[f].zeros(folds[f].size(), folds[f].size());
+    for (size_t r = 0; r < folds[f].size(); ++r) { fold[folds[f][r]] = f; at[folds[f][r]] = r; }
+  }
+  arma::vec Uty(m, arma::fill::zeros);  // U' ys
+  std::vector<std::vector<std::pair<int, double> > > cols(m);
+  for (int i = 0; i < m; ++i) {
+    const int* nb = vd_.nbr.data() + (size_t) i * k;
+    int c = 0;
+    while (c < k && nb[c] >= 0) {
+      for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
+      ++c;
+    }
+    const int s = vd_.ord[i];
+    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
+    const double v = conditional(c + 1, c + 1, true);
+    const double sd = std::sqrt(v);
+    std::vector<std::pair<int, double> >& col = cols[i];
+    col.emplace_back(s, 1.0 / sd);
+    for (int r = 0; r < c; ++r) col.emplace_back(nb[r], -rhs_[r] / sd);
+    double u = 0.0;
+    for (const auto& e : col) u += e.second * ys_[e.first];
+    Uty[i] = u;
+    for (const auto& e1 : col)
+      for (const auto& e2 : col)
+        if (fold[e1.first] >= 0 && fold[e1.first] == fold[e2.first])
+          QBB[fold[e1.first]](at[e1.first], at[e2.first]) += e1.second * e2.second;
+  }
+  a.zeros(m);
+  for (int i = 0; i < m; ++i)
+    for (const auto& e : cols[i]) a[e.first] += e.second * Uty[i];
+}
