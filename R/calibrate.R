@@ -457,7 +457,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kernelS = "powexp",
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
-                      neighbours = 30, checkpoint = NULL,
+                      neighbours = 20, checkpoint = NULL,
                       checkpointEvery = 60, converge = FALSE) {
   call <- match.call()
   sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
