@@ -25,8 +25,8 @@
     .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }
 
-.fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model) {
-    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model)
+.fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise) {
+    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise)
 }
 
 .log_prior <- function(x, family, p1, p2) {

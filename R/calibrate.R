@@ -138,6 +138,35 @@
 #' when it ran, with \eqn{k}. `inst/bench/vecchia.R` measures it against
 #' the exact algebra.
 #'
+#' @section Categorical inputs, outputs and data sets:
+#' A factor or character column of both `sim` and `field` (data frames) is a
+#' categorical experimental input. Its levels are those of `sim`'s column
+#' (a level of `field` or of [predict.fbc()]'s `newdata` that `sim` does not
+#' have is refused), and it enters both GPs through indicator columns, one
+#' for two levels (`name[level2]`) and one per level from three
+#' (`name[level]`), which appear among the inputs (and in the names of
+#' `thetaS`'s and `thetaB`'s columns' order). Two levels \eqn{a \ne b} are
+#' then correlated by \eqn{r(1; \theta_{[a]}) r(1; \theta_{[b]})}: one
+#' exchangeable correlation for two levels, all three pairwise correlations
+#' for three levels, a product of per-level factors for more (positive
+#' definite, learned and sampled like every \eqn{\theta}; the smoothness
+#' \eqn{\alpha} of an indicator is held at 2). [level_correlation()] gives
+#' the correlation matrix between levels.
+#'
+#' `output = "name"` names such a column that says which output each row of
+#' `sim` and `field` holds (long format). Each output is standardised by
+#' its own simulator runs' mean and sd, and has its own measurement-error
+#' variance (`sigma2E1`, `sigma2E2`, ...); the simulator GP and the bias
+#' correlate the outputs through the output's indicator columns, so all
+#' outputs inform the shared \eqn{\kappa}. When every run gives every
+#' output at the same experimental settings the design is still a product
+#' design and the Kronecker algebra applies.
+#'
+#' `source = "name"` names a factor column of `field` only: several field
+#' data sets sharing \eqn{\kappa}, each with its own measurement-error
+#' variance (the groups are the output x data set combinations present).
+#' The bias is shared by the data sets. `print()` lists the groups.
+#'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
 #' leaves the posterior invariant, the acceptance ratios include the Jacobian
@@ -396,6 +425,12 @@
 #'   a checkpoint of the same run, the run is resumed from it.
 #' @param checkpointEvery Seconds between a chain's checkpoints (it also
 #'   saves when it stops); `0` saves after every piece of 50 iterations.
+#' @param output For several outputs in long format: the name of a factor
+#'   (or character) column of both `sim` and `field` saying which output
+#'   each row holds; see "Categorical inputs, outputs and data sets".
+#' @param source For several field data sets stacked in `field`: the name
+#'   of a factor column of `field` only saying which data set each row
+#'   belongs to; each has its own measurement-error variance.
 #' @param converge `FALSE` (the default) runs `nMCMC` sweeps per chain.
 #'   `TRUE`, or a rule from [until_converged()], runs `nMCMC` sweeps and then
 #'   more, a few hundred at a time, until every R-hat is below 1.01 and every
@@ -458,9 +493,11 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = 20, checkpoint = NULL,
-                      checkpointEvery = 60, converge = FALSE) {
+                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL) {
   call <- match.call()
-  sim <- check_data_matrix(sim, "sim", min_cols = 2L, min_rows = 3L)
+  fac <- read_factors(sim, field, output, source)
+  sim <- check_data_matrix(fac$sim, "sim", min_cols = 2L, min_rows = 3L)
+  field <- fac$field
   check_experimental_input(field)
   field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
   cols <- align_columns(sim, field)
@@ -508,25 +545,30 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   kernelS <- check_kernel(kernelS, "kernelS")
   kernelB <- check_kernel(kernelB, "kernelB")
   hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB), kernelS, kernelB)
+  hypers <- indicator_hypers(hypers, match(unlist(lapply(fac$factors, `[[`, "columns")),
+                                           colnames(field)[-1]), p, q)
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
-  scale <- fbc_scale(sim, p, named = cols$named)
+  scale <- fbc_scale(sim, p, named = cols$named, out = fac$outS)
+  scale[c("factors", "output", "source", "noiseLabels")] <-
+    list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
   inform_duplicated_runs(sim)
   warn_field_outside(sim, field, scale)
-  dat <- scale_data(sim, field, scale)
+  dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
+  noise <- length(fac$noiseLabels %||% 1L)
   kappaSpec <- check_class_spec(
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   check_kappa_design(kappaSpec, scale)
-  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy)
+  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise)
   code <- algebra_code(algebra, dat$Xs, p)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = code, discrepancy,
                                vecchia = if (code == 2L) {
                                  vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
                                                 neighbours, neighbours)
-                               })
+                               }, noise = fac$noise)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -541,6 +583,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   # is one under another approximation
   if (!is.null(converge)) settings$converge <- unclass(converge)
   if (code == 2L) settings$neighbours <- neighbours
+  if (!is.null(output)) settings$output <- output
+  if (!is.null(source)) settings$source <- source
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -566,7 +610,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                      nChains = length(results), nugget = fbc_nugget, sampler = sampler,
                      moves = moves, time = proc.time()[["elapsed"]] - t0,
                      checkpoint = checkpoint, algebra = algebra, simAlgebra = simAlgebra,
-                     kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy)
+                     kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy,
+                     output = output, source = source)
     new_fbc_chains(results, dat, spec, scale, call, settings = settings)
   }
   run_rounds(starts, seeds, rep(nMCMC, nChains), converge, assemble, nBurn = nBurn,

@@ -58,8 +58,11 @@ loo.fbc <- function(x, unit = c("input", "observation"), ndraws = 4000, ...) {
   group <- loo_groups(d$Xf, unit)
   ll <- .fbc_loo(d$Xf, d$yf, d$Xs, d$ys, sampler_draws(x, rows$rows), x$settings$nugget,
                  group, model = x$spec$model)
-  # densities in the response's units: y = ymean + ysd * y_scaled
-  ll <- sweep(ll, 2, tabulate(group) * log(x$scale$ysd))
+  # densities in the response's units: y = ymean + ysd * y_scaled (each
+  # row by its output's sd)
+  logsd <- log(y_sd(x$scale, d$outF))
+  if (length(logsd) == 1L) logsd <- rep(logsd, length(group))
+  ll <- sweep(ll, 2, vapply(split(logsd, group), sum, numeric(1)))
   r_eff <- loo::relative_eff(exp(ll), chain_id = rows$chain)
   out <- loo::loo(ll, r_eff = r_eff)
   attr(out, "unit") <- unit

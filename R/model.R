@@ -10,7 +10,9 @@
 #            class1, class2, ... (muB, sigma2S ...: one parameter, no index)
 #   over     what the class expands over: "calibration" (one per
 #            calibration input, q), "inputs" (one per simulator input,
-#            p + q: experimental then calibration), "experimental" (p), "one"
+#            p + q: experimental then calibration), "experimental" (p),
+#            "noise" (one per measurement-error group of the field data:
+#            outputs x sources, see R/factors.R), "one"
 #   domain   "real", "positive" or "unit12" ([1, 2])
 #   walk     the scale its random walk runs on: "identity", "log",
 #            "logit12" (logit of x - 1)
@@ -28,7 +30,7 @@
 #            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
 model_classes <- data.frame(
   class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
-  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "one", "one"),
+  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "noise", "one"),
   domain = c("real", "positive", "unit12", "positive", "unit12", "positive", "positive", "positive", "positive", "real"),
   walk   = c("identity", "log", "logit12", "log", "logit12", "log", "log", "log", "log", "identity"),
   sd0    = c(0.1, 0.5, 0.5, 0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.1),
@@ -85,10 +87,11 @@ discrepancy_having <- function(cls) {
 }
 
 # How many parameters each class has with p experimental and q calibration
-# inputs under the discrepancy model `discrepancy` (named by class, in the
-# table's order; the bias classes have none without a bias).
-class_sizes <- function(p, q, discrepancy = "gp") {
-  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L)
+# inputs under the discrepancy model `discrepancy`, with `noise`
+# measurement-error groups (named by class, in the table's order; the bias
+# classes have none without a bias).
+class_sizes <- function(p, q, discrepancy = "gp", noise = 1L) {
+  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
   stats::setNames(n, model_classes$class)
@@ -96,28 +99,28 @@ class_sizes <- function(p, q, discrepancy = "gp") {
 
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
-param_indices <- function(p, q, discrepancy = "gp") {
-  sizes <- class_sizes(p, q, discrepancy)
+param_indices <- function(p, q, discrepancy = "gp", noise = 1L) {
+  sizes <- class_sizes(p, q, discrepancy, noise)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
 }
 
 # Parameter names in the order of phi: the class name, with an index when
-# the class expands over inputs.
-param_names <- function(p, q, discrepancy = "gp") {
-  sizes <- class_sizes(p, q, discrepancy)
+# the class expands over inputs (or over several noise groups).
+param_names <- function(p, q, discrepancy = "gp", noise = 1L) {
+  sizes <- class_sizes(p, q, discrepancy, noise)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     if (sizes[i] == 0L) character(0)
-    else if (model_classes$over[i] == "one") cls
+    else if (model_classes$over[i] == "one" || (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
   }), use.names = FALSE)
 }
 
 # The class of each parameter of phi.
-param_class_of <- function(p, q, discrepancy = "gp") {
-  rep(model_classes$class, class_sizes(p, q, discrepancy))
+param_class_of <- function(p, q, discrepancy = "gp", noise = 1L) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise))
 }
 
 # The classes that are not parameters for these correlation families: the
@@ -129,8 +132,8 @@ absent_classes <- function(kernS, kernB) {
 
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
-layout_codes <- function(p, q, discrepancy = "gp") {
-  idx <- param_indices(p, q, discrepancy)
+layout_codes <- function(p, q, discrepancy = "gp", noise = 1L) {
+  idx <- param_indices(p, q, discrepancy, noise)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -141,14 +144,20 @@ layout_codes <- function(p, q, discrepancy = "gp") {
 # families of the simulator and bias GPs (kernel_codes()), the algebra
 # (0 auto: Kronecker on a product design, else dense; 1 dense; 2 the
 # nearest-neighbour approximation, whose design vecchia_design() makes),
-# the discrepancy model (discrepancy_codes) and the layout of phi.
+# the discrepancy model (discrepancy_codes), the layout of phi and, with
+# several measurement-error groups, each field row's group (`noise`,
+# 1-based: sigma2E has max(noise) entries).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
-                           vecchia = NULL) {
+                           vecchia = NULL, noise = NULL) {
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
-    layout_codes(p, q, discrepancy),
-    if (!is.null(vecchia)) list(vecchia = vecchia))
+    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise)),
+    if (!is.null(vecchia)) list(vecchia = vecchia),
+    if (!is.null(noise)) list(noise = as.integer(noise)))
 }
+
+# The number of measurement-error groups of a compiled model.
+noise_count <- function(model) if (is.null(model$noise)) 1L else max(model$noise)
 
 # The compiled entry points, each with the model description attached. The
 # first arguments are the scaled data; kernS, kernB and algebra give the
@@ -166,8 +175,9 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepan
 
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
                          algebra = 0L,
-                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
-  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model)
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra),
+                         noise = integer()) {
+  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise))
 }
 
 .loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,

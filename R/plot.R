@@ -210,20 +210,30 @@ plot_fits <- function(x, xlab) {
   }
   X <- sweep(sweep(x$data$Xf, 2, sc$xmax[seq_len(p)] - sc$xmin[seq_len(p)], "*"),
              2, sc$xmin[seq_len(p)], "+")
-  y <- sc$ymean + sc$ysd * x$data$yf
-  fits <- stats::predict(x, X, method = "MAP", type = "field", level = 0.95)
-  df <- do.call(rbind, lapply(seq_len(p), function(k) {
-    data.frame(input = xlab[k], x = X[, k], observed = y, fitted = fits$pred,
-               lower = fits$lower, upper = fits$upper)
+  y <- field_response(x)
+  fc <- field_conditionals(x, sampler_draws(x, which.max(x$logPost)), 1L)
+  z <- stats::qnorm(0.975)
+  # numeric inputs on the x axes; categorical inputs' indicators are not
+  # axes (outputs get a row each)
+  ind <- match(unlist(lapply(sc$factors, `[[`, "columns")), sc$names$inputs)
+  axes <- setdiff(seq_len(p), ind)
+  if (!length(axes)) axes <- seq_len(p)
+  out <- if (!is.null(sc$output)) sc$output$levels[x$data$outF] else NULL
+  df <- do.call(rbind, lapply(axes, function(k) {
+    data.frame(input = xlab[k], x = X[, k], observed = y, fitted = fc$mean[, 1],
+               lower = fc$mean[, 1] - z * fc$sd[, 1], upper = fc$mean[, 1] + z * fc$sd[, 1],
+               output = out %||% "")
   }))
-  df$input <- factor(df$input, unique(xlab))
+  df$input <- factor(df$input, unique(xlab[axes]))
+  facet <- if (is.null(out)) ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") else
+    ggplot2::facet_grid(ggplot2::vars(.data$output), ggplot2::vars(.data$input), scales = "free")
   ggplot2::ggplot(df, ggplot2::aes(x = .data$x)) +
     ggplot2::geom_linerange(ggplot2::aes(ymin = .data$lower, ymax = .data$upper),
                             colour = "steelblue", alpha = 0.6) +
     ggplot2::geom_point(ggplot2::aes(y = .data$fitted), colour = "steelblue", shape = 17) +
     ggplot2::geom_point(ggplot2::aes(y = .data$observed), colour = "firebrick") +
-    ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") +
-    ggplot2::labs(x = if (p == 1L) xlab else NULL, y = sc$names$response,
+    facet +
+    ggplot2::labs(x = if (length(axes) == 1L) xlab[axes] else NULL, y = sc$names$response,
                   title = "Field data (red) and MAP fits with 95% intervals (blue)") +
     ggplot2::theme_bw()
 }

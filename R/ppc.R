@@ -58,13 +58,12 @@ ppc_field <- function(fit, ndraws = 500) {
   dat <- fit$data
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_draws(fit, rows)
-  res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, 1L,
-                      fit$settings$nugget, 500L, model = fit$spec$model)
-  m <- sc$ymean + sc$ysd * res$mean         # n x D
-  s <- sc$ysd * sqrt(pmax(res$var, 0))
+  fc <- field_conditionals(fit, phis, 1L)
+  m <- fc$mean         # n x D
+  s <- fc$sd
   n <- nrow(m)
   D <- ncol(m)
-  y <- sc$ymean + sc$ysd * dat$yf
+  y <- field_response(fit)
   yrep <- t(m) + t(s) * matrix(stats::rnorm(D * n), D, n)
 
   mu <- rowMeans(m)
@@ -217,4 +216,24 @@ pp_check.fbc <- function(object, type = "dens_overlay", ndraws = 50, ...) {
   args <- list(y = pp$y, yrep = pp$yrep, ...)
   if (type %in% c("intervals", "ribbon") && is.null(args$x)) args$x <- pp$x[, 1]
   do.call(getExportedValue("bayesplot", fun), args)
+}
+
+# The GP conditionals of target type `code` (1 field, 2 mean, ...) at the
+# field inputs, one column per row of `phis`, in the response's units (each
+# field row by its output's mean and sd); a field target has its row's
+# measurement error.
+field_conditionals <- function(fit, phis, code) {
+  dat <- fit$data
+  sc <- fit$scale
+  res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, code,
+                      fit$settings$nugget, 500L, model = fit$spec$model,
+                      noise = if (code == 1L) fit$spec$model$noise %||% integer() else integer())
+  shift <- if (code == 4L) 0 else y_mean(sc, dat$outF)
+  list(mean = shift + y_sd(sc, dat$outF) * res$mean,
+       sd = y_sd(sc, dat$outF) * sqrt(pmax(res$var, 0)))
+}
+
+# The field response in its units.
+field_response <- function(fit) {
+  y_mean(fit$scale, fit$data$outF) + y_sd(fit$scale, fit$data$outF) * fit$data$yf
 }

@@ -127,7 +127,8 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   check_flag(draws, "draws")
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
   sc <- object$scale
-  X <- check_newdata(newdata, sc)
+  nf <- read_newdata_factors(newdata, sc, type)
+  X <- check_newdata(nf$newdata, sc)
   warn_newdata_outside(X, object)
   Xn <- scale_inputs(X, sc, seq_len(sc$p))
 
@@ -139,7 +140,8 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   code <- match(type, c("field", "mean", "simulator", "bias"))
   nugget <- object$settings$nugget
   model <- object$spec$model
-  shift <- if (type == "bias") 0 else sc$ymean
+  shift <- if (type == "bias") 0 else y_mean(sc, nf$output)
+  ysd <- y_sd(sc, nf$output)
   z <- stats::qnorm((1 + level) / 2)
 
   # Points in blocks, so that memory stays bounded whatever their number: a
@@ -160,9 +162,11 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   for (r0 in starts) {
     idx <- seq.int(r0, min(N, r0 + B - 1L))
     res <- .fbc_predict(object$data$Xf, object$data$yf, object$data$Xs, object$data$ys,
-                        phis, Xn[idx, , drop = FALSE], code, nugget, 500L, model = model)
-    m <- shift + sc$ysd * res$mean
-    s <- sc$ysd * sqrt(pmax(res$var, 0))
+                        phis, Xn[idx, , drop = FALSE], code, nugget, 500L, model = model,
+                        noise = nf$noise[idx[idx <= length(nf$noise)]])
+    at <- function(v) if (length(v) > 1L) v[idx] else v
+    m <- at(shift) + at(ysd) * res$mean
+    s <- at(ysd) * sqrt(pmax(res$var, 0))
     res <- NULL
     if (method == "MAP") {
       pred[idx] <- m[, 1]

@@ -38,6 +38,19 @@ print.fbc <- function(x, digits = 3, ...) {
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
+  for (f in sc$factors) {
+    cat(sprintf("  categorical input %s: levels %s (indicator%s %s)\n", f$name,
+                paste(f$levels, collapse = ", "), if (length(f$columns) > 1L) "s" else "",
+                paste(f$columns, collapse = ", ")))
+  }
+  if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
+                                       sc$output$name, paste(sc$output$levels, collapse = ", ")))
+  if (!is.null(sc$source)) cat(sprintf("  field data sets (%s): %s\n", sc$source$name,
+                                       paste(sc$source$levels, collapse = ", ")))
+  if (!is.null(sc$noiseLabels)) {
+    cat(sprintf("  measurement error: %s\n", paste0("sigma2E", seq_along(sc$noiseLabels), " = ",
+                                                    sc$noiseLabels, collapse = ", ")))
+  }
   des <- kappa_design(sc)
   cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
               paste0("kappa", seq_len(sc$q), " = ", des$names, " (design ",

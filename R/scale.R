@@ -5,10 +5,11 @@
 # Relative nugget added to the diagonal of the simulator correlation matrix.
 fbc_nugget <- 1e-6
 
-# Min/max of each simulator input, mean/sd of the simulator response.
-# `named`: whether the columns were matched by name (then predict() matches
-# newdata's columns by name too).
-fbc_scale <- function(sim, p, named = FALSE, call = parent.frame()) {
+# Min/max of each simulator input, mean/sd of the simulator response (per
+# output when `out` gives each run's output, 1-based: ymean and ysd then
+# have one entry per output). `named`: whether the columns were matched by
+# name (then predict() matches newdata's columns by name too).
+fbc_scale <- function(sim, p, named = FALSE, out = NULL, call = parent.frame()) {
   X <- sim[, -1, drop = FALSE]
   xmin <- apply(X, 2, min)
   xmax <- apply(X, 2, max)
@@ -21,12 +22,17 @@ fbc_scale <- function(sim, p, named = FALSE, call = parent.frame()) {
     ), call = call)
   }
   ys <- sim[, 1]
-  if (stats::sd(ys) == 0) {
-    cli::cli_abort("The simulator response (first column of {.arg sim}) is constant.", call = call)
+  groups <- if (is.null(out)) list(seq_along(ys)) else split(seq_along(ys), out)
+  for (g in groups) {
+    if (length(g) < 2L || stats::sd(ys[g]) == 0) {
+      cli::cli_abort("The simulator response (first column of {.arg sim}) is constant{if (!is.null(out)) ' for an output' else ''}.", call = call)
+    }
+    warn_nearly_constant(ys[g], call = call)
   }
-  warn_nearly_constant(ys, call = call)
   names_ <- usable_names(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
-  list(xmin = unname(xmin), xmax = unname(xmax), ymean = mean(ys), ysd = stats::sd(ys),
+  list(xmin = unname(xmin), xmax = unname(xmax),
+       ymean = vapply(groups, function(g) mean(ys[g]), numeric(1), USE.NAMES = FALSE),
+       ysd = vapply(groups, function(g) stats::sd(ys[g]), numeric(1), USE.NAMES = FALSE),
        p = p, q = ncol(sim) - 1L - p, named = named,
        names = list(response = names_[1], inputs = names_[1L + seq_len(p)],
                     calibration = names_[-seq_len(p + 1L)]))
@@ -36,15 +42,25 @@ scale_inputs <- function(X, scale, cols) {
   sweep(sweep(X, 2, scale$xmin[cols], "-"), 2, scale$xmax[cols] - scale$xmin[cols], "/")
 }
 
-scale_data <- function(sim, field, scale) {
+# The scaled data; with several outputs (outS, outF: each run's and each
+# field row's output) each standardised by its own mean and sd, and the
+# outputs kept in the data for the back-transforms.
+scale_data <- function(sim, field, scale, outS = NULL, outF = NULL) {
   p <- scale$p
-  list(
+  out <- list(
     Xf = unname(scale_inputs(field[, -1, drop = FALSE], scale, seq_len(p))),
-    yf = unname((field[, 1] - scale$ymean) / scale$ysd),
+    yf = unname((field[, 1] - y_mean(scale, outF)) / y_sd(scale, outF)),
     Xs = unname(scale_inputs(sim[, -1, drop = FALSE], scale, seq_len(ncol(sim) - 1L))),
-    ys = unname((sim[, 1] - scale$ymean) / scale$ysd)
+    ys = unname((sim[, 1] - y_mean(scale, outS)) / y_sd(scale, outS))
   )
+  if (!is.null(outS)) out[c("outS", "outF")] <- list(as.integer(outS), as.integer(outF))
+  out
 }
+
+# The response's mean and sd for rows of outputs `out` (NULL: the one
+# output).
+y_mean <- function(scale, out = NULL) if (is.null(out)) scale$ymean[1] else scale$ymean[out]
+y_sd <- function(scale, out = NULL) if (is.null(out)) scale$ysd[1] else scale$ysd[out]
 
 # Parameter draws in the sampler's parameterisation: kappa back to [0, 1].
 sampler_scale <- function(Phi, scale) {

@@ -30,6 +30,24 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   hypers
 }
 
+# The smoothness of the indicator columns of categorical inputs (their
+# positions `pos` among the p experimental inputs) held at 2: d^alpha = d on
+# {0, 1}, so alpha means nothing there (see R/factors.R).
+indicator_hypers <- function(hypers, pos, p, q) {
+  pos <- pos[!is.na(pos)]
+  if (!length(pos)) return(hypers)
+  for (cls in c("alphaS", "alphaB")) {
+    h <- hypers[[cls]]
+    if (is.null(h) || identical(h$dist, "fixed")) next
+    n <- if (cls == "alphaS") p + q else p
+    h <- lapply(h, function(v) rep_len(v, n))
+    h$dist[pos] <- "fixed"
+    h$init[pos] <- 2
+    hypers[[cls]] <- h
+  }
+  hypers
+}
+
 # The hyperparameter priors of the discrepancy model: the classes it does
 # not have (the bias GP's under "none", muB under "sgasp", lambdaZ but
 # under "sgasp") have no parameters, so a prior the user gave for one, or a
@@ -94,9 +112,9 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # Expands every class to one row per parameter: the C++ prior table, the
 # initial values on the sampler's scale and the initial proposal SDs. The
 # classes without parameters under `discrepancy` have no prior.
-build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp",
+build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
                          call = parent.frame()) {
-  sizes <- class_sizes(p, q, discrepancy)
+  sizes <- class_sizes(p, q, discrepancy, noise)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -152,12 +170,13 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp",
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q, discrepancy)
-  cls_of <- param_class_of(p, q, discrepancy)
+  vars <- param_names(p, q, discrepancy, noise)
+  cls_of <- param_class_of(p, q, discrepancy, noise)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
-       model = compiled_model(p, q, discrepancy = discrepancy))
+       model = compiled_model(p, q, discrepancy = discrepancy,
+                              noise = if (noise > 1L) seq_len(noise)))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -88,9 +88,9 @@ fitted.fbc <- function(object, method = c("Bayesian", "MAP"), ...) {
   check_dots_empty(..., fn = fitted.fbc, name = "fitted")
   object <- check_fbc(object, "object")
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
-  sc <- object$scale
-  X <- unscale_inputs(object$data$Xf, sc, seq_len(sc$p))
-  stats::predict(object, X, method = method, type = "field")$pred
+  rows <- check_rows(object, method, 1000L)
+  # the Bayesian prediction's mean: the average of the draws' means
+  rowMeans(field_conditionals(object, sampler_draws(object, rows), 1L)$mean)
 }
 
 #' @rdname fitted.fbc
@@ -99,8 +99,7 @@ residuals.fbc <- function(object, method = c("Bayesian", "MAP"), ...) {
   check_dots_empty(..., fn = residuals.fbc, name = "residuals")
   object <- check_fbc(object, "object")
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
-  sc <- object$scale
-  sc$ymean + sc$ysd * object$data$yf - fitted.fbc(object, method = method)
+  field_response(object) - fitted.fbc(object, method = method)
 }
 
 #' @rdname fitted.fbc

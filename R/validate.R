@@ -104,15 +104,18 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   stat_cols <- c("fold", "observed", "mean", "sd", "z", "pit")
   inputs <- make.unique(c(stat_cols, sim_input_names(sc, ncol(X))))[-seq_along(stat_cols)]
   colnames(X) <- inputs
+  out <- fit$data$outS
   runs <- data.frame(X, fold = fold %||% seq_len(m),
-                     observed = sc$ymean + sc$ysd * ys, mean = sc$ymean + sc$ysd * mu,
-                     sd = sc$ysd * sqrt(v), z = z, pit = pit, check.names = FALSE)
+                     observed = y_mean(sc, out) + y_sd(sc, out) * ys,
+                     mean = y_mean(sc, out) + y_sd(sc, out) * mu,
+                     sd = y_sd(sc, out) * sqrt(v), z = z, pit = pit, check.names = FALSE)
   levels_ <- c(0.5, 0.9, 0.95)
   coverage <- stats::setNames(vapply(levels_, function(l) mean(abs(pit - 0.5) < l / 2), numeric(1)),
                               paste0(100 * levels_, "%"))
   rmse <- sqrt(mean((runs$observed - runs$mean)^2))
   structure(list(
-    runs = runs, coverage = coverage, rmse = rmse, rmseRel = rmse / sc$ysd,
+    runs = runs, coverage = coverage, rmse = rmse,
+    rmseRel = sqrt(mean(((runs$observed - runs$mean) / y_sd(sc, out))^2)),
     shareZ3 = mean(abs(z) > 3), method = method, ndraws = D,
     nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
     response = sc$names$response

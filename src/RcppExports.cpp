@@ -107,8 +107,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_predict
-Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, const Rcpp::List& model);
-RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP modelSEXP) {
+Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, const Rcpp::List& model, const Rcpp::IntegerVector& noise);
+RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP modelSEXP, SEXP noiseSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -122,7 +122,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< int >::type block(blockSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model));
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type noise(noiseSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -224,7 +225,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
-    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 10},
+    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 11},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},

@@ -80,6 +80,9 @@ struct Layout {
 struct Model {
   int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
+  // the measurement-error group of each field row (0-based; empty: one
+  // group), e.g. outputs x sources: sigma2E has one entry per group
+  std::vector<int> noise;
   VecchiaDesign vecchia;  // with algebra ALG_VECCHIA
 };
 // Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
@@ -224,8 +227,11 @@ public:
 
   // Prediction at the current state (predict.cpp): for new experimental
   // inputs Xnew (rows, scaled) and type 1 field, 2 mean, 3 simulator,
-  // 4 bias, the conditional mean and variance of the target given y.
-  virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var) = 0;
+  // 4 bias, the conditional mean and variance of the target given y; a
+  // field target's measurement error is that of group noise[c] (0-based;
+  // null: group 0).
+  virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                         const int* noise = nullptr) = 0;
   // The held-out predictive of the simulator runs from the simulator GP
   // alone (covariance sigma2S Ds, scaled space) at the current state, one
   // fold of 0-based runs at a time (heldout.cpp); false if a fold's block
@@ -261,7 +267,8 @@ public:
   void accept() override;
   void reject() override;
   void muBQuadratic(double& aa, double& ab) const override;
-  void condition(const arma::mat& Xnew, int type, double* mean, double* var) override;
+  void condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                 const int* noise = nullptr) override;
   bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
                arma::vec& var) override;
   void fieldLoo(const std::vector<std::vector<int> >& groups,
@@ -277,6 +284,7 @@ protected:
   int nu_;                 // distinct field input rows
   arma::mat Xu_;           // ... and their values (nu x p)
   std::vector<int> grp_;   // field row i is distinct row grp_[i]
+  std::vector<int> noise_; // ... and in measurement-error group noise_[i]
 
   // The simulator algebra, at the proposal (scratch buffers):
   // update what t touches, setting ldDs = log|Ds| and zz = ys' Ds^-1 ys

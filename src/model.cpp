@@ -31,7 +31,7 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iMuB = lay.offset[PC_MUB]; iLambdaZ = lay.offset[PC_LAMBDAZ];
   scaled.clear();
   for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
-    if (lay.length[c] > 0) scaled.push_back(lay.offset[c]);
+    for (int k = 0; k < lay.length[c]; ++k) scaled.push_back(lay.offset[c] + k);
   phi.zeros(d);
 }
 
@@ -50,7 +50,17 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   // bias, lambdaZ only with the S-GaSP one
   const int b = out.discrepancy != DS_NONE ? 1 : 0;
   const int mu = out.discrepancy == DS_GP ? 1 : 0, lz = out.discrepancy == DS_SGASP ? 1 : 0;
-  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, 1, mu, lz};
+  // sigma2E: one per measurement-error group of the field rows
+  if (model.containsElementNamed("noise")) {
+    const Rcpp::IntegerVector g = model["noise"];
+    out.noise.resize(g.size());
+    for (int i = 0; i < g.size(); ++i) {
+      if (g[i] == NA_INTEGER || g[i] < 1) Rcpp::stop("noise groups must be 1, 2, ...");
+      out.noise[i] = g[i] - 1;
+    }
+  }
+  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
+  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -130,6 +140,9 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
     kernB_(model.kernB) {
   set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
   touch_.reset(p + q, p);
+  if (!model.noise.empty() && (int) model.noise.size() != n)
+    Rcpp::stop("the noise groups must give one group per field row (%d)", n);
+  noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
   // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
   // (row i of Xf is row grp_[i] of Xu_).
@@ -322,15 +335,23 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
 // Without a bias, s2B = muB = 0: the bias is exactly 0 (mean and variance).
 // Under S-GaSP the bias's cross-correlation and variance are the
 // discretized kernel's (biasCross()), and its mean is 0.
-void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var) {
+void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                               const int* noise) {
   const int b = Xnew.n_rows;
-  const double s2S = phi[iSigma2S], s2E = phi[iSigma2E];
+  const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0, muB = biasMean ? phi[iMuB] : 0.0;
   const bool simPart = type != 4, biasPart = type != 3 && bias;
   const double mu0 = type == 3 ? 0.0 : muB;
   arma::vec v0(b, arma::fill::zeros);
   if (simPart) v0 += s2S;
-  if (type == 1) v0 += s2E;
+  if (type == 1) {
+    const int G = layout.length[PC_SIGMA2E];
+    for (int c = 0; c < b; ++c) {
+      const int g = noise ? noise[c] : 0;
+      if (g < 0 || g >= G) Rcpp::stop("noise group %d of a new point is not one of the %d", g + 1, G);
+      v0[c] += phi[iSigma2E + g];
+    }
+  }
   // covariances with the distinct field rows (Rs(Xk, xk*) involves the
   // experimental inputs only: the calibration inputs coincide)
   arma::mat Kf(nu_, b, arma::fill::zeros), G;
@@ -368,7 +389,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double SchurPosterior::evaluate(const Touch& t) {
-  const double s2S = phi[iSigma2S], s2E = phi[iSigma2E];
+  const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0;
   // D = sigma2S Ds is positive definite only for sigma2S > 0.
   if (!(s2S > 0)) return R_NegInf;
@@ -433,7 +454,7 @@ double SchurPosterior::evaluate(const Touch& t) {
         const int r = std::max(gi, gj), c = std::min(gi, gj);
         sc[i] = s2S * Q->at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
       }
-      sc[j] += s2E;
+      sc[j] += phi[iSigma2E + noise_[j]];
     }
     if (!chol_lower(S)) return R_NegInf;
     ldS = logdet_chol(S);

@@ -32,8 +32,8 @@ all_kernels <- c("powexp", "gaussian", "matern32", "matern52")
 # Unpacks phi (scaled space, kappa on [0, 1]) into named pieces, one per
 # parameter class, at the positions FBC's model description gives (under
 # discrepancy "none" the bias classes are empty).
-unpack_phi <- function(phi, p, q, discrepancy = "gp") {
-  lapply(FBC:::param_indices(p, q, discrepancy), function(i) phi[i])
+unpack_phi <- function(phi, p, q, discrepancy = "gp", G = 1L) {
+  lapply(FBC:::param_indices(p, q, discrepancy, G), function(i) phi[i])
 }
 
 # The bias GP's correlation between the rows of A and of B, for field
@@ -56,15 +56,16 @@ bias_corr_dense <- function(Xf, th, kernB, discrepancy) {
 # discrepancy "none": no bias block (y_f = eta(x, kappa) + eps); "sgasp":
 # the S-GaSP bias block (bias_corr_dense()).
 dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp",
-                      discrepancy = "gp") {
+                      discrepancy = "gp", noise = NULL) {
   n <- nrow(Xf); m <- nrow(Xs); p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q, discrepancy)
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L))
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   X <- rbind(Xk, Xs)
   C <- th$sigma2S * dense_corr(X, X, th$thetaS, th$alphaS, kernS)
   f <- seq_len(n); s <- n + seq_len(m)
   C[s, s] <- C[s, s] + th$sigma2S * nugget * diag(m)
-  C[f, f] <- C[f, f] + th$sigma2E * diag(n)
+  # measurement error: sigma2E of each row's group (noise: 1-based groups)
+  C[f, f] <- C[f, f] + diag(th$sigma2E[if (is.null(noise)) rep(1L, n) else noise], n)
   if (discrepancy != "none") {
     C[f, f] <- C[f, f] + th$sigma2B * bias_corr_dense(Xf, th, kernB, discrepancy)
   }
@@ -73,10 +74,10 @@ dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "pow
 
 # Gaussian log-likelihood of (yf, ys) via one dense Cholesky factor.
 dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
-                         kernB = "powexp", discrepancy = "gp") {
+                         kernB = "powexp", discrepancy = "gp", noise = NULL) {
   p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q, discrepancy)
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L))
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise)
   r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)  # S-GaSP: mean 0
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)
@@ -96,8 +97,8 @@ random_koh_data <- function(n, m, p, q, seed) {
 # classes Gamma(2, 2) (+ 0.05 for the variances), smoothness on [1.1, 1.95],
 # the bias mean N(0, 1), the S-GaSP scale 20 x Gamma(2, 2)); no bias
 # classes under discrepancy "none".
-random_phi <- function(p, q, discrepancy = "gp") {
-  idx <- FBC:::param_indices(p, q, discrepancy)
+random_phi <- function(p, q, discrepancy = "gp", G = 1L) {
+  idx <- FBC:::param_indices(p, q, discrepancy, G)
   phi <- numeric(sum(lengths(idx)))
   for (cls in names(idx)) {
     k <- length(idx[[cls]])
@@ -116,8 +117,9 @@ random_phi <- function(p, q, discrepancy = "gp") {
 # back); the compiled log-likelihoods against dense_loglik() at every row.
 # Under discrepancy "none" there is no bias block and the scale move
 # multiplies sigma2S and sigma2E.
-expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6, discrepancy = "gp") {
-  idx <- FBC:::param_indices(p, q, discrepancy)
+expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6, discrepancy = "gp",
+                                     noise = NULL) {
+  idx <- FBC:::param_indices(p, q, discrepancy, max(noise, 1L))
   groups <- integer(ncol(phis))
   groups[c(idx$thetaS, idx$alphaS, idx$sigma2S)] <- 1L
   groups[c(idx$thetaB, idx$alphaB, idx$lambdaZ, idx$sigma2B)] <- 2L
@@ -127,10 +129,11 @@ expect_joint_moves_dense <- function(d, phis, p, q, nugget = 1e-6, discrepancy =
   scaled[3, sig] <- scaled[2, sig] * 0.3
   phis2 <- rbind(phis, scaled, phis[2, ], scaled[3, ])
   dense2 <- apply(phis2, 1, function(phi) {
-    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, nugget, discrepancy = discrepancy)
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, nugget, discrepancy = discrepancy, noise = noise)
   })
   block <- FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis2, nugget, groups = groups,
                               decoys = TRUE, scale = TRUE,
-                              model = FBC:::compiled_model(p, q, discrepancy = discrepancy))
+                              model = FBC:::compiled_model(p, q, discrepancy = discrepancy,
+                                                           noise = noise))
   testthat::expect_equal(block, dense2, tolerance = 1e-8)
 }

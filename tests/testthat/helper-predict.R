@@ -5,12 +5,12 @@
 # bias (its mean and variance 0); "sgasp": the S-GaSP bias, mean 0, its
 # covariances from the discretized kernel (bias_kernel_dense()).
 dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
-                          kernB = "powexp", discrepancy = "gp") {
+                          kernB = "powexp", discrepancy = "gp", noise = NULL, noiseNew = NULL) {
   p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
-  th <- unpack_phi(phi, p, q, discrepancy)
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L))
   if (discrepancy == "none") th[c("muB", "sigma2B")] <- list(0, 0)
   if (discrepancy == "sgasp") th$muB <- 0
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
@@ -25,7 +25,8 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
   mu0 <- if (type == "simulator") 0 else th$muB
   vb <- if (discrepancy == "none") 0 else
     th$sigma2B * diag(bias_kernel_dense(Xnew, Xnew, Xf, th, kernB, discrepancy))
-  v0 <- switch(type, field = th$sigma2S + vb + th$sigma2E,
+  s2E <- th$sigma2E[if (is.null(noiseNew)) rep(1L, nrow(Xnew)) else noiseNew]
+  v0 <- switch(type, field = th$sigma2S + vb + s2E,
                mean = th$sigma2S + vb, simulator = th$sigma2S, bias = vb)
   list(mean = drop(mu0 + crossprod(k, solve(C, r))),
        var = v0 - colSums(k * solve(C, k)))

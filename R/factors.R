@@ -1,0 +1,262 @@
+# Categorical inputs, several outputs and several field data sets: the
+# factor columns of `sim`, `field` and `newdata`, read into the numeric
+# design the rest of FBC works with.
+#
+# A categorical input (a factor or character column of both `sim` and
+# `field`: an experimental input) with levels l_1 .. l_L becomes indicator
+# columns, inputs like any other: one, [c = l_2], for two levels; one per
+# level, [c = l_a], for three or more. Every correlation family r then
+# correlates two levels a != b through those columns only:
+#   R_c(a, b) = r(1; theta_[a]) r(1; theta_[b])   (r(1; theta_[l_1]) = 1
+# with two levels), a product of one factor per level, each learned through
+# the thetaS (and thetaB) of its column: with two levels one exchangeable
+# correlation r(1; theta), with three all three pairwise correlations
+# (c_a c_b for three free c's), with more a structured one of L parameters
+# (Qian, Wu and Wu 2008 call such structures multiplicative). It is positive
+# definite by construction, needs no new kernel, and works with every
+# algebra (a product design over the levels stays one). A smoothness alpha
+# means nothing on an indicator (d^alpha = d for d in {0, 1}): it is held
+# at 2, not sampled.
+#
+# Several outputs: `output` names a categorical input of both `sim` and
+# `field`. Besides being an input of both GPs (so the simulator GP and the
+# bias correlate the outputs as above), each output is standardised on its
+# own and has its own measurement-error variance.
+#
+# Several field data sets: `source` names a factor column of `field` only;
+# each source has its own measurement-error variance. The measurement-error
+# groups are the output x source combinations present in `field`.
+
+# Is column j of a data frame categorical (factor or character)?
+is_categorical <- function(x) is.factor(x) || is.character(x)
+
+# Reads the factor columns of `sim` and `field` (data frames or matrices).
+# Returns list(sim, field) with each categorical input replaced by its
+# indicator columns (numeric data frames), and `factors`: the categorical
+# inputs (list of name, levels, columns), `output` (its name and levels, or
+# NULL), `source` (likewise) and the codes of each row: outS, outF (output
+# level, 1-based), srcF (source level), noise (the measurement-error group
+# of each field row, 1-based) with the groups' labels.
+read_factors <- function(sim, field, output = NULL, source = NULL, call = parent.frame()) {
+  none <- list(sim = sim, field = field, factors = list(), output = NULL, source = NULL,
+               noise = NULL, noiseLabels = NULL)
+  catS <- if (is.data.frame(sim)) names(sim)[vapply(sim, is_categorical, logical(1))] else character()
+  catF <- if (is.data.frame(field)) names(field)[vapply(field, is_categorical, logical(1))] else character()
+  if (!is.null(output)) check_string(output, "output", call = call)
+  if (!is.null(source)) check_string(source, "source", call = call)
+  if (!length(catS) && !length(catF) && is.null(output) && is.null(source)) return(none)
+  for (nm in c(output, source)) {
+    where <- if (identical(nm, output)) c("sim", "field") else "field"
+    for (w in where) {
+      d <- if (w == "sim") sim else field
+      if (!is.data.frame(d) || !nm %in% names(d) || !is_categorical(d[[nm]])) {
+        arg <- if (identical(nm, output)) "output" else "source"
+        cli::cli_abort(c(
+          "{.arg {arg}} = {.val {nm}} must name a factor or character column of {.arg {w}}.",
+          i = if (arg == "output") "The outputs are in long format: one row per run (or observation) and output, the output's name in that column, its value in the response column." else
+            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column."
+        ), call = call)
+      }
+    }
+  }
+  if (!is.null(source) && is.data.frame(sim) && source %in% names(sim)) {
+    cli::cli_abort("{.arg source} = {.val {source}} is a column of {.arg sim}: a field data set is not a simulator input.", call = call)
+  }
+  src <- NULL
+  if (!is.null(source)) {
+    f <- factor(field[[source]])
+    src <- list(name = source, levels = levels(f), codes = as.integer(f))
+    field <- field[, names(field) != source, drop = FALSE]
+    catF <- setdiff(catF, source)
+  }
+  onlySim <- setdiff(catS, names(field))
+  if (length(onlySim)) {
+    cli::cli_abort(c(
+      "{.arg sim} has categorical {cli::qty(length(onlySim))}column{?s} {.val {onlySim}} that {.arg field} lacks: a calibration input must be numeric.",
+      i = "A categorical input is an experimental input: give it in both {.arg sim} and {.arg field}."
+    ), call = call)
+  }
+  onlyField <- setdiff(catF, catS)
+  numInSim <- intersect(onlyField, if (is.data.frame(sim)) names(sim) else colnames(sim))
+  if (length(numInSim)) {
+    cli::cli_abort(c(
+      "{cli::qty(length(numInSim))}Column{?s} {.val {numInSim}} {?is/are} numeric in {.arg sim} but not in {.arg field}.",
+      i = "{cli::qty(length(numInSim))}Convert {?it/them} in {.arg field} (e.g. with {.fn as.numeric}), or make {?it/them} categorical in both."
+    ), call = call)
+  }
+  if (length(onlyField)) {
+    cli::cli_abort(c(
+      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} has not as categorical.",
+      i = if (is.null(source)) "A field data set of its own goes in a column named by {.arg source}." else
+        "Give each categorical input in both {.arg sim} and {.arg field}."
+    ), call = call)
+  }
+  factors <- list()
+  for (nm in catS) {
+    levs <- if (is.factor(sim[[nm]])) levels(droplevels(sim[[nm]])) else sort(unique(sim[[nm]]))
+    if (length(levs) < 2L) {
+      cli::cli_abort("The categorical input {.val {nm}} has one level in {.arg sim} ({.val {levs}}): every input must vary over the simulator design.", call = call)
+    }
+    check_levels(field[[nm]], levs, nm, "field", call = call)
+    cols <- indicator_names(nm, levs)
+    factors[[nm]] <- list(name = nm, levels = levs, columns = cols)
+    sim <- replace_by_indicators(sim, nm, levs, cols)
+    field <- replace_by_indicators(field, nm, levs, cols)
+  }
+  out <- NULL
+  outS <- outF <- NULL
+  if (!is.null(output)) {
+    out <- factors[[output]][c("name", "levels", "columns")]
+    outS <- match(as.character(attr(sim, "fbc_codes")[[output]]), out$levels)
+    outF <- match(as.character(attr(field, "fbc_codes")[[output]]), out$levels)
+  }
+  # measurement-error groups: output x source combinations present in field
+  go <- if (is.null(outF)) rep(1L, nrow(field)) else outF
+  gs <- if (is.null(src)) rep(1L, nrow(field)) else src$codes
+  key <- paste(go, gs)
+  ukey <- unique(key[order(go, gs)])
+  noise <- match(key, ukey)
+  first <- match(ukey, key)
+  labels <- vapply(first, function(i) paste(c(if (!is.null(out)) out$levels[go[i]],
+                                              if (!is.null(src)) src$levels[gs[i]]), collapse = ":"),
+                   character(1))
+  attr(sim, "fbc_codes") <- NULL
+  attr(field, "fbc_codes") <- NULL
+  list(sim = sim, field = field, factors = factors, output = out, source = src,
+       outS = outS, outF = outF, noise = if (length(ukey) > 1L) noise,
+       noiseLabels = if (length(ukey) > 1L) labels)
+}
+
+# The indicator columns' names of a categorical input: one for two levels,
+# one per level from three.
+indicator_names <- function(nm, levs) {
+  use <- if (length(levs) == 2L) levs[2] else levs
+  sprintf("%s[%s]", nm, use)
+}
+
+# Levels of x not among `levs` are refused, naming the column and levels.
+check_levels <- function(x, levs, nm, arg, call = parent.frame()) {
+  bad <- setdiff(unique(as.character(x)), levs)
+  if (length(bad)) {
+    cli::cli_abort(c(
+      "Column {.val {nm}} of {.arg {arg}} has {cli::qty(length(bad))}{?a level/levels} the simulator runs do not: {.val {bad}}.",
+      i = "The levels of {.val {nm}} in {.arg sim} are {.val {levs}}; the emulator knows nothing of another."
+    ), call = call)
+  }
+  invisible(TRUE)
+}
+
+# The data frame d with column nm (categorical, levels levs) replaced, in
+# place, by its indicator columns `cols`; the codes are kept in an
+# attribute for the output's per-row level.
+replace_by_indicators <- function(d, nm, levs, cols) {
+  x <- as.character(d[[nm]])
+  ind <- vapply(sub("^.*\\[(.*)\\]$", "\\1", cols), function(l) as.numeric(x == l),
+                numeric(length(x)))
+  ind <- matrix(ind, nrow = length(x), dimnames = list(NULL, cols))
+  j <- match(nm, names(d))
+  codes <- attr(d, "fbc_codes") %||% list()
+  codes[[nm]] <- x
+  out <- cbind(d[, seq_len(j - 1L), drop = FALSE], as.data.frame(ind, check.names = FALSE),
+               d[, setdiff(seq_along(d), seq_len(j)), drop = FALSE])
+  attr(out, "fbc_codes") <- codes
+  out
+}
+
+# newdata for predict(): its categorical columns replaced by the fit's
+# indicator columns (unknown levels refused), and the measurement-error
+# group of each row (needed for type = "field" with several groups).
+read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
+  fac <- scale$factors
+  if (!length(fac) && is.null(scale$source)) return(list(newdata = newdata, noise = integer()))
+  if (!is.data.frame(newdata)) {
+    cli::cli_abort("{.arg newdata} must be a data frame with the categorical {cli::qty(length(fac))}input{?s} {.val {names(fac)}} as columns.", call = call)
+  }
+  outCodes <- NULL
+  for (f in fac) {
+    if (!f$name %in% names(newdata)) {
+      cli::cli_abort("{.arg newdata} has no column {.val {f$name}}, a categorical input of the calibration (levels {.val {f$levels}}).", call = call)
+    }
+    check_levels(newdata[[f$name]], f$levels, f$name, "newdata", call = call)
+    if (identical(f$name, scale$output$name)) outCodes <- match(as.character(newdata[[f$name]]), f$levels)
+    newdata <- replace_by_indicators(newdata, f$name, f$levels, f$columns)
+  }
+  attr(newdata, "fbc_codes") <- NULL
+  srcCodes <- NULL
+  if (!is.null(scale$source)) {
+    s <- scale$source
+    if (s$name %in% names(newdata)) {
+      check_levels(newdata[[s$name]], s$levels, s$name, "newdata", call = call)
+      srcCodes <- match(as.character(newdata[[s$name]]), s$levels)
+      newdata <- newdata[, names(newdata) != s$name, drop = FALSE]
+    } else if (type == "field") {
+      cli::cli_abort(c(
+        "{.code type = \"field\"} needs the field data set of each new point: {.arg newdata} has no column {.val {s$name}}.",
+        i = "Each data set has its own measurement error ({.val {s$levels}}); the other types do not depend on it."
+      ), call = call)
+    }
+  }
+  noise <- integer()
+  if (!is.null(scale$noiseLabels) && type == "field") {
+    lab <- vapply(seq_len(nrow(newdata)), function(i) paste(c(
+      if (!is.null(outCodes)) scale$output$levels[outCodes[i]],
+      if (!is.null(srcCodes)) scale$source$levels[srcCodes[i]]), collapse = ":"), character(1))
+    noise <- match(lab, scale$noiseLabels)
+    if (anyNA(noise)) {
+      cli::cli_abort("{.arg newdata} asks for the field at {.val {unique(lab[is.na(noise)])}}, a combination with no field data: its measurement error is unknown.", call = call)
+    }
+  }
+  list(newdata = newdata, noise = noise, output = outCodes)
+}
+
+#' Correlation between the levels of a categorical input
+#'
+#' The correlation the simulator GP (or the bias GP) puts between the levels
+#' of a categorical input of a calibration (see "Categorical inputs,
+#' outputs and data sets" in [calibrate()]), at each posterior draw's
+#' correlation parameters, averaged over the draws.
+#'
+#' @param fit An `fbc` object from [calibrate()] with a categorical input.
+#' @param input The input's name (a column of `sim` and `field`).
+#' @param gp `"simulator"` (default) or `"bias"`.
+#' @return A square matrix with the levels as row and column names.
+#' @export
+#' @examples
+#' \donttest{
+#' set.seed(1)
+#' sim <- data.frame(y = 0, x = runif(60), out = rep(c("a", "b"), 30), t = runif(60))
+#' sim$y <- sin(4 * sim$x * sim$t) + (sim$out == "b") * sim$x
+#' field <- data.frame(y = sin(4 * (1:10) / 10 * 0.5) + rnorm(10, 0, 0.05),
+#'                     x = (1:10) / 10, out = "a")
+#' fit <- calibrate(sim, field, nMCMC = 600, nBurn = 300, nChains = 2,
+#'                  kernelS = "matern52")
+#' level_correlation(fit, "out")
+#' }
+level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
+  fit <- check_fbc(fit, "fit")
+  gp <- match_choice(gp, c("simulator", "bias"), "gp")
+  fac <- fit$scale$factors
+  if (!length(fac)) cli::cli_abort("{.arg fit} has no categorical input.")
+  input <- match_choice(input, names(fac), "input")
+  f <- fac[[input]]
+  cls <- if (gp == "simulator") "thetaS" else "thetaB"
+  if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
+    cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
+  }
+  kern <- kernel_codes[[if (gp == "simulator") fit$settings$kernelS else fit$settings$kernelB]]
+  pos <- match(f$columns, fit$scale$names$inputs)
+  idx <- fit$spec$classes == cls
+  draws <- sampler_draws(fit)[, idx, drop = FALSE][, pos, drop = FALSE]
+  L <- length(f$levels)
+  # each level's indicator vector (level 1 has none with two levels)
+  ind <- t(vapply(f$levels, function(l) as.numeric(sub("^.*\\[(.*)\\]$", "\\1", f$columns) == l),
+                  numeric(length(pos))))
+  ind <- matrix(ind, nrow = L)
+  acc <- matrix(0, L, L)
+  for (d in seq_len(nrow(draws))) {
+    acc <- acc + .corr_matrix(ind, ind, draws[d, ], rep(2, length(pos)), kern)
+  }
+  out <- acc / nrow(draws)
+  dimnames(out) <- list(f$levels, f$levels)
+  out
+}
