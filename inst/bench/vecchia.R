@@ -102,6 +102,12 @@ converged_part <- function(m, algebra = "vecchia", k = 20, quick = FALSE) {
       nMCMC = if (quick) 300 else 2000, nBurn = if (quick) 150 else 1000, algebra = algebra,
       neighbours = k, converge = rule), h$fit_args)))
     cpu <- h$cpu() - t0
+    # 1000 new points predicted at the MAP draw
+    set.seed(6)
+    xn <- matrix(runif(2000), 1000, dimnames = list(NULL, c("x1", "x2")))
+    t1 <- h$cpu()
+    invisible(predict(fit, xn, method = "MAP"))
+    predCpu <- h$cpu() - t1
     q <- length(pr$truth)
     lo <- apply(fit$Phi[, 1:q, drop = FALSE], 2, quantile, 0.05)
     hi <- apply(fit$Phi[, 1:q, drop = FALSE], 2, quantile, 0.95)
@@ -111,7 +117,7 @@ converged_part <- function(m, algebra = "vecchia", k = 20, quick = FALSE) {
                min.ess = min(fit$estimates$ess, na.rm = TRUE),
                covers = all(lo <= pr$truth & pr$truth <= hi),
                intervals = paste(sprintf("[%.3f, %.3f]", lo, hi), collapse = " "),
-               peak.MB = h$peak_mb(), blas = h$blas())
+               predict1000.s = predCpu, peak.MB = h$peak_mb(), blas = h$blas())
   }, list(m = m, algebra = algebra, k = k, quick = quick))
 }
 
