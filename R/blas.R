@@ -21,8 +21,9 @@ blas_kind <- function(path = extSoftVersion()[["BLAS"]]) {
 fbc_session <- new.env(parent = emptyenv())
 fbc_session$blasHint <- FALSE
 
-# Says once per session, for m >= 500 simulator runs on the reference BLAS,
-# how much faster an optimized BLAS would make the run.
+# Says once per session, for m >= 500 simulator runs on the dense algebra
+# and the reference BLAS, how much faster an optimized BLAS would make the
+# run (the Kronecker and nearest-neighbour algebras factor no m x m block).
 blas_hint <- function(m, kind = blas_kind()) {
   if (m < 500L || kind != "reference" || isTRUE(fbc_session$blasHint)) return(invisible(FALSE))
   fbc_session$blasHint <- TRUE
