@@ -19,11 +19,17 @@
 #   m5000, m20000, m100000: p = 2, q = 3, n = 100
 # Converged: calibrate(converge = until_converged()) with 4 chains on the
 # sequential plan, Matérn 5/2 for both GPs, checks every 500 sweeps after a
-# first stretch of 2000 (1000 burn-in): every R-hat < 1.01 and bulk ESS >= 400.
+# first stretch of nburn + 1000 sweeps (nburn of them burn-in, default 3000):
+# every R-hat < 1.01 and bulk ESS >= 400.
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
-parts <- setdiff(args, "quick")
+# nburn=<sweeps>: the burn-in of the converged and accuracy parts (default
+# 3000: the simulator block's joint proposal learns its shape there; with
+# 1000 the m = 1000 problem needed 21,000 sweeps a chain, see RESULTS-vecchia.md)
+nburnArg <- grep("^nburn=", args, value = TRUE)
+nBurnLong <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 3000L
+parts <- setdiff(args, c("quick", nburnArg))
 if (!length(parts)) parts <- "sweep"
 
 helpers <- function() {
@@ -91,15 +97,15 @@ sweep_part <- function(m, k, nSweep) {
   }, list(m = m, k = k, nSweep = nSweep))
 }
 
-converged_part <- function(m, algebra = "vecchia", k = 20, quick = FALSE) {
+converged_part <- function(m, algebra = "vecchia", k = 20, quick = FALSE, nBurn = nBurnLong) {
   in_child(function(h, a) {
-    m <- a$m; algebra <- a$algebra; k <- a$k; quick <- a$quick
+    m <- a$m; algebra <- a$algebra; k <- a$k; quick <- a$quick; nBurn <- a$nBurn
     pr <- h$problem(m)
     set.seed(3)
     t0 <- h$cpu()
     rule <- until_converged(every = if (quick) 100 else 500, maxMCMC = if (quick) 400 else 40000)
     fit <- suppressMessages(do.call(calibrate, c(list(pr$sim, pr$field,
-      nMCMC = if (quick) 300 else 2000, nBurn = if (quick) 150 else 1000, algebra = algebra,
+      nMCMC = if (quick) 300 else nBurn + 1000, nBurn = if (quick) 150 else nBurn, algebra = algebra,
       neighbours = k, converge = rule), h$fit_args)))
     cpu <- h$cpu() - t0
     # 1000 new points predicted at the MAP draw
@@ -112,29 +118,29 @@ converged_part <- function(m, algebra = "vecchia", k = 20, quick = FALSE) {
     lo <- apply(fit$Phi[, 1:q, drop = FALSE], 2, quantile, 0.05)
     hi <- apply(fit$Phi[, 1:q, drop = FALSE], 2, quantile, 0.95)
     data.frame(m = m, algebra = algebra, k = if (algebra == "vecchia") k else NA,
-               converged = fit$settings$converge$converged, sweeps = fit$settings$nMCMC,
+               nBurn = if (quick) 150 else nBurn, converged = fit$settings$converge$converged, sweeps = fit$settings$nMCMC,
                cpu.s = cpu, max.rhat = max(fit$estimates$rhat, na.rm = TRUE),
                min.ess = min(fit$estimates$ess, na.rm = TRUE),
                covers = all(lo <= pr$truth & pr$truth <= hi),
                intervals = paste(sprintf("[%.3f, %.3f]", lo, hi), collapse = " "),
                predict1000.s = predCpu, peak.MB = h$peak_mb(), blas = h$blas())
-  }, list(m = m, algebra = algebra, k = k, quick = quick))
+  }, list(m = m, algebra = algebra, k = k, quick = quick, nBurn = nBurn))
 }
 
 # Long runs of the Vecchia and the exact algebra on one problem: kappa's
 # 5/50/95% quantiles (difference in posterior sds of the exact run),
 # predictive means (RMSE relative to the exact ones' sd over the points)
 # and 90% interval widths (mean relative difference) at 200 new inputs.
-accuracy_part <- function(m, k = 20, n = 6000, quick = FALSE) {
+accuracy_part <- function(m, k = 20, n = 10000, quick = FALSE, nBurn = nBurnLong) {
   in_child(function(h, a) {
-    m <- a$m; k <- a$k; n <- a$n; quick <- a$quick
+    m <- a$m; k <- a$k; n <- a$n; quick <- a$quick; nBurn <- a$nBurn
     pr <- h$problem(m)
-    if (quick) n <- 600
+    if (quick) { n <- 600; nBurn <- 150 }
     one <- function(algebra) {
       set.seed(4)
       t0 <- h$cpu()
       fit <- suppressMessages(do.call(calibrate, c(list(pr$sim, pr$field, nMCMC = n,
-        nBurn = n %/% 4, algebra = algebra, neighbours = k), h$fit_args)))
+        nBurn = nBurn, algebra = algebra, neighbours = k), h$fit_args)))
       list(fit = fit, cpu = h$cpu() - t0)
     }
     V <- one("vecchia"); D <- one("dense")
@@ -153,7 +159,7 @@ accuracy_part <- function(m, k = 20, n = 6000, quick = FALSE) {
                cpu.vecchia = V$cpu, cpu.dense = D$cpu,
                rhat.vecchia = max(V$fit$estimates$rhat, na.rm = TRUE),
                rhat.dense = max(D$fit$estimates$rhat, na.rm = TRUE), blas = h$blas())
-  }, list(m = m, k = k, n = n, quick = quick))
+  }, list(m = m, k = k, n = n, quick = quick, nBurn = nBurn))
 }
 
 # RobustCalibration (plug-in: the emulator's hyperparameters estimated once,
