@@ -41,6 +41,44 @@ test_that("chains that disagree give an R-hat message, too few draws an ESS mess
   expect_length(grep("Bulk ESS below 400", msg), 1)
 })
 
+test_that("a joint move far from its target acceptance, with slow parameters, asks for a longer burn-in", {
+  fit <- small_fit(nChains = 2)
+  # set each chain's retained acceptance of the simulator block by hand
+  with_acceptance <- function(fit, rates) {
+    for (k in seq_along(rates)) {
+      mv <- fit$state$chains[[k]]$sampler$moves
+      i <- match("sim", mv$name)
+      mv$accepted[i] <- rates[k] * mv$tries[i]
+      fit$state$chains[[k]]$sampler$moves <- mv
+    }
+    fit
+  }
+  mv <- fit$state$chains[[1]]$sampler$moves
+  simPars <- strsplit(mv$params[match("sim", mv$name)], ",", fixed = TRUE)[[1]]
+  expect_true("thetaS1" %in% simPars)
+
+  bad <- with_acceptance(fit, c(0.25, 0.62))
+  msg <- shape_messages(bad, "thetaS1")
+  expect_length(msg, 1)
+  expect_match(msg, "accepted 25%, 62% of its proposals", fixed = TRUE)
+  expect_match(msg, "100 burn-in sweeps", fixed = TRUE)
+  expect_match(msg, "nBurn = 3000", fixed = TRUE)
+  # too low is as bad as too high
+  expect_length(shape_messages(with_acceptance(fit, c(0.05, 0.2)), "sigma2S"), 1)
+  # on target, or its parameters converged: nothing to say
+  good <- with_acceptance(fit, c(0.22, 0.3))
+  expect_identical(shape_messages(good, "thetaS1"), character())
+  expect_identical(shape_messages(bad, character()), character())
+  expect_identical(shape_messages(bad, "kappa1"), character())
+  # and convergence_messages() passes on the slow parameters it found
+  set.seed(1)
+  y <- with_draws(bad, iid_draws(bad, 4, 50), rep(1:4, each = 50))
+  expect_length(grep("joint move of thetaS1, ", convergence_messages(y), fixed = TRUE), 1)
+  # the single-site sampler has no joint move
+  single <- small_fit(nChains = 2, sampler = "single")
+  expect_identical(shape_messages(single, single$vars), character())
+})
+
 test_that("a single chain is pointed out", {
   fit <- small_fit(nChains = 1)
   set.seed(1)
