@@ -5,10 +5,14 @@
 # plan, CPU seconds, and the 90% intervals of kappa against the truth;
 # with `single`, the same for the first output alone (its intervals are
 # wider).
-#   Rscript inst/bench/outputs.R [quick] [single]
+# nburn=<sweeps> sets the burn-in (default 1000); the first stretch is
+# nburn + 1000 sweeps, then checks every 500.
+#   Rscript inst/bench/outputs.R [quick] [single] [nburn=3000]
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
+nburnArg <- grep("^nburn=", args, value = TRUE)
+nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 1000L
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else
@@ -32,12 +36,12 @@ field <- do.call(rbind, lapply(names(ef), function(o) {
 run <- function(sim, field, output) {
   t0 <- proc.time()
   fit <- calibrate(sim, field, output = output, kernelS = "gaussian", kernelB = "gaussian",
-                   nMCMC = if (quick) 300 else 2000, nBurn = if (quick) 150 else 1000,
+                   nMCMC = if (quick) 300 else nBurn + 1000, nBurn = if (quick) 150 else nBurn,
                    converge = until_converged(every = if (quick) 100 else 500,
                                               maxMCMC = if (quick) 400 else 30000))
   cpu <- sum((proc.time() - t0)[c(1, 2, 4, 5)], na.rm = TRUE)
   q <- apply(fit$Phi[, 1:2], 2, quantile, c(0.05, 0.95))
-  data.frame(m = nrow(sim), algebra = fit$settings$simAlgebra$name,
+  data.frame(m = nrow(sim), algebra = fit$settings$simAlgebra$name, nBurn = fit$settings$nBurn,
              converged = fit$settings$converge$converged, sweeps = fit$settings$nMCMC,
              cpu.s = cpu, max.rhat = max(fit$estimates$rhat, na.rm = TRUE),
              min.ess = min(fit$estimates$ess, na.rm = TRUE),
