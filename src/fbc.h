@@ -425,6 +425,10 @@ private:
   Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa
   arma::mat Kw_, Xg_;                    // one conditional's system
   arma::vec rhs_;
+  arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
+                                         // the field inputs, experimental part
+  arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
+  std::vector<std::pair<double, int> > heap_;  // k nearest workspace
   double conditional(int s, int runs, bool coef);
   void fieldNeighbours(std::vector<int>& nbrF);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);

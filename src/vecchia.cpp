@@ -174,6 +174,23 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
     nearest(Xu_, rows.data(), j, y.memptr(), wx, p, vd_.kf, d2, idx, nbrL_[j]);
   }
   for (int b = 0; b < 2; ++b) { nbrF_.b[b].assign((size_t) nu_ * vd_.k, -1); }
+  // the experimental part of every field latent's distance to every run,
+  // summed in scaled_d2()'s order, so fieldNeighbours() adds the kappa part
+  // and finds the same neighbours as nearest() (O(nu m) memory: the cross
+  // terms' share)
+  dx2_.set_size(m, nu_);
+  for (int j = 0; j < nu_; ++j) {
+    double* col = dx2_.colptr(j);
+    for (int i = 0; i < m; ++i) {
+      double s2 = 0.0;
+      for (int d = 0; d < p; ++d) {
+        const double e = vd_.w[d] * (Xs_.at(i, d) - Xu_.at(j, d));
+        s2 += e * e;
+      }
+      col[i] = s2;
+    }
+  }
+  dt_.set_size(m, q);
 }
 
 std::string VecchiaPosterior::algebra() const {
@@ -235,16 +252,41 @@ bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   return true;
 }
 
-// The field latents' nearest runs at kappa (into nbrF, nu x k).
+// The field latents' nearest runs at kappa (into nbrF, nu x k): the same
+// runs, in the same order, as nearest() of each latent (x_j, kappa), but
+// with the distances' experimental part precomputed (dx2_) and the kappa
+// part computed once per run for all latents:
+//   d2(j, i) = dx2(i, j) + sum_d (w_d (t_id - kappa_d))^2,
+// added in scaled_d2()'s order; the k smallest by a bounded max-heap over
+// the runs in index order (ties to the lower index, as nearest()).
+// O(nu m q) per kappa instead of O(nu m (p + q) + nu m log k).
 void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF) {
-  const int K = p + q, k = vd_.k;
-  std::vector<double> y(K), d2;
-  std::vector<int> idx, nb;
+  const int k = vd_.k, kk = std::min(k, m);
+  for (int d = 0; d < q; ++d) {
+    const double wd = vd_.w[p + d], kap = phi[iKappa + d];
+    double* out = dt_.colptr(d);
+    for (int i = 0; i < m; ++i) { const double e = wd * (Xs_.at(i, p + d) - kap); out[i] = e * e; }
+  }
+  auto later = [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+    return a.first < b.first || (a.first == b.first && a.second < b.second);
+  };
   for (int j = 0; j < nu_; ++j) {
-    for (int d = 0; d < p; ++d) y[d] = Xu_.at(j, d);
-    for (int d = 0; d < q; ++d) y[p + d] = phi[iKappa + d];
-    nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, d2, idx, nb);
-    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < (int) nb.size() ? nb[r] : -1;
+    const double* dx = dx2_.colptr(j);
+    heap_.clear();
+    for (int i = 0; i < m; ++i) {
+      double s2 = dx[i];
+      for (int d = 0; d < q; ++d) s2 += dt_.at(i, d);
+      if ((int) heap_.size() < kk) {
+        heap_.emplace_back(s2, i);
+        std::push_heap(heap_.begin(), heap_.end(), later);
+      } else if (s2 < heap_.front().first) {  // a tie keeps the lower index
+        std::pop_heap(heap_.begin(), heap_.end(), later);
+        heap_.back() = std::make_pair(s2, i);
+        std::push_heap(heap_.begin(), heap_.end(), later);
+      }
+    }
+    std::sort_heap(heap_.begin(), heap_.end(), later);
+    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? heap_[r].second : -1;
   }
 }
 

@@ -7,6 +7,7 @@
 #   Rscript inst/bench/vecchia.R accuracy-500       # long runs of both algebras (also -1000,
 #                                                   #   -2000): kappa quantiles, predictions
 #   Rscript inst/bench/vecchia.R peer               # RobustCalibration at m = 1000 (if installed)
+#   ... k=10 nburn=4000                             # neighbours and burn-in of converged/accuracy
 # Add `quick` for a smoke test. Each part runs in a fresh R process (callr),
 # so its peak memory (VmHWM) is its own; CPU seconds are user + system of
 # that process and its children. Run under the BLAS you want to measure
@@ -29,7 +30,10 @@ quick <- "quick" %in% args
 # 1000 the m = 1000 problem needed 21,000 sweeps a chain, see RESULTS-vecchia.md)
 nburnArg <- grep("^nburn=", args, value = TRUE)
 nBurnLong <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 3000L
-parts <- setdiff(args, c("quick", nburnArg))
+# k=<neighbours>: the converged and accuracy parts' neighbours (default 20)
+kArg <- grep("^k=", args, value = TRUE)
+kNeighbours <- if (length(kArg)) as.integer(sub("^k=", "", kArg)) else 20L
+parts <- setdiff(args, c("quick", nburnArg, kArg))
 if (!length(parts)) parts <- "sweep"
 
 helpers <- function() {
@@ -148,12 +152,22 @@ accuracy_part <- function(m, k = 20, n = 10000, quick = FALSE, nBurn = nBurnLong
     qs <- function(f) apply(f$Phi[, 1:q, drop = FALSE], 2, quantile, c(0.05, 0.5, 0.95))
     sdD <- apply(D$fit$Phi[, 1:q, drop = FALSE], 2, sd)
     dq <- max(abs(qs(V$fit) - qs(D$fit)) / rep(sdD, each = 3))
+    # the Monte Carlo error of that difference (both runs' quantile MCSEs,
+    # posterior::mcse_quantile), in the same sd units: the largest over the
+    # quantiles, to read the difference against
+    mcse <- function(f) {
+      vapply(seq_len(q), function(j) {
+        x <- do.call(cbind, split(f$Phi[, j], f$chain))  # iterations x chains
+        vapply(c(0.05, 0.5, 0.95), function(pr) posterior::mcse_quantile(x, probs = pr), numeric(1))
+      }, numeric(3))
+    }
+    dqMcse <- max(sqrt(mcse(V$fit)^2 + mcse(D$fit)^2) / rep(sdD, each = 3))
     set.seed(5)
     xn <- matrix(runif(400), 200)
     colnames(xn) <- c("x1", "x2")
     pv <- predict(V$fit, xn, level = 0.9, ndraws = 300)
     pd <- predict(D$fit, xn, level = 0.9, ndraws = 300)
-    data.frame(m = m, k = k, sweeps = n, kappa.quantile.err.sd = dq,
+    data.frame(m = m, k = k, sweeps = n, kappa.quantile.err.sd = dq, its.mcse.sd = dqMcse,
                pred.rmse.rel = sqrt(mean((pv$pred - pd$pred)^2)) / sd(pd$pred),
                width.rel = mean(abs((pv$upper - pv$lower) / (pd$upper - pd$lower) - 1)),
                cpu.vecchia = V$cpu, cpu.dense = D$cpu,
@@ -192,9 +206,9 @@ for (part in parts) {
       if (quick) list(c(1000, 20)) else list(c(1000, 20), c(5000, 20), c(20000, 20),
                                              c(20000, 30), c(100000, 20)),
       function(a) sweep_part(a[1], a[2], if (quick) 20 else if (a[1] >= 1e5) 20 else 100))),
-    converged = converged_part(as.integer(sub("^.*-", "", part)), quick = quick),
+    converged = converged_part(as.integer(sub("^.*-", "", part)), k = kNeighbours, quick = quick),
     exact = converged_part(as.integer(sub("^.*-", "", part)), "dense", quick = quick),
-    accuracy = accuracy_part(as.integer(sub("^.*-", "", part)), quick = quick),
+    accuracy = accuracy_part(as.integer(sub("^.*-", "", part)), k = kNeighbours, quick = quick),
     peer = peer_part(quick),
     stop("unknown part ", part))
   print(res, digits = 4, row.names = FALSE)
