@@ -293,7 +293,7 @@ convergence_messages <- function(x) {
 # second half of burn-in, does not fit the posterior, and a longer burn-in
 # is the cure, not a longer run (update() keeps the proposals). Measured at
 # m = 1000 (inst/bench/RESULTS-vecchia.md): a burn-in of 1000 left the
-# simulator block at acceptance 0.29-0.68 over the chains and bulk ESS 62
+# simulator block at acceptance 0.30-0.68 over the chains and bulk ESS 62
 # per 12,000 draws; 4000 gave 0.22-0.24 and 634.
 shape_messages <- function(x, slow) {
   if (!length(slow)) return(character())
