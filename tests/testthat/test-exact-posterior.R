@@ -14,17 +14,6 @@ all_fixed <- function(thetaS, alphaS, thetaB, alphaB, sigma2S, sigma2B, sigma2E,
   )
 }
 
-# Quantiles of a density tabulated on an equispaced grid (trapezoid CDF).
-grid_quantile <- function(x, dens, probs) {
-  cdf <- c(0, cumsum((dens[-1] + dens[-length(dens)]) / 2 * diff(x)))
-  cdf <- cdf / cdf[length(cdf)]
-  stats::approx(cdf, x, probs, ties = "ordered")$y
-}
-grid_cdf <- function(x, dens) {
-  cdf <- c(0, cumsum((dens[-1] + dens[-length(dens)]) / 2 * diff(x)))
-  stats::approxfun(x, cdf / cdf[length(cdf)], yleft = 0, yright = 1)
-}
-
 # Posterior density (unnormalised, dense plain-R likelihood times the prior)
 # of phi[cols] on the grid g x g, the other coordinates at the fit's last
 # state (they are fixed).
@@ -48,30 +37,16 @@ marginal_quantile_error <- function(draws, dens, j, x, probs = c(0.1, 0.25, 0.5,
   max(abs(got - ref)) / stats::sd(draws)
 }
 
-# A q = 1 fit's kappa draws (every other parameter fixed, at the chain's
-# last state) against the posterior on a 101-point grid: dense_loglik()
-# with the kernels' plain-R formulas, times the Beta(1.1, 1.1) prior in the
-# scaled kappa; quantiles within 0.15 posterior sd, KS statistic < 0.06.
-# `u`: the grid (finer for a narrow posterior); the fit's discrepancy model.
-expect_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
-                              u = seq(0, 1, length.out = 101)) {
+# A q = 1 fit's kappa draws against the grid posterior (helper-grid.R) of
+# dense_loglik() with the kernels' plain-R formulas and the fit's
+# discrepancy model.
+expect_dense_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
+                                    u = seq(0, 1, length.out = 101)) {
   d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  lo <- fit$scale$xmin[2]
-  rng <- fit$scale$xmax[2] - lo
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
+  expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB,
                  discrepancy = fit$settings$discrepancy)
-  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  kappa <- lo + rng * u
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- grid_quantile(kappa, dens, probs)
-  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
-  expect_lt(max(abs(got - ref)) / stats::sd(fit$Phi[, "kappa1"]), 0.15)
-  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
-  expect_lt(ks, 0.06)
+  }, u)
 }
 
 test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
@@ -85,7 +60,7 @@ test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
   expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
   expect_true(all(is.na(fit$acceptance[-1])))
   # about 2000 nearly independent draws: quantile errors ~ 0.03-0.05 sd
-  expect_kappa_grid(fit)
+  expect_dense_kappa_grid(fit)
 })
 
 test_that("Matern families: kappa draws match the grid posterior on the ball data", {
@@ -100,7 +75,7 @@ test_that("Matern families: kappa draws match the grid posterior on the ball dat
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern32")
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaB1", "sigma2S",
                                         "sigma2B", "sigma2E", "muB"))
-  expect_kappa_grid(fit, "matern52", "matern32")
+  expect_dense_kappa_grid(fit, "matern52", "matern32")
 })
 
 test_that("without a discrepancy, kappa draws match the grid posterior on the ball data", {
@@ -114,7 +89,7 @@ test_that("without a discrepancy, kappa draws match the grid posterior on the ba
                    nChains = 1, hypers = hyp, discrepancy = "none")
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
                                         "sigma2S", "sigma2E"))
-  expect_kappa_grid(fit, u = seq(0, 1, length.out = 1001))
+  expect_dense_kappa_grid(fit, u = seq(0, 1, length.out = 1001))
 })
 
 test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors (ball data)", {
@@ -133,7 +108,7 @@ test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
                                         "thetaB1", "alphaB1", "lambdaZ", "sigma2S", "sigma2B",
                                         "sigma2E"))
-  expect_kappa_grid(fit, u = seq(0, 1, length.out = 501))
+  expect_dense_kappa_grid(fit, u = seq(0, 1, length.out = 501))
   # lambdaZ sampled under its default lognormal(log 20, 1.5) prior, kappa
   # fixed at 8.5: the draws of log(lambdaZ) against the grid posterior of
   # log(lambdaZ) (density L(e^u) prior(e^u) e^u)

@@ -123,21 +123,11 @@ test_that("two outputs: kappa draws match the grid posterior", {
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern52")
   expect_identical(colnames(fit$Phi)[grepl("sigma2E", colnames(fit$Phi))], c("sigma2E1", "sigma2E2"))
   d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  u <- seq(0, 1, length.out = 401)
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
+  # kappa1 is the third scaled input (x, the output's indicator, t)
+  expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, "matern52", "matern52",
                  noise = fit$spec$model$noise)
-  }, numeric(1)) + dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  lo <- fit$scale$xmin[3]; rng <- fit$scale$xmax[3] - lo
-  kap <- lo + rng * u
-  cdf <- cumsum(c(0, (dens[-1] + dens[-401]) / 2)); cdf <- cdf / cdf[401]
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- approx(cdf, kap, probs, ties = "ordered")$y
-  got <- quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
-  expect_lt(max(abs(got - ref)) / sd(fit$Phi[, "kappa1"]), 0.15)
+  }, u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
 })
 
 test_that("two outputs recover kappa with an interval narrower than either output alone", {

@@ -260,23 +260,9 @@ test_that("kappa draws on a product design match the grid posterior", {
                    hypers = hyp)
   expect_identical(fit$settings$simAlgebra$name, "Kronecker")
   d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  u <- seq(0, 1, length.out = 201)
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
-    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6)
-  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  cdf <- c(0, cumsum((dens[-1] + dens[-201]) / 2 * diff(u)))
-  cdf <- cdf / cdf[201]
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- stats::approx(cdf, u, probs, ties = "ordered")$y
-  draws <- (fit$Phi[, "kappa1"] - fit$scale$xmin[2]) / diff(c(fit$scale$xmin[2], fit$scale$xmax[2]))
-  got <- stats::quantile(draws, probs, names = FALSE)
   # 7000 draws of kappa (ESS a few thousand): quantile errors ~0.03 sd
-  expect_lt(max(abs(got - ref)) / stats::sd(draws), 0.12)
-  ks <- suppressWarnings(stats::ks.test(draws, stats::approxfun(u, cdf))$statistic)
-  expect_lt(ks, 0.05)
+  expect_kappa_grid(fit, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6),
+                    u = seq(0, 1, length.out = 201), quantileTol = 0.12, ksTol = 0.05)
 })
 
 test_that("the dense algebra's on-the-fly correlation gives the cached path's numbers", {

@@ -102,23 +102,9 @@ test_that("with few neighbours the kappa draws match the approximation's own gri
   expect_identical(fit$settings$simAlgebra$name, "Vecchia")
   expect_identical(fit$spec$model$vecchia$k, 5L)
   d <- fit$data
-  phi <- fit$state$chains[[1]]$last
-  u <- seq(0, 1, length.out = 501)
-  lp <- vapply(u, function(k) {
-    phi[1] <- k
+  expect_kappa_grid(fit, function(phi) {
     .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = fit$spec$model)
-  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  lo <- fit$scale$xmin[2]; rng <- fit$scale$xmax[2] - lo
-  kap <- lo + rng * u
-  cdf <- cumsum(c(0, (dens[-1] + dens[-501]) / 2))
-  cdf <- cdf / cdf[501]
-  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
-  ref <- approx(cdf, kap, probs, ties = "ordered")$y
-  got <- quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
-  expect_lt(max(abs(got - ref)) / sd(fit$Phi[, "kappa1"]), 0.15)
-  ks <- suppressWarnings(ks.test(fit$Phi[, "kappa1"], approxfun(kap, cdf))$statistic)
-  expect_lt(ks, 0.06)
+  }, u = seq(0, 1, length.out = 501))
 })
 
 test_that("a Vecchia run resumes from its checkpoint to the same draws, and update() continues it", {
