@@ -444,6 +444,11 @@ std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& 
                                           const arma::mat& Xs, const arma::vec& ys,
                                           double nugget, const Rcpp::List& model);
 
+// The rows of each label (labels 1 .. k over n rows, each used; heldout.cpp):
+// the folds of validate_emulator() and the groups of loo().
+std::vector<std::vector<int> > label_groups(const Rcpp::IntegerVector& labels, int n,
+                                            const char* what);
+
 // Bytes the dense algebra may spend on per-dimension caches (dense.cpp).
 extern double fbc_cache_budget;
 

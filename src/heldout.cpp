@@ -29,6 +29,24 @@ bool SchurPosterior::heldout(const std::vector<std::vector<int> >& folds, arma::
   return true;
 }
 
+// The rows of each label: labels[i] in 1 .. k (k <= n, each used) for the n
+// rows; group g - 1 holds the rows labelled g, in order. `what` names the
+// labels in the errors.
+std::vector<std::vector<int> > label_groups(const Rcpp::IntegerVector& labels, int n,
+                                            const char* what) {
+  if (labels.size() != n) Rcpp::stop("%s must have %d labels", what, n);
+  std::vector<std::vector<int> > groups;
+  for (int i = 0; i < n; ++i) {
+    const int k = labels[i];
+    if (k < 1 || k > n) Rcpp::stop("%s labels must be in 1..%d", what, n);
+    if ((int)groups.size() < k) groups.resize(k);
+    groups[k - 1].push_back(i);
+  }
+  for (const std::vector<int>& G : groups)
+    if (G.empty()) Rcpp::stop("%s labels must be 1..k, each used", what);
+  return groups;
+}
+
 // Held-out means and variances (scaled space) of the m simulator runs at
 // each row of `phis` (m x draws matrices); run r is in fold fold[r]
 // (labels 1 .. k); `model` is the model description (read_model()).
@@ -40,16 +58,7 @@ Rcpp::List fbc_heldout(const arma::mat& Xf, const arma::vec& yf, const arma::mat
   Posterior& post = *pp;
   const int m = post.m, M = phis.n_rows;
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  if (fold.size() != m) Rcpp::stop("fold must have %d labels", m);
-  std::vector<std::vector<int> > folds;
-  for (int r = 0; r < m; ++r) {
-    const int k = fold[r];
-    if (k < 1 || k > m) Rcpp::stop("fold labels must be in 1..%d", m);
-    if ((int)folds.size() < k) folds.resize(k);
-    folds[k - 1].push_back(r);
-  }
-  for (const std::vector<int>& B : folds)
-    if (B.empty()) Rcpp::stop("fold labels must be 1..k, each used");
+  const std::vector<std::vector<int> > folds = label_groups(fold, m, "fold");
   arma::mat mean(m, M), var(m, M);
   arma::vec mu, v;
   for (int i = 0; i < M; ++i) {

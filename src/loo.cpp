@@ -45,16 +45,7 @@ Rcpp::NumericMatrix fbc_loo(const arma::mat& Xf, const arma::vec& yf, const arma
   Posterior& post = *pp;
   const int n = post.n, M = phis.n_rows;
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  if (group.size() != n) Rcpp::stop("group must have %d labels", n);
-  std::vector<std::vector<int> > groups;
-  for (int i = 0; i < n; ++i) {
-    const int k = group[i];
-    if (k < 1 || k > n) Rcpp::stop("group labels must be in 1..%d", n);
-    if ((int)groups.size() < k) groups.resize(k);
-    groups[k - 1].push_back(i);
-  }
-  for (const std::vector<int>& G : groups)
-    if (G.empty()) Rcpp::stop("group labels must be 1..k, each used");
+  const std::vector<std::vector<int> > groups = label_groups(group, n, "group");
   Rcpp::NumericMatrix out(M, groups.size());
   arma::vec ld;
   for (int s = 0; s < M; ++s) {
