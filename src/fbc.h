@@ -432,6 +432,7 @@ private:
   double conditional(int s, int runs, bool coef);
   void fieldNeighbours(std::vector<int>& nbrF);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
+  int gatherRun(int i);
 };
 
 // The algebra for the data at hand: Kronecker on a product design unless

@@ -223,19 +223,13 @@ double VecchiaPosterior::conditional(int s, int runs, bool coef) {
 // log|Ds| and ys' Ds^-1 ys over the runs' conditionals.
 bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   if (!t.simCorr) return true;
-  const int K = p + q, k = vd_.k;
+  const int k = vd_.k;
   double ld = 0.0, qq = 0.0;
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
-    int c = 0;
-    while (c < k && nb[c] >= 0) {
-      for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
-      rhs_[c] = ys_[nb[c]];
-      ++c;
-    }
-    const int s = vd_.ord[i];
-    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
-    rhs_[c] = ys_[s];
+    const int c = gatherRun(i);
+    for (int r = 0; r < c; ++r) rhs_[r] = ys_[nb[r]];
+    rhs_[c] = ys_[vd_.ord[i]];
     const double v = conditional(c + 1, c + 1, false);
     if (!(v > 0)) return false;
     // z = L^-1 [ys_N; ys_s]: its last entry is e / sqrt(d)
@@ -250,6 +244,20 @@ bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   }
   ldDs = ld; zz = qq;
   return true;
+}
+
+// Gathers run i's conditioning system into Xg_: its earlier neighbours,
+// then the run itself (the i-th in the maximin order); returns the number
+// of neighbours c (c + 1 rows).
+int VecchiaPosterior::gatherRun(int i) {
+  const int K = p + q, k = vd_.k;
+  const int* nb = vd_.nbr.data() + (size_t) i * k;
+  int c = 0;
+  for (; c < k && nb[c] >= 0; ++c)
+    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
+  const int s = vd_.ord[i];
+  for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
+  return c;
 }
 
 // The field latents' nearest runs at kappa (into nbrF, nu x k): the same
@@ -388,7 +396,7 @@ void VecchiaPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::v
 // entries in B.
 void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                                   std::vector<arma::mat>& QBB) {
-  const int K = p + q, k = vd_.k;
+  const int k = vd_.k;
   std::vector<int> fold(m, -1), at(m, -1);
   QBB.assign(folds.size(), arma::mat());
   for (size_t f = 0; f < folds.size(); ++f) {
@@ -399,13 +407,7 @@ void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, a
   std::vector<std::vector<std::pair<int, double> > > cols(m);
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
-    int c = 0;
-    while (c < k && nb[c] >= 0) {
-      for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
-      ++c;
-    }
-    const int s = vd_.ord[i];
-    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
+    const int c = gatherRun(i), s = vd_.ord[i];
     const double v = conditional(c + 1, c + 1, true);
     const double sd = std::sqrt(v);
     std::vector<std::pair<int, double> >& col = cols[i];
