@@ -181,7 +181,7 @@ inform_duplicated_runs <- function(sim, call = parent.frame()) {
   X <- sim[, -1, drop = FALSE]
   dup <- duplicated(X)
   if (!any(dup)) return(inform_near_duplicates(X, call = call))
-  key <- apply(X, 1, function(r) paste(format(r, digits = 17), collapse = "\r"))
+  key <- row_keys(X)
   groups <- split(seq_len(nrow(X)), key)
   groups <- groups[lengths(groups) > 1L]
   groups <- groups[order(vapply(groups, min, numeric(1)))]

@@ -86,6 +86,6 @@ loo_rows <- function(chain, ndraws) {
 # first appearance) or itself.
 loo_groups <- function(Xf, unit) {
   if (unit == "observation") return(seq_len(nrow(Xf)))
-  key <- apply(Xf, 1, function(r) paste(format(r, digits = 17), collapse = "\r"))
+  key <- row_keys(Xf)
   match(key, unique(key))
 }
