@@ -4,8 +4,9 @@
 needed <- c("Rcpp", "RcppArmadillo", "cli", "ggplot2", "lhs", "testthat", "knitr",
             "rmarkdown", "coda", "posterior", "future", "progressr",
             # Suggests the tests use: kill-and-resume in a child process,
-            # the batchtools backend (both skip when missing, but CI runs them)
-            "callr", "future.batchtools")
+            # the batchtools backend, PSIS-LOO (loo.fbc) and bayesplot's
+            # plots (all skip when missing, but CI runs them)
+            "callr", "future.batchtools", "loo", "bayesplot")
 have <- function(p) requireNamespace(p, quietly = TRUE)
 missing <- needed[!vapply(needed, have, logical(1))]
 if (length(missing)) {
