@@ -151,7 +151,13 @@
 #' for three levels, a product of per-level factors for more (positive
 #' definite, learned and sampled like every \eqn{\theta}; the smoothness
 #' \eqn{\alpha} of an indicator is held at 2). [level_correlation()] gives
-#' the correlation matrix between levels.
+#' the correlation matrix between levels. These correlations are all
+#' positive. With three or more levels, a level nearly uncorrelated with the
+#' others (its \eqn{\theta} large) leaves only the sum of the other
+#' levels' \eqn{\theta} determined: the chains then mix slowly along that
+#' ridge, and R-hat of those \eqn{\theta} says so (a three-output problem
+#' in the package's benchmarks did not converge in 13 CPU minutes; see
+#' `inst/bench/RESULTS-outputs.md`).
 #'
 #' `output = "name"` names such a column that says which output each row of
 #' `sim` and `field` holds (long format). Each output is standardised by
