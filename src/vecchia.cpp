@@ -179,16 +179,11 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   // and finds the same neighbours as nearest() (O(nu m) memory: the cross
   // terms' share)
   dx2_.set_size(m, nu_);
+  std::vector<double> xj(p);
   for (int j = 0; j < nu_; ++j) {
+    for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
     double* col = dx2_.colptr(j);
-    for (int i = 0; i < m; ++i) {
-      double s2 = 0.0;
-      for (int d = 0; d < p; ++d) {
-        const double e = vd_.w[d] * (Xs_.at(i, d) - Xu_.at(j, d));
-        s2 += e * e;
-      }
-      col[i] = s2;
-    }
+    for (int i = 0; i < m; ++i) col[i] = scaled_d2(Xs_, i, xj.data(), vd_.w, p);
   }
   dt_.set_size(m, q);
 }
