@@ -17,6 +17,10 @@
     .Call(`_FBC_sim_algebra`, Xs, p, algebra)
 }
 
+.level_corr <- function(L, z) {
+    .Call(`_FBC_level_corr_r`, L, z)
+}
+
 .fbc_loo_c <- function(Xf, yf, Xs, ys, phis, nugget, group, model) {
     .Call(`_FBC_fbc_loo`, Xf, yf, Xs, ys, phis, nugget, group, model)
 }

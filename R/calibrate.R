@@ -142,28 +142,30 @@
 #' A factor or character column of both `sim` and `field` (data frames) is a
 #' categorical experimental input. Its levels are those of `sim`'s column
 #' (a level of `field` or of [predict.fbc()]'s `newdata` that `sim` does not
-#' have is refused), and it enters both GPs through indicator columns, one
-#' for two levels (`name[level2]`) and one per level from three
-#' (`name[level]`), which appear among the inputs (and in the names of
-#' `thetaS`'s and `thetaB`'s columns' order). Two levels \eqn{a \ne b} are
-#' then correlated by \eqn{r(1; \theta_{[a]}) r(1; \theta_{[b]})}: one
-#' exchangeable correlation for two levels, all three pairwise correlations
-#' for three levels, a product of per-level factors for more (positive
-#' definite, learned and sampled like every \eqn{\theta}; the smoothness
-#' \eqn{\alpha} of an indicator is held at 2). [level_correlation()] gives
-#' the correlation matrix between levels. These correlations are all
-#' positive. With three or more levels, a level nearly uncorrelated with the
-#' others (its \eqn{\theta} large) leaves only the sum of the other
-#' levels' \eqn{\theta} determined: the chains then mix slowly along that
-#' ridge, and R-hat of those \eqn{\theta} says so (a three-output problem
-#' in the package's benchmarks did not converge in 13 CPU minutes; see
-#' `inst/bench/RESULTS-outputs.md`).
+#' have is refused). Its levels are read into indicator columns, one for
+#' two levels (`name[level2]`) and one per level from three
+#' (`name[level]`), which appear among the inputs but enter neither GP's
+#' kernel (their \eqn{\theta} is held at 0, and they are not in `Phi`).
+#' Each GP multiplies its correlation by the levels' correlation instead:
+#' \eqn{R((x, a), (x', b)) = R(x, x') C_{ab}}, with \eqn{C} an
+#' unstructured \eqn{L \times L} correlation matrix, learned and sampled
+#' like every hyperparameter through its \eqn{L(L-1)/2} canonical partial
+#' correlations (`rhoS1`, ... for the simulator GP, `rhoB1`, ... for the
+#' bias; see [set_hyperPriors()]): for two levels the correlation itself;
+#' for three, the correlations of levels 2 and 3 with level 1, then the
+#' partial correlation of levels 2 and 3 given level 1. \eqn{C} is positive
+#' definite by construction, and its correlations may be negative (two
+#' outputs that move in opposite directions). [level_correlation()] gives
+#' its posterior mean. An unstructured correlation has \eqn{L(L-1)/2}
+#' parameters: for a categorical input with many levels, expect slower
+#' mixing. (Version 0.1.x used a product of one positive factor per level
+#' instead; see `inst/bench/RESULTS-outputs.md` for why it was replaced.)
 #'
 #' `output = "name"` names such a column that says which output each row of
 #' `sim` and `field` holds (long format). Each output is standardised by
 #' its own simulator runs' mean and sd, and has its own measurement-error
 #' variance (`sigma2E1`, `sigma2E2`, ...); the simulator GP and the bias
-#' correlate the outputs through the output's indicator columns, so all
+#' correlate the outputs through the output's level correlation, so all
 #' outputs inform the shared \eqn{\kappa}. When every run gives every
 #' output at the same experimental settings the design is still a product
 #' design and the Kronecker algebra applies.
@@ -557,6 +559,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB), kernelS, kernelB)
   hypers <- indicator_hypers(hypers, match(unlist(lapply(fac$factors, `[[`, "columns")),
                                            colnames(field)[-1]), p, q)
+  levels <- model_levels(fac$factors, colnames(field)[-1])
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
@@ -571,14 +574,14 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   check_kappa_design(kappaSpec, scale)
-  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise)
+  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels)
   code <- algebra_code(algebra, dat$Xs, p)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = code, discrepancy,
                                vecchia = if (code == 2L) {
                                  vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
                                                 neighbours, neighbours)
-                               }, noise = fac$noise)
+                               }, noise = fac$noise, levels = levels)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))

@@ -4,19 +4,24 @@
 #
 # A categorical input (a factor or character column of both `sim` and
 # `field`: an experimental input) with levels l_1 .. l_L becomes indicator
-# columns, inputs like any other: one, [c = l_2], for two levels; one per
-# level, [c = l_a], for three or more. Every correlation family r then
-# correlates two levels a != b through those columns only:
-#   R_c(a, b) = r(1; theta_[a]) r(1; theta_[b])   (r(1; theta_[l_1]) = 1
-# with two levels), a product of one factor per level, each learned through
-# the thetaS (and thetaB) of its column: with two levels one exchangeable
-# correlation r(1; theta), with three all three pairwise correlations
-# (c_a c_b for three free c's), with more a structured one of L parameters
-# (Qian, Wu and Wu 2008 call such structures multiplicative). It is positive
-# definite by construction, needs no new kernel, and works with every
-# algebra (a product design over the levels stays one). A smoothness alpha
-# means nothing on an indicator (d^alpha = d for d in {0, 1}): it is held
-# at 2, not sampled.
+# columns: one, [c = l_2], for two levels; one per level, [c = l_a], for
+# three or more. They carry the level of each row (so product designs over
+# the levels stay product designs, and newdata is matched by level name),
+# but enter neither GP's separable kernel: their thetaS and thetaB are held
+# at 0 (alphaS and alphaB at 2) and left out of Phi. Each GP multiplies its
+# kernel instead by the levels' correlation,
+#   R((x, a), (x', b)) = R(x, x') C[a, b],
+# an unstructured L x L correlation matrix, positive definite by
+# construction from its L (L - 1) / 2 canonical partial correlations rhoS
+# (rhoB for the bias), each in (-1, 1) (src/levels.cpp). We chose the
+# unstructured correlation over a structured one: 0.1.x's product of one
+# factor per level (correlation f_a f_b, f in (0, 1]) could not express a
+# negative correlation between outputs and, with one level uncorrelated
+# with the others, left only the product of the others' factors determined
+# (the 3-output benchmark's chains did not converge; see
+# inst/bench/RESULTS-outputs.md). For two levels it is one exchangeable
+# correlation, now signed; with many levels the L (L - 1) / 2 parameters
+# grow quickly.
 #
 # Several outputs: `output` names a categorical input of both `sim` and
 # `field`. Besides being an input of both GPs (so the simulator GP and the
@@ -238,25 +243,19 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fac <- fit$scale$factors
   if (!length(fac)) cli::cli_abort("{.arg fit} has no categorical input.")
   input <- match_choice(input, names(fac), "input")
-  f <- fac[[input]]
-  cls <- if (gp == "simulator") "thetaS" else "thetaB"
   if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
   }
-  kern <- kernel_codes[[if (gp == "simulator") fit$settings$kernelS else fit$settings$kernelB]]
-  pos <- match(f$columns, fit$scale$names$inputs)
-  idx <- fit$spec$classes == cls
-  draws <- sampler_draws(fit)[, idx, drop = FALSE][, pos, drop = FALSE]
-  L <- length(f$levels)
-  # each level's indicator vector (level 1 has none with two levels)
-  ind <- t(vapply(f$levels, function(l) as.numeric(sub("^.*\\[(.*)\\]$", "\\1", f$columns) == l),
-                  numeric(length(pos))))
-  ind <- matrix(ind, nrow = L)
-  acc <- matrix(0, L, L)
-  for (d in seq_len(nrow(draws))) {
-    acc <- acc + .corr_matrix(ind, ind, draws[d, ], rep(2, length(pos)), kern)
-  }
+  cls <- if (gp == "simulator") "rhoS" else "rhoB"
+  L <- vapply(fac, function(f) length(f$levels), integer(1))
+  # this input's partial correlations among the class's (inputs in order)
+  end <- cumsum(L * (L - 1L) / 2L)
+  k <- match(input, names(fac))
+  pos <- seq_len(L[[k]] * (L[[k]] - 1L) / 2L) + end[[k]] - L[[k]] * (L[[k]] - 1L) / 2L
+  draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
+  acc <- matrix(0, L[[k]], L[[k]])
+  for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L[[k]], draws[d, ])[[1]]
   out <- acc / nrow(draws)
-  dimnames(out) <- list(f$levels, f$levels)
+  dimnames(out) <- list(fac[[k]]$levels, fac[[k]]$levels)
   out
 }

@@ -68,6 +68,18 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// level_corr_r
+Rcpp::List level_corr_r(const Rcpp::IntegerVector& L, const arma::vec& z);
+RcppExport SEXP _FBC_level_corr_r(SEXP LSEXP, SEXP zSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type L(LSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type z(zSEXP);
+    rcpp_result_gen = Rcpp::wrap(level_corr_r(L, z));
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_loo
 Rcpp::NumericMatrix fbc_loo(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& group, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_loo(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupSEXP, SEXP modelSEXP) {
@@ -223,6 +235,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
+    {"_FBC_level_corr_r", (DL_FUNC) &_FBC_level_corr_r, 2},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 11},

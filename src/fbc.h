@@ -27,7 +27,7 @@ enum PriorFamily {
 };
 
 // Transformation on which a parameter's random walk runs.
-enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2 };
+enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
 // Correlation family codes, one per GP; R/correlation.R keeps the same table
 // (kernel_codes()).
@@ -61,7 +61,7 @@ enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
 // hands the offsets and lengths over by name (read_model()).
 enum ParamClass {
   PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
-  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_COUNT
+  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_RHOS, PC_RHOB, PC_COUNT
 };
 
 // Where each class lives in phi: offset[c], length[c] (0-based), and for
@@ -77,9 +77,20 @@ struct Layout {
 // The model as the compiled entry points receive it from R
 // (compiled_model() in R/model.R): correlation families of the two GPs, the
 // algebra choice, the discrepancy model and the layout of phi.
+// A categorical input (R/factors.R): its indicator columns col .. col +
+// ncol - 1 among the experimental inputs (one column for two levels, one per
+// level from three) and its number of levels L. Both GPs hold the
+// indicators' thetaS and thetaB at 0 and multiply their correlation by the
+// levels' correlation C[a, b] (levels.cpp), from L (L - 1) / 2 canonical
+// partial correlations (rhoS, rhoB).
+struct LevelInput {
+  int col = 0, ncol = 1, L = 2;
+};
+
 struct Model {
   int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
+  std::vector<LevelInput> levels;  // the categorical inputs, if any
   // the measurement-error group of each field row (0-based; empty: one
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
@@ -136,6 +147,22 @@ void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* 
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = KF_POWEXP);
+
+// levels.cpp: the categorical inputs' level correlations ---------------------
+// The number of canonical partial correlations of the categorical inputs.
+int level_count(const std::vector<LevelInput>& in);
+// C[f] = the levels' correlation of input f from its partial correlations,
+// z[0 ..] consecutively by input (see levels.cpp).
+void level_corr(const std::vector<LevelInput>& in, const double* z,
+                std::vector<arma::mat>& C);
+// out(i, j) *= prod_f C[f](level of X row i, level of Y row j), over the
+// first `rows` rows of X and Y (-1: all; lower: X == Y and only i >= j).
+void level_scale(const std::vector<LevelInput>& in, const std::vector<arma::mat>& C,
+                 const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower,
+                 int rows = -1);
+// The same with C computed from z first; nothing without categorical inputs.
+void level_scale(const std::vector<LevelInput>& in, const double* z, const arma::mat& X,
+                 const arma::mat& Y, arma::mat& out, bool lower);
 
 // linalg.cpp: dense linear algebra -------------------------------------------
 // In-place lower Cholesky (LAPACK dpotrf); returns false when not PD.
@@ -199,6 +226,8 @@ public:
   int n, m, p, q, d;
   Layout layout;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB, iLambdaZ;
+  int iRhoS, iRhoB;                 // the level correlations' partial correlations
+  std::vector<LevelInput> levels;   // the categorical inputs (none: empty)
   bool bias;                // the model has a bias GP (KOH or S-GaSP)
   bool biasMean;            // ... with a mean muB (KOH)
   bool sgasp;               // ... scaled (S-GaSP)
@@ -424,6 +453,8 @@ private:
   std::vector<std::vector<int> > nbrL_;  // each field latent's earlier latents
   Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa
   arma::mat Kw_, Xg_;                    // one conditional's system
+  arma::vec levelZ_;                     // rhoS the level correlations levelC_ are of
+  std::vector<arma::mat> levelC_;
   arma::vec rhs_;
   arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
                                          // the field inputs, experimental part

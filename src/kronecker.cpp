@@ -99,8 +99,10 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   const bool xMove = t.simCorr && t.expDim, tMove = t.simCorr && t.calDim;
   if (xMove) {
     kernel_corr(kernS_, dz_.Xg, dz_.Xg, p, thetaS, alphaS, Rx_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, dz_.Xg, Rx_, false);
     if (!arma::eig_sym(lx_.alt(), Ux_.alt(), Rx_)) return false;
     kernel_corr(kernS_, dz_.Xg, Xu_, p, thetaS, alphaS, Rxf_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xu_, Rxf_, false);
     Ax_.alt() = Ux_.alt().t() * Rxf_;
   }
   if (tMove) {
@@ -179,8 +181,10 @@ void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma:
                                       arma::mat& G) {
   const arma::vec& w = w_.cur();
   const arma::vec& g = g_.cur();
-  An_ = Ux_.cur().t() * corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
-                                    phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+  arma::mat rx = corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
+                             phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+  level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xnew, rx, false);
+  An_ = Ux_.cur().t() * rx;
   a = An_.t() * g;
   b = (arma::square(An_).t()) * w;
   An_.each_col() %= w;

@@ -29,6 +29,8 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
   iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
   iMuB = lay.offset[PC_MUB]; iLambdaZ = lay.offset[PC_LAMBDAZ];
+  iRhoS = lay.offset[PC_RHOS]; iRhoB = lay.offset[PC_RHOB];
+  levels = model.levels;
   scaled.clear();
   for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
     for (int k = 0; k < lay.length[c]; ++k) scaled.push_back(lay.offset[c] + k);
@@ -37,7 +39,8 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
 
 Model read_model(const Rcpp::List& model, int p, int q) {
   static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ"};
+                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ",
+                                        "rhoS", "rhoB"};
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
@@ -60,7 +63,23 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     }
   }
   const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
-  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz};
+  // the categorical inputs: their indicator columns and levels
+  if (model.containsElementNamed("levels")) {
+    const Rcpp::List lv = model["levels"];
+    const Rcpp::IntegerVector col = lv["col"], ncol = lv["ncol"], L = lv["L"];
+    if (col.size() != L.size() || ncol.size() != L.size())
+      Rcpp::stop("the levels need col, ncol and L for each categorical input");
+    for (int f = 0; f < L.size(); ++f) {
+      LevelInput in;
+      in.col = col[f] - 1; in.ncol = ncol[f]; in.L = L[f];
+      if (in.L < 2 || in.col < 0 || in.col + in.ncol > p ||
+          in.ncol != (in.L == 2 ? 1 : in.L))
+        Rcpp::stop("categorical input %d: its indicator columns do not fit the inputs", f + 1);
+      out.levels.push_back(in);
+    }
+  }
+  const int lc = level_count(out.levels);
+  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz, lc, b * lc};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -200,10 +219,13 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
     t.simCorr = t.cross = t.field = true;
     if (k < p) t.expDim = true; else t.calDim = t.cChange = true;
     break;
+  case PC_RHOS:  // the levels' correlation: as an experimental input's thetaS
+    t.simCorr = t.cross = t.field = t.expDim = true;
+    break;
   case PC_ALPHAB:
     t.biasPow[k] = 1;
     // fall through
-  case PC_THETAB: case PC_LAMBDAZ:
+  case PC_THETAB: case PC_LAMBDAZ: case PC_RHOB:
     t.biasCorr = t.field = true;
     break;
   case PC_SIGMA2S: case PC_SIGMA2B: case PC_SIGMA2E:
@@ -311,10 +333,12 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
   const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
   const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
   K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
+  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xnew, K, false);
   r.ones(Xnew.n_rows);
   if (!sgasp) return;
   const double c = nu_ / phi[iLambdaZ];
   arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, L, false);
   L.diag() += c;
   if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
   solve_lower(L, K);  // H
@@ -359,6 +383,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
   if (simPart) {
     Kf = s2S * corr_matrix(Xu_, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
                            phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, Xu_, Xnew, Kf, false);
     simCondition(Xnew, a, bb, G);
     Kf -= s2S * G;
   }
@@ -410,6 +435,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
     }
     kernel_combine(kernS_, Pf, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
+    level_scale(levels, phi.memptr() + iRhoS, Xu_, Xu_, Rkk_.alt(), true);
     Rkk = &Rkk_.alt();
   }
 
@@ -435,6 +461,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
+    level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, Rb_.alt(), true);
     if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }
