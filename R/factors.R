@@ -132,6 +132,21 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
        noiseLabels = if (length(ukey) > 1L) labels)
 }
 
+# What each partial correlation of the categorical inputs' levels (rhoS1,
+# rhoS2, ...; the same for rhoB) correlates, in order: "mat: b~a" for the
+# correlation of levels b and a, "mat: c~b | a" for the partial correlation
+# of c and b given a (column by column, as src/levels.cpp takes them).
+level_labels <- function(factors) {
+  unlist(lapply(factors, function(f) {
+    l <- f$levels
+    L <- length(l)
+    unlist(lapply(seq_len(L - 1L), function(j) {
+      given <- if (j > 1L) paste0(" | ", paste(l[seq_len(j - 1L)], collapse = ", ")) else ""
+      sprintf("%s: %s~%s%s", f$name, l[(j + 1L):L], l[j], given)
+    }))
+  }), use.names = FALSE)
+}
+
 # The indicator columns' names of a categorical input: one for two levels,
 # one per level from three.
 indicator_names <- function(nm, levs) {

@@ -38,10 +38,15 @@ print.fbc <- function(x, digits = 3, ...) {
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
+  lev <- level_labels(sc$factors)
+  at <- 0L
   for (f in sc$factors) {
-    cat(sprintf("  categorical input %s: levels %s (indicator%s %s)\n", f$name,
-                paste(f$levels, collapse = ", "), if (length(f$columns) > 1L) "s" else "",
-                paste(f$columns, collapse = ", ")))
+    L <- length(f$levels)
+    k <- at + seq_len(L * (L - 1L) / 2L)
+    at <- at + L * (L - 1L) / 2L
+    cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
+                paste(f$levels, collapse = ", "),
+                paste0("rhoS", k, " (", sub("^[^:]*: ", "", lev[k]), ")", collapse = ", ")))
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", ")))
