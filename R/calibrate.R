@@ -173,7 +173,13 @@
 #' `source = "name"` names a factor column of `field` only: several field
 #' data sets sharing \eqn{\kappa}, each with its own measurement-error
 #' variance (the groups are the output x data set combinations present).
-#' The bias is shared by the data sets. `print()` lists the groups.
+#' The bias is shared by the data sets, or with `sourceBias = "own"` each
+#' data set has its own: the bias GP multiplies its correlation by a
+#' correlation between the data sets (`rhoD1`, ..., an unstructured one as
+#' for a categorical input), so the data show how alike the biases are;
+#' [predict.fbc()] then needs the data set of each new point for every type
+#' but `"simulator"`, and [level_correlation()] gives the biases'
+#' correlation (`input` = the data set column). `print()` lists the groups.
 #'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
@@ -443,6 +449,13 @@
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
 #'   belongs to; each has its own measurement-error variance.
+#' @param sourceBias With `source`: `"shared"` (default), one bias for all
+#'   field data sets; `"own"`, a bias per data set: the bias GP correlates
+#'   the data sets' biases by a correlation learned like every
+#'   hyperparameter (`rhoD1`, ...: at 1 the biases coincide, at 0 they are
+#'   independent, as in Gu, Anderson and McPhillips' multi-source
+#'   calibration; `set_hyperPriors(rhoDDist = "fixed", rhoDInit = 0)` holds
+#'   them independent).
 #' @param converge `FALSE` (the default) runs `nMCMC` sweeps per chain.
 #'   `TRUE`, or a rule from [until_converged()], runs `nMCMC` sweeps and then
 #'   more, a few hundred at a time, until every R-hat is below 1.01 and every
@@ -505,7 +518,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = 20, checkpoint = NULL,
-                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL) {
+                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL,
+                      sourceBias = c("shared", "own")) {
   call <- match.call()
   fac <- read_factors(sim, field, output, source)
   sim <- check_data_matrix(fac$sim, "sim", min_cols = 2L, min_rows = 3L)
@@ -540,7 +554,19 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
     )
   }
+  sourceBias <- match_choice(sourceBias, c("shared", "own"), "sourceBias")
+  if (sourceBias == "own" && (is.null(fac$source) || length(fac$source$levels) < 2L)) {
+    cli::cli_abort(c(
+      if (is.null(fac$source)) "{.code sourceBias = \"own\"} needs several field data sets, but no {.arg source} column was named." else
+        "{.code sourceBias = \"own\"} needs several field data sets, but the {.arg source} column has one.",
+      i = "Name the column of {.arg field} that says which data set each row belongs to with {.arg source}."
+    ))
+  }
+  biasSource <- if (sourceBias == "own") list(codes = fac$source$codes, L = length(fac$source$levels))
   discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy")
+  if (sourceBias == "own" && discrepancy == "none") {
+    cli::cli_abort("{.code sourceBias = \"own\"} gives each field data set its own bias, but {.code discrepancy = \"none\"} has no bias.")
+  }
   converge <- check_converge(converge)
   check_ceiling(converge, nMCMC)
   longest <- max(nMCMC, converge$maxMCMC)
@@ -566,6 +592,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   scale <- fbc_scale(sim, p, named = cols$named, out = fac$outS)
   scale[c("factors", "output", "source", "noiseLabels")] <-
     list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
+  if (sourceBias == "own") scale$sourceBias <- TRUE
   inform_duplicated_runs(sim)
   warn_field_outside(sim, field, scale)
   dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
@@ -574,14 +601,15 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   check_kappa_design(kappaSpec, scale)
-  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels)
+  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels,
+                       source = biasSource)
   code <- algebra_code(algebra, dat$Xs, p)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = code, discrepancy,
                                vecchia = if (code == 2L) {
                                  vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
                                                 neighbours, neighbours)
-                               }, noise = fac$noise, levels = levels)
+                               }, noise = fac$noise, levels = levels, source = biasSource)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -599,6 +627,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   if (code == 2L) settings$neighbours <- neighbours
   if (!is.null(output)) settings$output <- output
   if (!is.null(source)) settings$source <- source
+  if (sourceBias == "own") settings$sourceBias <- sourceBias
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -625,7 +654,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                      moves = moves, time = proc.time()[["elapsed"]] - t0,
                      checkpoint = checkpoint, algebra = algebra, simAlgebra = simAlgebra,
                      kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy,
-                     output = output, source = source)
+                     output = output, source = source, sourceBias = sourceBias)
     new_fbc_chains(results, dat, spec, scale, call, settings = settings)
   }
   run_rounds(starts, seeds, rep(nMCMC, nChains), converge, assemble, nBurn = nBurn,

@@ -209,10 +209,11 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
       check_levels(newdata[[s$name]], s$levels, s$name, "newdata", call = call)
       srcCodes <- match(as.character(newdata[[s$name]]), s$levels)
       newdata <- newdata[, names(newdata) != s$name, drop = FALSE]
-    } else if (type == "field") {
+    } else if (type == "field" || (isTRUE(scale$sourceBias) && type != "simulator")) {
       cli::cli_abort(c(
-        "{.code type = \"field\"} needs the field data set of each new point: {.arg newdata} has no column {.val {s$name}}.",
-        i = "Each data set has its own measurement error ({.val {s$levels}}); the other types do not depend on it."
+        "{.code type = \"{type}\"} needs the field data set of each new point: {.arg newdata} has no column {.val {s$name}}.",
+        i = if (isTRUE(scale$sourceBias)) "Each data set has its own bias ({.val {s$levels}}); only {.code type = \"simulator\"} does not depend on it." else
+          "Each data set has its own measurement error ({.val {s$levels}}); the other types do not depend on it."
       ), call = call)
     }
   }
@@ -226,7 +227,8 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
       cli::cli_abort("{.arg newdata} asks for the field at {.val {unique(lab[is.na(noise)])}}, a combination with no field data: its measurement error is unknown.", call = call)
     }
   }
-  list(newdata = newdata, noise = noise, output = outCodes)
+  list(newdata = newdata, noise = noise, output = outCodes,
+       source = if (isTRUE(scale$sourceBias) && type != "simulator") srcCodes else integer())
 }
 
 #' Correlation between the levels of a categorical input
@@ -237,7 +239,8 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 #' correlation parameters, averaged over the draws.
 #'
 #' @param fit An `fbc` object from [calibrate()] with a categorical input.
-#' @param input The input's name (a column of `sim` and `field`).
+#' @param input The input's name (a column of `sim` and `field`), or with
+#'   `sourceBias = "own"` the field data sets' column (`gp = "bias"`).
 #' @param gp `"simulator"` (default) or `"bias"`.
 #' @return A square matrix with the levels as row and column names.
 #' @export
@@ -256,10 +259,23 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fit <- check_fbc(fit, "fit")
   gp <- match_choice(gp, c("simulator", "bias"), "gp")
   fac <- fit$scale$factors
-  if (!length(fac)) cli::cli_abort("{.arg fit} has no categorical input.")
-  input <- match_choice(input, names(fac), "input")
+  src <- fit$scale$source
+  own <- isTRUE(fit$scale$sourceBias)
+  if (!length(fac) && !own) cli::cli_abort("{.arg fit} has no categorical input.")
+  input <- match_choice(input, c(names(fac), if (own) src$name), "input")
   if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
+  }
+  if (own && identical(input, src$name)) {
+    # the field data sets' biases (sourceBias = "own"): rhoD
+    if (gp != "bias") {
+      cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
+    }
+    draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
+    L <- length(src$levels)
+    acc <- matrix(0, L, L)
+    for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L, draws[d, ])[[1]]
+    return(matrix(acc / nrow(draws), L, L, dimnames = list(src$levels, src$levels)))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
   L <- vapply(fac, function(f) length(f$levels), integer(1))

@@ -14,7 +14,9 @@
 #            "noise" (one per measurement-error group of the field data:
 #            outputs x sources, see R/factors.R), "levels" (the canonical
 #            partial correlations of the categorical inputs' levels,
-#            L (L - 1) / 2 per input with L levels), "one"
+#            L (L - 1) / 2 per input with L levels), "sources" (the
+#            partial correlations between the field data sets' biases when
+#            each has its own: L (L - 1) / 2 for L data sets), "one"
 #   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
 #   walk     the scale its random walk runs on: "identity", "log",
 #            "logit12" (logit of x - 1), "atanh" (Fisher's z)
@@ -31,16 +33,16 @@
 #            parameters under "none", muB (the bias mean) none under the
 #            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
 model_classes <- data.frame(
-  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
-  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "one", "one", "one", "noise", "one"),
-  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "positive", "positive", "positive", "positive", "real"),
-  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "log", "log", "log", "log", "identity"),
-  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
-  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
-  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
-  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", ""),
+  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
+  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one"),
+  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real"),
+  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity"),
+  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
+  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
   models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp",
-             "gp sgasp", "sgasp", "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
+             "gp sgasp", "gp sgasp", "sgasp", "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
   stringsAsFactors = FALSE
 )
 
@@ -92,9 +94,9 @@ discrepancy_having <- function(cls) {
 # inputs under the discrepancy model `discrepancy`, with `noise`
 # measurement-error groups (named by class, in the table's order; the bias
 # classes have none without a bias).
-class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
+class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L) {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
-         levels = levels)
+         levels = levels, sources = sources)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
   stats::setNames(n, model_classes$class)
@@ -102,8 +104,9 @@ class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
 
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
-param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels)
+param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                           sources = 0L) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -111,8 +114,9 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
 
 # Parameter names in the order of phi: the class name, with an index when
 # the class expands over inputs (or over several noise groups).
-param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels)
+param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                         sources = 0L) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     if (sizes[i] == 0L) character(0)
@@ -122,8 +126,9 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
 }
 
 # The class of each parameter of phi.
-param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
-  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels))
+param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                            sources = 0L) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources))
 }
 
 # The classes that are not parameters for these correlation families: the
@@ -135,8 +140,9 @@ absent_classes <- function(kernS, kernB) {
 
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
-layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
-  idx <- param_indices(p, q, discrepancy, noise, levels)
+layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                          sources = 0L) {
+  idx <- param_indices(p, q, discrepancy, noise, levels, sources)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -150,15 +156,28 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L) {
 # the discrepancy model (discrepancy_codes), the layout of phi and, with
 # several measurement-error groups, each field row's group (`noise`,
 # 1-based: sigma2E has max(noise) entries) and, with categorical inputs,
-# their indicator columns (`levels`, model_levels()).
+# their indicator columns (`levels`, model_levels()) and, with a bias per
+# field data set, each field row's data set and their number (`source`:
+# list(codes, L), 1-based codes; the bias classes take it only with a bias).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
-                           vecchia = NULL, noise = NULL, levels = NULL) {
+                           vecchia = NULL, noise = NULL, levels = NULL, source = NULL) {
+  if (discrepancy == "none") source <- NULL
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
-    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels)),
+    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
+                 source_count(source)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),
-    if (!is.null(levels)) list(levels = levels))
+    if (!is.null(levels)) list(levels = levels),
+    if (!is.null(source)) list(source = as.integer(source$codes),
+                               sourceLevels = as.integer(source$L)))
+}
+
+# The number of partial correlations between the field data sets' biases
+# (class rhoD), from list(codes, L) or a compiled model.
+source_count <- function(source) {
+  L <- source$sourceLevels %||% source$L
+  if (is.null(L)) 0L else as.integer(L * (L - 1L) / 2L)
 }
 
 # The number of measurement-error groups of a compiled model.
@@ -201,8 +220,9 @@ level_count <- function(levels) {
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
                          algebra = 0L,
                          model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra),
-                         noise = integer()) {
-  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise))
+                         noise = integer(), source = integer()) {
+  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise),
+                 as.integer(source))
 }
 
 .loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,

@@ -99,6 +99,9 @@ param_labels <- function(x, vars) {
   lev <- level_labels(x$scale$factors)
   rho <- ok & cls %in% c("rhoS", "rhoB") & k <= length(lev)
   out[rho] <- paste0(vars[rho], " (", lev[k[rho]], ")")
+  src <- level_labels(if (isTRUE(x$scale$sourceBias)) list(x$scale$source))
+  rd <- ok & cls == "rhoD" & k <= length(src)
+  out[rd] <- paste0(vars[rd], " (", src[k[rd]], ")")
   stats::setNames(out, vars)
 }
 

@@ -50,8 +50,15 @@ print.fbc <- function(x, digits = 3, ...) {
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", ")))
-  if (!is.null(sc$source)) cat(sprintf("  field data sets (%s): %s\n", sc$source$name,
-                                       paste(sc$source$levels, collapse = ", ")))
+  if (!is.null(sc$source)) {
+    own <- if (isTRUE(sc$sourceBias)) {
+      lab <- level_labels(list(sc$source))
+      sprintf("; a bias each, correlated by %s",
+              paste0("rhoD", seq_along(lab), " (", sub("^[^:]*: ", "", lab), ")", collapse = ", "))
+    } else ""
+    cat(sprintf("  field data sets (%s): %s%s\n", sc$source$name,
+                paste(sc$source$levels, collapse = ", "), own))
+  }
   if (!is.null(sc$noiseLabels)) {
     cat(sprintf("  measurement error: %s\n", paste0("sigma2E", seq_along(sc$noiseLabels), " = ",
                                                     sc$noiseLabels, collapse = ", ")))

@@ -264,6 +264,11 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #'   canonical partial correlations, in `(-1, 1)`, \eqn{L(L-1)/2} per input
 #'   with \eqn{L} levels (with two levels, the correlation itself). Default
 #'   uniform on `(-1, 1)`, starting at 0 (levels uncorrelated).
+#' @param rhoDDist,rhoDInit,rhoDP1,rhoDP2 With `sourceBias = "own"` in
+#'   [calibrate()], the correlation between the field data sets' biases:
+#'   its canonical partial correlations, as for `rhoB` (one for two data
+#'   sets). Default uniform on `(-1, 1)`; `rhoDDist = "fixed", rhoDInit = 0`
+#'   makes the biases independent.
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
@@ -281,7 +286,8 @@ set_hyperPriors <- function(
     muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1,
     lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5,
     rhoSDist = "uniform", rhoSInit = 0, rhoSP1 = -1, rhoSP2 = 1,
-    rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1) {
+    rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1,
+    rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1) {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()

@@ -130,9 +130,10 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # initial values on the sampler's scale and the initial proposal SDs. The
 # classes without parameters under `discrepancy` have no prior.
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
-                         levels = NULL, call = parent.frame()) {
+                         levels = NULL, source = NULL, call = parent.frame()) {
   nLev <- level_count(levels)
-  sizes <- class_sizes(p, q, discrepancy, noise, nLev)
+  nSrc <- if (discrepancy == "none") 0L else source_count(source)
+  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -188,13 +189,14 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q, discrepancy, noise, nLev)
-  cls_of <- param_class_of(p, q, discrepancy, noise, nLev)
+  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc)
+  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
        model = compiled_model(p, q, discrepancy = discrepancy,
-                              noise = if (noise > 1L) seq_len(noise), levels = levels))
+                              noise = if (noise > 1L) seq_len(noise), levels = levels,
+                              source = source))
 }
 
 # One log-density function per parameter, in the units it is reported in.

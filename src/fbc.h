@@ -61,7 +61,8 @@ enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
 // hands the offsets and lengths over by name (read_model()).
 enum ParamClass {
   PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
-  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_RHOS, PC_RHOB, PC_COUNT
+  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_RHOS, PC_RHOB, PC_RHOD,
+  PC_COUNT
 };
 
 // Where each class lives in phi: offset[c], length[c] (0-based), and for
@@ -91,6 +92,11 @@ struct Model {
   int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
   std::vector<LevelInput> levels;  // the categorical inputs, if any
+  // a bias per field data set: each field row's data set (0-based; empty:
+  // one bias for all) among sourceL, whose biases the bias GP correlates by
+  // a level correlation from the partial correlations rhoD
+  std::vector<int> source;
+  int sourceL = 0;
   // the measurement-error group of each field row (0-based; empty: one
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
@@ -160,6 +166,13 @@ void level_corr(const std::vector<LevelInput>& in, const double* z,
 void level_scale(const std::vector<LevelInput>& in, const std::vector<arma::mat>& C,
                  const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower,
                  int rows = -1);
+// The level (0-based) of row i of X for categorical input f.
+int level_of(const arma::mat& X, arma::uword i, const LevelInput& f);
+// out(i, j) *= C[a[i], b[j]] for the L x L level correlation C of the
+// partial correlations z (the field data sets' biases), over out's rows and
+// columns (lower: only i >= j).
+void source_scale(int L, const double* z, const int* a, const int* b, arma::mat& out,
+                  bool lower);
 // The same with C computed from z first; nothing without categorical inputs.
 void level_scale(const std::vector<LevelInput>& in, const double* z, const arma::mat& X,
                  const arma::mat& Y, arma::mat& out, bool lower);
@@ -226,7 +239,7 @@ public:
   int n, m, p, q, d;
   Layout layout;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB, iLambdaZ;
-  int iRhoS, iRhoB;                 // the level correlations' partial correlations
+  int iRhoS, iRhoB, iRhoD;          // the level correlations' partial correlations
   std::vector<LevelInput> levels;   // the categorical inputs (none: empty)
   bool bias;                // the model has a bias GP (KOH or S-GaSP)
   bool biasMean;            // ... with a mean muB (KOH)
@@ -260,7 +273,7 @@ public:
   // field target's measurement error is that of group noise[c] (0-based;
   // null: group 0).
   virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var,
-                         const int* noise = nullptr) = 0;
+                         const int* noise = nullptr, const int* source = nullptr) = 0;
   // The held-out predictive of the simulator runs from the simulator GP
   // alone (covariance sigma2S Ds, scaled space) at the current state, one
   // fold of 0-based runs at a time (heldout.cpp); false if a fold's block
@@ -297,7 +310,7 @@ public:
   void reject() override;
   void muBQuadratic(double& aa, double& ab) const override;
   void condition(const arma::mat& Xnew, int type, double* mean, double* var,
-                 const int* noise = nullptr) override;
+                 const int* noise = nullptr, const int* source = nullptr) override;
   bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
                arma::vec& var) override;
   void fieldLoo(const std::vector<std::vector<int> >& groups,
@@ -314,6 +327,8 @@ protected:
   arma::mat Xu_;           // ... and their values (nu x p)
   std::vector<int> grp_;   // field row i is distinct row grp_[i]
   std::vector<int> noise_; // ... and in measurement-error group noise_[i]
+  int sourceL_ = 0;        // data sets with a bias each (0: one bias)
+  std::vector<int> srcU_;  // ... and the data set of each distinct row
 
   // The simulator algebra, at the proposal (scratch buffers):
   // update what t touches, setting ldDs = log|Ds| and zz = ys' Ds^-1 ys
@@ -349,7 +364,8 @@ private:
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
   // the bias's correlation with new inputs (see model.cpp)
-  void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const;
+  void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
+                 const int* source = nullptr) const;
   arma::mat Bz_, Wz_;  // S-GaSP workspaces
 
 protected:
@@ -424,8 +440,19 @@ protected:
                   std::vector<arma::mat>& QBB) override;
 
 private:
+  void split_levels();
   ProductDesign dz_;
   arma::mat Y_;                      // ys as an I x J matrix
+  // When the experimental settings Xg are themselves every combination of
+  // T level tuples of the categorical inputs and R numeric settings, Rx =
+  // Ct (x) Rn up to the order of Xg's rows (kronecker.cpp): setting k is
+  // tuple tk_[k] at numeric setting rk_[k]; Xt_ (T x p) holds a setting of
+  // each tuple at one numeric setting, Xn_ (R x p) each numeric setting at
+  // one tuple.
+  bool split_ = false;
+  std::vector<int> tk_, rk_;
+  arma::mat Xt_, Xn_, Ct_, Rn_, Uc_, Un_;
+  arma::vec lc_, ln_;
   Buf2<arma::mat> Ux_, Ut_, Ax_, Yt_;
   Buf2<arma::vec> lx_, lt_, c_, ct_, w_, g_;
   arma::mat Rx_, Rt_, Rxf_, An_;     // workspaces

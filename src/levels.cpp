@@ -50,7 +50,7 @@ void level_corr(const std::vector<LevelInput>& in, const double* z,
 }
 
 // The level (0-based) of row i of X for input f, read off its indicators.
-static inline int level_of(const arma::mat& X, arma::uword i, const LevelInput& f) {
+int level_of(const arma::mat& X, arma::uword i, const LevelInput& f) {
   if (f.ncol == 1) return X.at(i, f.col) > 0.5 ? 1 : 0;
   int best = 0;
   for (int a = 1; a < f.ncol; ++a)
@@ -75,6 +75,20 @@ void level_scale(const std::vector<LevelInput>& in, const std::vector<arma::mat>
       const int* af = a.data() + f * nr;
       for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] *= cf[af[i]];
     }
+  }
+}
+
+void source_scale(int L, const double* z, const int* a, const int* b, arma::mat& out,
+                  bool lower) {
+  std::vector<LevelInput> in(1);
+  in[0].L = L;
+  std::vector<arma::mat> C;
+  level_corr(in, z, C);
+  const arma::mat& C0 = C[0];
+  for (arma::uword j = 0; j < out.n_cols; ++j) {
+    const double* cj = C0.colptr(b[j]);
+    double* col = out.colptr(j);
+    for (arma::uword i = lower ? j : 0; i < out.n_rows; ++i) col[i] *= cj[a[i]];
   }
 }
 

@@ -32,8 +32,8 @@ all_kernels <- c("powexp", "gaussian", "matern32", "matern52")
 # Unpacks phi (scaled space, kappa on [0, 1]) into named pieces, one per
 # parameter class, at the positions FBC's model description gives (under
 # discrepancy "none" the bias classes are empty).
-unpack_phi <- function(phi, p, q, discrepancy = "gp", G = 1L, nLev = 0L) {
-  lapply(FBC:::param_indices(p, q, discrepancy, G, nLev), function(i) phi[i])
+unpack_phi <- function(phi, p, q, discrepancy = "gp", G = 1L, nLev = 0L, nSrc = 0L) {
+  lapply(FBC:::param_indices(p, q, discrepancy, G, nLev, nSrc), function(i) phi[i])
 }
 
 # The levels' correlation of a categorical input with L levels from its
@@ -83,15 +83,27 @@ level_factor <- function(X, Y, levels, z) {
 # inputs Xf: R(A, B) for the KOH bias; for the S-GaSP (Gu and Wang 2018) the
 # discretized kernel on the nu distinct field inputs U,
 #   Kz(A, B) = R(A, B) - R(A, U) (R(U, U) + nu / lambdaZ I)^-1 R(U, B).
-bias_kernel_dense <- function(A, B, Xf, th, kernB, discrepancy, levels = NULL) {
-  R <- function(X, Y) dense_corr(X, Y, th$thetaB, th$alphaB, kernB) * level_factor(X, Y, levels, th$rhoB)
+#
+# With a bias per field data set (`srcL` data sets) the last column of A, B
+# and Xf holds each row's data set (1-based), and the kernel is multiplied
+# by the data sets' level correlation C_D (partial correlations rhoD):
+#   R((x, s), (x', s')) = R(x, x') C_D[s, s'].
+bias_kernel_dense <- function(A, B, Xf, th, kernB, discrepancy, levels = NULL, srcL = 0L) {
+  R <- function(X, Y) {
+    X <- as.matrix(X); Y <- as.matrix(Y)
+    p <- ncol(X) - (srcL > 0)
+    out <- dense_corr(X[, seq_len(p), drop = FALSE], Y[, seq_len(p), drop = FALSE], th$thetaB,
+                      th$alphaB, kernB) * level_factor(X, Y, levels, th$rhoB)
+    if (srcL > 0) out <- out * level_corr_plain(srcL, th$rhoD)[X[, p + 1], Y[, p + 1], drop = FALSE]
+    out
+  }
   if (discrepancy != "sgasp") return(R(A, B))
   U <- unique(as.matrix(Xf))
   nu <- nrow(U)
   R(A, B) - R(A, U) %*% solve(R(U, U) + nu / th$lambdaZ * diag(nu), R(U, B))
 }
-bias_corr_dense <- function(Xf, th, kernB, discrepancy, levels = NULL) {
-  bias_kernel_dense(Xf, Xf, Xf, th, kernB, discrepancy, levels)
+bias_corr_dense <- function(Xf, th, kernB, discrepancy, levels = NULL, srcL = 0L) {
+  bias_kernel_dense(Xf, Xf, Xf, th, kernB, discrepancy, levels, srcL)
 }
 
 # The full (n + m) x (n + m) covariance of y = (yf, ys) (vignette 2.4).
@@ -99,9 +111,10 @@ bias_corr_dense <- function(Xf, th, kernB, discrepancy, levels = NULL) {
 # discrepancy "none": no bias block (y_f = eta(x, kappa) + eps); "sgasp":
 # the S-GaSP bias block (bias_corr_dense()).
 dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "powexp",
-                      discrepancy = "gp", noise = NULL, levels = NULL) {
+                      discrepancy = "gp", noise = NULL, levels = NULL, source = NULL) {
   n <- nrow(Xf); m <- nrow(Xs); p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels))
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels),
+                   FBC:::source_count(source))
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   X <- rbind(Xk, Xs)
   C <- th$sigma2S * dense_corr(X, X, th$thetaS, th$alphaS, kernS) *
@@ -111,17 +124,21 @@ dense_cov <- function(Xf, Xs, phi, nugget = 1e-6, kernS = "powexp", kernB = "pow
   # measurement error: sigma2E of each row's group (noise: 1-based groups)
   C[f, f] <- C[f, f] + diag(th$sigma2E[if (is.null(noise)) rep(1L, n) else noise], n)
   if (discrepancy != "none") {
-    C[f, f] <- C[f, f] + th$sigma2B * bias_corr_dense(Xf, th, kernB, discrepancy, levels)
+    Xb <- if (is.null(source)) Xf else cbind(Xf, source$codes)
+    C[f, f] <- C[f, f] + th$sigma2B * bias_corr_dense(Xb, th, kernB, discrepancy, levels,
+                                                      if (is.null(source)) 0L else source$L)
   }
   C
 }
 
 # Gaussian log-likelihood of (yf, ys) via one dense Cholesky factor.
 dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
-                         kernB = "powexp", discrepancy = "gp", noise = NULL, levels = NULL) {
+                         kernB = "powexp", discrepancy = "gp", noise = NULL, levels = NULL,
+                         source = NULL) {
   p <- ncol(Xf); q <- ncol(Xs) - p
-  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels))
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise, levels)
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels),
+                   FBC:::source_count(source))
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise, levels, source)
   r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)  # S-GaSP: mean 0
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)
@@ -141,8 +158,8 @@ random_koh_data <- function(n, m, p, q, seed) {
 # classes Gamma(2, 2) (+ 0.05 for the variances), smoothness on [1.1, 1.95],
 # the bias mean N(0, 1), the S-GaSP scale 20 x Gamma(2, 2)); no bias
 # classes under discrepancy "none".
-random_phi <- function(p, q, discrepancy = "gp", G = 1L, nLev = 0L) {
-  idx <- FBC:::param_indices(p, q, discrepancy, G, nLev)
+random_phi <- function(p, q, discrepancy = "gp", G = 1L, nLev = 0L, nSrc = 0L) {
+  idx <- FBC:::param_indices(p, q, discrepancy, G, nLev, nSrc)
   phi <- numeric(sum(lengths(idx)))
   for (cls in names(idx)) {
     k <- length(idx[[cls]])

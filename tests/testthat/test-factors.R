@@ -90,8 +90,13 @@ test_that("with categorical inputs the likelihood, moves and predictions equal t
                      if (product) "Kronecker" else "dense")
     idx <- FBC:::param_indices(p, q, disc, 1L, 3L)
     phis <- t(replicate(2, random_phi(p, q, disc, nLev = 3L)))
-    phis[, idx$thetaS[2:4]] <- 0        # the indicators, as calibrate() holds them
-    if (disc != "none") phis[, idx$thetaB[2:4]] <- 0
+    # the indicators' theta as calibrate() holds them (0), or not: on the
+    # product design the Kronecker algebra splits Rx into the level tuples'
+    # and the numeric settings' factors, exact for any theta (separability)
+    if (!product) {
+      phis[, idx$thetaS[2:4]] <- 0
+      if (disc != "none") phis[, idx$thetaB[2:4]] <- 0
+    }
     # moves of the levels' partial correlations alone (the caches they touch)
     step <- phis[c(2, 2), ]
     step[1, idx$rhoS] <- c(-0.7, 0.2, 0.5)
@@ -254,4 +259,86 @@ test_that("several field data sets: each its own noise; refusals name the column
   f0 <- field
   invisible(predict(fit, data.frame(x = 0.3, out = "conc", lab = "A")))
   expect_identical(field, f0)
+})
+
+test_that("a bias per field data set: likelihood, moves and predictions equal the plain-R ones", {
+  # three data sets, two of them observed at the same x (distinct for the
+  # bias, the same for the simulator); the bias kernel is
+  # R(x, x') C_D[s, s'] (helper-dense.R)
+  for (disc in c("gp", "sgasp")) for (product in c(FALSE, TRUE)) {
+    d <- level_data(40 + product, product)
+    src <- list(codes = c(1L, 2L, 3L, 1L, 2L, 3L, 2L), L = 3L)
+    d$Xf[2, ] <- d$Xf[1, ]   # the same inputs in data sets 1 and 2
+    p <- 4; q <- 1
+    idx <- FBC:::param_indices(p, q, disc, 1L, 3L, 3L)
+    expect_length(idx$rhoD, 3L)
+    phis <- t(replicate(2, random_phi(p, q, disc, nLev = 3L, nSrc = 3L)))
+    step <- phis[2, , drop = FALSE]
+    step[1, idx$rhoD] <- c(0.7, -0.2, 0.4)   # a move of rhoD alone
+    phis <- rbind(phis, step)
+    ref <- apply(phis, 1, function(phi) {
+      dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = disc, levels = d$lev,
+                   source = src)
+    })
+    for (alg in c(0L, 1L)) {
+      model <- FBC:::compiled_model(p, q, algebra = alg, discrepancy = disc, levels = d$lev,
+                                    source = src)
+      expect_equal(.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = model),
+                   ref, tolerance = 1e-8)
+      Xn <- cbind(c(0.2, 0.7, 0.4), diag(3)[c(3, 1, 2), ])
+      for (type in c(1L, 2L, 4L)) {
+        got <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, type, 1e-6, 2L,
+                            model = model, source = c(2L, 3L, 1L))
+        for (i in 1:2) {
+          want <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn,
+                                c("field", "mean", "simulator", "bias")[type], discrepancy = disc,
+                                levels = d$lev, source = src, sourceNew = c(2L, 3L, 1L))
+          expect_equal(got$mean[, i], want$mean, tolerance = 1e-8)
+          expect_equal(got$var[, i], want$var, tolerance = 1e-8)
+        }
+      }
+      expect_error(.fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, 2L, 1e-6, 2L,
+                                model = model), "needs its field data set")
+    }
+  }
+  # with rhoD at 1 the biases coincide: the likelihood is the shared bias's
+  d <- level_data(42)
+  src <- list(codes = c(1L, 2L, 1L, 2L, 1L, 2L, 2L), L = 2L)
+  phi <- random_phi(4, 1, nLev = 3L, nSrc = 1L)
+  idx <- FBC:::param_indices(4, 1, "gp", 1L, 3L, 1L)
+  phi[idx$rhoD] <- 1
+  own <- FBC:::compiled_model(4, 1, levels = d$lev, source = src)
+  shared <- FBC:::compiled_model(4, 1, levels = d$lev)
+  expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = own),
+               .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi[-idx$rhoD], 1e-6, model = shared),
+               tolerance = 1e-8)
+})
+
+test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
+  pr <- two_outputs(seed = 3)
+  field <- rbind(cbind(pr$field, lab = "A"),
+                 transform(pr$field[pr$field$out == "conc", ], y = y + 0.3, lab = "B"))
+  set.seed(12)
+  fit <- calibrate(pr$sim, field, output = "out", source = "lab", sourceBias = "own",
+                   nMCMC = 300, nBurn = 150, nChains = 1, kernelS = "matern52",
+                   kernelB = "matern52")
+  expect_true("rhoD1" %in% colnames(fit$Phi))
+  expect_true(all(abs(fit$Phi[, "rhoD1"]) < 1))
+  expect_identical(fit$spec$model$source, c(rep(1L, 20), rep(2L, 10)))
+  expect_output(print(fit), "a bias each, correlated by rhoD1 \\(B~A\\)")
+  C <- level_correlation(fit, "lab", "bias")
+  expect_equal(C[1, 2], mean(fit$Phi[, "rhoD1"]), tolerance = 1e-12)
+  # the same inputs predict differently in the two data sets
+  nd <- data.frame(x = c(0.3, 0.3), out = "conc", lab = c("A", "B"))
+  pb <- predict(fit, nd, type = "bias")
+  expect_false(isTRUE(all.equal(pb$pred[1], pb$pred[2])))
+  ps <- predict(fit, nd, type = "simulator")
+  expect_equal(ps$pred[1], ps$pred[2])
+  expect_silent(predict(fit, data.frame(x = 0.3, out = "conc"), type = "simulator"))
+  expect_snapshot(error = TRUE, predict(fit, data.frame(x = 0.3, out = "conc"), type = "mean"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field, output = "out", sourceBias = "own"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out", source = "lab",
+                                          sourceBias = "own", discrepancy = "none"))
+  pp <- ppc_field(fit, ndraws = 5)
+  expect_equal(dim(pp$yrep), c(5L, 30L))
 })
