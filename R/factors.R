@@ -272,10 +272,7 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
       cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
     }
     draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
-    L <- length(src$levels)
-    acc <- matrix(0, L, L)
-    for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L, draws[d, ])[[1]]
-    return(matrix(acc / nrow(draws), L, L, dimnames = list(src$levels, src$levels)))
+    return(mean_level_corr(draws, src$levels))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
   L <- vapply(fac, function(f) length(f$levels), integer(1))
@@ -284,9 +281,14 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   k <- match(input, names(fac))
   pos <- seq_len(L[[k]] * (L[[k]] - 1L) / 2L) + end[[k]] - L[[k]] * (L[[k]] - 1L) / 2L
   draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
-  acc <- matrix(0, L[[k]], L[[k]])
-  for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L[[k]], draws[d, ])[[1]]
-  out <- acc / nrow(draws)
-  dimnames(out) <- list(fac[[k]]$levels, fac[[k]]$levels)
-  out
+  mean_level_corr(draws, fac[[k]]$levels)
+}
+
+# The level correlation averaged over the rows of `draws` (each row one
+# draw's partial correlations), named by `levels`.
+mean_level_corr <- function(draws, levels) {
+  L <- length(levels)
+  acc <- matrix(0, L, L)
+  for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L, draws[d, ])[[1]]
+  matrix(acc / nrow(draws), L, L, dimnames = list(levels, levels))
 }
