@@ -275,6 +275,12 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
     return(mean_level_corr(draws, src$levels))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
+  if (!any(fit$spec$classes == cls)) {
+    cli::cli_abort(c(
+      "{.arg fit} has no level correlations ({.field {cls}}): it was made by a version of FBC that correlated levels through the indicators' {.field {if (gp == 'simulator') 'thetaS' else 'thetaB'}}.",
+      i = "Refit it with this version to get the levels' correlation."
+    ))
+  }
   L <- vapply(fac, function(f) length(f$levels), integer(1))
   # this input's partial correlations among the class's (inputs in order)
   end <- cumsum(L * (L - 1L) / 2L)
