@@ -166,7 +166,11 @@
 #' its own simulator runs' mean and sd, and has its own measurement-error
 #' variance (`sigma2E1`, `sigma2E2`, ...); the simulator GP and the bias
 #' correlate the outputs through the output's level correlation, so all
-#' outputs inform the shared \eqn{\kappa}. When every run gives every
+#' outputs inform the shared \eqn{\kappa}. The bias is one GP with the
+#' output as an input rather than a separate bias per output: its learned
+#' correlation between outputs (`rhoB`) holds separate biases (at 0) and one
+#' common bias (at 1) as special cases, so the data choose, with one set of
+#' bias hyperparameters. When every run gives every
 #' output at the same experimental settings the design is still a product
 #' design and the Kronecker algebra applies.
 #'
