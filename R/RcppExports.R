@@ -17,6 +17,10 @@
     .Call(`_FBC_sim_algebra`, Xs, p, algebra)
 }
 
+.level_corr <- function(L, z) {
+    .Call(`_FBC_level_corr_r`, L, z)
+}
+
 .fbc_loo_c <- function(Xf, yf, Xs, ys, phis, nugget, group, model) {
     .Call(`_FBC_fbc_loo`, Xf, yf, Xs, ys, phis, nugget, group, model)
 }
@@ -25,8 +29,8 @@
     .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }
 
-.fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise) {
-    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise)
+.fbc_predict_c <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise, source) {
+    .Call(`_FBC_fbc_predict`, Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise, source)
 }
 
 .log_prior <- function(x, family, p1, p2) {

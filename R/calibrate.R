@@ -142,36 +142,48 @@
 #' A factor or character column of both `sim` and `field` (data frames) is a
 #' categorical experimental input. Its levels are those of `sim`'s column
 #' (a level of `field` or of [predict.fbc()]'s `newdata` that `sim` does not
-#' have is refused), and it enters both GPs through indicator columns, one
-#' for two levels (`name[level2]`) and one per level from three
-#' (`name[level]`), which appear among the inputs (and in the names of
-#' `thetaS`'s and `thetaB`'s columns' order). Two levels \eqn{a \ne b} are
-#' then correlated by \eqn{r(1; \theta_{[a]}) r(1; \theta_{[b]})}: one
-#' exchangeable correlation for two levels, all three pairwise correlations
-#' for three levels, a product of per-level factors for more (positive
-#' definite, learned and sampled like every \eqn{\theta}; the smoothness
-#' \eqn{\alpha} of an indicator is held at 2). [level_correlation()] gives
-#' the correlation matrix between levels. These correlations are all
-#' positive. With three or more levels, a level nearly uncorrelated with the
-#' others (its \eqn{\theta} large) leaves only the sum of the other
-#' levels' \eqn{\theta} determined: the chains then mix slowly along that
-#' ridge, and R-hat of those \eqn{\theta} says so (a three-output problem
-#' in the package's benchmarks did not converge in 13 CPU minutes; see
-#' `inst/bench/RESULTS-outputs.md`).
+#' have is refused). Its levels are read into indicator columns, one for
+#' two levels (`name[level2]`) and one per level from three
+#' (`name[level]`), which appear among the inputs but enter neither GP's
+#' kernel (their \eqn{\theta} is held at 0, and they are not in `Phi`).
+#' Each GP multiplies its correlation by the levels' correlation instead:
+#' \eqn{R((x, a), (x', b)) = R(x, x') C_{ab}}, with \eqn{C} an
+#' unstructured \eqn{L \times L} correlation matrix, learned and sampled
+#' like every hyperparameter through its \eqn{L(L-1)/2} canonical partial
+#' correlations (`rhoS1`, ... for the simulator GP, `rhoB1`, ... for the
+#' bias; see [set_hyperPriors()]): for two levels the correlation itself;
+#' for three, the correlations of levels 2 and 3 with level 1, then the
+#' partial correlation of levels 2 and 3 given level 1. \eqn{C} is positive
+#' definite by construction, and its correlations may be negative (two
+#' outputs that move in opposite directions). [level_correlation()] gives
+#' its posterior mean. An unstructured correlation has \eqn{L(L-1)/2}
+#' parameters: for a categorical input with many levels, expect slower
+#' mixing. (Version 0.1.x used a product of one positive factor per level
+#' instead; see `inst/bench/RESULTS-outputs.md` for why it was replaced.)
 #'
 #' `output = "name"` names such a column that says which output each row of
 #' `sim` and `field` holds (long format). Each output is standardised by
 #' its own simulator runs' mean and sd, and has its own measurement-error
 #' variance (`sigma2E1`, `sigma2E2`, ...); the simulator GP and the bias
-#' correlate the outputs through the output's indicator columns, so all
-#' outputs inform the shared \eqn{\kappa}. When every run gives every
+#' correlate the outputs through the output's level correlation, so all
+#' outputs inform the shared \eqn{\kappa}. The bias is one GP with the
+#' output as an input rather than a separate bias per output: its learned
+#' correlation between outputs (`rhoB`) holds separate biases (at 0) and one
+#' common bias (at 1) as special cases, so the data choose, with one set of
+#' bias hyperparameters. When every run gives every
 #' output at the same experimental settings the design is still a product
 #' design and the Kronecker algebra applies.
 #'
 #' `source = "name"` names a factor column of `field` only: several field
 #' data sets sharing \eqn{\kappa}, each with its own measurement-error
 #' variance (the groups are the output x data set combinations present).
-#' The bias is shared by the data sets. `print()` lists the groups.
+#' The bias is shared by the data sets, or with `sourceBias = "own"` each
+#' data set has its own: the bias GP multiplies its correlation by a
+#' correlation between the data sets (`rhoD1`, ..., an unstructured one as
+#' for a categorical input), so the data show how alike the biases are;
+#' [predict.fbc()] then needs the data set of each new point for every type
+#' but `"simulator"`, and [level_correlation()] gives the biases'
+#' correlation (`input` = the data set column). `print()` lists the groups.
 #'
 #' @section Sampler:
 #' Both samplers are exact adaptive Metropolis-within-Gibbs: every move
@@ -441,6 +453,13 @@
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
 #'   belongs to; each has its own measurement-error variance.
+#' @param sourceBias With `source`: `"shared"` (default), one bias for all
+#'   field data sets; `"own"`, a bias per data set: the bias GP correlates
+#'   the data sets' biases by a correlation learned like every
+#'   hyperparameter (`rhoD1`, ...: at 1 the biases coincide, at 0 they are
+#'   independent, as in Gu, Anderson and McPhillips' multi-source
+#'   calibration; `set_hyperPriors(rhoDDist = "fixed", rhoDInit = 0)` holds
+#'   them independent).
 #' @param converge `FALSE` (the default) runs `nMCMC` sweeps per chain.
 #'   `TRUE`, or a rule from [until_converged()], runs `nMCMC` sweeps and then
 #'   more, a few hundred at a time, until every R-hat is below 1.01 and every
@@ -503,7 +522,8 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = 20, checkpoint = NULL,
-                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL) {
+                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL,
+                      sourceBias = c("shared", "own")) {
   call <- match.call()
   fac <- read_factors(sim, field, output, source)
   sim <- check_data_matrix(fac$sim, "sim", min_cols = 2L, min_rows = 3L)
@@ -538,7 +558,19 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
     )
   }
+  sourceBias <- match_choice(sourceBias, c("shared", "own"), "sourceBias")
+  if (sourceBias == "own" && (is.null(fac$source) || length(fac$source$levels) < 2L)) {
+    cli::cli_abort(c(
+      if (is.null(fac$source)) "{.code sourceBias = \"own\"} needs several field data sets, but no {.arg source} column was named." else
+        "{.code sourceBias = \"own\"} needs several field data sets, but the {.arg source} column has one.",
+      i = "Name the column of {.arg field} that says which data set each row belongs to with {.arg source}."
+    ))
+  }
+  biasSource <- if (sourceBias == "own") list(codes = fac$source$codes, L = length(fac$source$levels))
   discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy")
+  if (sourceBias == "own" && discrepancy == "none") {
+    cli::cli_abort("{.code sourceBias = \"own\"} gives each field data set its own bias, but {.code discrepancy = \"none\"} has no bias.")
+  }
   converge <- check_converge(converge)
   check_ceiling(converge, nMCMC)
   longest <- max(nMCMC, converge$maxMCMC)
@@ -557,12 +589,14 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB), kernelS, kernelB)
   hypers <- indicator_hypers(hypers, match(unlist(lapply(fac$factors, `[[`, "columns")),
                                            colnames(field)[-1]), p, q)
+  levels <- model_levels(fac$factors, colnames(field)[-1])
 
   units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
   scale <- fbc_scale(sim, p, named = cols$named, out = fac$outS)
   scale[c("factors", "output", "source", "noiseLabels")] <-
     list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
+  if (sourceBias == "own") scale$sourceBias <- TRUE
   inform_duplicated_runs(sim)
   warn_field_outside(sim, field, scale)
   dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
@@ -571,14 +605,15 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
     list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
   )
   check_kappa_design(kappaSpec, scale)
-  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise)
+  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels,
+                       source = biasSource)
   code <- algebra_code(algebra, dat$Xs, p)
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = code, discrepancy,
                                vecchia = if (code == 2L) {
                                  vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
                                                 neighbours, neighbours)
-                               }, noise = fac$noise)
+                               }, noise = fac$noise, levels = levels, source = biasSource)
 
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
@@ -596,6 +631,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   if (code == 2L) settings$neighbours <- neighbours
   if (!is.null(output)) settings$output <- output
   if (!is.null(source)) settings$source <- source
+  if (sourceBias == "own") settings$sourceBias <- sourceBias
   run <- NULL
   if (!is.null(checkpoint)) {
     # a directory holding this run's checkpoint continues it, with the
@@ -622,7 +658,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                      moves = moves, time = proc.time()[["elapsed"]] - t0,
                      checkpoint = checkpoint, algebra = algebra, simAlgebra = simAlgebra,
                      kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy,
-                     output = output, source = source)
+                     output = output, source = source, sourceBias = sourceBias)
     new_fbc_chains(results, dat, spec, scale, call, settings = settings)
   }
   run_rounds(starts, seeds, rep(nMCMC, nChains), converge, assemble, nBurn = nBurn,

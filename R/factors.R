@@ -4,19 +4,24 @@
 #
 # A categorical input (a factor or character column of both `sim` and
 # `field`: an experimental input) with levels l_1 .. l_L becomes indicator
-# columns, inputs like any other: one, [c = l_2], for two levels; one per
-# level, [c = l_a], for three or more. Every correlation family r then
-# correlates two levels a != b through those columns only:
-#   R_c(a, b) = r(1; theta_[a]) r(1; theta_[b])   (r(1; theta_[l_1]) = 1
-# with two levels), a product of one factor per level, each learned through
-# the thetaS (and thetaB) of its column: with two levels one exchangeable
-# correlation r(1; theta), with three all three pairwise correlations
-# (c_a c_b for three free c's), with more a structured one of L parameters
-# (Qian, Wu and Wu 2008 call such structures multiplicative). It is positive
-# definite by construction, needs no new kernel, and works with every
-# algebra (a product design over the levels stays one). A smoothness alpha
-# means nothing on an indicator (d^alpha = d for d in {0, 1}): it is held
-# at 2, not sampled.
+# columns: one, [c = l_2], for two levels; one per level, [c = l_a], for
+# three or more. They carry the level of each row (so product designs over
+# the levels stay product designs, and newdata is matched by level name),
+# but enter neither GP's separable kernel: their thetaS and thetaB are held
+# at 0 (alphaS and alphaB at 2) and left out of Phi. Each GP multiplies its
+# kernel instead by the levels' correlation,
+#   R((x, a), (x', b)) = R(x, x') C[a, b],
+# an unstructured L x L correlation matrix, positive definite by
+# construction from its L (L - 1) / 2 canonical partial correlations rhoS
+# (rhoB for the bias), each in (-1, 1) (src/levels.cpp). We chose the
+# unstructured correlation over a structured one: 0.1.x's product of one
+# factor per level (correlation f_a f_b, f in (0, 1]) could not express a
+# negative correlation between outputs and, with one level uncorrelated
+# with the others, left only the product of the others' factors determined
+# (the 3-output benchmark's chains did not converge; see
+# inst/bench/RESULTS-outputs.md). For two levels it is one exchangeable
+# correlation, now signed; with many levels the L (L - 1) / 2 parameters
+# grow quickly.
 #
 # Several outputs: `output` names a categorical input of both `sim` and
 # `field`. Besides being an input of both GPs (so the simulator GP and the
@@ -127,6 +132,21 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
        noiseLabels = if (length(ukey) > 1L) labels)
 }
 
+# What each partial correlation of the categorical inputs' levels (rhoS1,
+# rhoS2, ...; the same for rhoB) correlates, in order: "mat: b~a" for the
+# correlation of levels b and a, "mat: c~b | a" for the partial correlation
+# of c and b given a (column by column, as src/levels.cpp takes them).
+level_labels <- function(factors) {
+  unlist(lapply(factors, function(f) {
+    l <- f$levels
+    L <- length(l)
+    unlist(lapply(seq_len(L - 1L), function(j) {
+      given <- if (j > 1L) paste0(" | ", paste(l[seq_len(j - 1L)], collapse = ", ")) else ""
+      sprintf("%s: %s~%s%s", f$name, l[(j + 1L):L], l[j], given)
+    }))
+  }), use.names = FALSE)
+}
+
 # The indicator columns' names of a categorical input: one for two levels,
 # one per level from three.
 indicator_names <- function(nm, levs) {
@@ -189,10 +209,11 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
       check_levels(newdata[[s$name]], s$levels, s$name, "newdata", call = call)
       srcCodes <- match(as.character(newdata[[s$name]]), s$levels)
       newdata <- newdata[, names(newdata) != s$name, drop = FALSE]
-    } else if (type == "field") {
+    } else if (type == "field" || (isTRUE(scale$sourceBias) && type != "simulator")) {
       cli::cli_abort(c(
-        "{.code type = \"field\"} needs the field data set of each new point: {.arg newdata} has no column {.val {s$name}}.",
-        i = "Each data set has its own measurement error ({.val {s$levels}}); the other types do not depend on it."
+        "{.code type = \"{type}\"} needs the field data set of each new point: {.arg newdata} has no column {.val {s$name}}.",
+        i = if (isTRUE(scale$sourceBias)) "Each data set has its own bias ({.val {s$levels}}); only {.code type = \"simulator\"} does not depend on it." else
+          "Each data set has its own measurement error ({.val {s$levels}}); the other types do not depend on it."
       ), call = call)
     }
   }
@@ -206,7 +227,8 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
       cli::cli_abort("{.arg newdata} asks for the field at {.val {unique(lab[is.na(noise)])}}, a combination with no field data: its measurement error is unknown.", call = call)
     }
   }
-  list(newdata = newdata, noise = noise, output = outCodes)
+  list(newdata = newdata, noise = noise, output = outCodes,
+       source = if (isTRUE(scale$sourceBias) && type != "simulator") srcCodes else integer())
 }
 
 #' Correlation between the levels of a categorical input
@@ -217,7 +239,8 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 #' correlation parameters, averaged over the draws.
 #'
 #' @param fit An `fbc` object from [calibrate()] with a categorical input.
-#' @param input The input's name (a column of `sim` and `field`).
+#' @param input The input's name (a column of `sim` and `field`), or with
+#'   `sourceBias = "own"` the field data sets' column (`gp = "bias"`).
 #' @param gp `"simulator"` (default) or `"bias"`.
 #' @return A square matrix with the levels as row and column names.
 #' @export
@@ -236,27 +259,42 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fit <- check_fbc(fit, "fit")
   gp <- match_choice(gp, c("simulator", "bias"), "gp")
   fac <- fit$scale$factors
-  if (!length(fac)) cli::cli_abort("{.arg fit} has no categorical input.")
-  input <- match_choice(input, names(fac), "input")
-  f <- fac[[input]]
-  cls <- if (gp == "simulator") "thetaS" else "thetaB"
+  src <- fit$scale$source
+  own <- isTRUE(fit$scale$sourceBias)
+  if (!length(fac) && !own) cli::cli_abort("{.arg fit} has no categorical input.")
+  input <- match_choice(input, c(names(fac), if (own) src$name), "input")
   if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
   }
-  kern <- kernel_codes[[if (gp == "simulator") fit$settings$kernelS else fit$settings$kernelB]]
-  pos <- match(f$columns, fit$scale$names$inputs)
-  idx <- fit$spec$classes == cls
-  draws <- sampler_draws(fit)[, idx, drop = FALSE][, pos, drop = FALSE]
-  L <- length(f$levels)
-  # each level's indicator vector (level 1 has none with two levels)
-  ind <- t(vapply(f$levels, function(l) as.numeric(sub("^.*\\[(.*)\\]$", "\\1", f$columns) == l),
-                  numeric(length(pos))))
-  ind <- matrix(ind, nrow = L)
-  acc <- matrix(0, L, L)
-  for (d in seq_len(nrow(draws))) {
-    acc <- acc + .corr_matrix(ind, ind, draws[d, ], rep(2, length(pos)), kern)
+  if (own && identical(input, src$name)) {
+    # the field data sets' biases (sourceBias = "own"): rhoD
+    if (gp != "bias") {
+      cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
+    }
+    draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
+    return(mean_level_corr(draws, src$levels))
   }
-  out <- acc / nrow(draws)
-  dimnames(out) <- list(f$levels, f$levels)
-  out
+  cls <- if (gp == "simulator") "rhoS" else "rhoB"
+  if (!any(fit$spec$classes == cls)) {
+    cli::cli_abort(c(
+      "{.arg fit} has no level correlations ({.field {cls}}): it was made by a version of FBC that correlated levels through the indicators' {.field {if (gp == 'simulator') 'thetaS' else 'thetaB'}}.",
+      i = "Refit it with this version to get the levels' correlation."
+    ))
+  }
+  L <- vapply(fac, function(f) length(f$levels), integer(1))
+  # this input's partial correlations among the class's (inputs in order)
+  end <- cumsum(L * (L - 1L) / 2L)
+  k <- match(input, names(fac))
+  pos <- seq_len(L[[k]] * (L[[k]] - 1L) / 2L) + end[[k]] - L[[k]] * (L[[k]] - 1L) / 2L
+  draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
+  mean_level_corr(draws, fac[[k]]$levels)
+}
+
+# The level correlation averaged over the rows of `draws` (each row one
+# draw's partial correlations), named by `levels`.
+mean_level_corr <- function(draws, levels) {
+  L <- length(levels)
+  acc <- matrix(0, L, L)
+  for (d in seq_len(nrow(draws))) acc <- acc + .level_corr(L, draws[d, ])[[1]]
+  matrix(acc / nrow(draws), L, L, dimnames = list(levels, levels))
 }

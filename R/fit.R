@@ -206,7 +206,8 @@ fbc_problems <- function(x) {
     return(c(out, sprintf("`spec$model$discrepancy` must be a discrepancy code (%s).",
                           paste(sprintf("%d for %s", discrepancy_codes, names(discrepancy_codes)), collapse = ", "))))
   }
-  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model)))) {
+  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
+                                                   source_count(spec$model)))) {
     return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }

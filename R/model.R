@@ -12,10 +12,14 @@
 #            calibration input, q), "inputs" (one per simulator input,
 #            p + q: experimental then calibration), "experimental" (p),
 #            "noise" (one per measurement-error group of the field data:
-#            outputs x sources, see R/factors.R), "one"
-#   domain   "real", "positive" or "unit12" ([1, 2])
+#            outputs x sources, see R/factors.R), "levels" (the canonical
+#            partial correlations of the categorical inputs' levels,
+#            L (L - 1) / 2 per input with L levels), "sources" (the
+#            partial correlations between the field data sets' biases when
+#            each has its own: L (L - 1) / 2 for L data sets), "one"
+#   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
 #   walk     the scale its random walk runs on: "identity", "log",
-#            "logit12" (logit of x - 1)
+#            "logit12" (logit of x - 1), "atanh" (Fisher's z)
 #   sd0      initial proposal SD on that scale
 #   move     the move of sampler = "blocks" it belongs to: "each" (one move
 #            per parameter, repeated), "sim", "bias" (joint moves of the
@@ -29,16 +33,16 @@
 #            parameters under "none", muB (the bias mean) none under the
 #            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
 model_classes <- data.frame(
-  class  = c("kappa", "thetaS", "alphaS", "thetaB", "alphaB", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
-  over   = c("calibration", "inputs", "inputs", "experimental", "experimental", "one", "one", "one", "noise", "one"),
-  domain = c("real", "positive", "unit12", "positive", "unit12", "positive", "positive", "positive", "positive", "real"),
-  walk   = c("identity", "log", "logit12", "log", "logit12", "log", "log", "log", "log", "identity"),
-  sd0    = c(0.1, 0.5, 0.5, 0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.1),
-  move   = c("each", "sim", "sim", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
-  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
-  smooth = c("", "", "S", "", "B", "", "", "", "", ""),
-  models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp", "sgasp",
-             "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
+  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
+  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one"),
+  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real"),
+  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity"),
+  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
+  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
+  models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp",
+             "gp sgasp", "gp sgasp", "sgasp", "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
   stringsAsFactors = FALSE
 )
 
@@ -50,7 +54,7 @@ kernel_arg <- function(cls) paste0("kernel", model_classes$smooth[match(cls, mod
 per_input_classes <- model_classes$class[model_classes$over %in% c("inputs", "experimental")]
 
 # Codes of the walks in the compiled core (src/fbc.h, enum Transform).
-walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L)
+walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)
 
 # Lookups by class, all read off the table.
 param_classes <- model_classes$class
@@ -90,8 +94,9 @@ discrepancy_having <- function(cls) {
 # inputs under the discrepancy model `discrepancy`, with `noise`
 # measurement-error groups (named by class, in the table's order; the bias
 # classes have none without a bias).
-class_sizes <- function(p, q, discrepancy = "gp", noise = 1L) {
-  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise)
+class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L) {
+  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
+         levels = levels, sources = sources)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
   stats::setNames(n, model_classes$class)
@@ -99,8 +104,9 @@ class_sizes <- function(p, q, discrepancy = "gp", noise = 1L) {
 
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
-param_indices <- function(p, q, discrepancy = "gp", noise = 1L) {
-  sizes <- class_sizes(p, q, discrepancy, noise)
+param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                           sources = 0L) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -108,8 +114,9 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L) {
 
 # Parameter names in the order of phi: the class name, with an index when
 # the class expands over inputs (or over several noise groups).
-param_names <- function(p, q, discrepancy = "gp", noise = 1L) {
-  sizes <- class_sizes(p, q, discrepancy, noise)
+param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                         sources = 0L) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     if (sizes[i] == 0L) character(0)
@@ -119,8 +126,9 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L) {
 }
 
 # The class of each parameter of phi.
-param_class_of <- function(p, q, discrepancy = "gp", noise = 1L) {
-  rep(model_classes$class, class_sizes(p, q, discrepancy, noise))
+param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                            sources = 0L) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources))
 }
 
 # The classes that are not parameters for these correlation families: the
@@ -132,8 +140,9 @@ absent_classes <- function(kernS, kernB) {
 
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
-layout_codes <- function(p, q, discrepancy = "gp", noise = 1L) {
-  idx <- param_indices(p, q, discrepancy, noise)
+layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                          sources = 0L) {
+  idx <- param_indices(p, q, discrepancy, noise, levels, sources)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -146,18 +155,53 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L) {
 # nearest-neighbour approximation, whose design vecchia_design() makes),
 # the discrepancy model (discrepancy_codes), the layout of phi and, with
 # several measurement-error groups, each field row's group (`noise`,
-# 1-based: sigma2E has max(noise) entries).
+# 1-based: sigma2E has max(noise) entries) and, with categorical inputs,
+# their indicator columns (`levels`, model_levels()) and, with a bias per
+# field data set, each field row's data set and their number (`source`:
+# list(codes, L), 1-based codes; the bias classes take it only with a bias).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
-                           vecchia = NULL, noise = NULL) {
+                           vecchia = NULL, noise = NULL, levels = NULL, source = NULL) {
+  if (discrepancy == "none") source <- NULL
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
-    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise)),
+    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
+                 source_count(source)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
-    if (!is.null(noise)) list(noise = as.integer(noise)))
+    if (!is.null(noise)) list(noise = as.integer(noise)),
+    if (!is.null(levels)) list(levels = levels),
+    if (!is.null(source)) list(source = as.integer(source$codes),
+                               sourceLevels = as.integer(source$L)))
+}
+
+# The number of partial correlations between the field data sets' biases
+# (class rhoD), from list(codes, L) or a compiled model.
+source_count <- function(source) {
+  L <- source$sourceLevels %||% source$L
+  if (is.null(L)) 0L else as.integer(L * (L - 1L) / 2L)
 }
 
 # The number of measurement-error groups of a compiled model.
 noise_count <- function(model) if (is.null(model$noise)) 1L else max(model$noise)
+
+# The categorical inputs as the compiled core takes them (src/fbc.h,
+# LevelInput): for each, the first of its indicator columns among the
+# experimental inputs `names` (1-based), their number and the number of
+# levels; NULL without categorical inputs (`factors` as read_factors()
+# gives them).
+model_levels <- function(factors, names) {
+  if (!length(factors)) return(NULL)
+  list(col = vapply(factors, function(f) match(f$columns[1], names), integer(1), USE.NAMES = FALSE),
+       ncol = vapply(factors, function(f) length(f$columns), integer(1), USE.NAMES = FALSE),
+       L = vapply(factors, function(f) length(f$levels), integer(1), USE.NAMES = FALSE))
+}
+
+# The number of partial correlations of the levels (class rhoS: L (L - 1) / 2
+# per categorical input with L levels), from model_levels() or a compiled
+# model.
+level_count <- function(levels) {
+  if (!is.null(levels$levels)) levels <- levels$levels
+  if (is.null(levels$L)) 0L else as.integer(sum(levels$L * (levels$L - 1L) / 2L))
+}
 
 # The compiled entry points, each with the model description attached. The
 # first arguments are the scaled data; kernS, kernB and algebra give the
@@ -176,8 +220,9 @@ noise_count <- function(model) if (is.null(model$noise)) 1L else max(model$noise
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
                          algebra = 0L,
                          model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra),
-                         noise = integer()) {
-  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise))
+                         noise = integer(), source = integer()) {
+  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise),
+                 as.integer(source))
 }
 
 .loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,

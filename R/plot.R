@@ -77,7 +77,8 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
 # Facet labels in the data's own names: a calibration parameter is named by
 # its input, with FBC's name in brackets ("g (kappa1)"); a hyperparameter of
 # one input by FBC's name with the input in brackets ("thetaS1 (h)",
-# "thetaS2 (g)", "alphaB1 (h)"); the others by FBC's name ("sigma2E").
+# "thetaS2 (g)", "alphaB1 (h)"), a level correlation by its pair of levels
+# ("rhoS1 (out: rate~amount)"); the others by FBC's name ("sigma2E").
 param_labels <- function(x, vars) {
   nm <- x$scale$names
   p <- x$scale$p
@@ -95,6 +96,12 @@ param_labels <- function(x, vars) {
     per <- ok & cls %in% per_input_classes
     out[per] <- paste0(vars[per], " (", inputs[k[per]], ")")
   }
+  lev <- level_labels(x$scale$factors)
+  rho <- ok & cls %in% c("rhoS", "rhoB") & k <= length(lev)
+  out[rho] <- paste0(vars[rho], " (", lev[k[rho]], ")")
+  src <- level_labels(if (isTRUE(x$scale$sourceBias)) list(x$scale$source))
+  rd <- ok & cls == "rhoD" & k <= length(src)
+  out[rd] <- paste0(vars[rd], " (", src[k[rd]], ")")
   stats::setNames(out, vars)
 }
 

@@ -163,7 +163,8 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
     idx <- seq.int(r0, min(N, r0 + B - 1L))
     res <- .fbc_predict(object$data$Xf, object$data$yf, object$data$Xs, object$data$ys,
                         phis, Xn[idx, , drop = FALSE], code, nugget, 500L, model = model,
-                        noise = nf$noise[idx[idx <= length(nf$noise)]])
+                        noise = nf$noise[idx[idx <= length(nf$noise)]],
+                        source = nf$source[idx[idx <= length(nf$source)]])
     at <- function(v) if (length(v) > 1L) v[idx] else v
     m <- at(shift) + at(ysd) * res$mean
     s <- at(ysd) * sqrt(pmax(res$var, 0))

@@ -38,15 +38,27 @@ print.fbc <- function(x, digits = 3, ...) {
               length(x$data$yf), length(x$data$ys), sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
+  lev <- level_labels(sc$factors)
+  at <- 0L
   for (f in sc$factors) {
-    cat(sprintf("  categorical input %s: levels %s (indicator%s %s)\n", f$name,
-                paste(f$levels, collapse = ", "), if (length(f$columns) > 1L) "s" else "",
-                paste(f$columns, collapse = ", ")))
+    L <- length(f$levels)
+    k <- at + seq_len(L * (L - 1L) / 2L)
+    at <- at + L * (L - 1L) / 2L
+    cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
+                paste(f$levels, collapse = ", "),
+                paste0("rhoS", k, " (", sub("^[^:]*: ", "", lev[k]), ")", collapse = ", ")))
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", ")))
-  if (!is.null(sc$source)) cat(sprintf("  field data sets (%s): %s\n", sc$source$name,
-                                       paste(sc$source$levels, collapse = ", ")))
+  if (!is.null(sc$source)) {
+    own <- if (isTRUE(sc$sourceBias)) {
+      lab <- level_labels(list(sc$source))
+      sprintf("; a bias each, correlated by %s",
+              paste0("rhoD", seq_along(lab), " (", sub("^[^:]*: ", "", lab), ")", collapse = ", "))
+    } else ""
+    cat(sprintf("  field data sets (%s): %s%s\n", sc$source$name,
+                paste(sc$source$levels, collapse = ", "), own))
+  }
   if (!is.null(sc$noiseLabels)) {
     cat(sprintf("  measurement error: %s\n", paste0("sigma2E", seq_along(sc$noiseLabels), " = ",
                                                     sc$noiseLabels, collapse = ", ")))

@@ -195,17 +195,18 @@ support_known <- function(dist) !anyNA(family_support(dist, NA_real_, NA_real_))
 check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
   domain <- class_domain[[cls]]
   if (dist == "fixed" || domain == "real") return(invisible(TRUE))
-  lim <- switch(domain, positive = c(0, Inf), unit12 = c(1, 2))
+  lim <- switch(domain, positive = c(0, Inf), unit12 = c(1, 2), corr = c(-1, 1))
   inside <- function(s) s[1] >= lim[1] && s[2] <= lim[2]
   if (!inside(family_support(dist, p1, p2))) {
     # every family whose support fits, those whose support is their
     # parameters (the uniform) within the domain, and fixed
     known <- Filter(support_known, setdiff(names(prior_registry), "fixed"))
     fits <- Filter(function(d) inside(family_support(d, NA_real_, NA_real_)), known)
-    within <- switch(domain, positive = "on [0, upper]", unit12 = "within [1, 2]")
+    within <- switch(domain, positive = "on [0, upper]", unit12 = "within [1, 2]",
+                     corr = "within [-1, 1]")
     given <- paste(setdiff(names(prior_registry), c(known, "fixed")), within)
     allowed <- paste(paste(c(fits, given), collapse = ", "), "or fixed")
-    what <- switch(domain, positive = "positive", unit12 = "in [1, 2]")
+    what <- switch(domain, positive = "positive", unit12 = "in [1, 2]", corr = "in [-1, 1]")
     cli::cli_abort(c(
       "The {.val {dist}} prior in {.arg {arg}} does not fit {.field {cls}}, which must be {what}.",
       i = "Use {allowed}."
@@ -235,7 +236,8 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' Defaults (vignette A.1): correlation scales \eqn{\theta} Gamma(1.1, rate
 #' 0.1); smoothness \eqn{\alpha} Beta(5, 2) shifted to `[1, 2]`; variances
 #' inverse gamma (shape 1.5, scale 1.5); the bias mean \eqn{\mu_b}
-#' Gaussian(0, 1); the S-GaSP scale \eqn{\lambda_z} lognormal(log 20, 1.5).
+#' Gaussian(0, 1); the S-GaSP scale \eqn{\lambda_z} lognormal(log 20, 1.5);
+#' the levels' partial correlations \eqn{\rho} uniform on `(-1, 1)`.
 #'
 #' @param thetaSDist,thetaSInit,thetaSP1,thetaSP2 Simulator GP correlation scales.
 #' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in
@@ -256,6 +258,17 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #'   and 380), around the value RobustCalibration's default rule
 #'   \eqn{\sqrt{n \|\beta L\| \sigma^2_B / \sigma^2_E}} gives on the ball
 #'   and kinetics data; fix it with `lambdaZDist = "fixed", lambdaZInit =`.
+#' @param rhoSDist,rhoSInit,rhoSP1,rhoSP2,rhoBDist,rhoBInit,rhoBP1,rhoBP2
+#'   The levels' correlations of categorical inputs (see "Categorical
+#'   inputs" in [calibrate()]), in the simulator and bias GPs: their
+#'   canonical partial correlations, in `(-1, 1)`, \eqn{L(L-1)/2} per input
+#'   with \eqn{L} levels (with two levels, the correlation itself). Default
+#'   uniform on `(-1, 1)`, starting at 0 (levels uncorrelated).
+#' @param rhoDDist,rhoDInit,rhoDP1,rhoDP2 With `sourceBias = "own"` in
+#'   [calibrate()], the correlation between the field data sets' biases:
+#'   its canonical partial correlations, as for `rhoB` (one for two data
+#'   sets). Default uniform on `(-1, 1)`; `rhoDDist = "fixed", rhoDInit = 0`
+#'   makes the biases independent.
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
@@ -271,7 +284,10 @@ set_hyperPriors <- function(
     sigma2BDist = "inversegamma", sigma2BInit = 0.1, sigma2BP1 = 1.5, sigma2BP2 = 1.5,
     sigma2EDist = "inversegamma", sigma2EInit = 0.1, sigma2EP1 = 1.5, sigma2EP2 = 1.5,
     muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1,
-    lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5) {
+    lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5,
+    rhoSDist = "uniform", rhoSInit = 0, rhoSP1 = -1, rhoSP2 = 1,
+    rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1,
+    rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1) {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()
@@ -396,11 +412,13 @@ check_init <- function(init, dist, p1, p2, cls, arg, call = parent.frame()) {
   domain <- class_domain[[cls]]
   inside <- switch(domain,
     real = is.finite(init),
-    positive = is.finite(init) && init > 0,
+    positive = is.finite(init) && (init > 0 || (dist == "fixed" && init == 0)),
+    corr = if (dist == "fixed") init >= -1 && init <= 1 else init > -1 && init < 1,
     unit12 = if (dist == "fixed") init >= 1 && init <= 2 else init > 1 && init < 2
   )
   if (!inside) {
     what <- switch(domain, real = "finite", positive = "positive",
+                   corr = if (dist == "fixed") "in [-1, 1]" else "strictly between -1 and 1",
                    unit12 = if (dist == "fixed") "in [1, 2]" else "strictly between 1 and 2")
     cli::cli_abort("{.arg {arg}} must be {what} (got {format_value(init)}).", call = call)
   }

@@ -30,19 +30,22 @@ kernel_hypers <- function(hypers, kernelS, kernelB, call = parent.frame()) {
   hypers
 }
 
-# The smoothness of the indicator columns of categorical inputs (their
-# positions `pos` among the p experimental inputs) held at 2: d^alpha = d on
-# {0, 1}, so alpha means nothing there (see R/factors.R).
+# The indicator columns of categorical inputs (their positions `pos` among
+# the p experimental inputs) enter neither GP's separable kernel: their
+# thetaS and thetaB are held at 0 and their alphaS and alphaB at 2 (d^alpha
+# = d on {0, 1}); the levels' correlation is rhoS's and rhoB's (see
+# R/factors.R and src/levels.cpp).
 indicator_hypers <- function(hypers, pos, p, q) {
   pos <- pos[!is.na(pos)]
   if (!length(pos)) return(hypers)
-  for (cls in c("alphaS", "alphaB")) {
+  held <- c(thetaS = 0, thetaB = 0, alphaS = 2, alphaB = 2)
+  for (cls in names(held)) {
     h <- hypers[[cls]]
-    if (is.null(h) || identical(h$dist, "fixed")) next
-    n <- if (cls == "alphaS") p + q else p
+    if (is.null(h)) next
+    n <- if (cls %in% c("thetaS", "alphaS")) p + q else p
     h <- lapply(h, function(v) rep_len(v, n))
     h$dist[pos] <- "fixed"
-    h$init[pos] <- 2
+    h$init[pos] <- held[[cls]]
     hypers[[cls]] <- h
   }
   hypers
@@ -81,7 +84,21 @@ discrepancy_hypers <- function(hypers, discrepancy, kernelB, call = parent.frame
 # (absent_classes()).
 phi_columns <- function(spec) {
   mc <- spec$model
-  which(!spec$classes %in% absent_classes(mc$kernS, mc$kernB))
+  keep <- !spec$classes %in% absent_classes(mc$kernS, mc$kernB)
+  keep[indicator_positions(mc)] <- FALSE
+  which(keep)
+}
+
+# The positions in phi of the indicator columns' thetaS, alphaS, thetaB and
+# alphaB, held at 0 and 2 (indicator_hypers()): the levels' correlation is
+# rhoS's and rhoB's, and Phi leaves them out.
+indicator_positions <- function(model) {
+  lv <- model$levels
+  if (is.null(lv)) return(integer(0))
+  pos <- unlist(Map(function(c, n) c + seq_len(n) - 1L, lv$col, lv$ncol))
+  unlist(lapply(c("thetaS", "alphaS", "thetaB", "alphaB"), function(cls) {
+    if (model$length[[cls]] == 0L) integer(0) else model$offset[[cls]] + pos
+  }))
 }
 
 # For each parameter class, the columns of Phi holding it (integer(0) for a
@@ -113,8 +130,10 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # initial values on the sampler's scale and the initial proposal SDs. The
 # classes without parameters under `discrepancy` have no prior.
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
-                         call = parent.frame()) {
-  sizes <- class_sizes(p, q, discrepancy, noise)
+                         levels = NULL, source = NULL, call = parent.frame()) {
+  nLev <- level_count(levels)
+  nSrc <- if (discrepancy == "none") 0L else source_count(source)
+  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -170,13 +189,14 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q, discrepancy, noise)
-  cls_of <- param_class_of(p, q, discrepancy, noise)
+  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc)
+  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
        model = compiled_model(p, q, discrepancy = discrepancy,
-                              noise = if (noise > 1L) seq_len(noise)))
+                              noise = if (noise > 1L) seq_len(noise), levels = levels,
+                              source = source))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -68,6 +68,18 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// level_corr_r
+Rcpp::List level_corr_r(const Rcpp::IntegerVector& L, const arma::vec& z);
+RcppExport SEXP _FBC_level_corr_r(SEXP LSEXP, SEXP zSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type L(LSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type z(zSEXP);
+    rcpp_result_gen = Rcpp::wrap(level_corr_r(L, z));
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_loo
 Rcpp::NumericMatrix fbc_loo(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& group, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_loo(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupSEXP, SEXP modelSEXP) {
@@ -107,8 +119,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_predict
-Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, const Rcpp::List& model, const Rcpp::IntegerVector& noise);
-RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP modelSEXP, SEXP noiseSEXP) {
+Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew, int type, double nugget, int block, const Rcpp::List& model, const Rcpp::IntegerVector& noise, const Rcpp::IntegerVector& source);
+RcppExport SEXP _FBC_fbc_predict(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP XnewSEXP, SEXP typeSEXP, SEXP nuggetSEXP, SEXP blockSEXP, SEXP modelSEXP, SEXP noiseSEXP, SEXP sourceSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -123,7 +135,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< int >::type block(blockSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
     Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type noise(noiseSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise));
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type source(sourceSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_predict(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, noise, source));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -223,9 +236,10 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
+    {"_FBC_level_corr_r", (DL_FUNC) &_FBC_level_corr_r, 2},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
-    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 11},
+    {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},

@@ -81,6 +81,7 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
     } else {
       kernel_corr_self(kernS_, Xs_, p + q, thetaS.memptr(), alphaS.memptr(), ptrG_, L);
     }
+    level_scale(levels, phi.memptr() + iRhoS, Xs_, Xs_, L, true);
     for (int i = 0; i < m; ++i) L.at(i, i) += nugget_;
     if (!chol_lower(L)) return false;
     ldDs = logdet_chol(L);
@@ -103,6 +104,7 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
     } else {
       kernel_corr(kernS_, Xs_, Xu_, p, thetaS.memptr(), alphaS.memptr(), Rx_.alt(), false);
     }
+    level_scale(levels, phi.memptr() + iRhoS, Xs_, Xu_, Rx_.alt(), false);
   }
   // Calibration-input factor c_i = R_cal(xs_i, kappa).
   if (t.cChange)
@@ -152,6 +154,7 @@ void DensePosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec
   for (int j = 0; j < q; ++j) xk.col(p + j).fill(phi[iKappa + j]);
   K_ = corr_matrix(Xs_, xk, phi.subvec(iThetaS, iThetaS + p + q - 1), phi.subvec(iAlphaS, iAlphaS + p + q - 1),
                    kernS_);
+  level_scale(levels, phi.memptr() + iRhoS, Xs_, xk, K_, false);
   solve_lower(Ls_.cur(), K_);
   const arma::vec& z = z_.cur();
   for (int c = 0; c < nb; ++c) {

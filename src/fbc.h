@@ -27,7 +27,7 @@ enum PriorFamily {
 };
 
 // Transformation on which a parameter's random walk runs.
-enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2 };
+enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
 // Correlation family codes, one per GP; R/correlation.R keeps the same table
 // (kernel_codes()).
@@ -61,7 +61,8 @@ enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
 // hands the offsets and lengths over by name (read_model()).
 enum ParamClass {
   PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
-  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_COUNT
+  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_RHOS, PC_RHOB, PC_RHOD,
+  PC_COUNT
 };
 
 // Where each class lives in phi: offset[c], length[c] (0-based), and for
@@ -77,9 +78,25 @@ struct Layout {
 // The model as the compiled entry points receive it from R
 // (compiled_model() in R/model.R): correlation families of the two GPs, the
 // algebra choice, the discrepancy model and the layout of phi.
+// A categorical input (R/factors.R): its indicator columns col .. col +
+// ncol - 1 among the experimental inputs (one column for two levels, one per
+// level from three) and its number of levels L. Both GPs hold the
+// indicators' thetaS and thetaB at 0 and multiply their correlation by the
+// levels' correlation C[a, b] (levels.cpp), from L (L - 1) / 2 canonical
+// partial correlations (rhoS, rhoB).
+struct LevelInput {
+  int col = 0, ncol = 1, L = 2;
+};
+
 struct Model {
   int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
   Layout layout;
+  std::vector<LevelInput> levels;  // the categorical inputs, if any
+  // a bias per field data set: each field row's data set (0-based; empty:
+  // one bias for all) among sourceL, whose biases the bias GP correlates by
+  // a level correlation from the partial correlations rhoD
+  std::vector<int> source;
+  int sourceL = 0;
   // the measurement-error group of each field row (0-based; empty: one
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
@@ -136,6 +153,29 @@ void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* 
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = KF_POWEXP);
+
+// levels.cpp: the categorical inputs' level correlations ---------------------
+// The number of canonical partial correlations of the categorical inputs.
+int level_count(const std::vector<LevelInput>& in);
+// C[f] = the levels' correlation of input f from its partial correlations,
+// z[0 ..] consecutively by input (see levels.cpp).
+void level_corr(const std::vector<LevelInput>& in, const double* z,
+                std::vector<arma::mat>& C);
+// out(i, j) *= prod_f C[f](level of X row i, level of Y row j), over the
+// first `rows` rows of X and Y (-1: all; lower: X == Y and only i >= j).
+void level_scale(const std::vector<LevelInput>& in, const std::vector<arma::mat>& C,
+                 const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower,
+                 int rows = -1);
+// The level (0-based) of row i of X for categorical input f.
+int level_of(const arma::mat& X, arma::uword i, const LevelInput& f);
+// out(i, j) *= C[a[i], b[j]] for the L x L level correlation C of the
+// partial correlations z (the field data sets' biases), over out's rows and
+// columns (lower: only i >= j).
+void source_scale(int L, const double* z, const int* a, const int* b, arma::mat& out,
+                  bool lower);
+// The same with C computed from z first; nothing without categorical inputs.
+void level_scale(const std::vector<LevelInput>& in, const double* z, const arma::mat& X,
+                 const arma::mat& Y, arma::mat& out, bool lower);
 
 // linalg.cpp: dense linear algebra -------------------------------------------
 // In-place lower Cholesky (LAPACK dpotrf); returns false when not PD.
@@ -199,6 +239,8 @@ public:
   int n, m, p, q, d;
   Layout layout;
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB, iLambdaZ;
+  int iRhoS, iRhoB, iRhoD;          // the level correlations' partial correlations
+  std::vector<LevelInput> levels;   // the categorical inputs (none: empty)
   bool bias;                // the model has a bias GP (KOH or S-GaSP)
   bool biasMean;            // ... with a mean muB (KOH)
   bool sgasp;               // ... scaled (S-GaSP)
@@ -231,7 +273,7 @@ public:
   // field target's measurement error is that of group noise[c] (0-based;
   // null: group 0).
   virtual void condition(const arma::mat& Xnew, int type, double* mean, double* var,
-                         const int* noise = nullptr) = 0;
+                         const int* noise = nullptr, const int* source = nullptr) = 0;
   // The held-out predictive of the simulator runs from the simulator GP
   // alone (covariance sigma2S Ds, scaled space) at the current state, one
   // fold of 0-based runs at a time (heldout.cpp); false if a fold's block
@@ -268,7 +310,7 @@ public:
   void reject() override;
   void muBQuadratic(double& aa, double& ab) const override;
   void condition(const arma::mat& Xnew, int type, double* mean, double* var,
-                 const int* noise = nullptr) override;
+                 const int* noise = nullptr, const int* source = nullptr) override;
   bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
                arma::vec& var) override;
   void fieldLoo(const std::vector<std::vector<int> >& groups,
@@ -285,6 +327,8 @@ protected:
   arma::mat Xu_;           // ... and their values (nu x p)
   std::vector<int> grp_;   // field row i is distinct row grp_[i]
   std::vector<int> noise_; // ... and in measurement-error group noise_[i]
+  int sourceL_ = 0;        // data sets with a bias each (0: one bias)
+  std::vector<int> srcU_;  // ... and the data set of each distinct row
 
   // The simulator algebra, at the proposal (scratch buffers):
   // update what t touches, setting ldDs = log|Ds| and zz = ys' Ds^-1 ys
@@ -320,7 +364,8 @@ private:
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
   // the bias's correlation with new inputs (see model.cpp)
-  void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const;
+  void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
+                 const int* source = nullptr) const;
   arma::mat Bz_, Wz_;  // S-GaSP workspaces
 
 protected:
@@ -395,8 +440,19 @@ protected:
                   std::vector<arma::mat>& QBB) override;
 
 private:
+  void split_levels();
   ProductDesign dz_;
   arma::mat Y_;                      // ys as an I x J matrix
+  // When the experimental settings Xg are themselves every combination of
+  // T level tuples of the categorical inputs and R numeric settings, Rx =
+  // Ct (x) Rn up to the order of Xg's rows (kronecker.cpp): setting k is
+  // tuple tk_[k] at numeric setting rk_[k]; Xt_ (T x p) holds a setting of
+  // each tuple at one numeric setting, Xn_ (R x p) each numeric setting at
+  // one tuple.
+  bool split_ = false;
+  std::vector<int> tk_, rk_;
+  arma::mat Xt_, Xn_, Ct_, Rn_, Uc_, Un_;
+  arma::vec lc_, ln_;
   Buf2<arma::mat> Ux_, Ut_, Ax_, Yt_;
   Buf2<arma::vec> lx_, lt_, c_, ct_, w_, g_;
   arma::mat Rx_, Rt_, Rxf_, An_;     // workspaces
@@ -424,6 +480,8 @@ private:
   std::vector<std::vector<int> > nbrL_;  // each field latent's earlier latents
   Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa
   arma::mat Kw_, Xg_;                    // one conditional's system
+  arma::vec levelZ_;                     // rhoS the level correlations levelC_ are of
+  std::vector<arma::mat> levelC_;
   arma::vec rhs_;
   arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
                                          // the field inputs, experimental part

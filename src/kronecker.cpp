@@ -86,6 +86,50 @@ KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
     w_.b[b].zeros(I); g_.b[b].zeros(I);
   }
   Rx_.zeros(I, I); Rt_.zeros(J, J); Rxf_.zeros(I, nu_);
+  split_levels();
+}
+
+// Is Xg every combination of the categorical inputs' level tuples and the
+// numeric settings (the other columns)? Then, by separability,
+//   Rx[k, k'] = Ct[tk, tk'] Rn[rk, rk'],
+// Ct the correlation of the tuples (their indicators' kernel times the
+// levels' correlations), Rn that of the numeric settings, and
+// Rx = Ux diag(lx) Ux' with Ux[k, a R + b] = Uc[tk, a] Un[rk, b],
+// lx[a R + b] = lc[a] ln[b]: a T x T and an R x R eigendecomposition
+// instead of an I x I one (3 outputs x 50 points: 3 x 3 and 50 x 50 for
+// 150 x 150).
+void KroneckerPosterior::split_levels() {
+  if (levels.empty()) return;
+  const int I = dz_.I;
+  std::vector<char> isLevel(p, 0);
+  for (const LevelInput& f : levels)
+    for (int c = 0; c < f.ncol; ++c) isLevel[f.col + c] = 1;
+  std::map<std::vector<int>, int> tuples;
+  std::map<std::vector<double>, int> nums;
+  tk_.resize(I); rk_.resize(I);
+  for (int k = 0; k < I; ++k) {
+    std::vector<int> tk(levels.size());
+    for (size_t f = 0; f < levels.size(); ++f) tk[f] = level_of(dz_.Xg, k, levels[f]);
+    std::vector<double> nk;
+    for (int c = 0; c < p; ++c) if (!isLevel[c]) nk.push_back(dz_.Xg.at(k, c));
+    tk_[k] = tuples.emplace(tk, (int) tuples.size()).first->second;
+    rk_[k] = nums.emplace(nk, (int) nums.size()).first->second;
+  }
+  const int T = tuples.size(), R = nums.size();
+  if (T < 2 || R < 2 || (double) T * R != (double) I) return;
+  std::vector<char> seen((size_t) T * R, 0);
+  for (int k = 0; k < I; ++k) {
+    char& s = seen[(size_t) tk_[k] * R + rk_[k]];
+    if (s) return;
+    s = 1;
+  }
+  Xt_.set_size(T, p); Xn_.set_size(R, p);
+  for (int k = 0; k < I; ++k) {
+    if (rk_[k] == 0) Xt_.row(tk_[k]) = dz_.Xg.row(k);
+    if (tk_[k] == 0) Xn_.row(rk_[k]) = dz_.Xg.row(k);
+  }
+  Ct_.zeros(T, T); Rn_.zeros(R, R);
+  split_ = true;
 }
 
 std::string KroneckerPosterior::algebra() const {
@@ -97,10 +141,30 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   const double* alphaS = phi.memptr() + iAlphaS;
   const int I = dz_.I, J = dz_.J;
   const bool xMove = t.simCorr && t.expDim, tMove = t.simCorr && t.calDim;
-  if (xMove) {
+  if (xMove && split_) {
+    // Rx = Ct (x) Rn in Xg's order (split_levels())
+    kernel_corr(kernS_, Xt_, Xt_, p, thetaS, alphaS, Ct_, false);
+    level_scale(levels, phi.memptr() + iRhoS, Xt_, Xt_, Ct_, false);
+    kernel_corr(kernS_, Xn_, Xn_, p, thetaS, alphaS, Rn_, false);
+    if (!arma::eig_sym(lc_, Uc_, Ct_) || !arma::eig_sym(ln_, Un_, Rn_)) return false;
+    const int T = Ct_.n_rows, R = Rn_.n_rows;
+    arma::mat& Ux = Ux_.alt();
+    arma::vec& lx = lx_.alt();
+    for (int a = 0; a < T; ++a)
+      for (int b = 0; b < R; ++b) {
+        const int col = a * R + b;
+        lx[col] = lc_[a] * ln_[b];
+        double* u = Ux.colptr(col);
+        for (int k = 0; k < I; ++k) u[k] = Uc_.at(tk_[k], a) * Un_.at(rk_[k], b);
+      }
+  } else if (xMove) {
     kernel_corr(kernS_, dz_.Xg, dz_.Xg, p, thetaS, alphaS, Rx_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, dz_.Xg, Rx_, false);
     if (!arma::eig_sym(lx_.alt(), Ux_.alt(), Rx_)) return false;
+  }
+  if (xMove) {
     kernel_corr(kernS_, dz_.Xg, Xu_, p, thetaS, alphaS, Rxf_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xu_, Rxf_, false);
     Ax_.alt() = Ux_.alt().t() * Rxf_;
   }
   if (tMove) {
@@ -179,8 +243,10 @@ void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma:
                                       arma::mat& G) {
   const arma::vec& w = w_.cur();
   const arma::vec& g = g_.cur();
-  An_ = Ux_.cur().t() * corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
-                                    phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+  arma::mat rx = corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
+                             phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+  level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xnew, rx, false);
+  An_ = Ux_.cur().t() * rx;
   a = An_.t() * g;
   b = (arma::square(An_).t()) * w;
   An_.each_col() %= w;

@@ -29,6 +29,8 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
   iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
   iMuB = lay.offset[PC_MUB]; iLambdaZ = lay.offset[PC_LAMBDAZ];
+  iRhoS = lay.offset[PC_RHOS]; iRhoB = lay.offset[PC_RHOB]; iRhoD = lay.offset[PC_RHOD];
+  levels = model.levels;
   scaled.clear();
   for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
     for (int k = 0; k < lay.length[c]; ++k) scaled.push_back(lay.offset[c] + k);
@@ -37,7 +39,8 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
 
 Model read_model(const Rcpp::List& model, int p, int q) {
   static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ"};
+                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ",
+                                        "rhoS", "rhoB", "rhoD"};
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
@@ -60,7 +63,35 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     }
   }
   const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
-  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz};
+  // the categorical inputs: their indicator columns and levels
+  if (model.containsElementNamed("levels")) {
+    const Rcpp::List lv = model["levels"];
+    const Rcpp::IntegerVector col = lv["col"], ncol = lv["ncol"], L = lv["L"];
+    if (col.size() != L.size() || ncol.size() != L.size())
+      Rcpp::stop("the levels need col, ncol and L for each categorical input");
+    for (int f = 0; f < L.size(); ++f) {
+      LevelInput in;
+      in.col = col[f] - 1; in.ncol = ncol[f]; in.L = L[f];
+      if (in.L < 2 || in.col < 0 || in.col + in.ncol > p ||
+          in.ncol != (in.L == 2 ? 1 : in.L))
+        Rcpp::stop("categorical input %d: its indicator columns do not fit the inputs", f + 1);
+      out.levels.push_back(in);
+    }
+  }
+  const int lc = level_count(out.levels);
+  // a bias per field data set: the data set of each field row
+  if (model.containsElementNamed("source")) {
+    const Rcpp::IntegerVector s = model["source"];
+    out.sourceL = Rcpp::as<int>(model["sourceLevels"]);
+    out.source.resize(s.size());
+    for (int i = 0; i < s.size(); ++i) {
+      if (s[i] == NA_INTEGER || s[i] < 1 || s[i] > out.sourceL)
+        Rcpp::stop("the field data sets must be 1, ..., %d", out.sourceL);
+      out.source[i] = s[i] - 1;
+    }
+  }
+  const int ld = out.sourceL * (out.sourceL - 1) / 2;
+  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz, lc, b * lc, b * ld};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -143,6 +174,10 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   if (!model.noise.empty() && (int) model.noise.size() != n)
     Rcpp::stop("the noise groups must give one group per field row (%d)", n);
   noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
+  if (!model.source.empty() && (int) model.source.size() != n)
+    Rcpp::stop("the field data sets must give one per field row (%d)", n);
+  sourceL_ = model.sourceL;
+  const std::vector<int> src = model.source.empty() ? std::vector<int>(n, 0) : model.source;
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
   // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
   // (row i of Xf is row grp_[i] of Xu_).
@@ -151,13 +186,14 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   for (int i = 0; i < n; ++i) {
     int g = -1;
     for (size_t u = 0; u < first.size() && g < 0; ++u)
-      if (arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
+      if (src[i] == src[first[u]] && arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
     if (g < 0) { g = first.size(); first.push_back(i); }
     grp_[i] = g;
   }
   nu_ = first.size();
   Xu_.set_size(nu_, p);
-  for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
+  srcU_.resize(nu_);
+  for (int u = 0; u < nu_; ++u) { Xu_.row(u) = Xf.row(first[u]); srcU_[u] = src[first[u]]; }
   Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p; ++k) {
@@ -200,10 +236,13 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
     t.simCorr = t.cross = t.field = true;
     if (k < p) t.expDim = true; else t.calDim = t.cChange = true;
     break;
+  case PC_RHOS:  // the levels' correlation: as an experimental input's thetaS
+    t.simCorr = t.cross = t.field = t.expDim = true;
+    break;
   case PC_ALPHAB:
     t.biasPow[k] = 1;
     // fall through
-  case PC_THETAB: case PC_LAMBDAZ:
+  case PC_THETAB: case PC_LAMBDAZ: case PC_RHOB: case PC_RHOD:
     t.biasCorr = t.field = true;
     break;
   case PC_SIGMA2S: case PC_SIGMA2B: case PC_SIGMA2E:
@@ -307,14 +346,25 @@ bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
 // lambdaZ, so with L = chol(R(Xu, Xu) + c I) and H = L^-1 R(Xu, Xnew):
 //   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
 //   r = 1 - colsums(H^2).
-void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r) const {
+void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
+                               const int* source) const {
   const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
   const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
   K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
+  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xnew, K, false);
+  if (sourceL_) {
+    if (!source) Rcpp::stop("the bias of a new point needs its field data set");
+    for (arma::uword c = 0; c < Xnew.n_rows; ++c)
+      if (source[c] < 0 || source[c] >= sourceL_)
+        Rcpp::stop("field data set %d of a new point is not one of the %d", source[c] + 1, sourceL_);
+    source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), source, K, false);
+  }
   r.ones(Xnew.n_rows);
   if (!sgasp) return;
   const double c = nu_ / phi[iLambdaZ];
   arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, L, false);
+  if (sourceL_) source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), srcU_.data(), L, false);
   L.diag() += c;
   if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
   solve_lower(L, K);  // H
@@ -336,7 +386,7 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
 // Under S-GaSP the bias's cross-correlation and variance are the
 // discretized kernel's (biasCross()), and its mean is 0.
 void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var,
-                               const int* noise) {
+                               const int* noise, const int* source) {
   const int b = Xnew.n_rows;
   const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0, muB = biasMean ? phi[iMuB] : 0.0;
@@ -359,13 +409,14 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
   if (simPart) {
     Kf = s2S * corr_matrix(Xu_, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
                            phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, Xu_, Xnew, Kf, false);
     simCondition(Xnew, a, bb, G);
     Kf -= s2S * G;
   }
   if (biasPart) {
     arma::mat Kb;
     arma::vec rb;
-    biasCross(Xnew, Kb, rb);
+    biasCross(Xnew, Kb, rb, source);
     Kf += s2B * Kb;
     v0 += s2B * rb;
   }
@@ -410,6 +461,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
     }
     kernel_combine(kernS_, Pf, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
+    level_scale(levels, phi.memptr() + iRhoS, Xu_, Xu_, Rkk_.alt(), true);
     Rkk = &Rkk_.alt();
   }
 
@@ -435,6 +487,8 @@ double SchurPosterior::evaluate(const Touch& t) {
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
+    level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, Rb_.alt(), true);
+    if (sourceL_) source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), srcU_.data(), Rb_.alt(), true);
     if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }

@@ -201,8 +201,16 @@ double VecchiaPosterior::conditional(int s, int runs, bool coef) {
   const int K = p + q, lda = Kw_.n_rows;
   const arma::vec thetaS = phi.subvec(iThetaS, iThetaS + K - 1);
   const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + K - 1);
+  // the levels' correlations, recomputed only when their rhoS moved
+  const int nz = level_count(levels);
+  if (nz && (levelZ_.n_elem != (arma::uword) nz ||
+             arma::any(levelZ_ != phi.subvec(iRhoS, iRhoS + nz - 1)))) {
+    levelZ_ = phi.subvec(iRhoS, iRhoS + nz - 1);
+    level_corr(levels, levelZ_.memptr(), levelC_);
+  }
   for (double jitter = 0.0; jitter < 1e-3; jitter = jitter == 0.0 ? 1e-10 : 100 * jitter) {
     kernel_corr_rows(kernS_, Xg_, s, K, thetaS.memptr(), alphaS.memptr(), Kw_);
+    level_scale(levels, levelC_, Xg_, Xg_, Kw_, true, s);
     for (int i = 0; i < s; ++i) Kw_.at(i, i) += i < runs ? nugget_ : jitter;
     if (!small_chol(Kw_.memptr(), s, lda)) continue;
     if (coef) {
@@ -359,7 +367,8 @@ void VecchiaPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::v
   G.set_size(nu_, nb);
   const arma::vec th = phi.subvec(iThetaS, iThetaS + p - 1);
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p - 1);
-  const arma::mat Rx = corr_matrix(Xu_, Xnew, th, al, kernS_);
+  arma::mat Rx = corr_matrix(Xu_, Xnew, th, al, kernS_);
+  level_scale(levels, phi.memptr() + iRhoS, Xu_, Xnew, Rx, false);
   std::vector<double> y(K), d2, dl;
   std::vector<int> idx, near, L, rows(nu_);
   std::iota(rows.begin(), rows.end(), 0);

@@ -5,14 +5,14 @@
 # plan, CPU seconds, and the 90% intervals of kappa against the truth;
 # with `single`, the same for the first output alone (its intervals are
 # wider).
-# nburn=<sweeps> sets the burn-in (default 1000); the first stretch is
+# nburn=<sweeps> sets the burn-in (default 2000, calibrate()'s); the first stretch is
 # nburn + 1000 sweeps, then checks every 500.
-#   Rscript inst/bench/outputs.R [quick] [single] [nburn=3000]
+#   Rscript inst/bench/outputs.R [quick] [single] [nburn=2000]
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
 nburnArg <- grep("^nburn=", args, value = TRUE)
-nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 1000L
+nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 2000L
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else

@@ -5,18 +5,24 @@
 # bias (its mean and variance 0); "sgasp": the S-GaSP bias, mean 0, its
 # covariances from the discretized kernel (bias_kernel_dense()).
 dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
-                          kernB = "powexp", discrepancy = "gp", noise = NULL, noiseNew = NULL) {
+                          kernB = "powexp", discrepancy = "gp", noise = NULL, noiseNew = NULL,
+                          levels = NULL, source = NULL, sourceNew = NULL) {
   p <- ncol(Xf); q <- ncol(Xs) - p; n <- nrow(Xf); m <- nrow(Xs)
-  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L))
+  th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels),
+                   FBC:::source_count(source))
+  srcL <- if (is.null(source)) 0L else source$L
+  Xb <- if (srcL) cbind(Xf, source$codes) else Xf
+  Xnb <- if (srcL) cbind(Xnew, sourceNew) else Xnew
   if (discrepancy == "none") th[c("muB", "sigma2B")] <- list(0, 0)
   if (discrepancy == "sgasp") th$muB <- 0
-  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise)
+  C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise, levels, source)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
   Xnk <- cbind(Xnew, matrix(th$kappa, nrow(Xnew), q, byrow = TRUE))
-  ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS, kernS)
+  ksim <- th$sigma2S * dense_corr(rbind(Xk, Xs), Xnk, th$thetaS, th$alphaS, kernS) *
+    level_factor(rbind(Xk, Xs), Xnk, levels, th$rhoS)
   kbias <- if (discrepancy != "none") {
-    rbind(th$sigma2B * bias_kernel_dense(Xf, Xnew, Xf, th, kernB, discrepancy),
+    rbind(th$sigma2B * bias_kernel_dense(Xb, Xnb, Xb, th, kernB, discrepancy, levels, srcL),
           matrix(0, m, nrow(Xnew)))
   } else {
     matrix(0, n + m, nrow(Xnew))
@@ -24,7 +30,7 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
   k <- switch(type, field = , mean = ksim + kbias, simulator = ksim, bias = kbias)
   mu0 <- if (type == "simulator") 0 else th$muB
   vb <- if (discrepancy == "none") 0 else
-    th$sigma2B * diag(bias_kernel_dense(Xnew, Xnew, Xf, th, kernB, discrepancy))
+    th$sigma2B * diag(bias_kernel_dense(Xnb, Xnb, Xb, th, kernB, discrepancy, levels, srcL))
   s2E <- th$sigma2E[if (is.null(noiseNew)) rep(1L, nrow(Xnew)) else noiseNew]
   v0 <- switch(type, field = th$sigma2S + vb + s2E,
                mean = th$sigma2S + vb, simulator = th$sigma2S, bias = vb)

@@ -418,3 +418,38 @@ test_that("a run without a discrepancy checkpoints, resumes, and is refused by a
   args$discrepancy <- NULL
   expect_error(do.call(calibrate, args), "`discrepancy` is none in the checkpoint and gp now")
 })
+
+test_that("a run with outputs and a bias per data set resumes to the uninterrupted draws", {
+  # two outputs (conc, rate) and two laboratories, B with its own bias
+  set.seed(5)
+  x <- runif(30); t <- runif(30, 0.5, 3)
+  sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),
+               data.frame(y = 2 * t * x, x = x, out = "rate", t = t))
+  xf <- seq(0.1, 0.9, length.out = 6)
+  field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(6, 0, 0.05), x = xf, out = "conc", lab = "A"),
+                 data.frame(y = 3.4 * xf + rnorm(6, 0, 0.05), x = xf, out = "rate", lab = "A"),
+                 data.frame(y = 5 * exp(-1.7 * xf) + 0.3 + rnorm(6, 0, 0.05), x = xf, out = "conc",
+                            lab = "B"))
+  args <- list(sim, field, output = "out", source = "lab", sourceBias = "own", nMCMC = 200,
+               nBurn = 100, thinning = 2, nChains = 2, kernelS = "matern52", kernelB = "matern52")
+  set.seed(6)
+  ref <- do.call(calibrate, args)
+  expect_true(all(c("rhoS1", "rhoB1", "rhoD1") %in% colnames(ref$Phi)))
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  old <- options(FBC.sampler = interrupt_at_call(3))
+  set.seed(6)
+  # (posterior's note on the ESS of the 25 draws kept is not the point here)
+  withCallingHandlers(
+    expect_warning(part <- do.call(calibrate, c(args, checkpoint = dir)), "Resume it with the same"),
+    warning = function(w) {
+      if (grepl("ESS has been capped", conditionMessage(w))) invokeRestart("muffleWarning")
+    })
+  options(old)
+  expect_true(part$state$interrupted)
+  expect_message(fit <- do.call(calibrate, c(args, checkpoint = dir)), "Resuming")
+  expect_same_draws(fit, ref)
+  # the same data with one shared bias is another run
+  args$sourceBias <- "shared"
+  expect_error(do.call(calibrate, c(args, checkpoint = dir)), "checkpoint")
+})

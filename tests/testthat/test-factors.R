@@ -18,9 +18,7 @@ two_outputs <- function(seed = 1, m = 40, noise = 0.05) {
   list(sim = sim, field = field, truth = 1.7)
 }
 
-test_that("a categorical input's correlation between levels is the plain-R product of per-level factors", {
-  # three levels: indicator columns [a], [b], [c]; two levels a != b are
-  # correlated by r(1; theta_a) r(1; theta_b) (r of the family, ?correlation)
+test_that("a categorical input's level correlation is the plain-R one from its partial correlations", {
   set.seed(2)
   sim <- data.frame(y = rnorm(30), mat = rep(c("a", "b", "c"), 10), x = runif(30), t = runif(30))
   field <- data.frame(y = rnorm(6), mat = rep(c("a", "b", "c"), 2), x = runif(6))
@@ -28,33 +26,116 @@ test_that("a categorical input's correlation between levels is the plain-R produ
   expect_identical(names(fac$sim), c("y", "mat[a]", "mat[b]", "mat[c]", "x", "t"))
   expect_identical(fac$factors$mat$levels, c("a", "b", "c"))
   expect_identical(unname(as.matrix(fac$sim[1:3, 2:4])), diag(3))
-  ind <- diag(3)
-  th <- c(0.3, 1.1, 2.0)
-  r1 <- list(gaussian = function(t) exp(-t), powexp = function(t) exp(-t),
-             matern32 = function(t) (1 + sqrt(3 * t)) * exp(-sqrt(3 * t)),
-             matern52 = function(t) (1 + sqrt(5 * t) + 5 * t / 3) * exp(-sqrt(5 * t)))
-  for (k in names(r1)) {
-    R <- FBC:::.corr_matrix(ind, ind, th, rep(2, 3), kernel_code(k))
-    ref <- outer(r1[[k]](th), r1[[k]](th))
-    diag(ref) <- 1
-    expect_equal(R, ref, tolerance = 1e-12)
-  }
-  # two levels: one indicator, one exchangeable correlation r(1; theta)
+  # two levels: one indicator, and the correlation is the one rho itself
   two <- FBC:::read_factors(sim[sim$mat != "c", ], field[field$mat != "c", ])
   expect_identical(two$factors$mat$columns, "mat[b]")
-  # level_correlation() of a fit with every parameter fixed is that matrix
-  hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(th, 1, 1), thetaBDist = "fixed",
-                         thetaBInit = c(1, 1, 1, 1), sigma2SDist = "fixed", sigma2SInit = 1,
-                         sigma2BDist = "fixed", sigma2BInit = 0.1, sigma2EDist = "fixed",
-                         sigma2EInit = 0.1, muBDist = "fixed", muBInit = 0)
-  fit <- suppressWarnings(calibrate(sim, field, nMCMC = 20, nBurn = 10, nChains = 1,
-                                    hypers = hyp, kernelS = "matern52", kernelB = "matern52"))
-  ref <- outer(r1$matern52(th), r1$matern52(th)); diag(ref) <- 1
-  expect_equal(unname(level_correlation(fit, "mat")), ref, tolerance = 1e-12)
+  expect_equal(FBC:::.level_corr(2L, -0.6)[[1]], matrix(c(1, -0.6, -0.6, 1), 2), tolerance = 1e-15)
+  # three levels, closed form: C12 = z1, C13 = z2,
+  # C23 = z1 z2 + z3 sqrt((1 - z1^2)(1 - z2^2))
+  z <- c(0.5, -0.3, 0.8)
+  C <- FBC:::.level_corr(3L, z)[[1]]
+  expect_equal(C[2, 3], 0.5 * -0.3 + 0.8 * sqrt((1 - 0.25) * (1 - 0.09)), tolerance = 1e-14)
+  # 2 to 6 levels against the C-vine recursion (helper-dense.R), each
+  # positive definite with a unit diagonal; two inputs at once
+  for (L in 2:6) {
+    z <- runif(L * (L - 1) / 2, -0.95, 0.95)
+    C <- FBC:::.level_corr(L, z)[[1]]
+    expect_equal(C, level_corr_plain(L, z), tolerance = 1e-12)
+    expect_gt(min(eigen(C, symmetric = TRUE, only.values = TRUE)$values), 0)
+    expect_identical(diag(C), rep(1, L))
+  }
+  z <- runif(1 + 6, -0.9, 0.9)
+  both <- FBC:::.level_corr(c(2L, 4L), z)
+  expect_equal(both[[2]], level_corr_plain(4, z[-1]), tolerance = 1e-12)
+  expect_error(FBC:::.level_corr(3L, c(0.1, 0.2)), "the levels need 3")
+  # level_correlation() of a fit with rhoS fixed is that matrix; the
+  # indicators' theta and alpha are held (0 and 2) and are not in Phi
+  hyp <- set_hyperPriors(rhoSDist = "fixed", rhoSInit = c(0.5, -0.3, 0.8))
+  fit <- suppressWarnings(calibrate(sim, field, nMCMC = 20, nBurn = 10, nChains = 1, hypers = hyp))
+  expect_equal(unname(level_correlation(fit, "mat")), level_corr_plain(3, c(0.5, -0.3, 0.8)),
+               tolerance = 1e-12)
   expect_identical(rownames(level_correlation(fit, "mat")), c("a", "b", "c"))
-  # indicator smoothness is not sampled (alpha means nothing on {0, 1})
-  fit <- suppressWarnings(calibrate(sim, field, nMCMC = 20, nBurn = 10, nChains = 1))
-  expect_true(all(fit$Phi[, c("alphaS1", "alphaS2", "alphaS3", "alphaB1", "alphaB2", "alphaB3")] == 2))
+  expect_identical(colnames(fit$Phi), c("kappa1", "thetaS4", "thetaS5", "alphaS4", "alphaS5",
+                                        "rhoS1", "rhoS2", "rhoS3", "thetaB4", "alphaB4",
+                                        "rhoB1", "rhoB2", "rhoB3", "sigma2S", "sigma2B",
+                                        "sigma2E", "muB"))
+  held <- FBC:::sampler_draws(fit)[, FBC:::indicator_positions(fit$spec$model)]
+  expect_true(all(held == rep(c(0, 2, 0, 2), each = 3 * nrow(fit$Phi))))
+  expect_true(all(abs(fit$Phi[, "rhoB2"]) < 1))
+})
+
+# Scaled data with a numeric experimental input x, a 3-level categorical
+# input (indicators in columns 2-4) and one calibration input; the levels
+# as compiled_model() takes them. `product`: every (x, level) at every t.
+level_data <- function(seed, product = FALSE) {
+  set.seed(seed)
+  lev <- list(col = 2L, ncol = 3L, L = 3L)
+  if (product) {
+    g <- expand.grid(x = seq(0, 1, length.out = 4), l = 1:3, t = seq(0, 1, length.out = 5))
+    Xs <- cbind(g$x, diag(3)[g$l, ], g$t)
+  } else {
+    Xs <- cbind(runif(24), diag(3)[rep(1:3, 8), ], runif(24))
+  }
+  Xf <- cbind(runif(7), diag(3)[c(1, 2, 3, 1, 2, 3, 2), ])
+  list(Xf = Xf, yf = rnorm(7), Xs = Xs, ys = rnorm(nrow(Xs)), lev = lev)
+}
+
+test_that("with categorical inputs the likelihood, moves and predictions equal the plain-R ones", {
+  for (disc in c("gp", "sgasp", "none")) for (product in c(FALSE, TRUE)) {
+    d <- level_data(30 + product, product)
+    p <- 4; q <- 1
+    kron <- FBC:::compiled_model(p, q, discrepancy = disc, levels = d$lev)
+    dense <- FBC:::compiled_model(p, q, algebra = 1L, discrepancy = disc, levels = d$lev)
+    expect_identical(FBC:::sim_algebra_info(list(Xs = d$Xs), p, kron)$name,
+                     if (product) "Kronecker" else "dense")
+    idx <- FBC:::param_indices(p, q, disc, 1L, 3L)
+    phis <- t(replicate(2, random_phi(p, q, disc, nLev = 3L)))
+    # the indicators' theta as calibrate() holds them (0), or not: on the
+    # product design the Kronecker algebra splits Rx into the level tuples'
+    # and the numeric settings' factors, exact for any theta (separability)
+    if (!product) {
+      phis[, idx$thetaS[2:4]] <- 0
+      if (disc != "none") phis[, idx$thetaB[2:4]] <- 0
+    }
+    # moves of the levels' partial correlations alone (the caches they touch)
+    step <- phis[c(2, 2), ]
+    step[1, idx$rhoS] <- c(-0.7, 0.2, 0.5)
+    if (disc != "none") step[2, idx$rhoB] <- c(0.6, -0.4, -0.1)
+    phis <- rbind(phis, step)
+    ref <- apply(phis, 1, function(phi) {
+      dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = disc, levels = d$lev)
+    })
+    for (model in list(kron, dense)) {
+      expect_equal(apply(phis, 1, function(phi) {
+        .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = model)
+      }), ref, tolerance = 1e-8)
+      expect_equal(.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = model),
+                   ref, tolerance = 1e-8)
+      Xn <- cbind(c(0.2, 0.7, 0.4), diag(3)[c(3, 1, 2), ])
+      for (type in 1:4) {
+        got <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, type, 1e-6, 2L, model = model)
+        for (i in 1:2) {
+          want <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn,
+                                c("field", "mean", "simulator", "bias")[type],
+                                discrepancy = disc, levels = d$lev)
+          expect_equal(got$mean[, i], want$mean, tolerance = 1e-8)
+          expect_equal(got$var[, i], want$var, tolerance = 1e-8)
+        }
+      }
+    }
+  }
+  # the Vecchia algebra with every run a neighbour is exact
+  d <- level_data(33)
+  des <- FBC:::vecchia_design(d$Xs, d$ys, 1L, nrow(d$Xs), nrow(d$Xs))
+  vec <- FBC:::compiled_model(4, 1, algebra = 2L, vecchia = des, levels = d$lev)
+  phi <- random_phi(4, 1, nLev = 3L)
+  expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = vec),
+               dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, levels = d$lev), tolerance = 1e-8)
+  Xn <- cbind(c(0.2, 0.7), diag(3)[c(3, 1), ])
+  got <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, rbind(phi), Xn, 2L, 1e-6, 2L, model = vec)
+  want <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phi, Xn, "mean", levels = d$lev)
+  expect_equal(got$mean[, 1], want$mean, tolerance = 1e-8)
+  expect_equal(got$var[, 1], want$var, tolerance = 1e-8)
 })
 
 test_that("with per-group measurement error the likelihood and its moves equal the dense one", {
@@ -117,7 +198,8 @@ test_that("two outputs: kappa draws match the grid posterior", {
   hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.7, 10, 0.4),
                          thetaBDist = "fixed", thetaBInit = c(1, 5), sigma2SDist = "fixed",
                          sigma2SInit = 3.5, sigma2BDist = "fixed", sigma2BInit = 0.5,
-                         sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0)
+                         sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0,
+                         rhoSDist = "fixed", rhoSInit = -0.3, rhoBDist = "fixed", rhoBInit = 0.2)
   set.seed(9)
   fit <- calibrate(pr$sim, pr$field, output = "out", nMCMC = 9000, nBurn = 1000, thinning = 4,
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern52")
@@ -126,7 +208,7 @@ test_that("two outputs: kappa draws match the grid posterior", {
   # kappa1 is the third scaled input (x, the output's indicator, t)
   expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, "matern52", "matern52",
-                 noise = fit$spec$model$noise)
+                 noise = fit$spec$model$noise, levels = fit$spec$model$levels)
   }, u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
 })
 
@@ -177,4 +259,86 @@ test_that("several field data sets: each its own noise; refusals name the column
   f0 <- field
   invisible(predict(fit, data.frame(x = 0.3, out = "conc", lab = "A")))
   expect_identical(field, f0)
+})
+
+test_that("a bias per field data set: likelihood, moves and predictions equal the plain-R ones", {
+  # three data sets, two of them observed at the same x (distinct for the
+  # bias, the same for the simulator); the bias kernel is
+  # R(x, x') C_D[s, s'] (helper-dense.R)
+  for (disc in c("gp", "sgasp")) for (product in c(FALSE, TRUE)) {
+    d <- level_data(40 + product, product)
+    src <- list(codes = c(1L, 2L, 3L, 1L, 2L, 3L, 2L), L = 3L)
+    d$Xf[2, ] <- d$Xf[1, ]   # the same inputs in data sets 1 and 2
+    p <- 4; q <- 1
+    idx <- FBC:::param_indices(p, q, disc, 1L, 3L, 3L)
+    expect_length(idx$rhoD, 3L)
+    phis <- t(replicate(2, random_phi(p, q, disc, nLev = 3L, nSrc = 3L)))
+    step <- phis[2, , drop = FALSE]
+    step[1, idx$rhoD] <- c(0.7, -0.2, 0.4)   # a move of rhoD alone
+    phis <- rbind(phis, step)
+    ref <- apply(phis, 1, function(phi) {
+      dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = disc, levels = d$lev,
+                   source = src)
+    })
+    for (alg in c(0L, 1L)) {
+      model <- FBC:::compiled_model(p, q, algebra = alg, discrepancy = disc, levels = d$lev,
+                                    source = src)
+      expect_equal(.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = model),
+                   ref, tolerance = 1e-8)
+      Xn <- cbind(c(0.2, 0.7, 0.4), diag(3)[c(3, 1, 2), ])
+      for (type in c(1L, 2L, 4L)) {
+        got <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, type, 1e-6, 2L,
+                            model = model, source = c(2L, 3L, 1L))
+        for (i in 1:2) {
+          want <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn,
+                                c("field", "mean", "simulator", "bias")[type], discrepancy = disc,
+                                levels = d$lev, source = src, sourceNew = c(2L, 3L, 1L))
+          expect_equal(got$mean[, i], want$mean, tolerance = 1e-8)
+          expect_equal(got$var[, i], want$var, tolerance = 1e-8)
+        }
+      }
+      expect_error(.fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis[1:2, ], Xn, 2L, 1e-6, 2L,
+                                model = model), "needs its field data set")
+    }
+  }
+  # with rhoD at 1 the biases coincide: the likelihood is the shared bias's
+  d <- level_data(42)
+  src <- list(codes = c(1L, 2L, 1L, 2L, 1L, 2L, 2L), L = 2L)
+  phi <- random_phi(4, 1, nLev = 3L, nSrc = 1L)
+  idx <- FBC:::param_indices(4, 1, "gp", 1L, 3L, 1L)
+  phi[idx$rhoD] <- 1
+  own <- FBC:::compiled_model(4, 1, levels = d$lev, source = src)
+  shared <- FBC:::compiled_model(4, 1, levels = d$lev)
+  expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = own),
+               .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi[-idx$rhoD], 1e-6, model = shared),
+               tolerance = 1e-8)
+})
+
+test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
+  pr <- two_outputs(seed = 3)
+  field <- rbind(cbind(pr$field, lab = "A"),
+                 transform(pr$field[pr$field$out == "conc", ], y = y + 0.3, lab = "B"))
+  set.seed(12)
+  fit <- calibrate(pr$sim, field, output = "out", source = "lab", sourceBias = "own",
+                   nMCMC = 300, nBurn = 150, nChains = 1, kernelS = "matern52",
+                   kernelB = "matern52")
+  expect_true("rhoD1" %in% colnames(fit$Phi))
+  expect_true(all(abs(fit$Phi[, "rhoD1"]) < 1))
+  expect_identical(fit$spec$model$source, c(rep(1L, 20), rep(2L, 10)))
+  expect_output(print(fit), "a bias each, correlated by rhoD1 \\(B~A\\)")
+  C <- level_correlation(fit, "lab", "bias")
+  expect_equal(C[1, 2], mean(fit$Phi[, "rhoD1"]), tolerance = 1e-12)
+  # the same inputs predict differently in the two data sets
+  nd <- data.frame(x = c(0.3, 0.3), out = "conc", lab = c("A", "B"))
+  pb <- predict(fit, nd, type = "bias")
+  expect_false(isTRUE(all.equal(pb$pred[1], pb$pred[2])))
+  ps <- predict(fit, nd, type = "simulator")
+  expect_equal(ps$pred[1], ps$pred[2])
+  expect_silent(predict(fit, data.frame(x = 0.3, out = "conc"), type = "simulator"))
+  expect_snapshot(error = TRUE, predict(fit, data.frame(x = 0.3, out = "conc"), type = "mean"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field, output = "out", sourceBias = "own"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out", source = "lab",
+                                          sourceBias = "own", discrepancy = "none"))
+  pp <- ppc_field(fit, ndraws = 5)
+  expect_equal(dim(pp$yrep), c(5L, 30L))
 })
