@@ -5,7 +5,10 @@
 //       [ B  D  ]   B = sigma2S Rs(Xs,Xk),  D = sigma2S (Rs(Xs,Xs) + nugget I_m)
 // with separable correlations R(x,x') = prod_k r(|x_k - x'_k|; theta_k, alpha_k)
 // whose one-dimensional family r is chosen per GP (kernels.cpp: power
-// exponential, Gaussian, Matern 3/2, Matern 5/2).
+// exponential, Gaussian, Matern 3/2, Matern 5/2), times the levels'
+// correlation C[a, a'] of each categorical input (rhoS, rhoB) and, with a
+// bias per field data set, the data sets' correlation in the bias (rhoD;
+// levels.cpp).
 // Everything is evaluated through the Schur complement S = A - B' D^-1 B;
 // the simulator block D is the algebra's business (dense Cholesky, or
 // Kronecker eigendecompositions on a product design).
@@ -229,8 +232,8 @@ struct Touch {
 // it is chosen by make_posterior().
 // Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
 // kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
-// sigma2B, sigma2E, muB, lambdaZ at the offsets of `layout` (iKappa ...
-// iLambdaZ). Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB
+// sigma2B, sigma2E, muB, lambdaZ and the level correlations rhoS, rhoB,
+// rhoD at the offsets of `layout` (iKappa ... iRhoD). Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB
 // have length 0, and muB has none under S-GaSP (`biasMean` false), lambdaZ
 // only under S-GaSP (`sgasp`): the offsets of empty classes are never read.
 class Posterior {
