@@ -147,6 +147,14 @@ level_labels <- function(factors) {
   }), use.names = FALSE)
 }
 
+# Where each categorical input's partial correlations sit among its class's
+# (rhoS1, rhoS2, ...: L (L - 1) / 2 per input, inputs in order): a list of
+# positions, one per input.
+level_positions <- function(factors) {
+  n <- vapply(factors, function(f) (length(f$levels) * (length(f$levels) - 1L)) %/% 2L, integer(1))
+  unname(split(seq_len(sum(n)), factor(rep(seq_along(n), n), levels = seq_along(n))))
+}
+
 # The indicator columns' names of a categorical input: one for two levels,
 # one per level from three.
 indicator_names <- function(nm, levs) {
@@ -281,11 +289,8 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
       i = "Refit it with this version to get the levels' correlation."
     ))
   }
-  L <- vapply(fac, function(f) length(f$levels), integer(1))
-  # this input's partial correlations among the class's (inputs in order)
-  end <- cumsum(L * (L - 1L) / 2L)
   k <- match(input, names(fac))
-  pos <- seq_len(L[[k]] * (L[[k]] - 1L) / 2L) + end[[k]] - L[[k]] * (L[[k]] - 1L) / 2L
+  pos <- level_positions(fac)[[k]]
   draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
   mean_level_corr(draws, fac[[k]]$levels)
 }

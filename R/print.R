@@ -39,11 +39,10 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
   lev <- level_labels(sc$factors)
-  at <- 0L
-  for (f in sc$factors) {
-    L <- length(f$levels)
-    k <- at + seq_len(L * (L - 1L) / 2L)
-    at <- at + L * (L - 1L) / 2L
+  pos <- level_positions(sc$factors)
+  for (i in seq_along(sc$factors)) {
+    f <- sc$factors[[i]]
+    k <- pos[[i]]
     cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
                 paste(f$levels, collapse = ", "),
                 paste0("rhoS", k, " (", sub("^[^:]*: ", "", lev[k]), ")", collapse = ", ")))

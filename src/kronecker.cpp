@@ -26,6 +26,20 @@ static std::vector<double> row_key(const arma::mat& X, arma::uword r, int c0, in
   return key;
 }
 
+// Are the pairs (a[r], b[r]), a in 0 .. A-1 and b in 0 .. B-1, every one of
+// the A B combinations exactly once (A, B >= 2)? Rows, A B of them, none
+// twice.
+static bool full_grid(const std::vector<int>& a, int A, const std::vector<int>& b, int B) {
+  if (A < 2 || B < 2 || (double) A * B != (double) a.size()) return false;
+  std::vector<char> seen((size_t) A * B, 0);
+  for (size_t r = 0; r < a.size(); ++r) {
+    char& s = seen[(size_t) b[r] * A + a[r]];
+    if (s) return false;
+    s = 1;
+  }
+  return true;
+}
+
 bool product_design(const arma::mat& Xs, int p, ProductDesign& out) {
   const int m = Xs.n_rows, q = Xs.n_cols - p;
   if (p < 1 || q < 1 || m < 4) return false;
@@ -38,14 +52,7 @@ bool product_design(const arma::mat& Xs, int p, ProductDesign& out) {
     jt[r] = b.first->second;
   }
   const int I = xs.size(), J = ts.size();
-  if ((double) I * J != (double) m || I < 2 || J < 2) return false;
-  // m rows, I J combinations, none twice: every combination once
-  std::vector<char> seen((size_t) I * J, 0);
-  for (int r = 0; r < m; ++r) {
-    char& s = seen[(size_t) jt[r] * I + ix[r]];
-    if (s) return false;
-    s = 1;
-  }
+  if (!full_grid(ix, I, jt, J)) return false;
   out.I = I; out.J = J; out.ix = ix; out.jt = jt;
   out.Xg.set_size(I, p); out.Tg.set_size(J, q);
   for (int r = 0; r < m; ++r) {
@@ -116,13 +123,7 @@ void KroneckerPosterior::split_levels() {
     rk_[k] = nums.emplace(nk, (int) nums.size()).first->second;
   }
   const int T = tuples.size(), R = nums.size();
-  if (T < 2 || R < 2 || (double) T * R != (double) I) return;
-  std::vector<char> seen((size_t) T * R, 0);
-  for (int k = 0; k < I; ++k) {
-    char& s = seen[(size_t) tk_[k] * R + rk_[k]];
-    if (s) return;
-    s = 1;
-  }
+  if (!full_grid(tk_, T, rk_, R)) return;
   Xt_.set_size(T, p); Xn_.set_size(R, p);
   for (int k = 0; k < I; ++k) {
     if (rk_[k] == 0) Xt_.row(tk_[k]) = dz_.Xg.row(k);

@@ -30,12 +30,9 @@ void level_corr(const std::vector<LevelInput>& in, const double* z,
     arma::mat W(L, L, arma::fill::zeros);
     W(0, 0) = 1.0;
     // the CPCs of this input, column by column
-    std::vector<double> zz(z, z + L * (L - 1) / 2);
-    z += L * (L - 1) / 2;
-    int at = 0;
     arma::mat Z(L, L, arma::fill::zeros);
     for (int j = 0; j < L - 1; ++j)
-      for (int i = j + 1; i < L; ++i) Z(i, j) = zz[at++];
+      for (int i = j + 1; i < L; ++i) Z(i, j) = *z++;
     for (int i = 1; i < L; ++i) {
       double acc = 0.0;
       for (int j = 0; j < i; ++j) {
@@ -58,23 +55,27 @@ int level_of(const arma::mat& X, arma::uword i, const LevelInput& f) {
   return best;
 }
 
+// out(i, j) *= C[a[i], b[j]] over the first nr rows and nc columns of out
+// (lower: only i >= j).
+static void scale_by_codes(const arma::mat& C, const int* a, const int* b, arma::uword nr,
+                           arma::uword nc, arma::mat& out, bool lower) {
+  for (arma::uword j = 0; j < nc; ++j) {
+    const double* cj = C.colptr(b[j]);
+    double* col = out.colptr(j);
+    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] *= cj[a[i]];
+  }
+}
+
 void level_scale(const std::vector<LevelInput>& in, const std::vector<arma::mat>& C,
                  const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower,
                  int rows) {
   if (in.empty()) return;
   const arma::uword nr = rows < 0 ? X.n_rows : rows, nc = rows < 0 ? Y.n_rows : rows;
-  std::vector<int> a(nr * in.size()), b(nc * in.size());
+  std::vector<int> a(nr), b(nc);
   for (size_t f = 0; f < in.size(); ++f) {
-    for (arma::uword i = 0; i < nr; ++i) a[f * nr + i] = level_of(X, i, in[f]);
-    for (arma::uword j = 0; j < nc; ++j) b[f * nc + j] = level_of(Y, j, in[f]);
-  }
-  for (arma::uword j = 0; j < nc; ++j) {
-    double* col = out.colptr(j);
-    for (size_t f = 0; f < in.size(); ++f) {
-      const double* cf = C[f].colptr(b[f * nc + j]);
-      const int* af = a.data() + f * nr;
-      for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] *= cf[af[i]];
-    }
+    for (arma::uword i = 0; i < nr; ++i) a[i] = level_of(X, i, in[f]);
+    for (arma::uword j = 0; j < nc; ++j) b[j] = level_of(Y, j, in[f]);
+    scale_by_codes(C[f], a.data(), b.data(), nr, nc, out, lower);
   }
 }
 
@@ -84,12 +85,7 @@ void source_scale(int L, const double* z, const int* a, const int* b, arma::mat&
   in[0].L = L;
   std::vector<arma::mat> C;
   level_corr(in, z, C);
-  const arma::mat& C0 = C[0];
-  for (arma::uword j = 0; j < out.n_cols; ++j) {
-    const double* cj = C0.colptr(b[j]);
-    double* col = out.colptr(j);
-    for (arma::uword i = lower ? j : 0; i < out.n_rows; ++i) col[i] *= cj[a[i]];
-  }
+  scale_by_codes(C[0], a, b, out.n_rows, out.n_cols, out, lower);
 }
 
 void level_scale(const std::vector<LevelInput>& in, const double* z, const arma::mat& X,

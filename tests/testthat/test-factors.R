@@ -55,6 +55,12 @@ test_that("a categorical input's level correlation is the plain-R one from its p
   expect_equal(unname(level_correlation(fit, "mat")), level_corr_plain(3, c(0.5, -0.3, 0.8)),
                tolerance = 1e-12)
   expect_identical(rownames(level_correlation(fit, "mat")), c("a", "b", "c"))
+  expect_output(print(fit), "level correlation rhoS1 \\(b~a\\), rhoS2 \\(c~a\\), rhoS3 \\(c~b \\| a\\)")
+  # each input's partial correlations among the class's: 1 for two levels,
+  # 3 for three, 6 for four, in the inputs' order
+  two3 <- list(list(levels = c("a", "b")), list(levels = c("a", "b", "c")),
+               list(levels = c("a", "b", "c", "d")))
+  expect_identical(FBC:::level_positions(two3), list(1L, 2:4, 5:10))
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS4", "thetaS5", "alphaS4", "alphaS5",
                                         "rhoS1", "rhoS2", "rhoS3", "thetaB4", "alphaB4",
                                         "rhoB1", "rhoB2", "rhoB3", "sigma2S", "sigma2B",
@@ -326,6 +332,7 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
   expect_true(all(abs(fit$Phi[, "rhoD1"]) < 1))
   expect_identical(fit$spec$model$source, c(rep(1L, 20), rep(2L, 10)))
   expect_output(print(fit), "a bias each, correlated by rhoD1 \\(B~A\\)")
+  expect_output(print(fit), "categorical input out: levels conc, rate; level correlation rhoS1 \\(rate~conc\\)")
   C <- level_correlation(fit, "lab", "bias")
   expect_equal(C[1, 2], mean(fit$Phi[, "rhoD1"]), tolerance = 1e-12)
   # the same inputs predict differently in the two data sets
