@@ -24,6 +24,18 @@ chain_matrix <- function(x, chain) {
   vapply(cols, function(v) v[seq_len(n)], numeric(n))
 }
 
+# posterior (1.4 on) caps an ESS above S log10(S) for S draws, a guard
+# against antithetic noise in short chains, and warns each time; the capped
+# value is the one to report, and one warning per column of every summary
+# table would bury the user's own warnings.
+ess_capped <- function(expr) {
+  withCallingHandlers(expr, warning = function(w) {
+    if (grepl("ESS has been capped", conditionMessage(w), fixed = TRUE)) {
+      invokeRestart("muffleWarning")
+    }
+  })
+}
+
 # Rank-normalised split R-hat and bulk ESS of every column of Phi
 # (posterior::rhat, posterior::ess_bulk); NA for constant (fixed) columns or
 # when there are too few draws.
@@ -31,7 +43,7 @@ chain_diagnostics <- function(Phi, chain) {
   one <- function(x) {
     m <- chain_matrix(x, chain)
     if (nrow(m) < 4L || stats::var(as.vector(m)) == 0) return(c(NA_real_, NA_real_))
-    c(posterior::rhat(m), posterior::ess_bulk(m))
+    c(posterior::rhat(m), ess_capped(posterior::ess_bulk(m)))
   }
   out <- vapply(seq_len(ncol(Phi)), function(j) one(Phi[, j]), numeric(2))
   data.frame(rhat = out[1, ], ess = out[2, ], row.names = colnames(Phi))

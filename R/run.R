@@ -119,7 +119,7 @@ run_chain <- function(job, k, start) {
   }
   stopAsked <- function() {
     (files && file.exists(file.path(dir, "STOP"))) ||
-      (ownerHere && !isTRUE(tools::pskill(job$owner$pid, 0L)))
+      (ownerHere && !process_alive(job$owner$pid))
   }
   tick <- function(force = FALSE) {
     if (is.null(job$progress)) return(invisible())
@@ -382,6 +382,19 @@ stop_chains <- function(run, collect, sequential, quiet = FALSE) {
     reset_plan()
   }
   hard
+}
+
+# Is process `pid` of this machine running? Signal 0 tells whether it exists;
+# a killed process whose parent has not reaped it (a worker reparented to a
+# container's PID 1 that never reaps) still exists as a zombie, state "Z" in
+# /proc/<pid>/stat, and counts as gone.
+process_alive <- function(pid) {
+  if (!isTRUE(tools::pskill(pid, 0L))) return(FALSE)
+  stat <- tryCatch(readLines(file.path("/proc", pid, "stat"), n = 1L, warn = FALSE),
+                   error = function(e) character(), warning = function(w) character())
+  if (length(stat) == 0L) return(TRUE)
+  # the state follows the command name, which is in parentheses
+  !identical(sub("^.*\\) (\\S).*$", "\\1", stat), "Z")
 }
 
 # Kills the processes on this machine that run this call's chains.

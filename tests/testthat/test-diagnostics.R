@@ -127,6 +127,18 @@ test_that("R-hat and ESS use chains cut to a common length", {
   expect_true(all(is.na(unlist(chain_diagnostics(cbind(b = rep(1, 500)), chain)))))
 })
 
+test_that("an antithetic short chain's ESS is posterior's capped one, without its warning", {
+  # alternating draws: the raw bulk ESS exceeds S log10(S), S = 60 draws in
+  # all, and posterior caps it there (from 1.4, with a warning each time)
+  set.seed(1)
+  x <- rep(c(1, -1), 30) + rnorm(60, 0, 0.1)
+  chain <- rep(1:2, each = 30)
+  expect_no_warning(d <- chain_diagnostics(cbind(a = x), chain))
+  ref <- suppressWarnings(posterior::ess_bulk(cbind(x[1:30], x[31:60])))
+  expect_equal(d$ess, ref)
+  if (utils::packageVersion("posterior") >= "1.4.0") expect_equal(d$ess, 60 * log10(60))
+})
+
 test_that("convergence_messages() wants an fbc object", {
   expect_snapshot(error = TRUE, convergence_messages(list()))
 })
