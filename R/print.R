@@ -45,15 +45,14 @@ print.fbc <- function(x, digits = 3, ...) {
     k <- pos[[i]]
     cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
                 paste(f$levels, collapse = ", "),
-                paste0("rhoS", k, " (", sub("^[^:]*: ", "", lev[k]), ")", collapse = ", ")))
+                rho_list("rhoS", k, lev)))
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", ")))
   if (!is.null(sc$source)) {
     own <- if (isTRUE(sc$sourceBias)) {
       lab <- level_labels(list(sc$source))
-      sprintf("; a bias each, correlated by %s",
-              paste0("rhoD", seq_along(lab), " (", sub("^[^:]*: ", "", lab), ")", collapse = ", "))
+      sprintf("; a bias each, correlated by %s", rho_list("rhoD", seq_along(lab), lab))
     } else ""
     cat(sprintf("  field data sets (%s): %s%s\n", sc$source$name,
                 paste(sc$source$levels, collapse = ", "), own))
@@ -117,4 +116,10 @@ print.fbc <- function(x, digits = 3, ...) {
                  vapply(paste, character(1), collapse = "\n")), sep = "\n")
   }
   invisible(x)
+}
+
+# "rhoS1 (b~a), rhoS2 (c~a)": the parameters cls k with what each
+# correlates, from level_labels() without the input's name.
+rho_list <- function(cls, k, labels) {
+  paste0(cls, k, " (", sub("^[^:]*: ", "", labels[k]), ")", collapse = ", ")
 }

@@ -132,7 +132,7 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
                          levels = NULL, source = NULL, call = parent.frame()) {
   nLev <- level_count(levels)
-  nSrc <- if (discrepancy == "none") 0L else source_count(source)
+  nSrc <- source_count(source)
   sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)

@@ -369,6 +369,11 @@ private:
   // the bias's correlation with new inputs (see model.cpp)
   void biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
                  const int* source = nullptr) const;
+  // out(i, j) *= the bias's level correlations between row i of X (field
+  // data set srcX[i]) and row j of Y (srcY[j]): rhoB's, and rhoD's with a
+  // bias per data set (see model.cpp)
+  void biasLevels(const arma::mat& X, const int* srcX, const arma::mat& Y, const int* srcY,
+                  arma::mat& out, bool lower) const;
   arma::mat Bz_, Wz_;  // S-GaSP workspaces
 
 protected:

@@ -339,6 +339,15 @@ bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
   return true;
 }
 
+// out(i, j) *= prod_f C_f[a_f(i), a_f(j)] (rhoB: each categorical input f's
+// level correlation) * D[srcX[i], srcY[j]] (rhoD: the field data sets'
+// biases' correlation, with a bias per data set); lower: only i >= j.
+void SchurPosterior::biasLevels(const arma::mat& X, const int* srcX, const arma::mat& Y,
+                                const int* srcY, arma::mat& out, bool lower) const {
+  level_scale(levels, phi.memptr() + iRhoB, X, Y, out, lower);
+  if (sourceL_) source_scale(sourceL_, phi.memptr() + iRhoD, srcX, srcY, out, lower);
+}
+
 // The bias GP's correlation between the distinct field inputs and new
 // inputs Xnew (K, nu x b) and at the new inputs themselves (r, b): for the
 // KOH bias K = R(Xu, Xnew), r = 1; for the S-GaSP one the discretized
@@ -350,21 +359,19 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
                                const int* source) const {
   const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
   const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
-  K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
-  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xnew, K, false);
   if (sourceL_) {
     if (!source) Rcpp::stop("the bias of a new point needs its field data set");
     for (arma::uword c = 0; c < Xnew.n_rows; ++c)
       if (source[c] < 0 || source[c] >= sourceL_)
         Rcpp::stop("field data set %d of a new point is not one of the %d", source[c] + 1, sourceL_);
-    source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), source, K, false);
   }
+  K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
+  biasLevels(Xu_, srcU_.data(), Xnew, source, K, false);
   r.ones(Xnew.n_rows);
   if (!sgasp) return;
   const double c = nu_ / phi[iLambdaZ];
   arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
-  level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, L, false);
-  if (sourceL_) source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), srcU_.data(), L, false);
+  biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), L, false);
   L.diag() += c;
   if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
   solve_lower(L, K);  // H
@@ -487,8 +494,7 @@ double SchurPosterior::evaluate(const Touch& t) {
       P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
-    level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, Rb_.alt(), true);
-    if (sourceL_) source_scale(sourceL_, phi.memptr() + iRhoD, srcU_.data(), srcU_.data(), Rb_.alt(), true);
+    biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), Rb_.alt(), true);
     if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }
