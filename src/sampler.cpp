@@ -28,6 +28,21 @@
 // (every 50 sweeps), log s moves by +min(0.5, 1/sqrt(b)) when the batch's
 // acceptance rate is above the move's target, by -min(0.5, 1/sqrt(b))
 // otherwise (adapt_step()).
+// Warm-up of data-dependent length (nBurn < 0, R's nBurn = NULL): the
+// same adaptation, in windows of WINDOW sweeps. At the end of a window the
+// proposals have settled when every adapted move's acceptance over the
+// window is within WARM_BAND of its target, its log scale has moved by at
+// most WARM_DRIFT adaptation steps over the last two windows (the rule's
+// +-steps cancel around the right scale and add up while it is still
+// walking), and every block is shaped, the SD its shape gives each
+// parameter within a factor exp(WARM_SHAPE) of the previous window's.
+// Warm-up ends at the end of the second settled window in a row, at the
+// earliest after warmMin sweeps, and at warmMax sweeps in any case
+// (warmCapped). The joint proposals' running covariance starts afresh at
+// sweeps 200, 400, 800, ... (each estimate leaves out at least the first
+// half of the sweeps so far, as a fixed burn-in's leaves out its first
+// half). The decision is part of the chain's state, so a run split into
+// pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch); the schedule is the list of moves in sweep
 // order, and each move's acceptance and adapted scale is reported by name.
@@ -38,6 +53,7 @@
 // state.
 #include "fbc.h"
 #include <cli/progress.h>
+#include <climits>
 
 static void check_interrupt_fn(void*) { R_CheckUserInterrupt(); }
 // TRUE when the user pressed Ctrl-C (the interrupt is consumed here so the
@@ -47,6 +63,8 @@ static bool user_interrupted() {
 }
 
 static const int BATCH = 50;
+static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
+static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).
@@ -70,7 +88,7 @@ struct Block {
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
   double logscale = 0, accBatch = 0;
-  int n = 0, batch = 0, restart = 0;
+  int n = 0, batch = 0, restart = 0;  // restart < 0: a warm-up of data-dependent length
   bool shaped = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
@@ -105,6 +123,12 @@ struct Block {
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
       Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
   }
+  // log det(L)^(1/k): the log size of the shape.
+  double log_volume() const { return arma::mean(arma::log(L.diag())); }
+  // Log SD the shape L gives each parameter, relative to its size.
+  arma::vec log_shape() const {
+    return 0.5 * arma::log(arma::sum(arma::square(L), 1)) - log_volume();
+  }
   // Start the running mean and covariance afresh (L is kept).
   void forget() { n = 0; mean.zeros(); cov.zeros(); }
   // Welford update of the running mean and covariance of w.
@@ -127,8 +151,13 @@ struct Block {
       const double eps = 1e-10 * (1 + arma::max(tmp.diag()));
       for (int i = 0; i < k; ++i) tmp(i, i) += eps;
       if (chol_lower(tmp)) {
+        // a warm-up of data-dependent length keeps the proposal's volume
+        // when it reshapes (the scale tuned so far stays right when an
+        // estimate started afresh leaves out the drift from the start)
+        const double vol = restart < 0 && shaped ? log_volume() : 0;
         L = arma::trimatl(tmp);
         if (!shaped) logscale = std::log(2.38 / std::sqrt((double) k));
+        else if (restart < 0) logscale += vol - log_volume();
         shaped = true;
       }
     }
@@ -145,6 +174,15 @@ struct Chain {
   int scaleBatch = 0, iter = 0, batch = 0;
   double ll = 0;
   Rcpp::CharacterVector params;  // parameter names (R's spec$vars), for the report
+  // warm-up of data-dependent length (see the top): sweeps of warm-up once
+  // it ended (0: not yet), its bounds, settled windows in a row, and per
+  // move the acceptance so far in this window and the log scale at the end
+  // of the last two windows (winScale: 2 x moves), per block parameter the
+  // log SD of the shape at the end of the last window
+  bool adaptive = false, warmCapped = false;
+  int warmup = 0, warmMin = 200, warmMax = 5000, settled = 0, windows = 0;
+  arma::vec winAcc, winShape;
+  arma::mat winScale;
   Chain(Posterior& p, const Priors& r) : post(p), pr(r) {}
   std::string param_name(int j) const {
     return params.size() == post.d ? std::string(params[j]) : "phi" + std::to_string(j + 1);
@@ -171,6 +209,10 @@ struct Move {
   virtual double& batchCount(Chain& ch) = 0;
   virtual void adapt(Chain&) {}
   virtual double logScale(const Chain&) const { return NA_REAL; }
+  // the log size of its proposal, whose drift a warm-up watches
+  virtual double warmScale(const Chain& ch) const { return logScale(ch); }
+  // the acceptance rate its scale adapts towards (NA: not adapted)
+  virtual double target() const { return NA_REAL; }
   virtual const char* kind() const = 0;
 };
 
@@ -203,6 +245,7 @@ struct SiteMove : Move {
     ch.logsd[j] = adapt_step(ch.logsd[j], ch.accBatch[j] / BATCH, 0.44, ch.batch);
   }
   double logScale(const Chain& ch) const override { return ch.logsd[j]; }
+  double target() const override { return 0.44; }
 };
 
 // Joint random-walk move of a block (w* = w + exp(s) L e); it records the
@@ -243,12 +286,16 @@ struct BlockMove : Move {
   // the restart sweep on)
   void after(bool burn, int it, int rep) override {
     if (!burn) return;
-    if (it == b.restart && rep == 0) b.forget();
+    const bool restart = b.restart < 0 ?
+      it >= 200 && it % 200 == 0 && ((it / 200) & (it / 200 - 1)) == 0 : it == b.restart;
+    if (restart && rep == 0) b.forget();
     b.record();
   }
   double& batchCount(Chain&) override { return b.accBatch; }
   void adapt(Chain&) override { b.adapt(b.accBatch / BATCH); }
   double logScale(const Chain&) const override { return b.logscale; }
+  double warmScale(const Chain&) const override { return b.logscale + b.log_volume(); }
+  double target() const override { return idx.size() == 1 ? 0.44 : 0.234; }
 };
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
@@ -309,6 +356,7 @@ struct ScaleMove : Move {
     ch.scaleLogsd = adapt_step(ch.scaleLogsd, ch.scaleAccBatch / BATCH, 0.44, ch.scaleBatch);
   }
   double logScale(const Chain& ch) const override { return ch.scaleLogsd; }
+  double target() const override { return 0.44; }
 };
 
 static double list_num(const Rcpp::List& s, const char* name, double dflt) {
@@ -328,6 +376,17 @@ static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
   ch.scaleLogsd = list_num(state, "scaleLogsd", std::log(0.1));
   ch.scaleAccBatch = list_num(state, "scaleAccBatch", 0);
   ch.scaleBatch = (int) list_num(state, "scaleBatch", 0);
+  ch.warmup = (int) list_num(state, "warmup", 0);
+  ch.warmMin = (int) list_num(state, "warmMin", 200);
+  ch.warmMax = (int) list_num(state, "warmMax", 5000);
+  ch.warmCapped = list_num(state, "warmCapped", 0) != 0;
+  ch.settled = (int) list_num(state, "settled", 0);
+  ch.windows = (int) list_num(state, "windows", 0);
+  if (state.containsElementNamed("winAcc")) {
+    ch.winAcc = Rcpp::as<arma::vec>(state["winAcc"]);
+    ch.winShape = Rcpp::as<arma::vec>(state["winShape"]);
+    ch.winScale = Rcpp::as<arma::mat>(state["winScale"]);
+  }
 }
 
 // The schedule of `moves` (R's sampler_moves()): the moves in sweep order.
@@ -356,7 +415,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   // The joint proposals' covariance is estimated afresh from the middle of
   // burn-in (when burn-in has at least 400 sweeps), so the first sweeps'
   // drift from the starting point does not inflate it.
-  const int restartAt = nBurn >= 400 ? nBurn / 2 : 0;
+  // (A warm-up of data-dependent length starts it afresh at 200, 400, 800, ...)
+  const int restartAt = nBurn < 0 ? -1 : nBurn >= 400 ? nBurn / 2 : 0;
   Rcpp::List blockState;
   if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
     blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
@@ -431,12 +491,65 @@ static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
   }
 }
 
-// The end of a batch of BATCH sweeps: adapt every move during burn-in, set
-// the progress bar's status, start the next batch's counts.
-static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar) {
+// Log SDs of every block's shape, blocks in order.
+static arma::vec shapes(const Chain& ch) {
+  arma::vec out;
+  for (const Block& b : ch.blocks) out = arma::join_cols(out, b.log_shape());
+  return out;
+}
+
+// Starts the window bookkeeping of a warm-up of data-dependent length.
+static void start_windows(Chain& ch, const Schedule& schedule) {
+  const int nm = schedule.size();
+  if ((int) ch.winAcc.n_elem == nm && (int) ch.winScale.n_cols == nm) return;
+  ch.winAcc.zeros(nm);
+  ch.winScale.set_size(2, nm);
+  for (int i = 0; i < nm; ++i) ch.winScale(0, i) = ch.winScale(1, i) = schedule[i]->warmScale(ch);
+  ch.winShape = shapes(ch);
+  ch.windows = 0;
+}
+
+// The end of warm-up window `it` (see the top): have the proposals settled
+// over it? Then the window's bookkeeping starts afresh.
+static bool window_settled(Chain& ch, const Schedule& schedule) {
+  ++ch.windows;
+  const double step = WARM_DRIFT * std::min(0.5, 1.0 / std::sqrt((double) std::max(ch.batch, 1)));
+  bool ok = ch.windows >= 2;  // the log scales two windows back to compare with
+  const int nm = schedule.size();
+  for (int i = 0; i < nm; ++i) {
+    const double target = schedule[i]->target(), ls = schedule[i]->warmScale(ch);
+    if (!ISNAN(target)) {
+      if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) ok = false;
+      if (std::fabs(ls - ch.winScale(0, i)) > step) ok = false;
+    }
+    ch.winScale(0, i) = ch.winScale(1, i);
+    ch.winScale(1, i) = ls;
+  }
+  const arma::vec sh = shapes(ch);
+  for (const Block& b : ch.blocks) if (!b.shaped) ok = false;
+  if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
+    ok = false;
+  ch.winShape = sh;
+  ch.winAcc.zeros();
+  return ok;
+}
+
+// The end of a batch of BATCH sweeps (sweep `it`): adapt every move during
+// burn-in (and decide whether a warm-up of data-dependent length ends
+// here), set the progress bar's status, start the next batch's counts.
+static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar, int it) {
   ++ch.batch;
   if (burn)
     for (auto& mv : schedule) mv->adapt(ch);
+  if (burn && ch.adaptive) {
+    for (size_t i = 0; i < schedule.size(); ++i)
+      ch.winAcc[i] += schedule[i]->batchCount(ch) / BATCH;
+    if (it % WINDOW == 0) {
+      ch.settled = window_settled(ch, schedule) ? ch.settled + 1 : 0;
+      if (ch.settled >= 2 && it >= ch.warmMin) ch.warmup = it;
+    }
+    if (ch.warmup == 0 && it >= ch.warmMax) { ch.warmup = it; ch.warmCapped = true; }
+  }
   if (!Rf_isNull(bar)) {
     double lo = 1, mean = 0;
     for (auto& mv : schedule) {
@@ -491,7 +604,13 @@ static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule) {
     Rcpp::Named("scaleLogsd") = ch.scaleLogsd,
     Rcpp::Named("scaleAccBatch") = ch.scaleAccBatch,
     Rcpp::Named("scaleBatch") = ch.scaleBatch,
-    Rcpp::Named("moves") = move_report(ch, schedule));
+    Rcpp::Named("moves") = move_report(ch, schedule),
+    Rcpp::Named("warmup") = ch.warmup, Rcpp::Named("warmMin") = ch.warmMin,
+    Rcpp::Named("warmMax") = ch.warmMax, Rcpp::Named("warmCapped") = ch.warmCapped,
+    Rcpp::Named("settled") = ch.settled, Rcpp::Named("windows") = ch.windows,
+    Rcpp::Named("winAcc") = Rcpp::NumericVector(ch.winAcc.begin(), ch.winAcc.end()),
+    Rcpp::Named("winScale") = Rcpp::wrap(ch.winScale),
+    Rcpp::Named("winShape") = Rcpp::NumericVector(ch.winShape.begin(), ch.winShape.end()));
 }
 
 // [[Rcpp::export(.fbc_sample_c)]]
@@ -515,6 +634,14 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     ch.params = Rcpp::as<Rcpp::CharacterVector>(moves["params"]);
   read_chain(ch, state, d);
   Schedule schedule = make_schedule(ch, moves, state, nBurn);
+  ch.adaptive = nBurn < 0;
+  if (ch.adaptive) {
+    if (ch.warmMax % WINDOW != 0 || ch.warmMin < 0)
+      Rcpp::stop("the warm-up bounds must be whole windows of 100 sweeps");
+    start_windows(ch, schedule);
+  } else {
+    ch.warmup = nBurn;
+  }
 
   ch.lp.set_size(d);
   for (int j = 0; j < d; ++j) ch.lp[j] = pr(j, post.phi[j]);
@@ -522,9 +649,13 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   if (!std::isfinite(arma::accu(ch.lp)))
     Rcpp::stop("the initial values are outside the support of their priors");
 
-  // Retained iterations in (iter, iter + nIter]: it > nBurn, (it - nBurn) % thinning == 0.
+  // Retained iterations in (iter, iter + nIter]: it > W, (it - W) % thinning
+  // == 0, with W = nBurn, or the warm-up's length once it has ended (at
+  // most as many as if it ended now).
   const int it0 = ch.iter, it1 = ch.iter + nIter;
-  auto keptUpTo = [&](int it) { return it > nBurn ? (it - nBurn) / thinning : 0; };
+  auto warm = [&]() { return ch.adaptive ? (ch.warmup > 0 ? ch.warmup : INT_MAX) : nBurn; };
+  const int W0 = ch.adaptive ? (ch.warmup > 0 ? ch.warmup : it0) : nBurn;
+  auto keptUpTo = [&](int it) { return it > W0 ? (it - W0) / thinning : 0; };
   const int nKeep = keptUpTo(it1) - keptUpTo(it0);
   Rcpp::NumericMatrix draws(nKeep, d);
   Rcpp::NumericVector logPost(nKeep), logLik(nKeep);
@@ -535,14 +666,15 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   if (!Rf_isNull(progress)) bar = PROTECT(cli_progress_bar(nIter, progress));
 
   for (int it = it0 + 1; it <= it1; ++it) {
-    const bool burn = it <= nBurn;
+    const int W = warm();
+    const bool burn = it <= W;
     sweep(ch, schedule, burn, it);
     if (!burn) ++nPost;
     if (it % BATCH == 0) {
       if (!Rf_isNull(bar) && user_interrupted()) interrupted = true;
-      end_batch(ch, schedule, burn, interrupted ? R_NilValue : bar);
+      end_batch(ch, schedule, burn, interrupted ? R_NilValue : bar, it);
     }
-    if (it > nBurn && (it - nBurn) % thinning == 0 && kept < nKeep) {
+    if (it > W && (it - W) % thinning == 0 && kept < nKeep) {
       for (int j = 0; j < d; ++j) draws(kept, j) = post.phi[j];
       logLik[kept] = ch.ll;
       logPost[kept] = ch.ll + arma::accu(ch.lp);
@@ -568,6 +700,14 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
     const double a = nPost > 0 ? mv->accPiece / nPost : NA_REAL;
     if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
     else for (int j : mv->idx) acceptance[j] = a;
+  }
+  if (kept < nKeep) {  // a warm-up that ended in this piece
+    Rcpp::NumericMatrix cut(kept, d);
+    for (int j = 0; j < d; ++j)
+      std::copy(draws.begin() + j * nKeep, draws.begin() + j * nKeep + kept, cut.begin() + j * kept);
+    draws = cut;
+    logPost = Rcpp::NumericVector(logPost.begin(), logPost.begin() + kept);
+    logLik = Rcpp::NumericVector(logLik.begin(), logLik.begin() + kept);
   }
   return Rcpp::List::create(
     Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
