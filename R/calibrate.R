@@ -515,14 +515,14 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
 #'                  discrepancy = "none")
 #' colnames(fit$Phi)
-calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
+calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "sgasp", "none"),
                       kernelS = "powexp",
                       kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = 20, checkpoint = NULL,
-                      checkpointEvery = 60, converge = FALSE, output = NULL, source = NULL,
+                      checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
                       sourceBias = c("shared", "own")) {
   call <- match.call()
   fac <- read_factors(sim, field, output, source)
@@ -546,18 +546,12 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
       i = "A calibration input is a simulator input that the field experiment does not set (such as {.code g} in {.code ballSim})."
     ))
   }
-  nMCMC <- check_count(nMCMC, "nMCMC", min = 2)
-  nBurn <- check_count(nBurn, "nBurn", min = 0)
-  thinning <- check_count(thinning, "thinning", min = 1)
+  len <- check_run_length(nMCMC, nBurn, thinning, converge)
+  nMCMC <- len$nMCMC
+  nBurn <- len$nBurn
+  thinning <- len$thinning
+  converge <- len$converge
   nChains <- check_count(nChains, "nChains", min = 1)
-  if (nBurn >= nMCMC) {
-    cli::cli_abort("{.arg nBurn} must be smaller than {.arg nMCMC} (got {nBurn} and {nMCMC}).")
-  }
-  if ((nMCMC - nBurn) %/% thinning < 2L) {
-    cli::cli_abort(
-      "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning})."
-    )
-  }
   sourceBias <- match_choice(sourceBias, c("shared", "own"), "sourceBias")
   if (sourceBias == "own" && (is.null(fac$source) || length(fac$source$levels) < 2L)) {
     cli::cli_abort(c(
@@ -571,11 +565,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
   if (sourceBias == "own" && discrepancy == "none") {
     cli::cli_abort("{.code sourceBias = \"own\"} gives each field data set its own bias, but {.code discrepancy = \"none\"} has no bias.")
   }
-  converge <- check_converge(converge)
-  check_ceiling(converge, nMCMC)
-  longest <- max(nMCMC, converge$maxMCMC)
-  check_run_size((longest - nBurn) %/% thinning, length(param_names(p, q, discrepancy)), nChains,
-                 iters = longest, args = c(if (is.null(converge)) "nMCMC" else "maxMCMC", "nChains"))
+  check_run_length_size(len, length(param_names(p, q, discrepancy)), nChains)
   check_flag(showProgress, "showProgress")
   sampler <- check_sampler(sampler, blockSim)
   check_checkpoint(checkpoint, checkpointEvery)

@@ -2,25 +2,43 @@
 # and the rounds calibrate() and update() run under it.
 #
 # A run under a rule is one run of every chain, stopped at a data-dependent
-# length: the chains go to their first target (nMCMC sweeps), then, while
-# the draws do not meet the rule and the ceiling is not reached, `every`
-# sweeps further, each chain continuing its own random stream. The checks
-# fall at fixed sweep counts (nMCMC, nMCMC + every, ...) and read only the
-# draws up to that count, so a run resumed from a checkpoint, or run on
-# another plan, stops where the uninterrupted run stops, with its draws.
+# length: the chains go to their first target (nMCMC sweeps, or, without
+# nMCMC, the end of their warm-up plus fbc_first_check sweeps), then, while
+# the draws do not meet the rule and the ceiling is not reached, further:
+# the retained-phase sweeps of each chain grow by `every`, or by half
+# (every = NULL), each chain continuing its own random stream. The checks
+# fall at sweep counts fixed by the chain's own state (its warm-up length)
+# and read only the draws up to that count, so a run resumed from a
+# checkpoint, or run on another plan, stops where the uninterrupted run
+# stops, with its draws.
+
+# Defaults of the run's length (see ?calibrate, "Run length"):
+# a warm-up of data-dependent length (nBurn = NULL) takes between `min` and
+# `max` sweeps (src/sampler.cpp); without nMCMC a rule first checks
+# `fbc_first_check` sweeps after a chain's warm-up; converge = FALSE
+# without nMCMC runs fbc_fixed_nMCMC sweeps.
+fbc_warmup <- list(min = 200L, max = 5000L)
+fbc_first_check <- 500L
+fbc_fixed_nMCMC <- 8000L
 
 #' Stop a run when it has converged
 #'
-#' A rule for [calibrate()] and [update.fbc()] (`converge =`): the chains run
-#' their `nMCMC` sweeps, then `every` sweeps more at a time until every
-#' sampled parameter has a rank-normalised split R-hat below `rhat` and a
-#' bulk effective sample size of at least `ess` (Vehtari et al. 2021, as in
-#' the `estimates` table and [convergence_messages()]), or until a chain has
-#' run `maxMCMC` sweeps in all. The checks fall after `nMCMC`,
-#' `nMCMC + every`, ... sweeps and each reads the draws up to that point, so
-#' [set.seed()] reproduces the run and a checkpointed run resumes to the same
-#' end with the same draws. Burn-in (`nBurn`) is not extended: the proposals
-#' stay as burn-in left them.
+#' A rule for [calibrate()] and [update.fbc()] (`converge =`), and what
+#' [calibrate()] does by default: the chains run their first stretch
+#' (`nMCMC` sweeps when given; otherwise until 500 sweeps after each
+#' chain's warm-up), then more until every sampled parameter has a
+#' rank-normalised split R-hat below `rhat` and a bulk effective sample size
+#' of at least `ess` (Vehtari et al. 2021, as in the `estimates` table and
+#' [convergence_messages()]), or until a chain has run `maxMCMC` sweeps in
+#' all. Each further stretch adds half the sweeps each chain has retained so
+#' far (`every = NULL`; rounded up to 50: 500, 750, 1150, ... after
+#' warm-up), so the checks cost little and the run stops within about half
+#' again of the shortest run that meets the rule, or `every` sweeps (a
+#' number). The checks fall at sweep counts fixed by each chain's own warm-up
+#' and each reads the draws up to that point, so [set.seed()] reproduces the
+#' run on any [future::plan()] and a checkpointed run resumes to the same end
+#' with the same draws. Warm-up is not extended: the proposals stay as
+#' warm-up left them.
 #'
 #' So give the run the burn-in its proposals need. With hundreds or
 #' thousands of simulator runs the simulator's hyperparameters have a narrow,
@@ -39,8 +57,9 @@
 #'
 #' @param rhat Largest R-hat allowed (above 1).
 #' @param ess Smallest bulk ESS allowed (a whole number, at least 10).
-#' @param every Sweeps per chain between two checks (a whole number, at
-#'   least 50).
+#' @param every `NULL` (the default: each stretch adds half the sweeps
+#'   retained so far, see above) or the sweeps per chain between two checks
+#'   (a whole number, at least 50).
 #' @param maxMCMC Most sweeps a chain runs in all, counted from its start
 #'   (burn-in included; for [update.fbc()], the sweeps of the run it
 #'   continues too).
@@ -49,18 +68,22 @@
 #' @examples
 #' until_converged()
 #' \donttest{
+#' # the default: until converged, checked soon after warm-up
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField)
+#' fit$settings$converge$sweeps
 #' # a short first stretch, then 500 sweeps at a time until converged
 #' set.seed(1)
 #' fit <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000,
 #'                  converge = until_converged(ess = 400, every = 500))
 #' fit$settings$converge$sweeps
 #' }
-until_converged <- function(rhat = 1.01, ess = 400, every = 500, maxMCMC = 50000) {
+until_converged <- function(rhat = 1.01, ess = 400, every = NULL, maxMCMC = 50000) {
   if (!is.numeric(rhat) || length(rhat) != 1L || is.na(rhat) || !(rhat > 1)) {
     cli::cli_abort("{.arg rhat} must be a number above 1 (got {format_value(rhat)}).")
   }
   ess <- check_count(ess, "ess", min = 10)
-  every <- check_count(every, "every", min = 50)
+  if (!is.null(every)) every <- check_count(every, "every", min = 50)
   maxMCMC <- check_count(maxMCMC, "maxMCMC", min = 2)
   structure(list(rhat = rhat, ess = ess, every = every, maxMCMC = maxMCMC),
             class = "fbc_converge")
@@ -68,8 +91,8 @@ until_converged <- function(rhat = 1.01, ess = 400, every = 500, maxMCMC = 50000
 
 #' @export
 print.fbc_converge <- function(x, ...) {
-  cat(sprintf("<fbc_converge> until every R-hat < %g and bulk ESS >= %d, checked every %d sweeps, at most %d sweeps per chain\n",
-              x$rhat, x$ess, x$every, x$maxMCMC))
+  cat(sprintf("<fbc_converge> until every R-hat < %g and bulk ESS >= %d, checked %s, at most %d sweeps per chain\n",
+              x$rhat, x$ess, check_schedule(x), x$maxMCMC))
   invisible(x)
 }
 
@@ -84,6 +107,61 @@ check_converge <- function(converge, arg = "converge", call = parent.frame()) {
     "{.arg {arg}} must be {.code TRUE}, {.code FALSE} or a rule from {.fn until_converged}, not {format_value(converge, typed = TRUE)}.",
     call = call
   )
+}
+
+# When a rule checks, in words.
+check_schedule <- function(rule) {
+  if (is.null(rule$every)) "as the retained sweeps grow by half" else sprintf("every %d sweeps", rule$every)
+}
+
+# The run's length from calibrate()'s arguments (see ?calibrate, "Run
+# length"): `nMCMC` the sweeps a chain runs at most (the given nMCMC, or
+# the rule's ceiling), `nBurn` a number (a fixed burn-in) or the bounds of a
+# warm-up of data-dependent length (list(min, max): at most half the run,
+# whole windows of 100 sweeps), `converge` the rule or NULL (`first`: the
+# sweeps after warm-up of its first check, when nMCMC was not given).
+check_run_length <- function(nMCMC, nBurn, thinning, converge, call = parent.frame()) {
+  rule <- check_converge(converge %||% is.null(nMCMC), call = call)
+  if (!is.null(nMCMC)) nMCMC <- check_count(nMCMC, "nMCMC", min = 2, call = call)
+  if (!is.null(nBurn)) nBurn <- check_count(nBurn, "nBurn", min = 0, call = call)
+  thinning <- check_count(thinning, "thinning", min = 1, call = call)
+  if (is.null(nMCMC) && is.null(rule)) nMCMC <- fbc_fixed_nMCMC
+  if (is.null(nMCMC)) {
+    rule$first <- fbc_first_check
+    nMCMC <- rule$maxMCMC
+    check_ceiling(rule, (nBurn %||% 0) + rule$first, arg = "nBurn", call = call)
+  } else if (!is.null(nBurn)) {
+    if (nBurn >= nMCMC) {
+      cli::cli_abort("{.arg nBurn} must be smaller than {.arg nMCMC} (got {nBurn} and {nMCMC}).",
+                     call = call)
+    }
+    if ((nMCMC - nBurn) %/% thinning < 2L) {
+      cli::cli_abort(
+        "{.arg nMCMC}, {.arg nBurn} and {.arg thinning} keep fewer than 2 draws ((nMCMC - nBurn) / thinning = {(nMCMC - nBurn) / thinning}).",
+        call = call
+      )
+    }
+  }
+  if (!is.null(rule) && is.null(rule$first)) check_ceiling(rule, nMCMC, call = call)
+  if (is.null(nBurn)) {
+    cap <- min(fbc_warmup$max, (nMCMC %/% 2L) %/% 100L * 100L)
+    if (cap < 100L) {
+      cli::cli_abort(c(
+        "{.arg nMCMC} = {nMCMC} leaves no room for a warm-up of data-dependent length ({.code nBurn = NULL}).",
+        i = "Give {.arg nMCMC} of at least 200, or a fixed {.arg nBurn}."
+      ), call = call)
+    }
+    nBurn <- list(min = min(fbc_warmup$min, cap), max = cap)
+  }
+  list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, converge = rule)
+}
+
+# The size check of a run (check_run_size()) at its longest.
+check_run_length_size <- function(len, d, nChains, call = parent.frame()) {
+  burn <- if (is.list(len$nBurn)) len$nBurn$min else len$nBurn
+  args <- c(if (is.null(len$converge)) "nMCMC" else "maxMCMC", "nChains")
+  check_run_size((len$nMCMC - burn) %/% len$thinning, d, nChains, iters = len$nMCMC,
+                 args = args, call = call)
 }
 
 # The ceiling of a rule must leave room for the first stretch of `first`
@@ -118,7 +196,7 @@ start_from_result <- function(r, iter0) {
 # A chain's result cut to the draws it kept up to sweep `target` (a chain
 # resumed from a checkpoint of a later round is further on).
 result_up_to <- function(r, iter0, target, nBurn, thinning) {
-  keep <- seq_len(min(r$kept, kept_between(iter0, target, nBurn, thinning)))
+  keep <- seq_len(min(r$kept, kept_between(iter0, target, chain_burn(r$state, nBurn), thinning)))
   r$draws <- r$draws[keep, , drop = FALSE]
   r$logPost <- r$logPost[keep]
   r$logLik <- r$logLik[keep]
@@ -126,47 +204,109 @@ result_up_to <- function(r, iter0, target, nBurn, thinning) {
   r
 }
 
+# The rule's diagnostics of chain results (R-hat and bulk ESS of the
+# parameters of Phi, as the fit's estimates would give them: both are
+# invariant under the affine map of kappa to its units), without making the
+# fit: the check's cost is that of the diagnostics alone.
+rule_met <- function(results, rule, cols) {
+  draws <- lapply(results, function(r) r$draws[seq_len(r$kept), cols, drop = FALSE])
+  chain <- rep(seq_along(draws), vapply(draws, nrow, integer(1)))
+  est <- chain_diagnostics(do.call(rbind, draws), chain)
+  ok <- !is.na(est$rhat) & !is.na(est$ess)
+  list(met = any(ok) && all(est$rhat[ok] < rule$rhat) && all(est$ess[ok] >= rule$ess),
+       rhat = max(est$rhat, na.rm = TRUE), ess = min(est$ess, na.rm = TRUE))
+}
+
+# Sweeps after warm-up of the next check, after one at `post`: half as many
+# again (rounded up to a piece of 50), or `every` more.
+next_check <- function(post, rule) {
+  if (is.null(rule$every)) as.integer(ceiling(1.5 * post / fbc_piece) * fbc_piece) else post + rule$every
+}
+
 # Runs the chains from `starts` to `target` (one per chain), then, under
-# `rule` (until_converged(), or NULL for one round), in rounds of
-# rule$every further sweeps until assemble() of the results cut to the
-# round's targets meets the rule or a chain reaches rule$maxMCMC. Chain k
-# continues its own stream across rounds. `assemble(results, target)` makes
-# the fit of the chains run to `target`; `run_chains()` gets the other
-# arguments. Returns the fit, with
-# settings$converge (the rule and how it ended) when there is a rule.
+# `rule` (until_converged(), or NULL for one round), in rounds until the
+# results cut to the round's ends meet the rule or a chain reaches
+# rule$maxMCMC. A rule with `first` (nMCMC not given) ends its first round
+# `first` sweeps after each chain's warm-up; later rounds of any rule end
+# each chain at its warm-up plus next_check() of its retained-phase sweeps.
+# Chain k continues its own stream across rounds. `assemble(results,
+# target)` makes the fit of the chains run to `target` (once, at the end);
+# `run_chains()` gets the other arguments. Returns the fit, with
+# settings$converge (the rule and how it ended) when there is a rule, and
+# the warm-up each chain had (settings$warmup; see warmup_settings()).
 run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, showProgress,
                        ...) {
   iter0 <- vapply(starts, function(s) as.integer(s$iter0), integer(1))
   target <- as.integer(target)
   if (!is.null(rule)) target <- pmin(target, rule$maxMCMC)
+  post <- if (!is.null(rule$first)) rep(as.integer(rule$first), length(starts))
+  cols <- phi_columns(list(...)$spec)
   checks <- 0L
   repeat {
     for (k in seq_along(starts)) {
-      starts[[k]]$finished <- starts[[k]]$state$iter >= target[k]
+      starts[[k]]$finished <- starts[[k]]$state$iter >= chain_stop(starts[[k]]$state, target[k], post[k], nBurn)
     }
     results <- run_chains(starts = starts, seeds = seeds, target = target, nBurn = nBurn,
-                          thinning = thinning, showProgress = showProgress, ...)
-    if (is.null(rule)) return(assemble(results, target))
+                          thinning = thinning, showProgress = showProgress, post = post, ...)
+    stops <- vapply(seq_along(results), function(k) {
+      if (is.null(results[[k]])) NA_integer_ else chain_stop(results[[k]]$state, target[k], post[k], nBurn)
+    }, integer(1))
+    if (is.null(rule)) {
+      return(warmup_settings(assemble(results, ifelse(is.na(stops), target, stops)), nBurn))
+    }
     stopped <- vapply(results, function(r) is.null(r) || isTRUE(r$interrupted), logical(1))
     cut <- results
     for (k in which(!stopped)) {
-      cut[[k]] <- result_up_to(results[[k]], iter0[k], target[k], nBurn, thinning)
+      cut[[k]] <- result_up_to(results[[k]], iter0[k], stops[k], nBurn, thinning)
     }
-    fit <- assemble(cut, target)
     checks <- checks + 1L
-    converged <- !any(stopped) && meets_rule(fit, rule)
-    if (converged || any(stopped) || all(target >= rule$maxMCMC)) break
+    check <- if (!any(stopped)) rule_met(cut, rule, cols)
+    converged <- isTRUE(check$met)
+    if (converged || any(stopped) || all(stops >= rule$maxMCMC)) break
     if (showProgress) {
-      est <- fit$estimates
       cli::cli_inform(
-        "Not converged after {max(target)} sweeps (max R-hat {format(max(est$rhat, na.rm = TRUE), digits = 4)}, min bulk ESS {round(min(est$ess, na.rm = TRUE))}): {rule$every} more."
+        "Not converged after {max(stops)} sweeps (max R-hat {format(check$rhat, digits = 4)}, min bulk ESS {round(check$ess)}): more."
       )
     }
     starts <- lapply(seq_along(results), function(k) start_from_result(results[[k]], iter0[k]))
     seeds <- lapply(results, `[[`, "seed")
-    target <- pmin(target + rule$every, rule$maxMCMC)
+    warm <- vapply(results, function(r) chain_burn(r$state, nBurn), numeric(1))
+    post <- vapply(seq_along(results), function(k) next_check(stops[k] - warm[k], rule), numeric(1))
+    target <- rep(as.integer(rule$maxMCMC), length(starts))
   }
+  fit <- assemble(cut, ifelse(is.na(stops), target, stops))
   fit$settings$converge <- c(unclass(rule), list(converged = converged, checks = checks,
-                                                 sweeps = max(target)))
+                                                 sweeps = max(stops, na.rm = TRUE)))
+  warmup_settings(fit, nBurn)
+}
+
+# The fit's warm-up: settings$warmup, the sweeps of warm-up (burn-in) of each
+# chain; with a warm-up of data-dependent length, settings$nBurn its longest
+# (for readers of a fixed burn-in), settings$warmupBounds its bounds and
+# settings$warmupCapped the chains whose warm-up reached the maximum.
+warmup_settings <- function(fit, nBurn) {
+  states <- lapply(fit$state$chains, `[[`, "sampler")
+  warm <- vapply(states, function(st) chain_burn(st, nBurn), numeric(1))
+  fit$settings$warmup <- as.integer(warm)
+  if (is.list(nBurn)) {
+    fit$settings$nBurn <- max(warm, na.rm = TRUE)
+    fit$settings$warmupBounds <- nBurn
+    fit$settings$warmupCapped <- which(vapply(states, function(st) isTRUE(st$warmCapped), logical(1)))
+  }
   fit
+}
+
+# The warm-up a fit's further run continues with: the bounds of a warm-up of
+# data-dependent length, or the fixed burn-in.
+run_burn <- function(settings) settings$warmupBounds %||% settings$nBurn
+
+# How print() states the warm-up.
+warmup_text <- function(s) {
+  if (is.null(s$warmupBounds)) return(sprintf("%d burn-in", as.integer(s$nBurn)))
+  w <- s$warmup
+  txt <- if (length(unique(w)) == 1L) sprintf("%d", w[1]) else sprintf("%d-%d", min(w), max(w))
+  capped <- s$warmupCapped
+  sprintf("%s warm-up (adaptive%s)", txt,
+          if (length(capped)) sprintf(", maximum %d reached by chain %s", s$warmupBounds$max,
+                                      paste(capped, collapse = ", ")) else "")
 }

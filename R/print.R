@@ -66,13 +66,13 @@ print.fbc <- function(x, digits = 3, ...) {
               paste0("kappa", seq_len(sc$q), " = ", des$names, " (design ",
                      des$range, ")", collapse = ", ")))
   chains <- length(unique(x$chain))
-  cat(sprintf("  MCMC: %d iterations, %d burn-in, thinning %d -> %d draws%s (%.1f s)\n",
-              s$nMCMC, s$nBurn, s$thinning, nrow(x$Phi),
+  cat(sprintf("  MCMC: %d iterations, %s, thinning %d -> %d draws%s (%.1f s)\n",
+              s$nMCMC, warmup_text(s), s$thinning, nrow(x$Phi),
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
   cv <- s$converge
   if (!is.null(cv)) {
-    cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked every %d sweeps: %s\n",
-                cv$rhat, cv$ess, cv$every,
+    cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked %s: %s\n",
+                cv$rhat, cv$ess, check_schedule(cv),
                 if (isTRUE(cv$converged)) sprintf("met at %d sweeps per chain (check %d)", cv$sweeps, cv$checks)
                 else sprintf("not met by %d sweeps per chain (%d checks)", cv$sweeps, cv$checks)))
   }

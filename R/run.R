@@ -40,6 +40,23 @@ chain_start <- function(state, d, iter0 = state$iter) {
        scaleAccSum = 0, nPost = 0L, finished = FALSE)
 }
 
+# A chain's burn-in (warm-up) length: `nBurn` when fixed; for a warm-up of
+# data-dependent length (`nBurn` its bounds, list(min, max)) the length it
+# ended at, NA while it goes on.
+chain_burn <- function(state, nBurn) {
+  if (!is.list(nBurn)) return(nBurn)
+  w <- state$warmup
+  if (is.null(w) || w <= 0) NA_real_ else as.numeric(w)
+}
+
+# Where a chain stops: at `target`, or `post` sweeps after its warm-up
+# (post not NA/NULL) when that comes first (not known while it warms up).
+chain_stop <- function(state, target, post, nBurn) {
+  if (is.null(post) || is.na(post)) return(as.integer(target))
+  w <- chain_burn(state, nBurn)
+  as.integer(if (is.na(w)) target else min(target, w + post))
+}
+
 # Number of draws kept over iterations (from, to] (see src/sampler.cpp).
 kept_between <- function(from, to, nBurn, thinning) {
   k <- function(it) if (it > nBurn) (it - nBurn) %/% thinning else 0L
@@ -90,10 +107,15 @@ run_chain <- function(job, k, start) {
   genv <- globalenv()
   d <- length(start$state$phi)
   target <- job$target[k]
+  after <- job$post[k]
+  stopAt <- function(state) chain_stop(state, target, after, job$nBurn)
   n0 <- nrow(start$draws)
   # a chain resumed beyond this call's target (a later round of a run
-  # under until_converged()) keeps what it has
-  nAll <- max(n0, kept_between(start$iter0, target, job$nBurn, job$thinning))
+  # under until_converged()) keeps what it has; while a warm-up of
+  # data-dependent length goes on, room for the most it can keep
+  burn <- chain_burn(start$state, job$nBurn)
+  if (is.na(burn)) burn <- start$state$iter
+  nAll <- max(n0, kept_between(start$iter0, stopAt(start$state), burn, job$thinning))
   draws <- matrix(NA_real_, nAll, d)
   logPost <- logLik <- rep(NA_real_, nAll)
   if (n0) {
@@ -110,7 +132,7 @@ run_chain <- function(job, k, start) {
     list(state = cur$state, iter0 = start$iter0,
          draws = draws[kept, , drop = FALSE], logPost = logPost[kept], logLik = logLik[kept],
          accSum = cur$accSum, scaleAccSum = cur$scaleAccSum, nPost = cur$nPost,
-         finished = cur$state$iter >= target)
+         finished = cur$state$iter >= stopAt(cur$state))
   }
   save <- function() {
     write_atomic(list(format = fbc_checkpoint_format, id = job$id, chain = k,
@@ -128,7 +150,8 @@ run_chain <- function(job, k, start) {
     lastTick <<- now
     acc <- if (cur$nPost > 0) mean(cur$accSum / cur$nPost, na.rm = TRUE) else NA_real_
     job$progress(amount = 0, fbcChain = k, fbcDone = cur$state$iter - job$from[k],
-                 fbcAcceptance = acc, fbcBurn = cur$state$iter <= job$nBurn)
+                 fbcAcceptance = acc, fbcBurn = in_warmup(cur$state, job$nBurn),
+                 fbcTotal = expected_stop(cur$state, target, after, job$nBurn) - job$from[k])
   }
   lastSave <- lastTick <- proc.time()[["elapsed"]]
   status <- "done"
@@ -140,13 +163,20 @@ run_chain <- function(job, k, start) {
       # than later in the future's own code, which would lose the result
       Sys.sleep(0.001)
       it <- cur$state$iter
-      if (it >= target) break
+      stop <- stopAt(cur$state)
+      if (it >= stop) break
       if (stopAsked()) { status <- "stopped"; break }
-      n <- min(target, (it %/% fbc_piece + 1L) * fbc_piece) - it
+      n <- min(stop, (it %/% fbc_piece + 1L) * fbc_piece) - it
       assign(".Random.seed", cur$seed, envir = genv)
       r <- sample_chain(job$dat, job$spec, cur$state, job$moves, n, job$nBurn,
                         job$thinning, FALSE, sampler = job$sampler)
       seed <- genv$.Random.seed
+      if (cur$kept + r$kept > nrow(draws)) {  # not reached: nAll is an upper bound
+        grow <- cur$kept + r$kept - nrow(draws)
+        draws <- rbind(draws, matrix(NA_real_, grow, d))
+        logPost <- c(logPost, rep(NA_real_, grow))
+        logLik <- c(logLik, rep(NA_real_, grow))
+      }
       if (r$kept > 0) {
         idx <- cur$kept + seq_len(r$kept)
         draws[idx, ] <- r$draws[seq_len(r$kept), , drop = FALSE]
@@ -160,7 +190,7 @@ run_chain <- function(job, k, start) {
                   nPost = cur$nPost + r$nPost, seed = seed)
       if (isTRUE(r$interrupted)) { status <- "interrupted"; break }
       now <- proc.time()[["elapsed"]]
-      if (files && (now - lastSave >= job$every) && cur$state$iter < target) {
+      if (files && (now - lastSave >= job$every) && cur$state$iter < stopAt(cur$state)) {
         save()
         lastSave <- now
       }
@@ -199,7 +229,7 @@ free_workers <- function() {
 # reached) kills this run's worker processes on this machine and restarts
 # the plan's workers, and the chains come back as far as their checkpoints.
 run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
-                       showProgress, run = NULL, every = 60) {
+                       showProgress, run = NULL, every = 60, post = NULL) {
   n <- length(starts)
   sequential <- plan_is_sequential()
   if (is.null(run) && !sequential) {
@@ -215,7 +245,7 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   from <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
   target <- rep_len(as.integer(target), n)
   job <- list(dat = dat, spec = list(table = spec$table, model = spec$model), moves = moves, nBurn = nBurn,
-              thinning = thinning, target = target, from = from,
+              thinning = thinning, target = target, post = post, from = from,
               dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
               token = basename(tempfile("")), sampler = fbc_sampler_hook(),
               owner = list(pid = Sys.getpid(), host = Sys.info()[["nodename"]]),
@@ -231,10 +261,17 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   if (showProgress && length(todo)) {
     if (n > 1L) {
       workers <- future::nbrOfWorkers()
-      cli::cli_inform("Running {n} chain{?s} of {max(target)} iterations on {workers} worker{?s}.")
+      if (is.null(post)) {
+        cli::cli_inform("Running {n} chain{?s} of {max(target)} iterations on {workers} worker{?s}.")
+      } else {
+        cli::cli_inform("Running {n} chain{?s} to {post[1]} sweeps after warm-up on {workers} worker{?s}.")
+      }
     }
-    bar <- progress_bar(n, target - from, nBurn)
-    job$progress <- progressr::progressor(steps = sum(target - from), enable = TRUE,
+    total <- vapply(seq_len(n), function(k) {
+      expected_stop(starts[[k]]$state, target[k], post[k], nBurn)
+    }, numeric(1)) - from
+    bar <- progress_bar(n, total, nBurn)
+    job$progress <- progressr::progressor(steps = sum(total), enable = TRUE,
                                           initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
   }
   # the run's shared state: the futures launched, the results collected,
@@ -336,7 +373,7 @@ collect_chains <- function(rs) {
 progress_handler <- function(bar, all = FALSE) {
   function(c) {
     if (!all && is.null(c$fbcChain)) return()
-    if (!is.null(bar)) bar$update(c$fbcChain, c$fbcDone, c$fbcAcceptance, c$fbcBurn)
+    if (!is.null(bar)) bar$update(c$fbcChain, c$fbcDone, c$fbcAcceptance, c$fbcBurn, c$fbcTotal)
     if (!is.null(findRestart("muffleProgression", c))) invokeRestart("muffleProgression")
   }
 }
@@ -425,10 +462,27 @@ reset_plan <- function() {
   invisible()
 }
 
+# Is the chain in its burn-in (warm-up)?
+in_warmup <- function(state, nBurn) {
+  w <- chain_burn(state, nBurn)
+  is.na(w) || state$iter <= w
+}
+
+# Where a chain is expected to stop, for the progress bar: chain_stop(), with
+# a warm-up still going on counted as ending where it is now or at its
+# minimum.
+expected_stop <- function(state, target, post, nBurn) {
+  if (is.null(post) || is.na(post) || !is.na(chain_burn(state, nBurn))) {
+    return(chain_stop(state, target, post, nBurn))
+  }
+  min(target, max(state$iter, nBurn$min) + post)
+}
+
 # One progress bar for all chains: sweeps done over all, time left and each
 # chain's acceptance rate (mean over its parameters, after burn-in).
 progress_bar <- function(n, total, nBurn, .envir = parent.frame()) {
   done <- rep(0, n)
+  totals <- rep_len(total, n)
   acc <- rep(NA_real_, n)
   burn <- rep(TRUE, n)
   id <- cli::cli_progress_bar(
@@ -437,15 +491,18 @@ progress_bar <- function(n, total, nBurn, .envir = parent.frame()) {
     format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}"
   )
   status <- function() {
-    a <- ifelse(burn, "burn-in", ifelse(is.na(acc), "-", sprintf("%.2f", acc)))
+    a <- ifelse(burn, "warm-up", ifelse(is.na(acc), "-", sprintf("%.2f", acc)))
     paste("acceptance", paste(a, collapse = " "))
   }
   list(
-    update = function(k, d, a, b) {
+    update = function(k, d, a, b, tot = NULL) {
       done[k] <<- d
       acc[k] <<- a
       burn[k] <<- isTRUE(b)
-      try(cli::cli_progress_update(id = id, set = sum(done), status = status(), .envir = .envir),
+      # a run whose length depends on the warm-up: each chain's expected total
+      if (!is.null(tot)) totals[k] <<- tot
+      try(cli::cli_progress_update(id = id, set = sum(done), total = sum(totals),
+                                   status = status(), .envir = .envir),
           silent = TRUE)
     },
     done = function() try(cli::cli_progress_done(id = id, .envir = .envir), silent = TRUE)

@@ -90,7 +90,9 @@ proposal_sd <- function(state, vars, fixed) {
 
 # Runs the compiled sampler for `nIter` further sweeps from `state` (the
 # sampler's whole state on its own scale: see initial_state()); sweeps up to
-# `nBurn` (counted from the chain's start) adapt the proposals. An interrupt
+# `nBurn` (counted from the chain's start) adapt the proposals, or, when
+# `nBurn` is a warm-up's bounds (list(min, max)), sweeps until the
+# proposals have settled (src/sampler.cpp). An interrupt
 # (Ctrl-C) is reported in the result (`interrupted`, `done`, `kept`), not as
 # a condition: the caller decides what to say.
 sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showProgress,
@@ -98,6 +100,12 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
   progress <- if (showProgress) {
     list(name = "Calibrating", clear = TRUE, show_after = 0,
          format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}")
+  }
+  if (is.list(nBurn)) {
+    # the bounds travel in the state; -1: a warm-up of data-dependent length
+    state$warmMin <- state$warmMin %||% as.integer(nBurn$min)
+    state$warmMax <- state$warmMax %||% as.integer(nBurn$max)
+    nBurn <- -1L
   }
   args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
                nIter, nBurn, thinning, fbc_nugget, progress)

@@ -31,7 +31,7 @@
 update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
   converge <- check_converge(converge)
-  if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every
+  if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every %||% fbc_first_check
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
   check_flag(showProgress, "showProgress")
   object <- check_fbc(object, "object")
@@ -83,6 +83,6 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
   }
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
-             nBurn = s$nBurn, thinning = s$thinning, showProgress = showProgress,
+             nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
              dat = object$data, spec = object$spec, moves = s$moves)
 }
