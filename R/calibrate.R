@@ -311,19 +311,42 @@
 #' directory must be on storage the workers share (on a cluster, not a
 #' node's local disk); see `vignette("clusters", package = "FBC")`.
 #'
-#' @section Stopping when converged:
-#' With `converge = TRUE` (or `converge = until_converged(...)`) the chains
-#' run `nMCMC` sweeps (burn-in included), then the draws are checked, and
-#' while some sampled parameter has R-hat of 1.01 or more or bulk ESS below
-#' 400, every chain runs `every` (500) sweeps further and the draws are
-#' checked again, up to `maxMCMC` (50000) sweeps per chain. The chains
-#' continue their own random streams, and each check reads the draws up to
-#' its sweep count only: the run is one run of a data-dependent length,
-#' reproduced by [set.seed()] on any plan and resumed from a checkpoint to
-#' the same end. Burn-in is not extended. A short first stretch (say
-#' `nMCMC = 2000, nBurn = 1000`) then stops near the shortest run that meets
-#' the thresholds instead of the defaults' 8000 sweeps; `print()` says how
-#' many checks it took and whether the rule was met, and
+#' @section Warm-up and stopping when converged:
+#' By default (`nBurn = NULL`) each chain warms up for as long as its
+#' proposals need, as Stan's warm-up does: the proposals adapt as under a
+#' fixed burn-in (see "Sampler"), and at the end of every window of 100
+#' sweeps the chain checks whether they have settled: every adapted move's
+#' acceptance over the window within 0.15 of its target, its proposal's log
+#' size moved by at most 2.5 adaptation steps over the last two windows
+#' (the steps cancel around the right scale and add up while it is still
+#' walking), and every joint proposal's shape (its SD per parameter,
+#' relative to its size) within 35% of the last window's. Warm-up ends at
+#' the second settled window in a row, after at least 200 sweeps and at
+#' most 5000 (or half of an explicit `nMCMC`); the joint proposals' running
+#' covariance starts afresh at sweeps 200, 400, 800, ..., so it leaves out
+#' the drift from the start as a fixed burn-in's second half does. Each
+#' chain decides for itself: `fit$settings$warmup` has each chain's
+#' warm-up length (`settings$warmupCapped` the chains that reached the
+#' maximum), and `print()` says it. Draws are kept, every `thinning`-th, from
+#' the end of each chain's warm-up.
+#'
+#' By default (`nMCMC = NULL`, `converge = NULL`) the run stops when it has
+#' converged: each chain runs 500 sweeps after its warm-up, then the draws
+#' of all chains are checked, and while some sampled parameter has R-hat of
+#' 1.01 or more or bulk ESS below 400 every chain runs further, half as many
+#' sweeps again as it has retained (500, 750, 1150, ... after warm-up), up to
+#' `maxMCMC` (50000) sweeps per chain. [until_converged()] sets other
+#' thresholds, a fixed step (`every`) or another ceiling; `converge = TRUE`
+#' is its defaults. With an explicit `nMCMC` the run has that many sweeps
+#' (`converge = NULL` or `FALSE`), or the rule's first check falls after
+#' `nMCMC` sweeps (`converge = TRUE` or a rule); with an explicit `nBurn` the
+#' burn-in is fixed. An explicit `nMCMC` and `nBurn` give the draws of
+#' earlier versions. The chains continue their own random streams, and
+#' each check reads the draws up to its sweep count only: a run of
+#' data-dependent length (warm-up or stopping) is one run, reproduced by
+#' [set.seed()] on any plan and resumed from a checkpoint to the same end
+#' with the same draws. Warm-up is not extended by the rule. `print()` says
+#' how many checks it took and whether the rule was met, and
 #' `fit$settings$converge` keeps it. [update.fbc()] takes the same rule.
 #'
 #' @section Defaults:
@@ -397,9 +420,13 @@
 #'   (matched by name or by position: see "Columns").
 #' @param field Field data: the response and the same `p` experimental
 #'   inputs (see "Columns").
-#' @param nMCMC Total number of MCMC iterations (sweeps), burn-in included.
+#' @param nMCMC Total number of MCMC iterations (sweeps) per chain, burn-in
+#'   included. `NULL` (the default): until converged (see `converge`), or
+#'   8000 sweeps with `converge = FALSE`.
 #' @param nBurn Number of initial iterations discarded; the proposals adapt
-#'   during these.
+#'   during these. `NULL` (the default): each chain warms up until its
+#'   proposals have settled, between 200 and 5000 sweeps (see "Warm-up and
+#'   stopping when converged").
 #' @param thinning Keep every `thinning`-th iteration after burn-in.
 #' @param nChains Number of independent chains (see "Several chains").
 #' @param kappaDist,kappaInit,kappaP1,kappaP2 Prior family, initial value and
@@ -460,11 +487,13 @@
 #'   independent, as in Gu, Anderson and McPhillips' multi-source
 #'   calibration; `set_hyperPriors(rhoDDist = "fixed", rhoDInit = 0)` holds
 #'   them independent).
-#' @param converge `FALSE` (the default) runs `nMCMC` sweeps per chain.
-#'   `TRUE`, or a rule from [until_converged()], runs `nMCMC` sweeps and then
-#'   more, a few hundred at a time, until every R-hat is below 1.01 and every
-#'   bulk ESS at least 400 (the rule's thresholds), or a ceiling; see
-#'   "Stopping when converged".
+#' @param converge `NULL` (the default): stop when converged when `nMCMC`
+#'   is not given, run `nMCMC` sweeps when it is. `FALSE` runs `nMCMC`
+#'   sweeps per chain. `TRUE`, or a rule from [until_converged()], runs
+#'   until every R-hat is below 1.01 and every bulk ESS at least 400 (the
+#'   rule's thresholds), or a ceiling, checked first 500 sweeps after each
+#'   chain's warm-up (or after `nMCMC` sweeps when given); see "Warm-up and
+#'   stopping when converged".
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,

@@ -31,18 +31,21 @@
 // Warm-up of data-dependent length (nBurn < 0, R's nBurn = NULL): the
 // same adaptation, in windows of WINDOW sweeps. At the end of a window the
 // proposals have settled when every adapted move's acceptance over the
-// window is within WARM_BAND of its target, its log scale has moved by at
-// most WARM_DRIFT adaptation steps over the last two windows (the rule's
-// +-steps cancel around the right scale and add up while it is still
-// walking), and every block is shaped, the SD its shape gives each
-// parameter within a factor exp(WARM_SHAPE) of the previous window's.
-// Warm-up ends at the end of the second settled window in a row, at the
-// earliest after warmMin sweeps, and at warmMax sweeps in any case
+// window is within WARM_BAND of its target, the log size of its proposal
+// (log s, plus log det(L)^(1/k) for a block) has moved by at most
+// WARM_DRIFT adaptation steps over the last two windows (over the second
+// alone at the second window's end: the first explores; the rule's +-steps
+// cancel around the right scale and add up while it is still walking), and
+// every block is shaped, the SD its shape gives each parameter relative to
+// the shape's size within a factor exp(WARM_SHAPE) of the previous
+// window's. Warm-up ends at the end of the second settled window in a row,
+// at the earliest after warmMin sweeps, and at warmMax sweeps in any case
 // (warmCapped). The joint proposals' running covariance starts afresh at
 // sweeps 200, 400, 800, ... (each estimate leaves out at least the first
 // half of the sweeps so far, as a fixed burn-in's leaves out its first
-// half). The decision is part of the chain's state, so a run split into
-// pieces ends warm-up at the same sweep.
+// half), and a reshaped block keeps its proposal's size (log s absorbs the
+// change of log det(L)^(1/k)). The decision is part of the chain's state, so
+// a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch); the schedule is the list of moves in sweep
 // order, and each move's acceptance and adapted scale is reported by name.
@@ -504,7 +507,7 @@ static void start_windows(Chain& ch, const Schedule& schedule) {
   if ((int) ch.winAcc.n_elem == nm && (int) ch.winScale.n_cols == nm) return;
   ch.winAcc.zeros(nm);
   ch.winScale.set_size(2, nm);
-  for (int i = 0; i < nm; ++i) ch.winScale(0, i) = ch.winScale(1, i) = schedule[i]->warmScale(ch);
+  ch.winScale.fill(NA_REAL);  // no window has ended
   ch.winShape = shapes(ch);
   ch.windows = 0;
 }
@@ -520,7 +523,10 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     const double target = schedule[i]->target(), ls = schedule[i]->warmScale(ch);
     if (!ISNAN(target)) {
       if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) ok = false;
-      if (std::fabs(ls - ch.winScale(0, i)) > step) ok = false;
+      // the drift since two windows back (since the first window's end at
+      // the second: the first window is the exploring one)
+      const double ref = ISNAN(ch.winScale(0, i)) ? ch.winScale(1, i) : ch.winScale(0, i);
+      if (!ISNAN(ref) && std::fabs(ls - ref) > step) ok = false;
     }
     ch.winScale(0, i) = ch.winScale(1, i);
     ch.winScale(1, i) = ls;

@@ -1,0 +1,149 @@
+# The warm-up of data-dependent length (nBurn = NULL) and the run that stops
+# when converged (nMCMC = NULL): where warm-up ends, that the draws are the
+# posterior's (kappa against the grid posterior of helper-grid.R with
+# dense_loglik() of helper-dense.R), and that a run of data-dependent
+# length is reproduced by set.seed() on every plan and by its checkpoints.
+
+# Every hyperparameter fixed (the values of test-exact-posterior.R): kappa
+# alone is sampled, and its posterior is known on a grid.
+kappa_only <- function(sigma2E = 0.15) {
+  set_hyperPriors(
+    thetaSDist = "fixed", thetaSInit = c(3.6, 0.42), alphaSDist = "fixed", alphaSInit = 1.95,
+    thetaBDist = "fixed", thetaBInit = 2, alphaBDist = "fixed", alphaBInit = 1.8,
+    sigma2SDist = "fixed", sigma2SInit = 3.3, sigma2BDist = "fixed", sigma2BInit = 0.9,
+    sigma2EDist = "fixed", sigma2EInit = sigma2E, muBDist = "fixed", muBInit = 0.2
+  )
+}
+
+expect_grid_kappa <- function(fit, u = seq(0, 1, length.out = 101), ...) {
+  d <- fit$data
+  expect_kappa_grid(fit, function(phi) {
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget)
+  }, u, ...)
+}
+
+test_that("warm-up ends early where the proposals settle at once, and the draws are the posterior's", {
+  set.seed(31)
+  # the default run (warm-up of data-dependent length, stop when converged)
+  # with a larger ESS asked, for a sharp comparison with the grid
+  fit <- calibrate(ballSim, ballField, nChains = 2, hypers = kappa_only(),
+                   converge = until_converged(ess = 1500))
+  # kappa's walk has its scale right within two windows of 100 sweeps: the
+  # warm-up ends at the earliest (300 sweeps: two settled windows after the
+  # first)
+  expect_true(all(fit$settings$warmup <= 300))
+  expect_length(fit$settings$warmupCapped, 0)
+  expect_true(fit$settings$converge$converged)
+  expect_gte(fit$estimates["kappa1", "ess"], 1500)
+  # each chain kept the sweeps after its own warm-up, at thinning 2
+  post <- fit$settings$converge$sweeps - fit$settings$warmup
+  expect_equal(as.vector(table(fit$chain)), post %/% 2)
+  expect_grid_kappa(fit)
+})
+
+test_that("warm-up goes on while a proposal is badly scaled, and the draws are the posterior's", {
+  # precise field data (sigma2E fixed 1000 times smaller): kappa's posterior
+  # is some 30 times narrower than its initial proposal SD, so its walk
+  # accepts almost nothing until the scale has come down by steps of at
+  # most 0.5 on the log scale
+  set.seed(32)
+  fit <- calibrate(ballSim, ballField, nChains = 2, hypers = kappa_only(sigma2E = 1.5e-4),
+                   converge = until_converged(ess = 1500))
+  expect_true(all(fit$settings$warmup >= 500))
+  expect_true(all(fit$settings$warmup < 5000))
+  expect_true(fit$settings$converge$converged)
+  # the grid over where the posterior lies (on the sampler's [0, 1] scale)
+  sc <- fit$scale
+  u <- (fit$Phi[, "kappa1"] - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2])
+  w <- diff(range(u))
+  expect_grid_kappa(fit, seq(max(0, min(u) - w), min(1, max(u) + w), length.out = 201))
+})
+
+test_that("print() says how long the warm-up was, and when it reached its maximum", {
+  s <- list(nBurn = 700, warmup = c(500L, 700L), warmupBounds = list(min = 200L, max = 5000L),
+            warmupCapped = integer())
+  expect_identical(FBC:::warmup_text(s), "500-700 warm-up (adaptive)")
+  s$warmup <- c(5000L, 700L)
+  s$warmupCapped <- 1L
+  expect_identical(FBC:::warmup_text(s), "700-5000 warm-up (adaptive, maximum 5000 reached by chain 1)")
+  expect_identical(FBC:::warmup_text(list(nBurn = 2000)), "2000 burn-in")
+})
+
+test_that("the warm-up's maximum ends it, and thinning counts from its end", {
+  set.seed(33)
+  # nMCMC = 400: at most 200 sweeps of warm-up (half the run), too few for
+  # the ball's hyperparameters to settle
+  fit <- calibrate(ballSim, ballField, nMCMC = 400, nChains = 2, thinning = 3)
+  expect_identical(fit$settings$warmup, c(200L, 200L))
+  expect_identical(fit$settings$warmupCapped, 1:2)
+  expect_match(FBC:::warmup_text(fit$settings), "maximum 200 reached by chain 1, 2")
+  expect_equal(as.vector(table(fit$chain)), c(66, 66))  # (400 - 200) %/% 3
+  expect_output(print(fit), "200 warm-up (adaptive, maximum 200", fixed = TRUE)
+})
+
+test_that("explicit nMCMC and nBurn keep the fixed run", {
+  set.seed(34)
+  fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, nChains = 2)
+  expect_identical(fit$settings$warmup, c(200L, 200L))
+  expect_null(fit$settings$converge)
+  expect_null(fit$settings$warmupBounds)
+  expect_equal(as.vector(table(fit$chain)), c(150, 150))
+})
+
+test_that("run-length arguments are checked, naming the argument", {
+  expect_snapshot(error = TRUE, {
+    calibrate(ballSim, ballField, nMCMC = 150)
+    calibrate(ballSim, ballField, nBurn = 60000)
+    calibrate(ballSim, ballField, nMCMC = 500, nBurn = 500)
+  })
+})
+
+test_that("set.seed() reproduces a run of data-dependent length on every plan", {
+  skip_on_cran()
+  args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
+  set.seed(35)
+  a <- do.call(calibrate, args)
+  expect_true(a$settings$converge$converged)
+  old <- future::plan(future::multisession, workers = 2)
+  on.exit(future::plan(old), add = TRUE)
+  set.seed(35)
+  b <- do.call(calibrate, args)
+  expect_identical(b$Phi, a$Phi)
+  expect_identical(b$chain, a$chain)
+  expect_identical(b$settings$warmup, a$settings$warmup)
+  expect_identical(b$settings$converge$sweeps, a$settings$converge$sweeps)
+  # update() under the rule goes on from the run's end the same way
+  future::plan(future::sequential)
+  set.seed(36)
+  ua <- update(a, converge = until_converged(ess = 800))
+  future::plan(future::multisession, workers = 2)
+  set.seed(36)
+  ub <- update(b, converge = until_converged(ess = 800))
+  expect_identical(ub$Phi, ua$Phi)
+  expect_gte(min(ua$estimates$ess), 800)
+})
+
+test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
+  args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
+  set.seed(37)
+  ref <- do.call(calibrate, args)
+  expect_true(all(ref$settings$warmup > 200))
+  dir <- tempfile("ck-warm-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  # imitated Ctrl-C 200 sweeps (4 pieces) into chain 1: in its warm-up
+  old <- options(FBC.sampler = interrupt_at_call(4))
+  set.seed(37)
+  expect_error(
+    suppressWarnings(do.call(calibrate, c(args, list(checkpoint = dir)))),
+    "before any draw was retained"
+  )
+  options(old)
+  expect_equal(ck_iter(dir, 1), 200)
+  ck <- readRDS(file.path(dir, "chain-1.rds"))
+  expect_identical(ck$start$state$warmup, 0L)  # not ended yet
+  set.seed(999)
+  expect_message(fit <- do.call(calibrate, c(args, list(checkpoint = dir))), "Resuming")
+  expect_identical(fit$Phi, ref$Phi)
+  expect_identical(fit$settings$warmup, ref$settings$warmup)
+  expect_identical(fit$settings$converge$sweeps, ref$settings$converge$sweeps)
+})
