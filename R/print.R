@@ -92,14 +92,15 @@ print.fbc <- function(x, digits = 3, ...) {
   }
   cat(sprintf("  kernels: simulator %s%s\n", s$kernelS, if (gp) paste(", bias", s$kernelB) else ""))
   alg <- s$simAlgebra
-  cat(sprintf("  algebra: %s\n", switch(alg$name,
+  # why it ran (choose_algebra()'s reason; a fit made before it has none)
+  why <- if (!is.null(alg$reason)) paste0(": ", alg$reason) else if (alg$name == "Vecchia" && identical(s$algebra, "auto")) {
+    sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
+  } else ""
+  cat(sprintf("  algebra: %s%s\n", switch(alg$name,
     Kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
                         alg$dims[1], alg$dims[2]),
-    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d%s", alg$k,
-                      if (identical(s$algebra, "auto")) sprintf(
-                        " (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)",
-                        fbc_vecchia_m) else ""),
-    "dense")))
+    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$k),
+    "dense"), why))
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")
     stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")

@@ -83,7 +83,17 @@ prior_registry <- list(
   # density 1/x on x > 0, improper
   jeffreys = prior_entry(10L, support = positive_support, center = function(p1, p2) 1),
   # not sampled: kept at its initial value (log density 0)
-  fixed = prior_entry(11L, center = function(p1, p2) NA_real_)
+  fixed = prior_entry(11L, center = function(p1, p2) NA_real_),
+  # for a variance: its square root (the sd) is half-t with p1 degrees of
+  # freedom and scale p2 (p1 = 1: half-Cauchy), weakly informative on the
+  # scale a variance acts on (Gelman 2006)
+  halft_sd = prior_entry(12L,
+    params = c(p1 = "degrees of freedom", p2 = "scale of the sd"),
+    need = c(p1 = "positive", p2 = "positive"),
+    support = positive_support,
+    cdf = function(x, p1, p2) 2 * stats::pt(sqrt(pmax(x, 0)) / p2, p1) - 1,
+    quantile = function(u, p1, p2) (p2 * stats::qt((1 + u) / 2, p1))^2,
+    center = function(p1, p2) p2^2)
 )
 
 # The codes by name, as the compiled core takes them.
@@ -135,6 +145,7 @@ prior_center <- function(dist, p1, p2) prior_registry[[dist]]$center(p1, p2)
 #' | `"inversegamma"` | shape | scale |
 #' | `"jeffreys"` | (unused) | (unused); density `1/x` on `x > 0`, improper |
 #' | `"fixed"` | (unused) | (unused); log density 0 |
+#' | `"halft_sd"` | degrees of freedom | scale of the sd; for a variance \eqn{x}: \eqn{\sqrt{x}} is half-t (`p1 = 1`: half-Cauchy) |
 #'
 #' @param prior Name of the prior family (see the table).
 #' @param p1,p2 Parameters of the family.
