@@ -175,6 +175,8 @@ suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
       gaussian = list(dist = "gaussian", p1 = p1[k], p2 = max(p2[k], 2 * abs(value - p1[k])),
                       init = value),
       lognormal = list(dist = "lognormal", p1 = log(value), p2 = max(p2[k], 1), init = value),
+      # the data's sd well inside the half-t's scale
+      halft_sd = list(dist = "halft_sd", p1 = p1[k], p2 = max(p2[k], 2 * sqrt(value)), init = value),
       betashift = list(dist = "uniform", p1 = 1, p2 = 2, init = 1.5),
       NULL
     )
