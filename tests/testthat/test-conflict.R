@@ -184,3 +184,27 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   expect_false(cf$rising)
   expect_equal(cf$dataValue, 0.002, tolerance = 0.02)
 })
+
+test_that("the conflict check runs once per fit: print(), summary() and convergence_messages() reuse it", {
+  d <- small_noise_data(frac = 0.1)
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 400, nBurn = 200, nChains = 2)
+  cache <- attr(fit, "cache")
+  expect_true(is.environment(cache))
+  expect_null(cache$conflictRuns)
+  m1 <- convergence_messages(fit)
+  capture.output(print(fit), summary(fit), print(fit))
+  m2 <- convergence_messages(fit)
+  expect_identical(cache$conflictRuns, 1L)
+  expect_identical(m1, m2)
+  # a copy with other draws is checked afresh (the cache is shared, its key is not)
+  fit2 <- with_draws(fit, fit$Phi[rev(seq_len(nrow(fit$Phi))), ])
+  convergence_messages(fit2)
+  expect_identical(cache$conflictRuns, 2L)
+  # the cached rows are prior_conflicts()'s
+  expect_identical(FBC:::cached_conflicts(fit2), FBC:::prior_conflicts(fit2))
+  # a fit made before the cache (no attribute) still works, checked each time
+  old <- fit
+  attr(old, "cache") <- NULL
+  expect_identical(convergence_messages(old), m1)
+})
