@@ -7,15 +7,21 @@
 #' settings, the acceptance rates, the correlation families of the
 #' simulator and bias GPs (`kernelS`, `kernelB` of [calibrate()]; the
 #' bias's only when there is one) and the algebra of
-#' the simulator block: Kronecker on a product design, else dense; see
-#' [calibrate()]) and the posterior
+#' the simulator block (Kronecker on a product design, dense, or the
+#' nearest-neighbour approximation with its `neighbours`) with why it ran:
+#' asked for, or chosen by `algebra = "auto"` from the projected cost of a
+#' dense sweep, which it gives, with the ways towards the exact posterior
+#' when the approximation ran; see "Simulator algebra" in [calibrate()])
+#' and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
 #' 400, one chain only, an interrupted run, a chain that never moved, draws
 #' piling up at a bound, a posterior pressing against its prior's bound,
 #' calibration parameters beyond the simulator design, a prior-data
 #' conflict), each
-#' with what to do.
+#' with what to do. The prior-data conflict check (about 30 likelihood
+#' evaluations) runs once per fit: `print()`, [summary.fbc()] and
+#' [convergence_messages()] reuse its result.
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param digits Significant digits for the table: a whole number, at least 1.
