@@ -62,12 +62,21 @@
 #' `kernelS` and `kernelB` choose the family of the simulator GP
 #' \eqn{\eta} and of the bias GP \eqn{\delta}, separately, with
 #' \eqn{d = |x_k - x'_k|} and \eqn{h = \sqrt{\theta_k} d} per input:
-#' * `"powexp"` (the default, the vignette's): \eqn{\exp(-\theta d^\alpha)},
+#' * `"matern52"` (the default): \eqn{(1 + \sqrt{5} h + 5 h^2 / 3) \exp(-\sqrt{5} h)};
+#' * `"powexp"` (the vignette's): \eqn{\exp(-\theta d^\alpha)},
 #'   with a smoothness \eqn{\alpha \in [1, 2]} per input that is sampled
 #'   (`alphaS`, `alphaB`);
 #' * `"gaussian"`: \eqn{\exp(-\theta d^2)};
-#' * `"matern32"`: \eqn{(1 + \sqrt{3} h) \exp(-\sqrt{3} h)};
-#' * `"matern52"`: \eqn{(1 + \sqrt{5} h + 5 h^2 / 3) \exp(-\sqrt{5} h)}.
+#' * `"matern32"`: \eqn{(1 + \sqrt{3} h) \exp(-\sqrt{3} h)}.
+#'
+#' The Matérn 5/2 is the default (as in RobustGaSP, RobustCalibration and
+#' DiceKriging) because it mixes on the smooth simulators calibration
+#' meets: there the power exponential's smoothness piles up at its bound 2
+#' (the README's example warned of it), and at m = 1000 scattered runs its
+#' block did not mix in 30,000 sweeps a chain (`alphaS` R-hat 2.6, bulk ESS
+#' 5), while the Matérn 5/2 converged in 5500 (issue 27). The vignette's
+#' power exponential stays available as `kernelS = "powexp"` (and
+#' `kernelB`); it was the default of FBC 0.1.0.
 #'
 #' Every family is \eqn{1 - c\,\theta d^2 + \dots} near 0 (\eqn{c = 1, 3/2,
 #' 5/6}; the power exponential at \eqn{\alpha = 2}), so \eqn{\theta} keeps its
@@ -119,7 +128,8 @@
 #' Beyond a few thousand scattered runs no exact algebra is practical (a
 #' factorization of the \eqn{m \times m} block per sweep). The
 #' nearest-neighbour (Vecchia) approximation (`algebra = "vecchia"`, or
-#' `"auto"` above 3000 runs that are not a product design) replaces the
+#' `"auto"` when the runs are not a product design and a dense sweep is
+#' projected to cost more than 0.1 s, see below) replaces the
 #' joint Gaussian of the runs and the field points by a directed graph
 #' (Vecchia 1988; Datta et al. 2016; Katzfuss and Guinness 2021): the runs
 #' in a maximin order of their scaled inputs (Guinness 2018), each
@@ -137,6 +147,18 @@
 #' predecessors (`neighbours` at least \eqn{m}, tested); `print()` says
 #' when it ran, with \eqn{k}. `inst/bench/vecchia.R` measures it against
 #' the exact algebra.
+#'
+#' Under `algebra = "auto"` the choice is by projected cost: a dense sweep
+#' costs about 1.2 Cholesky factorisations of the \eqn{(m + n) \times (m +
+#' n)} block, projected as \eqn{1.5 \times 10^{-10} (m + n)^3} CPU seconds
+#' on the reference BLAS (timed on a 2-core machine: 0.16 s at \eqn{m + n =
+#' 1060}) and 9 times less on an optimized BLAS. While that is under 0.1 s
+#' (\eqn{m + n} up to about 870 on the reference BLAS, 1800 on an optimized
+#' one) the dense algebra runs, exact; above, the nearest-neighbour one,
+#' whose sweep costs milliseconds (8 ms at m = 1000). A fixed constant per
+#' BLAS, not a timing at run time, so the same data always get the same
+#' algebra on a machine. `print()` gives the projected dense cost and the
+#' ways towards exact (`algebra = "dense"`, a larger `neighbours`).
 #'
 #' @section Categorical inputs, outputs and data sets:
 #' A factor or character column of both `sim` and `field` (data frames) is a
@@ -447,26 +469,32 @@
 #'   GP), `"sgasp"` (the scaled GP of Gu and Wang 2018) or `"none"` (no
 #'   discrepancy); see "Discrepancy models".
 #' @param kernelS,kernelB Correlation family of the simulator GP and of the
-#'   bias GP: `"powexp"` (default), `"gaussian"`, `"matern32"` or
-#'   `"matern52"` (see "Correlation families").
+#'   bias GP: `"matern52"` (the default), `"powexp"` (the vignette's),
+#'   `"gaussian"` or `"matern32"` (see "Correlation families").
 #' @param showProgress Show a progress bar over all chains (on any plan: the
 #'   workers report through \pkg{progressr}) with the time left and each
 #'   chain's acceptance rate after burn-in (mean over its parameters).
-#'   `FALSE` (the default) prints nothing.
+#'   `NULL` (the default) shows it where a person waits for the run, in an
+#'   interactive session, and prints nothing in scripts (`Rscript`) or
+#'   while \pkg{knitr} renders a document; `TRUE` or `FALSE` decide.
 #' @param sampler `"blocks"` (the default: joint and exact moves, see
 #'   "Sampler") or `"single"` (the vignette's one-at-a-time sampler).
 #' @param algebra `"auto"` (the default: the Kronecker algebra on a product
-#'   design, the nearest-neighbour approximation for more than 3000 runs of
-#'   another design, else the dense one), `"dense"` (always the exact dense
-#'   one) or `"vecchia"` (the nearest-neighbour approximation); see
-#'   "Simulator algebra".
+#'   design, else the exact dense one while a sweep of it is projected to
+#'   cost under 0.1 s, else the nearest-neighbour approximation), `"dense"`
+#'   (always the exact dense one) or `"vecchia"` (the nearest-neighbour
+#'   approximation); see "Simulator algebra". `print()` says which ran and
+#'   why.
 #' @param neighbours For the nearest-neighbour algebra: how many neighbours
 #'   each simulator run and each field point conditions on (a whole number,
-#'   at least 1; more is closer to exact and slower). Measured on scattered
-#'   designs (`inst/bench/RESULTS-vecchia.md`): with 20, `kappa`'s quantiles
-#'   within 0.05 posterior sd of the exact algebra's at m = 1000; with 10, a
-#'   sweep costs about half and m = 20,000 runs converged in 31 CPU minutes
-#'   (4 chains, `nBurn = 3000`).
+#'   at least 1; more is closer to exact and slower). `NULL` (the default):
+#'   20 below 4000 runs, 10 from 4000 on. Measured on scattered designs
+#'   (`inst/bench/RESULTS-vecchia.md`): with 20, `kappa`'s quantiles within
+#'   0.05 posterior sd of the exact algebra's at m = 1000; with 10, within
+#'   0.1 sd at m = 500, a sweep costs about half and m = 20,000 runs
+#'   converged in 31 CPU minutes (4 chains, `nBurn = 3000`) where 20 had not
+#'   in 60. Given with an algebra that has no neighbours, it is not used and
+#'   a message says so.
 #' @param blockSim Deprecated: `TRUE` is `sampler = "blocks"` and `FALSE`
 #'   `sampler = "single"`, with a warning.
 #' @param checkpoint `NULL` (no checkpoints) or a directory where the chains
@@ -547,10 +575,10 @@
 calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "sgasp", "none"),
-                      kernelS = "powexp",
-                      kernelB = "powexp", showProgress = FALSE, sampler = c("blocks", "single"),
+                      kernelS = "matern52",
+                      kernelB = "matern52", showProgress = NULL, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
-                      neighbours = 20, checkpoint = NULL,
+                      neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
                       sourceBias = c("shared", "own")) {
   call <- match.call()
@@ -595,11 +623,11 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
     cli::cli_abort("{.code sourceBias = \"own\"} gives each field data set its own bias, but {.code discrepancy = \"none\"} has no bias.")
   }
   check_run_length_size(len, length(param_names(p, q, discrepancy)), nChains)
-  check_flag(showProgress, "showProgress")
+  showProgress <- default_progress(showProgress)
   sampler <- check_sampler(sampler, blockSim)
   check_checkpoint(checkpoint, checkpointEvery)
   algebra <- match_choice(algebra, c("auto", "dense", "vecchia"), "algebra")
-  neighbours <- check_neighbours(neighbours)
+  if (!is.null(neighbours)) neighbours <- check_neighbours(neighbours)
   if (!inherits(hypers, "fbc_hypers")) {
     cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
   }
@@ -626,7 +654,9 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
   check_kappa_design(kappaSpec, scale)
   spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels,
                        source = biasSource)
-  code <- algebra_code(algebra, dat$Xs, p)
+  alg <- choose_algebra(algebra, neighbours, dat$Xs, p, kernelS, nrow(dat$Xf))
+  code <- alg$code
+  neighbours <- alg$neighbours
   spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
                                algebra = code, discrepancy,
                                vecchia = if (code == 2L) {
@@ -634,7 +664,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                                                 neighbours, neighbours)
                                }, noise = fac$noise, levels = levels, source = biasSource)
 
-  simAlgebra <- sim_algebra_info(dat, p, spec$model)
+  simAlgebra <- c(sim_algebra_info(dat, p, spec$model), reason = alg$reason)
   moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
   # only the dense algebra factors an m x m block
   if (identical(simAlgebra$name, "dense")) blas_hint(nrow(sim))

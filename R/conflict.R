@@ -15,6 +15,37 @@ fbc_conflict_sds <- 3
 # does not vary with) leaves the choice to the prior, which is no conflict.
 fbc_conflict_gain <- 2
 
+# The check costs about 30 likelihood evaluations (12 s at m = 1500 on the
+# dense algebra), and print(), summary() and convergence_messages() all ask
+# for it: it is computed once per fit and kept in the fit's cache, an
+# environment in its attribute "cache" (fit_cache(), made with the fit). A
+# fit made before the cache, or a copy whose draws, data or priors were
+# changed (its fingerprint differs), is checked afresh.
+fit_cache <- function() new.env(parent = emptyenv())
+
+# What the check reads, in a few numbers: the draws (weighted by position,
+# so that a reordered column differs), log posteriors, data, priors and
+# nugget.
+conflict_key <- function(fit) {
+  d <- fit$data
+  list(dim(fit$Phi), sum(fit$Phi), sum(fit$Phi * seq_along(fit$Phi)), sum(fit$logPost),
+       sum(d$yf), sum(d$ys), sum(d$Xs), sum(d$Xf), fit$spec$table, fit$settings$nugget)
+}
+
+# prior_conflicts() of the fit, from its cache when it has one and the fit
+# is unchanged; cache$conflictRuns counts the checks run (for tests).
+cached_conflicts <- function(fit) {
+  cache <- attr(fit, "cache", exact = TRUE)
+  if (!is.environment(cache)) return(prior_conflicts(fit))
+  key <- conflict_key(fit)
+  if (!identical(cache$conflictKey, key)) {
+    cache$conflicts <- prior_conflicts(fit)
+    cache$conflictKey <- key
+    cache$conflictRuns <- (cache$conflictRuns %||% 0L) + 1L
+  }
+  cache$conflicts
+}
+
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
   d <- fit$data
@@ -144,6 +175,8 @@ suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
       gaussian = list(dist = "gaussian", p1 = p1[k], p2 = max(p2[k], 2 * abs(value - p1[k])),
                       init = value),
       lognormal = list(dist = "lognormal", p1 = log(value), p2 = max(p2[k], 1), init = value),
+      # the data's sd well inside the half-t's scale
+      halft_sd = list(dist = "halft_sd", p1 = p1[k], p2 = max(p2[k], 2 * sqrt(value)), init = value),
       betashift = list(dist = "uniform", p1 = 1, p2 = 2, init = 1.5),
       NULL
     )
@@ -176,7 +209,7 @@ format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific 
 
 # The convergence_messages() text: one message per class of parameters
 # (`cf`: the rows of prior_conflicts()).
-conflict_messages <- function(fit, cf = prior_conflicts(fit)) {
+conflict_messages <- function(fit, cf = cached_conflicts(fit)) {
   tab <- fit$spec$table
   vapply(unique(cf$class), function(cls) {
     rows <- cf[cf$class == cls, , drop = FALSE]

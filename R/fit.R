@@ -40,7 +40,7 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, s
     state = state,
     spec = spec,
     version = list(fbc = as.character(utils::packageVersion("FBC")), format = fbc_fit_format)
-  ), class = "fbc")
+  ), class = "fbc", cache = fit_cache())
   validate_fbc(x)
 }
 

@@ -7,15 +7,21 @@
 #' settings, the acceptance rates, the correlation families of the
 #' simulator and bias GPs (`kernelS`, `kernelB` of [calibrate()]; the
 #' bias's only when there is one) and the algebra of
-#' the simulator block: Kronecker on a product design, else dense; see
-#' [calibrate()]) and the posterior
+#' the simulator block (Kronecker on a product design, dense, or the
+#' nearest-neighbour approximation with its `neighbours`) with why it ran:
+#' asked for, or chosen by `algebra = "auto"` from the projected cost of a
+#' dense sweep, which it gives, with the ways towards the exact posterior
+#' when the approximation ran; see "Simulator algebra" in [calibrate()])
+#' and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below
 #' 400, one chain only, an interrupted run, a chain that never moved, draws
 #' piling up at a bound, a posterior pressing against its prior's bound,
 #' calibration parameters beyond the simulator design, a prior-data
 #' conflict), each
-#' with what to do.
+#' with what to do. The prior-data conflict check (about 30 likelihood
+#' evaluations) runs once per fit: `print()`, [summary.fbc()] and
+#' [convergence_messages()] reuse its result.
 #'
 #' @param x An `fbc` object from [calibrate()].
 #' @param digits Significant digits for the table: a whole number, at least 1.
@@ -92,14 +98,15 @@ print.fbc <- function(x, digits = 3, ...) {
   }
   cat(sprintf("  kernels: simulator %s%s\n", s$kernelS, if (gp) paste(", bias", s$kernelB) else ""))
   alg <- s$simAlgebra
-  cat(sprintf("  algebra: %s\n", switch(alg$name,
+  # why it ran (choose_algebra()'s reason; a fit made before it has none)
+  why <- if (!is.null(alg$reason)) paste0(": ", alg$reason) else if (alg$name == "Vecchia" && identical(s$algebra, "auto")) {
+    sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
+  } else ""
+  cat(sprintf("  algebra: %s%s\n", switch(alg$name,
     Kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
                         alg$dims[1], alg$dims[2]),
-    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d%s", alg$k,
-                      if (identical(s$algebra, "auto")) sprintf(
-                        " (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)",
-                        fbc_vecchia_m) else ""),
-    "dense")))
+    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$k),
+    "dense"), why))
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")
     stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")

@@ -54,10 +54,11 @@ indicator_hypers <- function(hypers, pos, p, q) {
 # The hyperparameter priors of the discrepancy model: the classes it does
 # not have (the bias GP's under "none", muB under "sgasp", lambdaZ but
 # under "sgasp") have no parameters, so a prior the user gave for one, or a
-# bias correlation family without a bias, is ignored with a warning naming
+# bias correlation family other than the default (calibrate()'s
+# "matern52") without a bias, is ignored with a warning naming
 # the arguments.
 discrepancy_hypers <- function(hypers, discrepancy, kernelB, call = parent.frame()) {
-  if (discrepancy == "none" && kernelB != "powexp") {
+  if (discrepancy == "none" && kernelB != "matern52") {
     cli::cli_warn(sprintf("`kernelB = \"%s\"` is not used: `discrepancy = \"%s\"` has no bias GP.",
                           kernelB, discrepancy), call = call)
   }

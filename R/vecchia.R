@@ -12,8 +12,9 @@
 # way). The runs are put in a maximin order of the scaled inputs (Guinness
 # 2018) and each conditions on its k nearest earlier runs.
 
-# Runs above which calibrate(algebra = "auto") uses this algebra on a design
-# that is not a product design.
+# Runs above which calibrate(algebra = "auto") used this algebra on a design
+# that is not a product design before choose_algebra() (R/algebra.R) chose by
+# projected cost: print() of such a fit says so.
 fbc_vecchia_m <- 3000L
 # Runs the pilot estimate of the scaling uses (at most).
 fbc_vecchia_pilot <- 400L
@@ -54,13 +55,4 @@ vecchia_scaling <- function(Xs, ys, kern) {
 # Checks `neighbours`: a whole number, at least 1.
 check_neighbours <- function(neighbours, call = parent.frame()) {
   check_count(neighbours, "neighbours", min = 1, call = call)
-}
-
-# The algebra code calibrate() hands the compiled core: the Vecchia one when
-# asked for, or under "auto" for a design of more than fbc_vecchia_m runs
-# that is not a product design; else 0 (auto: Kronecker or dense) or 1.
-algebra_code <- function(algebra, Xs, p) {
-  if (algebra == "dense") return(1L)
-  if (algebra == "vecchia") return(2L)
-  if (nrow(Xs) > fbc_vecchia_m && !length(.sim_algebra(Xs, p, 0L))) 2L else 0L
 }

@@ -26,7 +26,7 @@
 // of R/priors.R is checked against when the package loads.
 enum PriorFamily {
   PF_UNIFORM = 1, PF_GAUSSIAN, PF_GAMMA, PF_BETA, PF_LOGNORMAL, PF_LOGISTIC,
-  PF_BETASHIFT, PF_EXPONENTIAL, PF_INVGAMMA, PF_JEFFREYS, PF_FIXED
+  PF_BETASHIFT, PF_EXPONENTIAL, PF_INVGAMMA, PF_JEFFREYS, PF_FIXED, PF_HALFT_SD
 };
 
 // Transformation on which a parameter's random walk runs.

@@ -7,7 +7,9 @@
 //   beta(s1, s2); lognormal(meanlog, sdlog); logistic(location, scale);
 //   betashift = beta(s1, s2) of x - 1; exponential(rate);
 //   inversegamma(shape a, scale b) b^a/Gamma(a) x^-(a+1) exp(-b/x);
-//   jeffreys 1/x (x > 0); fixed: log 1 = 0.
+//   jeffreys 1/x (x > 0); fixed: log 1 = 0;
+//   halft_sd(df, scale): sqrt(x) (a variance's sd) is half-t(df, scale), so
+//   p(x) = 2 t_df(sqrt(x) / scale) / scale * 1 / (2 sqrt(x)).
 double log_prior(int family, double x, double p1, double p2) {
   const double ninf = R_NegInf;
   if (ISNAN(x)) return ninf;
@@ -35,6 +37,8 @@ double log_prior(int family, double x, double p1, double p2) {
     return x > 0 ? -std::log(x) : ninf;
   case PF_FIXED:
     return 0.0;
+  case PF_HALFT_SD:
+    return x > 0 ? R::dt(std::sqrt(x) / p2, p1, 1) - std::log(p2) - 0.5 * std::log(x) : ninf;
   }
   Rcpp::stop("unknown prior family code %d", family);
 }
@@ -58,5 +62,6 @@ Rcpp::IntegerVector prior_codes() {
       _["uniform"] = PF_UNIFORM, _["gaussian"] = PF_GAUSSIAN, _["gamma"] = PF_GAMMA,
       _["beta"] = PF_BETA, _["lognormal"] = PF_LOGNORMAL, _["logistic"] = PF_LOGISTIC,
       _["betashift"] = PF_BETASHIFT, _["exponential"] = PF_EXPONENTIAL,
-      _["inversegamma"] = PF_INVGAMMA, _["jeffreys"] = PF_JEFFREYS, _["fixed"] = PF_FIXED);
+      _["inversegamma"] = PF_INVGAMMA, _["jeffreys"] = PF_JEFFREYS, _["fixed"] = PF_FIXED,
+      _["halft_sd"] = PF_HALFT_SD);
 }

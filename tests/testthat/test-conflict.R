@@ -21,10 +21,15 @@ small_noise_data <- function(frac = 0.1, seed = 10) {
 # the MAP row the middle one.
 hand_base <- c(kappa1 = 9.8, thetaS1 = 3, thetaS2 = 0.4, alphaS1 = 1.95, alphaS2 = 1.95,
                thetaB1 = 1, alphaB1 = 1.8, sigma2S = 1, sigma2B = 0.05, sigma2E = 0.16, muB = 0)
+# The vignette's inverse gamma on sigma2E (the default before the half-Cauchy
+# on the sd): the prior these checks flag.
+vignette_noise <- set_hyperPriors(sigma2EDist = "inversegamma", sigma2EP1 = 1.5, sigma2EP2 = 1.5)
 hand_built_fit <- function(vary, at = NULL) {
   d <- small_noise_data(frac = 0.1)
   set.seed(1)
-  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1)
+  # the power exponential: the draws include the smoothness parameters
+  fit <- calibrate(d$sim, d$field, nMCMC = 60, nBurn = 20, nChains = 1, hypers = vignette_noise,
+                   kernelS = "powexp", kernelB = "powexp")
   base <- hand_base
   base[names(at)] <- at
   Phi <- matrix(base, 400, length(base), byrow = TRUE, dimnames = list(NULL, names(base)))
@@ -53,14 +58,14 @@ test_that("prior CDFs integrate the prior densities", {
                  label = cs[[1]])
   }
   expect_true(is.na(FBC:::prior_cdf(1, "jeffreys", NA, NA)))
-  # the default sigma2E prior has almost no mass below 0.1
+  # the vignette's sigma2E prior has almost no mass below 0.1
   expect_lt(FBC:::prior_cdf(0.1, "inversegamma", 1.5, 1.5), 1e-5)
 })
 
-test_that("small field noise: the default sigma2E prior is flagged, and the suggested prior fixes it", {
+test_that("small field noise: the vignette's sigma2E prior is flagged, and the suggested prior fixes it", {
   d <- small_noise_data(frac = 0.1)  # true sigma2E about 0.01
   set.seed(1)
-  fit <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2)
+  fit <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2, hypers = vignette_noise)
   cf <- FBC:::prior_conflicts(fit)
   expect_equal(cf$var, "sigma2E")
   expect_equal(cf$side, "lower")
@@ -78,11 +83,17 @@ test_that("small field noise: the default sigma2E prior is flagged, and the sugg
   fit2 <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2, hypers = hypers)
   expect_equal(nrow(FBC:::prior_conflicts(fit2)), 0L)
   expect_lt(median(fit2$Phi[, "sigma2E"]), 0.05)
+  # the default, a half-Cauchy on the noise sd, lets the data set it: no conflict
+  set.seed(1)
+  fit3 <- calibrate(d$sim, d$field, nMCMC = 1000, nBurn = 400, nChains = 2)
+  expect_equal(nrow(FBC:::prior_conflicts(fit3)), 0L)
+  expect_lt(median(fit3$Phi[, "sigma2E"]), 0.05)
 })
 
-test_that("no conflict on the ball data with the default priors", {
+test_that("no conflict on the ball data with the vignette's priors", {
   set.seed(1)
-  fit <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 400, nChains = 2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 400, nChains = 2, hypers = vignette_noise,
+                   kernelS = "powexp", kernelB = "powexp")
   # sigma2E is in the prior's tail (rule 1) but the likelihood peaks within
   # 3 posterior sds of its median (rule 2 fails)
   u <- FBC:::prior_cdf(median(fit$Phi[, "sigma2E"]), "inversegamma", 1.5, 1.5)
@@ -114,7 +125,7 @@ test_that("the conflict message, on draws built by hand", {
 })
 
 test_that("suggestions keep the other members of a class and give the family's centre", {
-  fit <- small_fit(nChains = 1)
+  fit <- small_fit(nChains = 1, kernelS = "powexp", kernelB = "powexp")  # with smoothness parameters
   j <- match(c("thetaS1", "thetaS2"), fit$vars)
   s <- FBC:::suggest_prior(fit, j[2], 40)
   expect_equal(s, "set_hyperPriors(thetaSDist = c(\"gamma\", \"gamma\"), thetaSP1 = c(1.1, 1.1), thetaSP2 = c(0.1, 0.02), thetaSInit = c(1, 40))")
@@ -135,7 +146,7 @@ test_that("suggestions keep the other members of a class and give the family's c
 })
 
 test_that("a smoothness the likelihood pushes to 2 gets the smooth families as advice", {
-  fit <- small_fit(nChains = 1)
+  fit <- small_fit(nChains = 1, kernelS = "powexp", kernelB = "powexp")
   # a prior_conflicts() row as it comes for alphaS2 at its bound 2
   cf <- data.frame(var = "alphaS2", class = "alphaS", side = "upper", cdf = 0.995,
                    median = 1.99, dataValue = 2, atBound = TRUE, bound = 2, priorValue = 2)
@@ -183,4 +194,28 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   cf <- FBC:::prior_conflicts(fit, loglik = peak)
   expect_false(cf$rising)
   expect_equal(cf$dataValue, 0.002, tolerance = 0.02)
+})
+
+test_that("the conflict check runs once per fit: print(), summary() and convergence_messages() reuse it", {
+  d <- small_noise_data(frac = 0.1)
+  set.seed(1)
+  fit <- calibrate(d$sim, d$field, nMCMC = 400, nBurn = 200, nChains = 2)
+  cache <- attr(fit, "cache")
+  expect_true(is.environment(cache))
+  expect_null(cache$conflictRuns)
+  m1 <- convergence_messages(fit)
+  capture.output(print(fit), summary(fit), print(fit))
+  m2 <- convergence_messages(fit)
+  expect_identical(cache$conflictRuns, 1L)
+  expect_identical(m1, m2)
+  # a copy with other draws is checked afresh (the cache is shared, its key is not)
+  fit2 <- with_draws(fit, fit$Phi[rev(seq_len(nrow(fit$Phi))), ])
+  convergence_messages(fit2)
+  expect_identical(cache$conflictRuns, 2L)
+  # the cached rows are prior_conflicts()'s
+  expect_identical(FBC:::cached_conflicts(fit2), FBC:::prior_conflicts(fit2))
+  # a fit made before the cache (no attribute) still works, checked each time
+  old <- fit
+  attr(old, "cache") <- NULL
+  expect_identical(convergence_messages(old), m1)
 })

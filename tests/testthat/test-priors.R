@@ -13,7 +13,9 @@ test_that("each prior family matches R's d* function", {
     # X ~ InvGamma(a, b)  <=>  1/X ~ Gamma(a, rate = b): f(x) = g(1/x) / x^2
     inversegamma = list(1.5, 1.5, ifelse(x > 0, dgamma(1 / x, 1.5, rate = 1.5, log = TRUE) - 2 * log(x), -Inf)),
     jeffreys = list(NA, NA, ifelse(x > 0, -log(x), -Inf)),
-    fixed = list(NA, NA, rep(0, length(x)))
+    fixed = list(NA, NA, rep(0, length(x))),
+    # sd = sqrt(X) half-Cauchy(scale s): f(x) = 2 / (pi s (1 + x / s^2)) * 1 / (2 sqrt(x))
+    halft_sd = list(1, 0.5, ifelse(x > 0, -log(pi * 0.5 * sqrt(x) * (1 + x / 0.25)), -Inf))
   ))
   expect_setequal(names(ref), names(FBC:::prior_registry))
   for (fam in names(ref)) {
@@ -27,20 +29,20 @@ test_that("the registry's family codes are the compiled core's", {
   expect_identical(FBC:::.prior_codes(), FBC:::prior_families)
   expect_true(FBC:::check_prior_codes())
   # fits store the codes: they are those of every earlier version
-  expect_identical(unname(FBC:::prior_families), 1:11)
+  expect_identical(unname(FBC:::prior_families), 1:12)
   # a table that drifted is refused, naming the families that differ
   expect_snapshot(error = TRUE, {
     FBC:::check_prior_codes(replace(FBC:::.prior_codes(), "gamma", 12L))
     FBC:::check_prior_codes(FBC:::.prior_codes()[-11])
   })
-  expect_error(FBC:::.log_prior(1, 12L, 0, 1), "unknown prior family code 12")
+  expect_error(FBC:::.log_prior(1, 13L, 0, 1), "unknown prior family code 13")
 })
 
 # Parameters for every family (those of the d* test above).
 family_pars <- list(uniform = c(-1, 2.5), gaussian = c(0.4, 1.7), gamma = c(1.1, 0.1),
                     beta = c(2, 5), lognormal = c(0.2, 0.8), logistic = c(1, 0.5),
                     betashift = c(5, 2), exponential = c(1.3, NA), inversegamma = c(1.5, 1.5),
-                    jeffreys = c(NA, NA), fixed = c(NA, NA))
+                    jeffreys = c(NA, NA), fixed = c(NA, NA), halft_sd = c(3, 0.5))
 
 test_that("each proper family's cdf and quantile invert each other and match its density", {
   reg <- FBC:::prior_registry
@@ -117,13 +119,35 @@ test_that("prior_builder refuses unknown families and impossible parameters", {
   expect_snapshot(error = TRUE, prior_builder("exponential", 0))
 })
 
-test_that("set_hyperPriors() gives the vignette's A.1 defaults", {
+test_that("halft_sd: the sd is half-t, in closed form for the half-Cauchy and through dt() for df = 3", {
+  x <- c(1e-6, 0.01, 0.3, 2, 50)
+  # P(X <= x) = P(sd <= sqrt(x)) = (2 / pi) atan(sqrt(x) / s) for the half-Cauchy
+  expect_equal(FBC:::prior_cdf(x, "halft_sd", 1, 2), 2 / pi * atan(sqrt(x) / 2), tolerance = 1e-12)
+  # df = 3: the density of the sd, 2 dt(s / scale, 3) / scale, times ds/dx = 1 / (2 sqrt(x))
+  f <- prior_builder("halft_sd", 3, 0.5)
+  expect_equal(exp(f(x)), 2 * dt(sqrt(x) / 0.5, 3) / 0.5 / (2 * sqrt(x)), tolerance = 1e-12)
+  # proper: the density of the variance integrates to 1 over (0, Inf)
+  expect_equal(integrate(function(v) exp(f(v)), 0, Inf, rel.tol = 1e-10)$value, 1, tolerance = 1e-7)
+})
+
+test_that("the default noise prior is the half-Cauchy on the sd; the vignette's is kept by name", {
+  h <- set_hyperPriors()
+  expect_equal(h$sigma2E[c("dist", "p1", "p2")], list(dist = "halft_sd", p1 = 1, p2 = 1))
+  v <- set_hyperPriors(sigma2EDist = "inversegamma", sigma2EP1 = 1.5, sigma2EP2 = 1.5)
+  expect_equal(v$sigma2E[c("dist", "p1", "p2")], list(dist = "inversegamma", p1 = 1.5, p2 = 1.5))
+  # the reason (?set_hyperPriors): the inverse gamma puts almost no mass on a
+  # noise sd below a tenth of the response's, the half-Cauchy about 6%
+  expect_lt(FBC:::prior_cdf(0.1^2, "inversegamma", 1.5, 1.5), 1e-40)
+  expect_equal(FBC:::prior_cdf(0.1^2, "halft_sd", 1, 1), 2 / pi * atan(0.1))
+})
+
+test_that("set_hyperPriors() gives the vignette's A.1 defaults (but the noise's)", {
   h <- set_hyperPriors()
   expect_s3_class(h, "fbc_hypers")
   expect_equal(h$thetaS[c("dist", "p1", "p2")], list(dist = "gamma", p1 = 1.1, p2 = 0.1))
   expect_equal(h$thetaB[c("dist", "p1", "p2")], list(dist = "gamma", p1 = 1.1, p2 = 0.1))
   expect_equal(h$alphaS[c("dist", "p1", "p2")], list(dist = "betashift", p1 = 5, p2 = 2))
-  for (v in c("sigma2S", "sigma2B", "sigma2E")) {
+  for (v in c("sigma2S", "sigma2B")) {
     expect_equal(h[[v]][c("dist", "p1", "p2")], list(dist = "inversegamma", p1 = 1.5, p2 = 1.5))
   }
   expect_equal(h$muB[c("dist", "p1", "p2")], list(dist = "gaussian", p1 = 0, p2 = 1))

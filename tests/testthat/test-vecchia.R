@@ -94,8 +94,7 @@ test_that("with few neighbours the kappa draws match the approximation's own gri
   hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(1.5, 0.2), thetaBDist = "fixed",
                          thetaBInit = 2, sigma2SDist = "fixed", sigma2SInit = 3.5,
                          sigma2BDist = "fixed", sigma2BInit = 0.9, sigma2EDist = "fixed",
-                         sigma2EInit = 0.15, muBDist = "fixed", muBInit = 0.2,
-                         alphaBDist = "fixed", alphaBInit = 1.8)
+                         sigma2EInit = 0.15, muBDist = "fixed", muBInit = 0.2)
   set.seed(16)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
                    hypers = hyp, kernelS = "matern52", algebra = "vecchia", neighbours = 5)
@@ -136,13 +135,7 @@ test_that("a Vecchia run resumes from its checkpoint to the same draws, and upda
                tolerance = 1e-8)
 })
 
-test_that("auto picks the approximation only above 3000 scattered runs; bad neighbours are refused", {
-  Xs <- matrix(runif(3001 * 2), 3001, 2)
-  expect_identical(FBC:::algebra_code("auto", Xs, 1), 2L)
-  expect_identical(FBC:::algebra_code("auto", Xs[1:3000, ], 1), 0L)
-  expect_identical(FBC:::algebra_code("dense", Xs, 1), 1L)
-  grid <- as.matrix(expand.grid(x = seq(0, 1, length.out = 80), t = seq(0, 1, length.out = 50)))
-  expect_identical(FBC:::algebra_code("auto", grid, 1), 0L)  # a product design: Kronecker
+test_that("bad neighbours and algebras are refused (auto's choice: test-algebra.R)", {
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, algebra = "vecchia", neighbours = 0))
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, algebra = "vecchia", neighbours = 2.5))
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, algebra = "nn"))

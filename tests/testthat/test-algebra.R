@@ -1,0 +1,72 @@
+# choose_algebra(): the algebra and neighbours by projected cost (R/algebra.R).
+
+test_that("the projected dense sweep is the documented constant times (m + n)^3", {
+  # 1.5e-10 s per (m + n)^3 on the reference BLAS (R/algebra.R), 9 times less optimized
+  expect_equal(FBC:::dense_sweep_cost(1000, 60, "reference"), 1.5e-10 * 1060^3)
+  expect_equal(FBC:::dense_sweep_cost(1000, 60, "optimized"), 1.5e-10 * 1060^3 / 9)
+  expect_identical(FBC:::vecchia_neighbours(3999), 20L)
+  expect_identical(FBC:::vecchia_neighbours(4000), 10L)
+})
+
+test_that("auto: dense while cheap, Vecchia above, Kronecker on a product design", {
+  set.seed(1)
+  ca <- function(...) FBC:::choose_algebra(..., blas = "reference")
+  small <- ca("auto", NULL, matrix(runif(300 * 3), 300), 1, "matern52", 20)
+  expect_identical(small[c("name", "code", "neighbours", "forced")],
+                   list(name = "dense", code = 0L, neighbours = NULL, forced = FALSE))
+  # m + n = 1060: 0.18 s a sweep on the reference BLAS, over 0.1 s
+  X <- matrix(runif(1000 * 4), 1000)
+  large <- ca("auto", NULL, X, 2, "matern52", 60)
+  expect_identical(large[c("name", "code", "neighbours", "forced")],
+                   list(name = "vecchia", code = 2L, neighbours = 20L, forced = FALSE))
+  # the same on an optimized BLAS: 0.02 s, dense
+  expect_identical(FBC:::choose_algebra("auto", NULL, X, 2, "matern52", 60, blas = "optimized")$name,
+                   "dense")
+  # from 4000 runs, 10 neighbours; a given count is kept
+  big <- matrix(runif(4000 * 3), 4000)
+  expect_identical(ca("auto", NULL, big, 1, "matern52", 50)$neighbours, 10L)
+  expect_identical(ca("auto", 15, big, 1, "matern52", 50)$neighbours, 15L)
+  # a product design of 80 x 50 runs (m = 4000): Kronecker, exact
+  grid <- as.matrix(expand.grid(x = seq(0, 1, length.out = 80), t = seq(0, 1, length.out = 50)))
+  kron <- ca("auto", NULL, grid, 1, "powexp", 30)
+  expect_identical(kron[c("name", "code", "neighbours", "forced")],
+                   list(name = "kronecker", code = 0L, neighbours = NULL, forced = FALSE))
+  # one run missing: no longer a product design, and large: Vecchia
+  expect_identical(ca("auto", NULL, grid[-1, ], 1, "powexp", 30)$name, "vecchia")
+  expect_snapshot({
+    writeLines(small$reason)
+    writeLines(large$reason)
+    writeLines(kron$reason)
+  })
+})
+
+test_that("a named algebra is used as asked, and neighbours without Vecchia gets a message", {
+  set.seed(2)
+  X <- matrix(runif(200 * 2), 200)
+  ca <- function(...) FBC:::choose_algebra(..., blas = "reference")
+  dense <- ca("dense", NULL, X, 1, "matern52", 10)
+  expect_identical(dense[c("name", "code", "forced")], list(name = "dense", code = 1L, forced = TRUE))
+  vec <- ca("vecchia", NULL, X, 1, "matern52", 10)
+  expect_identical(vec[c("name", "code", "neighbours", "forced")],
+                   list(name = "vecchia", code = 2L, neighbours = 20L, forced = TRUE))
+  expect_identical(ca("vecchia", 7, X, 1, "matern52", 10)$neighbours, 7L)
+  expect_snapshot({
+    writeLines(dense$reason)
+    writeLines(vec$reason)
+    out <- ca("dense", 5, X, 1, "matern52", 10)
+    out <- ca("auto", 5, X, 1, "matern52", 10)
+  })
+  expect_silent(ca("vecchia", 5, X, 1, "matern52", 10))
+})
+
+test_that("print() says which algebra ran and why", {
+  set.seed(3)
+  fit <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 10, nChains = 1, discrepancy = "none")
+  expect_identical(fit$settings$simAlgebra$name, "dense")
+  # the projected cost depends on the BLAS (0.00065 s on the reference one)
+  expect_output(print(fit), "algebra: dense: exact; projected at about [0-9.]+ s a sweep \\(m \\+ n = 163; under 0.1 s\\)")
+  # a fit made before the reason was kept prints the old line
+  old <- fit
+  old$settings$simAlgebra$reason <- NULL
+  expect_output(print(old), "algebra: dense\n", fixed = TRUE)
+})
