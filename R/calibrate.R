@@ -641,10 +641,7 @@ calibrate <- function(sim, field, nMCMC = 8000, nBurn = 2000, thinning = 2,
                            starts, seeds, spec$vars)
     starts <- run$starts
     seeds <- run$seeds
-    if (run$resumed) {
-      at <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
-      cli::cli_inform("Resuming the run in {.file {checkpoint}}: {cli::qty(length(at))}chain{?s} at iteration{?s} {at} of {nMCMC}.")
-    }
+    if (run$resumed) inform_resumed(checkpoint, starts, nMCMC, converge)
   }
   # the directory as used (absolute): workers and later sessions may start
   # elsewhere

@@ -64,6 +64,8 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
       }
     }
   }
+  check_no_missing_levels(sim, c(catS, output), "sim", output, source, call = call)
+  check_no_missing_levels(field, c(catF, output, source), "field", output, source, call = call)
   if (!is.null(source) && is.data.frame(sim) && source %in% names(sim)) {
     cli::cli_abort("{.arg source} = {.val {source}} is a column of {.arg sim}: a field data set is not a simulator input.", call = call)
   }
@@ -130,6 +132,30 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   list(sim = sim, field = field, factors = factors, output = out, source = src,
        outS = outS, outF = outF, noise = if (length(ukey) > 1L) noise,
        noiseLabels = if (length(ukey) > 1L) labels)
+}
+
+# A missing value (NA, or "") in a categorical column (a categorical input,
+# the `output` or `source` column) is refused naming the column and rows:
+# it would otherwise become a level of its own (a data set "NA" with its own
+# noise) or fail later.
+check_no_missing_levels <- function(d, cols, arg, output = NULL, source = NULL,
+                                    call = parent.frame()) {
+  if (!is.data.frame(d)) return(invisible(TRUE))
+  for (nm in intersect(unique(cols), names(d))) {
+    x <- d[[nm]]
+    bad <- which(is.na(x) | (is.character(x) & x == ""))
+    if (!length(bad)) next
+    role <- if (identical(nm, output)) "named by {.arg output}" else
+      if (identical(nm, source)) "named by {.arg source}" else "a categorical input"
+    n <- length(bad)
+    rows <- paste(utils::head(bad, 10L), collapse = ", ")
+    more <- if (n > 10L) sprintf(" and %d more", n - 10L) else ""
+    cli::cli_abort(c(
+      paste0("Column {.val {nm}} of {.arg {arg}} (", role, ") has {cli::qty(n)}{?a missing value/missing values}: {cli::qty(n)}row{?s} {rows}{more}."),
+      i = "{cli::qty(n)}Each row needs its level: fill {?it/them} in or drop {?that row/those rows}."
+    ), call = call)
+  }
+  invisible(TRUE)
 }
 
 # What each partial correlation of the categorical inputs' levels (rhoS1,

@@ -349,3 +349,24 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
   pp <- ppc_field(fit, ndraws = 5)
   expect_equal(dim(pp$yrep), c(5L, 30L))
 })
+
+test_that("a missing level in the source, output or a categorical column is refused naming rows", {
+  # issue 32: an NA became a data set "NA" with its own noise, or a level
+  # the simulator runs do not have
+  pr <- two_outputs(seed = 3)
+  field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
+  bad <- field
+  bad$lab[c(2, 5)] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, bad, output = "out", source = "lab"))
+  bad <- field
+  bad$out[3] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, bad, output = "out", source = "lab"))
+  badS <- pr$sim
+  badS$out[c(1, 2, 4)] <- ""
+  expect_snapshot(error = TRUE, calibrate(badS, pr$field, output = "out"))
+  # a factor with an NA in a categorical input that is not the output
+  badF <- pr$field
+  badF$out <- factor(badF$out)
+  badF$out[1:12] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, badF))
+})
