@@ -276,7 +276,9 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 #' @param input The input's name (a column of `sim` and `field`), or with
 #'   `sourceBias = "own"` the field data sets' column (`gp = "bias"`).
 #' @param gp `"simulator"` (default) or `"bias"`.
-#' @return A square matrix with the levels as row and column names.
+#' @return A square matrix with the levels as row and column names. When a
+#'   correlation's draws sit both near +1 and near -1 (at least 10% within
+#'   0.1 of each), a warning says so: the average is then neither answer.
 #' @export
 #' @examples
 #' \donttest{
@@ -306,6 +308,7 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
       cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
     }
     draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
+    warn_split_rho(draws, fit$spec$vars[fit$spec$classes == "rhoD"])
     return(mean_level_corr(draws, src$levels))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
@@ -318,7 +321,27 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   k <- match(input, names(fac))
   pos <- level_positions(fac)[[k]]
   draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
+  warn_split_rho(draws, fit$spec$vars[fit$spec$classes == cls][pos])
   mean_level_corr(draws, fac[[k]]$levels)
+}
+
+# A correlation whose draws sit both near +1 and near -1 (at least
+# `fbc_split_share` of them within 0.1 of each) has two answers, the levels
+# moving together or oppositely; their average, near 0, is neither: said
+# with the shares.
+fbc_split_share <- 0.1
+warn_split_rho <- function(draws, vars, call = parent.frame()) {
+  for (j in seq_len(ncol(draws))) {
+    up <- mean(draws[, j] > 0.9)
+    down <- mean(draws[, j] < -0.9)
+    if (up >= fbc_split_share && down >= fbc_split_share) {
+      cli::cli_warn(c(
+        "{.field {vars[j]}} has two answers: {round(100 * up)}% of its draws lie near +1 (the levels move together) and {round(100 * down)}% near -1 (they move oppositely).",
+        i = "The average correlation returned is neither; look at the draws ({.code plot(fit, \"rhoS\", type = \"trace\")}, or {.val rhoB}, {.val rhoD}) before reading it, and compare chains: each may have settled on one sign."
+      ), call = call)
+    }
+  }
+  invisible()
 }
 
 # The level correlation averaged over the rows of `draws` (each row one

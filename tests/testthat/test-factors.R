@@ -370,3 +370,27 @@ test_that("a missing level in the source, output or a categorical column is refu
   badF$out[1:12] <- NA
   expect_snapshot(error = TRUE, calibrate(pr$sim, badF))
 })
+
+test_that("a level correlation at +-1 is explained, and a split one is flagged by level_correlation()", {
+  # issue 32: rhoS piling at +1 was answered with "check that this prior's
+  # support is wide enough"; draws split between +1 and -1 were averaged
+  pr <- two_outputs(seed = 3)
+  set.seed(12)
+  fit <- calibrate(pr$sim, pr$field, output = "out", nMCMC = 200, nBurn = 100, nChains = 1,
+                   kernelS = "matern52", kernelB = "matern52")
+  n <- nrow(fit$Phi)
+  up <- fit
+  up$Phi[, "rhoS1"] <- 0.999
+  msgs <- convergence_messages(up)
+  expect_snapshot(cat(grep("rhoS1 lie at", msgs, value = TRUE), sep = "\n"))
+  down <- fit
+  down$Phi[, "rhoB1"] <- -0.999
+  expect_snapshot(cat(grep("rhoB1 lie at", convergence_messages(down), value = TRUE), sep = "\n"))
+  expect_false(any(grepl("support is wide enough", c(msgs, convergence_messages(down)))))
+  # split draws: 40% at +0.95, 60% at -0.95; the average is 0.4 * 0.95 - 0.6 * 0.95
+  split <- fit
+  split$Phi[, "rhoS1"] <- rep(c(0.95, -0.95), c(round(0.4 * n), n - round(0.4 * n)))
+  expect_snapshot(C <- level_correlation(split, "out"))
+  expect_equal(C["conc", "rate"], mean(split$Phi[, "rhoS1"]))
+  expect_no_warning(level_correlation(fit, "out"))
+})
