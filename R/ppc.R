@@ -149,7 +149,7 @@ print.fbc_ppc <- function(x, digits = 3, ...) {
                       format(signif(big$sigma2E, 2)), format(signif(big$ratio, 2)),
                       ifelse(nzchar(big$label), "its", "the"), format(signif(big$residual, 2)))
       paste0(": ", paste(what, collapse = "; "),
-             ". A prior that holds sigma2E up (its sigma2EP1, sigma2EP2 in set_hyperPriors()) or a bias the data cannot separate from noise are common causes; convergence_messages() flags a prior only beyond its conflict threshold.")
+             ". A prior that holds sigma2E up (its sigma2EP1, sigma2EP2 in set_hyperPriors()) or a bias the data cannot separate from noise are common causes (see convergence_messages(), which flags a prior only beyond its thresholds).")
     } else ". A prior that holds sigma2E too high is a common cause."
     cat_warning(paste0(
       "The observations sit much closer to their predictive means than the intervals allow: the model overstates the noise", cause))
