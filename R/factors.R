@@ -59,7 +59,10 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
         cli::cli_abort(c(
           "{.arg {arg}} = {.val {nm}} must name a factor or character column of {.arg {w}}.",
           i = if (arg == "output") "The outputs are in long format: one row per run (or observation) and output, the output's name in that column, its value in the response column." else
-            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column."
+            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column.",
+          i = if (arg == "output" && w == "sim" && is.data.frame(field) && nm %in% names(field)) {
+            "{.val {nm}} is a column of {.arg field} only: if it says which field data set each row comes from, name it with {.arg source} instead."
+          }
         ), call = call)
       }
     }
@@ -93,9 +96,9 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   }
   if (length(onlyField)) {
     cli::cli_abort(c(
-      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} has not as categorical.",
-      i = if (is.null(source)) "A field data set of its own goes in a column named by {.arg source}." else
-        "Give each categorical input in both {.arg sim} and {.arg field}."
+      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} lacks: a column of {.arg field} alone is not an input of the simulator.",
+      i = if (is.null(source)) "If it says which field data set each row comes from, name it with {.arg source}; if it is an input, give it in {.arg sim} too; else drop it." else
+        "Give each categorical input in both {.arg sim} and {.arg field}; the field data sets' column ({.val {source}}) is the only column of {.arg field} alone."
     ), call = call)
   }
   factors <- list()
@@ -115,6 +118,8 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   if (!is.null(output)) {
     out <- factors[[output]][c("name", "levels", "columns")]
     outS <- match(as.character(attr(sim, "fbc_codes")[[output]]), out$levels)
+    # the outputs' names, for fbc_scale()'s messages
+    attr(outS, "labels") <- out$levels
     outF <- match(as.character(attr(field, "fbc_codes")[[output]]), out$levels)
   }
   # measurement-error groups: output x source combinations present in field
@@ -297,7 +302,20 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fac <- fit$scale$factors
   src <- fit$scale$source
   own <- isTRUE(fit$scale$sourceBias)
-  if (!length(fac) && !own) cli::cli_abort("{.arg fit} has no categorical input.")
+  if (!length(fac) && !own) {
+    cli::cli_abort(c(
+      "{.arg fit} has no categorical input.",
+      i = if (!is.null(src) && identical(input, src$name)) {
+        "{.val {input}} names the field data sets, which share one bias ({.code sourceBias = \"shared\"}): there is no correlation between their biases to show. {.code calibrate(source = \"{input}\", sourceBias = \"own\")} gives each data set its own bias, correlated by {.field rhoD}."
+      }
+    ))
+  }
+  if (!own && !is.null(src) && identical(input, src$name)) {
+    cli::cli_abort(c(
+      "{.val {input}} names the field data sets, not a categorical input: they share one bias ({.code sourceBias = \"shared\"}), so there is no correlation between their biases to show.",
+      i = "{.code calibrate(source = \"{input}\", sourceBias = \"own\")} gives each data set its own bias, correlated by {.field rhoD}; the categorical {cli::qty(length(fac))}input{?s} of {.arg fit} {?is/are} {.val {names(fac)}}."
+    ))
+  }
   input <- match_choice(input, c(names(fac), if (own) src$name), "input")
   if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")

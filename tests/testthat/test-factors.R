@@ -394,3 +394,35 @@ test_that("a level correlation at +-1 is explained, and a split one is flagged b
   expect_equal(C["conc", "rate"], mean(split$Phi[, "rhoS1"]))
   expect_no_warning(level_correlation(fit, "out"))
 })
+
+test_that("messages name the output that is constant, and the field data sets' column for what it is", {
+  # issue 32: "constant for an output" did not say which; a field-only
+  # column named by `output =`, and the data sets' column under a shared
+  # bias in level_correlation() ("no categorical input"), were not explained
+  pr <- two_outputs(seed = 3)
+  flat <- pr$sim
+  flat$y[flat$out == "rate"] <- 2
+  expect_snapshot(error = TRUE, calibrate(flat, pr$field, output = "out"))
+  near <- pr$sim
+  near$y[near$out == "rate"] <- 1e9 + 1e-6 * seq_len(sum(near$out == "rate"))
+  expect_snapshot(FBC:::fbc_scale(as.matrix(cbind(y = near$y, x = near$x, t = near$t)), 1,
+                                  out = structure(match(near$out, c("conc", "rate")),
+                                                  labels = c("conc", "rate")))$ysd > 0)
+  field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "lab"))
+  set.seed(1)
+  fit <- calibrate(pr$sim, field, output = "out", source = "lab", nMCMC = 60, nBurn = 30,
+                   nChains = 1)
+  expect_snapshot(error = TRUE, level_correlation(fit, "lab", gp = "bias"))
+  ball <- data.frame(ballField, lab = rep(c("A", "B"), length.out = nrow(ballField)))
+  fit2 <- calibrate(ballSim, ball, source = "lab", nMCMC = 60, nBurn = 30, nChains = 1)
+  expect_snapshot(error = TRUE, level_correlation(fit2, "lab", gp = "bias"))
+})
+
+test_that("a categorical column of field alone is not called a column of sim", {
+  # issue 32: "... that `sim` has not as categorical" for a column sim lacks
+  pr <- two_outputs(seed = 3)
+  field <- cbind(pr$field, lab = "A", site = "north")
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out", source = "lab"))
+})
