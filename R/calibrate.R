@@ -184,7 +184,14 @@
 #' instead; see `inst/bench/RESULTS-outputs.md` for why it was replaced.)
 #'
 #' `output = "name"` names such a column that says which output each row of
-#' `sim` and `field` holds (long format). Each output is standardised by
+#' `sim` and `field` holds (long format: one response column, one row per
+#' run or observation and output). Outputs given in wide format (a response
+#' column per output) are not read as outputs: the first is the response
+#' and a second, when `field` has it too, an experimental input. Stack them
+#' instead (e.g. with `reshape()` or `tidyr::pivot_longer()`);
+#' `calibrate()` warns when a column shared with `field` varies with the
+#' calibration inputs in `sim`, as an output does and a design input does
+#' not. Each output is standardised by
 #' its own simulator runs' mean and sd, and has its own measurement-error
 #' variance (`sigma2E1`, `sigma2E2`, ...); the simulator GP and the bias
 #' correlate the outputs through the output's level correlation, so all
@@ -645,6 +652,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
     list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
   if (sourceBias == "own") scale$sourceBias <- TRUE
   inform_duplicated_runs(sim)
+  warn_wide_outputs(sim, p, named = cols$named)
   warn_field_outside(sim, field, scale)
   dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
   noise <- length(fac$noiseLabels %||% 1L)
@@ -690,10 +698,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                            starts, seeds, spec$vars)
     starts <- run$starts
     seeds <- run$seeds
-    if (run$resumed) {
-      at <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
-      cli::cli_inform("Resuming the run in {.file {checkpoint}}: {cli::qty(length(at))}chain{?s} at iteration{?s} {at} of {nMCMC}.")
-    }
+    if (run$resumed) inform_resumed(checkpoint, starts, nMCMC, converge)
   }
   # the directory as used (absolute): workers and later sessions may start
   # elsewhere

@@ -69,15 +69,42 @@ read_checkpoint_file <- function(path, what, id = NULL, call = parent.frame()) {
 identity_defaults <- list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp")
 
 # What makes a run the same run: data and priors as the sampler sees them,
-# and the settings (but identity_defaults at their defaults).
+# and the settings (but identity_defaults at their defaults). The numeric
+# `sim` and `field` carry the response, the inputs, the categorical inputs
+# (outputs included) as indicator columns and the row order; what the
+# model takes from the other columns, each field row's measurement-error
+# group (output x data set) and data set (a bias per data set), is in
+# `groups` (left out when there is none, so older checkpoints still match).
 run_identity <- function(sim, field, spec, settings) {
   default <- vapply(names(settings), function(s) {
     s %in% names(identity_defaults) && identical(settings[[s]], identity_defaults[[s]])
   }, logical(1))
   settings <- settings[!default]
-  list(sim = unname(sim), field = unname(field),
-       priors = list(table = spec$table, init = spec$init, logsd = spec$logsd),
-       settings = settings)
+  groups <- Filter(Negate(is.null), list(noise = spec$model$noise, source = spec$model$source))
+  c(list(sim = unname(sim), field = unname(field),
+         priors = list(table = spec$table, init = spec$init, logsd = spec$logsd),
+         settings = settings),
+    if (length(groups)) list(groups = groups))
+}
+
+# The field rows whose group differs between two codings (NULL: one group;
+# with `single = FALSE`, NULL is not compared: another setting says it), in
+# words.
+group_differences <- function(old, new, what, single = TRUE) {
+  if (!single && (is.null(old) || is.null(new))) return(character())
+  n <- max(length(old), length(new))
+  a <- old %||% rep(1L, n)
+  b <- new %||% rep(1L, n)
+  if (identical(a, b)) return(character())
+  if (length(a) != length(b) || max(a) != max(b)) {
+    return(sprintf("The field rows' %s differ from the checkpoint's: %d there, %d now.", what,
+                   max(a), max(b)))
+  }
+  rows <- which(a != b)
+  shown <- paste(utils::head(rows, 5L), collapse = ", ")
+  more <- if (length(rows) > 5L) sprintf(" and %d more", length(rows) - 5L) else ""
+  sprintf("The field rows' %s differ from the checkpoint's (%s %s%s).", what,
+          if (length(rows) == 1L) "row" else "rows", shown, more)
 }
 
 # Differences between a checkpoint's identity and the call's, in words.
@@ -85,6 +112,13 @@ identity_differences <- function(old, new, vars) {
   out <- character()
   if (!identical(old$sim, new$sim)) out <- c(out, "{.arg sim} differs from the checkpoint's simulator runs.")
   if (!identical(old$field, new$field)) out <- c(out, "{.arg field} differs from the checkpoint's field data.")
+  if (identical(old$field, new$field)) {
+    out <- c(out,
+             group_differences(old$groups$noise, new$groups$noise,
+                               "measurement-error groups (outputs x data sets, columns `output` and `source`)"),
+             group_differences(old$groups$source, new$groups$source, "data sets (column `source`)",
+                               single = FALSE))
+  }
   if (!identical(nrow(old$priors$table), nrow(new$priors$table))) {
     out <- c(out, sprintf("The model has %d parameters in the checkpoint and %d now.",
                           nrow(old$priors$table), nrow(new$priors$table)))
@@ -104,11 +138,33 @@ identity_differences <- function(old, new, vars) {
       b <- b %||% identity_defaults[[s]]
     }
     if (!identical(a, b)) {
-      fmt <- function(x) if (is.atomic(x) && length(x) == 1L) format(x) else "another value"
-      out <- c(out, sprintf("`%s` is %s in the checkpoint and %s now.", s, fmt(a), fmt(b)))
+      out <- c(out, sprintf("`%s` differs: %s in the checkpoint, %s now.", s, format_setting(a),
+                            format_setting(b)))
     }
   }
   out
+}
+
+# A setting's value in a checkpoint message: a number or string as is, a
+# list (converge's rule) as its fields, NULL as "not set".
+format_setting <- function(x) {
+  if (is.null(x)) return("not set")
+  if (is.atomic(x) && length(x) == 1L) return(format(x))
+  if (is.atomic(x)) return(paste0("c(", paste(format(x), collapse = ", "), ")"))
+  if (is.list(x) && !is.null(names(x))) {
+    return(paste(names(x), vapply(x, format_setting, character(1)), sep = " = ", collapse = ", "))
+  }
+  "another value"
+}
+
+# The message of a resumed run: where each chain is, out of nMCMC, or under
+# a `converge` rule out of nMCMC at first and up to the rule's maxMCMC.
+inform_resumed <- function(dir, starts, nMCMC, converge = NULL) {
+  at <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
+  of <- if (is.null(converge)) sprintf("of %d", nMCMC) else
+    sprintf("(`converge`: a first stretch of %d, then on until converged or %d)", nMCMC,
+            converge$maxMCMC)
+  cli::cli_inform("Resuming the run in {.file {dir}}: {cli::qty(length(at))}chain{?s} at iteration{?s} {at} {of}.")
 }
 
 # Opens (or creates) the run directory of calibrate(checkpoint = dir).

@@ -204,23 +204,117 @@ inform_duplicated_runs <- function(sim, call = parent.frame()) {
 # fbc_near_runs of each input's design range but are not identical. Their
 # correlation is 1 to about 1e-12, far inside the relative nugget (1e-6),
 # so they act as one run whose responses must agree; a message says where
-# (rows found by rounding the scaled inputs to that grid, O(m)).
+# (near_groups(): every pair within the distance, however it falls on a
+# grid; rounding to a grid missed pairs on either side of a grid line).
 fbc_near_runs <- 1e-7
 
 inform_near_duplicates <- function(X, call = parent.frame()) {
   rng <- apply(X, 2, function(v) diff(range(v)))
   rng[rng == 0] <- 1
   U <- sweep(sweep(X, 2, apply(X, 2, min), "-"), 2, rng, "/")
-  key <- apply(round(U / fbc_near_runs), 1, paste, collapse = "\r")
-  near <- duplicated(key) | duplicated(key, fromLast = TRUE)
-  if (!any(near)) return(invisible(FALSE))
-  groups <- split(which(near), key[near])
+  groups <- near_groups(U, fbc_near_runs)
+  if (!length(groups)) return(invisible(FALSE))
   shown <- paste(vapply(utils::head(groups, 5), paste, character(1), collapse = " and "),
                  collapse = "; ")
   if (length(groups) > 5L) shown <- paste0(shown, "; ...")
   cli::cli_inform(c(
     i = "{.arg sim} has {length(groups)} group{?s} of runs whose inputs differ by less than {fbc_near_runs} of each input's range: rows {shown}.",
     " " = "The emulator treats such runs as one (their correlation is 1 far inside its tiny nugget): their responses must agree, and they add no information."
+  ), call = call)
+  invisible(TRUE)
+}
+
+# The groups of rows of U (the runs' inputs scaled to [0, 1]) linked by
+# pairs closer than `eps` in every input but not identical: a list of row
+# sets, each sorted, in order of their first row. Candidates come from
+# splitting the rows, input by input, where the sorted values jump by `eps`
+# or more (a pair closer than eps in every input stays in one block); each
+# block's pairs are then checked. O(m log m) per input for scattered
+# designs.
+near_groups <- function(U, eps) {
+  U <- as.matrix(U)
+  d <- ncol(U)
+  blocks <- list(seq_len(nrow(U)))
+  for (j in seq_len(d)) {
+    blocks <- unlist(lapply(blocks, function(idx) {
+      o <- idx[order(U[idx, j])]
+      split(o, cumsum(c(TRUE, diff(U[o, j]) >= eps)))
+    }), recursive = FALSE)
+    blocks <- blocks[lengths(blocks) > 1L]
+    if (!length(blocks)) return(list())
+  }
+  parent <- seq_len(nrow(U))
+  find <- function(i) {
+    while (parent[i] != i) i <- parent[i]
+    i
+  }
+  for (b in blocks) {
+    for (a in seq_len(length(b) - 1L)) {
+      for (c in (a + 1L):length(b)) {
+        dif <- abs(U[b[a], ] - U[b[c], ])
+        if (all(dif < eps) && any(dif > 0)) {
+          ra <- find(b[a]); rc <- find(b[c])
+          if (ra != rc) parent[max(ra, rc)] <- min(ra, rc)
+        }
+      }
+    }
+  }
+  root <- vapply(seq_along(parent), find, integer(1))
+  linked <- which(root != seq_along(root))
+  if (!length(linked)) return(list())
+  groups <- split(seq_along(root), root)
+  groups <- unname(groups[lengths(groups) > 1L])
+  groups[order(vapply(groups, min, integer(1)))]
+}
+
+# Outputs given in wide format (several response columns) are read as a
+# response and inputs: an output column shared with `field` becomes an
+# experimental input. A design input is set independently of the
+# calibration inputs; an output varies with them. Warns, naming the
+# column, when the calibration inputs (with their squares and products with
+# the other experimental inputs) explain at least `fbc_wide_share` of a
+# shared column's variation in `sim` beyond what the other experimental
+# inputs explain, and at least `fbc_wide_alone` of it on their own. `sim`: the numeric matrix (response, p experimental, q
+# calibration inputs, named when `named`).
+fbc_wide_share <- 0.5
+fbc_wide_alone <- 0.1
+
+warn_wide_outputs <- function(sim, p, named = TRUE, call = parent.frame()) {
+  m <- nrow(sim)
+  q <- ncol(sim) - 1L - p
+  if (!named || q < 1L || p < 1L) return(invisible(FALSE))
+  nm <- colnames(sim)
+  exper <- 1L + seq_len(p)
+  calib <- 1L + p + seq_len(q)
+  Tm <- scale(sim[, calib, drop = FALSE])
+  flagged <- character()
+  share <- numeric()
+  for (j in exper) {
+    v <- sim[, j]
+    if (length(unique(v)) <= 2L) next  # indicators, two-level inputs
+    others <- scale(sim[, setdiff(exper, j), drop = FALSE])
+    others <- others[, colSums(is.finite(others)) == m, drop = FALSE]
+    reduced <- cbind(1, others, others^2)
+    full <- cbind(reduced, Tm, Tm^2,
+                  if (ncol(others)) do.call(cbind, lapply(seq_len(ncol(Tm)), function(k) others * Tm[, k])))
+    if (ncol(full) >= m - 2L) next
+    rss <- function(X) sum(stats::lm.fit(X, v)$residuals^2)
+    r0 <- rss(reduced)
+    if (!(r0 > 0)) next
+    gain <- (r0 - rss(full)) / r0
+    # alone, too: given an output among the others, a design input is
+    # "explained" by the calibration inputs through it
+    alone <- 1 - rss(cbind(1, Tm, Tm^2)) / sum((v - mean(v))^2)
+    if (gain >= fbc_wide_share && alone >= fbc_wide_alone) {
+      flagged <- c(flagged, nm[j])
+      share <- c(share, gain)
+    }
+  }
+  if (!length(flagged)) return(invisible(FALSE))
+  cli::cli_warn(c(
+    "{cli::qty(length(flagged))}Column{?s} {.val {flagged}} of {.arg sim}, read as {?an experimental input/experimental inputs} (shared with {.arg field}), {?varies/vary} with the calibration {cli::qty(q)}input{?s} {.val {nm[calib]}} in the simulator runs: {?it explains/they explain} {fmt_share(share)} of {cli::qty(length(flagged))}{?its/their} variation beyond the other inputs.",
+    i = "A design input is set independently of the calibration inputs; an output is not. Is it a second output given in wide format?",
+    i = "Several outputs go in long format: one response column, a column naming the output of each row, and {.code calibrate(output = \"<that column>\")} (see {.topic FBC::calibrate}, \"Categorical inputs, outputs and data sets\")."
   ), call = call)
   invisible(TRUE)
 }

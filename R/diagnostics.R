@@ -181,10 +181,13 @@ smooth_kernel_hint <- function(cls) {
 #' parameter is flagged when the field data barely inform it -- its central
 #' 95% posterior interval covers at least 70% of the range the simulator
 #' design covers, or its posterior sd is at least 70% of its prior's --
-#' while the bias carries the signal: the posterior median of `sigma2B`
-#' exceeds that of `sigma2E`. The bias and \eqn{\kappa} are then confounded
-#' (Kennedy and O'Hagan 2001): another calibration explained the data as
-#' well with another bias. The message gives the calls that fit the other
+#' while the posterior median of `sigma2B` exceeds that of `sigma2E` (with
+#' several measurement-error groups, `output =` or `source =`, that of any
+#' group: the message names it). The data then cannot separate \eqn{\kappa}
+#' from a bias (Kennedy and O'Hagan 2001): another calibration explains the
+#' data as well with another bias. This says what the data cannot tell
+#' apart, not that there is a bias: with none in the data, `sigma2B`'s prior
+#' alone can hold it above `sigma2E`. The message gives the calls that fit the other
 #' discrepancy models and compare them with [loo.fbc()]. On the ball data
 #' the default fit is flagged (the 95% interval of `g` covers about 90% of
 #' the design's range); its S-GaSP and no-discrepancy fits are not.
@@ -278,6 +281,7 @@ convergence_messages <- function(x) {
         sprintf(" (e.g. `%sDist = \"fixed\", %sInit = %g` in set_hyperPriors()).",
                 cls, cls, pile$bound[i])),
       kappa = "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb.",
+      rhoS = , rhoB = , rhoD = rho_bound_hint(x, v, cls, pile$bound[i]),
       "Check that this prior's support is wide enough."
     )
     msgs <- c(msgs, sprintf("%.0f%% of the draws of %s lie at its bound %g. %s",
@@ -297,6 +301,35 @@ convergence_messages <- function(x) {
       v, press$bound[i], hint))
   }
   c(msgs, kappa_beyond_messages(x), confounding_messages(x), conflict_messages(x))
+}
+
+# What a level correlation (rhoS, rhoB: levels of a categorical input;
+# rhoD: the field data sets' biases) at +1 or -1 means, in words: the two
+# levels move together (or oppositely), one a shifted and scaled copy (or
+# mirror image) of the other. An answer about the data, not a prior whose
+# support is too narrow (it is the whole of (-1, 1)).
+rho_bound_hint <- function(x, v, cls, bound) {
+  pos <- match(v, x$spec$vars[x$spec$classes == cls])
+  src <- x$scale$source
+  factors <- if (cls == "rhoD") list(list(name = src$name, levels = src$levels)) else x$scale$factors
+  lab <- level_labels(factors)[pos]
+  input <- sub(":.*$", "", lab)
+  pair <- sub("^[^:]*: ", "", lab)
+  given <- if (grepl(" | ", pair, fixed = TRUE)) paste0(" given ", sub("^.* \\| ", "", pair)) else ""
+  pair <- sub("~", " and ", sub(" \\| .*$", "", pair))
+  who <- if (cls == "rhoD") "data sets' biases" else "levels"
+  head <- switch(cls,
+    rhoS = sprintf("the simulator GP's correlation between levels %s of `%s`", pair, input),
+    rhoB = sprintf("the bias GP's correlation between levels %s of `%s`", pair, input),
+    rhoD = sprintf("the correlation between the biases of data sets %s (`%s`)", pair, input))
+  if (nzchar(given)) head <- paste0(head, " (a partial correlation,", given, ")")
+  how <- if (bound > 0) "move together: across the inputs, one is a shifted and scaled copy of the other" else
+    "move oppositely: across the inputs, one is a mirror image of the other (up where it goes down)"
+  gp <- if (cls == "rhoS") "" else ", gp = \"bias\""
+  paste0(v, " is ", head, ": at ", sprintf("%+g", bound), " the two ", who, " ", how,
+         ". This is what the data say (or that they are too few to tell the ", who,
+         " apart), not a prior too narrow: it spans all of -1 to 1. See `level_correlation(fit, \"",
+         input, "\"", gp, ")`; if the ", who, " should differ, check that each has enough runs and field data.")
 }
 
 # A joint move whose parameters have not converged (`slow`: R-hat or ESS

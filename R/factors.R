@@ -59,11 +59,16 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
         cli::cli_abort(c(
           "{.arg {arg}} = {.val {nm}} must name a factor or character column of {.arg {w}}.",
           i = if (arg == "output") "The outputs are in long format: one row per run (or observation) and output, the output's name in that column, its value in the response column." else
-            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column."
+            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column.",
+          i = if (arg == "output" && w == "sim" && is.data.frame(field) && nm %in% names(field)) {
+            "{.val {nm}} is a column of {.arg field} only: if it says which field data set each row comes from, name it with {.arg source} instead."
+          }
         ), call = call)
       }
     }
   }
+  check_no_missing_levels(sim, c(catS, output), "sim", output, source, call = call)
+  check_no_missing_levels(field, c(catF, output, source), "field", output, source, call = call)
   if (!is.null(source) && is.data.frame(sim) && source %in% names(sim)) {
     cli::cli_abort("{.arg source} = {.val {source}} is a column of {.arg sim}: a field data set is not a simulator input.", call = call)
   }
@@ -91,9 +96,9 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   }
   if (length(onlyField)) {
     cli::cli_abort(c(
-      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} has not as categorical.",
-      i = if (is.null(source)) "A field data set of its own goes in a column named by {.arg source}." else
-        "Give each categorical input in both {.arg sim} and {.arg field}."
+      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} lacks: a column of {.arg field} alone is not an input of the simulator.",
+      i = if (is.null(source)) "If it says which field data set each row comes from, name it with {.arg source}; if it is an input, give it in {.arg sim} too; else drop it." else
+        "Give each categorical input in both {.arg sim} and {.arg field}; the field data sets' column ({.val {source}}) is the only column of {.arg field} alone."
     ), call = call)
   }
   factors <- list()
@@ -113,6 +118,8 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   if (!is.null(output)) {
     out <- factors[[output]][c("name", "levels", "columns")]
     outS <- match(as.character(attr(sim, "fbc_codes")[[output]]), out$levels)
+    # the outputs' names, for fbc_scale()'s messages
+    attr(outS, "labels") <- out$levels
     outF <- match(as.character(attr(field, "fbc_codes")[[output]]), out$levels)
   }
   # measurement-error groups: output x source combinations present in field
@@ -130,6 +137,30 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   list(sim = sim, field = field, factors = factors, output = out, source = src,
        outS = outS, outF = outF, noise = if (length(ukey) > 1L) noise,
        noiseLabels = if (length(ukey) > 1L) labels)
+}
+
+# A missing value (NA, or "") in a categorical column (a categorical input,
+# the `output` or `source` column) is refused naming the column and rows:
+# it would otherwise become a level of its own (a data set "NA" with its own
+# noise) or fail later.
+check_no_missing_levels <- function(d, cols, arg, output = NULL, source = NULL,
+                                    call = parent.frame()) {
+  if (!is.data.frame(d)) return(invisible(TRUE))
+  for (nm in intersect(unique(cols), names(d))) {
+    x <- d[[nm]]
+    bad <- which(is.na(x) | (is.character(x) & x == ""))
+    if (!length(bad)) next
+    role <- if (identical(nm, output)) "named by {.arg output}" else
+      if (identical(nm, source)) "named by {.arg source}" else "a categorical input"
+    n <- length(bad)
+    rows <- paste(utils::head(bad, 10L), collapse = ", ")
+    more <- if (n > 10L) sprintf(" and %d more", n - 10L) else ""
+    cli::cli_abort(c(
+      paste0("Column {.val {nm}} of {.arg {arg}} (", role, ") has {cli::qty(n)}{?a missing value/missing values}: {cli::qty(n)}row{?s} {rows}{more}."),
+      i = "{cli::qty(n)}Each row needs its level: fill {?it/them} in or drop {?that row/those rows}."
+    ), call = call)
+  }
+  invisible(TRUE)
 }
 
 # What each partial correlation of the categorical inputs' levels (rhoS1,
@@ -250,7 +281,9 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 #' @param input The input's name (a column of `sim` and `field`), or with
 #'   `sourceBias = "own"` the field data sets' column (`gp = "bias"`).
 #' @param gp `"simulator"` (default) or `"bias"`.
-#' @return A square matrix with the levels as row and column names.
+#' @return A square matrix with the levels as row and column names. When a
+#'   correlation's draws sit both near +1 and near -1 (at least 10% within
+#'   0.1 of each), a warning says so: the average is then neither answer.
 #' @export
 #' @examples
 #' \donttest{
@@ -269,7 +302,20 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fac <- fit$scale$factors
   src <- fit$scale$source
   own <- isTRUE(fit$scale$sourceBias)
-  if (!length(fac) && !own) cli::cli_abort("{.arg fit} has no categorical input.")
+  if (!length(fac) && !own) {
+    cli::cli_abort(c(
+      "{.arg fit} has no categorical input.",
+      i = if (!is.null(src) && identical(input, src$name)) {
+        "{.val {input}} names the field data sets, which share one bias ({.code sourceBias = \"shared\"}): there is no correlation between their biases to show. {.code calibrate(source = \"{input}\", sourceBias = \"own\")} gives each data set its own bias, correlated by {.field rhoD}."
+      }
+    ))
+  }
+  if (!own && !is.null(src) && identical(input, src$name)) {
+    cli::cli_abort(c(
+      "{.val {input}} names the field data sets, not a categorical input: they share one bias ({.code sourceBias = \"shared\"}), so there is no correlation between their biases to show.",
+      i = "{.code calibrate(source = \"{input}\", sourceBias = \"own\")} gives each data set its own bias, correlated by {.field rhoD}; the categorical {cli::qty(length(fac))}input{?s} of {.arg fit} {?is/are} {.val {names(fac)}}."
+    ))
+  }
   input <- match_choice(input, c(names(fac), if (own) src$name), "input")
   if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
@@ -280,6 +326,7 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
       cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
     }
     draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
+    warn_split_rho(draws, fit$spec$vars[fit$spec$classes == "rhoD"])
     return(mean_level_corr(draws, src$levels))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
@@ -292,7 +339,27 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   k <- match(input, names(fac))
   pos <- level_positions(fac)[[k]]
   draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
+  warn_split_rho(draws, fit$spec$vars[fit$spec$classes == cls][pos])
   mean_level_corr(draws, fac[[k]]$levels)
+}
+
+# A correlation whose draws sit both near +1 and near -1 (at least
+# `fbc_split_share` of them within 0.1 of each) has two answers, the levels
+# moving together or oppositely; their average, near 0, is neither: said
+# with the shares.
+fbc_split_share <- 0.1
+warn_split_rho <- function(draws, vars, call = parent.frame()) {
+  for (j in seq_len(ncol(draws))) {
+    up <- mean(draws[, j] > 0.9)
+    down <- mean(draws[, j] < -0.9)
+    if (up >= fbc_split_share && down >= fbc_split_share) {
+      cli::cli_warn(c(
+        "{.field {vars[j]}} has two answers: {round(100 * up)}% of its draws lie near +1 (the levels move together) and {round(100 * down)}% near -1 (they move oppositely).",
+        i = "The average correlation returned is neither; look at the draws ({.code plot(fit, \"rhoS\", type = \"trace\")}, or {.val rhoB}, {.val rhoD}) before reading it, and compare chains: each may have settled on one sign."
+      ), call = call)
+    }
+  }
+  invisible()
 }
 
 # The level correlation averaged over the rows of `draws` (each row one

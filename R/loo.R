@@ -24,11 +24,20 @@
 #' time. Without replicates the two are the same. Compare fits with the
 #' same `unit`.
 #'
+#' An input is a point of the experimental inputs but the output: with
+#' several outputs (`calibrate(output =)`) or field data sets (`source =`)
+#' every output and data set observed at one input is left out with it
+#' (they share its bias, correlated across outputs by `rhoB` and across data
+#' sets by `rhoD`). A categorical input other than the output is part of
+#' the input: another level is another input. The pointwise elements are
+#' then the inputs, not the observations.
+#'
 #' @param x An `fbc` object from [calibrate()].
 #' @param unit `"input"` (default) or `"observation"`: see "What is left out".
 #' @param ndraws How many posterior draws to use, evenly spaced within each
 #'   chain (the same number per chain, for the relative efficiencies); `NULL`
-#'   for all. Each draw costs one evaluation of the likelihood's factors.
+#'   for all. At least 2 per chain. Each draw costs one evaluation of the
+#'   likelihood's factors.
 #' @param ... Not used: an argument given here is an error.
 #' @return A `psis_loo` object of \pkg{loo} (see [loo::loo()]), whose
 #'   pointwise elements are the field inputs (or observations) in the order
@@ -53,9 +62,10 @@ loo.fbc <- function(x, unit = c("input", "observation"), ndraws = 4000, ...) {
   }
   unit <- match_choice(unit, c("input", "observation"), "unit")
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
+  check_loo_draws(x$chain, ndraws)
   rows <- loo_rows(x$chain, ndraws)
   d <- x$data
-  group <- loo_groups(d$Xf, unit)
+  group <- loo_groups(d$Xf, unit, loo_input_columns(x$scale))
   ll <- .fbc_loo(d$Xf, d$yf, d$Xs, d$ys, sampler_draws(x, rows$rows), x$settings$nugget,
                  group, model = x$spec$model)
   # densities in the response's units: y = ymean + ysd * y_scaled (each
@@ -83,9 +93,48 @@ loo_rows <- function(chain, ndraws) {
 }
 
 # The group of each field row: its distinct input (numbered in order of
-# first appearance) or itself.
-loo_groups <- function(Xf, unit) {
+# first appearance) or itself. `cols`: the columns of Xf that make the
+# input (all by default).
+loo_groups <- function(Xf, unit, cols = seq_len(ncol(Xf))) {
   if (unit == "observation") return(seq_len(nrow(Xf)))
-  key <- row_keys(Xf)
+  key <- row_keys(Xf[, cols, drop = FALSE])
   match(key, unique(key))
+}
+
+# The columns of the scaled field inputs that say where an observation was
+# made, for unit = "input": every experimental input but the output's
+# indicators (the data set, `source`, is not among them). The outputs and
+# data sets observed at one input are left out together, as its replicates
+# are: they share its bias (correlated across outputs by rhoB, across data
+# sets by rhoD), so one left out while the others stay in would be
+# predicted from them whatever the calibration.
+loo_input_columns <- function(scale) {
+  cols <- seq_len(scale$p)
+  out <- scale$output$columns
+  if (is.null(out)) return(cols)
+  setdiff(cols, match(out, scale$names$inputs))
+}
+
+# loo() needs a few draws per chain for the relative efficiencies
+# (loo::relative_eff fails with one): at least `fbc_loo_per_chain`, from
+# `ndraws` and from what the chains kept (an interrupted chain may keep
+# fewer than calibrate()'s 2).
+fbc_loo_per_chain <- 2L
+check_loo_draws <- function(chain, ndraws, call = parent.frame()) {
+  k <- length(unique(chain))
+  kept <- min(tabulate(match(chain, unique(chain))))
+  need <- fbc_loo_per_chain
+  if (kept < need) {
+    cli::cli_abort(c(
+      "{.fn loo} needs at least {need} draws per chain for the relative efficiencies of the chains; {.arg x} keeps {kept} in its shortest chain.",
+      i = "Run the chains longer with {.code update(fit, nMCMC = ...)}."
+    ), call = call)
+  }
+  if (!is.null(ndraws) && ndraws %/% k < need) {
+    cli::cli_abort(c(
+      "{.arg ndraws} = {ndraws} gives {ndraws %/% k} draw{?s} per chain over {k} chain{?s}; {.fn loo} needs at least {need} per chain for the relative efficiencies.",
+      i = "Use {.code ndraws = {need * k}} or more (or {.code NULL} for all draws)."
+    ), call = call)
+  }
+  invisible()
 }

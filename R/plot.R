@@ -16,7 +16,8 @@
 #' * `"fits"`: the field observations, the MAP fitted values
 #'   ([predict.fbc()] with `method = "MAP"` at the field inputs) and their
 #'   95% prediction intervals against each experimental input (one facet
-#'   each). `parameter` is ignored.
+#'   each; with several outputs or field data sets, `output =` or
+#'   `source =`, a row of facets for each). `parameter` is ignored.
 #'
 #' Facets and axes use the data's own names: a calibration parameter is
 #' labelled by its input (`"g (kappa1)"`, and the axis `"g"`), a
@@ -225,13 +226,16 @@ plot_fits <- function(x, xlab) {
   ind <- match(unlist(lapply(sc$factors, `[[`, "columns")), sc$names$inputs)
   axes <- setdiff(seq_len(p), ind)
   if (!length(axes)) axes <- seq_len(p)
-  out <- if (!is.null(sc$output)) sc$output$levels[x$data$outF] else NULL
+  # a row of panels per output and per field data set (`source`): the
+  # measurement-error groups, labelled as print() labels sigma2E1, ...
+  out <- fits_rows(x)
   df <- do.call(rbind, lapply(axes, function(k) {
     data.frame(input = xlab[k], x = X[, k], observed = y, fitted = fc$mean[, 1],
                lower = fc$mean[, 1] - z * fc$sd[, 1], upper = fc$mean[, 1] + z * fc$sd[, 1],
                output = out %||% "")
   }))
   df$input <- factor(df$input, unique(xlab[axes]))
+  if (!is.null(out)) df$output <- factor(df$output, unique(out[order(x$spec$model$noise %||% 1L)]))
   facet <- if (is.null(out)) ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") else
     ggplot2::facet_grid(ggplot2::vars(.data$output), ggplot2::vars(.data$input), scales = "free")
   ggplot2::ggplot(df, ggplot2::aes(x = .data$x)) +
@@ -243,4 +247,18 @@ plot_fits <- function(x, xlab) {
     ggplot2::labs(x = if (length(axes) == 1L) xlab[axes] else NULL, y = sc$names$response,
                   title = "Field data (red) and MAP fits with 95% intervals (blue)") +
     ggplot2::theme_bw()
+}
+
+# The panel row of each field row in plot(type = "fits"): its output, its
+# field data set ("lab A") or both ("conc, lab A"); NULL with neither.
+fits_rows <- function(x) {
+  sc <- x$scale
+  out <- if (!is.null(sc$output)) sc$output$levels[x$data$outF]
+  if (is.null(sc$source) || is.null(sc$noiseLabels)) return(out)
+  # the data set of each row, from its measurement-error group's label
+  # ("output:source" or "source")
+  lab <- sc$noiseLabels[x$spec$model$noise]
+  src <- if (is.null(out)) lab else substring(lab, nchar(out) + 2L)
+  src <- paste(sc$source$name, src)
+  if (is.null(out)) src else paste(out, src, sep = ", ")
 }

@@ -81,9 +81,37 @@ ppc_field <- function(fit, ndraws = 500) {
   outside <- stats::setNames(vapply(levels_, function(l) mean(abs(p - 0.5) > l / 2), numeric(1)),
                              paste0(100 * levels_, "%"))
   structure(list(y = y, yrep = yrep, x = X, obs = obs, outside = outside, ndraws = D,
-                 response = sc$names$response),
+                 response = sc$names$response, noise = ppc_noise(fit, y, mu)),
             class = "fbc_ppc")
 }
+
+# How far the measurement error's variance exceeds what the observations
+# show, per measurement-error group: the posterior median of sigma2E (in
+# the response's units squared: the scaled-space draws times the output's
+# variance) against the mean squared distance of the group's observations
+# from their predictive means (which a good fit keeps near sigma2E plus the
+# latent field's posterior variance, so a ratio well above 1 says the noise
+# is overstated). A data frame: label, sigma2E, residual, ratio.
+ppc_noise <- function(fit, y, mu) {
+  cols <- grep("^sigma2E[0-9]*$", colnames(fit$Phi), value = TRUE)
+  if (!length(cols)) return(NULL)
+  codes <- fit$spec$model$noise %||% rep(1L, length(y))
+  sds <- y_sd(fit$scale, fit$data$outF)
+  if (length(sds) == 1L) sds <- rep(sds, length(y))
+  labels <- fit$scale$noiseLabels %||% rep("", length(cols))
+  out <- lapply(seq_along(cols), function(g) {
+    rows <- which(codes == g)
+    s2 <- stats::median(fit$Phi[, cols[g]]) * sds[rows[1]]^2
+    res <- mean((y[rows] - mu[rows])^2)
+    data.frame(parameter = cols[g], label = labels[g], sigma2E = s2, residual = res,
+               ratio = s2 / res, stringsAsFactors = FALSE)
+  })
+  do.call(rbind, out)
+}
+
+# Ratio of sigma2E to the observations' mean squared residual above which
+# ppc_field() says the measurement error is overstated.
+fbc_ppc_noise_ratio <- 4
 
 field_input_names <- function(scale) {
   nm <- scale$names$inputs
@@ -113,8 +141,18 @@ print.fbc_ppc <- function(x, digits = 3, ...) {
     cat_warning(
       "Many observations fall outside their 90% intervals: the model misses part of the field data. The plot shows where; a discrepancy the bias GP cannot follow, or a measurement error variance fixed too low, are common causes.")
   } else if (x$outside[["50%"]] < 0.2) {
-    cat_warning(
-      "The observations sit much closer to their predictive means than the intervals allow: the model overstates the noise, often because a prior holds sigma2E too high (see convergence_messages()).")
+    nz <- x$noise
+    big <- if (!is.null(nz)) nz[is.finite(nz$ratio) & nz$ratio > fbc_ppc_noise_ratio, , drop = FALSE]
+    cause <- if (!is.null(big) && nrow(big)) {
+      what <- sprintf("%s%s's posterior median %s is %s times the mean squared distance of %s observations from their predictive means (%s)",
+                      big$parameter, ifelse(nzchar(big$label), sprintf(" (%s)", big$label), ""),
+                      format(signif(big$sigma2E, 2)), format(signif(big$ratio, 2)),
+                      ifelse(nzchar(big$label), "its", "the"), format(signif(big$residual, 2)))
+      paste0(": ", paste(what, collapse = "; "),
+             ". A prior that holds sigma2E up (its sigma2EP1, sigma2EP2 in set_hyperPriors()) or a bias the data cannot separate from noise are common causes (see convergence_messages(), which flags a prior only beyond its thresholds).")
+    } else ". A prior that holds sigma2E too high is a common cause."
+    cat_warning(paste0(
+      "The observations sit much closer to their predictive means than the intervals allow: the model overstates the noise", cause))
   }
   invisible(x)
 }

@@ -22,12 +22,19 @@ fbc_scale <- function(sim, p, named = FALSE, out = NULL, call = parent.frame()) 
     ), call = call)
   }
   ys <- sim[, 1]
-  groups <- if (is.null(out)) list(seq_along(ys)) else split(seq_along(ys), out)
-  for (g in groups) {
+  groups <- if (is.null(out)) list(seq_along(ys)) else split(seq_along(ys), as.integer(out))
+  labels <- attr(out, "labels")
+  for (k in seq_along(groups)) {
+    g <- groups[[k]]
+    what <- if (is.null(out)) "" else
+      sprintf(" for the output %s", if (is.null(labels)) k else sprintf("\"%s\"", labels[as.integer(names(groups)[k])]))
     if (length(g) < 2L || stats::sd(ys[g]) == 0) {
-      cli::cli_abort("The simulator response (first column of {.arg sim}) is constant{if (!is.null(out)) ' for an output' else ''}.", call = call)
+      cli::cli_abort(c(
+        "The simulator response (first column of {.arg sim}) is constant{what}.",
+        i = if (!is.null(out)) "Each output is standardised by its own runs' sd: an output the simulator never varies cannot be calibrated against; drop its rows."
+      ), call = call)
     }
-    warn_nearly_constant(ys[g], call = call)
+    warn_nearly_constant(ys[g], what = what, call = call)
   }
   names_ <- usable_names(sim) %||% c("y", paste0("x", seq_len(p)), paste0("t", seq_len(ncol(sim) - 1L - p)))
   list(xmin = unname(xmin), xmax = unname(xmax),
@@ -77,11 +84,11 @@ sampler_scale <- function(Phi, scale) {
 fbc_constant_spread <- 1e-8
 
 # Warns when the simulator response's sd is tiny against its level.
-warn_nearly_constant <- function(ys, call = parent.frame()) {
+warn_nearly_constant <- function(ys, what = "", call = parent.frame()) {
   spread <- stats::sd(ys) / max(abs(ys))
   if (spread < fbc_constant_spread) {
     cli::cli_warn(c(
-      "The simulator response is nearly constant: its sd is {signif(spread, 2)} of its largest absolute value.",
+      "The simulator response is nearly constant{what}: its sd is {signif(spread, 2)} of its largest absolute value.",
       i = "FBC standardises the response by its sd, which here magnifies rounding in its last digits: check that {.arg sim}'s response column is the intended output, or subtract its constant part."
     ), call = call)
   }

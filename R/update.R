@@ -6,6 +6,12 @@
 #' if they had been run longer in the first place (with fresh random
 #' streams). A run interrupted with Ctrl-C is continued the same way.
 #'
+#' `update()` writes no checkpoint: the continued draws are only in the
+#' object it returns (an `update()` interrupted with Ctrl-C returns the
+#' draws made so far, and is continued by `update()` again). For a long
+#' continuation that must survive the session, run [calibrate()] with
+#' `checkpoint =` and a larger `nMCMC` (or `converge =`) instead.
+#'
 #' @param object An `fbc` object from [calibrate()] (or from `update()`).
 #' @param nMCMC Number of further iterations (sweeps) per chain. Every
 #'   `thinning`-th is kept, with the `thinning` of the original run. Under
@@ -39,7 +45,7 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
   states <- object$state$chains
   if (!is.null(converge)) {
     done <- max(vapply(states, function(st) as.numeric(st$sampler$iter), numeric(1)))
-    check_ceiling(converge, done + nMCMC, arg = "nMCMC")
+    check_update_ceiling(converge, done, nMCMC)
   }
   if (nMCMC %/% s$thinning < 1L) {
     cli::cli_abort("{.arg nMCMC} = {nMCMC} keeps no draw at thinning {s$thinning}; use at least {s$thinning}.")
@@ -85,4 +91,16 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
              nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
              dat = object$data, spec = object$spec, moves = s$moves)
+}
+
+# Under a `converge` rule, update() runs `nMCMC` further sweeps first: the
+# chains, `done` sweeps already, must stay within the rule's maxMCMC (a
+# total counted from calibrate()'s start), said with both numbers.
+check_update_ceiling <- function(rule, done, nMCMC, call = parent.frame()) {
+  if (rule$maxMCMC >= done + nMCMC) return(invisible())
+  cli::cli_abort(c(
+    "The rule's {.arg maxMCMC} ({rule$maxMCMC} sweeps in all) leaves no room for {.arg nMCMC} = {nMCMC} further sweeps: the chains have run {done} already.",
+    i = if (rule$maxMCMC > done) "Give {.arg nMCMC} of at most {rule$maxMCMC - done}, or a {.arg maxMCMC} of at least {done + nMCMC} in {.fn until_converged}." else
+      "Give a {.arg maxMCMC} of at least {done + nMCMC} in {.fn until_converged}."
+  ), call = call)
 }

@@ -43,8 +43,9 @@
 #' mixture). A run lies inside the central `level` interval when
 #' `|pit - 0.5| < level / 2`; `coverage` gives the share of runs inside the
 #' 50%, 90% and 95% intervals, which should be close to those levels.
-#' `rmse` is the root mean squared error of the means (`rmseRel`: as a share
-#' of the simulator response's sd) and `shareZ3` the share of runs with
+#' `rmse` is the root mean squared error of the means, in the response's
+#' units (with several outputs one per output, named, since their units
+#' differ; `rmseRel`: pooled as a share of each output's sd) and `shareZ3` the share of runs with
 #' `|z| > 3` (0.27% for a Gaussian). Coverage well below nominal or many
 #' large `|z|` mean the emulator is overconfident (`print()` says so when the
 #' 95% coverage is below 0.85 or at least 3 runs, and 2%, have `|z| > 3`);
@@ -66,7 +67,8 @@
 #' @param folds `NULL` (default), a number of folds, or one fold label per
 #'   simulator run (see "Folds").
 #' @return An object of class `fbc_validation`: a list with `runs` (a data
-#'   frame with one row per simulator run: its inputs in their own units,
+#'   frame with one row per simulator run: its inputs in their own units
+#'   (a categorical input, outputs included, as a factor of its levels),
 #'   `fold`, `observed`, `mean`, `sd`, `z`, `pit`), `coverage` (named by
 #'   level), `rmse`, `rmseRel`, `shareZ3`, `method`, `ndraws` (draws used),
 #'   `nFolds` and `inputs` (the names of the input columns of `runs`). It
@@ -112,7 +114,15 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
   levels_ <- c(0.5, 0.9, 0.95)
   coverage <- stats::setNames(vapply(levels_, function(l) mean(abs(pit - 0.5) < l / 2), numeric(1)),
                               paste0(100 * levels_, "%"))
-  rmse <- sqrt(mean((runs$observed - runs$mean)^2))
+  # raw errors pool only within one output's units: with several outputs
+  # one RMSE per output
+  err <- runs$observed - runs$mean
+  rmse <- if (is.null(sc$output)) sqrt(mean(err^2)) else
+    vapply(seq_along(sc$output$levels), function(k) sqrt(mean(err[out == k]^2)), numeric(1))
+  if (!is.null(sc$output)) names(rmse) <- sc$output$levels
+  cat_runs <- categorical_runs(runs, inputs, sc)
+  runs <- cat_runs$runs
+  inputs <- cat_runs$inputs
   structure(list(
     runs = runs, coverage = coverage, rmse = rmse,
     rmseRel = sqrt(mean(((runs$observed - runs$mean) / y_sd(sc, out))^2)),
@@ -120,6 +130,24 @@ validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, f
     nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
     response = sc$names$response
   ), class = "fbc_validation")
+}
+
+# The runs' categorical inputs (outputs included) as one factor column each,
+# with the level names, in place of their indicator columns: list(runs,
+# inputs).
+categorical_runs <- function(runs, inputs, scale) {
+  for (f in scale$factors) {
+    cols <- f$columns
+    if (!all(cols %in% names(runs))) next
+    ind <- as.matrix(runs[, cols, drop = FALSE])
+    code <- if (length(cols) == 1L) 1L + as.integer(round(ind[, 1])) else max.col(ind, "first")
+    j <- match(cols[1], names(runs))
+    runs[[cols[1]]] <- factor(f$levels[code], f$levels)
+    names(runs)[j] <- f$name
+    runs <- runs[, setdiff(names(runs), cols[-1]), drop = FALSE]
+    inputs <- unique(replace(inputs, inputs %in% cols, f$name))
+  }
+  list(runs = runs, inputs = inputs)
 }
 
 # Above this many simulator runs, validate_emulator() uses 10 folds.
@@ -224,8 +252,17 @@ print.fbc_validation <- function(x, digits = 3, ...) {
   cat(sprintf("  %s\n", at))
   cat(sprintf("  coverage of nominal intervals: %s\n",
               paste(sprintf("%s: %.2f", names(x$coverage), x$coverage), collapse = "  ")))
-  cat(sprintf("  RMSE %s (%s%% of the response's sd); |z| > 3: %d run%s (%.1f%%)\n",
-              format(signif(x$rmse, digits)), format(signif(100 * x$rmseRel, digits)),
+  rmse <- if (length(x$rmse) > 1L) {
+    # several outputs: each in its own units, pooled only relative to each sd
+    paste0("RMSE by output: ", paste(sprintf("%s %s", names(x$rmse),
+                                             vapply(signif(x$rmse, digits), format, character(1))),
+                                     collapse = ", "),
+           sprintf(" (%s%% of each output's sd, pooled)", format(signif(100 * x$rmseRel, digits))))
+  } else {
+    sprintf("RMSE %s (%s%% of the response's sd)", format(signif(x$rmse, digits)),
+            format(signif(100 * x$rmseRel, digits)))
+  }
+  cat(sprintf("  %s; |z| > 3: %d run%s (%.1f%%)\n", rmse,
               sum(abs(x$runs$z) > 3), if (sum(abs(x$runs$z) > 3) == 1) "" else "s",
               100 * x$shareZ3))
   worst <- which.max(abs(x$runs$z))
@@ -259,7 +296,9 @@ validation_verdict <- function(x) {
 #' [validate_emulator()] against each simulator input (one panel each,
 #' labelled with the input's name), with dashed lines at 0 and \eqn{\pm 2},
 #' and a normal QQ plot of `z` (last panel: `z` against the standard normal
-#' quantiles, the identity line dashed). Runs with `|z| > 3` are red. A
+#' quantiles, the identity line dashed). A categorical input (an output)
+#' is drawn at its levels' positions 1, 2, ..., named in its panel's title.
+#' Runs with `|z| > 3` are red. A
 #' trend or a funnel against an input shows where the emulator is wrong;
 #' points above the QQ line at the right (below it at the left) mean heavier
 #' tails than the emulator admits.
@@ -275,8 +314,14 @@ plot.fbc_validation <- function(x, which = c("both", "inputs", "qq"), ...) {
   qq_label <- "normal QQ (x: N(0, 1) quantile)"
   panels <- list()
   if (which != "qq") {
+    # a categorical input (an output) at its levels' positions 1, 2, ...,
+    # named in the panel's title
     panels <- lapply(x$inputs, function(v) {
-      data.frame(panel = v, x = runs[[v]], z = runs$z)
+      xv <- runs[[v]]
+      if (is.factor(xv)) {
+        xv <- as.integer(xv)
+      }
+      data.frame(panel = validation_panel(runs, v), x = xv, z = runs$z)
     })
   }
   if (which != "inputs") {
@@ -286,7 +331,9 @@ plot.fbc_validation <- function(x, which = c("both", "inputs", "qq"), ...) {
     )
   }
   df <- do.call(rbind, panels)
-  lev <- c(if (which != "qq") x$inputs, if (which != "inputs") qq_label)
+  lev <- c(if (which != "qq") vapply(x$inputs, function(v) validation_panel(runs, v), character(1),
+                                      USE.NAMES = FALSE),
+           if (which != "inputs") qq_label)
   df$panel <- factor(df$panel, lev)
   df$large <- abs(df$z) > 3
   p <- ggplot2::ggplot(df, ggplot2::aes(x = .data$x, y = .data$z)) +
@@ -304,4 +351,12 @@ plot.fbc_validation <- function(x, which = c("both", "inputs", "qq"), ...) {
     ggplot2::labs(x = NULL, y = "standardized error z",
                   title = sprintf("Emulator check: %s standardized errors of the simulator runs", how)) +
     ggplot2::theme_bw()
+}
+
+# The panel title of an input in plot.fbc_validation(): its name, and for a
+# categorical one the level at each position ("out (1 conc, 2 rate)").
+validation_panel <- function(runs, v) {
+  xv <- runs[[v]]
+  if (!is.factor(xv)) return(v)
+  sprintf("%s (%s)", v, paste(seq_along(levels(xv)), levels(xv), collapse = ", "))
 }

@@ -430,7 +430,7 @@ test_that("a run without a discrepancy checkpoints, resumes, and is refused by a
   expect_named(FBC:::run_identity(ballSim, ballField, fit$spec,
                                   list(nMCMC = 1, discrepancy = "gp"))$settings, "nMCMC")
   args$discrepancy <- NULL
-  expect_error(do.call(calibrate, args), "`discrepancy` is none in the checkpoint and gp now")
+  expect_error(do.call(calibrate, args), "`discrepancy` differs: none in the checkpoint, gp now")
 })
 
 test_that("a run with outputs and a bias per data set resumes to the uninterrupted draws", {
@@ -466,4 +466,47 @@ test_that("a run with outputs and a bias per data set resumes to the uninterrupt
   # the same data with one shared bias is another run
   args$sourceBias <- "shared"
   expect_error(do.call(calibrate, c(args, checkpoint = dir)), "checkpoint")
+})
+
+test_that("a checkpoint of other data sets (rows moved between sources) is refused naming the rows", {
+  # issue 32: the same field values, the same number of data sets, rows 1
+  # and 7 swapped between laboratories: another model (other noise groups)
+  set.seed(5)
+  x <- runif(30); t <- runif(30, 0.5, 3)
+  sim <- data.frame(y = 5 * exp(-t * x), x = x, t = t)
+  xf <- seq(0.1, 0.9, length.out = 6)
+  field <- data.frame(y = 5 * exp(-1.7 * rep(xf, 2)) + rnorm(12, 0, 0.05), x = rep(xf, 2),
+                      lab = rep(c("A", "B"), each = 6))
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  hide <- function(x) gsub(dir, "<dir>", x, fixed = TRUE)
+  args <- list(sim, source = "lab", nMCMC = 100, nBurn = 50, nChains = 1, checkpoint = dir)
+  set.seed(1)
+  fit <- do.call(calibrate, c(list(field = field), args))
+  md5 <- dir_md5(dir)
+  moved <- field
+  moved$lab[c(1, 7)] <- c("B", "A")
+  expect_snapshot(error = TRUE, transform = hide, do.call(calibrate, c(list(field = moved), args)))
+  # with a bias per data set, both the noise groups and the biases differ
+  expect_snapshot(error = TRUE, transform = hide,
+                  do.call(calibrate, c(list(field = moved, sourceBias = "own"), args)))
+  expect_identical(dir_md5(dir), md5)
+  # the rule's settings are shown, not "another value"
+  expect_snapshot(error = TRUE, transform = hide,
+                  do.call(calibrate, c(list(field = field, converge = TRUE), args)))
+  # the same data resumes (relabelling the data sets is the same model)
+  relabel <- field
+  relabel$lab <- ifelse(field$lab == "A", "lab1", "lab2")
+  expect_message(again <- do.call(calibrate, c(list(field = relabel), args)),
+                 "iteration 100 of 100")
+  expect_identical(again$Phi, fit$Phi)
+})
+
+test_that("a resumed run under converge says where it stops", {
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  starts <- list(list(state = list(iter = 4750L)), list(state = list(iter = 3000L)))
+  rule <- until_converged(maxMCMC = 20000)
+  expect_snapshot(FBC:::inform_resumed("<dir>", starts, 1500, rule))
+  expect_snapshot(FBC:::inform_resumed("<dir>", starts[1], 1500))
 })

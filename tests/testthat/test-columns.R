@@ -246,3 +246,36 @@ test_that("runs closer than the nugget can carry are reported, distinct designs 
   expect_no_message(FBC:::inform_duplicated_runs(s))
   expect_no_message(FBC:::inform_duplicated_runs(ballSim))
 })
+
+test_that("near-duplicate runs are found on either side of a grid line", {
+  # issue 32: rounding the scaled inputs to a 1e-7 grid split a pair 1e-8
+  # apart that straddled a grid line (0.45e-7 and 0.55e-7 round apart)
+  U <- rbind(c(0.45e-7, 0.3), c(0.55e-7, 0.3), c(0.9, 0.9), c(0.2, 0.1), c(0.9 + 5e-8, 0.9),
+             c(0.9 + 9e-8, 0.9))
+  # rows 1-2 (1e-8 apart), rows 3, 5, 6 linked (5e-8 and 4e-8 apart; 3 and 6 are 9e-8)
+  expect_identical(FBC:::near_groups(U, 1e-7), list(1:2, c(3L, 5L, 6L)))
+  # identical rows are duplicates, not near ones; 2e-7 apart is two runs
+  expect_identical(FBC:::near_groups(rbind(c(0, 0), c(0, 0), c(0.5, 0), c(0.5 + 2e-7, 0)), 1e-7),
+                   list())
+  # in a design: row 2 moved to 1e-8 of h's range from row 1
+  s <- ballSim
+  s[2, ] <- s[1, ]
+  s[2, "h"] <- s[1, "h"] + 1e-8 * diff(range(s[, "h"]))
+  expect_message(FBC:::inform_duplicated_runs(s), "1 group of runs whose inputs differ")
+})
+
+test_that("an output given in wide format (a second response column) gets a warning", {
+  # issue 32: y2 = 2 t x is shared with field, so it is read as an
+  # experimental input; it varies with the calibration input t, which a
+  # design input does not
+  set.seed(1)
+  x <- runif(40); t <- runif(40, 0.5, 3)
+  sim <- data.frame(y1 = 5 * exp(-t * x), x = x, y2 = 2 * t * x, t = t)
+  xf <- seq(0.05, 0.95, length.out = 10)
+  field <- data.frame(y1 = 5 * exp(-1.7 * xf), x = xf, y2 = 3.4 * xf)
+  expect_snapshot(invisible(FBC:::warn_wide_outputs(as.matrix(sim), 2)))
+  # the design inputs of the shipped data do not
+  expect_false(FBC:::warn_wide_outputs(ballSim, 2))
+  expect_false(FBC:::warn_wide_outputs(as.matrix(sim[, c("y1", "x", "t")]), 1))
+  expect_warning(short_fit(sim, field), "wide format")
+})

@@ -41,3 +41,27 @@ test_that("a well-informed calibration parameter is not flagged, however large t
   small$Phi[, "sigma2B"] <- small$Phi[, "sigma2E"] / 2
   expect_null(FBC:::confounded_kappa(small))
 })
+
+test_that("with several measurement-error groups the check compares sigma2B with each group's", {
+  # issue 32: with `source =` the noise variances are sigma2E1, sigma2E2 and
+  # the check looked for a column sigma2E only. The ball data split into two
+  # data sets (alternate rows): the same confounding as the one-group fit
+  set.seed(4)
+  field <- data.frame(ballField, lab = rep(c("A", "B"), length.out = nrow(ballField)))
+  gp <- calibrate(ballSim, field, source = "lab", nMCMC = 700, nBurn = 300, nChains = 2,
+                  kernelS = "matern52", kernelB = "matern52")
+  b <- FBC:::confounded_kappa(gp)
+  expect_identical(nrow(b), 1L)
+  # the ratio reported is sigma2B's median over the largest of the groups'
+  ratios <- median(gp$Phi[, "sigma2B"]) / apply(gp$Phi[, c("sigma2E1", "sigma2E2")], 2, median)
+  expect_equal(b$biasRatio, max(ratios))
+  g <- which.max(ratios)
+  expect_identical(b$noise, sprintf("sigma2E%d (%s)", g, c("A", "B")[g]))
+  msg <- grep("barely informed", convergence_messages(gp), value = TRUE)
+  expect_length(msg, 1L)
+  expect_match(msg, sprintf("times the measurement error's sigma2E%d (%s)", g, c("A", "B")[g]),
+               fixed = TRUE)
+  # worded as what the data cannot separate, not as a bias found
+  expect_match(msg, "the data cannot separate a change of g (kappa1) from a bias", fixed = TRUE)
+  expect_no_match(msg, "carries the signal")
+})

@@ -349,3 +349,80 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
   pp <- ppc_field(fit, ndraws = 5)
   expect_equal(dim(pp$yrep), c(5L, 30L))
 })
+
+test_that("a missing level in the source, output or a categorical column is refused naming rows", {
+  # issue 32: an NA became a data set "NA" with its own noise, or a level
+  # the simulator runs do not have
+  pr <- two_outputs(seed = 3)
+  field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
+  bad <- field
+  bad$lab[c(2, 5)] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, bad, output = "out", source = "lab"))
+  bad <- field
+  bad$out[3] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, bad, output = "out", source = "lab"))
+  badS <- pr$sim
+  badS$out[c(1, 2, 4)] <- ""
+  expect_snapshot(error = TRUE, calibrate(badS, pr$field, output = "out"))
+  # a factor with an NA in a categorical input that is not the output
+  badF <- pr$field
+  badF$out <- factor(badF$out)
+  badF$out[1:12] <- NA
+  expect_snapshot(error = TRUE, calibrate(pr$sim, badF))
+})
+
+test_that("a level correlation at +-1 is explained, and a split one is flagged by level_correlation()", {
+  # issue 32: rhoS piling at +1 was answered with "check that this prior's
+  # support is wide enough"; draws split between +1 and -1 were averaged
+  pr <- two_outputs(seed = 3)
+  set.seed(12)
+  fit <- calibrate(pr$sim, pr$field, output = "out", nMCMC = 200, nBurn = 100, nChains = 1,
+                   kernelS = "matern52", kernelB = "matern52")
+  n <- nrow(fit$Phi)
+  up <- fit
+  up$Phi[, "rhoS1"] <- 0.999
+  msgs <- convergence_messages(up)
+  expect_snapshot(cat(grep("rhoS1 lie at", msgs, value = TRUE), sep = "\n"))
+  down <- fit
+  down$Phi[, "rhoB1"] <- -0.999
+  expect_snapshot(cat(grep("rhoB1 lie at", convergence_messages(down), value = TRUE), sep = "\n"))
+  expect_false(any(grepl("support is wide enough", c(msgs, convergence_messages(down)))))
+  # split draws: 40% at +0.95, 60% at -0.95; the average is 0.4 * 0.95 - 0.6 * 0.95
+  split <- fit
+  split$Phi[, "rhoS1"] <- rep(c(0.95, -0.95), c(round(0.4 * n), n - round(0.4 * n)))
+  expect_snapshot(C <- level_correlation(split, "out"))
+  expect_equal(C["conc", "rate"], mean(split$Phi[, "rhoS1"]))
+  expect_no_warning(level_correlation(fit, "out"))
+})
+
+test_that("messages name the output that is constant, and the field data sets' column for what it is", {
+  # issue 32: "constant for an output" did not say which; a field-only
+  # column named by `output =`, and the data sets' column under a shared
+  # bias in level_correlation() ("no categorical input"), were not explained
+  pr <- two_outputs(seed = 3)
+  flat <- pr$sim
+  flat$y[flat$out == "rate"] <- 2
+  expect_snapshot(error = TRUE, calibrate(flat, pr$field, output = "out"))
+  near <- pr$sim
+  near$y[near$out == "rate"] <- 1e9 + 1e-6 * seq_len(sum(near$out == "rate"))
+  expect_snapshot(FBC:::fbc_scale(as.matrix(cbind(y = near$y, x = near$x, t = near$t)), 1,
+                                  out = structure(match(near$out, c("conc", "rate")),
+                                                  labels = c("conc", "rate")))$ysd > 0)
+  field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "lab"))
+  set.seed(1)
+  fit <- calibrate(pr$sim, field, output = "out", source = "lab", nMCMC = 60, nBurn = 30,
+                   nChains = 1)
+  expect_snapshot(error = TRUE, level_correlation(fit, "lab", gp = "bias"))
+  ball <- data.frame(ballField, lab = rep(c("A", "B"), length.out = nrow(ballField)))
+  fit2 <- calibrate(ballSim, ball, source = "lab", nMCMC = 60, nBurn = 30, nChains = 1)
+  expect_snapshot(error = TRUE, level_correlation(fit2, "lab", gp = "bias"))
+})
+
+test_that("a categorical column of field alone is not called a column of sim", {
+  # issue 32: "... that `sim` has not as categorical" for a column sim lacks
+  pr <- two_outputs(seed = 3)
+  field <- cbind(pr$field, lab = "A", site = "north")
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out"))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out", source = "lab"))
+})

@@ -93,3 +93,41 @@ test_that("loo() refuses what it cannot use", {
   expect_snapshot(error = TRUE, loo::loo(fit, ndraws = 0))
   expect_snapshot(error = TRUE, loo::loo(fit, r_eff = 1))
 })
+
+test_that("unit = \"input\" leaves out every output and data set observed at an input together", {
+  skip_if_not_installed("loo")
+  # issue 32: data sets at one input were grouped, outputs were not. Two
+  # outputs at 6 inputs, a second laboratory repeating the first output at
+  # 3 of them: 6 inputs, 15 observations
+  set.seed(5)
+  x <- runif(30); t <- runif(30, 0.5, 3)
+  sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),
+               data.frame(y = 2 * t * x, x = x, out = "rate", t = t))
+  xf <- seq(0.1, 0.9, length.out = 6)
+  field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(6, 0, 0.05), x = xf, out = "conc", lab = "A"),
+                 data.frame(y = 3.4 * xf + rnorm(6, 0, 0.05), x = xf, out = "rate", lab = "A"),
+                 data.frame(y = 5 * exp(-1.7 * xf[1:3]) + rnorm(3, 0, 0.05), x = xf[1:3],
+                            out = "conc", lab = "B"))
+  set.seed(6)
+  fit <- calibrate(sim, field, output = "out", source = "lab", nMCMC = 200, nBurn = 100,
+                   nChains = 2, kernelS = "matern52", kernelB = "matern52")
+  g <- FBC:::loo_groups(fit$data$Xf, "input", FBC:::loo_input_columns(fit$scale))
+  expect_identical(g, match(field$x, xf))
+  l <- suppressWarnings(loo::loo(fit, ndraws = 40))  # (Pareto k: 40 draws)
+  expect_identical(nrow(l$pointwise), 6L)
+  expect_identical(nrow(suppressWarnings(loo::loo(fit, unit = "observation", ndraws = 40))$pointwise), 15L)
+  # a categorical input that is not the output stays part of the input
+  expect_identical(FBC:::loo_input_columns(list(p = 3L, names = list(inputs = c("x", "m[b]", "out[rate]")),
+                                                output = list(columns = "out[rate]"))), 1:2)
+})
+
+test_that("loo() needs a few draws per chain", {
+  skip_if_not_installed("loo")
+  # issue 32: ndraws = 3 with 2 chains gave one draw a chain and failed inside loo
+  set.seed(2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
+  expect_snapshot(error = TRUE, loo::loo(fit, ndraws = 3))
+  expect_s3_class(suppressWarnings(loo::loo(fit, ndraws = 4)), "psis_loo")
+  # a chain interrupted early may keep a single draw
+  expect_snapshot(error = TRUE, FBC:::check_loo_draws(c(1, 1, 1, 2), NULL))
+})

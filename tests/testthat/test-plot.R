@@ -146,3 +146,28 @@ test_that("a fixed parameter is shown as its value; an improper prior is not dra
   expect_identical(pe$labels$caption, "sigma2E: improper jeffreys prior, not drawn.")
   expect_null(plot(fit, "sigma2S")$labels$caption)
 })
+
+test_that("fits plot: a row of panels per output and field data set", {
+  # issue 32: with source = the data sets were overlaid in one panel
+  set.seed(3)
+  x <- runif(30); t <- runif(30, 0.5, 3)
+  sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),
+               data.frame(y = 2 * t * x, x = x, out = "rate", t = t))
+  xf <- seq(0.05, 0.95, length.out = 8)
+  field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(8, 0, 0.05), x = xf, out = "conc",
+                            lab = rep(c("A", "B"), 4)),
+                 data.frame(y = 3.4 * xf + rnorm(8, 0, 0.05), x = xf, out = "rate", lab = "A"))
+  set.seed(1)
+  fit <- calibrate(sim, field, output = "out", source = "lab", nMCMC = 120, nBurn = 60,
+                   nChains = 1, kernelS = "matern52", kernelB = "matern52")
+  p <- plot(fit, type = "fits")
+  expect_identical(levels(p$data$output), c("conc, lab A", "conc, lab B", "rate, lab A"))
+  expect_identical(as.character(p$data$output),
+                   paste0(field$out, ", lab ", field$lab))
+  expect_s3_class(p$facet, "FacetGrid")
+  expect_no_error(ggplot2::ggplot_build(p))
+  # data sets alone
+  ball <- data.frame(ballField, lab = rep(c("A", "B"), length.out = nrow(ballField)))
+  fit2 <- calibrate(ballSim, ball, source = "lab", nMCMC = 60, nBurn = 30, nChains = 1)
+  expect_identical(levels(plot(fit2, type = "fits")$data$output), c("lab A", "lab B"))
+})

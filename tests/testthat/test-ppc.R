@@ -80,6 +80,14 @@ test_that("a model that overstates the noise, or misplaces the mean, is caught",
   pp <- ppc_field(fixed_fit(noisy), ndraws = 8)
   expect_lt(pp$outside[["50%"]], 0.2)
   expect_match(capture.output(print(pp)), "overstates the noise", all = FALSE)
+  # issue 32: the cause is named where it is seen: sigma2E (scaled space,
+  # times the response's variance) against the observations' mean squared
+  # residual
+  fit <- fixed_fit(noisy)
+  expect_equal(pp$noise$sigma2E, 50 * fit$scale$ysd^2)
+  expect_equal(pp$noise$residual, mean((pp$y - pp$obs$mean)^2))
+  expect_gt(pp$noise$ratio, 4)
+  expect_snapshot(print(pp))
   shifted <- replace(phi, 15, 50)  # muB
   pp <- ppc_field(fixed_fit(shifted), ndraws = 8)
   expect_equal(pp$outside[["90%"]], 1)

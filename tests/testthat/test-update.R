@@ -115,3 +115,12 @@ test_that("update() refuses run lengths whose draws cannot be stored", {
     update(fit, nMCMC = 1e9)
   })
 })
+
+test_that("update() under a rule whose maxMCMC leaves no room says both numbers", {
+  fit <- small_fit(nChains = 2)
+  # the chains have run fit$settings$nMCMC sweeps; 100 more pass maxMCMC
+  expect_snapshot(error = TRUE,
+                  update(fit, nMCMC = 100, converge = until_converged(maxMCMC = fit$settings$nMCMC + 50)))
+  expect_snapshot(error = TRUE,
+                  update(fit, nMCMC = 100, converge = until_converged(maxMCMC = fit$settings$nMCMC)))
+})

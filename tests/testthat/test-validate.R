@@ -250,3 +250,31 @@ test_that("validation in blocks of draws equals one call, and shows progress whe
   # differently with other shapes)
   expect_equal(blocks, one[c("mean", "var")], tolerance = 1e-12)
 })
+
+test_that("with several outputs: an RMSE per output, and the output drawn as categorical", {
+  # issue 32: the raw RMSE pooled outputs of different units (here conc ~ 1
+  # and rate ~ 100), and plot() drew the output's indicator as a numeric input
+  set.seed(3)
+  x <- runif(30); t <- runif(30, 0.5, 3)
+  sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),
+               data.frame(y = 200 * t * x, x = x, out = "rate", t = t))
+  xf <- seq(0.05, 0.95, length.out = 8)
+  field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(8, 0, 0.05), x = xf, out = "conc"),
+                 data.frame(y = 340 * xf + rnorm(8, 0, 0.5), x = xf, out = "rate"))
+  set.seed(1)
+  fit <- calibrate(sim, field, output = "out", nMCMC = 120, nBurn = 60, nChains = 1,
+                   kernelS = "matern52", kernelB = "matern52")
+  v <- validate_emulator(fit, method = "MAP")
+  expect_identical(levels(v$runs$out), c("conc", "rate"))
+  expect_identical(as.character(v$runs$out), sim$out)
+  expect_identical(v$inputs, c("x", "out", "t"))
+  # each output's RMSE from its own runs, in its own units
+  err <- v$runs$observed - v$runs$mean
+  expect_equal(v$rmse, c(conc = sqrt(mean(err[sim$out == "conc"]^2)),
+                         rate = sqrt(mean(err[sim$out == "rate"]^2))))
+  expect_output(print(v), "RMSE by output: conc [0-9.e-]+, rate [0-9.e-]+ \\(")
+  p <- plot(v, which = "inputs")
+  expect_identical(levels(p$data$panel), c("x", "out (1 conc, 2 rate)", "t"))
+  expect_equal(p$data$x[p$data$panel == "out (1 conc, 2 rate)"], match(sim$out, c("conc", "rate")))
+  expect_no_error(ggplot2::ggplot_build(p))
+})
