@@ -379,21 +379,22 @@
 #' `fit$settings$converge` keeps it. [update.fbc()] takes the same rule.
 #'
 #' @section Defaults:
-#' `nChains = 4`, `nMCMC = 8000`, `nBurn = 2000`, `thinning = 2`: 4 x 3000 =
-#' 12000 retained draws. Four chains are the usual minimum for R-hat to
-#' detect chains stuck in different places. The burn-in of 2000 sweeps lets
-#' the joint proposals take the posterior's shape (with 1000 the ESS per
-#' sweep of the simulator block was about half). On the ball data, seeds 1,
-#' 77 and 2024 gave every parameter R-hat <= 1.0021 and bulk ESS >= 1999
-#' (`kappa`'s about 7200-8300), in 26-27 CPU seconds for the four chains one
-#' after the other (FBC 0.1.0's one-at-a-time default: R-hat <= 1.008 and
-#' ESS >= 640 in 35 s). In `inst/bench/mixing.R` the default sampler's
-#' slowest parameter gains about 100 effective draws per CPU second on the
-#' ball data, 17 times Stan's NUTS on the same model and priors, and `kappa`
-#' about 300, 42 times Stan's. Thinning by 2 halves the memory at little
-#' cost in ESS. Harder problems (more parameters, larger data) need longer
-#' runs: check `convergence_messages(fit)` (or `print(fit)`) and continue
-#' with [update.fbc()].
+#' `nChains = 4`, `thinning = 2`, a warm-up of data-dependent length and a
+#' run until every R-hat < 1.01 and bulk ESS >= 400 (see "Warm-up and
+#' stopping when converged"). Four chains are the usual minimum for R-hat to
+#' detect chains stuck in different places. On the ball data the default
+#' run's chains warm up for about 500-1100 sweeps and stop after one to
+#' six checks (`inst/bench/RESULTS-warmup.md`); the earlier defaults,
+#' `nMCMC = 8000, nBurn = 2000`, ran 4 x 8000 sweeps whatever the data (on
+#' the ball data R-hat <= 1.0021 and bulk ESS >= 1999 for seeds 1, 77 and
+#' 2024, in 26-27 CPU seconds) and still give the same draws when given. In
+#' `inst/bench/mixing.R` the default sampler's slowest parameter gains
+#' about 100 effective draws per CPU second on the ball data, 17 times
+#' Stan's NUTS on the same model and priors, and `kappa` about 300, 42 times
+#' Stan's. Thinning by 2 halves the memory at little cost in ESS. Harder
+#' problems (more parameters, larger data) need longer runs, which the rule
+#' makes up to its ceiling: check `convergence_messages(fit)` (or
+#' `print(fit)`) and continue with [update.fbc()].
 #'
 #' @section Columns:
 #' When both `sim` and `field` carry column names (matrices with
@@ -554,8 +555,8 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 800, nBurn = 300, nChains = 2)
 #' fit
 #' \donttest{
-#' # the defaults: 4 chains, R-hat and ESS checked (about 25 s, or in
-#' # parallel after future::plan(future::multisession, workers = 2))
+#' # the defaults: 4 chains until every R-hat < 1.01 and bulk ESS >= 400
+#' # (or in parallel after future::plan(future::multisession, workers = 2))
 #' fit <- calibrate(ballSim, ballField)
 #' fit$estimates[, c("mean", "lwr80", "upr80", "rhat", "ess")]
 #' }

@@ -231,11 +231,13 @@ next_check <- function(post, rule) {
 # each chain at its warm-up plus next_check() of its retained-phase sweeps.
 # Chain k continues its own stream across rounds. `assemble(results,
 # target)` makes the fit of the chains run to `target` (once, at the end);
-# `run_chains()` gets the other arguments. Returns the fit, with
+# `run_chains()` gets the other arguments. `whole`: the check reads the
+# fit assemble() makes at each check (update(): the fit holds the earlier
+# run's draws too). Returns the fit, with
 # settings$converge (the rule and how it ended) when there is a rule, and
 # the warm-up each chain had (settings$warmup; see warmup_settings()).
 run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, showProgress,
-                       ...) {
+                       ..., whole = FALSE) {
   iter0 <- vapply(starts, function(s) as.integer(s$iter0), integer(1))
   target <- as.integer(target)
   if (!is.null(rule)) target <- pmin(target, rule$maxMCMC)
@@ -260,7 +262,14 @@ run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, s
       cut[[k]] <- result_up_to(results[[k]], iter0[k], stops[k], nBurn, thinning)
     }
     checks <- checks + 1L
-    check <- if (!any(stopped)) rule_met(cut, rule, cols)
+    fit <- NULL
+    check <- if (any(stopped)) NULL else if (whole) {
+      fit <- assemble(cut, stops)
+      list(met = meets_rule(fit, rule), rhat = max(fit$estimates$rhat, na.rm = TRUE),
+           ess = min(fit$estimates$ess, na.rm = TRUE))
+    } else {
+      rule_met(cut, rule, cols)
+    }
     converged <- isTRUE(check$met)
     if (converged || any(stopped) || all(stops >= rule$maxMCMC)) break
     if (showProgress) {
@@ -274,7 +283,7 @@ run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, s
     post <- vapply(seq_along(results), function(k) next_check(stops[k] - warm[k], rule), numeric(1))
     target <- rep(as.integer(rule$maxMCMC), length(starts))
   }
-  fit <- assemble(cut, ifelse(is.na(stops), target, stops))
+  if (is.null(fit)) fit <- assemble(cut, ifelse(is.na(stops), target, stops))
   fit$settings$converge <- c(unclass(rule), list(converged = converged, checks = checks,
                                                  sweeps = max(stops, na.rm = TRUE)))
   warmup_settings(fit, nBurn)

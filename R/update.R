@@ -90,7 +90,7 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
              nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
-             dat = object$data, spec = object$spec, moves = s$moves)
+             dat = object$data, spec = object$spec, moves = s$moves, whole = TRUE)
 }
 
 # Under a `converge` rule, update() runs `nMCMC` further sweeps first: the

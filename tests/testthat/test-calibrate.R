@@ -209,7 +209,10 @@ test_that("run lengths whose draws cannot be stored are refused with the memory 
   # 2.5 MB, refused under a 1 MB limit and accepted under 3 MB
   expect_equal(FBC:::check_run_size(3000, 11, 4, 8000, "nMCMC"), 2 * 4 * 3000 * 13 * 8)
   options(FBC.memory_limit = 1e6)
-  expect_error(calibrate(ballSim, ballField), "2.5 MB")
+  expect_error(calibrate(ballSim, ballField, nMCMC = 8000, nBurn = 2000), "2.5 MB")
+  # the default run until converged is checked at its ceiling (maxMCMC =
+  # 50000 sweeps, at least 200 of warm-up): 4 x 24,900 draws, 20.7 MB
+  expect_error(calibrate(ballSim, ballField), "20.7 MB")
 })
 
 test_that("large dense problems move each kappa and the simulator block once a sweep", {
