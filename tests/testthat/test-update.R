@@ -26,7 +26,7 @@ test_that("update() continues each chain from where it stopped", {
   )
   set.seed(4)
   fit <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 1, nChains = 2,
-                   hypers = hyp)
+                   hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   up <- update(fit, nMCMC = 5)
   for (k in 1:2) {
     last <- fit$state$chains[[k]]$last
