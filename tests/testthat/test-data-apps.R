@@ -1,11 +1,12 @@
 # The application data sets (R/data-apps.R): shapes, columns, the generating
 # formulas of the synthetic ones, and one short calibration per application.
 
-# Priors for precisely measured data: the default IG(1.5, 1.5) on sigma2E and
-# sigma2B (standardised scale) rules out noise below ~30% of the simulator's
-# sd, while the analytic field noise is 0.03 / sd(ys) ~ 5% of it.
+# Priors for precisely measured data, as the applications vignette gives them:
+# the vignette's IG(1.5, 1.5) on sigma2E and sigma2B (standardised scale)
+# rules out noise below ~30% of the simulator's sd, while the analytic field
+# noise is 0.03 / sd(ys) ~ 5% of it.
 precise_hypers <- function() {
-  set_hyperPriors(sigma2EP1 = 1.1, sigma2EP2 = 0.01, sigma2EInit = 0.01,
+  set_hyperPriors(sigma2EDist = "inversegamma", sigma2EP1 = 1.1, sigma2EP2 = 0.01, sigma2EInit = 0.01,
                   sigma2BP1 = 1.1, sigma2BP2 = 0.01, sigma2BInit = 0.01)
 }
 
