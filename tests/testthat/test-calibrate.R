@@ -83,7 +83,9 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
                    discrepancy = "none")
   keep <- c("kappa1", "thetaS1", "thetaS2", "sigma2S", "sigma2E")
   expect_identical(colnames(fit$Phi), keep)
-  expect_identical(fit$spec$vars, keep)
+  # the sampler's vector keeps the smoothness slots, held (the Matérn has none)
+  expect_identical(fit$spec$vars, c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S",
+                                    "sigma2E"))
   expect_identical(rownames(fit$estimates), keep)
   expect_identical(names(fit$proposalSD), keep)
   for (cls in c("thetaB", "alphaB", "sigma2B", "muB")) expect_identical(fit$indices[[cls]], integer(0))
@@ -157,10 +159,11 @@ test_that("logPost is the log-likelihood plus the log priors of the draw", {
   i <- 3
   phi <- fit$Phi[i, ]
   lp <- sum(vapply(fit$vars, function(v) fit$priorFns[[v]](phi[[v]]), 0))
-  # the sampler's scale: g mapped to [0, 1] over the design range
-  u <- phi
+  # the sampler's scale: g mapped to [0, 1] over the design range (and the
+  # smoothness slots the Matérn holds, which Phi leaves out)
+  u <- FBC:::sampler_draws(fit, i)[1, ]
   lo <- min(ballSim[, "g"]); rng <- diff(range(ballSim[, "g"]))
-  u[1] <- (phi[1] - lo) / rng
+  expect_equal(u[[1]], (phi[[1]] - lo) / rng)
   ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, unname(u),
                      kernS = "matern52", kernB = "matern52")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)

@@ -39,7 +39,9 @@ test_that("update() continues each chain from where it stopped", {
 })
 
 test_that("update() keeps the adapted joint proposals and goes on as one run", {
-  fit <- small_fit(nChains = 2)  # the default sampler: joint moves
+  # the default sampler: joint moves (the power exponential: the simulator
+  # block's indices in Phi and in the sampler's vector agree)
+  fit <- small_fit(nChains = 2, kernelS = "powexp", kernelB = "powexp")
   sim <- unlist(fit$indices[c("thetaS", "alphaS", "sigma2S")], use.names = FALSE)
   blocks <- fit$state$chains[[1]]$sampler$blocks
   b1 <- blocks[vapply(blocks, function(b) sim[1] %in% b$index, logical(1))][[1]]
