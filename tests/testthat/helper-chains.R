@@ -5,20 +5,28 @@ lhs_like <- function(m, k) {
   vapply(seq_len(k), function(j) (sample(m) - stats::runif(m)) / m, numeric(m))
 }
 
+# FBC 0.1.0's defaults, for tests whose references (fixtures, draws, plain-R
+# formulas) were made with them: the power exponential for both GPs and the
+# inverse gamma (1.5, 1.5) noise prior.
+defaults_010 <- list(kernelS = "powexp", kernelB = "powexp",
+                     hypers = set_hyperPriors(sigma2EDist = "inversegamma", sigma2EP1 = 1.5,
+                                              sigma2EP2 = 1.5))
+
 # A sampler that imitates Ctrl-C: the first `calls` calls stop after `stopAt`
 # iterations and return what the compiled sampler returns when interrupted
 # (interrupted = TRUE, the state where it stopped). Install with
 # options(FBC.sampler = ...).
 fake_interrupt_sampler <- function(stopAt, calls = 1L) {
   n <- 0L
-  function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress) {
+  # (`...`: the model description, kernels and algebra, passed on as given)
+  function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, ...) {
     n <<- n + 1L
     if (n > calls) {
       return(FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning,
-                               nugget, progress))
+                               nugget, progress, ...))
     }
     res <- FBC:::.fbc_sample(Xf, yf, Xs, ys, prior, moves, state, stopAt, nBurn, thinning,
-                             nugget, progress)
+                             nugget, progress, ...)
     res$interrupted <- TRUE
     res
   }

@@ -70,7 +70,9 @@ fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
   # the random field inputs overhang the random design: the warning is expected
   suppressWarnings(
     calibrate(sim, field, nMCMC = 6, nBurn = 2, thinning = 2, kappaDist = "fixed",
-              kappaInit = kap, hypers = hyp, kernelS = kernelS, kernelB = kernelB,
+              kappaInit = kap, hypers = hyp, kernelS = kernelS,
+              # no bias GP: its family is not given (calibrate() warns it is unused)
+              kernelB = if (discrepancy == "none") "matern52" else kernelB,
               discrepancy = discrepancy),
     classes = "fbc_extrapolation")
 }

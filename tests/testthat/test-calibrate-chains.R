@@ -42,12 +42,12 @@ test_that("dispersed starts: chain 1 at the inits, the others inside the priors'
   x <- do.call(rbind, inits[-1])
   # kappa: Beta(1.1, 1.1) on the sampler's [0, 1] scale
   expect_true(all(x[, 1] >= qbeta(0.1, 1.1, 1.1) & x[, 1] <= qbeta(0.9, 1.1, 1.1)))
-  # sigma2E: inverse gamma(1.5, 1.5), i.e. 1.5 / Gamma(1.5, 1)
+  # sigma2E: its sd half-Cauchy(1), so sigma2E's u-quantile is qt((1 + u) / 2, 1)^2
   j <- match("sigma2E", spec$vars)
-  expect_true(all(x[, j] >= 1.5 / qgamma(0.9, 1.5) & x[, j] <= 1.5 / qgamma(0.1, 1.5)))
-  # alphaS: Beta(5, 2) shifted to [1, 2]
-  j <- match("alphaS1", spec$vars)
-  expect_true(all(x[, j] >= 1 + qbeta(0.1, 5, 2) & x[, j] <= 1 + qbeta(0.9, 5, 2)))
+  expect_true(all(x[, j] >= qt(0.55, 1)^2 & x[, j] <= qt(0.95, 1)^2))
+  # thetaS1: Gamma(1.1, rate 0.1)
+  j <- match("thetaS1", spec$vars)
+  expect_true(all(x[, j] >= qgamma(0.1, 1.1, 0.1) & x[, j] <= qgamma(0.9, 1.1, 0.1)))
   expect_gt(sd(x[, 1]), 0.1)
   # fixed parameters stay at their value
   hyp <- set_hyperPriors(muBDist = "fixed", muBInit = 0.3)

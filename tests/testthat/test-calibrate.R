@@ -60,9 +60,11 @@ test_that("set.seed() reproduces a run and the inputs are not modified", {
 
 test_that("the default discrepancy model gives the draws it gave before the choice existed", {
   # reference: the same call with FBC at commit 62c9243 (before
-  # `discrepancy`): its Phi[100, ] and sum(Phi), to 12 significant digits
+  # `discrepancy`; with its kernel and noise prior, defaults_010): its
+  # Phi[100, ] and sum(Phi), to 12 significant digits
   set.seed(7)
-  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1)
+  fit <- do.call(calibrate, c(list(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1),
+                              defaults_010))
   expect_identical(fit$settings$discrepancy, "gp")
   expect_equal(unname(fit$Phi[100, ]),
                c(7.79832811351, 3.14605375608, 0.362741566864, 1.99967461794, 1.99987846678,
@@ -70,17 +72,20 @@ test_that("the default discrepancy model gives the draws it gave before the choi
                  0.73174816915), tolerance = 1e-11)
   expect_equal(sum(fit$Phi), 2526.33110293876, tolerance = 1e-13)
   set.seed(7)
-  expect_identical(calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1,
-                             discrepancy = "gp")$Phi, fit$Phi)
+  expect_identical(do.call(calibrate, c(list(ballSim, ballField, nMCMC = 300, nBurn = 100,
+                                             nChains = 1, discrepancy = "gp"), defaults_010))$Phi,
+                   fit$Phi)
 })
 
 test_that("discrepancy = \"none\": no bias parameters anywhere, and every path follows", {
   set.seed(32)
   fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2,
                    discrepancy = "none")
-  keep <- c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S", "sigma2E")
+  keep <- c("kappa1", "thetaS1", "thetaS2", "sigma2S", "sigma2E")
   expect_identical(colnames(fit$Phi), keep)
-  expect_identical(fit$spec$vars, keep)
+  # the sampler's vector keeps the smoothness slots, held (the Matérn has none)
+  expect_identical(fit$spec$vars, c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S",
+                                    "sigma2E"))
   expect_identical(rownames(fit$estimates), keep)
   expect_identical(names(fit$proposalSD), keep)
   for (cls in c("thetaB", "alphaB", "sigma2B", "muB")) expect_identical(fit$indices[[cls]], integer(0))
@@ -93,11 +98,11 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   # the retained log-likelihoods are the plain-R ones without a bias block
   i <- 7
   ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
-                     FBC:::sampler_draws(fit, i)[1, ], discrepancy = "none")
+                     FBC:::sampler_draws(fit, i)[1, ], kernS = "matern52", discrepancy = "none")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
   # print, plots, checks
   expect_output(print(fit), "no discrepancy: y_f = eta\\(x, kappa\\) \\+ eps")
-  expect_output(print(fit), "kernels: simulator powexp\n")
+  expect_output(print(fit), "kernels: simulator matern52\n")
   expect_s3_class(plot(fit, "sigma2E"), "ggplot")
   expect_s3_class(plot(fit, type = "fits"), "ggplot")
   expect_snapshot(error = TRUE, plot(fit, "sigma2B"))
@@ -114,7 +119,8 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   last <- nrow(up$Phi)
   expect_equal(up$logLik[last],
                dense_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
-                            FBC:::sampler_draws(up, last)[1, ], discrepancy = "none"),
+                            FBC:::sampler_draws(up, last)[1, ], kernS = "matern52",
+                            discrepancy = "none"),
                tolerance = 1e-8)
 })
 
@@ -153,11 +159,13 @@ test_that("logPost is the log-likelihood plus the log priors of the draw", {
   i <- 3
   phi <- fit$Phi[i, ]
   lp <- sum(vapply(fit$vars, function(v) fit$priorFns[[v]](phi[[v]]), 0))
-  # the sampler's scale: g mapped to [0, 1] over the design range
-  u <- phi
+  # the sampler's scale: g mapped to [0, 1] over the design range (and the
+  # smoothness slots the Matérn holds, which Phi leaves out)
+  u <- FBC:::sampler_draws(fit, i)[1, ]
   lo <- min(ballSim[, "g"]); rng <- diff(range(ballSim[, "g"]))
-  u[1] <- (phi[1] - lo) / rng
-  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, unname(u))
+  expect_equal(u[[1]], (phi[[1]] - lo) / rng)
+  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, unname(u),
+                     kernS = "matern52", kernB = "matern52")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
   expect_equal(fit$logPost[i], ll + lp, tolerance = 1e-8)
 })
@@ -299,7 +307,7 @@ test_that("the kernels are checked, and alpha priors with a family without one a
   set.seed(1)
   expect_snapshot(
     fit <- calibrate(ballSim, ballField, nMCMC = 20, nBurn = 10, nChains = 1,
-                     kernelS = "gaussian",
+                     kernelS = "gaussian", kernelB = "powexp",
                      hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2,
                                               alphaBInit = 1.5))
   )

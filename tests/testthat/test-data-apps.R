@@ -1,11 +1,12 @@
 # The application data sets (R/data-apps.R): shapes, columns, the generating
 # formulas of the synthetic ones, and one short calibration per application.
 
-# Priors for precisely measured data: the default IG(1.5, 1.5) on sigma2E and
-# sigma2B (standardised scale) rules out noise below ~30% of the simulator's
-# sd, while the analytic field noise is 0.03 / sd(ys) ~ 5% of it.
+# Priors for precisely measured data, as the applications vignette gives them:
+# the vignette's IG(1.5, 1.5) on sigma2E and sigma2B (standardised scale)
+# rules out noise below ~30% of the simulator's sd, while the analytic field
+# noise is 0.03 / sd(ys) ~ 5% of it.
 precise_hypers <- function() {
-  set_hyperPriors(sigma2EP1 = 1.1, sigma2EP2 = 0.01, sigma2EInit = 0.01,
+  set_hyperPriors(sigma2EDist = "inversegamma", sigma2EP1 = 1.1, sigma2EP2 = 0.01, sigma2EInit = 0.01,
                   sigma2BP1 = 1.1, sigma2BP2 = 0.01, sigma2BInit = 0.01)
 }
 
@@ -92,7 +93,9 @@ test_that("a short analytic calibration covers the true kappa", {
 
 test_that("spot weld calibration handles replicated field inputs", {
   set.seed(12)
-  fit <- calibrate(swSim, swField, nMCMC = 300, nBurn = 150, thinning = 1, nChains = 1)
+  # (the power exponential: dense_loglik()'s default family below)
+  fit <- calibrate(swSim, swField, nMCMC = 300, nBurn = 150, thinning = 1, nChains = 1,
+                   kernelS = "powexp", kernelB = "powexp")
   expect_true(all(is.finite(fit$logPost)))
   expect_true(all(fit$Phi[, "sigma2E"] > 0))
   # the field block has exact duplicate rows, so Rb is singular; with
@@ -107,8 +110,9 @@ test_that("spot weld calibration handles replicated field inputs", {
 
 test_that("kinetics: calibrated field mean falls within the field data's spread", {
   set.seed(13)
+  # (the power exponential: dense_cov()'s default family below)
   fit <- calibrate(kineticSim, kineticField, nMCMC = 2000, nBurn = 800, thinning = 2,
-                   nChains = 2)
+                   nChains = 2, kernelS = "powexp", kernelB = "powexp")
   # the convergence diagnostics are computed for every sampled parameter
   expect_true(all(is.finite(fit$estimates$rhat) & fit$estimates$rhat > 0.99))
   expect_true(all(is.finite(fit$estimates$ess) & fit$estimates$ess > 0))

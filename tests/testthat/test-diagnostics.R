@@ -87,7 +87,7 @@ test_that("a single chain is pointed out", {
 })
 
 test_that("draws piling up at a bound are reported with a hint", {
-  fit <- small_fit(nChains = 2)
+  fit <- small_fit(nChains = 2, kernelS = "powexp", kernelB = "powexp")  # with smoothness parameters
   set.seed(1)
   Phi <- iid_draws(fit, 4, 500)
   Phi[, "alphaS1"] <- 2 - stats::runif(2000, 0, 1e-3)
@@ -106,7 +106,7 @@ test_that("draws piling up at a bound are reported with a hint", {
 })
 
 test_that("supports follow the priors: stretched beta and uniform kappa, [1, 2] alpha", {
-  fit <- small_fit(nChains = 1)
+  fit <- small_fit(nChains = 1, kernelS = "powexp", kernelB = "powexp")
   sup <- param_support(fit)
   expect_equal(unname(sup[1, ]), c(6.044, 13.959))
   expect_equal(unname(sup[match("alphaB1", fit$vars), ]), c(1, 2))
@@ -144,7 +144,8 @@ test_that("convergence_messages() wants an fbc object", {
 })
 
 test_that("a chain that never moves a sampled parameter is reported, a fixed parameter is not", {
-  fit <- small_fit(nChains = 2, hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2))
+  fit <- small_fit(nChains = 2, hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2),
+                   kernelS = "powexp", kernelB = "powexp")
   set.seed(1)
   Phi <- iid_draws(fit, 4, 500)
   Phi[, c("alphaS1", "alphaS2")] <- 2  # fixed: constant in every chain

@@ -3,15 +3,21 @@
 # R from dense_loglik() (helper-dense.R, one dense Cholesky of the full
 # covariance) plus the Beta(1.1, 1.1) prior, which the default stretches over
 # the simulator design's range of kappa (so on the sampler's [0, 1] scale it
-# is the plain Beta density).
+# is the plain Beta density). The first test runs the default kernel (the
+# Matérn 5/2 for both GPs); the others are written in the power
+# exponential's parameters (their references and the data drawn from the
+# model include the smoothness), so they name `kernelS = "powexp"`.
 
-all_fixed <- function(thetaS, alphaS, thetaB, alphaB, sigma2S, sigma2B, sigma2E, muB) {
-  set_hyperPriors(
-    thetaSDist = "fixed", thetaSInit = thetaS, alphaSDist = "fixed", alphaSInit = alphaS,
-    thetaBDist = "fixed", thetaBInit = thetaB, alphaBDist = "fixed", alphaBInit = alphaB,
+# (alphaS, alphaB: NULL for a family without a smoothness)
+all_fixed <- function(thetaS, alphaS = NULL, thetaB, alphaB = NULL, sigma2S, sigma2B, sigma2E, muB) {
+  smooth <- if (!is.null(alphaS)) {
+    list(alphaSDist = "fixed", alphaSInit = alphaS, alphaBDist = "fixed", alphaBInit = alphaB)
+  }
+  do.call(set_hyperPriors, c(list(
+    thetaSDist = "fixed", thetaSInit = thetaS, thetaBDist = "fixed", thetaBInit = thetaB,
     sigma2SDist = "fixed", sigma2SInit = sigma2S, sigma2BDist = "fixed", sigma2BInit = sigma2B,
     sigma2EDist = "fixed", sigma2EInit = sigma2E, muBDist = "fixed", muBInit = muB
-  )
+  ), smooth))
 }
 
 # Posterior density (unnormalised, dense plain-R likelihood times the prior)
@@ -49,18 +55,19 @@ expect_dense_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
   }, u)
 }
 
-test_that("kappa draws match the grid posterior on the ball data (q = 1)", {
-  hyp <- all_fixed(thetaS = c(3.6, 0.42), alphaS = 1.95, thetaB = 2, alphaB = 1.8,
-                   sigma2S = 3.3, sigma2B = 0.9, sigma2E = 0.15, muB = 0.2)
+test_that("kappa draws match the grid posterior on the ball data (q = 1, default kernels)", {
+  hyp <- all_fixed(thetaS = c(1.5, 0.2), thetaB = 2, sigma2S = 3.5, sigma2B = 0.9, sigma2E = 0.15,
+                   muB = 0.2)
   set.seed(11)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
                    nChains = 1, hypers = hyp)
+  expect_identical(c(fit$settings$kernelS, fit$settings$kernelB), c("matern52", "matern52"))
   # fixed columns stay at their values and are not sampled
-  expect_equal(unname(fit$Phi[1, -1]), c(3.6, 0.42, 1.95, 1.95, 2, 1.8, 3.3, 0.9, 0.15, 0.2))
+  expect_equal(unname(fit$Phi[1, -1]), c(1.5, 0.2, 2, 3.5, 0.9, 0.15, 0.2))
   expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
   expect_true(all(is.na(fit$acceptance[-1])))
   # about 2000 nearly independent draws: quantile errors ~ 0.03-0.05 sd
-  expect_dense_kappa_grid(fit)
+  expect_dense_kappa_grid(fit, "matern52", "matern52")
 })
 
 test_that("Matern families: kappa draws match the grid posterior on the ball data", {
@@ -86,7 +93,7 @@ test_that("without a discrepancy, kappa draws match the grid posterior on the ba
                          sigma2EDist = "fixed", sigma2EInit = 0.15)
   set.seed(13)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
-                   nChains = 1, hypers = hyp, discrepancy = "none")
+                   nChains = 1, hypers = hyp, discrepancy = "none", kernelS = "powexp")
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
                                         "sigma2S", "sigma2E"))
   expect_dense_kappa_grid(fit, u = seq(0, 1, length.out = 1001))
@@ -104,7 +111,8 @@ test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors
   hyp <- do.call(set_hyperPriors, c(fixedBias, list(lambdaZDist = "fixed", lambdaZInit = 20)))
   set.seed(14)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
-                   nChains = 1, hypers = hyp, discrepancy = "sgasp")
+                   nChains = 1, hypers = hyp, discrepancy = "sgasp", kernelS = "powexp",
+                   kernelB = "powexp")
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2",
                                         "thetaB1", "alphaB1", "lambdaZ", "sigma2S", "sigma2B",
                                         "sigma2E"))
@@ -115,7 +123,8 @@ test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors
   hyp <- do.call(set_hyperPriors, fixedBias)
   set.seed(15)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
-                   hypers = hyp, discrepancy = "sgasp", kappaDist = "fixed", kappaInit = 8.5)
+                   hypers = hyp, discrepancy = "sgasp", kappaDist = "fixed", kappaInit = 8.5,
+                   kernelS = "powexp", kernelB = "powexp")
   d <- fit$data
   phi <- fit$state$chains[[1]]$last
   j <- match("lambdaZ", fit$spec$vars)
@@ -147,7 +156,7 @@ test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
                    sigma2S = 1, sigma2B = 0.05, sigma2E = 0.01, muB = 0)
   # 4 chains: ESS about 1800 of the kappas, quantile errors ~0.04 sd
   fit <- calibrate(sim, field, nMCMC = 30000, nBurn = 1000, thinning = 4, nChains = 4,
-                   hypers = hyp)
+                   hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   g <- seq(0, 1, length.out = 51)
   dens <- grid_posterior_2d(fit, 1:2, g, function(u) stats::dbeta(u, 1.1, 1.1, log = TRUE))
   for (j in 1:2) {
@@ -183,7 +192,8 @@ test_that("the joint thetaS move (default sampler) matches the 2-D grid posterio
   # (the random design stops short of the field's x = 1: the warning is expected)
   fit <- suppressWarnings(
     calibrate(sim, field, nMCMC = 12000, nBurn = 2000, thinning = 2, nChains = 2,
-              kappaDist = "fixed", kappaInit = kappa0, hypers = hyp),
+              kappaDist = "fixed", kappaInit = kappa0, hypers = hyp, kernelS = "powexp",
+              kernelB = "powexp"),
     classes = "fbc_extrapolation")
   expect_identical(fit$settings$sampler, "blocks")
   expect_equal(fit$acceptance[["thetaS1"]], fit$acceptance[["thetaS2"]])
@@ -224,7 +234,8 @@ test_that("the exact muB draw matches muB's closed-form Gaussian posterior", {
   set.seed(22)
   fit <- suppressWarnings(  # field inputs past the random design: expected
     calibrate(pr$sim, pr$field, nMCMC = 4100, nBurn = 100, thinning = 1, nChains = 1,
-              kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp),
+              kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, kernelS = "powexp",
+              kernelB = "powexp"),
     classes = "fbc_extrapolation")
   expect_identical(fit$acceptance[["muB"]], 1)
   d <- fit$data
@@ -260,7 +271,8 @@ test_that("the scale move and single-site variance moves match the 3-D grid post
   )
   set.seed(24)
   fit <- calibrate(pr$sim, pr$field, nMCMC = 16000, nBurn = 1000, thinning = 3, nChains = 2,
-                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
+                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, kernelS = "powexp",
+                   kernelB = "powexp")
   expect_true(fit$settings$moves$scale)
   sc <- fit$state$chains[[1]]$scaleAcceptance
   expect_true(sc > 0.1 && sc < 0.9)
@@ -303,7 +315,8 @@ test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches th
   set.seed(28)
   fit <- suppressWarnings(  # field inputs past the random design: expected
     calibrate(pr$sim, pr$field, nMCMC = 16000, nBurn = 1000, thinning = 3, nChains = 2,
-              kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, discrepancy = "none"),
+              kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, discrepancy = "none",
+              kernelS = "powexp"),
     classes = "fbc_extrapolation")
   expect_true(fit$settings$moves$scale)
   expect_identical(FBC:::move_report(fit)$parameters[FBC:::move_report(fit)$move == "scale"],
@@ -339,7 +352,8 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
   )
   set.seed(26)
   fit <- calibrate(pr$sim, pr$field, nMCMC = 12000, nBurn = 1000, thinning = 2, nChains = 2,
-                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp)
+                   kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, kernelS = "powexp",
+                   kernelB = "powexp")
   ix <- c(fit$indices$thetaB, fit$indices$sigma2B)
   expect_identical(fit$settings$moves$blocks, list(bias = ix))
   expect_equal(fit$acceptance[["thetaB1"]], fit$acceptance[["sigma2B"]])

@@ -14,7 +14,8 @@ skip_if_not_reference_blas <- function() {
   testthat::skip_if_not(FBC:::blas_kind() == "reference",
                         "draws to the bit need the reference BLAS the fixtures were made with")
 }
-old_args <- list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
+# (with FBC 0.1.0's kernels and noise prior, as the fixtures were made)
+old_args <- c(list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2), defaults_010)
 
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
@@ -51,7 +52,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
                     discrepancy = "none")
   expect_identical(FBC:::validate_fbc(none), none)
-  expect_identical(none$spec$model, FBC:::compiled_model(1, 1, discrepancy = "none"))
+  expect_identical(none$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
   other <- none
   other$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
@@ -153,7 +154,8 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(predict(fit, c(1, 2.5, 4), method = "MAP"),
                    readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map)
   set.seed(7)
-  now <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
+  now <- do.call(calibrate, c(list(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2,
+                                   nChains = 2), defaults_010))
   expect_identical(now$Phi, old$Phi)
   expect_identical(now$logPost, old$logPost)
   expect_identical(now$state$chains[[2]]$sampler, old$state$chains[[2]]$sampler)

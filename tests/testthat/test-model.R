@@ -91,7 +91,7 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
   p <- 2; q <- 2
   dat <- random_koh_data(8, 20, p, q, seed = 7)
   sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q), p2 = rep(1.1, q)),
-                           set_hyperPriors(),
+                           defaults_010$hypers,  # (a prior whose every move accepts and rejects in 60 sweeps)
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
                            p, q)
   set.seed(3)

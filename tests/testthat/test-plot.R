@@ -42,14 +42,14 @@ test_that("density plot: posterior, prior in reported units, mode; one facet per
 
 test_that("trace plot has one facet per parameter and the draws in order", {
   fit <- fit_for_plots()
-  p <- plot(fit, parameter = "alphaS", type = "trace")
+  p <- plot(fit, parameter = "thetaS", type = "trace")
   expect_identical(class(p$layers[[1]]$geom)[1], "GeomLine")
   df <- p$data
   expect_equal(nrow(df), 2 * nrow(fit$Phi))
-  expect_equal(df$value[df$parameter == "alphaS2 (g)"], unname(fit$Phi[, "alphaS2"]))
-  expect_equal(df$draw[df$parameter == "alphaS2 (g)"], seq_len(nrow(fit$Phi)))
+  expect_equal(df$value[df$parameter == "thetaS2 (g)"], unname(fit$Phi[, "thetaS2"]))
+  expect_equal(df$draw[df$parameter == "thetaS2 (g)"], seq_len(nrow(fit$Phi)))
   # the same labels as the density plot
-  expect_identical(levels(df$parameter), levels(plot(fit, "alphaS")$layers[[1]]$data$parameter))
+  expect_identical(levels(df$parameter), levels(plot(fit, "thetaS")$layers[[1]]$data$parameter))
   pk <- plot(fit, type = "trace")
   expect_identical(levels(pk$data$parameter), "g (kappa1)")
   expect_identical(pk$labels$y, "g")
@@ -129,7 +129,8 @@ test_that("a fixed parameter is shown as its value; an improper prior is not dra
   set.seed(9)
   fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1,
                    hypers = set_hyperPriors(alphaSDist = "fixed", alphaSInit = 2,
-                                            sigma2EDist = "jeffreys", sigma2EInit = 0.2))
+                                            sigma2EDist = "jeffreys", sigma2EInit = 0.2),
+                   kernelS = "powexp", kernelB = "powexp")
   p <- plot(fit, "alphaS")
   expect_identical(levels(p$layers[[3]]$data$parameter),
                    c("alphaS1 (h), fixed at 2", "alphaS2 (g), fixed at 2"))

@@ -55,7 +55,7 @@ test_that("print() shows no warning for a converged run", {
   )
   set.seed(3)
   fit <- calibrate(ballSim, ballField, nMCMC = 1500, nBurn = 300, thinning = 1, nChains = 4,
-                   hypers = hyp)
+                   hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   expect_lt(fit$estimates["kappa1", "rhat"], 1.01)
   expect_gt(fit$estimates["kappa1", "ess"], 400)
   expect_identical(convergence_messages(fit), character())

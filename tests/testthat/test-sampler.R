@@ -4,7 +4,8 @@
 # the ball data's model (p = q = 1) as calibrate() builds it
 ball_spec <- function() {
   set.seed(1)
-  calibrate(ballSim, ballField, nMCMC = 4, nBurn = 0, thinning = 1, nChains = 1)$spec
+  calibrate(ballSim, ballField, nMCMC = 4, nBurn = 0, thinning = 1, nChains = 1,
+            kernelS = "powexp", kernelB = "powexp")$spec  # with the smoothness parameters
 }
 
 test_that("the blocks schedule follows the model description's move column", {
@@ -23,7 +24,8 @@ test_that("the blocks schedule follows the model description's move column", {
 
 test_that("each move is reported by name, and its counts add up over update()", {
   set.seed(3)
-  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2,
+                   kernelS = "powexp", kernelB = "powexp")
   rep <- FBC:::move_report(fit)
   expect_identical(rep$move, c("kappa1", "sim", "bias", "sigma2E", "muB", "scale"))
   expect_identical(rep$kind, c("walk", "joint", "joint", "single", "gibbs", "scale"))
@@ -44,7 +46,8 @@ test_that("each move is reported by name, and its counts add up over update()", 
 
 test_that("proposalSD is the step each parameter's move makes, joint moves included", {
   set.seed(3)
-  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1)
+  fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1,
+                   kernelS = "powexp", kernelB = "powexp")
   st <- fit$state$chains[[1]]$sampler
   sim <- st$blocks[[2]]
   # the joint move's marginal step: exp(s) times the SD its shape L gives

@@ -28,7 +28,7 @@ test_that("as.matrix(), fitted() and residuals() are the draws and the calibrate
   set.seed(5)
   fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
   expect_identical(as.matrix(fit), fit$Phi)
-  expect_identical(dim(as.matrix(fit)), c(200L, 11L))  # 4 chains x (150 - 50) / 2 draws, 11 parameters
+  expect_identical(dim(as.matrix(fit)), c(200L, 8L))  # 4 chains x (150 - 50) / 2 draws, 8 parameters (Matérn: no smoothness)
   # reference: predict() at the field inputs, as plot(type = "fits") shows
   map <- predict(fit, ballField[, "h"], method = "MAP")$pred
   expect_equal(fitted(fit, method = "MAP"), map)

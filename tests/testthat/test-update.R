@@ -26,7 +26,7 @@ test_that("update() continues each chain from where it stopped", {
   )
   set.seed(4)
   fit <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 1, nChains = 2,
-                   hypers = hyp)
+                   hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   up <- update(fit, nMCMC = 5)
   for (k in 1:2) {
     last <- fit$state$chains[[k]]$last
@@ -39,7 +39,9 @@ test_that("update() continues each chain from where it stopped", {
 })
 
 test_that("update() keeps the adapted joint proposals and goes on as one run", {
-  fit <- small_fit(nChains = 2)  # the default sampler: joint moves
+  # the default sampler: joint moves (the power exponential: the simulator
+  # block's indices in Phi and in the sampler's vector agree)
+  fit <- small_fit(nChains = 2, kernelS = "powexp", kernelB = "powexp")
   sim <- unlist(fit$indices[c("thetaS", "alphaS", "sigma2S")], use.names = FALSE)
   blocks <- fit$state$chains[[1]]$sampler$blocks
   b1 <- blocks[vapply(blocks, function(b) sim[1] %in% b$index, logical(1))][[1]]
