@@ -146,13 +146,15 @@ identity_differences <- function(old, new, vars) {
 }
 
 # A setting's value in a checkpoint message: a number or string as is, a
-# list (converge's rule) as its fields, NULL as "not set".
+# list (converge's rule) as its fields (a NULL field as the R value, e.g.
+# `every = NULL`: the growing stretches), a NULL setting as "not set".
 format_setting <- function(x) {
   if (is.null(x)) return("not set")
   if (is.atomic(x) && length(x) == 1L) return(format(x))
   if (is.atomic(x)) return(paste0("c(", paste(format(x), collapse = ", "), ")"))
   if (is.list(x) && !is.null(names(x))) {
-    return(paste(names(x), vapply(x, format_setting, character(1)), sep = " = ", collapse = ", "))
+    fields <- vapply(x, function(v) if (is.null(v)) "NULL" else format_setting(v), character(1))
+    return(paste(names(x), fields, sep = " = ", collapse = ", "))
   }
   "another value"
 }
