@@ -147,3 +147,24 @@ test_that("a run interrupted in its warm-up resumes from its checkpoint to the u
   expect_identical(fit$settings$warmup, ref$settings$warmup)
   expect_identical(fit$settings$converge$sweeps, ref$settings$converge$sweeps)
 })
+
+test_that("a run of data-dependent length interrupted after its warm-up resumes to the uninterrupted draws", {
+  args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
+  set.seed(37)
+  ref <- do.call(calibrate, args)
+  dir <- tempfile("ck-run-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  # imitated Ctrl-C 100 sweeps after chain 1's warm-up (pieces of 50 sweeps),
+  # before its first check (500 sweeps after warm-up)
+  at <- ref$settings$warmup[1] %/% 50 + 2L
+  old <- options(FBC.sampler = interrupt_at_call(at))
+  set.seed(37)
+  expect_warning(part <- do.call(calibrate, c(args, list(checkpoint = dir))), "Resume it with the same")
+  options(old)
+  expect_equal(ck_iter(dir, 1), at * 50)
+  expect_equal(nrow(part$Phi), 50)  # 100 retained sweeps at thinning 2
+  set.seed(999)
+  expect_message(fit <- do.call(calibrate, c(args, list(checkpoint = dir))), "Resuming")
+  expect_identical(fit$Phi, ref$Phi)
+  expect_identical(fit$settings$converge$sweeps, ref$settings$converge$sweeps)
+})
