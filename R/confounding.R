@@ -19,7 +19,7 @@ fbc_confound_sd <- 0.7
 # posterior to the prior sd, and the ratio of sigma2B to sigma2E (medians);
 # NULL when nothing is flagged.
 confounded_kappa <- function(x) {
-  if (identical(x$settings$discrepancy, "none")) return(NULL)
+  if (identical(x$model$discrepancy, "none")) return(NULL)
   Phi <- x$Phi
   if (!all(c("sigma2B", "sigma2E") %in% colnames(Phi))) return(NULL)
   ratio <- stats::median(Phi[, "sigma2B"]) / stats::median(Phi[, "sigma2E"])
@@ -50,7 +50,7 @@ confounded_kappa <- function(x) {
 confounding_messages <- function(x) {
   b <- confounded_kappa(x)
   if (is.null(b)) return(character())
-  other <- setdiff(c("gp", "sgasp", "none"), x$settings$discrepancy)
+  other <- setdiff(c("gp", "sgasp", "none"), x$model$discrepancy)
   fits <- paste(sprintf("`fit_%s <- calibrate(sim, field, discrepancy = \"%s\")`", other, other),
                 collapse = " and ")
   cmp <- paste(c("loo::loo(fit)", sprintf("loo::loo(fit_%s)", other)), collapse = ", ")

@@ -74,7 +74,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,
                                opt$discrepancy,
-                               vecchia = if (alg$code == 2L) {
+                               vecchia = if (alg$name == "vecchia") {
                                  vecchia_design(dat$Xs, dat$ys, kS, opt$neighbours, opt$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource)
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
@@ -273,7 +273,7 @@ print.fbc_model <- function(x, ...) {
   validate_fbc_model(x, "x")
   d <- x$dims
   sc <- x$scale
-  cat("FBC model (not fitted)\n")
+  cat("<fbc_model> FBC model\n")
   cat(sprintf("  Data:        %d simulator runs, %d field rows\n", d$m, d$n))
   cat(sprintf("  Inputs:      %s (experimental); %s (calibration)\n",
               paste(sc$names$inputs, collapse = ", "), paste(sc$names$calibration, collapse = ", ")))
@@ -349,7 +349,7 @@ identity_settings <- function(model, run) {
   # a run under a rule is another run (its length depends on the rule), as
   # is one under another approximation
   if (!is.null(run$converge)) s$converge <- unclass(run$converge)
-  if (model$algebra$code == 2L) s$neighbours <- o$neighbours
+  if (model$algebra$name == "vecchia") s$neighbours <- o$neighbours
   if (!is.null(o$output)) s$output <- o$output
   if (!is.null(o$source)) s$source <- o$source
   if (o$sourceBias == "own") s$sourceBias <- o$sourceBias
@@ -376,15 +376,11 @@ fit_model <- function(model, run, call = model$call) {
   here <- parent.frame()
   assemble <- function(results, target) {
     results <- check_chain_results(results, max(target), checkpoint = rd$dir, call = here)
-    o <- model$options
+    # the run's settings (the model's are in fit$model)
     settings <- list(nMCMC = max(target), nBurn = run$nBurn, thinning = run$thinning,
-                     nChains = length(results), nugget = fbc_nugget, sampler = model$sampler,
-                     moves = model$moves, time = proc.time()[["elapsed"]] - t0,
-                     checkpoint = rd$dir, algebra = o$algebra, simAlgebra = model$simAlgebra,
-                     kernelS = model$kernelS, kernelB = model$kernelB,
-                     discrepancy = model$discrepancy, output = o$output, source = o$source,
-                     sourceBias = o$sourceBias)
-    new_fbc_chains(results, dat, spec, model$scale, call, settings = settings)
+                     nChains = length(results), nugget = fbc_nugget,
+                     time = proc.time()[["elapsed"]] - t0, checkpoint = rd$dir)
+    new_fbc_chains(results, model, call, settings = settings)
   }
   run_rounds(rd$starts, rd$seeds, rep(run$nMCMC, run$nChains), run$converge, assemble,
              nBurn = run$nBurn, thinning = run$thinning, showProgress = run$showProgress,

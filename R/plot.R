@@ -57,16 +57,16 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
-  if (!length(vars) && !class_in_model(x$settings$discrepancy)[match(parameter, model_classes$class)]) {
+  if (!length(vars) && !class_in_model(x$model$discrepancy)[match(parameter, model_classes$class)]) {
     cli::cli_abort(c(
-      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} {discrepancy_lacks(parameter, x$settings$discrepancy)}.",
+      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$model$discrepancy}\"} {discrepancy_lacks(parameter, x$model$discrepancy)}.",
       i = "{discrepancy_having(parameter)}"
     ))
   }
   if (!length(vars)) {
     K <- kernel_arg(parameter)
     cli::cli_abort(c(
-      "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$settings[[K]]}\"} has no smoothness parameter.",
+      "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$model[[K]]}\"} has no smoothness parameter.",
       i = "Only the power exponential ({.code {K} = \"powexp\"}) samples a smoothness; see {.help FBC::correlation}."
     ))
   }

@@ -78,11 +78,10 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
     s$nMCMC <- s$nMCMC + further
     s$time <- s$time + proc.time()[["elapsed"]] - t0
     s$converge <- NULL
-    new_fbc_chains(results, object$data, object$spec, object$scale, object$call, s,
-                   prev = object)
+    new_fbc_chains(results, object$model, object$call, s, prev = object)
   }
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
              nBurn = s$nBurn, thinning = s$thinning, showProgress = showProgress,
-             dat = object$data, spec = object$spec, moves = s$moves)
+             dat = object$data, spec = object$spec, moves = object$model$moves)
 }

@@ -96,12 +96,8 @@ test_that("prior_conflicts() checks a correlation whose posterior sits in its pr
   fit <- calibrate(sim, field, output = "out", nMCMC = 60, nBurn = 20, nChains = 1)
   Phi <- fit$Phi[rep(seq_len(nrow(fit$Phi)), length.out = 400), ]
   Phi[, "rhoS1"] <- 0.985 + 0.004 * qnorm(ppoints(400))
-  fit$Phi <- Phi
-  fit$chain <- rep(1:4, each = 100)
-  fit$logPost <- -abs(seq_len(400) - 200.5)
+  fit <- fit_with_draws(fit, Phi, rep(1:4, each = 100), -abs(seq_len(400) - 200.5))
   fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
-  fit$state$chains <- rep(fit$state$chains, 4)
-  for (k in 1:4) fit$state$chains[[k]]$kept <- 100
   col <- FBC:::phi_columns(fit$spec)[match("rhoS1", colnames(Phi))]
   out <- FBC:::prior_conflicts(fit, loglik = function(fit, phi) 200 * phi[col])
   expect_identical(out$var, "rhoS1")
