@@ -14,7 +14,7 @@
 choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   code <- algebra_code(algebra, Xs, p)
   forced <- algebra != "auto"
-  if (code == 2L) {
+  if (code == algebra_codes[["vecchia"]]) {
     k <- as.integer(neighbours %||% 20L)
     why <- if (forced) "asked for" else
       sprintf("more than %d runs that are not a product design", fbc_vecchia_m)

@@ -53,8 +53,6 @@ smooth_classes <- model_classes$class[model_classes$smooth != ""]
 kernel_arg <- function(cls) paste0("kernel", model_classes$smooth[match(cls, model_classes$class)])
 per_input_classes <- model_classes$class[model_classes$over %in% c("inputs", "experimental")]
 
-# Codes of the walks in the compiled core (src/fbc.h, enum Transform).
-walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)
 
 # The domains of the table's `domain` column, with numeric bounds: a
 # sampled parameter lies strictly inside (its walk maps the open interval
@@ -77,9 +75,7 @@ param_classes <- model_classes$class
 class_domain <- stats::setNames(model_classes$domain, model_classes$class)
 class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
 
-# The discrepancy models of calibrate(discrepancy =) and their codes in the
-# compiled core (src/fbc.h, enum Discrepancy).
-discrepancy_codes <- c(gp = 0L, sgasp = 2L, none = 1L)
+# The discrepancy model of a code (discrepancy_codes, R/boundary.R).
 discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
 
 # Does each class have parameters under the discrepancy model? (A logical
@@ -268,7 +264,7 @@ large_dense <- function(m, simAlgebra) {
 # Kronecker one on a product design (`dims`: I experimental x J calibration
 # settings), else the dense one.
 sim_algebra_info <- function(dat, p, model) {
-  if (identical(model$algebra, 2L)) {
+  if (identical(model$algebra, algebra_codes[["vecchia"]])) {
     return(list(name = "Vecchia", dims = NULL, k = model$vecchia$k,
                 scaling = model$vecchia$scaling))
   }

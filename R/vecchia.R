@@ -60,7 +60,7 @@ check_neighbours <- function(neighbours, call = parent.frame()) {
 # asked for, or under "auto" for a design of more than fbc_vecchia_m runs
 # that is not a product design; else 0 (auto: Kronecker or dense) or 1.
 algebra_code <- function(algebra, Xs, p) {
-  if (algebra == "dense") return(1L)
-  if (algebra == "vecchia") return(2L)
-  if (nrow(Xs) > fbc_vecchia_m && !length(.sim_algebra(Xs, p, 0L))) 2L else 0L
+  if (algebra != "auto") return(algebra_codes[[algebra]])
+  auto <- algebra_codes[["auto"]]
+  if (nrow(Xs) > fbc_vecchia_m && !length(.sim_algebra(Xs, p, auto))) algebra_codes[["vecchia"]] else auto
 }
