@@ -105,3 +105,30 @@ test_that("prior_conflicts() checks a correlation whose posterior sits in its pr
   expect_equal(out$cdf, 1.985 / 2)
   expect_true(out$atBound)
 })
+
+test_that("the package's code tables are the compiled core's, and a difference is refused", {
+  expect_true(FBC:::check_model_codes())
+  codes <- FBC:::.model_codes()
+  expect_setequal(names(codes$class), FBC:::model_classes$class)
+  bad <- codes
+  bad$kernel[["matern52"]] <- 7L
+  bad$class <- bad$class[-1]
+  expect_snapshot(error = TRUE, FBC:::check_model_codes(bad))
+})
+
+test_that("a model fits with checkpoints, as calibrate() does", {
+  dir1 <- tempfile("fbc-model-")
+  dir2 <- tempfile("fbc-model-")
+  on.exit(unlink(c(dir1, dir2), recursive = TRUE))
+  set.seed(4)
+  direct <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 50, nChains = 1,
+                      checkpoint = file.path(dir1, "run"))
+  set.seed(4)
+  model <- calibrate(ballSim, ballField, fit = FALSE)
+  fit <- calibrate(model, nMCMC = 100, nBurn = 50, nChains = 1, checkpoint = file.path(dir2, "run"))
+  expect_identical(fit$Phi, direct$Phi)
+  # the run's identity is the same: the model's checkpoint resumes from calibrate()'s
+  again <- suppressMessages(
+    calibrate(model, nMCMC = 100, nBurn = 50, nChains = 1, checkpoint = file.path(dir1, "run")))
+  expect_identical(again$Phi, direct$Phi)
+})
