@@ -75,7 +75,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,
                                opt$discrepancy,
                                vecchia = if (alg$name == "vecchia") {
-                                 vecchia_design(dat$Xs, dat$ys, kS, opt$neighbours, opt$neighbours)
+                                 vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource)
   simAlgebra <- sim_algebra_info(dat, p, spec$model)
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), simAlgebra))
@@ -180,10 +180,8 @@ model_priors <- function(dd, opt, kappa, kappaDefault, call) {
 # rows equal in every column (and in `group`, when given) share one, as in
 # the compiled core's distinct field rows (SchurPosterior).
 distinct_rows <- function(X, group = NULL) {
-  key <- cbind(X, group)
-  if (!ncol(key)) return(rep(1L, nrow(key)))
-  s <- do.call(paste, lapply(seq_len(ncol(key)), function(j) sprintf("%a", key[, j] + 0)))
-  match(s, unique(s))
+  key <- row_keys(cbind(X, group))
+  match(key, unique(key))
 }
 
 # --------------------------------------------------------- constructor ----

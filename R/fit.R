@@ -69,9 +69,7 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     kept <- seq_len(r$kept)
     Phi <- r$draws[kept, cols, drop = FALSE]
     colnames(Phi) <- spec$vars[cols]
-    Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2,
-                                     scale$xmax[cal] - scale$xmin[cal], "*"),
-                               2, scale$xmin[cal], "+")
+    Phi[, seq_len(q)] <- unscale_inputs(Phi[, seq_len(q), drop = FALSE], scale, cal)
     list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
   })
   states <- lapply(results, function(r) {

@@ -85,7 +85,5 @@ loo_rows <- function(chain, ndraws) {
 # The group of each field row: its distinct input (numbered in order of
 # first appearance) or itself.
 loo_groups <- function(Xf, unit) {
-  if (unit == "observation") return(seq_len(nrow(Xf)))
-  key <- row_keys(Xf)
-  match(key, unique(key))
+  if (unit == "observation") seq_len(nrow(Xf)) else distinct_rows(Xf)
 }

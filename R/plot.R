@@ -215,8 +215,7 @@ plot_fits <- function(x, xlab) {
       "{.arg xlab} must be a character vector with one name per experimental input ({p}); got {.obj_type_friendly {xlab}} of length {length(xlab)}."
     )
   }
-  X <- sweep(sweep(x$data$Xf, 2, sc$xmax[seq_len(p)] - sc$xmin[seq_len(p)], "*"),
-             2, sc$xmin[seq_len(p)], "+")
+  X <- unscale_inputs(x$data$Xf, sc, seq_len(p))
   y <- field_response(x)
   fc <- field_conditionals(x, sampler_draws(x, which.max(x$logPost)), 1L)
   z <- stats::qnorm(0.975)

@@ -185,9 +185,6 @@ check_rows <- function(fit, method, ndraws) {
   draw_rows(nrow(fit$Phi), ndraws)
 }
 
-unscale_inputs <- function(X, scale, cols) {
-  sweep(sweep(X, 2, scale$xmax[cols] - scale$xmin[cols], "*"), 2, scale$xmin[cols], "+")
-}
 
 # Names of the simulator's input columns (experimental, then calibration).
 sim_input_names <- function(scale, k) {

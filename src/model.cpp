@@ -75,6 +75,28 @@ Rcpp::List model_codes() {
       _["class"] = cls);
 }
 
+// The Vecchia algebra's design (R/vecchia.R, vecchia_design()) into vd.
+static void read_vecchia(const Rcpp::List& v, VecchiaDesign& vd) {
+  vd.k = Rcpp::as<int>(v["k"]);
+  vd.kf = Rcpp::as<int>(v["kf"]);
+  const Rcpp::IntegerVector ord = v["order"];
+  const Rcpp::IntegerMatrix nbr = v["neighbours"];
+  if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
+    Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
+  vd.w = Rcpp::as<arma::vec>(v["scaling"]);
+  vd.ord.resize(ord.size());
+  vd.nbr.assign((size_t) ord.size() * vd.k, -1);
+  for (int i = 0; i < ord.size(); ++i) {
+    vd.ord[i] = ord[i] - 1;
+    for (int c = 0; c < vd.k; ++c) {
+      const int r = nbr(i, c);
+      if (r == NA_INTEGER || r < 0 || r > ord.size())
+        Rcpp::stop("the Vecchia design's neighbours must be row numbers");
+      vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
+    }
+  }
+}
+
 Model read_model(const Rcpp::List& model, int p, int q) {
   const char* const* names = class_names;
   Model out;
@@ -142,26 +164,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   if (out.algebra == ALG_VECCHIA) {
     if (!model.containsElementNamed("vecchia"))
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
-    const Rcpp::List v = model["vecchia"];
-    VecchiaDesign& vd = out.vecchia;
-    vd.k = Rcpp::as<int>(v["k"]);
-    vd.kf = Rcpp::as<int>(v["kf"]);
-    const Rcpp::IntegerVector ord = v["order"];
-    const Rcpp::IntegerMatrix nbr = v["neighbours"];
-    if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
-      Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
-    vd.w = Rcpp::as<arma::vec>(v["scaling"]);
-    vd.ord.resize(ord.size());
-    vd.nbr.assign((size_t) ord.size() * vd.k, -1);
-    for (int i = 0; i < ord.size(); ++i) {
-      vd.ord[i] = ord[i] - 1;
-      for (int c = 0; c < vd.k; ++c) {
-        const int r = nbr(i, c);
-        if (r == NA_INTEGER || r < 0 || r > ord.size())
-          Rcpp::stop("the Vecchia design's neighbours must be row numbers");
-        vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
-      }
-    }
+    read_vecchia(model["vecchia"], out.vecchia);
   }
   lay.cls.assign(lay.d, -1);
   lay.pos.assign(lay.d, -1);
