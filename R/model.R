@@ -3,7 +3,10 @@
 # initial proposal scales, the sampler's moves, Phi's columns, plot labels,
 # the conflict check, checkpoints' identity and the tests' helpers). Adding a
 # class is one row here, its default prior in set_hyperPriors(), its name in
-# src/fbc.h (ParamClass) and read_model(), and the code that computes with it.
+# src/fbc.h (ParamClass) and src/model.cpp (class_names, read_model()'s
+# expected length), and the code that computes with it; the package checks
+# when it loads that R's classes are the compiled core's
+# (check_model_codes(), R/boundary.R).
 #
 # Columns:
 #   class    name, in the vignette's notation; its parameters are named
