@@ -14,4 +14,6 @@
 .onLoad <- function(libname, pkgname) {
   # the compiled core switches on the registry's prior family codes
   check_prior_codes()
+  # ... and on its own code tables (walks, kernels, algebras, ...)
+  check_model_codes()
 }

@@ -25,6 +25,10 @@
     .Call(`_FBC_fbc_loo`, Xf, yf, Xs, ys, phis, nugget, group, model)
 }
 
+.model_codes <- function() {
+    .Call(`_FBC_model_codes`)
+}
+
 .loglik_path_c <- function(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model) {
     .Call(`_FBC_loglik_path`, Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }

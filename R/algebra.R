@@ -58,24 +58,24 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, blas = blas_k
   m <- nrow(Xs)
   cost <- dense_sweep_cost(m, n, blas)
   costTxt <- sprintf("about %s s a sweep", format(signif(cost, 2), scientific = FALSE))
-  dims <- if (algebra == "auto") .sim_algebra(Xs, p, 0L) else integer(0)
+  dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]]) else integer(0)
   out <- if (algebra == "vecchia") {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
-    list(name = "vecchia", code = 2L, neighbours = k, forced = TRUE,
+    list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = TRUE,
          reason = sprintf("as asked (`algebra = \"vecchia\"`); the exact dense algebra would cost %s", costTxt))
   } else if (algebra == "dense") {
-    list(name = "dense", code = 1L, neighbours = NULL, forced = TRUE,
+    list(name = "dense", code = algebra_codes[["dense"]], neighbours = NULL, forced = TRUE,
          reason = sprintf("as asked (`algebra = \"dense\"`); exact, projected at %s", costTxt))
   } else if (length(dims)) {
-    list(name = "kronecker", code = 0L, neighbours = NULL, forced = FALSE,
+    list(name = "kronecker", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = "exact; the runs are a product design, so no m x m matrix is formed")
   } else if (cost < fbc_dense_sweep_max) {
-    list(name = "dense", code = 0L, neighbours = NULL, forced = FALSE,
+    list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = sprintf("exact; projected at %s (m + n = %d; under %g s)", costTxt,
                           m + n, fbc_dense_sweep_max))
   } else {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
-    list(name = "vecchia", code = 2L, neighbours = k, forced = FALSE,
+    list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = FALSE,
          reason = sprintf(
            "the exact dense algebra would cost %s (m + n = %d; over %g s): `algebra = \"dense\"` is exact, a larger `neighbours =` comes closer",
            costTxt, m + n, fbc_dense_sweep_max))

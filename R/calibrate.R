@@ -122,7 +122,7 @@
 #' pays) and otherwise uses the dense algebra, Cholesky factors of the
 #' \eqn{m \times m} simulator block: a design with one run missing is not a
 #' product design. `algebra = "dense"` forces the dense algebra (the same
-#' posterior, slower). `print()` and `fit$settings$simAlgebra` say which one
+#' posterior, slower). `print()` and `fit$model$simAlgebra` say which one
 #' ran; [predict.fbc()] uses the same.
 #'
 #' Beyond a few thousand scattered runs no exact algebra is practical (a
@@ -447,7 +447,8 @@
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs
-#'   (matched by name or by position: see "Columns").
+#'   (matched by name or by position: see "Columns"); or an `fbc_model`
+#'   from `calibrate(..., fit = FALSE)` to fit.
 #' @param field Field data: the response and the same `p` experimental
 #'   inputs (see "Columns").
 #' @param nMCMC Total number of MCMC iterations (sweeps) per chain, burn-in
@@ -530,6 +531,11 @@
 #'   rule's thresholds), or a ceiling, checked first 500 sweeps after each
 #'   chain's warm-up (or after `nMCMC` sweeps when given); see "Warm-up and
 #'   stopping when converged".
+#' @param fit `TRUE` (the default) fits the model; `FALSE` returns it
+#'   unfitted, an `fbc_model` (see [fbc_model]) that `calibrate(model, ...)`
+#'   fits later. With a model as `sim`, only the run's settings (`nMCMC`,
+#'   `nBurn`, `thinning`, `nChains`, `showProgress`, `checkpoint`,
+#'   `checkpointEvery`, `converge`) may be given.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -540,8 +546,10 @@
 #'   of `Phi`'s columns), `data`, `scale`, `indices` (for each parameter
 #'   class, the columns of `Phi` holding it: `integer(0)` for a smoothness
 #'   that is not sampled), `priorFns`, `proposalSD`, `call`, `settings`
-#'   (MCMC sizes, nugget, run time, checkpoint directory, `algebra` and the
-#'   `simAlgebra` used, `kernelS`, `kernelB`, `discrepancy`), `state` (`chains`: where
+#'   (the run's: MCMC sizes, nugget, run time, checkpoint directory, the
+#'   convergence rule), `model` (the [fbc_model] fitted: `kernelS`,
+#'   `kernelB`, `discrepancy`, `sampler` and its `moves`, the `algebra`
+#'   chosen and the `simAlgebra` used, ...), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
 #'   the sampler's full parameter vector; `interrupted`), `spec` (the model
 #'   description the copies `priors`, `vars`, `indices` and `priorFns` come
@@ -588,136 +596,19 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own")) {
+                      sourceBias = c("shared", "own"), fit = TRUE) {
   call <- match.call()
-  fac <- read_factors(sim, field, output, source)
-  sim <- check_data_matrix(fac$sim, "sim", min_cols = 2L, min_rows = 3L)
-  field <- fac$field
-  check_experimental_input(field)
-  field <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L)
-  cols <- align_columns(sim, field)
-  sim <- cols$sim
-  field <- cols$field
-  p <- ncol(field) - 1L
-  q <- ncol(sim) - 1L - p
-  if (q < 1L) {
-    cli::cli_abort(c(
-      "{.arg sim} needs a calibration input: a column besides the response and the {cli::qty(p)}experimental input{?s} it shares with {.arg field}.",
-      i = if (cols$named) {
-        "{.arg sim} has {.val {colnames(sim)}} and {.arg field} {.val {colnames(field)}}: every input of {.arg sim} is an experimental input of {.arg field}, so nothing is left to calibrate."
-      } else {
-        "{.arg field} has {ncol(field)} column{?s} (response + {p} input{?s}), so {.arg sim} needs at least {p + 2}; it has {ncol(sim)}."
-      },
-      i = "A calibration input is a simulator input that the field experiment does not set (such as {.code g} in {.code ballSim})."
-    ))
-  }
-  len <- check_run_length(nMCMC, nBurn, thinning, converge)
-  nMCMC <- len$nMCMC
-  nBurn <- len$nBurn
-  thinning <- len$thinning
-  converge <- len$converge
-  nChains <- check_count(nChains, "nChains", min = 1)
-  sourceBias <- match_choice(sourceBias, c("shared", "own"), "sourceBias")
-  if (sourceBias == "own" && (is.null(fac$source) || length(fac$source$levels) < 2L)) {
-    cli::cli_abort(c(
-      if (is.null(fac$source)) "{.code sourceBias = \"own\"} needs several field data sets, but no {.arg source} column was named." else
-        "{.code sourceBias = \"own\"} needs several field data sets, but the {.arg source} column has one.",
-      i = "Name the column of {.arg field} that says which data set each row belongs to with {.arg source}."
-    ))
-  }
-  biasSource <- if (sourceBias == "own") list(codes = fac$source$codes, L = length(fac$source$levels))
-  discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy")
-  if (sourceBias == "own" && discrepancy == "none") {
-    cli::cli_abort("{.code sourceBias = \"own\"} gives each field data set its own bias, but {.code discrepancy = \"none\"} has no bias.")
-  }
-  check_run_length_size(len, length(param_names(p, q, discrepancy)), nChains)
-  showProgress <- default_progress(showProgress)
-  sampler <- check_sampler(sampler, blockSim)
-  check_checkpoint(checkpoint, checkpointEvery)
-  algebra <- match_choice(algebra, c("auto", "dense", "vecchia"), "algebra")
-  if (!is.null(neighbours)) neighbours <- check_neighbours(neighbours)
-  if (!inherits(hypers, "fbc_hypers")) {
-    cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.")
-  }
-  kernelS <- check_kernel(kernelS, "kernelS")
-  kernelB <- check_kernel(kernelB, "kernelB")
-  hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB), kernelS, kernelB)
-  hypers <- indicator_hypers(hypers, match(unlist(lapply(fac$factors, `[[`, "columns")),
-                                           colnames(field)[-1]), p, q)
-  levels <- model_levels(fac$factors, colnames(field)[-1])
-
-  units <- if (cols$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
-  check_family_switch(kappaDist, "beta", missing(kappaP1), missing(kappaP2), "kappa", units)
-  scale <- fbc_scale(sim, p, named = cols$named, out = fac$outS)
-  scale[c("factors", "output", "source", "noiseLabels")] <-
-    list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
-  if (sourceBias == "own") scale$sourceBias <- TRUE
-  inform_duplicated_runs(sim)
-  warn_wide_outputs(sim, p, named = cols$named)
-  warn_field_outside(sim, field, scale)
-  dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
-  noise <- length(fac$noiseLabels %||% 1L)
-  kappaSpec <- check_class_spec(
-    list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2), "kappa", q
-  )
-  check_kappa_design(kappaSpec, scale)
-  spec <- build_priors(kappaSpec, hypers, scale, p, q, discrepancy, noise = noise, levels = levels,
-                       source = biasSource)
-  alg <- choose_algebra(algebra, neighbours, dat$Xs, p, kernelS, nrow(dat$Xf))
-  code <- alg$code
-  neighbours <- alg$neighbours
-  spec$model <- compiled_model(p, q, kernel_codes[[kernelS]], kernel_codes[[kernelB]],
-                               algebra = code, discrepancy,
-                               vecchia = if (code == 2L) {
-                                 vecchia_design(dat$Xs, dat$ys, kernel_codes[[kernelS]],
-                                                neighbours, neighbours)
-                               }, noise = fac$noise, levels = levels, source = biasSource)
-
-  simAlgebra <- c(sim_algebra_info(dat, p, spec$model), reason = alg$reason)
-  moves <- sampler_moves(sampler, spec, large = large_dense(nrow(sim), simAlgebra))
-  # only the dense algebra factors an m x m block
-  if (identical(simAlgebra$name, "dense")) blas_hint(nrow(sim))
-  inits <- dispersed_inits(nChains, dat, spec)
-  seeds <- chain_seeds(nChains)
-  starts <- lapply(inits, function(x) chain_start(initial_state(x, spec), length(x), 0L))
-  settings <- list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, nChains = nChains,
-                   nugget = fbc_nugget, sampler = sampler, kernelS = kernelS, kernelB = kernelB,
-                   discrepancy = discrepancy)
-  # a run under a rule is another run (its length depends on the rule), as
-  # is one under another approximation
-  if (!is.null(converge)) settings$converge <- unclass(converge)
-  if (code == 2L) settings$neighbours <- neighbours
-  if (!is.null(output)) settings$output <- output
-  if (!is.null(source)) settings$source <- source
-  if (sourceBias == "own") settings$sourceBias <- sourceBias
-  run <- NULL
-  if (!is.null(checkpoint)) {
-    # a directory holding this run's checkpoint continues it, with the
-    # chains' saved starts and streams (the session's RNG is advanced as
-    # for a new run all the same)
-    run <- open_checkpoint(checkpoint, checkpointEvery, run_identity(sim, field, spec, settings),
-                           starts, seeds, spec$vars)
-    starts <- run$starts
-    seeds <- run$seeds
-    if (run$resumed) inform_resumed(checkpoint, starts, nMCMC, converge)
-  }
-  # the directory as used (absolute): workers and later sessions may start
-  # elsewhere
-  if (!is.null(run)) checkpoint <- run$dir
-  t0 <- proc.time()[["elapsed"]]
-  here <- environment()
-  assemble <- function(results, target) {
-    results <- check_chain_results(results, max(target), checkpoint = checkpoint, call = here)
-    settings <- list(nMCMC = max(target), nBurn = nBurn, thinning = thinning,
-                     nChains = length(results), nugget = fbc_nugget, sampler = sampler,
-                     moves = moves, time = proc.time()[["elapsed"]] - t0,
-                     checkpoint = checkpoint, algebra = algebra, simAlgebra = simAlgebra,
-                     kernelS = kernelS, kernelB = kernelB, discrepancy = discrepancy,
-                     output = output, source = source, sourceBias = sourceBias)
-    new_fbc_chains(results, dat, spec, scale, call, settings = settings)
-  }
-  run_rounds(starts, seeds, rep(nMCMC, nChains), converge, assemble, nBurn = nBurn,
-             thinning = thinning, showProgress = showProgress, dat = dat, spec = spec,
-             moves = moves, run = run, every = checkpointEvery)
+  run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
+                   checkpointEvery)
+  if (inherits(sim, "fbc_model")) return(fit_model(model_to_fit(sim, call), run))
+  check_flag(fit, "fit")
+  model <- build_model(sim, field,
+                       kappa = list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2),
+                       kappaDefault = c(missing(kappaP1), missing(kappaP2)), hypers = hypers,
+                       discrepancy = discrepancy, kernelS = kernelS, kernelB = kernelB,
+                       sampler = sampler, blockSim = blockSim, algebra = algebra,
+                       neighbours = neighbours, output = output, source = source,
+                       sourceBias = sourceBias, modelCall = call)
+  if (!fit) return(model)
+  fit_model(model, run)
 }
-

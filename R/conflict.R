@@ -112,8 +112,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
       value <- tab$a[j] + tab$b[j] * u
       reported <- if (ps$classes[j] == "kappa") {
         k <- match(vars[j], vars[ps$classes == "kappa"])
-        lo <- fit$scale$xmin[fit$scale$p + k]
-        lo + (fit$scale$xmax[fit$scale$p + k] - lo) * u
+        drop(unscale_inputs(matrix(u), fit$scale, fit$scale$p + k))
       } else value
       list(value = value, reported = reported)
     }

@@ -27,7 +27,7 @@ fbc_confound_sd <- 0.7
 # (`noise`: "sigma2E", or "sigma2E2 (conc:B)"); NULL when nothing is
 # flagged.
 confounded_kappa <- function(x) {
-  if (identical(x$settings$discrepancy, "none")) return(NULL)
+  if (identical(x$model$discrepancy, "none")) return(NULL)
   Phi <- x$Phi
   noiseCols <- grep("^sigma2E[0-9]*$", colnames(Phi), value = TRUE)
   if (!"sigma2B" %in% colnames(Phi) || !length(noiseCols)) return(NULL)
@@ -66,7 +66,7 @@ confounded_kappa <- function(x) {
 confounding_messages <- function(x) {
   b <- confounded_kappa(x)
   if (is.null(b)) return(character())
-  other <- setdiff(c("gp", "sgasp", "none"), x$settings$discrepancy)
+  other <- setdiff(c("gp", "sgasp", "none"), x$model$discrepancy)
   fits <- paste(sprintf("`fit_%s <- calibrate(sim, field, discrepancy = \"%s\")`", other, other),
                 collapse = " and ")
   cmp <- paste(c("loo::loo(fit)", sprintf("loo::loo(fit_%s)", other)), collapse = ", ")

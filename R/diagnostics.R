@@ -61,8 +61,7 @@ param_support <- function(x) {
   for (j in seq_len(d)) {
     cls <- ps$classes[j]
     s <- family_support(fam[j], tab$p1[j], tab$p2[j])
-    dom <- switch(class_domain[[cls]], real = c(-Inf, Inf), positive = c(0, Inf),
-                  unit12 = c(1, 2), corr = c(-1, 1))
+    dom <- domain_bounds(cls)
     s <- c(max(s[1], dom[1]), min(s[2], dom[2]))
     if (cls == "kappa") {
       k <- match(vars[j], vars[ps$classes == "kappa"])
@@ -112,8 +111,7 @@ bound_pressing <- function(x, piled = bound_piling(x)) {
   for (j in seq_along(vars)) {
     v <- x$Phi[, j]
     if (fixed[j] || vars[j] %in% piled$var || stats::var(v) == 0) next
-    dom <- switch(class_domain[[ps$classes[j]]], real = c(-Inf, Inf), positive = c(0, Inf),
-                  unit12 = c(1, 2), corr = c(-1, 1))
+    dom <- domain_bounds(ps$classes[j])
     d <- support_density(v, sup[j, 1], sup[j, 2])
     flat <- if (all(is.finite(sup[j, ]))) 1 / (sup[j, 2] - sup[j, 1]) else 0
     ends <- c(d$y[1], d$y[length(d$y)])

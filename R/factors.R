@@ -317,7 +317,7 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
     ))
   }
   input <- match_choice(input, c(names(fac), if (own) src$name), "input")
-  if (gp == "bias" && identical(fit$settings$discrepancy, "none")) {
+  if (gp == "bias" && identical(fit$model$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
   }
   if (own && identical(input, src$name)) {

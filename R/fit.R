@@ -13,14 +13,16 @@
 
 # Format of the fit: fit$version$format. Fits made before it existed have
 # no `version` (format 0), format 1 fits no discrepancy model, format 2
-# fits a layout without the S-GaSP scale; all are upgraded by what they
-# lack.
-fbc_fit_format <- 3L
+# fits a layout without the S-GaSP scale, format 3 fits no model object
+# (the model's choices among the settings); upgrade_fit() brings each to
+# the current format by the steps keyed by format in fit_upgrades.
+fbc_fit_format <- 4L
 
 # ------------------------------------------------------------ constructor ----
 
-new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, scale, spec,
-                    settings, state, call, estimates = estimate_table(Phi, chain)) {
+new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, model, settings, state,
+                    call, estimates = estimate_table(Phi, chain)) {
+  spec <- model$spec
   x <- structure(list(
     Phi = Phi,
     chain = chain,
@@ -29,8 +31,8 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, s
     priors = spec$priors,
     acceptance = acceptance,
     vars = phi_vars(spec),
-    data = data,
-    scale = scale,
+    data = model$data,
+    scale = model$scale,
     indices = phi_indices(spec),
     priorFns = spec$fns,
     proposalSD = proposalSD,
@@ -39,6 +41,7 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, s
     logLik = logLik,
     state = state,
     spec = spec,
+    model = model,
     version = list(fbc = as.character(utils::packageVersion("FBC")), format = fbc_fit_format)
   ), class = "fbc", cache = fit_cache())
   validate_fbc(x)
@@ -49,9 +52,12 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, data, s
 phi_vars <- function(spec) spec$vars[phi_columns(spec)]
 
 # Assembles an fbc object from a list of chain results (each as returned by
-# .fbc_sample, draws on the sampler's scale). `prev` is an earlier fbc object
-# whose draws the new ones are appended to (update()), or NULL.
-new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NULL) {
+# .fbc_sample, draws on the sampler's scale) of `model` (an fbc_model).
+# `prev` is an earlier fbc object whose draws the new ones are appended to
+# (update()), or NULL.
+new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
+  spec <- model$spec
+  scale <- model$scale
   p <- scale$p
   q <- scale$q
   cal <- p + seq_len(q)
@@ -63,9 +69,7 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     kept <- seq_len(r$kept)
     Phi <- r$draws[kept, cols, drop = FALSE]
     colnames(Phi) <- spec$vars[cols]
-    Phi[, seq_len(q)] <- sweep(sweep(Phi[, seq_len(q), drop = FALSE], 2,
-                                     scale$xmax[cal] - scale$xmin[cal], "*"),
-                               2, scale$xmin[cal], "+")
+    Phi[, seq_len(q)] <- unscale_inputs(Phi[, seq_len(q), drop = FALSE], scale, cal)
     list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
   })
   states <- lapply(results, function(r) {
@@ -121,7 +125,7 @@ new_fbc_chains <- function(results, dat, spec, scale, call, settings, prev = NUL
     logLik = unlist(lapply(pieces, `[[`, "logLik")),
     acceptance = (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols],
     proposalSD = exp(Reduce(`+`, logSD) / length(states))[cols],
-    data = dat, scale = scale, spec = spec, settings = settings,
+    model = model, settings = settings,
     state = list(chains = states,
                  interrupted = any(vapply(states, `[[`, logical(1), "interrupted"))),
     call = call
@@ -157,7 +161,7 @@ validate_fbc <- function(x, arg = "x", call = parent.frame()) {
 fbc_problems <- function(x) {
   if (!inherits(x, "fbc") || !is.list(x)) return("It is not a list of class {.cls fbc}.")
   need <- c("Phi", "chain", "estimates", "logPost", "acceptance", "data", "scale",
-            "proposalSD", "settings", "logLik", "state", "spec", "version")
+            "proposalSD", "settings", "logLik", "state", "spec", "model", "version")
   miss <- setdiff(need, names(x))
   if (length(miss)) return(sprintf("`%s` is missing.", miss))
   out <- character()
@@ -190,13 +194,29 @@ fbc_problems <- function(x) {
       }
     }
   }
-  # the model: Phi's columns and everything per parameter follow `spec`
+  c(out, fbc_spec_problems(x))
+}
+
+# The problems of an fbc object's model and of what follows it: Phi's
+# columns and everything per parameter follow `spec`, and `spec` is the
+# model's.
+fbc_spec_problems <- function(x) {
+  out <- character()
+  Phi <- x$Phi
+  chains <- x$state$chains
+  K <- length(chains)
   spec <- x$spec
   miss <- setdiff(c("table", "init", "logsd", "vars", "classes", "priors", "fns", "model"), names(spec))
   if (length(miss)) return(c(out, sprintf("`spec$%s` is missing.", miss)))
   d <- length(spec$vars)
   if (nrow(spec$table) != d || length(spec$init) != d || length(spec$classes) != d) {
     return(c(out, sprintf("`spec$table`, `spec$init` and `spec$classes` must describe the %d parameters of `spec$vars`.", d)))
+  }
+  # the model (an fbc_model) is the one `spec` copies
+  mp <- fbc_model_problems(x$model)
+  if (length(mp)) return(c(out, paste("`model`:", mp)))
+  if (!identical(x$model$spec[c("vars", "table", "init")], spec[c("vars", "table", "init")])) {
+    return(c(out, "`spec` must be the model's (`model$spec`)."))
   }
   # the layout the compiled core gets is the model description's for these
   # data (R/model.R)
@@ -259,6 +279,18 @@ upgrade_fit <- function(x, call) {
       i = "Update FBC to use it."
     ), call = call)
   }
+  # one step after the other, each keyed by the format it starts from; the
+  # last one (fit_to_4()) constructs and validates the fit
+  while (format < fbc_fit_format) {
+    x <- fit_upgrades[[as.character(format)]](x)
+    format <- x$version$format
+  }
+  x
+}
+
+# Formats 0 to 2 to 3: what each earlier version did not write, filled in
+# as that version behaved (a step changes nothing a fit already has).
+fit_to_3 <- function(x) {
   # format 0: every fit made before the version existed; format 1: before
   # the discrepancy models. What each earlier version left out (a step
   # changes nothing a fit already has):
@@ -322,14 +354,50 @@ upgrade_fit <- function(x, call) {
   # - R-hat and ESS (before several chains)
   est <- x$estimates
   if (is.null(est$rhat) || is.null(est$ess)) est <- estimate_table(x$Phi, chain)
+  x[c("chain", "estimates", "spec", "scale", "settings")] <- list(chain, est, spec, sc, s)
+  x$state <- list(chains = chains, interrupted = any(vapply(chains, function(st) isTRUE(st$interrupted), logical(1))))
+  x$version <- list(fbc = x$version$fbc %||% "0.1.0", format = 3L)
+  x
+}
+
+# Format 3 to 4: the model of the fit becomes an object (fit$model, an
+# fbc_model) and the settings keep the run's only.
+fit_to_4 <- function(x) {
+  s <- x$settings
+  model <- model_of_fit(x)
+  run <- c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint", "converge")
   new_fbc(
-    Phi = x$Phi, chain = chain, logPost = x$logPost, logLik = x$logLik,
-    acceptance = x$acceptance, proposalSD = x$proposalSD, data = x$data, scale = sc,
-    spec = spec, settings = s,
-    state = list(chains = chains, interrupted = any(vapply(chains, function(st) isTRUE(st$interrupted), logical(1)))),
-    call = x$call, estimates = est
+    Phi = x$Phi, chain = x$chain, logPost = x$logPost, logLik = x$logLik,
+    acceptance = x$acceptance, proposalSD = x$proposalSD, model = model,
+    settings = s[intersect(names(s), run)], state = x$state, call = x$call,
+    estimates = x$estimates
   )
 }
+
+# The fbc_model of a format-3 fit, from its data, scale, spec and settings
+# (the unscaled data were not kept: `raw` is NULL).
+model_of_fit <- function(x) {
+  s <- x$settings
+  sc <- x$scale
+  mc <- x$spec$model
+  alg <- s$simAlgebra
+  name <- switch(alg$name, Kronecker = "kronecker", Vecchia = "vecchia", "dense")
+  algebra <- list(name = name, code = mc$algebra, neighbours = alg$k, forced = !identical(s$algebra, "auto"),
+                  reason = "as recorded by the FBC that made the fit.")
+  bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
+  design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
+                 noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
+                 fieldRows = distinct_rows(x$data$Xf, bias$codes))
+  new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
+                kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
+                sampler = s$sampler %||% "single", algebra = algebra, simAlgebra = alg,
+                moves = s$moves,
+                options = list(algebra = s$algebra, neighbours = s$neighbours, output = s$output,
+                               source = s$source, sourceBias = s$sourceBias %||% "shared"),
+                call = x$call)
+}
+
+fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4)
 
 # The contents of a checkpoint file of format `x$format` (at most
 # fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format

@@ -96,9 +96,7 @@ loo_rows <- function(chain, ndraws) {
 # first appearance) or itself. `cols`: the columns of Xf that make the
 # input (all by default).
 loo_groups <- function(Xf, unit, cols = seq_len(ncol(Xf))) {
-  if (unit == "observation") return(seq_len(nrow(Xf)))
-  key <- row_keys(Xf[, cols, drop = FALSE])
-  match(key, unique(key))
+  if (unit == "observation") seq_len(nrow(Xf)) else distinct_rows(Xf[, cols, drop = FALSE])
 }
 
 # The columns of the scaled field inputs that say where an observation was

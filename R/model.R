@@ -3,7 +3,10 @@
 # initial proposal scales, the sampler's moves, Phi's columns, plot labels,
 # the conflict check, checkpoints' identity and the tests' helpers). Adding a
 # class is one row here, its default prior in set_hyperPriors(), its name in
-# src/fbc.h (ParamClass) and read_model(), and the code that computes with it.
+# src/fbc.h (ParamClass) and src/model.cpp (class_names, read_model()'s
+# expected length), and the code that computes with it; the package checks
+# when it loads that R's classes are the compiled core's
+# (check_model_codes(), R/boundary.R).
 #
 # Columns:
 #   class    name, in the vignette's notation; its parameters are named
@@ -53,17 +56,29 @@ smooth_classes <- model_classes$class[model_classes$smooth != ""]
 kernel_arg <- function(cls) paste0("kernel", model_classes$smooth[match(cls, model_classes$class)])
 per_input_classes <- model_classes$class[model_classes$over %in% c("inputs", "experimental")]
 
-# Codes of the walks in the compiled core (src/fbc.h, enum Transform).
-walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)
+
+# The domains of the table's `domain` column, with numeric bounds: a
+# sampled parameter lies strictly inside (its walk maps the open interval
+# onto the line), a fixed one may sit on a bound; `what` says it in words.
+model_domains <- data.frame(
+  domain = c("real", "positive", "unit12", "corr"),
+  lower  = c(-Inf, 0, 1, -1),
+  upper  = c(Inf, Inf, 2, 1),
+  what   = c("finite", "positive", "in [1, 2]", "in [-1, 1]"),
+  stringsAsFactors = FALSE
+)
+# The bounds c(lower, upper) of class `cls`'s domain.
+domain_bounds <- function(cls) {
+  row <- match(class_domain[[cls]], model_domains$domain)
+  c(model_domains$lower[row], model_domains$upper[row])
+}
 
 # Lookups by class, all read off the table.
 param_classes <- model_classes$class
 class_domain <- stats::setNames(model_classes$domain, model_classes$class)
 class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
 
-# The discrepancy models of calibrate(discrepancy =) and their codes in the
-# compiled core (src/fbc.h, enum Discrepancy).
-discrepancy_codes <- c(gp = 0L, sgasp = 2L, none = 1L)
+# The discrepancy model of a code (discrepancy_codes, R/boundary.R).
 discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
 
 # Does each class have parameters under the discrepancy model? (A logical
@@ -252,7 +267,7 @@ large_dense <- function(m, simAlgebra) {
 # Kronecker one on a product design (`dims`: I experimental x J calibration
 # settings), else the dense one.
 sim_algebra_info <- function(dat, p, model) {
-  if (identical(model$algebra, 2L)) {
+  if (identical(model$algebra, algebra_codes[["vecchia"]])) {
     return(list(name = "Vecchia", dims = NULL, k = model$vecchia$k,
                 scaling = model$vecchia$scaling))
   }
@@ -260,10 +275,18 @@ sim_algebra_info <- function(dat, p, model) {
   if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
 }
 
-# The sampler's walk scale (calibrate(), "Sampler") and back.
-to_walk <- function(x, transform) {
-  switch(as.character(transform), `0` = x, `1` = log(x), `2` = stats::qlogis(x - 1))
+# The sampler's walk scale (calibrate(), "Sampler") and back, by walk
+# code (walk_codes; src/transforms.cpp computes the same).
+walk_maps <- list(
+  identity = list(to = function(x) x, from = function(w) w),
+  log = list(to = function(x) log(x), from = function(w) exp(w)),
+  logit12 = list(to = function(x) stats::qlogis(x - 1), from = function(w) 1 + stats::plogis(w)),
+  atanh = list(to = function(x) atanh(x), from = function(w) tanh(w))
+)
+walk_map <- function(transform) {
+  name <- names(walk_codes)[match(transform, walk_codes)]
+  if (length(name) != 1L || is.na(name)) stop("unknown walk code ", format(transform))
+  walk_maps[[name]]
 }
-from_walk <- function(w, transform) {
-  switch(as.character(transform), `0` = w, `1` = exp(w), `2` = 1 + stats::plogis(w))
-}
+to_walk <- function(x, transform) walk_map(transform)$to(x)
+from_walk <- function(w, transform) walk_map(transform)$from(w)

@@ -58,16 +58,16 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...)
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
   vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
-  if (!length(vars) && !class_in_model(x$settings$discrepancy)[match(parameter, model_classes$class)]) {
+  if (!length(vars) && !class_in_model(x$model$discrepancy)[match(parameter, model_classes$class)]) {
     cli::cli_abort(c(
-      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$settings$discrepancy}\"} {discrepancy_lacks(parameter, x$settings$discrepancy)}.",
+      "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$model$discrepancy}\"} {discrepancy_lacks(parameter, x$model$discrepancy)}.",
       i = "{discrepancy_having(parameter)}"
     ))
   }
   if (!length(vars)) {
     K <- kernel_arg(parameter)
     cli::cli_abort(c(
-      "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$settings[[K]]}\"} has no smoothness parameter.",
+      "{.field {parameter}} is not a parameter of this fit: {.code {K} = \"{x$model[[K]]}\"} has no smoothness parameter.",
       i = "Only the power exponential ({.code {K} = \"powexp\"}) samples a smoothness; see {.help FBC::correlation}."
     ))
   }
@@ -216,8 +216,7 @@ plot_fits <- function(x, xlab) {
       "{.arg xlab} must be a character vector with one name per experimental input ({p}); got {.obj_type_friendly {xlab}} of length {length(xlab)}."
     )
   }
-  X <- sweep(sweep(x$data$Xf, 2, sc$xmax[seq_len(p)] - sc$xmin[seq_len(p)], "*"),
-             2, sc$xmin[seq_len(p)], "+")
+  X <- unscale_inputs(x$data$Xf, sc, seq_len(p))
   y <- field_response(x)
   fc <- field_conditionals(x, sampler_draws(x, which.max(x$logPost)), 1L)
   z <- stats::qnorm(0.975)

@@ -137,7 +137,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   phis <- sampler_draws(object, rows)
   N <- nrow(Xn)
   M <- length(rows)
-  code <- match(type, c("field", "mean", "simulator", "bias"))
+  code <- predict_type_codes[[type]]
   nugget <- object$settings$nugget
   model <- object$spec$model
   shift <- if (type == "bias") 0 else y_mean(sc, nf$output)

@@ -34,9 +34,10 @@ print.fbc <- function(x, digits = 3, ...) {
   x <- check_fbc(x, "x")
   digits <- check_count(digits, "digits")
   s <- x$settings
+  mo <- x$model
   sc <- x$scale
-  gp <- s$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
-  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", switch(s$discrepancy,
+  gp <- mo$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
+  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", switch(mo$discrepancy,
     gp = "Kennedy-O'Hagan",
     sgasp = "S-GaSP discrepancy, Gu and Wang 2018",
     none = "no discrepancy: y_f = eta(x, kappa) + eps")))
@@ -93,13 +94,14 @@ print.fbc <- function(x, digits = 3, ...) {
     acc <- x$acceptance[!is.na(x$acceptance)]
     if (length(acc)) {
       cat(sprintf("  acceptance: %.2f to %.2f (target 0.44%s)\n", min(acc), max(acc),
-                  if (length(s$moves$blocks)) "; joint moves 0.234" else ""))
+                  if (length(mo$moves$blocks)) "; joint moves 0.234" else ""))
     }
   }
-  cat(sprintf("  kernels: simulator %s%s\n", s$kernelS, if (gp) paste(", bias", s$kernelB) else ""))
-  alg <- s$simAlgebra
+  cat(sprintf("  kernels: simulator %s%s\n", mo$kernelS, if (gp) paste(", bias", mo$kernelB) else ""))
+  alg <- mo$simAlgebra
   # why it ran (choose_algebra()'s reason; a fit made before it has none)
-  why <- if (!is.null(alg$reason)) paste0(": ", alg$reason) else if (alg$name == "Vecchia" && identical(s$algebra, "auto")) {
+  reason <- mo$algebra$reason %||% alg$reason
+  why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "Vecchia" && identical(mo$options$algebra, "auto")) {
     sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
   } else ""
   cat(sprintf("  algebra: %s%s\n", switch(alg$name,

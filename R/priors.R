@@ -206,7 +206,7 @@ support_known <- function(dist) !anyNA(family_support(dist, NA_real_, NA_real_))
 check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
   domain <- class_domain[[cls]]
   if (dist == "fixed" || domain == "real") return(invisible(TRUE))
-  lim <- switch(domain, positive = c(0, Inf), unit12 = c(1, 2), corr = c(-1, 1))
+  lim <- domain_bounds(cls)
   inside <- function(s) s[1] >= lim[1] && s[2] <= lim[2]
   if (!inside(family_support(dist, p1, p2))) {
     # every family whose support fits, those whose support is their
@@ -217,7 +217,7 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
                      corr = "within [-1, 1]")
     given <- paste(setdiff(names(prior_registry), c(known, "fixed")), within)
     allowed <- paste(paste(c(fits, given), collapse = ", "), "or fixed")
-    what <- switch(domain, positive = "positive", unit12 = "in [1, 2]", corr = "in [-1, 1]")
+    what <- model_domains$what[match(domain, model_domains$domain)]
     cli::cli_abort(c(
       "The {.val {dist}} prior in {.arg {arg}} does not fit {.field {cls}}, which must be {what}.",
       i = "Use {allowed}."
@@ -446,12 +446,11 @@ check_init <- function(init, dist, p1, p2, cls, arg, call = parent.frame()) {
     return(invisible(TRUE))
   }
   domain <- class_domain[[cls]]
-  inside <- switch(domain,
-    real = is.finite(init),
-    positive = is.finite(init) && (init > 0 || (dist == "fixed" && init == 0)),
-    corr = if (dist == "fixed") init >= -1 && init <= 1 else init > -1 && init < 1,
-    unit12 = if (dist == "fixed") init >= 1 && init <= 2 else init > 1 && init < 2
-  )
+  # a sampled parameter strictly inside its domain, a fixed one perhaps on
+  # a bound
+  b <- domain_bounds(cls)
+  inside <- is.finite(init) &&
+    if (dist == "fixed") init >= b[1] && init <= b[2] else init > b[1] && init < b[2]
   if (!inside) {
     what <- switch(domain, real = "finite", positive = "positive",
                    corr = if (dist == "fixed") "in [-1, 1]" else "strictly between -1 and 1",

@@ -69,6 +69,13 @@ scale_data <- function(sim, field, scale, outS = NULL, outF = NULL) {
 y_mean <- function(scale, out = NULL) if (is.null(out)) scale$ymean[1] else scale$ymean[out]
 y_sd <- function(scale, out = NULL) if (is.null(out)) scale$ysd[1] else scale$ysd[out]
 
+# Scaled inputs (columns `cols` of the inputs, on [0, 1] over the design)
+# back in their own units: the one map back, for inputs and for kappa
+# (whose draws the sampler keeps on [0, 1]).
+unscale_inputs <- function(X, scale, cols) {
+  sweep(sweep(X, 2, scale$xmax[cols] - scale$xmin[cols], "*"), 2, scale$xmin[cols], "+")
+}
+
 # Parameter draws in the sampler's parameterisation: kappa back to [0, 1].
 sampler_scale <- function(Phi, scale) {
   q <- scale$q

@@ -84,13 +84,12 @@ update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ..
     s$nMCMC <- s$nMCMC + further
     s$time <- s$time + proc.time()[["elapsed"]] - t0
     s$converge <- NULL
-    new_fbc_chains(results, object$data, object$spec, object$scale, object$call, s,
-                   prev = object)
+    new_fbc_chains(results, object$model, object$call, s, prev = object)
   }
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
              nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
-             dat = object$data, spec = object$spec, moves = s$moves, whole = TRUE)
+             dat = object$data, spec = object$spec, moves = object$model$moves, whole = TRUE)
 }
 
 # Under a `converge` rule, update() runs `nMCMC` further sweeps first: the

@@ -213,9 +213,6 @@ check_rows <- function(fit, method, ndraws) {
   draw_rows(nrow(fit$Phi), ndraws)
 }
 
-unscale_inputs <- function(X, scale, cols) {
-  sweep(sweep(X, 2, scale$xmax[cols] - scale$xmin[cols], "*"), 2, scale$xmin[cols], "+")
-}
 
 # Names of the simulator's input columns (experimental, then calibration).
 sim_input_names <- function(scale, k) {
@@ -239,7 +236,10 @@ check_fbc <- function(x, arg = "fit", call = parent.frame()) {
     cli::cli_abort("{.arg {arg}} must be an {.cls fbc} object from {.fn calibrate}, not {.obj_type_friendly {x}}.",
                    call = call)
   }
-  upgrade_fbc(x, call = call)
+  # an earlier format is brought up to date (and validated on the way);
+  # a current one is validated here
+  if (identical(x$version$format, fbc_fit_format)) validate_fbc(x, arg, call = call) else
+    upgrade_fbc(x, call = call)
 }
 
 #' @export

@@ -98,6 +98,16 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// model_codes
+Rcpp::List model_codes();
+RcppExport SEXP _FBC_model_codes() {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    rcpp_result_gen = Rcpp::wrap(model_codes());
+    return rcpp_result_gen;
+END_RCPP
+}
 // loglik_path
 Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, SEXP groups, bool decoys, bool scale, const Rcpp::List& model);
 RcppExport SEXP _FBC_loglik_path(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP groupsSEXP, SEXP decoysSEXP, SEXP scaleSEXP, SEXP modelSEXP) {
@@ -238,6 +248,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
     {"_FBC_level_corr_r", (DL_FUNC) &_FBC_level_corr_r, 2},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
+    {"_FBC_model_codes", (DL_FUNC) &_FBC_model_codes, 0},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},

@@ -59,6 +59,11 @@ struct VecchiaDesign {
 // with mean 0 (no muB).
 enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
 
+// What a prediction is of (R/predict.R, type): a new field observation
+// (eta + delta + eps), the mean of the field (eta + delta), the simulator
+// (eta), the bias (delta).
+enum PredictType { PT_FIELD = 1, PT_MEAN = 2, PT_SIMULATOR = 3, PT_BIAS = 4 };
+
 // Parameter classes of the model. Where each lives in phi is not assumed
 // here: R's model description (R/model.R, model_classes) owns the layout and
 // hands the offsets and lengths over by name (read_model()).
@@ -296,6 +301,21 @@ protected:
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 };
+
+// The one per-draw loop of the entry points that evaluate the posterior at
+// given draws (prediction, held-out runs, leave-one-out): for each row i of
+// `phis` the posterior is set to it (its factors from scratch) and f(i)
+// runs; a draw whose covariance is not positive definite (init() or f(i)
+// false) is an error naming it. Checks for an interrupt every 100 draws.
+template <class F>
+void for_each_draw(Posterior& post, const arma::mat& phis, F f) {
+  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
+  for (arma::uword i = 0; i < phis.n_rows; ++i) {
+    if (!post.init(phis.row(i).t()) || !f(i))
+      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", (int)i + 1);
+    if (i % 100 == 99) Rcpp::checkUserInterrupt();
+  }
+}
 
 // Everything but the simulator block: the field block, its Schur
 // complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a

@@ -57,15 +57,14 @@ Rcpp::List fbc_heldout(const arma::mat& Xf, const arma::vec& yf, const arma::mat
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   const int m = post.m, M = phis.n_rows;
-  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   const std::vector<std::vector<int> > folds = label_groups(fold, m, "fold");
   arma::mat mean(m, M), var(m, M);
   arma::vec mu, v;
-  for (int i = 0; i < M; ++i) {
-    if (!post.init(phis.row(i).t()) || !post.heldout(folds, mu, v))
-      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", i + 1);
+  for_each_draw(post, phis, [&](arma::uword i) {
+    if (!post.heldout(folds, mu, v)) return false;
     mean.col(i) = mu;
     var.col(i) = v;
-  }
+    return true;
+  });
   return Rcpp::List::create(Rcpp::Named("mean") = mean, Rcpp::Named("var") = var);
 }

@@ -44,16 +44,13 @@ Rcpp::NumericMatrix fbc_loo(const arma::mat& Xf, const arma::vec& yf, const arma
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   const int n = post.n, M = phis.n_rows;
-  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   const std::vector<std::vector<int> > groups = label_groups(group, n, "group");
   Rcpp::NumericMatrix out(M, groups.size());
   arma::vec ld;
-  for (int s = 0; s < M; ++s) {
-    if (!post.init(phis.row(s).t()))
-      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
+  for_each_draw(post, phis, [&](arma::uword s) {
     post.fieldLoo(groups, ld);
     for (size_t g = 0; g < groups.size(); ++g) out(s, g) = ld[g];
-    if (s % 100 == 99) Rcpp::checkUserInterrupt();
-  }
+    return true;
+  });
   return out;
 }

@@ -16,6 +16,12 @@
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
+// The log-likelihood from its pieces (the formula above), for every move.
+static double koh_loglik(int n, int m, double s2S, double ldDs, double ldS, double zz,
+                         double vv) {
+  return -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS + zz / s2S + vv);
+}
+
 void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   n = n_; m = m_; p = p_; q = q_;
   const Layout& lay = model.layout;
@@ -37,10 +43,62 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   phi.zeros(d);
 }
 
+// The classes' names, by ParamClass: the layout is handed over by name.
+static const char* class_names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
+                                            "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ",
+                                            "rhoS", "rhoB", "rhoD"};
+
+// The compiled core's code tables by name (walks, kernels, algebras,
+// discrepancy models, prediction types, parameter classes): R's tables
+// (R/boundary.R) must agree, which the package checks when it loads
+// (check_model_codes()).
+// [[Rcpp::export(.model_codes)]]
+Rcpp::List model_codes() {
+  using Rcpp::_;
+  Rcpp::IntegerVector cls(PC_COUNT);
+  Rcpp::CharacterVector cn(PC_COUNT);
+  for (int c = 0; c < PC_COUNT; ++c) { cls[c] = c; cn[c] = class_names[c]; }
+  cls.names() = cn;
+  return Rcpp::List::create(
+      _["walk"] = Rcpp::IntegerVector::create(_["identity"] = TR_IDENTITY, _["log"] = TR_LOG,
+                                              _["logit12"] = TR_LOGIT12, _["atanh"] = TR_ATANH),
+      _["kernel"] = Rcpp::IntegerVector::create(_["powexp"] = KF_POWEXP,
+                                                _["gaussian"] = KF_GAUSSIAN,
+                                                _["matern32"] = KF_MATERN32,
+                                                _["matern52"] = KF_MATERN52),
+      _["algebra"] = Rcpp::IntegerVector::create(_["auto"] = ALG_AUTO, _["dense"] = ALG_DENSE,
+                                                 _["vecchia"] = ALG_VECCHIA),
+      _["discrepancy"] = Rcpp::IntegerVector::create(_["gp"] = DS_GP, _["sgasp"] = DS_SGASP,
+                                                     _["none"] = DS_NONE),
+      _["type"] = Rcpp::IntegerVector::create(_["field"] = PT_FIELD, _["mean"] = PT_MEAN,
+                                              _["simulator"] = PT_SIMULATOR, _["bias"] = PT_BIAS),
+      _["class"] = cls);
+}
+
+// The Vecchia algebra's design (R/vecchia.R, vecchia_design()) into vd.
+static void read_vecchia(const Rcpp::List& v, VecchiaDesign& vd) {
+  vd.k = Rcpp::as<int>(v["k"]);
+  vd.kf = Rcpp::as<int>(v["kf"]);
+  const Rcpp::IntegerVector ord = v["order"];
+  const Rcpp::IntegerMatrix nbr = v["neighbours"];
+  if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
+    Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
+  vd.w = Rcpp::as<arma::vec>(v["scaling"]);
+  vd.ord.resize(ord.size());
+  vd.nbr.assign((size_t) ord.size() * vd.k, -1);
+  for (int i = 0; i < ord.size(); ++i) {
+    vd.ord[i] = ord[i] - 1;
+    for (int c = 0; c < vd.k; ++c) {
+      const int r = nbr(i, c);
+      if (r == NA_INTEGER || r < 0 || r > ord.size())
+        Rcpp::stop("the Vecchia design's neighbours must be row numbers");
+      vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
+    }
+  }
+}
+
 Model read_model(const Rcpp::List& model, int p, int q) {
-  static const char* names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                                        "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ",
-                                        "rhoS", "rhoB", "rhoD"};
+  const char* const* names = class_names;
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
@@ -106,26 +164,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   if (out.algebra == ALG_VECCHIA) {
     if (!model.containsElementNamed("vecchia"))
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
-    const Rcpp::List v = model["vecchia"];
-    VecchiaDesign& vd = out.vecchia;
-    vd.k = Rcpp::as<int>(v["k"]);
-    vd.kf = Rcpp::as<int>(v["kf"]);
-    const Rcpp::IntegerVector ord = v["order"];
-    const Rcpp::IntegerMatrix nbr = v["neighbours"];
-    if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
-      Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
-    vd.w = Rcpp::as<arma::vec>(v["scaling"]);
-    vd.ord.resize(ord.size());
-    vd.nbr.assign((size_t) ord.size() * vd.k, -1);
-    for (int i = 0; i < ord.size(); ++i) {
-      vd.ord[i] = ord[i] - 1;
-      for (int c = 0; c < vd.k; ++c) {
-        const int r = nbr(i, c);
-        if (r == NA_INTEGER || r < 0 || r > ord.size())
-          Rcpp::stop("the Vecchia design's neighbours must be row numbers");
-        vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
-      }
-    }
+    read_vecchia(model["vecchia"], out.vecchia);
   }
   lay.cls.assign(lay.d, -1);
   lay.pos.assign(lay.d, -1);
@@ -291,8 +330,7 @@ double SchurPosterior::proposeScale(double c) {
   const double ldDs = ldDs_.cur(), zz = zz_.cur();
   const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS +
-                            zz / s2S + vv);
+  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
   loglik_.alt() = ll;
   return ll;
 }
@@ -397,11 +435,11 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
   const int b = Xnew.n_rows;
   const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0, muB = biasMean ? phi[iMuB] : 0.0;
-  const bool simPart = type != 4, biasPart = type != 3 && bias;
-  const double mu0 = type == 3 ? 0.0 : muB;
+  const bool simPart = type != PT_BIAS, biasPart = type != PT_SIMULATOR && bias;
+  const double mu0 = type == PT_SIMULATOR ? 0.0 : muB;
   arma::vec v0(b, arma::fill::zeros);
   if (simPart) v0 += s2S;
-  if (type == 1) {
+  if (type == PT_FIELD) {
     const int G = layout.length[PC_SIGMA2E];
     for (int c = 0; c < b; ++c) {
       const int g = noise ? noise[c] : 0;
@@ -528,8 +566,7 @@ double SchurPosterior::evaluate(const Touch& t) {
   const double vv = arma::dot(u_, u_);
 
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS +
-                            zz / s2S + vv);
+  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
   loglik_.alt() = ll;
   return ll;
 }

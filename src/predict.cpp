@@ -21,11 +21,10 @@ Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat
                        const arma::vec& ys, const arma::mat& phis, const arma::mat& Xnew,
                        int type, double nugget, int block, const Rcpp::List& model,
                        const Rcpp::IntegerVector& noise, const Rcpp::IntegerVector& source) {
-  if (type < 1 || type > 4) Rcpp::stop("type must be 1, 2, 3 or 4");
+  if (type < PT_FIELD || type > PT_BIAS) Rcpp::stop("type must be 1, 2, 3 or 4");
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   Posterior& post = *pp;
   const int p = post.p, N = Xnew.n_rows, M = phis.n_rows;
-  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   if (Xnew.n_cols != (arma::uword)p) Rcpp::stop("Xnew must have %d columns", p);
   if (block < 1) block = 1;
   if (noise.size() != 0 && noise.size() != N) Rcpp::stop("noise must have %d groups", N);
@@ -35,15 +34,13 @@ Rcpp::List fbc_predict(const arma::mat& Xf, const arma::vec& yf, const arma::mat
   std::vector<int> src(N, 0);
   for (int c = 0; c < source.size(); ++c) src[c] = source[c] - 1;
   arma::mat mean(N, M), var(N, M);
-  for (int i = 0; i < M; ++i) {
-    if (!post.init(phis.row(i).t())) {
-      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", i + 1);
-    }
+  for_each_draw(post, phis, [&](arma::uword i) {
     for (int r0 = 0; r0 < N; r0 += block) {
       const int r1 = std::min(N, r0 + block) - 1;
       post.condition(Xnew.rows(r0, r1), type, mean.colptr(i) + r0, var.colptr(i) + r0,
                      g.data() + r0, source.size() ? src.data() + r0 : nullptr);
     }
-  }
+    return true;
+  });
   return Rcpp::List::create(Rcpp::Named("mean") = mean, Rcpp::Named("var") = var);
 }

@@ -93,7 +93,7 @@ run_case <- function(prob, nAdapt, nSweep, chunks = 1, sampler = "single", floor
                    nChains = 1, sampler = sampler)
   dat <- fit$data
   state <- fit$state$chains[[1]]$sampler
-  moves <- fit$settings$moves
+  moves <- fit$model$moves
   invisible(gc())
   per <- ceiling(nSweep / chunks)
   el <- wall <- 0

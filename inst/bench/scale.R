@@ -120,13 +120,13 @@ helpers <- function() {
     ms <- ch <- numeric(chunks)
     for (i in seq_len(chunks)) {
       t0 <- cpu()
-      res <- FBC:::sample_chain(fit$data, fit$spec, state, fit$settings$moves, per, 0L, 1L, FALSE)
+      res <- FBC:::sample_chain(fit$data, fit$spec, state, fit$model$moves, per, 0L, 1L, FALSE)
       ms[i] <- 1000 * (cpu() - t0) / per
       state <- res$state
       ch[i] <- t_chol(n + m, budget = 0.5)
     }
     data.frame(case = name, kernel = kernel %||% "powexp", n = n, m = m,
-               algebra = fit$settings$simAlgebra$name,
+               algebra = fit$model$simAlgebra$name,
                sweeps = per * chunks, `ms/sweep` = stats::median(ms),
                `chol ms` = stats::median(ch), ratio = stats::median(ms / ch),
                `peak MB` = peak_mb(), blas = FBC:::blas_kind(), check.names = FALSE)

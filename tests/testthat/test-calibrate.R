@@ -34,7 +34,7 @@ test_that("the default ball calibration covers g = 9.81", {
   expect_s3_class(fit, "fbc")
   expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars", "data",
                       "scale", "indices", "priorFns", "proposalSD", "call", "settings",
-                      "logLik", "state", "spec", "version"))
+                      "logLik", "state", "spec", "model", "version"))
   expect_equal(rownames(fit$estimates), fit$vars)
   expect_equal(fit$estimates["kappa1", "median"], median(fit$Phi[, "kappa1"]))
   expect_equal(fit$estimates["kappa1", "lwr80"], unname(quantile(fit$Phi[, "kappa1"], 0.1)))
@@ -65,7 +65,7 @@ test_that("the default discrepancy model gives the draws it gave before the choi
   set.seed(7)
   fit <- do.call(calibrate, c(list(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1),
                               defaults_010))
-  expect_identical(fit$settings$discrepancy, "gp")
+  expect_identical(fit$model$discrepancy, "gp")
   expect_equal(unname(fit$Phi[100, ]),
                c(7.79832811351, 3.14605375608, 0.362741566864, 1.99967461794, 1.99987846678,
                  0.588393759571, 1.57226685352, 3.95411184451, 0.596029356555, 0.153550863944,
@@ -89,12 +89,12 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   expect_identical(rownames(fit$estimates), keep)
   expect_identical(names(fit$proposalSD), keep)
   for (cls in c("thetaB", "alphaB", "sigma2B", "muB")) expect_identical(fit$indices[[cls]], integer(0))
-  expect_identical(fit$settings$discrepancy, "none")
+  expect_identical(fit$model$discrepancy, "none")
   expect_identical(fit$spec$model$discrepancy, 1L)
   # no bias moves; the scale move multiplies sigma2S and sigma2E
   mv <- FBC:::move_report(fit)
   expect_identical(mv$move, c("kappa1", "sim", "sigma2E", "scale"))
-  expect_false(fit$settings$moves$gibbsMuB)
+  expect_false(fit$model$moves$gibbsMuB)
   # the retained log-likelihoods are the plain-R ones without a bias block
   i <- 7
   ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
@@ -113,7 +113,7 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   # update() continues the chains with the same columns and model
   up <- update(fit, nMCMC = 40)
   expect_identical(colnames(up$Phi), keep)
-  expect_identical(up$settings$discrepancy, "none")
+  expect_identical(up$model$discrepancy, "none")
   expect_identical(up$Phi[up$chain == 1, ][seq_len(sum(fit$chain == 1)), ],
                    fit$Phi[fit$chain == 1, ])
   last <- nrow(up$Phi)
@@ -243,8 +243,8 @@ test_that("large dense problems move each kappa and the simulator block once a s
   sim <- cbind(y = sin(3 * X[, 1]) + X[, 2], x = X[, 1], t = X[, 2])
   field <- cbind(y = sin(3 * c(0.2, 0.5, 0.8)) + 0.5, x = c(0.2, 0.5, 0.8))
   fit <- suppressMessages(calibrate(sim, field, nMCMC = 4, nBurn = 2, thinning = 1, nChains = 1))
-  expect_identical(fit$settings$simAlgebra$name, "dense")
-  expect_identical(fit$settings$moves$repeats, c(1L, 1L, 2L))
+  expect_identical(fit$model$simAlgebra$name, "dense")
+  expect_identical(fit$model$moves$repeats, c(1L, 1L, 2L))
 })
 
 test_that("a family without a smoothness: Phi, vars and indices leave alpha out, and every path follows", {
@@ -261,7 +261,7 @@ test_that("a family without a smoothness: Phi, vars and indices leave alpha out,
   expect_identical(fit$indices$alphaB, integer(0))
   expect_identical(fit$indices$thetaS, 2:3)
   expect_identical(fit$indices$muB, 8L)
-  expect_identical(fit$settings[c("kernelS", "kernelB")], list(kernelS = "matern52", kernelB = "matern32"))
+  expect_identical(fit$model[c("kernelS", "kernelB")], list(kernelS = "matern52", kernelB = "matern32"))
   # the sampler's vector keeps fixed alpha slots
   expect_length(fit$spec$vars, 11)
   full <- FBC:::sampler_draws(fit, 1:3)

@@ -23,7 +23,7 @@ test_that("a chain in pieces makes the draws of the uninterrupted chain", {
   # multiples of 50 sweeps from the chain's start, and a chain continued
   # from any boundary with its saved RNG state repeats the same sweeps
   sp <- fit$spec
-  moves <- fit$settings$moves
+  moves <- fit$model$moves
   st0 <- FBC:::initial_state(sp$init, sp)
   set.seed(5)
   one <- FBC:::sample_chain(fit$data, sp, st0, moves, 50L, 30L, 1L, FALSE)
@@ -405,7 +405,7 @@ test_that("a run with another correlation family checkpoints and comes back with
   # the finished run's directory gives the fit back, kernels and all
   expect_message(again <- do.call(calibrate, args), "Resuming")
   expect_identical(again$Phi, fit$Phi)
-  expect_identical(again$settings$kernelS, "matern32")
+  expect_identical(again$model$kernelS, "matern32")
   # the default kernels are not written into the fingerprint, so
   # checkpoints written before the kernels existed still match
   id <- FBC:::run_identity(ballSim, ballField, fit$spec,
@@ -423,7 +423,7 @@ test_that("a run without a discrepancy checkpoints, resumes, and is refused by a
   expect_false("sigma2B" %in% colnames(fit$Phi))
   expect_message(again <- do.call(calibrate, args), "Resuming")
   expect_identical(again$Phi, fit$Phi)
-  expect_identical(again$settings$discrepancy, "none")
+  expect_identical(again$model$discrepancy, "none")
   # the identity holds the discrepancy model when it is not the default;
   # the default is left out, so checkpoints written before it still match
   expect_identical(FBC:::run_identity(ballSim, ballField, fit$spec,

@@ -40,7 +40,7 @@ hand_built_fit <- function(vary, at = NULL) {
 }
 # The fit with draws `Phi` (same chains) and their estimates.
 with_draws <- function(fit, Phi) {
-  fit$Phi <- Phi
+  fit <- fit_with_draws(fit, Phi, fit$chain, fit$logPost)
   fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
   fit
 }

@@ -1,7 +1,6 @@
 # Fake draws put into a real fbc object, so each check sees a known situation.
 with_draws <- function(fit, Phi, chain) {
-  fit$Phi <- Phi
-  fit$chain <- chain
+  fit <- fit_with_draws(fit, Phi, chain, logPost = rep_len(fit$logPost, nrow(Phi)))
   fit$estimates <- estimate_table(Phi, chain)
   fit
 }

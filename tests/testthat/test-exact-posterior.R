@@ -51,7 +51,7 @@ expect_dense_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
   d <- fit$data
   expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB,
-                 discrepancy = fit$settings$discrepancy)
+                 discrepancy = fit$model$discrepancy)
   }, u)
 }
 
@@ -61,7 +61,7 @@ test_that("kappa draws match the grid posterior on the ball data (q = 1, default
   set.seed(11)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4,
                    nChains = 1, hypers = hyp)
-  expect_identical(c(fit$settings$kernelS, fit$settings$kernelB), c("matern52", "matern52"))
+  expect_identical(c(fit$model$kernelS, fit$model$kernelB), c("matern52", "matern52"))
   # fixed columns stay at their values and are not sampled
   expect_equal(unname(fit$Phi[1, -1]), c(1.5, 0.2, 2, 3.5, 0.9, 0.15, 0.2))
   expect_true(all(apply(fit$Phi[, -1], 2, stats::var) == 0))
@@ -195,7 +195,7 @@ test_that("the joint thetaS move (default sampler) matches the 2-D grid posterio
               kappaDist = "fixed", kappaInit = kappa0, hypers = hyp, kernelS = "powexp",
               kernelB = "powexp"),
     classes = "fbc_extrapolation")
-  expect_identical(fit$settings$sampler, "blocks")
+  expect_identical(fit$model$sampler, "blocks")
   expect_equal(fit$acceptance[["thetaS1"]], fit$acceptance[["thetaS2"]])
   g <- seq(0.02, 8, length.out = 100)
   dens <- grid_posterior_2d(fit, 2:3, g, function(x) stats::dgamma(x, 4, 2, log = TRUE))
@@ -273,7 +273,7 @@ test_that("the scale move and single-site variance moves match the 3-D grid post
   fit <- calibrate(pr$sim, pr$field, nMCMC = 16000, nBurn = 1000, thinning = 3, nChains = 2,
                    kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, kernelS = "powexp",
                    kernelB = "powexp")
-  expect_true(fit$settings$moves$scale)
+  expect_true(fit$model$moves$scale)
   sc <- fit$state$chains[[1]]$scaleAcceptance
   expect_true(sc > 0.1 && sc < 0.9)
   d <- fit$data
@@ -318,7 +318,7 @@ test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches th
               kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, discrepancy = "none",
               kernelS = "powexp"),
     classes = "fbc_extrapolation")
-  expect_true(fit$settings$moves$scale)
+  expect_true(fit$model$moves$scale)
   expect_identical(FBC:::move_report(fit)$parameters[FBC:::move_report(fit)$move == "scale"],
                    "sigma2S,sigma2E")
   d <- fit$data
@@ -355,7 +355,7 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
                    kappaDist = "fixed", kappaInit = pr$kappa0, hypers = hyp, kernelS = "powexp",
                    kernelB = "powexp")
   ix <- c(fit$indices$thetaB, fit$indices$sigma2B)
-  expect_identical(fit$settings$moves$blocks, list(bias = ix))
+  expect_identical(fit$model$moves$blocks, list(bias = ix))
   expect_equal(fit$acceptance[["thetaB1"]], fit$acceptance[["sigma2B"]])
   d <- fit$data
   phi <- fit$state$chains[[1]]$last

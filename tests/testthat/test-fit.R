@@ -17,10 +17,25 @@ skip_if_not_reference_blas <- function() {
 # (with FBC 0.1.0's kernels and noise prior, as the fixtures were made)
 old_args <- c(list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2), defaults_010)
 
+# A current fit as format 3 wrote it: no model object, the model's choices
+# among the settings.
+as_format_3 <- function(fit) {
+  m <- fit$model
+  fit$settings <- c(fit$settings[c("nMCMC", "nBurn", "thinning", "nChains", "nugget")],
+                    list(sampler = m$sampler, moves = m$moves, time = fit$settings$time,
+                         checkpoint = fit$settings$checkpoint, algebra = m$options$algebra,
+                         simAlgebra = m$simAlgebra, kernelS = m$kernelS, kernelB = m$kernelB,
+                         discrepancy = m$discrepancy, output = m$options$output,
+                         source = m$options$source, sourceBias = m$options$sourceBias))
+  fit$model <- NULL
+  fit$version$format <- 3L
+  fit
+}
+
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 3L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 4L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
@@ -38,15 +53,15 @@ test_that("a fresh fit carries the current version and its copies of the model d
 test_that("a fit of format 1 (before the discrepancy models) upgrades to the bias GP", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  old <- fit
+  old <- as_format_3(fit)
   old$version$format <- 1L
   old$settings$discrepancy <- NULL
   old$spec$model$discrepancy <- NULL
   up <- FBC:::upgrade_fbc(old)
-  expect_identical(up$settings$discrepancy, "gp")
+  expect_identical(up$model$discrepancy, "gp")
   expect_identical(up$spec$model, fit$spec$model)
   expect_identical(up$Phi, fit$Phi)
-  expect_identical(up$version$format, 3L)
+  expect_identical(up$version$format, 4L)
   # a fit without a bias validates; its layout is the "none" one
   set.seed(2)
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
@@ -100,7 +115,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 3L)
+    expect_identical(fit$version$format, 4L)
     expect_identical(FBC:::validate_fbc(fit), fit)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
@@ -108,8 +123,9 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     # the power exponential on both GPs, the design's algebra, and the one
     # layout of phi there was (the ball data: p = q = 1)
     expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
-    expect_identical(fit$settings[c("kernelS", "kernelB", "nugget", "discrepancy")],
-                     list(kernelS = "powexp", kernelB = "powexp", nugget = 1e-6, discrepancy = "gp"))
+    expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy")],
+                     list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp"))
+    expect_identical(fit$settings$nugget, 1e-6)
     # every chain continues from where it stopped: iteration 300
     for (st in fit$state$chains) {
       expect_identical(st$sampler$iter, 300L)
@@ -124,13 +140,13 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
   expect_identical(first$estimates[, 1:8], old_fit("ff9b582")$estimates)
   expect_equal(first$estimates$ess, FBC:::chain_diagnostics(first$Phi, first$chain)$ess)
   # before the sampler state (0.1.0) the run was single-site
-  expect_identical(FBC:::upgrade_fbc(old_fit("2617448"))$settings$moves,
+  expect_identical(FBC:::upgrade_fbc(old_fit("2617448"))$model$moves,
                    list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
                         params = FBC:::param_names(1, 1)))
   # a fit with a sampler state keeps its moves and adapted blocks
   b <- old_fit("fa818f9")
   # (their parameters now named, for the per-move report)
-  expect_identical(FBC:::upgrade_fbc(b)$settings$moves,
+  expect_identical(FBC:::upgrade_fbc(b)$model$moves,
                    c(b$settings$moves, list(params = FBC:::param_names(1, 1))))
   expect_identical(FBC:::upgrade_fbc(b)$state$chains[[2]]$sampler, b$state$chains[[2]]$sampler)
 })
@@ -143,7 +159,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(old$version$format, 2L)
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 3L)
+  expect_identical(fit$version$format, 4L)
   expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
@@ -158,7 +174,55 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
                                    nChains = 2), defaults_010))
   expect_identical(now$Phi, old$Phi)
   expect_identical(now$logPost, old$logPost)
-  expect_identical(now$state$chains[[2]]$sampler, old$state$chains[[2]]$sampler)
+  # the adapted state as it was (today's state adds the adaptive warm-up's
+  # bookkeeping, unused under a fixed nBurn)
+  was <- old$state$chains[[2]]$sampler
+  expect_identical(now$state$chains[[2]]$sampler[names(was)], was)
+})
+
+test_that("a format 3 fit (before the model object) upgrades, predicts, resumes, and its draws are today's", {
+  # fit-3f92546.rds: made by FBC at 3f92546 (make-old-fits.R, seed 7), the
+  # last commit that wrote format 3 (the model's choices among the settings)
+  old <- old_fit("3f92546")
+  expect_identical(old$version$format, 3L)
+  expect_null(old$model)
+  fit <- FBC:::upgrade_fbc(old)
+  expect_identical(fit$version$format, 4L)
+  expect_s3_class(fit$model, "fbc_model")
+  expect_identical(fit$model$moves, old$settings$moves)
+  expect_identical(fit$model$simAlgebra, old$settings$simAlgebra)
+  expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy", "sampler")],
+                   old$settings[c("kernelS", "kernelB", "discrepancy", "sampler")])
+  expect_identical(names(fit$settings),
+                   c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint"))
+  expect_identical(fit$Phi, old$Phi)
+  expect_identical(fit$spec, old$spec)
+  h <- c(1, 2.5, 4)
+  ref <- readRDS(test_path("fixtures", "predict-3f92546.rds"))
+  expect_equal(predict(old, h, method = "MAP"), ref$map, tolerance = 1e-10)
+  # it resumes: every chain goes on from iteration 300
+  set.seed(3)
+  up <- update(old, nMCMC = 100)
+  expect_identical(vapply(up$state$chains, function(st) st$sampler$iter, integer(1)), c(400L, 400L))
+  expect_identical(unname(up$Phi[up$chain == 1, ][1:100, ]), unname(old$Phi[old$chain == 1, ]))
+  # a current fit written as format 3 upgrades to the same fit
+  set.seed(7)
+  now <- do.call(calibrate, c(list(ballSim, ballField), old_args))
+  back <- FBC:::upgrade_fbc(as_format_3(now))
+  expect_identical(back$settings, now$settings)
+  expect_identical(back$model[c("spec", "moves", "simAlgebra", "kernelS", "discrepancy", "dims", "classes")],
+                   now$model[c("spec", "moves", "simAlgebra", "kernelS", "discrepancy", "dims", "classes")])
+  expect_identical(back$model$design$fieldRows, now$model$design$fieldRows)
+  # the same call and seed today: the same draws, to the bit (on the BLAS
+  # the fixture was made with)
+  skip_if_not_reference_blas()
+  expect_identical(predict(old, h, method = "MAP"), ref$map)
+  expect_identical(now$Phi, old$Phi)
+  expect_identical(now$logPost, old$logPost)
+  # the adapted state as it was (today's state adds the adaptive warm-up's
+  # bookkeeping, unused under a fixed nBurn)
+  was <- old$state$chains[[2]]$sampler
+  expect_identical(now$state$chains[[2]]$sampler[names(was)], was)
 })
 
 test_that("print, summary, predict, plot and update work on the fits of earlier versions", {
@@ -179,7 +243,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 3L)
+    expect_identical(up$version$format, 4L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -236,7 +300,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 3L)
+  expect_identical(fit$version$format, 4L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L

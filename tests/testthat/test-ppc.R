@@ -58,7 +58,7 @@ test_that("several draws: the numbers come from the mixture of the draws' predic
   Phi <- phis
   Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
   colnames(Phi) <- colnames(fit$Phi)
-  fit$Phi <- Phi
+  fit <- fit_with_draws(fit, Phi, logPost = rep_len(fit$logPost, 3))
   refs <- lapply(1:3, function(i) dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], d$Xf, "field"))
   m <- sc$ymean + sc$ysd * sapply(refs, `[[`, "mean")
   s <- sc$ysd * sqrt(sapply(refs, `[[`, "var"))

@@ -105,8 +105,7 @@ test_that("the Bayesian method combines per-draw conditionals by total variance 
   Phi <- phis
   Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
   colnames(Phi) <- colnames(fit$Phi)
-  fit$Phi <- Phi
-  fit$logPost <- c(-3, -1, -7, -2)
+  fit <- fit_with_draws(fit, Phi, logPost = c(-3, -1, -7, -2))
   Xn <- scaled_new(Xnew, sc)
   for (type in c("field", "bias")) {
     shift <- if (type == "bias") 0 else sc$ymean
@@ -213,8 +212,7 @@ test_that("ndraws uses evenly spaced draws over all chains; NULL uses them all",
   expect_identical(attr(pr, "draw_rows"), rows)
   expect_true(all(c(1, 2) %in% fit$chain[rows]))
   # the same as predicting from a fit that holds only those draws
-  sub <- fit
-  sub$Phi <- fit$Phi[rows, ]
+  sub <- fit_with_draws(fit, fit$Phi[rows, ], fit$chain[rows], fit$logPost[rows], fit$logLik[rows])
   ref <- predict(sub, h, ndraws = NULL, draws = TRUE)
   expect_equal(pr[c("pred", "se", "lower", "upper", "draws")],
                ref[c("pred", "se", "lower", "upper", "draws")], tolerance = 1e-14)

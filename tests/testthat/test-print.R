@@ -23,9 +23,8 @@ test_that("print() shows the header and the table and returns the fit invisibly"
 
 test_that("print() copes with extra estimate columns and several chains", {
   set.seed(5)
-  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2, nChains = 2)
   fit$estimates$nChains <- 2L
-  fit$chain <- rep(1:2, length.out = nrow(fit$Phi))
   out <- capture.output(print(fit))
   expect_match(out[5], "from 2 chains", fixed = TRUE)
   expect_true(any(grepl("nChains", out)))

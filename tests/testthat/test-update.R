@@ -51,7 +51,7 @@ test_that("update() keeps the adapted joint proposals and goes on as one run", {
   expect_gt(sum(abs(b1$chol[lower.tri(b1$chol)])), 0)
   set.seed(3)
   up <- update(fit, nMCMC = 40)
-  expect_identical(up$settings$sampler, "blocks")
+  expect_identical(up$model$sampler, "blocks")
   for (k in 1:2) {
     # frozen: the same factor and scale as the original run, not restarted
     for (b in seq_along(fit$state$chains[[k]]$sampler$blocks)) {
@@ -73,7 +73,7 @@ test_that("a run split by update() gives the same draws as one run", {
   set.seed(11)
   first <- calibrate(ballSim, ballField, nMCMC = 200, nBurn = 100, thinning = 2, nChains = 1)
   st <- first$state$chains[[1]]$sampler
-  moves <- first$settings$moves
+  moves <- first$model$moves
   set.seed(12)
   a <- FBC:::sample_chain(first$data, first$spec, st, moves, 100L, 100L, 2L, FALSE)
   set.seed(12)

@@ -58,8 +58,7 @@ test_that("several draws combine as a Gaussian mixture (total variance, mixture 
   Phi <- phis
   Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
   colnames(Phi) <- colnames(fit$Phi)
-  fit$Phi <- Phi
-  fit$logPost <- c(-3, -1, -7, -2)
+  fit <- fit_with_draws(fit, Phi, logPost = c(-3, -1, -7, -2))
   m <- length(fit$data$ys)
   refs <- lapply(1:4, function(i) refit_heldout(fit$data$Xs, fit$data$ys, unpack_phi(phis[i, ], 2, 1),
                                                 seq_len(m)))
@@ -210,7 +209,7 @@ test_that("validate_emulator() on a product design goes through the Kronecker al
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi, d = product_koh_data(5, 7, n = 7, seed = 11))
-  expect_identical(fit$settings$simAlgebra[c("name", "dims")], list(name = "Kronecker", dims = c(5L, 7L)))
+  expect_identical(fit$model$simAlgebra[c("name", "dims")], list(name = "Kronecker", dims = c(5L, 7L)))
   sc <- fit$scale
   th <- unpack_phi(phi, 2, 1)
   m <- length(fit$data$ys)

@@ -1,0 +1,49 @@
+# The boundary to the compiled core: the integer codes it switches on, by
+# name, in one place (kernel_codes, of the correlation families, lives
+# with them in R/correlation.R; the prior families' in R/priors.R), and the
+# check, when the package loads, that they are the compiled core's
+# (src/model.cpp, .model_codes(); src/priors.cpp, .prior_codes()).
+# compiled_model() (R/model.R) is the one function that turns the model
+# into the list the compiled entry points take.
+
+# The walks of the model description's `walk` column (src/fbc.h, enum
+# Transform).
+walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)
+
+# The discrepancy models of calibrate(discrepancy =) (enum Discrepancy).
+discrepancy_codes <- c(gp = 0L, sgasp = 2L, none = 1L)
+
+# The algebras of calibrate(algebra =) (enum AlgebraChoice): "auto" lets
+# the compiled core use the Kronecker algebra on a product design.
+algebra_codes <- c(auto = 0L, dense = 1L, vecchia = 2L)
+
+# The types of predict.fbc() (enum PredictType).
+predict_type_codes <- c(field = 1L, mean = 2L, simulator = 3L, bias = 4L)
+
+# R's code tables, as .model_codes() gives the compiled core's; the classes
+# are handed over by name, so only their names must agree.
+model_code_tables <- function() {
+  list(walk = walk_codes, kernel = kernel_codes, algebra = algebra_codes,
+       discrepancy = discrepancy_codes, type = predict_type_codes,
+       class = sort(model_classes$class))
+}
+
+# Every code table of R against the compiled core's (`compiled`), name for
+# name; the package refuses to load when one differs.
+check_model_codes <- function(compiled = .model_codes()) {
+  compiled$class <- sort(names(compiled$class))
+  mine <- model_code_tables()
+  tables <- union(names(mine), names(compiled))
+  differ <- tables[!vapply(tables, function(t) {
+    a <- mine[[t]]
+    b <- compiled[[t]]
+    identical(a[order(names(a) %||% a)], b[order(names(b) %||% b)])
+  }, logical(1))]
+  if (length(differ)) {
+    cli::cli_abort(c(
+      "The code tables of R (R/boundary.R) and of the compiled core (src/model.cpp) differ.",
+      x = "They differ for {.val {differ}}."
+    ))
+  }
+  invisible(TRUE)
+}
