@@ -20,10 +20,13 @@
 # at run time: the same data on the same machine always get the same
 # algebra (set.seed() reproduces the run).
 fbc_dense_flop_s <- c(reference = 1.5e-10, optimized = 1.5e-10 / 9, unknown = 1.5e-10)
-# The dense algebra while its projected sweep costs less than this (s): 0.1
-# s a sweep is about 15 CPU minutes for a default-length run of 4 chains
-# (4 x 2000 sweeps of burn-in and as many after), with m + n up to about 870
-# on the reference BLAS and 1800 on an optimized one.
+# The dense algebra while its projected sweep costs less than this (s),
+# m + n up to about 870 on the reference BLAS and 1800 on an optimized one.
+# At the limit 4 chains of 8000 sweeps (the default nMCMC) take about 53 CPU
+# minutes, 4 x 3000 (a run the stopping rule ends early) 20; the Vecchia
+# algebra's sweep costs 8 ms at m = 1000, k = 20 (RESULTS-vecchia.md), so
+# above the limit the exact algebra is an hour or more and the
+# approximation minutes.
 fbc_dense_sweep_max <- 0.1
 
 # Neighbours of the Vecchia algebra for m runs when not given (measured,
