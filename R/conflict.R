@@ -260,8 +260,15 @@ conflict_messages <- function(fit, cf = cached_conflicts(fit)) {
               if (nrow(rows) == 1L) "it" else "them", sugg)
     } else if (all(rows$atBound)) {
       sprintf(" Consider fixing %s, e.g. `hypers = %s`.", if (nrow(rows) == 1L) "it" else "them", sugg)
-    } else {
+    } else if (all(dist %in% c("gaussian", "halft_sd"))) {
+      # same centre, a wider spread
       sprintf(" Loosen %s, e.g. `hypers = %s`, and calibrate again.",
+              if (nrow(rows) == 1L) "it" else "them", sugg)
+    } else {
+      # suggest_prior() moves the median to the likelihood's peak with a
+      # heavy tail: a re-centred prior, possibly narrower in absolute terms
+      # (gamma rate 0.1 -> 610), so it is not called a looser one
+      sprintf(" Re-centre %s on the likelihood's peak (a heavy-tailed prior with its median there), e.g. `hypers = %s`, and calibrate again.",
               if (nrow(rows) == 1L) "it" else "them", sugg)
     }
     sprintf("Prior-data conflict for %s: %s: %s.%s", vars, parts, verdict, advice)
