@@ -278,7 +278,8 @@ print.fbc_model <- function(x, ...) {
               paste(sc$names$inputs, collapse = ", "), paste(sc$names$calibration, collapse = ", ")))
   cat(sprintf("  Discrepancy: %s; kernels %s (simulator), %s (bias)\n", x$discrepancy,
               x$kernelS, x$kernelB))
-  cat(sprintf("  Algebra:     %s: %s\n", x$algebra$name, x$algebra$reason))
+  cat(sprintf("  Algebra:     %s%s\n", x$algebra$name,
+              if (is.null(x$algebra$reason)) "" else paste0(": ", x$algebra$reason)))
   cat(sprintf("  Sampler:     %s, %d parameters\n", x$sampler, d$d))
   cls <- x$classes[x$classes$length > 0L, , drop = FALSE]
   cat(sprintf("  Classes:     %s\n", paste(sprintf("%s (%d)", cls$class, cls$length), collapse = ", ")))

@@ -383,7 +383,7 @@ model_of_fit <- function(x) {
   alg <- s$simAlgebra
   name <- switch(alg$name, Kronecker = "kronecker", Vecchia = "vecchia", "dense")
   algebra <- list(name = name, code = mc$algebra, neighbours = alg$k, forced = !identical(s$algebra, "auto"),
-                  reason = "as recorded by the FBC that made the fit.")
+                  reason = alg$reason)  # NULL: the FBC that made it gave none
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,

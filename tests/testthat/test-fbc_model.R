@@ -40,7 +40,8 @@ test_that("a model fits under another seed and with the run's settings only", {
 
 test_that("print() describes the model", {
   model <- calibrate(ballSim, ballField, fit = FALSE)
-  expect_snapshot(print(model))
+  # the projected cost depends on the BLAS (choose_algebra())
+  expect_snapshot(print(model), transform = function(x) gsub("about [0-9.e-]+ s", "about <cost> s", x))
 })
 
 test_that("the validator names what is wrong", {

@@ -6,6 +6,8 @@
 
 # Every hyperparameter fixed (the values of test-exact-posterior.R): kappa
 # alone is sampled, and its posterior is known on a grid.
+# (in the power exponential's parameters: the calls name that kernel; the
+# dense reference, helper-dense.R, is written in them)
 kappa_only <- function(sigma2E = 0.15) {
   set_hyperPriors(
     thetaSDist = "fixed", thetaSInit = c(3.6, 0.42), alphaSDist = "fixed", alphaSInit = 1.95,
@@ -27,7 +29,7 @@ test_that("warm-up ends early where the proposals settle at once, and the draws 
   # the default run (warm-up of data-dependent length, stop when converged)
   # with a larger ESS asked, for a sharp comparison with the grid
   fit <- calibrate(ballSim, ballField, nChains = 2, hypers = kappa_only(),
-                   converge = until_converged(ess = 1500))
+                   kernelS = "powexp", kernelB = "powexp", converge = until_converged(ess = 1500))
   # kappa's walk has its scale right within two windows of 100 sweeps: the
   # warm-up ends at the earliest (300 sweeps: two settled windows after the
   # first)
@@ -48,7 +50,7 @@ test_that("warm-up goes on while a proposal is badly scaled, and the draws are t
   # most 0.5 on the log scale
   set.seed(32)
   fit <- calibrate(ballSim, ballField, nChains = 2, hypers = kappa_only(sigma2E = 1.5e-4),
-                   converge = until_converged(ess = 1500))
+                   kernelS = "powexp", kernelB = "powexp", converge = until_converged(ess = 1500))
   expect_true(all(fit$settings$warmup >= 500))
   expect_true(all(fit$settings$warmup < 5000))
   expect_true(fit$settings$converge$converged)
