@@ -209,13 +209,7 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
 # Checks the structure of an fbc_model; returns it (invisibly) or aborts
 # with one line per problem found.
 validate_fbc_model <- function(x, arg = "model", call = parent.frame()) {
-  bad <- fbc_model_problems(x)
-  if (length(bad)) {
-    cli::cli_abort(c(
-      "{.arg {arg}} is not a valid {.cls fbc_model}:",
-      stats::setNames(bad, rep("x", length(bad)))
-    ), call = call)
-  }
+  abort_problems(fbc_model_problems(x), "{.arg {arg}} is not a valid {.cls fbc_model}:", arg, call)
   invisible(x)
 }
 

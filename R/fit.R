@@ -145,14 +145,15 @@ split_chains <- function(x) {
 # Checks the structure of an fbc object; returns it (invisibly) or aborts
 # with one line per problem found.
 validate_fbc <- function(x, arg = "x", call = parent.frame()) {
-  bad <- fbc_problems(x)
-  if (length(bad)) {
-    cli::cli_abort(c(
-      "{.arg {arg}} is not a valid {.cls fbc} object:",
-      stats::setNames(bad, rep("x", length(bad)))
-    ), call = call)
-  }
+  abort_problems(fbc_problems(x), "{.arg {arg}} is not a valid {.cls fbc} object:", arg, call)
   invisible(x)
+}
+
+# The one error of a validator: `head` (cli markup; {arg} is the argument)
+# and a line per problem; nothing when there is none.
+abort_problems <- function(bad, head, arg, call) {
+  if (!length(bad)) return(invisible())
+  cli::cli_abort(c(head, stats::setNames(bad, rep("x", length(bad)))), call = call)
 }
 
 # The problems of an fbc object, in words (character(0) when none). A check
