@@ -21,7 +21,9 @@
 #'   `every` at a time until every R-hat and bulk ESS, over the old and new
 #'   draws, meet the rule, or a chain has run the rule's `maxMCMC` sweeps in
 #'   all (counted from its start in [calibrate()]).
-#' @param showProgress Show a progress bar over all chains (see [calibrate()]).
+#' @param showProgress Show a progress bar over all chains: `NULL` (the
+#'   default) shows it in an interactive session and not in scripts or knitr,
+#'   as in [calibrate()].
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
@@ -34,12 +36,12 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
 #' fit <- update(fit, nMCMC = 400)
 #' table(fit$chain)
-update.fbc <- function(object, nMCMC, showProgress = FALSE, converge = FALSE, ...) {
+update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
   converge <- check_converge(converge)
   if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every %||% fbc_first_check
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)
-  check_flag(showProgress, "showProgress")
+  showProgress <- default_progress(showProgress)
   object <- check_fbc(object, "object")
   s <- object$settings
   states <- object$state$chains
