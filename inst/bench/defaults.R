@@ -59,11 +59,12 @@ row_of <- function(problem, fit, cpu, truth, peer = NA_real_) {
   kap <- grep("^kappa", colnames(fit$Phi))
   data.frame(problem = problem, cpu.s = round(cpu, 1),
              sweeps = s$converge$sweeps %||% s$nMCMC,
-             warmup = s$warmup %||% s$nBurn,
+             # each chain's warm-up, as a range (one row per problem)
+             warmup = paste(unique(range(s$warmup %||% s$nBurn)), collapse = "-"),
              max.rhat = round(max(est$rhat, na.rm = TRUE), 3),
              min.ess = round(min(est$ess, na.rm = TRUE)),
              covers = all(mapply(function(j, t) covers(fit$Phi[, j], t), kap, truth)),
-             algebra = s$simAlgebra$name,
+             algebra = (fit$model %||% s)$simAlgebra$name,
              robustcal.s = round(peer, 1))
 }
 # ---------------------------------------------------------------- problems --
@@ -150,6 +151,8 @@ scattered_part <- function(m) {
   pr <- scattered_problem(m)
   set.seed(1)
   r <- timed(default_fit(pr$sim, pr$field))
+  # FBC's row first, in case the peer's run fails or is stopped
+  print(row_of(sprintf("m%d scattered", m), r$value, r$cpu, pr$truth), row.names = FALSE)
   row_of(sprintf("m%d scattered", m), r$value, r$cpu, pr$truth,
          peer = if (m <= 1000) peer_cpu(pr$sim, pr$field, 2) else NA_real_)
 }
