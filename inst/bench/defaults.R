@@ -79,29 +79,8 @@ precise_problem <- function(n, seed = 1) {
   list(sim = sim, field = data.frame(y = eta(xf, 1.5) + e, x = xf),
        truth = 1.5, noise = 0.01, realized = sqrt(mean(e^2)))
 }
-scattered_problem <- function(m, seed = 1) {
-  set.seed(seed)
-  if (m <= 2000) {
-    eta <- function(x1, x2, t1, t2) sin(2 * pi * x1) * (1 + t1) + exp(-x2) * t2 + x1 * x2 * t1 * t2
-    D <- lhs::randomLHS(m, 4)
-    sim <- data.frame(y = eta(D[, 1], D[, 2], D[, 3], D[, 4]), x1 = D[, 1], x2 = D[, 2],
-                      t1 = D[, 3], t2 = D[, 4])
-    xf <- matrix(stats::runif(2 * 60), 60)
-    field <- data.frame(y = eta(xf[, 1], xf[, 2], 0.3, 0.7) + 0.1 * xf[, 1] +
-                          stats::rnorm(60, 0, 0.05), x1 = xf[, 1], x2 = xf[, 2])
-    return(list(sim = sim, field = field, truth = c(0.3, 0.7)))
-  }
-  eta <- function(x1, x2, t1, t2, t3) {
-    sin(2 * pi * x1) * (1 + t1) + exp(-x2) * t2 + x1 * x2 * t1 * t2 + 0.5 * cos(pi * x2) * t3
-  }
-  D <- lhs::randomLHS(m, 5)
-  sim <- data.frame(y = eta(D[, 1], D[, 2], D[, 3], D[, 4], D[, 5]), x1 = D[, 1], x2 = D[, 2],
-                    t1 = D[, 3], t2 = D[, 4], t3 = D[, 5])
-  xf <- matrix(stats::runif(2 * 100), 100)
-  field <- data.frame(y = eta(xf[, 1], xf[, 2], 0.3, 0.7, 0.5) + 0.1 * xf[, 1] +
-                        stats::rnorm(100, 0, 0.05), x1 = xf[, 1], x2 = xf[, 2])
-  list(sim = sim, field = field, truth = c(0.3, 0.7, 0.5))
-}
+# scattered_problem(): the problems shared with inst/bench/vecchia.R
+source("inst/bench/problems.R")
 
 # RobustCalibration's default run (S-GaSP, its 10,000 sweeps), CPU s
 peer_cpu <- function(sim, field, p) {
