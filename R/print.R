@@ -100,7 +100,7 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  kernels: simulator %s%s\n", mo$kernelS, if (gp) paste(", bias", mo$kernelB) else ""))
   alg <- mo$simAlgebra
   # why it ran (choose_algebra()'s reason; a fit made before it has none)
-  reason <- mo$algebra$reason %||% alg$reason
+  reason <- mo$algebra$reason
   why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "Vecchia" && identical(mo$options$algebra, "auto")) {
     sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
   } else ""
