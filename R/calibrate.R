@@ -596,12 +596,22 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), fit = TRUE) {
+                      sourceBias = c("shared", "own"), fit = TRUE,
+                      nonFinite = c("error", "reject")) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery)
   if (inherits(sim, "fbc_model")) return(fit_model(model_to_fit(sim, call), run))
   check_flag(fit, "fit")
+  if (is.function(sim)) {
+    # the simulator as an R function (R/simulator_function.R)
+    model <- build_function_model(sim, field,
+      kappa = list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2),
+      hypers = hypers, discrepancy = discrepancy, kernelB = kernelB, sampler = sampler,
+      blockSim = blockSim, output = output, source = source, sourceBias = sourceBias,
+      nonFinite = nonFinite, modelCall = call)
+    return(if (fit) fit_model(model, run) else model)
+  }
   model <- build_model(sim, field,
                        kappa = list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2),
                        kappaDefault = c(missing(kappaP1), missing(kappaP2)), hypers = hypers,

@@ -237,7 +237,8 @@ fbc_model_problems <- function(x) {
     }
   }
   if (length(out)) return(out)
-  lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources)
+  lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources,
+                      emulator = is.null(x$spec$model$simulator))
   if (!identical(x$classes$length, unname(lay$length)) ||
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {
@@ -248,7 +249,7 @@ fbc_model_problems <- function(x) {
       NROW(x$spec$table) != d$d || length(x$spec$init) != d$d) {
     out <- c(out, sprintf("`spec` must describe the %d parameters of `dims$d`.", d$d))
   }
-  if (!isTRUE(x$algebra$name %in% c("dense", "kronecker", "vecchia")) ||
+  if (!isTRUE(x$algebra$name %in% c("dense", "kronecker", "vecchia", "function")) ||
       !identical(as.integer(x$algebra$code), x$spec$model$algebra)) {
     out <- c(out, "`algebra` must be a choice of `choose_algebra()` whose code the compiled model holds.")
   }
@@ -267,11 +268,18 @@ print.fbc_model <- function(x, ...) {
   d <- x$dims
   sc <- x$scale
   cat("<fbc_model> FBC model\n")
-  cat(sprintf("  Data:        %d simulator runs, %d field rows\n", d$m, d$n))
+  if (!is.null(x$simulator)) {
+    cat(sprintf("  Data:        a simulator function, %d field rows\n", d$n))
+  } else {
+    cat(sprintf("  Data:        %d simulator runs, %d field rows\n", d$m, d$n))
+  }
   cat(sprintf("  Inputs:      %s (experimental); %s (calibration)\n",
               paste(sc$names$inputs, collapse = ", "), paste(sc$names$calibration, collapse = ", ")))
-  cat(sprintf("  Discrepancy: %s; kernels %s (simulator), %s (bias)\n", x$discrepancy,
-              x$kernelS, x$kernelB))
+  cat(if (is.null(x$simulator)) {
+    sprintf("  Discrepancy: %s; kernels %s (simulator), %s (bias)\n", x$discrepancy, x$kernelS, x$kernelB)
+  } else {
+    sprintf("  Discrepancy: %s; kernel %s (bias)\n", x$discrepancy, x$kernelB)
+  })
   cat(sprintf("  Algebra:     %s%s\n", x$algebra$name,
               if (is.null(x$algebra$reason)) "" else paste0(": ", x$algebra$reason)))
   cat(sprintf("  Sampler:     %s, %d parameters\n", x$sampler, d$d))
@@ -301,7 +309,7 @@ check_run <- function(nMCMC, nBurn, thinning, nChains, converge, showProgress, c
 # run's settings).
 model_args <- c("field", "kappaDist", "kappaInit", "kappaP1", "kappaP2", "hypers", "discrepancy",
                 "kernelS", "kernelB", "sampler", "blockSim", "algebra", "neighbours", "output",
-                "source", "sourceBias")
+                "source", "sourceBias", "nonFinite")
 
 # calibrate(model, ...): the model, with the call that will be the fit's
 # (the model's call with this call's run settings). A model argument given
@@ -336,6 +344,8 @@ identity_settings <- function(model, run) {
   if (!is.null(o$output)) s$output <- o$output
   if (!is.null(o$source)) s$source <- o$source
   if (o$sourceBias == "own") s$sourceBias <- o$sourceBias
+  # a simulator given as a function: its code and what a non-finite value does
+  if (!is.null(model$simulator)) s$simulator <- function_identity(model$simulator)
   s
 }
 

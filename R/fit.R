@@ -228,7 +228,8 @@ fbc_spec_problems <- function(x) {
                           paste(sprintf("%d for %s", discrepancy_codes, names(discrepancy_codes)), collapse = ", "))))
   }
   if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
-                                                   source_count(spec$model)))) {
+                                                   source_count(spec$model),
+                                                   emulator = is.null(spec$model$simulator)))) {
     return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }

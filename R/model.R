@@ -109,19 +109,27 @@ discrepancy_having <- function(cls) {
 # inputs under the discrepancy model `discrepancy`, with `noise`
 # measurement-error groups (named by class, in the table's order; the bias
 # classes have none without a bias).
-class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L) {
+class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
+                        emulator = TRUE) {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
          levels = levels, sources = sources)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
+  # a simulator given as a function (R/simulator_function.R) has no
+  # simulator GP, hence none of its classes
+  if (!emulator) n[model_classes$class %in% emulator_classes] <- 0L
   stats::setNames(n, model_classes$class)
 }
+
+# The classes of the simulator GP (the emulator): none when the simulator
+# is a function.
+emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
 
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
 param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                           sources = 0L) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
+                           sources = 0L, emulator = TRUE) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -130,8 +138,8 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # Parameter names in the order of phi: the class name, with an index when
 # the class expands over inputs (or over several noise groups).
 param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                         sources = 0L) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources)
+                         sources = 0L, emulator = TRUE) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     if (sizes[i] == 0L) character(0)
@@ -142,8 +150,8 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 
 # The class of each parameter of phi.
 param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                            sources = 0L) {
-  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources))
+                            sources = 0L, emulator = TRUE) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources, emulator))
 }
 
 # The classes that are not parameters for these correlation families: the
@@ -156,8 +164,8 @@ absent_classes <- function(kernS, kernB) {
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
 layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                          sources = 0L) {
-  idx <- param_indices(p, q, discrepancy, noise, levels, sources)
+                          sources = 0L, emulator = TRUE) {
+  idx <- param_indices(p, q, discrepancy, noise, levels, sources, emulator)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -175,17 +183,21 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # field data set, each field row's data set and their number (`source`:
 # list(codes, L), 1-based codes; the bias classes take it only with a bias).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
-                           vecchia = NULL, noise = NULL, levels = NULL, source = NULL) {
+                           vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
+                           simulator = NULL) {
   if (discrepancy == "none") source <- NULL
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
     layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
-                 source_count(source)),
+                 source_count(source), emulator = is.null(simulator)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),
     if (!is.null(levels)) list(levels = levels),
     if (!is.null(source)) list(source = as.integer(source$codes),
-                               sourceLevels = as.integer(source$L)))
+                               sourceLevels = as.integer(source$L)),
+    # a simulator given as a function: the closures the compiled core calls
+    # (function_closures(), R/simulator_function.R)
+    if (!is.null(simulator)) list(simulator = simulator))
 }
 
 # The number of partial correlations between the field data sets' biases

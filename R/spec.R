@@ -131,10 +131,10 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # initial values on the sampler's scale and the initial proposal SDs. The
 # classes without parameters under `discrepancy` have no prior.
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
-                         levels = NULL, source = NULL, call = parent.frame()) {
+                         levels = NULL, source = NULL, emulator = TRUE, call = parent.frame()) {
   nLev <- level_count(levels)
   nSrc <- source_count(source)
-  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc)
+  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -190,14 +190,14 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc)
-  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc)
+  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc, emulator)
+  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, emulator)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
        model = compiled_model(p, q, discrepancy = discrepancy,
                               noise = if (noise > 1L) seq_len(noise), levels = levels,
-                              source = source))
+                              source = source, simulator = if (!emulator) list()))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -109,6 +109,9 @@ struct Model {
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
   VecchiaDesign vecchia;  // with algebra ALG_VECCHIA
+  // the simulator is a user's R function (function.cpp): no simulator GP,
+  // so thetaS, alphaS, rhoS and sigma2S have length 0 in the layout
+  bool emulator = true;
 };
 // Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
 // and length integer vectors named by class) and checks that the layout
@@ -530,6 +533,13 @@ std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& 
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
                                           double nugget, const Rcpp::List& model);
+
+// The posterior of a simulator given as an R function (function.cpp):
+// `sim` holds the closures R builds (R/simulator_function.R): field(u),
+// the scaled f at the field rows for kappa u (sampler's scale), and
+// at(Xnew, u), the scaled f at new scaled inputs.
+std::unique_ptr<Posterior> make_function_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                                   const Model& model, const Rcpp::List& sim);
 
 // The rows of each label (labels 1 .. k over n rows, each used; heldout.cpp):
 // the folds of validate_emulator() and the groups of loo().

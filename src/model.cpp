@@ -149,7 +149,11 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     }
   }
   const int ld = out.sourceL * (out.sourceL - 1) / 2;
-  const int want[PC_COUNT] = {q, p + q, p + q, b * p, b * p, 1, b, G, mu, lz, lc, b * lc, b * ld};
+  // a simulator given as a function (function.cpp) has no simulator GP
+  out.emulator = !model.containsElementNamed("simulator");
+  const int e = out.emulator ? 1 : 0;
+  const int want[PC_COUNT] = {q, e * (p + q), e * (p + q), b * p, b * p, e, b, G, mu, lz,
+                              e * lc, b * lc, b * ld};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -200,8 +204,9 @@ std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& 
                                           const arma::mat& Xs, const arma::vec& ys,
                                           double nugget, const Rcpp::List& model) {
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
-  return make_posterior(Xf, yf, Xs, ys, nugget,
-                        read_model(model, Xf.n_cols, Xs.n_cols - Xf.n_cols));
+  const Model mod = read_model(model, Xf.n_cols, Xs.n_cols - Xf.n_cols);
+  if (!mod.emulator) return make_function_posterior(Xf, yf, mod, model["simulator"]);
+  return make_posterior(Xf, yf, Xs, ys, nugget, mod);
 }
 
 SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,

@@ -1,0 +1,210 @@
+# The simulator as an R function (issue 29): calibrate(f, field, ...) with
+# f(x, kappa) called inside the sampler, no emulator. The model object is an
+# fbc_model like any other (R/fbc_model.R) with:
+#   - no simulator GP: the classes thetaS, alphaS, rhoS and sigma2S have
+#     length 0 (class_sizes(emulator = FALSE)), no runs (m = 0);
+#   - the calibration inputs' number, names and ranges from the kappa prior
+#     (kappaDist = "uniform", kappaP1 = lower, kappaP2 = upper), which also
+#     scale kappa to [0, 1] for the sampler as a design's range would;
+#   - the response standardised by the mean of f over the field inputs at
+#     the prior's centre (kappaInit when given) and the sd of the field
+#     response (see ?calibrate, "The simulator as a function");
+#   - `simulator`: list(f, x, nonFinite), and in the compiled model the two
+#     closures the compiled core calls (function_closures()): the scaled f
+#     at the field rows for one kappa (once per kappa proposal), and at new
+#     inputs (prediction, once per draw).
+
+# The model of calibrate(f, field, ...): what build_model() is for runs.
+build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, sampler,
+                                 blockSim, output, source, sourceBias, nonFinite,
+                                 modelCall = NULL, call = parent.frame()) {
+  check_simulator_function(f, call = call)
+  nonFinite <- match_choice(nonFinite, c("error", "reject"), "nonFinite", call = call)
+  refuse_function_options(output, source, sourceBias, call = call)
+  fm <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L, call = call)
+  p <- ncol(fm) - 1L
+  inputNames <- usable_names(fm)[-1] %||% paste0("x", seq_len(p))
+  x <- function_inputs(fm[, -1, drop = FALSE], inputNames, is.data.frame(field))
+  kap <- function_kappa(kappa, inputNames, call = call)
+  q <- length(kap$lower)
+  discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy", call = call)
+  sampler <- check_sampler(sampler, blockSim, call = call)
+  kernelB <- check_kernel(kernelB, "kernelB", call = call)
+  if (!inherits(hypers, "fbc_hypers")) {
+    cli::cli_abort("{.arg hypers} must come from {.fn set_hyperPriors}, not {.obj_type_friendly {hypers}}.", call = call)
+  }
+  warn_emulator_hypers(hypers, call = call)
+  hypers <- kernel_hypers(discrepancy_hypers(hypers, discrepancy, kernelB, call = call),
+                          "matern52", kernelB, call = call)
+  # the response's scaling: f at the prior's centre (a check of f too)
+  k0 <- ifelse(is.na(kap$spec$init), (kap$lower + kap$upper) / 2, kap$spec$init)
+  f0 <- function_values(f, x, stats::setNames(k0, kap$names), nrow(fm), "error")
+  scale <- function_scale(fm, f0, kap, inputNames, named = !is.null(usable_names(fm)))
+  dat <- list(Xf = unname(scale_inputs(fm[, -1, drop = FALSE], scale, seq_len(p))),
+              yf = unname((fm[, 1] - scale$ymean) / scale$ysd),
+              Xs = matrix(numeric(0), 0L, p + q), ys = numeric(0))
+  spec <- build_priors(kap$spec, hypers, scale, p, q, discrepancy, emulator = FALSE, call = call)
+  spec$model <- compiled_model(p, q, kernel_codes[["matern52"]], kernel_codes[[kernelB]],
+                               algebra = algebra_codes[["dense"]], discrepancy,
+                               simulator = function_closures(f, x, scale, nonFinite))
+  alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
+              forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)")
+  design <- list(factors = list(), output = NULL, source = NULL, noise = NULL, noiseLabels = NULL,
+                 levels = NULL, biasSource = NULL, fieldRows = distinct_rows(dat$Xf))
+  model <- new_fbc_model(
+    data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
+    kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,
+    algebra = alg, simAlgebra = list(name = "function", dims = NULL),
+    moves = sampler_moves(sampler, spec, large = FALSE),
+    options = list(algebra = "auto", neighbours = NULL, output = NULL, source = NULL,
+                   sourceBias = "shared"),
+    call = modelCall)
+  model$simulator <- list(f = f, x = x, nonFinite = nonFinite)
+  validate_fbc_model(model, call = call)
+}
+
+# `sim` as a function must take (x, kappa).
+check_simulator_function <- function(f, call = parent.frame()) {
+  args <- names(formals(f))
+  if (is.primitive(f) || (length(args) < 2L && !"..." %in% args)) {
+    cli::cli_abort(c(
+      "{.arg sim} as a function must take two arguments, {.code f(x, kappa)}.",
+      i = "{.arg x}: the field inputs (one row per point, the field's column names); {.arg kappa}: a named numeric vector of the calibration inputs. It returns one response per row of {.arg x}."
+    ), call = call)
+  }
+  invisible(f)
+}
+
+# What the function model does not take yet: several outputs and data sets.
+refuse_function_options <- function(output, source, sourceBias, call = parent.frame()) {
+  given <- c(output = !is.null(output), source = !is.null(source),
+             sourceBias = !identical(sourceBias, c("shared", "own")) && !identical(sourceBias, "shared"))
+  if (any(given)) {
+    cli::cli_abort(c(
+      "{.arg {names(given)[given]}} cannot be used with a simulator function yet.",
+      i = "A simulator function calibrates one output against one field data set; stack several as runs (a {.arg sim} data frame) to use them."
+    ), call = call)
+  }
+}
+
+# The field inputs as f receives them: a data frame when the field was one,
+# else a matrix, with the field's input names.
+function_inputs <- function(X, names, frame) {
+  X <- unname(X)
+  colnames(X) <- names
+  if (frame) as.data.frame(X) else X
+}
+
+# The calibration inputs from the kappa prior arguments: list(spec (as
+# check_class_spec() gives it), lower, upper, names). Only uniform priors
+# say the ranges.
+function_kappa <- function(kappa, inputNames, call = parent.frame()) {
+  nm <- names(kappa$p1) %||% names(kappa$p2) %||% names(kappa$init)
+  spec <- check_class_spec(kappa, "kappa", NULL, call = call)
+  q <- length(spec$dist)
+  if (!all(spec$dist == "uniform")) {
+    cli::cli_abort(c(
+      "With a simulator function, the kappa prior must say the calibration inputs' ranges: {.arg kappaDist} must be {.val uniform}, not {.val {unique(spec$dist[spec$dist != 'uniform'])}}.",
+      i = "Give {.code kappaDist = \"uniform\", kappaP1 = lower, kappaP2 = upper} (one entry per calibration input; a named vector names them). There are no runs whose range a {.val beta} prior could be stretched over."
+    ), call = call)
+  }
+  if (is.null(nm)) nm <- paste0("kappa", seq_len(q))
+  if (length(nm) != q || anyNA(nm) || any(nm == "") || anyDuplicated(nm) ||
+      any(nm %in% inputNames)) {
+    cli::cli_abort(c(
+      "The calibration inputs' names must be {q} distinct name{?s}, none an input of {.arg field}.",
+      x = "The names of {.arg kappaP1} are {.val {nm}}; {.arg field}'s inputs are {.val {inputNames}}."
+    ), call = call)
+  }
+  list(spec = spec, lower = spec$p1, upper = spec$p2, names = nm)
+}
+
+# The scaling (as fbc_scale() gives it for runs): the experimental inputs
+# over the field's range (an input the field holds constant over a unit
+# range), kappa over its prior's range, the response by the mean of f at
+# the prior's centre `f0` and the sd of the field response (of f0 when the
+# field's is 0, e.g. one row; 1 when both are).
+function_scale <- function(fm, f0, kap, inputNames, named) {
+  X <- fm[, -1, drop = FALSE]
+  xmin <- apply(X, 2, min)
+  xmax <- apply(X, 2, max)
+  xmax[xmax == xmin] <- xmin[xmax == xmin] + 1
+  sds <- c(if (nrow(fm) > 1L) stats::sd(fm[, 1]), if (length(f0) > 1L) stats::sd(f0), 1)
+  list(xmin = unname(c(xmin, kap$lower)), xmax = unname(c(xmax, kap$upper)),
+       ymean = mean(f0), ysd = sds[sds > 0][1], p = ncol(X), q = length(kap$lower),
+       named = named,
+       names = list(response = usable_names(fm)[1] %||% "y", inputs = inputNames,
+                    calibration = kap$names),
+       factors = list(), output = NULL, source = NULL, noiseLabels = NULL)
+}
+
+# f(x, kappa) checked: one finite number per row of x. Errors name kappa
+# (native units); a non-finite value is an error, or NULL (a rejected
+# proposal) with nonFinite = "reject".
+function_values <- function(f, x, kappa, n, nonFinite) {
+  at <- paste(sprintf("%s = %s", names(kappa), format(signif(kappa, 7))), collapse = ", ")
+  y <- tryCatch(f(x, kappa), error = function(e) {
+    cli::cli_abort(c("The simulator function failed at {at}.", x = conditionMessage(e)),
+                   parent = e, call = NULL)
+  })
+  if (!is.numeric(y) || length(y) != n) {
+    cli::cli_abort(c(
+      "The simulator function must return one number per row of {.arg x} ({n}); at {at} it returned {.obj_type_friendly {y}} of length {length(y)}.",
+      i = "It is called once per kappa with all the field rows (vectorised), not once per row."
+    ), call = NULL)
+  }
+  bad <- which(!is.finite(y))
+  if (length(bad)) {
+    if (nonFinite == "reject") return(NULL)
+    cli::cli_abort(c(
+      "The simulator function returned {length(bad)} non-finite value{?s} at {at} (row{?s} {utils::head(bad, 5)}).",
+      i = "If the simulator is undefined there, {.code nonFinite = \"reject\"} in {.fn calibrate} rejects such kappa as proposals and the chain goes on."
+    ), call = NULL)
+  }
+  as.numeric(y)
+}
+
+# The closures the compiled core calls (src/function.cpp), scaled like the
+# data: field(u), f at the field rows for kappa u on the sampler's scale
+# ([0, 1] over the prior's range), NULL for a rejected proposal; at(Xnew,
+# u), f at new scaled experimental inputs (prediction). Built here, with
+# only what they need in their environment (they travel to parallel
+# workers with the model).
+function_closures <- function(f, x, scale, nonFinite) {
+  p <- scale$p
+  cal <- p + seq_len(scale$q)
+  lo <- scale$xmin[cal]
+  rng <- scale$xmax[cal] - lo
+  kn <- scale$names$calibration
+  frame <- is.data.frame(x)
+  kappa_of <- function(u) stats::setNames(lo + rng * u, kn)
+  list(
+    field = function(u) {
+      y <- function_values(f, x, kappa_of(u), NROW(x), nonFinite)
+      if (is.null(y)) NULL else (y - scale$ymean) / scale$ysd
+    },
+    at = function(Xnew, u) {
+      xn <- function_inputs(unscale_inputs(Xnew, scale, seq_len(p)), colnames(x), frame)
+      (function_values(f, xn, kappa_of(u), nrow(Xnew), "error") - scale$ymean) / scale$ysd
+    }
+  )
+}
+
+# A prior given for the simulator GP's classes is not used: warn.
+warn_emulator_hypers <- function(hypers, call = parent.frame()) {
+  default <- set_hyperPriors()
+  given <- emulator_classes[!vapply(emulator_classes, function(cls)
+    identical(hypers[[cls]], default[[cls]]), logical(1))]
+  if (length(given)) {
+    cli::cli_warn(c(
+      "A simulator function has no emulator: the priors of {.val {given}} in {.arg hypers} are not used.",
+      i = "They describe the simulator GP of runs; drop them, or calibrate runs of the function as {.arg sim}."
+    ), call = call)
+  }
+}
+
+# What makes a run with a simulator function the same run (checkpoints):
+# the function's code and what a non-finite value does.
+function_identity <- function(sim) {
+  list(code = paste(deparse(sim$f), collapse = "\n"), nonFinite = sim$nonFinite)
+}

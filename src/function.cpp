@@ -1,0 +1,260 @@
+// The posterior of a simulator given as an R function f(x, kappa) (issue 29;
+// R/simulator_function.R builds the closures). No simulator GP: in the
+// scaled space, with fs(kappa) the scaled f at the n field rows,
+//   yf = fs(kappa) + delta + eps,
+//   S = sigma2B Rb + sigma2E I   (KOH, with mean muB; S-GaSP: Rb -> Rz, no
+//       muB; "none": S = sigma2E I),
+//   log L = -0.5 [ n log 2pi + log|S| + v'v ],  v = LS^-1 (yf - muB - fs),
+// LS = chol(S). f is called once per kappa proposal (the closure `field`,
+// vectorised over the field rows) and its value kept on accept; a move of
+// the bias or noise parameters reuses it. Rb lives on the nu distinct field
+// rows (replicates share their bias).
+#include "fbc.h"
+
+static const double LOG_2PI = 1.837877066409345483560659472811;
+
+class FunctionPosterior : public Posterior {
+public:
+  FunctionPosterior(const arma::mat& Xf, const arma::vec& yf, const Model& model,
+                    const Rcpp::List& sim)
+    : Xf_(Xf), yf_(yf), kernB_(model.kernB), fieldFn_(Rcpp::as<Rcpp::Function>(sim["field"])),
+      atFn_(Rcpp::as<Rcpp::Function>(sim["at"])) {
+    if (!model.levels.empty() || model.sourceL)
+      Rcpp::stop("a function simulator takes no categorical inputs or bias per data set");
+    set_sizes(Xf.n_rows, 0, Xf.n_cols, model.layout.length[PC_KAPPA], model);
+    noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
+    if ((int) noise_.size() != n) Rcpp::stop("the noise groups must give one group per field row");
+    // distinct field rows (as SchurPosterior's)
+    grp_.resize(n);
+    std::vector<int> first;
+    for (int i = 0; i < n; ++i) {
+      int g = -1;
+      for (size_t u = 0; u < first.size() && g < 0; ++u)
+        if (arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
+      if (g < 0) { g = first.size(); first.push_back(i); }
+      grp_[i] = g;
+    }
+    nu_ = first.size();
+    Xu_.set_size(nu_, p);
+    for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
+    for (int b = 0; b < 2; ++b) {
+      f_.b[b].zeros(n); Rb_.b[b].zeros(nu_, nu_); LS_.b[b].zeros(n, n);
+    }
+  }
+
+  bool init(const arma::vec& phi0) override {
+    phi = phi0;
+    tk_ = tb_ = tf_ = true;
+    sc_ = false;
+    if (!std::isfinite(evaluate())) return false;
+    flip();
+    return true;
+  }
+  double logLik() const override { return loglik_.cur(); }
+
+  double propose(const std::vector<int>& idx, const arma::vec& values) override {
+    oldIdx_ = idx;
+    oldVal_.set_size(idx.size());
+    tk_ = tb_ = tf_ = sc_ = false;
+    for (size_t i = 0; i < idx.size(); ++i) {
+      const int j = idx[i];
+      oldVal_[i] = phi[j];
+      phi[j] = values[i];
+      switch (layout.cls[j]) {
+      case PC_KAPPA: tk_ = true; break;
+      case PC_THETAB: case PC_ALPHAB: case PC_LAMBDAZ: tb_ = tf_ = true; break;
+      case PC_SIGMA2B: case PC_SIGMA2E: tf_ = true; break;
+      default: break;  // muB: the residual only
+      }
+    }
+    return evaluate();
+  }
+
+  // S -> c S: log|S| + n log c, v'v / c (the variances sigma2B, sigma2E).
+  double proposeScale(double c) override {
+    oldIdx_ = scaled;
+    oldVal_.set_size(scaled.size());
+    for (size_t i = 0; i < scaled.size(); ++i) {
+      oldVal_[i] = phi[scaled[i]];
+      phi[scaled[i]] *= c;
+    }
+    tk_ = tb_ = tf_ = false;
+    sc_ = true;
+    if (!(c > 0) || !std::isfinite(c)) return R_NegInf;
+    ldS_.alt() = ldS_.cur() + n * std::log(c);
+    vv_.alt() = vv_.cur() / c;
+    loglik_.alt() = -0.5 * (n * LOG_2PI + ldS_.alt() + vv_.alt());
+    return loglik_.alt();
+  }
+
+  void accept() override {
+    if (sc_) LS_.alt() = std::sqrt(phi[oldIdx_[0]] / oldVal_[0]) * LS_.cur();
+    flip();
+  }
+  void reject() override {
+    for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
+  }
+
+  // a = LS^-1 1, b = LS^-1 (yf - fs): the log-likelihood is
+  // -0.5 |b - muB a|^2 + const.
+  void muBQuadratic(double& aa, double& ab) const override {
+    arma::vec a(n, arma::fill::ones);
+    arma::vec b = yf_ - f_.cur();
+    solve_lower(LS_.cur(), a);
+    solve_lower(LS_.cur(), b);
+    aa = arma::dot(a, a);
+    ab = arma::dot(a, b);
+  }
+
+  void condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                 const int* noise = nullptr, const int* source = nullptr) override;
+
+  bool heldout(const std::vector<std::vector<int> >&, arma::vec&, arma::vec&) override {
+    Rcpp::stop("a simulator given as a function has no runs to hold out");
+  }
+
+  // As SchurPosterior::fieldLoo (loo.cpp) with r = yf - muB - fs.
+  void fieldLoo(const std::vector<std::vector<int> >& groups, arma::vec& logdens) const override {
+    const arma::mat Li = arma::inv(arma::trimatl(LS_.cur()));
+    const arma::mat Sinv = Li.t() * Li;
+    const double muB = biasMean ? phi[iMuB] : 0.0;
+    const arma::vec a = Sinv * (yf_ - muB - f_.cur());
+    logdens.set_size(groups.size());
+    for (size_t g = 0; g < groups.size(); ++g) {
+      const arma::uvec G = arma::conv_to<arma::uvec>::from(groups[g]);
+      arma::mat P = Sinv.submat(G, G);
+      arma::vec z = a.elem(G);
+      if (!chol_lower(P)) Rcpp::stop("the leave-one-out precision is not positive definite");
+      solve_lower(P, z);
+      logdens[g] = -0.5 * (G.n_elem * LOG_2PI - logdet_chol(P) + arma::dot(z, z));
+    }
+  }
+
+  std::string algebra() const override { return "function"; }
+
+private:
+  const arma::mat& Xf_;
+  const arma::vec& yf_;
+  int kernB_, nu_ = 0;
+  arma::mat Xu_;
+  std::vector<int> grp_, noise_;
+  Rcpp::Function fieldFn_, atFn_;
+  bool tk_ = false, tb_ = false, tf_ = false, sc_ = false;
+  std::vector<int> oldIdx_;
+  arma::vec oldVal_;
+  Buf2<arma::vec> f_;
+  Buf2<arma::mat> Rb_, LS_;
+  Buf2<double> ldS_, vv_, loglik_;
+  arma::mat Bz_, Wz_;
+
+  arma::vec kappa() const { return phi.subvec(iKappa, iKappa + q - 1); }
+  // The scaled f at the field rows for the current kappa: false when the
+  // closure returns NULL (a non-finite value the user asked to reject).
+  bool callField(arma::vec& out) {
+    SEXP r = fieldFn_(Rcpp::NumericVector(kappa().begin(), kappa().end()));
+    if (Rf_isNull(r)) return false;
+    Rcpp::NumericVector v(r);
+    if (v.size() != n) Rcpp::stop("the simulator's closure returned %d values for %d rows", (int) v.size(), n);
+    out = Rcpp::as<arma::vec>(v);
+    return true;
+  }
+  // The bias correlation on the distinct rows (S-GaSP: scaled).
+  bool biasCorr(arma::mat& R) {
+    R = corr_matrix(Xu_, Xu_, phi.subvec(iThetaB, iThetaB + p - 1),
+                    phi.subvec(iAlphaB, iAlphaB + p - 1), kernB_);
+    if (sgasp && !sgasp_corr(R, phi[iLambdaZ], Bz_, Wz_)) return false;
+    R = arma::symmatl(R);
+    return true;
+  }
+  // The blocks the proposal touches into the scratch buffers; the
+  // log-likelihood (the formula atop the file).
+  double evaluate() {
+    if (tk_ && !callField(f_.alt())) return R_NegInf;
+    if (tb_ && bias && !biasCorr(Rb_.alt())) return R_NegInf;
+    const arma::vec& f = tk_ ? f_.alt() : f_.cur();
+    const arma::mat& Rb = tb_ ? Rb_.alt() : Rb_.cur();
+    if (tf_) {
+      arma::mat& S = LS_.alt();
+      const double s2B = bias ? phi[iSigma2B] : 0.0;
+      for (int j = 0; j < n; ++j)
+        for (int i = j; i < n; ++i) S(i, j) = bias ? s2B * Rb(grp_[i], grp_[j]) : 0.0;
+      for (int j = 0; j < n; ++j) S(j, j) += phi[iSigma2E + noise_[j]];
+      if (!chol_lower(S)) return R_NegInf;
+      ldS_.alt() = logdet_chol(S);
+    } else {
+      ldS_.alt() = ldS_.cur();
+    }
+    const arma::mat& LS = tf_ ? LS_.alt() : LS_.cur();
+    const double muB = biasMean ? phi[iMuB] : 0.0;
+    arma::vec v = yf_ - muB - f;
+    solve_lower(LS, v);
+    vv_.alt() = arma::dot(v, v);
+    loglik_.alt() = -0.5 * (n * LOG_2PI + ldS_.alt() + vv_.alt());
+    return loglik_.alt();
+  }
+  void flip() {
+    if (tk_) f_.flip();
+    if (tb_) Rb_.flip();
+    if (tf_ || sc_) LS_.flip();
+    ldS_.flip(); vv_.flip(); loglik_.flip();
+  }
+};
+
+// Prediction at new scaled inputs Xnew, at the current state. The bias
+// part is the GP conditional given the field residual r = yf - muB - fs:
+// with K the bias's cross-correlation (KOH: R(Xu, Xnew), r0 = 1; S-GaSP:
+// the discretized kernel, as SchurPosterior::biasCross), h = LS^-1 s2B K,
+// v = LS^-1 r:  bias mean = muB + h'v, variance s2B r0 - h'h. By type:
+// 1 field = f(x*) + bias + eps (variance + sigma2E of its group),
+// 2 mean = f(x*) + bias, 3 simulator = f(x*) (variance 0: f is known),
+// 4 bias. f(x*) comes from the closure `at`, once per draw.
+void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                                  const int* noise, const int*) {
+  const int b = Xnew.n_rows;
+  arma::vec fn(b, arma::fill::zeros);
+  if (type != PT_BIAS) {
+    Rcpp::NumericVector r = atFn_(Rcpp::wrap(Xnew), Rcpp::NumericVector(kappa().begin(), kappa().end()));
+    if (r.size() != b) Rcpp::stop("the simulator's closure returned %d values for %d points", (int) r.size(), b);
+    fn = Rcpp::as<arma::vec>(r);
+  }
+  arma::vec bm(b, arma::fill::zeros), bv(b, arma::fill::zeros);
+  if (type != PT_SIMULATOR && bias) {
+    const double s2B = phi[iSigma2B], muB = biasMean ? phi[iMuB] : 0.0;
+    const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
+    const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
+    arma::mat K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
+    arma::vec r0(b, arma::fill::ones);
+    if (sgasp) {
+      const double c = nu_ / phi[iLambdaZ];
+      arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+      L.diag() += c;
+      if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
+      solve_lower(L, K);
+      r0 -= arma::sum(arma::square(K), 0).t();
+      K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+    }
+    arma::mat H(n, b);
+    for (int c = 0; c < b; ++c)
+      for (int i = 0; i < n; ++i) H(i, c) = s2B * K(grp_[i], c);
+    solve_lower(LS_.cur(), H);
+    arma::vec v = yf_ - muB - f_.cur();
+    solve_lower(LS_.cur(), v);
+    bm = muB + H.t() * v;
+    bv = s2B * r0 - arma::sum(arma::square(H), 0).t();
+  }
+  const int G = layout.length[PC_SIGMA2E];
+  for (int c = 0; c < b; ++c) {
+    mean[c] = (type == PT_BIAS ? 0.0 : fn[c]) + (type == PT_SIMULATOR ? 0.0 : bm[c]);
+    var[c] = type == PT_SIMULATOR ? 0.0 : bv[c];
+    if (type == PT_FIELD) {
+      const int g = noise ? noise[c] : 0;
+      if (g < 0 || g >= G) Rcpp::stop("noise group %d of a new point is not one of the %d", g + 1, G);
+      var[c] += phi[iSigma2E + g];
+    }
+  }
+}
+
+std::unique_ptr<Posterior> make_function_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                                   const Model& model, const Rcpp::List& sim) {
+  return std::unique_ptr<Posterior>(new FunctionPosterior(Xf, yf, model, sim));
+}
