@@ -144,7 +144,7 @@ function_scale <- function(fm, f0, kap, inputNames, named) {
 function_values <- function(f, x, kappa, n, nonFinite) {
   at <- paste(sprintf("%s = %s", names(kappa), format(signif(kappa, 7))), collapse = ", ")
   y <- tryCatch(f(x, kappa), error = function(e) {
-    cli::cli_abort(c("The simulator function failed at {at}.", x = conditionMessage(e)),
+    cli::cli_abort("The simulator function failed at {at}.",
                    parent = e, call = NULL)
   })
   if (!is.numeric(y) || length(y) != n) {

@@ -1,0 +1,170 @@
+# The simulator as an R function (R/simulator_function.R, src/function.cpp).
+
+# RobustCalibration's documented example (rcalibration(), simul_type = 1):
+# the model sin(theta x) + x; here the field is drawn from the model itself
+# at theta = 1.2 (so that "none" is the right model), noise sd 0.3.
+fn_model <- function(x, kappa) sin(kappa[["theta"]] * x$x) + x$x
+fn_field <- function(n = 15, seed = 1, theta = 1.2, sd = 0.3) {
+  set.seed(seed)
+  x <- seq(0, 5, length.out = n)
+  data.frame(y = sin(theta * x) + x + stats::rnorm(n, 0, sd), x = x)
+}
+fn_kappa <- list(kappaDist = "uniform", kappaP1 = c(theta = 0), kappaP2 = c(theta = 3))
+
+test_that("discrepancy none, sigma2E fixed: theta's draws match the grid posterior computed from f", {
+  field <- fn_field()
+  s2 <- 0.3^2
+  # the response is standardised by the field response's sd (?calibrate,
+  # "The simulator as a function"), so the fixed noise variance is given
+  # on that scale
+  hyp <- set_hyperPriors(sigma2EDist = "fixed", sigma2EInit = s2 / stats::sd(field$y)^2)
+  set.seed(3)
+  fit <- do.call(calibrate, c(list(fn_model, field, discrepancy = "none", hypers = hyp,
+                                   nMCMC = 3000, nBurn = 500, nChains = 2), fn_kappa))
+  expect_identical(colnames(fit$Phi), c("kappa1", "sigma2E"))
+  expect_equal(fit$scale$ysd, stats::sd(field$y))
+  # plain R: uniform prior on [0, 3], Gaussian likelihood of y - f(x, theta)
+  th <- seq(0, 3, length.out = 6001)
+  ll <- vapply(th, function(t) sum(stats::dnorm(field$y, fn_model(field, c(theta = t)), 0.3, log = TRUE)),
+               numeric(1))
+  dens <- exp(ll - max(ll))
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  ref <- grid_quantile(th, dens, probs)
+  got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)
+  sdRef <- sqrt(sum(th^2 * dens) / sum(dens) - (sum(th * dens) / sum(dens))^2)
+  expect_lt(max(abs(got - ref)) / sdRef, 0.15)
+  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(th, dens))$statistic)
+  expect_lt(ks, 0.06)
+})
+
+# The log-likelihood of the function model in plain R: yf - muB - fs ~
+# N(0, sigma2B Rb + sigma2E I) on the scaled space (Rb: matern52 over the
+# scaled inputs; S-GaSP: its discretized kernel; none: sigma2E I).
+fn_dense_loglik <- function(model, phi, f) {
+  d <- model$data
+  sc <- model$scale
+  th <- lapply(FBC:::param_indices(sc$p, sc$q, model$discrepancy, emulator = FALSE),
+               function(i) phi[i])
+  theta <- sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * th$kappa
+  fs <- (f(model$simulator$x, c(theta = theta)) - sc$ymean) / sc$ysd
+  n <- length(d$yf)
+  S <- th$sigma2E * diag(n)
+  if (model$discrepancy != "none") {
+    S <- S + th$sigma2B * bias_corr_dense(d$Xf, th, "matern52", model$discrepancy)
+  }
+  r <- d$yf - fs - if (model$discrepancy == "gp") th$muB else 0
+  L <- chol(S)
+  a <- backsolve(L, r, transpose = TRUE)
+  -0.5 * (n * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+}
+
+test_that("the log-likelihood and every move's update equal a dense plain-R one (1e-8)", {
+  field <- fn_field(n = 12, seed = 2)
+  field <- rbind(field, field[3, ])  # a replicate shares its bias
+  for (disc in c("gp", "sgasp", "none")) {
+    model <- do.call(calibrate, c(list(fn_model, field, discrepancy = disc, fit = FALSE), fn_kappa))
+    d <- model$data
+    vars <- model$spec$vars
+    expect_false(any(c("thetaS1", "sigma2S") %in% vars))
+    set.seed(4)
+    base <- model$spec$init
+    phis <- t(replicate(6, {
+      x <- base
+      x[vars == "kappa1"] <- stats::runif(1, 0.1, 0.9)
+      x[vars == "sigma2E"] <- stats::runif(1, 0.05, 0.5)
+      if (disc != "none") {
+        x[vars == "thetaB1"] <- stats::runif(1, 0.5, 8)
+        x[vars == "sigma2B"] <- stats::runif(1, 0.2, 2)
+      }
+      if (disc == "gp") x[vars == "muB"] <- stats::rnorm(1)
+      if (disc == "sgasp") x[vars == "lambdaZ"] <- stats::runif(1, 5, 50)
+      x
+    }))
+    # the last row: the variances scaled by one factor (the scale move)
+    last <- phis[6, ]
+    sc <- vars %in% c("sigma2B", "sigma2E")
+    last[sc] <- last[sc] * 1.7
+    phis <- rbind(phis, last)
+    ref <- unname(apply(phis, 1, function(phi) fn_dense_loglik(model, phi, fn_model)))
+    one <- sapply(seq_len(nrow(phis)), function(i) { phi <- phis[i, ]
+      FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = model$spec$model)
+    })
+    expect_equal(one, ref, tolerance = 1e-8)
+    # moves from row to row (one parameter at a time, rejected decoys, the
+    # scale move): the cached updates
+    path <- FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, scale = TRUE,
+                               model = model$spec$model)
+    expect_equal(path, ref, tolerance = 1e-8)
+  }
+})
+
+test_that("f is called once per kappa proposal, with every field row", {
+  field <- fn_field()
+  calls <- 0L
+  rows <- integer()
+  f <- function(x, kappa) {
+    calls <<- calls + 1L
+    rows <<- c(rows, nrow(x))
+    sin(kappa[["theta"]] * x$x) + x$x
+  }
+  set.seed(1)
+  fit <- do.call(calibrate, c(list(f, field, discrepancy = "gp", nMCMC = 200, nBurn = 100,
+                                   nChains = 1, thinning = 1), fn_kappa))
+  expect_true(all(rows == nrow(field)))
+  # kappa moves three times a sweep (sampler_moves()); the other moves reuse
+  # f's value: 200 sweeps x 3 proposals, plus the start's and the scaling's calls
+  tries <- 200 * 3
+  expect_gte(calls, tries)
+  expect_lte(calls, tries + 5L)
+})
+
+test_that("errors from f name the kappa that caused them", {
+  field <- fn_field(n = 5)
+  k <- list(kappaDist = "uniform", kappaP1 = c(theta = 0), kappaP2 = c(theta = 3))
+  short <- function(x, kappa) sin(kappa[["theta"]] * x$x)[-1]
+  failing <- function(x, kappa) stop("the solver diverged")
+  nan <- function(x, kappa) rep(NaN, nrow(x))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(short, field, fit = FALSE), k)))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(failing, field, fit = FALSE), k)))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(nan, field, fit = FALSE), k)))
+  # during sampling: f fails beyond theta = 1.5 (the centre works)
+  late <- function(x, kappa) {
+    if (kappa[["theta"]] > 1.6) stop("no convergence") else sin(kappa[["theta"]] * x$x) + x$x
+  }
+  set.seed(1)
+  err <- expect_error(do.call(calibrate, c(list(late, field, nMCMC = 200, nBurn = 100, nChains = 1,
+                                                 discrepancy = "none"), k)),
+                      "failed at theta = ")
+  expect_gt(as.numeric(sub(".*theta = ([0-9.]+).*", "\\1", conditionMessage(err))), 1.6)
+})
+
+test_that("nonFinite = \"reject\" turns non-finite values into rejected proposals", {
+  field <- fn_field()
+  f <- function(x, kappa) if (kappa[["theta"]] > 1.25) rep(NA_real_, nrow(x)) else fn_model(x, kappa)
+  set.seed(2)
+  # the scaling needs f finite at the prior's centre, or at kappaInit
+  expect_error(do.call(calibrate, c(list(f, field, fit = FALSE, nonFinite = "reject"), fn_kappa)),
+               "non-finite values at theta = 1.5")
+  fit <- do.call(calibrate, c(list(f, field, discrepancy = "none", nMCMC = 600, nBurn = 200,
+                                   nChains = 2, nonFinite = "reject", kappaInit = 1), fn_kappa))
+  expect_lte(max(fit$Phi[, "kappa1"]), 1.25)
+  expect_gt(max(fit$Phi[, "kappa1"]), 1.15)
+})
+
+test_that("what cannot define the calibration inputs is refused", {
+  field <- fn_field(n = 5)
+  expect_snapshot(error = TRUE, calibrate(fn_model, field, fit = FALSE))
+  expect_snapshot(error = TRUE, calibrate(function(x) x, field, kappaDist = "uniform",
+                                          kappaP1 = 0, kappaP2 = 1, fit = FALSE))
+  expect_snapshot(error = TRUE, calibrate(fn_model, field, kappaDist = "uniform",
+                                          kappaP1 = c(x = 0), kappaP2 = 3, fit = FALSE))
+  expect_snapshot(error = TRUE, calibrate(fn_model, cbind(field, s = "a"), kappaDist = "uniform",
+                                          kappaP1 = c(theta = 0), kappaP2 = 3, fit = FALSE))
+  # two calibration inputs, named by kappaP1
+  f2 <- function(x, kappa) kappa[["a"]] * x$x + kappa[["b"]]
+  model <- calibrate(f2, field, kappaDist = "uniform", kappaP1 = c(a = 0, b = -1),
+                     kappaP2 = c(2, 1), fit = FALSE)
+  expect_identical(model$scale$names$calibration, c("a", "b"))
+  expect_identical(model$scale$xmin[2:3], c(0, -1))
+  expect_identical(model$scale$xmax[2:3], c(2, 1))
+})
