@@ -41,8 +41,10 @@ print.fbc <- function(x, digits = 3, ...) {
     gp = "Kennedy-O'Hagan",
     sgasp = "S-GaSP discrepancy, Gu and Wang 2018",
     none = "no discrepancy: y_f = eta(x, kappa) + eps")))
-  cat(sprintf("  data: n = %d field, m = %d simulator runs; p = %d, q = %d\n",
-              length(x$data$yf), length(x$data$ys), sc$p, sc$q))
+  fn <- !is.null(mo$simulator)  # the simulator is a function (R/simulator_function.R)
+  cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$data$yf),
+              if (fn) "the simulator a function" else sprintf("m = %d simulator runs", length(x$data$ys)),
+              sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
   lev <- level_labels(sc$factors)
@@ -70,7 +72,7 @@ print.fbc <- function(x, digits = 3, ...) {
   }
   des <- kappa_design(sc)
   cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
-              paste0("kappa", seq_len(sc$q), " = ", des$names, " (design ",
+              paste0("kappa", seq_len(sc$q), " = ", des$names, if (fn) " (prior " else " (design ",
                      des$range, ")", collapse = ", ")))
   chains <- length(unique(x$chain))
   cat(sprintf("  MCMC: %d iterations, %s, thinning %d -> %d draws%s (%.1f s)\n",
@@ -97,18 +99,12 @@ print.fbc <- function(x, digits = 3, ...) {
                   if (length(mo$moves$blocks)) "; joint moves 0.234" else ""))
     }
   }
-  cat(sprintf("  kernels: simulator %s%s\n", mo$kernelS, if (gp) paste(", bias", mo$kernelB) else ""))
-  alg <- mo$simAlgebra
-  # why it ran (choose_algebra()'s reason; a fit made before it has none)
-  reason <- mo$algebra$reason
-  why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "Vecchia" && identical(mo$options$algebra, "auto")) {
-    sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
-  } else ""
-  cat(sprintf("  algebra: %s%s\n", switch(alg$name,
-    Kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
-                        alg$dims[1], alg$dims[2]),
-    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$k),
-    "dense"), why))
+  if (fn) {
+    if (gp) cat(sprintf("  kernel: bias %s\n", mo$kernelB))
+    cat(sprintf("  simulator: %s\n", mo$algebra$reason))
+  } else {
+    print_algebra(x, gp)
+  }
   if (isTRUE(x$state$interrupted)) {
     done <- vapply(x$state$chains, `[[`, numeric(1), "done")
     stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")
@@ -125,6 +121,23 @@ print.fbc <- function(x, digits = 3, ...) {
                  vapply(paste, character(1), collapse = "\n")), sep = "\n")
   }
   invisible(x)
+}
+
+# The kernels' and the algebra's lines of print.fbc() (a fit of runs).
+print_algebra <- function(x, gp) {
+  mo <- x$model
+  cat(sprintf("  kernels: simulator %s%s\n", mo$kernelS, if (gp) paste(", bias", mo$kernelB) else ""))
+  alg <- mo$simAlgebra
+  # why it ran (choose_algebra()'s reason; a fit made before it has none)
+  reason <- mo$algebra$reason
+  why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "Vecchia" && identical(mo$options$algebra, "auto")) {
+    sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
+  } else ""
+  cat(sprintf("  algebra: %s%s\n", switch(alg$name,
+    Kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
+                        alg$dims[1], alg$dims[2]),
+    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$k),
+    "dense"), why))
 }
 
 # "rhoS1 (b~a), rhoS2 (c~a)": the parameters cls k with what each

@@ -83,6 +83,12 @@
 #' plot(v)
 validate_emulator <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds = NULL) {
   fit <- check_fbc(fit)
+  if (!is.null(fit$model$simulator)) {
+    cli::cli_abort(c(
+      "{.arg fit} has no emulator to validate: its simulator is a function, called directly.",
+      i = "{.fn validate_emulator} checks an emulator's predictions of held-out runs; {.fn emulator_check} compares an emulator-based calibration with the function's."
+    ))
+  }
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
   ndraws <- check_count(ndraws, "ndraws")
   sc <- fit$scale

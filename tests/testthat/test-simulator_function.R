@@ -168,3 +168,65 @@ test_that("what cannot define the calibration inputs is refused", {
   expect_identical(model$scale$xmin[2:3], c(0, -1))
   expect_identical(model$scale$xmax[2:3], c(2, 1))
 })
+
+test_that("predict(): f at the new inputs plus the bias, against plain R at one draw", {
+  field <- fn_field(n = 10, seed = 5)
+  set.seed(6)
+  fit <- do.call(calibrate, c(list(fn_model, field, nMCMC = 400, nBurn = 200, nChains = 2),
+                              fn_kappa))
+  new <- data.frame(x = c(0.7, 2.2, 4.9))
+  sim <- predict(fit, new, type = "simulator", method = "MAP")
+  map <- fit$Phi[which.max(fit$logPost), ]
+  # the simulator is known: f at the MAP theta, no uncertainty
+  expect_equal(sim$pred, fn_model(new, c(theta = map[["kappa1"]])), tolerance = 1e-12)
+  expect_equal(sim$se, rep(0, 3))
+  # the mean: f plus the bias GP's conditional mean given the field
+  # residual yf - f(xf), in plain R on the scaled space (matern52 bias)
+  sc <- fit$scale
+  Xf <- fit$data$Xf
+  Xn <- (new$x - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
+  fs <- (fn_model(field, c(theta = map[["kappa1"]])) - sc$ymean) / sc$ysd
+  S <- map[["sigma2B"]] * dense_corr(Xf, Xf, map[["thetaB1"]], NA, "matern52") +
+    map[["sigma2E"]] * diag(nrow(field))
+  K <- map[["sigma2B"]] * dense_corr(Xn, Xf, map[["thetaB1"]], NA, "matern52")
+  r <- fit$data$yf - map[["muB"]] - fs
+  biasMean <- map[["muB"]] + K %*% solve(S, r)
+  biasVar <- map[["sigma2B"]] - rowSums((K %*% solve(S)) * K)
+  mean <- predict(fit, new, type = "mean", method = "MAP")
+  expect_equal(mean$pred, sim$pred + sc$ysd * c(biasMean), tolerance = 1e-8)
+  expect_equal(mean$se, sc$ysd * sqrt(biasVar), tolerance = 1e-8)
+  obs <- predict(fit, new, type = "field", method = "MAP")
+  expect_equal(obs$se^2, mean$se^2 + sc$ysd^2 * map[["sigma2E"]], tolerance = 1e-8)
+  bias <- predict(fit, new, type = "bias", method = "MAP")
+  expect_equal(bias$pred, sc$ysd * c(biasMean), tolerance = 1e-8)
+  # Bayesian: the draws' mixture; the simulator's spread is theta's
+  expect_gt(predict(fit, new, type = "simulator")$se[3], 0)
+})
+
+test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; validate_emulator() refuses", {
+  field <- fn_field(n = 10, seed = 5)
+  dir <- withr::local_tempdir()
+  args <- c(list(fn_model, field, discrepancy = "none", nMCMC = 300, nBurn = 100, nChains = 2,
+                 checkpoint = dir), fn_kappa)
+  set.seed(7)
+  fit <- do.call(calibrate, args)
+  out <- capture.output(print(fit))
+  expect_match(out[2], "the simulator a function")
+  expect_true(any(grepl("theta (prior 0 to 3)", out, fixed = TRUE)))
+  expect_true(any(grepl("simulator: the simulator is a function", out, fixed = TRUE)))
+  expect_s3_class(plot(fit), "ggplot")
+  expect_s3_class(plot(fit, type = "fits"), "ggplot")
+  # the same call returns the finished run from its checkpoint
+  again <- suppressMessages(do.call(calibrate, args))
+  expect_identical(again$Phi, fit$Phi)
+  # another function is another run
+  other <- function(x, kappa) sin(kappa[["theta"]] * x$x) + x$x + 0
+  expect_error(suppressMessages(do.call(calibrate, c(list(other), args[-1]))), "checkpoint")
+  up <- update(fit, nMCMC = 100)
+  expect_identical(nrow(up$Phi), nrow(fit$Phi) + 100L)
+  lo <- loo::loo(fit)
+  expect_identical(dim(lo$pointwise)[1], nrow(field))
+  pp <- ppc_field(fit, ndraws = 100)
+  expect_s3_class(pp, "fbc_ppc")
+  expect_snapshot(error = TRUE, validate_emulator(fit))
+})
