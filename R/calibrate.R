@@ -58,6 +58,40 @@
 #' 7.8 to 8.6 (none). [loo.fbc()] compares the models by exact
 #' leave-one-out predictive densities of the field data.
 #'
+#' @section The simulator as a function:
+#' When the simulator is an R function that runs in micro- to
+#' milliseconds, give it as `sim`: `calibrate(f, field, ...)` calibrates
+#' \eqn{y_f = f(x, \kappa) + \delta(x) + \epsilon} with no emulator
+#' (and no runs), every unknown sampled jointly as for runs.
+#' * `f(x, kappa)` takes `x`, the field inputs (a data frame when `field`
+#'   is one, else a matrix, with `field`'s input names, one row per field
+#'   point) and `kappa`, a named numeric vector, and returns one number per
+#'   row of `x`. It is called once per proposal of kappa with all the field
+#'   rows (never once per point), and at the new inputs by [predict.fbc()]
+#'   (once per draw); the rest of a sweep is compiled code.
+#' * The calibration inputs come from the kappa prior:
+#'   `kappaDist = "uniform", kappaP1 = lower, kappaP2 = upper`, one entry
+#'   per input; a named `kappaP1` (or `kappaP2`) names them (else `kappa1`,
+#'   `kappa2`, ...). Other prior families are refused: there is no design
+#'   whose range a `"beta"` prior could be stretched over.
+#' * Scaling: the experimental inputs over the field's range, kappa over its
+#'   prior's range, the response by the mean of `f` over the field inputs
+#'   at the prior's centre (or `kappaInit`) and by the field response's sd
+#'   (the priors of `sigma2E` and `sigma2B` are on that scale).
+#' * `discrepancy` is `"gp"`, `"sgasp"` or `"none"` as for runs; there is
+#'   no simulator GP, so `thetaS`, `alphaS`, `sigma2S` are not parameters
+#'   (priors given for them are ignored with a warning).
+#' * An error inside `f`, a wrong length or a non-finite value stops the
+#'   run with a message naming the kappa (native units) that caused it;
+#'   `nonFinite = "reject"` rejects proposals where `f` is not finite
+#'   instead. `f` must be self-contained (it travels to parallel workers).
+#' * `predict()` gives `f` at the new inputs plus the bias (`"simulator"`:
+#'   `f` itself, with no emulator variance); `print()`, `plot()`,
+#'   `update()`, `loo()`, `ppc_field()`, checkpoints (the function's code
+#'   is part of the run's identity) and `converge` work as for runs;
+#'   `validate_emulator()` has no emulator to check. `output` and `source`
+#'   are not taken yet, nor categorical inputs.
+#'
 #' @section Correlation families:
 #' `kernelS` and `kernelB` choose the family of the simulator GP
 #' \eqn{\eta} and of the bias GP \eqn{\delta}, separately, with
@@ -447,8 +481,10 @@
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs
-#'   (matched by name or by position: see "Columns"); or an `fbc_model`
-#'   from `calibrate(..., fit = FALSE)` to fit.
+#'   (matched by name or by position: see "Columns"); or the simulator
+#'   itself as an R function `f(x, kappa)`, called inside the sampler (see
+#'   "The simulator as a function"); or an `fbc_model` from
+#'   `calibrate(..., fit = FALSE)` to fit.
 #' @param field Field data: the response and the same `p` experimental
 #'   inputs (see "Columns").
 #' @param nMCMC Total number of MCMC iterations (sweeps) per chain, burn-in
@@ -536,6 +572,11 @@
 #'   fits later. With a model as `sim`, only the run's settings (`nMCMC`,
 #'   `nBurn`, `thinning`, `nChains`, `showProgress`, `checkpoint`,
 #'   `checkpointEvery`, `converge`) may be given.
+#' @param nonFinite With a simulator function: `"error"` (the default)
+#'   stops at a non-finite value of `f`, naming the kappa; `"reject"`
+#'   treats it as a rejected proposal, so the chains avoid the kappa where
+#'   `f` is undefined (the posterior is then restricted to where `f` is
+#'   finite).
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -588,6 +629,13 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
 #'                  discrepancy = "none")
 #' colnames(fit$Phi)
+#' # the simulator as an R function (no runs, no emulator)
+#' f <- function(x, kappa) 5 * exp(-kappa[["u"]] * x$t)
+#' set.seed(1)
+#' fit <- calibrate(f, as.data.frame(kineticField), kappaDist = "uniform",
+#'                  kappaP1 = c(u = 0.5), kappaP2 = c(u = 3), nMCMC = 600,
+#'                  nBurn = 200, nChains = 2)
+#' fit
 calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
                       kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "sgasp", "none"),

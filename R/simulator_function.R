@@ -142,11 +142,13 @@ function_scale <- function(fm, f0, kap, inputNames, named) {
 # (native units); a non-finite value is an error, or NULL (a rejected
 # proposal) with nonFinite = "reject".
 function_values <- function(f, x, kappa, n, nonFinite) {
-  at <- paste(sprintf("%s = %s", names(kappa), format(signif(kappa, 7))), collapse = ", ")
   y <- tryCatch(f(x, kappa), error = function(e) {
+    at <- kappa_text(kappa)
     cli::cli_abort("The simulator function failed at {at}.",
                    parent = e, call = NULL)
   })
+  if (is.numeric(y) && length(y) == n && all(is.finite(y))) return(as.numeric(y))
+  at <- kappa_text(kappa)
   if (!is.numeric(y) || length(y) != n) {
     cli::cli_abort(c(
       "The simulator function must return one number per row of {.arg x} ({n}); at {at} it returned {.obj_type_friendly {y}} of length {length(y)}.",
@@ -162,6 +164,11 @@ function_values <- function(f, x, kappa, n, nonFinite) {
     ), call = NULL)
   }
   as.numeric(y)
+}
+
+# "theta = 1.234567, b = 2": kappa in native units, for messages.
+kappa_text <- function(kappa) {
+  paste(sprintf("%s = %s", names(kappa), format(signif(kappa, 7))), collapse = ", ")
 }
 
 # The closures the compiled core calls (src/function.cpp), scaled like the
