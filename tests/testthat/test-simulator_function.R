@@ -230,3 +230,25 @@ test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; v
   expect_s3_class(pp, "fbc_ppc")
   expect_snapshot(error = TRUE, validate_emulator(fit))
 })
+
+test_that("a matrix field gives f a matrix; converge runs until its rule; output and source are refused", {
+  field <- as.matrix(fn_field(n = 8))
+  seen <- NULL
+  f <- function(x, kappa) {
+    seen <<- x
+    sin(kappa[["theta"]] * x[, "x"]) + x[, "x"]
+  }
+  set.seed(8)
+  fit <- do.call(calibrate, c(list(f, field, discrepancy = "none", nChains = 2,
+                                   converge = until_converged(rhat = 1.05, ess = 100)), fn_kappa))
+  expect_true(is.matrix(seen))
+  expect_identical(colnames(seen), "x")
+  cv <- fit$settings$converge
+  expect_true(cv$converged)
+  expect_true(all(fit$estimates[, "rhat"] < 1.05))
+  expect_true(all(fit$estimates[, "ess"] >= 100))
+  # predict() hands f the new inputs the same way
+  pr <- predict(fit, c(1, 2), type = "simulator", method = "MAP")
+  expect_identical(dim(seen), c(2L, 1L))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", fit = FALSE), fn_kappa)))
+})
