@@ -38,7 +38,14 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
                           "matern52", kernelB, call = call)
   # the response's scaling: f at the prior's centre (a check of f too)
   k0 <- ifelse(is.na(kap$spec$init), (kap$lower + kap$upper) / 2, kap$spec$init)
-  f0 <- function_values(f, x, stats::setNames(k0, kap$names), nrow(fm), "error")
+  k0 <- stats::setNames(k0, kap$names)
+  f0 <- function_values(f, x, k0, nrow(fm), nonFinite)
+  if (is.null(f0)) {
+    cli::cli_abort(c(
+      "The simulator function must be finite at the prior's centre or {.arg kappaInit} ({kappa_text(k0)}): the response is scaled by its values there.",
+      i = "Give {.arg kappaInit} where the function is finite."
+    ), call = call)
+  }
   scale <- function_scale(fm, f0, kap, inputNames, named = !is.null(usable_names(fm)))
   dat <- list(Xf = unname(scale_inputs(fm[, -1, drop = FALSE], scale, seq_len(p))),
               yf = unname((fm[, 1] - scale$ymean) / scale$ysd),

@@ -46,7 +46,7 @@ problems <- list(
 )
 
 summarise <- function(draws, chain, secs) {
-  ess <- posterior::ess_bulk(draws = matrix(draws, ncol = length(unique(chain))))
+  ess <- posterior::ess_bulk(matrix(draws, ncol = length(unique(chain))))
   rh <- posterior::rhat(matrix(draws, ncol = length(unique(chain))))
   q <- stats::quantile(draws, c(0.05, 0.5, 0.95), names = FALSE)
   data.frame(cpu = secs, median = q[2], lo90 = q[1], hi90 = q[3], rhat = rh, ess = ess,

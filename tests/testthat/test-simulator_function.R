@@ -144,7 +144,7 @@ test_that("nonFinite = \"reject\" turns non-finite values into rejected proposal
   set.seed(2)
   # the scaling needs f finite at the prior's centre, or at kappaInit
   expect_error(do.call(calibrate, c(list(f, field, fit = FALSE, nonFinite = "reject"), fn_kappa)),
-               "non-finite values at theta = 1.5")
+               "finite at the prior's centre or `kappaInit` \\(theta = 1.5\\)")
   fit <- do.call(calibrate, c(list(f, field, discrepancy = "none", nMCMC = 600, nBurn = 200,
                                    nChains = 2, nonFinite = "reject", kappaInit = 1), fn_kappa))
   expect_lte(max(fit$Phi[, "kappa1"]), 1.25)
