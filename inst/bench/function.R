@@ -13,6 +13,8 @@
 # kappa over 4 chains, and kappa's ESS per CPU second.
 #   FBC: the defaults (4 chains, sequential plan, warm-up until settled, run
 #   until every R-hat < 1.01 and bulk ESS >= 400).
+#   FBC, 4 x 10000: the peer's run length (nMCMC = 10000, nBurn = 2000,
+#   thinning = 1), for ESS per CPU second at equal lengths.
 #   RobustCalibration: 4 chains (4 calls, seeds 1-4) of its documented
 #   length, S = 10000 with S_0 = 2000 burn-in; R-hat and ESS of theta from
 #   the 4 chains by the posterior package (the same estimators as FBC's).
@@ -53,18 +55,25 @@ summarise <- function(draws, chain, secs) {
              essPerSec = ess / secs)
 }
 
-fbc_row <- function(pr, disc, seed) {
+fbc_row <- function(pr, disc, seed, fixed = FALSE) {
   set.seed(seed)
   t0 <- cpu()
-  fit <- calibrate(pr$f, pr$field, kappaDist = "uniform", kappaP1 = pr$lower,
-                   kappaP2 = pr$upper, discrepancy = disc)
+  fit <- if (fixed) {
+    # the peer's length: 4 chains of 10000 sweeps, 2000 of warm-up, all kept
+    calibrate(pr$f, pr$field, kappaDist = "uniform", kappaP1 = pr$lower, kappaP2 = pr$upper,
+              discrepancy = disc, nMCMC = 10000, nBurn = 2000, thinning = 1)
+  } else {
+    calibrate(pr$f, pr$field, kappaDist = "uniform", kappaP1 = pr$lower,
+              kappaP2 = pr$upper, discrepancy = disc)
+  }
   secs <- cpu() - t0
   est <- fit$estimates
   q <- stats::quantile(fit$Phi[, "kappa1"], c(0.05, 0.5, 0.95), names = FALSE)
   data.frame(cpu = secs, median = q[2], lo90 = q[1], hi90 = q[3],
              rhat = est["kappa1", "rhat"], ess = est["kappa1", "ess"],
              essPerSec = est["kappa1", "ess"] / secs, maxRhatAll = max(est[, "rhat"]),
-             minEssAll = min(est[, "ess"]), sweeps = fit$settings$nMCMC)
+             minEssAll = min(est[, "ess"]), sweeps = fit$settings$nMCMC,
+             converged = if (fixed) NA else isTRUE(fit$settings$converge$converged))
 }
 
 peer_row <- function(pr, disc) {
@@ -96,17 +105,21 @@ for (name in names(problems)) {
                                         seed = r, row)
       print(utils::tail(rows, 1)[[1]], digits = 3)
     }
+    row <- fbc_row(pr, disc, 1L, fixed = TRUE)
+    rows[[length(rows) + 1]] <- cbind(problem = name, discrepancy = disc,
+                                      software = "FBC, 4 x 10000", seed = 1L, row)
+    print(utils::tail(rows, 1)[[1]], digits = 3)
     if (peer) {
       row <- peer_row(pr, disc)
       rows[[length(rows) + 1]] <- cbind(problem = name, discrepancy = disc,
                                         software = "RobustCalibration", seed = 1, row,
-                                        maxRhatAll = NA, minEssAll = NA)
+                                        maxRhatAll = NA, minEssAll = NA, converged = NA)
       print(utils::tail(rows, 1)[[1]], digits = 3)
     }
   }
 }
 tab <- do.call(rbind, lapply(rows, function(r) r[, c("problem", "discrepancy", "software", "seed",
                                                      "cpu", "sweeps", "median", "lo90", "hi90",
-                                                     "rhat", "ess", "essPerSec")]))
+                                                     "rhat", "ess", "essPerSec", "converged")]))
 print(tab, digits = 3, row.names = FALSE)
 saveRDS(tab, "function-bench.rds")
