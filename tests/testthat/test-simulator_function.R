@@ -252,3 +252,17 @@ test_that("a matrix field gives f a matrix; converge runs until its rule; output
   expect_identical(dim(seen), c(2L, 1L))
   expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", fit = FALSE), fn_kappa)))
 })
+
+test_that("chains on parallel workers call f there and give the sequential draws", {
+  skip_on_cran()
+  f <- function(x, kappa) 5 * exp(-kappa[["u"]] * x$t)
+  args <- list(f, as.data.frame(kineticField), kappaDist = "uniform", kappaP1 = c(u = 0.5),
+               kappaP2 = c(u = 3), nMCMC = 400, nBurn = 200, nChains = 2, discrepancy = "none")
+  set.seed(9)
+  a <- do.call(calibrate, args)
+  old <- future::plan(future::multisession, workers = 2)
+  on.exit(future::plan(old), add = TRUE)
+  set.seed(9)
+  b <- do.call(calibrate, args)
+  expect_identical(b$Phi, a$Phi)
+})
