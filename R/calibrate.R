@@ -89,8 +89,11 @@
 #'   `f` itself, with no emulator variance); `print()`, `plot()`,
 #'   `update()`, `loo()`, `ppc_field()`, checkpoints (the function's code
 #'   is part of the run's identity) and `converge` work as for runs;
-#'   `validate_emulator()` has no emulator to check. `output` and `source`
-#'   are not taken yet, nor categorical inputs.
+#'   `validate_emulator()` has no emulator to check; [emulator_check()]
+#'   compares an emulator-based fit with the function's. `source` works
+#'   (a noise variance per field data set, one shared bias; `f` does not
+#'   see the data set's column); `output`, `sourceBias = "own"` and
+#'   categorical inputs are not taken yet.
 #'
 #' @section Correlation families:
 #' `kernelS` and `kernelB` choose the family of the simulator GP

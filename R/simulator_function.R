@@ -20,7 +20,9 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
                                  modelCall = NULL, call = parent.frame()) {
   check_simulator_function(f, call = call)
   nonFinite <- match_choice(nonFinite, c("error", "reject"), "nonFinite", call = call)
-  refuse_function_options(output, source, sourceBias, call = call)
+  refuse_function_options(output, sourceBias, call = call)
+  src <- function_source(field, source, call = call)
+  field <- src$field
   fm <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L, call = call)
   p <- ncol(fm) - 1L
   inputNames <- usable_names(fm)[-1] %||% paste0("x", seq_len(p))
@@ -50,20 +52,23 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
   dat <- list(Xf = unname(scale_inputs(fm[, -1, drop = FALSE], scale, seq_len(p))),
               yf = unname((fm[, 1] - scale$ymean) / scale$ysd),
               Xs = matrix(numeric(0), 0L, p + q), ys = numeric(0))
-  spec <- build_priors(kap$spec, hypers, scale, p, q, discrepancy, emulator = FALSE, call = call)
+  scale[c("source", "noiseLabels")] <- list(src$source[c("name", "levels")], src$noiseLabels)
+  spec <- build_priors(kap$spec, hypers, scale, p, q, discrepancy,
+                       noise = length(src$noiseLabels %||% 1L), emulator = FALSE, call = call)
   spec$model <- compiled_model(p, q, kernel_codes[["matern52"]], kernel_codes[[kernelB]],
-                               algebra = algebra_codes[["dense"]], discrepancy,
+                               algebra = algebra_codes[["dense"]], discrepancy, noise = src$noise,
                                simulator = function_closures(f, x, scale, nonFinite))
   alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
               forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)")
-  design <- list(factors = list(), output = NULL, source = NULL, noise = NULL, noiseLabels = NULL,
-                 levels = NULL, biasSource = NULL, fieldRows = distinct_rows(dat$Xf))
+  design <- list(factors = list(), output = NULL, source = src$source, noise = src$noise,
+                 noiseLabels = src$noiseLabels, levels = NULL, biasSource = NULL,
+                 fieldRows = distinct_rows(dat$Xf))
   model <- new_fbc_model(
     data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
     kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,
     algebra = alg, simAlgebra = list(name = "function", dims = NULL),
     moves = sampler_moves(sampler, spec, large = FALSE),
-    options = list(algebra = "auto", neighbours = NULL, output = NULL, source = NULL,
+    options = list(algebra = "auto", neighbours = NULL, output = NULL, source = source,
                    sourceBias = "shared"),
     call = modelCall)
   model$simulator <- list(f = f, x = x, nonFinite = nonFinite)
@@ -82,16 +87,37 @@ check_simulator_function <- function(f, call = parent.frame()) {
   invisible(f)
 }
 
-# What the function model does not take yet: several outputs and data sets.
-refuse_function_options <- function(output, source, sourceBias, call = parent.frame()) {
-  given <- c(output = !is.null(output), source = !is.null(source),
+# What the function model does not take yet: several outputs, a bias per
+# field data set.
+refuse_function_options <- function(output, sourceBias, call = parent.frame()) {
+  given <- c(output = !is.null(output),
              sourceBias = !identical(sourceBias, c("shared", "own")) && !identical(sourceBias, "shared"))
   if (any(given)) {
     cli::cli_abort(c(
       "{.arg {names(given)[given]}} cannot be used with a simulator function yet.",
-      i = "A simulator function calibrates one output against one field data set; stack several as runs (a {.arg sim} data frame) to use them."
+      i = "A simulator function calibrates one output, with one bias shared by the field data sets ({.arg source}); give runs as {.arg sim} for several outputs or a bias per data set."
     ), call = call)
   }
+}
+
+# Several field data sets (`source`, a factor or character column of
+# field): list(field without that column, source = list(name, levels,
+# codes), noise: each row's measurement-error group (its data set; NULL for
+# one), noiseLabels). Any other non-numeric column is refused by
+# check_data_matrix().
+function_source <- function(field, source, call = parent.frame()) {
+  if (is.null(source)) return(list(field = field))
+  check_string(source, "source", call = call)
+  if (!is.data.frame(field) || !source %in% names(field) || !is_categorical(field[[source]])) {
+    cli::cli_abort("{.arg source} = {.val {source}} must name a factor or character column of {.arg field}.",
+                   call = call)
+  }
+  check_no_missing_levels(field, source, "field", NULL, source, call = call)
+  f <- factor(field[[source]])
+  codes <- as.integer(f)
+  list(field = field[, names(field) != source, drop = FALSE],
+       source = list(name = source, levels = levels(f), codes = codes),
+       noise = if (nlevels(f) > 1L) codes, noiseLabels = if (nlevels(f) > 1L) levels(f))
 }
 
 # The field inputs as f receives them: a data frame when the field was one,

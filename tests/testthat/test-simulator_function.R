@@ -43,12 +43,13 @@ test_that("discrepancy none, sigma2E fixed: theta's draws match the grid posteri
 fn_dense_loglik <- function(model, phi, f) {
   d <- model$data
   sc <- model$scale
-  th <- lapply(FBC:::param_indices(sc$p, sc$q, model$discrepancy, emulator = FALSE),
+  G <- max(model$design$noise, 1L)
+  th <- lapply(FBC:::param_indices(sc$p, sc$q, model$discrepancy, G, emulator = FALSE),
                function(i) phi[i])
   theta <- sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * th$kappa
   fs <- (f(model$simulator$x, c(theta = theta)) - sc$ymean) / sc$ysd
   n <- length(d$yf)
-  S <- th$sigma2E * diag(n)
+  S <- diag(th$sigma2E[model$design$noise %||% rep(1L, n)], n)
   if (model$discrepancy != "none") {
     S <- S + th$sigma2B * bias_corr_dense(d$Xf, th, "matern52", model$discrepancy)
   }
@@ -251,6 +252,46 @@ test_that("a matrix field gives f a matrix; converge runs until its rule; output
   pr <- predict(fit, c(1, 2), type = "simulator", method = "MAP")
   expect_identical(dim(seen), c(2L, 1L))
   expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", fit = FALSE), fn_kappa)))
+})
+
+test_that("several field data sets (source): a noise variance each, one shared bias", {
+  a <- fn_field(n = 8, seed = 1, sd = 0.1)
+  b <- fn_field(n = 6, seed = 2, sd = 0.5)
+  field <- rbind(cbind(a, lab = "A"), cbind(b, lab = "B"))
+  seen <- NULL
+  f <- function(x, kappa) {
+    seen <<- x
+    fn_model(x, kappa)
+  }
+  model <- do.call(calibrate, c(list(f, field, source = "lab", fit = FALSE), fn_kappa))
+  expect_identical(names(seen), "x")  # the data set is not an input of f
+  expect_identical(model$design$noise, rep(1:2, c(8L, 6L)))
+  expect_true(all(c("sigma2E1", "sigma2E2") %in% model$spec$vars))
+  d <- model$data
+  vars <- model$spec$vars
+  set.seed(5)
+  phis <- t(replicate(4, {
+    x <- model$spec$init
+    x[vars == "kappa1"] <- stats::runif(1, 0.2, 0.8)
+    x[vars %in% c("sigma2E1", "sigma2E2")] <- stats::runif(2, 0.01, 0.5)
+    x[vars == "thetaB1"] <- stats::runif(1, 0.5, 8)
+    x
+  }))
+  ref <- unname(apply(phis, 1, function(phi) fn_dense_loglik(model, phi, fn_model)))
+  path <- FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE,
+                             model = model$spec$model)
+  expect_equal(path, ref, tolerance = 1e-8)
+  set.seed(10)
+  fit <- calibrate(model, nMCMC = 400, nBurn = 200, nChains = 2)
+  # a new observation of data set B has B's noise
+  pA <- predict(fit, data.frame(x = 2, lab = "A"), type = "field", method = "MAP")
+  pB <- predict(fit, data.frame(x = 2, lab = "B"), type = "field", method = "MAP")
+  map <- fit$Phi[which.max(fit$logPost), ]
+  expect_equal(pB$se^2 - pA$se^2, fit$scale$ysd^2 * (map[["sigma2E2"]] - map[["sigma2E1"]]),
+               tolerance = 1e-8)
+  expect_snapshot(error = TRUE, calibrate(f, field, source = "lab", sourceBias = "own",
+                                          kappaDist = "uniform", kappaP1 = c(theta = 0),
+                                          kappaP2 = 3, fit = FALSE))
 })
 
 test_that("chains on parallel workers call f there and give the sequential draws", {
