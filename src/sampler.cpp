@@ -38,7 +38,13 @@
 // cancel around the right scale and add up while it is still walking), and
 // every block is shaped, the SD its shape gives each parameter relative to
 // the shape's size within a factor exp(WARM_SHAPE) of the previous
-// window's. Warm-up ends at the end of the second settled window in a row,
+// window's, and learnt from enough draws: a joint block's running
+// covariance must hold at least WARM_ESS effective draws per parameter,
+// counted by batch means over the windows since the estimate started
+// (B window means, ESS_i = B var_i / var(means_i), at least 4 windows; at
+// m = 1000 scattered runs the simulator's block ended warm-up at 700 sweeps
+// without it, from some 10 effective draws, and mixed at half the rate of
+// a block shaped over 1500 sweeps). Warm-up ends at the end of the second settled window in a row,
 // at the earliest after warmMin sweeps, and at warmMax sweeps in any case
 // (warmCapped). The joint proposals' running covariance starts afresh at
 // sweeps 200, 400, 800, ... (each estimate leaves out at least the first
@@ -68,6 +74,9 @@ static bool user_interrupted() {
 static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
+// a joint block's shape is learnt when its running covariance holds at
+// least WARM_ESS effective draws per parameter (batch means over windows)
+static const double WARM_ESS = 10;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).
@@ -90,8 +99,12 @@ struct Block {
   std::vector<int> idx;
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
+  // warm-up of data-dependent length: the sum of w over this window's
+  // records (winN of them) and the window means since the estimate's start
+  arma::vec winSum;
+  arma::mat winMeans;
   double logscale = 0, accBatch = 0;
-  int n = 0, batch = 0, restart = 0;  // restart < 0: a warm-up of data-dependent length
+  int n = 0, batch = 0, restart = 0, winN = 0;  // restart < 0: a warm-up of data-dependent length
   bool shaped = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
@@ -100,6 +113,7 @@ struct Block {
     mean.zeros(k); cov.zeros(k, k); L.zeros(k, k);
     for (int i = 0; i < k; ++i) L(i, i) = std::exp(logsd[idx[i]]);
     logscale = -0.5 * std::log((double) k);
+    winSum.zeros(k); winMeans.set_size(k, 0);
     alloc();
   }
   void alloc() {
@@ -115,6 +129,12 @@ struct Block {
     L = Rcpp::as<arma::mat>(s["chol"]);
     logscale = s["logscale"]; accBatch = s["accBatch"];
     n = s["n"]; batch = s["batch"]; shaped = s["shaped"];
+    // (a state written before the effective-draws rule: none recorded)
+    winSum = s.containsElementNamed("winSum") ? Rcpp::as<arma::vec>(s["winSum"]) :
+      arma::vec(idx.size(), arma::fill::zeros);
+    winMeans = s.containsElementNamed("winMeans") ? Rcpp::as<arma::mat>(s["winMeans"]) :
+      arma::mat(idx.size(), 0);
+    winN = s.containsElementNamed("winN") ? Rcpp::as<int>(s["winN"]) : 0;
     alloc();
   }
   Rcpp::List write() const {
@@ -124,7 +144,9 @@ struct Block {
       Rcpp::Named("index") = ix, Rcpp::Named("logscale") = logscale,
       Rcpp::Named("chol") = L, Rcpp::Named("shaped") = shaped,
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
-      Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
+      Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch,
+      Rcpp::Named("winSum") = winSum, Rcpp::Named("winMeans") = winMeans,
+      Rcpp::Named("winN") = winN);
   }
   // log det(L)^(1/k): the log size of the shape.
   double log_volume() const { return arma::mean(arma::log(L.diag())); }
@@ -133,15 +155,38 @@ struct Block {
     return 0.5 * arma::log(arma::sum(arma::square(L), 1)) - log_volume();
   }
   // Start the running mean and covariance afresh (L is kept).
-  void forget() { n = 0; mean.zeros(); cov.zeros(); }
+  void forget() {
+    n = 0; mean.zeros(); cov.zeros();
+    winSum.zeros(); winN = 0; winMeans.set_size(idx.size(), 0);
+  }
   // Welford update of the running mean and covariance of w.
   void record() {
     ++n;
+    if (restart < 0) { winSum += w; ++winN; }
     const int k = idx.size();
     for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
     mean += e / n;
     for (int a = 0; a < k; ++a)
       for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
+  }
+  // End of a warm-up window: its mean of w joins the window means (a window
+  // the estimate started in is left out), and the effective draws in the
+  // running covariance, per parameter, by batch means over those windows,
+  //   ESS_i = B var_i / var(window means_i),
+  // the fewest of them (0 with fewer than 4 windows).
+  double window_ess() {
+    const int k = idx.size();
+    if (winN >= WINDOW / 2) winMeans.insert_cols(winMeans.n_cols, winSum / winN);
+    winSum.zeros(); winN = 0;
+    const int B = winMeans.n_cols;
+    if (B < 4 || n < 2) return 0;
+    double ess = INFINITY;
+    for (int i = 0; i < k; ++i) {
+      const double vb = arma::var(winMeans.row(i).t());
+      const double v = cov(i, i) / (n - 1);
+      ess = std::min(ess, vb > 0 ? B * v / vb : (double) n);
+    }
+    return ess;
   }
   // End of a burn-in batch with acceptance rate `rate`: scale towards the
   // target acceptance, shape L.
@@ -532,7 +577,12 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     ch.winScale(1, i) = ls;
   }
   const arma::vec sh = shapes(ch);
-  for (const Block& b : ch.blocks) if (!b.shaped) ok = false;
+  for (Block& b : ch.blocks) {
+    if (!b.shaped) ok = false;
+    // a joint block's shape learnt from enough effective draws
+    const double ess = b.window_ess();
+    if (b.idx.size() > 1 && ess < WARM_ESS * b.idx.size()) ok = false;
+  }
   if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
     ok = false;
   ch.winShape = sh;
