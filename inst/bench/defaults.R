@@ -39,9 +39,23 @@ quick <- "quick" %in% args
 trace <- "trace" %in% args
 nopeer <- "nopeer" %in% args  # leave RobustCalibration out (a diagnosis run)
 extra <- grep("=", args, value = TRUE, fixed = TRUE)
+# experiments on the package's own constants (not arguments): ess=N the
+# warm-up's effective draws per block parameter (fbc_warmup$ess), growth=G
+# the stopping checks' growth factor (fbc_check_growth)
+internal <- grep("^(ess|growth)=", extra, value = TRUE)
+extra <- setdiff(extra, internal)
+for (a in internal) {
+  ns <- asNamespace("FBC")
+  v <- as.numeric(sub("^.*=", "", a))
+  nm <- if (startsWith(a, "ess=")) "fbc_warmup" else "fbc_check_growth"
+  val <- get(nm, ns)
+  if (nm == "fbc_warmup") val$ess <- v else val <- v
+  unlockBinding(nm, ns)
+  assign(nm, val, envir = ns)
+}
 extraArgs <- lapply(sub("^[^=]*=", "", extra), function(v) eval(str2lang(v)))
 names(extraArgs) <- sub("=.*$", "", extra)
-parts <- setdiff(args, c("quick", "trace", "nopeer", extra))
+parts <- setdiff(args, c("quick", "trace", "nopeer", extra, internal))
 known <- c("precise", "ball", "m1000", "m5000", "m20000", "functional", "priors")
 if (!length(parts)) parts <- c("precise", "ball")
 if ("all" %in% parts) parts <- setdiff(known, "priors")
@@ -224,7 +238,9 @@ cat(sprintf("FBC %s defaults benchmark, %s; %s; BLAS %s (%s); load %s\n",
             basename(extSoftVersion()[["BLAS"]]), FBC:::blas_kind(),
             paste(tryCatch(readLines("/proc/loadavg")[1], error = function(e) "?"))))
 if (quick) cat("(quick: short fixed runs, not the default)\n")
-if (length(extraArgs)) cat("(not the defaults: every calibrate() call adds", paste(extra, collapse = ", "), ")\n")
+if (length(extraArgs) || length(internal)) {
+  cat("(not the defaults: every calibrate() call adds", paste(c(extra, internal), collapse = ", "), ")\n")
+}
 for (part in parts) {
   cat("\n==", part, "==\n")
   res <- switch(part,

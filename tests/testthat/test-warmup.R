@@ -125,11 +125,32 @@ test_that("set.seed() reproduces a run of data-dependent length on every plan", 
   expect_gte(min(ua$estimates$ess), 800)
 })
 
+# The fewest effective draws per parameter in a joint block's running
+# covariance where its warm-up ended, by batch means over the windows since
+# the estimate started (src/sampler.cpp): B var_i / var(window means_i),
+# computed here in plain R from the block's state.
+block_ess <- function(b) {
+  m <- as.matrix(b$winMeans)
+  v <- diag(as.matrix(b$cov)) / (b$n - 1)
+  ncol(m) * v / apply(m, 1, stats::var)
+}
+
 test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
   args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(37)
   ref <- do.call(calibrate, args)
   expect_true(all(ref$settings$warmup > 200))
+  # warm-up ended only once each joint block's shape was learnt from at
+  # least 10 effective draws per parameter (fbc_warmup$ess), over at least
+  # 4 windows of 100 sweeps since its estimate started
+  for (k in 1:2) {
+    st <- ref$state$chains[[k]]$sampler
+    expect_identical(st$warmESS, 10)
+    for (b in Filter(function(b) length(b$index) > 1, st$blocks)) {
+      expect_gte(ncol(as.matrix(b$winMeans)), 4)
+      expect_true(all(block_ess(b) >= 10 * length(b$index)))
+    }
+  }
   dir <- tempfile("ck-warm-")
   on.exit(unlink(dir, recursive = TRUE), add = TRUE)
   # imitated Ctrl-C 200 sweeps (4 pieces) into chain 1: in its warm-up
