@@ -38,8 +38,9 @@
 // cancel around the right scale and add up while it is still walking), and
 // every block is shaped, the SD its shape gives each parameter relative to
 // the shape's size within a factor exp(WARM_SHAPE) of the previous
-// window's, and learnt from enough draws: a joint block's running
-// covariance must hold at least warmESS effective draws per parameter (R's
+// window's, and learnt from enough draws: a joint block of at least
+// WARM_ESS_K parameters must hold in its running covariance at least
+// warmESS effective draws per parameter (R's
 // fbc_warmup$ess, carried in the state; 0 in a state written before the
 // rule, which resumes as it began), counted by batch means over the
 // windows since the estimate started (B >= 4 window means,
@@ -77,6 +78,11 @@ static bool user_interrupted() {
 static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
+// the effective-draws rule holds blocks of at least this many parameters
+// (a smaller block's shape is learnt soon enough: the ball drop's blocks of
+// 2 and 3 end warm-up at 500 sweeps without it, 1300-1400 with it, as the
+// rule needs 4 windows since the estimate's restart at 800)
+static const int WARM_ESS_K = 4;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).
@@ -613,7 +619,8 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     if (!b->shaped) ok = false;
     // a joint block's shape learnt from enough effective draws
     const double ess = b->window_ess();
-    if (b->idx.size() > 1 && ess < ch.warmESS * b->idx.size()) ok = false;
+    const int k = b->idx.size();
+    if (k >= WARM_ESS_K && ess < ch.warmESS * k) ok = false;
   }
   if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
     ok = false;

@@ -135,22 +135,53 @@ block_ess <- function(b) {
   ncol(m) * v / apply(m, 1, stats::var)
 }
 
+# Runs `code` with the warm-up's effective-draws rule at `ess` per
+# parameter (fbc_warmup$ess, R/converge.R).
+with_warmup_ess <- function(ess, code) {
+  ns <- asNamespace("FBC")
+  old <- get("fbc_warmup", ns)
+  unlockBinding("fbc_warmup", ns)
+  on.exit(assign("fbc_warmup", old, envir = ns), add = TRUE)
+  assign("fbc_warmup", utils::modifyList(old, list(ess = ess)), envir = ns)
+  force(code)
+}
+
+test_that("warm-up waits for the joint blocks' shapes to be learnt from enough effective draws", {
+  # the ball drop with a second, irrelevant field input z: the simulator
+  # block is thetaS of h, z and g and sigma2S (4 parameters: the rule holds
+  # blocks of at least 4; the bias block's 3 are exempt)
+  set.seed(39)
+  sim <- cbind(ballSim[, 1:2], z = runif(nrow(ballSim)), ballSim[, 3, drop = FALSE])
+  field <- cbind(ballField, z = runif(nrow(ballField)))
+  args <- list(sim, field, nChains = 2, nMCMC = 3000)
+  set.seed(38)
+  fit <- with_warmup_ess(10, do.call(calibrate, args))
+  expect_length(fit$settings$warmupCapped, 0)
+  # where warm-up ended each joint block of 4 or more parameters held at
+  # least 10 effective draws per parameter in its running covariance, over
+  # at least 4 windows of 100 sweeps since its estimate started
+  for (k in 1:2) {
+    st <- fit$state$chains[[k]]$sampler
+    expect_identical(st$warmESS, 10)
+    big <- Filter(function(b) length(b$index) >= 4, st$blocks)
+    expect_length(big, 1)
+    for (b in big) {
+      expect_gte(ncol(as.matrix(b$winMeans)), 4)
+      expect_true(all(block_ess(b) >= 10 * length(b$index)))
+    }
+  }
+  # without the rule the same chains end warm-up sooner: it is what held them
+  set.seed(38)
+  off <- with_warmup_ess(0, do.call(calibrate, args))
+  expect_true(all(off$settings$warmup <= fit$settings$warmup))
+  expect_true(any(off$settings$warmup < fit$settings$warmup))
+})
+
 test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
   args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(37)
   ref <- do.call(calibrate, args)
   expect_true(all(ref$settings$warmup > 200))
-  # warm-up ended only once each joint block's shape was learnt from at
-  # least 10 effective draws per parameter (fbc_warmup$ess), over at least
-  # 4 windows of 100 sweeps since its estimate started
-  for (k in 1:2) {
-    st <- ref$state$chains[[k]]$sampler
-    expect_identical(st$warmESS, 10)
-    for (b in Filter(function(b) length(b$index) > 1, st$blocks)) {
-      expect_gte(ncol(as.matrix(b$winMeans)), 4)
-      expect_true(all(block_ess(b) >= 10 * length(b$index)))
-    }
-  }
   dir <- tempfile("ck-warm-")
   on.exit(unlink(dir, recursive = TRUE), add = TRUE)
   # imitated Ctrl-C 200 sweeps (4 pieces) into chain 1: in its warm-up
