@@ -146,16 +146,21 @@ struct Block {
     winN = s.containsElementNamed("winN") ? Rcpp::as<int>(s["winN"]) : 0;
     alloc();
   }
+  // (the window means only under a warm-up of data-dependent length: a
+  // fixed burn-in's state is as it was before them)
   Rcpp::List write() const {
     Rcpp::IntegerVector ix(idx.size());
     for (size_t i = 0; i < idx.size(); ++i) ix[i] = idx[i] + 1;
-    return Rcpp::List::create(
+    Rcpp::List out = Rcpp::List::create(
       Rcpp::Named("index") = ix, Rcpp::Named("logscale") = logscale,
       Rcpp::Named("chol") = L, Rcpp::Named("shaped") = shaped,
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
-      Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch,
-      Rcpp::Named("winSum") = winSum, Rcpp::Named("winMeans") = winMeans,
-      Rcpp::Named("winN") = winN);
+      Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
+    if (restart >= 0) return out;
+    out.push_back(Rcpp::wrap(winSum), "winSum");
+    out.push_back(Rcpp::wrap(winMeans), "winMeans");
+    out.push_back(winN, "winN");
+    return out;
   }
   // log det(L)^(1/k): the log size of the shape.
   double log_volume() const { return arma::mean(arma::log(L.diag())); }
