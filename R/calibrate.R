@@ -386,7 +386,12 @@
 #' size moved by at most 2.5 adaptation steps over the last two windows
 #' (the steps cancel around the right scale and add up while it is still
 #' walking), and every joint proposal's shape (its SD per parameter,
-#' relative to its size) within 35% of the last window's. Warm-up ends at
+#' relative to its size) within 35% of the last window's, and, for a joint
+#' proposal of 4 or more parameters, learnt from at least 10 effective draws
+#' per parameter (batch means over the windows since its estimate started:
+#' at m = 1000 scattered runs a shape learnt from fewer left the simulator's
+#' block mixing at half the rate, see `inst/bench/RESULTS-defaults.md`).
+#' Warm-up ends at
 #' the second settled window in a row, after at least 200 sweeps and at
 #' most 5000 (or half of an explicit `nMCMC`); the joint proposals' running
 #' covariance starts afresh at sweeps 200, 400, 800, ..., so it leaves out

@@ -91,31 +91,16 @@ result_from_start <- function(start, interrupted) {
 # the main session is gone (same host), or on an interrupt in this process.
 # Returns the chain's result over its whole run (from start$iter0).
 run_chain <- function(job, k, start) {
-  dir <- job$dir
-  files <- !is.null(dir) && dir.exists(dir)
-  if (!is.null(dir) && !files && job$user) {
-    stop(sprintf("the checkpoint directory %s is not visible from the worker on %s: put it on storage the workers share",
-                 dir, Sys.info()[["nodename"]]), call. = FALSE)
-  }
-  host <- Sys.info()[["nodename"]]
-  if (files) {
-    pidFile <- chain_file(dir, k, "pid")
-    writeLines(c(as.character(Sys.getpid()), host, job$token), pidFile)
-    on.exit(unlink(pidFile), add = TRUE)
-  }
-  ownerHere <- identical(host, job$owner$host) && job$owner$pid != Sys.getpid()
+  cx <- chain_context(job, k)
+  if (!is.null(cx$pidFile)) on.exit(unlink(cx$pidFile), add = TRUE)
   genv <- globalenv()
   d <- length(start$state$phi)
-  target <- job$target[k]
-  after <- job$post[k]
-  stopAt <- function(state) chain_stop(state, target, after, job$nBurn)
+  stopAt <- function(state) chain_stop(state, job$target[k], job$post[k], job$nBurn)
+  # room for every draw the run can keep (see chain_room()); `cur` is
+  # replaced whole after each piece, so an interrupt at any point leaves the
+  # last consistent piece boundary
   n0 <- nrow(start$draws)
-  # a chain resumed beyond this call's target (a later round of a run
-  # under until_converged()) keeps what it has; while a warm-up of
-  # data-dependent length goes on, room for the most it can keep
-  burn <- chain_burn(start$state, job$nBurn)
-  if (is.na(burn)) burn <- start$state$iter
-  nAll <- max(n0, kept_between(start$iter0, stopAt(start$state), burn, job$thinning))
+  nAll <- chain_room(start, job, stopAt)
   draws <- matrix(NA_real_, nAll, d)
   logPost <- logLik <- rep(NA_real_, nAll)
   if (n0) {
@@ -123,8 +108,6 @@ run_chain <- function(job, k, start) {
     logPost[seq_len(n0)] <- start$logPost
     logLik[seq_len(n0)] <- start$logLik
   }
-  # `cur` is replaced whole after each piece, so an interrupt at any point
-  # leaves the last consistent piece boundary
   cur <- list(state = start$state, kept = n0, accSum = start$accSum,
               scaleAccSum = start$scaleAccSum, nPost = start$nPost, seed = genv$.Random.seed)
   snapshot <- function() {
@@ -134,26 +117,6 @@ run_chain <- function(job, k, start) {
          accSum = cur$accSum, scaleAccSum = cur$scaleAccSum, nPost = cur$nPost,
          finished = cur$state$iter >= stopAt(cur$state))
   }
-  save <- function() {
-    write_atomic(list(format = fbc_checkpoint_format, id = job$id, chain = k,
-                      start = snapshot(), seed = cur$seed, host = host,
-                      pid = Sys.getpid(), time = Sys.time()), chain_file(dir, k))
-  }
-  stopAsked <- function() {
-    (files && file.exists(file.path(dir, "STOP"))) ||
-      (ownerHere && !process_alive(job$owner$pid))
-  }
-  tick <- function(force = FALSE) {
-    if (is.null(job$progress)) return(invisible())
-    now <- proc.time()[["elapsed"]]
-    if (!force && now - lastTick < 0.25) return(invisible())
-    lastTick <<- now
-    acc <- if (cur$nPost > 0) mean(cur$accSum / cur$nPost, na.rm = TRUE) else NA_real_
-    job$progress(amount = 0, fbcChain = k, fbcDone = cur$state$iter - job$from[k],
-                 fbcAcceptance = acc, fbcBurn = in_warmup(cur$state, job$nBurn),
-                 fbcTotal = expected_stop(cur$state, target, after, job$nBurn) - job$from[k])
-  }
-  lastSave <- lastTick <- proc.time()[["elapsed"]]
   status <- "done"
   status <- tryCatch({
     repeat {
@@ -165,47 +128,113 @@ run_chain <- function(job, k, start) {
       it <- cur$state$iter
       stop <- stopAt(cur$state)
       if (it >= stop) break
-      if (stopAsked()) { status <- "stopped"; break }
+      if (chain_stop_asked(cx)) { status <- "stopped"; break }
       n <- min(stop, (it %/% fbc_piece + 1L) * fbc_piece) - it
       assign(".Random.seed", cur$seed, envir = genv)
       r <- sample_chain(job$dat, job$spec, cur$state, job$moves, n, job$nBurn,
                         job$thinning, FALSE, sampler = job$sampler)
-      seed <- genv$.Random.seed
-      if (cur$kept + r$kept > nrow(draws)) {  # not reached: nAll is an upper bound
-        grow <- cur$kept + r$kept - nrow(draws)
-        draws <- rbind(draws, matrix(NA_real_, grow, d))
-        logPost <- c(logPost, rep(NA_real_, grow))
-        logLik <- c(logLik, rep(NA_real_, grow))
-      }
-      if (r$kept > 0) {
+      if (r$kept > 0) {  # (nAll is an upper bound: never past the end)
         idx <- cur$kept + seq_len(r$kept)
         draws[idx, ] <- r$draws[seq_len(r$kept), , drop = FALSE]
         logPost[idx] <- r$logPost[seq_len(r$kept)]
         logLik[idx] <- r$logLik[seq_len(r$kept)]
       }
-      post <- r$nPost > 0
-      cur <- list(state = r$state, kept = cur$kept + r$kept,
-                  accSum = if (post) cur$accSum + r$acceptance * r$nPost else cur$accSum,
-                  scaleAccSum = if (post) cur$scaleAccSum + r$scaleAcceptance * r$nPost else cur$scaleAccSum,
-                  nPost = cur$nPost + r$nPost, seed = seed)
+      cur <- merge_piece(cur, r, genv$.Random.seed)
       if (isTRUE(r$interrupted)) { status <- "interrupted"; break }
-      now <- proc.time()[["elapsed"]]
-      if (files && (now - lastSave >= job$every) && cur$state$iter < stopAt(cur$state)) {
-        save()
-        lastSave <- now
-      }
-      tick()
+      if (chain_save_due(cx) && cur$state$iter < stopAt(cur$state)) save_chain(cx, snapshot(), cur$seed)
+      chain_tick(cx, cur)
     }
     status
   }, interrupt = function(e) "interrupted")
   if (status == "interrupted") fbc_run$stop <- TRUE
-  if (files) save()
-  tick(force = TRUE)
+  if (cx$files) save_chain(cx, snapshot(), cur$seed)
+  chain_tick(cx, cur, force = TRUE)
   res <- result_from_start(snapshot(), interrupted = status != "done")
   res$status <- status
   # where its stream stands: a further round continues it (run_rounds())
   res$seed <- cur$seed
   res
+}
+
+# What chain k's run needs besides its draws: whether the run directory is
+# visible here (else an error when the user gave it), its pid file (written
+# here: the main session kills a worker by it), whether the main session
+# runs on this host (then its death stops the chain), and the times of the
+# last checkpoint and progress report.
+chain_context <- function(job, k) {
+  dir <- job$dir
+  files <- !is.null(dir) && dir.exists(dir)
+  host <- Sys.info()[["nodename"]]
+  if (!is.null(dir) && !files && job$user) {
+    stop(sprintf("the checkpoint directory %s is not visible from the worker on %s: put it on storage the workers share",
+                 dir, host), call. = FALSE)
+  }
+  cx <- new.env(parent = emptyenv())
+  cx$job <- job
+  cx$k <- k
+  cx$files <- files
+  cx$host <- host
+  cx$pidFile <- if (files) chain_file(dir, k, "pid")
+  if (files) writeLines(c(as.character(Sys.getpid()), host, job$token), cx$pidFile)
+  cx$ownerHere <- identical(host, job$owner$host) && job$owner$pid != Sys.getpid()
+  cx$lastSave <- cx$lastTick <- proc.time()[["elapsed"]]
+  cx
+}
+
+# Rows a chain's draws need: what it has, or what it can keep up to where
+# it stops (a chain resumed beyond this call's target, a later round of a
+# run under until_converged(), keeps what it has; while a warm-up of
+# data-dependent length goes on, room for the most it can keep).
+chain_room <- function(start, job, stopAt) {
+  burn <- chain_burn(start$state, job$nBurn)
+  if (is.na(burn)) burn <- start$state$iter
+  max(nrow(start$draws), kept_between(start$iter0, stopAt(start$state), burn, job$thinning))
+}
+
+# The chain's bookkeeping after piece `r` of the compiled sampler: its state,
+# draws kept, acceptance sums over retained sweeps, and RNG state `seed`.
+merge_piece <- function(cur, r, seed) {
+  post <- r$nPost > 0
+  list(state = r$state, kept = cur$kept + r$kept,
+       accSum = if (post) cur$accSum + r$acceptance * r$nPost else cur$accSum,
+       scaleAccSum = if (post) cur$scaleAccSum + r$scaleAcceptance * r$nPost else cur$scaleAccSum,
+       nPost = cur$nPost + r$nPost, seed = seed)
+}
+
+# Has the main session asked chain cx$k to stop (STOP file), or gone away?
+chain_stop_asked <- function(cx) {
+  (cx$files && file.exists(file.path(cx$job$dir, "STOP"))) ||
+    (cx$ownerHere && !process_alive(cx$job$owner$pid))
+}
+
+# Is a checkpoint due (job$every seconds since the last)? Then the clock
+# restarts.
+chain_save_due <- function(cx) {
+  now <- proc.time()[["elapsed"]]
+  if (!cx$files || now - cx$lastSave < cx$job$every) return(FALSE)
+  cx$lastSave <- now
+  TRUE
+}
+
+# Writes chain cx$k's checkpoint: its start for a resumed run and RNG state.
+save_chain <- function(cx, start, seed) {
+  write_atomic(list(format = fbc_checkpoint_format, id = cx$job$id, chain = cx$k,
+                    start = start, seed = seed, host = cx$host,
+                    pid = Sys.getpid(), time = Sys.time()), chain_file(cx$job$dir, cx$k))
+}
+
+# Reports chain cx$k's progress (at most every 0.25 s unless `force`).
+chain_tick <- function(cx, cur, force = FALSE) {
+  job <- cx$job
+  k <- cx$k
+  if (is.null(job$progress)) return(invisible())
+  now <- proc.time()[["elapsed"]]
+  if (!force && now - cx$lastTick < 0.25) return(invisible())
+  cx$lastTick <- now
+  acc <- if (cur$nPost > 0) mean(cur$accSum / cur$nPost, na.rm = TRUE) else NA_real_
+  job$progress(amount = 0, fbcChain = k, fbcDone = cur$state$iter - job$from[k],
+               fbcAcceptance = acc, fbcBurn = in_warmup(cur$state, job$nBurn),
+               fbcTotal = expected_stop(cur$state, job$target[k], job$post[k], job$nBurn) - job$from[k])
 }
 
 # Is the current plan one that evaluates futures in this process?
@@ -242,44 +271,30 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
     unlink(file.path(run$dir, "STOP"))
     unlink(list.files(run$dir, pattern = "^chain-[0-9]+[.]pid$", full.names = TRUE))
   }
-  from <- vapply(starts, function(s) as.integer(s$state$iter), integer(1))
   target <- rep_len(as.integer(target), n)
   job <- list(dat = dat, spec = list(table = spec$table, model = spec$model), moves = moves, nBurn = nBurn,
-              thinning = thinning, target = target, post = post, from = from,
+              thinning = thinning, target = target, post = post,
+              from = vapply(starts, function(s) as.integer(s$state$iter), integer(1)),
               dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
               token = basename(tempfile("")), sampler = fbc_sampler_hook(),
               owner = list(pid = Sys.getpid(), host = Sys.info()[["nodename"]]),
               progress = NULL)
-
-  results <- vector("list", n)
-  bar <- NULL
   todo <- which(!vapply(starts, function(s) isTRUE(s$finished), logical(1)))
-  for (k in setdiff(seq_len(n), todo)) {
-    results[[k]] <- result_from_start(starts[[k]], FALSE)
-    results[[k]]$seed <- seeds[[k]]
-  }
+  bar <- NULL
   if (showProgress && length(todo)) {
-    if (n > 1L) {
-      workers <- future::nbrOfWorkers()
-      if (is.null(post)) {
-        cli::cli_inform("Running {n} chain{?s} of {max(target)} iterations on {workers} worker{?s}.")
-      } else {
-        cli::cli_inform("Running {n} chain{?s} to {post[1]} sweeps after warm-up on {workers} worker{?s}.")
-      }
-    }
-    total <- vapply(seq_len(n), function(k) {
-      expected_stop(starts[[k]]$state, target[k], post[k], nBurn)
-    }, numeric(1)) - from
-    bar <- progress_bar(n, total, nBurn)
-    job$progress <- progressr::progressor(steps = sum(total), enable = TRUE,
-                                          initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
+    bar <- chain_progress(job, starts)
+    job$progress <- bar$progressor
   }
-  # the run's shared state: the futures launched, the results collected,
-  # the chains whose worker died or failed, and what an interrupt needs to
-  # know (the chain being launched)
+  # the run's shared state: the futures launched, the results collected
+  # (a finished chain's at once), the chains whose worker died or failed,
+  # and what an interrupt needs to know (the chain being launched)
   rs <- new.env(parent = emptyenv())
   rs$futures <- vector("list", n)
-  rs$results <- results
+  rs$results <- vector("list", n)
+  for (k in setdiff(seq_len(n), todo)) {
+    rs$results[[k]] <- result_from_start(starts[[k]], FALSE)
+    rs$results[[k]]$seed <- seeds[[k]]
+  }
   rs$failed <- integer()
   rs$errors <- list()
   rs$launching <- 0L
@@ -316,6 +331,29 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   # a dead worker's connection, or one a Ctrl-C cut short, is useless
   if ((length(rs$failed) || dirty) && !hard) reset_plan()
   recover_chains(rs$results, rs$failed, run, starts)
+}
+
+# The progress bar of a run's chains (the run's size said first with
+# several chains) and the progressor the chains report to.
+chain_progress <- function(job, starts) {
+  n <- length(starts)
+  target <- job$target
+  post <- job$post
+  if (n > 1L) {
+    workers <- future::nbrOfWorkers()
+    if (is.null(post)) {
+      cli::cli_inform("Running {n} chain{?s} of {max(target)} iterations on {workers} worker{?s}.")
+    } else {
+      cli::cli_inform("Running {n} chain{?s} to {post[1]} sweeps after warm-up on {workers} worker{?s}.")
+    }
+  }
+  total <- vapply(seq_len(n), function(k) {
+    expected_stop(starts[[k]]$state, target[k], post[k], job$nBurn)
+  }, numeric(1)) - job$from
+  bar <- progress_bar(n, total, job$nBurn, .envir = parent.frame())
+  bar$progressor <- progressr::progressor(steps = sum(total), enable = TRUE,
+                                          initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
+  bar
 }
 
 # Launches chain k as a future with its own stream. Not with interrupts

@@ -348,6 +348,7 @@ protected:
   const arma::mat& Xf_; const arma::vec& yf_;
   const arma::mat& Xs_; const arma::vec& ys_;
   double nugget_;
+  bool scratch_ = false;   // init(): S factored from scratch, no pivot floor (see evaluate())
   int kernS_, kernB_;
   int nu_;                 // distinct field input rows
   arma::mat Xu_;           // ... and their values (nu x p)

@@ -300,7 +300,9 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
 bool SchurPosterior::init(const arma::vec& phi0) {
   phi = phi0;
   Touch all; all.everything(p + q, p);
+  scratch_ = true;
   double ll = evaluate(all);
+  scratch_ = false;
   if (!std::isfinite(ll)) return false;
   flip(all);
   return true;
@@ -542,13 +544,20 @@ double SchurPosterior::evaluate(const Touch& t) {
     Rb = &Rb_.alt();
   }
 
-  // Schur complement S and its factor.
+  // Schur complement S and its factor. A proposal whose S is numerically
+  // singular, some pivot L_ii^2 below S_PIVOT times S's largest diagonal
+  // entry, is refused: its log-likelihood is roundoff (from scratch and
+  // updated values differed by 2.5 on such draws) and a draw accepted
+  // there could fail to factor from scratch (predict()). init() factors
+  // from scratch without the floor, so every accepted draw initialises.
   const arma::mat* LS = &LS_.cur();
   double ldS = ldS_.cur();
   if (t.field) {
+    static const double S_PIVOT = 1e-10;
     // S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) + s2E [i = j], from the
     // lower triangles of the distinct-row Q and Rb (no Rb without a bias)
     arma::mat& S = LS_.alt();
+    double dmax = 0;
     for (int j = 0; j < n; ++j) {
       const int gj = grp_[j];
       double* sc = S.colptr(j);
@@ -558,8 +567,10 @@ double SchurPosterior::evaluate(const Touch& t) {
         sc[i] = s2S * Q->at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
       }
       sc[j] += phi[iSigma2E + noise_[j]];
+      dmax = std::max(dmax, sc[j]);
     }
     if (!chol_lower(S)) return R_NegInf;
+    if (!scratch_ && arma::min(S.diag()) < std::sqrt(S_PIVOT * dmax)) return R_NegInf;
     ldS = logdet_chol(S);
     LS = &S;
   }

@@ -38,7 +38,13 @@
 // cancel around the right scale and add up while it is still walking), and
 // every block is shaped, the SD its shape gives each parameter relative to
 // the shape's size within a factor exp(WARM_SHAPE) of the previous
-// window's. Warm-up ends at the end of the second settled window in a row,
+// window's, and learnt from enough draws: a joint block of at least
+// WARM_ESS_K parameters must hold in its running covariance at least
+// warmESS effective draws per parameter (R's
+// fbc_warmup$ess, carried in the state; 0 in a state written before the
+// rule, which resumes as it began), counted by batch means over the
+// windows since the estimate started (B >= 4 window means,
+// ESS_i = B var_i / var(means_i)). Warm-up ends at the end of the second settled window in a row,
 // at the earliest after warmMin sweeps, and at warmMax sweeps in any case
 // (warmCapped). The joint proposals' running covariance starts afresh at
 // sweeps 200, 400, 800, ... (each estimate leaves out at least the first
@@ -47,8 +53,12 @@
 // change of log det(L)^(1/k)). The decision is part of the chain's state, so
 // a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
-// adapt() ends a burn-in batch); the schedule is the list of moves in sweep
-// order, and each move's acceptance and adapted scale is reported by name.
+// adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
+// the model: its proposal scale (a block its shape too), its batch counts,
+// its adaptation and its retained counts; the chain keeps only the sweep
+// clock, the log densities and the warm-up's decision. The schedule is the
+// list of moves in sweep order, and each move's acceptance and adapted
+// scale is reported by name.
 // Every adapted scale is frozen after burn-in, so the retained draws come
 // from one valid kernel. The sampler's whole state (parameters, proposals,
 // adaptation sums, batch counters) goes in and comes out as a list: a run
@@ -68,6 +78,11 @@ static bool user_interrupted() {
 static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
+// the effective-draws rule holds blocks of at least this many parameters
+// (a smaller block's shape is learnt soon enough: the ball drop's blocks of
+// 2 and 3 end warm-up at 500 sweeps without it, 1300-1400 with it, as the
+// rule needs 4 windows since the estimate's restart at 800)
+static const int WARM_ESS_K = 4;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).
@@ -85,13 +100,21 @@ static double adapt_step(double logscale, double rate, double target, int batch)
   return logscale + (rate > target ? 1 : -1) * std::min(0.5, 1.0 / std::sqrt((double) batch));
 }
 
+static double list_num(const Rcpp::List& s, const char* name, double dflt) {
+  return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
+}
+
 // An adaptive joint random walk over some parameters (see the top).
 struct Block {
   std::vector<int> idx;
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
+  // warm-up of data-dependent length: the sum of w over this window's
+  // records (winN of them) and the window means since the estimate started
+  arma::vec winSum;
+  arma::mat winMeans;
   double logscale = 0, accBatch = 0;
-  int n = 0, batch = 0, restart = 0;  // restart < 0: a warm-up of data-dependent length
+  int n = 0, batch = 0, restart = 0, winN = 0;  // restart < 0: a warm-up of data-dependent length
   bool shaped = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
@@ -100,6 +123,7 @@ struct Block {
     mean.zeros(k); cov.zeros(k, k); L.zeros(k, k);
     for (int i = 0; i < k; ++i) L(i, i) = std::exp(logsd[idx[i]]);
     logscale = -0.5 * std::log((double) k);
+    winSum.zeros(k); winMeans.set_size(k, 0);
     alloc();
   }
   void alloc() {
@@ -115,16 +139,28 @@ struct Block {
     L = Rcpp::as<arma::mat>(s["chol"]);
     logscale = s["logscale"]; accBatch = s["accBatch"];
     n = s["n"]; batch = s["batch"]; shaped = s["shaped"];
+    // (a state written before the effective-draws rule: none recorded)
+    const int k = idx.size();
+    winSum = s.containsElementNamed("winSum") ? Rcpp::as<arma::vec>(s["winSum"]) : arma::vec(k, arma::fill::zeros);
+    winMeans = s.containsElementNamed("winMeans") ? Rcpp::as<arma::mat>(s["winMeans"]) : arma::mat(k, 0);
+    winN = s.containsElementNamed("winN") ? Rcpp::as<int>(s["winN"]) : 0;
     alloc();
   }
+  // (the window means only under a warm-up of data-dependent length: a
+  // fixed burn-in's state is as it was before them)
   Rcpp::List write() const {
     Rcpp::IntegerVector ix(idx.size());
     for (size_t i = 0; i < idx.size(); ++i) ix[i] = idx[i] + 1;
-    return Rcpp::List::create(
+    Rcpp::List out = Rcpp::List::create(
       Rcpp::Named("index") = ix, Rcpp::Named("logscale") = logscale,
       Rcpp::Named("chol") = L, Rcpp::Named("shaped") = shaped,
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
       Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
+    if (restart >= 0) return out;
+    out.push_back(Rcpp::wrap(winSum), "winSum");
+    out.push_back(Rcpp::wrap(winMeans), "winMeans");
+    out.push_back(winN, "winN");
+    return out;
   }
   // log det(L)^(1/k): the log size of the shape.
   double log_volume() const { return arma::mean(arma::log(L.diag())); }
@@ -133,15 +169,35 @@ struct Block {
     return 0.5 * arma::log(arma::sum(arma::square(L), 1)) - log_volume();
   }
   // Start the running mean and covariance afresh (L is kept).
-  void forget() { n = 0; mean.zeros(); cov.zeros(); }
+  void forget() {
+    n = 0; mean.zeros(); cov.zeros();
+    winSum.zeros(); winN = 0; winMeans.set_size(idx.size(), 0);
+  }
   // Welford update of the running mean and covariance of w.
   void record() {
     ++n;
+    if (restart < 0) { winSum += w; ++winN; }
     const int k = idx.size();
     for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
     mean += e / n;
     for (int a = 0; a < k; ++a)
       for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
+  }
+  // End of a warm-up window: its mean of w joins the window means (a window
+  // the estimate started in is left out), and the fewest effective draws
+  // of a parameter in the running covariance, by batch means (0 with fewer
+  // than 4 windows): ESS_i = B var_i / var(window means_i).
+  double window_ess() {
+    if (winN >= WINDOW / 2) winMeans.insert_cols(winMeans.n_cols, winSum / winN);
+    winSum.zeros(); winN = 0;
+    const int B = winMeans.n_cols, k = idx.size();
+    if (B < 4 || n < 2) return 0;
+    double ess = INFINITY;
+    for (int i = 0; i < k; ++i) {
+      const double vb = arma::var(winMeans.row(i).t()), v = cov(i, i) / (n - 1);
+      ess = std::min(ess, vb > 0 ? B * v / vb : (double) n);
+    }
+    return ess;
   }
   // End of a burn-in batch with acceptance rate `rate`: scale towards the
   // target acceptance, shape L.
@@ -167,14 +223,17 @@ struct Block {
   }
 };
 
-// Everything a chain carries from one piece of a run to the next.
+// Everything a chain carries from one piece of a run to the next but the
+// moves' own state (Move): the posterior, the log priors and likelihood,
+// the sweep and batch clock, the warm-up's decision. `logsd` and
+// `accBatch` are the state's per-parameter proposal log SDs and batch
+// acceptances as read (the moves take theirs from them and write them back).
 struct Chain {
   Posterior& post;
   const Priors& pr;
-  arma::vec logsd, lp, accBatch;  // accBatch: single sites' acceptances this batch
-  std::vector<Block> blocks;
-  double scaleLogsd = std::log(0.1), scaleAccBatch = 0;
-  int scaleBatch = 0, iter = 0, batch = 0;
+  arma::vec logsd, lp, accBatch;
+  std::vector<Block*> blocks;  // the block moves' blocks, in R's order
+  int iter = 0, batch = 0;
   double ll = 0;
   Rcpp::CharacterVector params;  // parameter names (R's spec$vars), for the report
   // warm-up of data-dependent length (see the top): sweeps of warm-up once
@@ -184,6 +243,7 @@ struct Chain {
   // log SD of the shape at the end of the last window
   bool adaptive = false, warmCapped = false;
   int warmup = 0, warmMin = 200, warmMax = 5000, settled = 0, windows = 0;
+  double warmESS = 0;
   arma::vec winAcc, winShape;
   arma::mat winScale;
   Chain(Posterior& p, const Priors& r) : post(p), pr(r) {}
@@ -208,12 +268,14 @@ struct Move {
   virtual bool step(Chain& ch) = 0;
   // after repeat `rep` of sweep `it` (burn-in or not): what the move learns
   virtual void after(bool, int, int) {}
-  // acceptances / repeats in the current batch, where the chain's state keeps them
-  virtual double& batchCount(Chain& ch) = 0;
-  virtual void adapt(Chain&) {}
-  virtual double logScale(const Chain&) const { return NA_REAL; }
+  // acceptances / repeats in the current batch (the move's own count)
+  virtual double& batchCount() = 0;
+  virtual void adapt(const Chain&) {}
+  virtual double logScale() const { return NA_REAL; }
   // the log size of its proposal, whose drift a warm-up watches
-  virtual double warmScale(const Chain& ch) const { return logScale(ch); }
+  virtual double warmScale() const { return logScale(); }
+  // its adapted state into the chain's state list (write_chain())
+  virtual void write(arma::vec&, arma::vec&, Rcpp::List&) const {}
   // the acceptance rate its scale adapts towards (NA: not adapted)
   virtual double target() const { return NA_REAL; }
   virtual const char* kind() const = 0;
@@ -222,13 +284,16 @@ struct Move {
 // Single-site random-walk Metropolis move of parameter j.
 struct SiteMove : Move {
   int j;
-  explicit SiteMove(int j_) : j(j_) { idx = {j_}; }
+  double logsd, accBatch;  // log SD of its walk, acceptances this batch
+  SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]), accBatch(ch.accBatch[j_]) {
+    idx = {j_};
+  }
   const char* kind() const override { return "single"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const int tr = ch.pr.transform[j];
     const double x = post.phi[j];
-    const double xNew = from_walk(tr, to_walk(tr, x) + std::exp(ch.logsd[j]) * R::norm_rand());
+    const double xNew = from_walk(tr, to_walk(tr, x) + std::exp(logsd) * R::norm_rand());
     const double lpNew = ch.pr(j, xNew);
     if (!std::isfinite(lpNew)) return false;
     const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
@@ -243,19 +308,22 @@ struct SiteMove : Move {
     post.reject();
     return false;
   }
-  double& batchCount(Chain& ch) override { return ch.accBatch[j]; }
-  void adapt(Chain& ch) override {
-    ch.logsd[j] = adapt_step(ch.logsd[j], ch.accBatch[j] / BATCH, 0.44, ch.batch);
+  double& batchCount() override { return accBatch; }
+  void adapt(const Chain& ch) override {
+    logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
   }
-  double logScale(const Chain& ch) const override { return ch.logsd[j]; }
+  double logScale() const override { return logsd; }
   double target() const override { return 0.44; }
+  void write(arma::vec& lsd, arma::vec& acc, Rcpp::List&) const override {
+    lsd[j] = logsd; acc[j] = accBatch;
+  }
 };
 
 // Joint random-walk move of a block (w* = w + exp(s) L e); it records the
 // burn-in draws that shape L.
 struct BlockMove : Move {
-  Block& b;
-  BlockMove(Block& b_, int rep) : b(b_) { idx = b_.idx; repeats = rep; }
+  Block b;
+  BlockMove(Block&& b_, int rep) : b(std::move(b_)) { idx = b.idx; repeats = rep; }
   const char* kind() const override { return idx.size() == 1 ? "walk" : "joint"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
@@ -294,18 +362,20 @@ struct BlockMove : Move {
     if (restart && rep == 0) b.forget();
     b.record();
   }
-  double& batchCount(Chain&) override { return b.accBatch; }
-  void adapt(Chain&) override { b.adapt(b.accBatch / BATCH); }
-  double logScale(const Chain&) const override { return b.logscale; }
-  double warmScale(const Chain&) const override { return b.logscale + b.log_volume(); }
+  double& batchCount() override { return b.accBatch; }
+  void adapt(const Chain&) override { b.adapt(b.accBatch / BATCH); }
+  double logScale() const override { return b.logscale; }
+  double warmScale() const override { return b.logscale + b.log_volume(); }
   double target() const override { return idx.size() == 1 ? 0.44 : 0.234; }
 };
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
 struct GibbsMuBMove : Move {
-  explicit GibbsMuBMove(int j) { idx = {j}; }
+  double accBatch;  // draws this batch (every one is accepted)
+  GibbsMuBMove(int j, const Chain& ch) : accBatch(ch.accBatch[j]) { idx = {j}; }
   const char* kind() const override { return "gibbs"; }
-  double& batchCount(Chain& ch) override { return ch.accBatch[idx[0]]; }
+  double& batchCount() override { return accBatch; }
+  void write(arma::vec&, arma::vec& acc, Rcpp::List&) const override { acc[idx[0]] = accBatch; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const int j = idx[0];
@@ -326,15 +396,20 @@ struct GibbsMuBMove : Move {
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
 struct ScaleMove : Move {
   std::vector<double> lpNew;  // the proposal's log priors (workspace)
-  explicit ScaleMove(const Posterior& post) {
+  double logsd, accBatch;     // log SD of log c, acceptances this batch
+  int batch;                  // its burn-in batches so far
+  ScaleMove(const Posterior& post, const Rcpp::List& state) {
     idx = post.scaled;
     lpNew.resize(idx.size());
     name = "scale";
+    logsd = list_num(state, "scaleLogsd", std::log(0.1));
+    accBatch = list_num(state, "scaleAccBatch", 0);
+    batch = (int) list_num(state, "scaleBatch", 0);
   }
   const char* kind() const override { return "scale"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
-    const double e = std::exp(ch.scaleLogsd) * R::norm_rand(), c = std::exp(e);
+    const double e = std::exp(logsd) * R::norm_rand(), c = std::exp(e);
     const int k = idx.size();
     double lpDiff = 0;
     for (int i = 0; i < k; ++i) {
@@ -353,18 +428,17 @@ struct ScaleMove : Move {
     post.reject();
     return false;
   }
-  double& batchCount(Chain& ch) override { return ch.scaleAccBatch; }
-  void adapt(Chain& ch) override {
-    ++ch.scaleBatch;
-    ch.scaleLogsd = adapt_step(ch.scaleLogsd, ch.scaleAccBatch / BATCH, 0.44, ch.scaleBatch);
+  double& batchCount() override { return accBatch; }
+  void adapt(const Chain&) override {
+    ++batch;
+    logsd = adapt_step(logsd, accBatch / BATCH, 0.44, batch);
   }
-  double logScale(const Chain& ch) const override { return ch.scaleLogsd; }
+  double logScale() const override { return logsd; }
   double target() const override { return 0.44; }
+  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
+    out["scaleLogsd"] = logsd; out["scaleAccBatch"] = accBatch; out["scaleBatch"] = batch;
+  }
 };
-
-static double list_num(const Rcpp::List& s, const char* name, double dflt) {
-  return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
-}
 
 typedef std::vector<std::unique_ptr<Move> > Schedule;
 
@@ -376,12 +450,10 @@ static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
   ch.batch = (int) list_num(state, "batch", 0);
   ch.accBatch = state.containsElementNamed("accBatch") ?
     Rcpp::as<arma::vec>(state["accBatch"]) : arma::vec(d, arma::fill::zeros);
-  ch.scaleLogsd = list_num(state, "scaleLogsd", std::log(0.1));
-  ch.scaleAccBatch = list_num(state, "scaleAccBatch", 0);
-  ch.scaleBatch = (int) list_num(state, "scaleBatch", 0);
   ch.warmup = (int) list_num(state, "warmup", 0);
   ch.warmMin = (int) list_num(state, "warmMin", 200);
   ch.warmMax = (int) list_num(state, "warmMax", 5000);
+  ch.warmESS = list_num(state, "warmESS", 0);
   ch.warmCapped = list_num(state, "warmCapped", 0) != 0;
   ch.settled = (int) list_num(state, "settled", 0);
   ch.windows = (int) list_num(state, "windows", 0);
@@ -390,6 +462,44 @@ static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
     ch.winShape = Rcpp::as<arma::vec>(state["winShape"]);
     ch.winScale = Rcpp::as<arma::mat>(state["winScale"]);
   }
+}
+
+// The joint blocks of `blockSpec` (R's sampler_moves()$blocks), each
+// continued from `state` when it has them, else started from the
+// parameters' proposal SDs, with the burn-in sweep their covariance
+// estimate restarts at: from the middle of burn-in (when burn-in has at
+// least 400 sweeps), so the first sweeps' drift from the starting point
+// does not inflate it (a warm-up of data-dependent length starts it afresh
+// at 200, 400, 800, ...).
+static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSpec,
+                                      const Rcpp::List& state, int nBurn) {
+  const int d = ch.post.d;
+  const int restartAt = nBurn < 0 ? -1 : nBurn >= 400 ? nBurn / 2 : 0;
+  Rcpp::List blockState;
+  if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
+    blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
+  const bool haveBlocks = blockState.size() > 0 && blockState.size() == blockSpec.size();
+  std::vector<Block> blocks(blockSpec.size());
+  std::vector<char> inBlock(d, 0);
+  for (int b = 0; b < blockSpec.size(); ++b) {
+    const Rcpp::IntegerVector ix = blockSpec[b];
+    if (haveBlocks) {
+      blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
+    } else {
+      std::vector<int> idx(ix.begin(), ix.end());
+      for (int& j : idx) j -= 1;
+      blocks[b].start(idx, ch.logsd);
+    }
+    if ((int) blocks[b].idx.size() != ix.size())
+      Rcpp::stop("the block proposal to continue from has the wrong size");
+    blocks[b].restart = restartAt;
+    for (int j : blocks[b].idx) {
+      if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || inBlock[j])
+        Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
+      inBlock[j] = 1;
+    }
+  }
+  return blocks;
 }
 
 // The schedule of `moves` (R's sampler_moves()): the moves in sweep order.
@@ -415,59 +525,37 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   const Rcpp::List blockSpec = moves["blocks"];
   const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
     Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
-  // The joint proposals' covariance is estimated afresh from the middle of
-  // burn-in (when burn-in has at least 400 sweeps), so the first sweeps'
-  // drift from the starting point does not inflate it.
-  // (A warm-up of data-dependent length starts it afresh at 200, 400, 800, ...)
-  const int restartAt = nBurn < 0 ? -1 : nBurn >= 400 ? nBurn / 2 : 0;
-  Rcpp::List blockState;
-  if (state.containsElementNamed("blocks") && !Rf_isNull(state["blocks"]))
-    blockState = Rcpp::as<Rcpp::List>(state["blocks"]);
-  const bool haveBlocks = blockState.size() > 0 && blockState.size() == blockSpec.size();
-  ch.blocks.resize(blockSpec.size());
+  std::vector<Block> blocks = make_blocks(ch, blockSpec, state, nBurn);
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
-  for (int b = 0; b < blockSpec.size(); ++b) {
-    const Rcpp::IntegerVector ix = blockSpec[b];
-    if (haveBlocks) {
-      ch.blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
-    } else {
-      std::vector<int> idx(ix.begin(), ix.end());
-      for (int& j : idx) j -= 1;
-      ch.blocks[b].start(idx, ch.logsd);
-    }
-    if ((int) ch.blocks[b].idx.size() != ix.size())
-      Rcpp::stop("the block proposal to continue from has the wrong size");
-    ch.blocks[b].restart = restartAt;
-    for (int j : ch.blocks[b].idx) {
-      if (j < 0 || j >= d || pr.family[j] == PF_FIXED || inBlock[j])
-        Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
-      inBlock[j] = 1;
-    }
-    blockAt[ch.blocks[b].idx[0]] = b;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    for (int j : blocks[b].idx) inBlock[j] = 1;
+    blockAt[blocks[b].idx[0]] = b;
   }
-
   SEXP bn = Rf_getAttrib(blockSpec, R_NamesSymbol);
   const Rcpp::CharacterVector blockNames = Rf_isNull(bn) ?
     Rcpp::CharacterVector(blockSpec.size()) : Rcpp::CharacterVector(bn);
   Schedule schedule;
+  ch.blocks.assign(blocks.size(), nullptr);
   for (int j = 0; j < d; ++j) {
     if (pr.family[j] == PF_FIXED) continue;
     if (inBlock[j]) {
       if (blockAt[j] < 0) continue;
       const int b = blockAt[j];
-      schedule.emplace_back(new BlockMove(ch.blocks[b], repeats.size() > b ? std::max(1, repeats[b]) : 1));
+      BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
+      schedule.emplace_back(mv);
+      ch.blocks[b] = &mv->b;
       const std::string nm(blockNames[b]);
-      schedule.back()->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
+      mv->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
-      schedule.emplace_back(new GibbsMuBMove(j));
+      schedule.emplace_back(new GibbsMuBMove(j, ch));
       schedule.back()->name = ch.param_name(j);
     } else {
-      schedule.emplace_back(new SiteMove(j));
+      schedule.emplace_back(new SiteMove(j, ch));
       schedule.back()->name = ch.param_name(j);
     }
   }
-  if (scaleMove) schedule.emplace_back(new ScaleMove(post));
+  if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
     const Rcpp::List old = state["moves"];
     const Rcpp::CharacterVector nm = old["name"];
@@ -485,7 +573,7 @@ static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
     for (int r = 0; r < mv->repeats; ++r) {
       const bool acc = mv->step(ch);
       mv->after(burn, it, r);
-      if (acc) mv->batchCount(ch) += 1.0 / mv->repeats;
+      if (acc) mv->batchCount() += 1.0 / mv->repeats;
       if (!burn) {
         mv->tries += 1;
         if (acc) { mv->accepted += 1; mv->accPiece += 1.0 / mv->repeats; }
@@ -497,7 +585,7 @@ static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
 // Log SDs of every block's shape, blocks in order.
 static arma::vec shapes(const Chain& ch) {
   arma::vec out;
-  for (const Block& b : ch.blocks) out = arma::join_cols(out, b.log_shape());
+  for (const Block* b : ch.blocks) out = arma::join_cols(out, b->log_shape());
   return out;
 }
 
@@ -520,7 +608,7 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
   bool ok = ch.windows >= 2;  // the log scales two windows back to compare with
   const int nm = schedule.size();
   for (int i = 0; i < nm; ++i) {
-    const double target = schedule[i]->target(), ls = schedule[i]->warmScale(ch);
+    const double target = schedule[i]->target(), ls = schedule[i]->warmScale();
     if (!ISNAN(target)) {
       if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) ok = false;
       // the drift since two windows back (since the first window's end at
@@ -532,7 +620,13 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     ch.winScale(1, i) = ls;
   }
   const arma::vec sh = shapes(ch);
-  for (const Block& b : ch.blocks) if (!b.shaped) ok = false;
+  for (Block* b : ch.blocks) {
+    if (!b->shaped) ok = false;
+    // a joint block's shape learnt from enough effective draws
+    const double ess = b->window_ess();
+    const int k = b->idx.size();
+    if (k >= WARM_ESS_K && ess < ch.warmESS * k) ok = false;
+  }
   if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
     ok = false;
   ch.winShape = sh;
@@ -549,7 +643,7 @@ static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar, int it
     for (auto& mv : schedule) mv->adapt(ch);
   if (burn && ch.adaptive) {
     for (size_t i = 0; i < schedule.size(); ++i)
-      ch.winAcc[i] += schedule[i]->batchCount(ch) / BATCH;
+      ch.winAcc[i] += schedule[i]->batchCount() / BATCH;
     if (it % WINDOW == 0) {
       ch.settled = window_settled(ch, schedule) ? ch.settled + 1 : 0;
       if (ch.settled >= 2 && it >= ch.warmMin) ch.warmup = it;
@@ -559,7 +653,7 @@ static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar, int it
   if (!Rf_isNull(bar)) {
     double lo = 1, mean = 0;
     for (auto& mv : schedule) {
-      const double rate = mv->batchCount(ch) / BATCH;
+      const double rate = mv->batchCount() / BATCH;
       lo = std::min(lo, rate); mean += rate;
     }
     if (!schedule.empty()) mean /= schedule.size();
@@ -568,9 +662,7 @@ static void end_batch(Chain& ch, Schedule& schedule, bool burn, SEXP bar, int it
                   burn ? "burn-in" : "sampling", lo, mean);
     cli_progress_set_status(bar, status);
   }
-  ch.accBatch.zeros();
-  for (Block& b : ch.blocks) b.accBatch = 0;
-  ch.scaleAccBatch = 0;
+  for (auto& mv : schedule) mv->batchCount() = 0;
 }
 
 // The per-move report: name, kind, parameters, repeats, retained
@@ -587,7 +679,7 @@ static Rcpp::List move_report(const Chain& ch, const Schedule& schedule) {
     for (size_t k = 0; k < mv.idx.size(); ++k) ps += (k ? "," : "") + ch.param_name(mv.idx[k]);
     params[i] = ps;
     accepted[i] = mv.accepted; tries[i] = mv.tries;
-    const double ls = mv.logScale(ch);
+    const double ls = mv.logScale();
     scale[i] = ISNA(ls) ? NA_REAL : std::exp(ls);
   }
   return Rcpp::List::create(
@@ -596,27 +688,98 @@ static Rcpp::List move_report(const Chain& ch, const Schedule& schedule) {
     Rcpp::Named("tries") = tries, Rcpp::Named("scale") = scale);
 }
 
-// The chain's whole state, for the next piece (read_chain(), make_schedule()).
-static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule) {
+// The chain's whole state, for the next piece (read_chain(), make_schedule()):
+// the chain's own, and each move's where the state keeps it (per-parameter
+// log SDs and batch counts, the scale move's; a parameter without a move
+// of its own, and the scale move's entries without one, as `state` had them).
+static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule,
+                              const Rcpp::List& state) {
   Rcpp::List blocks(ch.blocks.size());
-  for (size_t b = 0; b < ch.blocks.size(); ++b) blocks[b] = ch.blocks[b].write();
+  for (size_t b = 0; b < ch.blocks.size(); ++b) blocks[b] = ch.blocks[b]->write();
   const arma::vec& phi = ch.post.phi;
+  arma::vec logsd = ch.logsd, accBatch = ch.accBatch;
+  Rcpp::List scale = Rcpp::List::create(
+    Rcpp::Named("scaleLogsd") = list_num(state, "scaleLogsd", std::log(0.1)),
+    Rcpp::Named("scaleAccBatch") = list_num(state, "scaleAccBatch", 0),
+    Rcpp::Named("scaleBatch") = (int) list_num(state, "scaleBatch", 0));
+  for (const auto& mv : schedule) mv->write(logsd, accBatch, scale);
   return Rcpp::List::create(
     Rcpp::Named("phi") = Rcpp::NumericVector(phi.begin(), phi.end()),
-    Rcpp::Named("logsd") = Rcpp::NumericVector(ch.logsd.begin(), ch.logsd.end()),
+    Rcpp::Named("logsd") = Rcpp::NumericVector(logsd.begin(), logsd.end()),
     Rcpp::Named("iter") = ch.iter, Rcpp::Named("batch") = ch.batch,
-    Rcpp::Named("accBatch") = Rcpp::NumericVector(ch.accBatch.begin(), ch.accBatch.end()),
+    Rcpp::Named("accBatch") = Rcpp::NumericVector(accBatch.begin(), accBatch.end()),
     Rcpp::Named("blocks") = blocks,
-    Rcpp::Named("scaleLogsd") = ch.scaleLogsd,
-    Rcpp::Named("scaleAccBatch") = ch.scaleAccBatch,
-    Rcpp::Named("scaleBatch") = ch.scaleBatch,
+    Rcpp::Named("scaleLogsd") = scale["scaleLogsd"],
+    Rcpp::Named("scaleAccBatch") = scale["scaleAccBatch"],
+    Rcpp::Named("scaleBatch") = scale["scaleBatch"],
     Rcpp::Named("moves") = move_report(ch, schedule),
     Rcpp::Named("warmup") = ch.warmup, Rcpp::Named("warmMin") = ch.warmMin,
-    Rcpp::Named("warmMax") = ch.warmMax, Rcpp::Named("warmCapped") = ch.warmCapped,
+    Rcpp::Named("warmMax") = ch.warmMax, Rcpp::Named("warmESS") = ch.warmESS,
+    Rcpp::Named("warmCapped") = ch.warmCapped,
     Rcpp::Named("settled") = ch.settled, Rcpp::Named("windows") = ch.windows,
     Rcpp::Named("winAcc") = Rcpp::NumericVector(ch.winAcc.begin(), ch.winAcc.end()),
     Rcpp::Named("winScale") = Rcpp::wrap(ch.winScale),
     Rcpp::Named("winShape") = Rcpp::NumericVector(ch.winShape.begin(), ch.winShape.end()));
+}
+
+// The chain continued from `state`: its own state, its moves' schedule, the
+// warm-up's settings (nBurn < 0: of data-dependent length), the log priors
+// and likelihood at its parameters.
+static Schedule start_chain(Chain& ch, const Rcpp::List& moves, const Rcpp::List& state,
+                            int nBurn) {
+  const int d = ch.post.d;
+  if (moves.containsElementNamed("params"))
+    ch.params = Rcpp::as<Rcpp::CharacterVector>(moves["params"]);
+  read_chain(ch, state, d);
+  Schedule schedule = make_schedule(ch, moves, state, nBurn);
+  ch.adaptive = nBurn < 0;
+  if (ch.adaptive) {
+    if (ch.warmMax % WINDOW != 0 || ch.warmMin < 0)
+      Rcpp::stop("the warm-up bounds must be whole windows of 100 sweeps");
+    start_windows(ch, schedule);
+  } else {
+    ch.warmup = nBurn;
+  }
+  ch.lp.set_size(d);
+  for (int j = 0; j < d; ++j) ch.lp[j] = ch.pr(j, ch.post.phi[j]);
+  ch.ll = ch.post.logLik();
+  if (!std::isfinite(arma::accu(ch.lp)))
+    Rcpp::stop("the initial values are outside the support of their priors");
+  return schedule;
+}
+
+// The result of a call (the chain-result record of one piece; R's
+// result_from_start() builds the run's from it): the `kept` retained draws
+// (the first rows of draws, logPost, logLik), the acceptance of each
+// parameter over this call's `nPost` retained sweeps (that of the move that
+// moves it; the scale move's apart), the sweeps done and the state.
+static Rcpp::List piece_result(const Chain& ch, const Schedule& schedule,
+                               const Rcpp::List& state, Rcpp::NumericMatrix draws,
+                               Rcpp::NumericVector logPost, Rcpp::NumericVector logLik,
+                               int kept, int nPost, int done, bool interrupted) {
+  const int d = ch.post.d, nKeep = draws.nrow();
+  Rcpp::NumericVector acceptance(d, NA_REAL);
+  double scaleAcceptance = NA_REAL;
+  for (auto& mv : schedule) {
+    const double a = nPost > 0 ? mv->accPiece / nPost : NA_REAL;
+    if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
+    else for (int j : mv->idx) acceptance[j] = a;
+  }
+  if (kept < nKeep) {  // a warm-up that ended in this piece
+    Rcpp::NumericMatrix cut(kept, d);
+    for (int j = 0; j < d; ++j)
+      std::copy(draws.begin() + j * nKeep, draws.begin() + j * nKeep + kept, cut.begin() + j * kept);
+    draws = cut;
+    logPost = Rcpp::NumericVector(logPost.begin(), logPost.begin() + kept);
+    logLik = Rcpp::NumericVector(logLik.begin(), logLik.begin() + kept);
+  }
+  return Rcpp::List::create(
+    Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
+    Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
+    Rcpp::Named("acceptance") = acceptance,
+    Rcpp::Named("scaleAcceptance") = scaleAcceptance,
+    Rcpp::Named("done") = done, Rcpp::Named("nPost") = nPost,
+    Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = write_chain(ch, schedule, state));
 }
 
 // [[Rcpp::export(.fbc_sample_c)]]
@@ -636,24 +799,7 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   if (thinning < 1) Rcpp::stop("thinning must be at least 1");
 
   Chain ch(post, pr);
-  if (moves.containsElementNamed("params"))
-    ch.params = Rcpp::as<Rcpp::CharacterVector>(moves["params"]);
-  read_chain(ch, state, d);
-  Schedule schedule = make_schedule(ch, moves, state, nBurn);
-  ch.adaptive = nBurn < 0;
-  if (ch.adaptive) {
-    if (ch.warmMax % WINDOW != 0 || ch.warmMin < 0)
-      Rcpp::stop("the warm-up bounds must be whole windows of 100 sweeps");
-    start_windows(ch, schedule);
-  } else {
-    ch.warmup = nBurn;
-  }
-
-  ch.lp.set_size(d);
-  for (int j = 0; j < d; ++j) ch.lp[j] = pr(j, post.phi[j]);
-  ch.ll = post.logLik();
-  if (!std::isfinite(arma::accu(ch.lp)))
-    Rcpp::stop("the initial values are outside the support of their priors");
+  Schedule schedule = start_chain(ch, moves, state, nBurn);
 
   // Retained iterations in (iter, iter + nIter]: it > W, (it - W) % thinning
   // == 0, with W = nBurn, or the warm-up's length once it has ended (at
@@ -699,29 +845,8 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
   }
   if (!Rf_isNull(bar)) { cli_progress_done(bar); UNPROTECT(1); }
 
-  // acceptance of each parameter: that of the move that moves it
-  Rcpp::NumericVector acceptance(d, NA_REAL);
-  double scaleAcceptance = NA_REAL;
-  for (auto& mv : schedule) {
-    const double a = nPost > 0 ? mv->accPiece / nPost : NA_REAL;
-    if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
-    else for (int j : mv->idx) acceptance[j] = a;
-  }
-  if (kept < nKeep) {  // a warm-up that ended in this piece
-    Rcpp::NumericMatrix cut(kept, d);
-    for (int j = 0; j < d; ++j)
-      std::copy(draws.begin() + j * nKeep, draws.begin() + j * nKeep + kept, cut.begin() + j * kept);
-    draws = cut;
-    logPost = Rcpp::NumericVector(logPost.begin(), logPost.begin() + kept);
-    logLik = Rcpp::NumericVector(logLik.begin(), logLik.begin() + kept);
-  }
-  return Rcpp::List::create(
-    Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
-    Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
-    Rcpp::Named("acceptance") = acceptance,
-    Rcpp::Named("scaleAcceptance") = scaleAcceptance,
-    Rcpp::Named("done") = ch.iter - it0, Rcpp::Named("nPost") = nPost,
-    Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = write_chain(ch, schedule));
+  return piece_result(ch, schedule, state, draws, logPost, logLik, kept, nPost, ch.iter - it0,
+                      interrupted);
 }
 
 // Log-likelihood at one parameter vector, computed from scratch.

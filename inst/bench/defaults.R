@@ -8,6 +8,12 @@
 #   Rscript inst/bench/defaults.R priors           # the noise-prior study behind ?set_hyperPriors
 #   Rscript inst/bench/defaults.R all              # every row but priors
 #   ... quick                                      # a smoke test (short runs)
+#   ... nopeer                                     # without RobustCalibration
+#   ... trace                                      # each convergence check's R-hat and
+#                                                  # bulk ESS per parameter, the warm-ups
+#   ... neighbours=10                              # name=value: an argument added to
+#                                                  # every calibrate() call (an experiment,
+#                                                  # not the default; the header says so)
 #
 # Each row: CPU s (user + system of this process, proc.time()), sweeps a
 # chain, warm-up sweeps, max R-hat, min bulk ESS over every parameter,
@@ -30,7 +36,26 @@
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
-parts <- setdiff(args, "quick")
+trace <- "trace" %in% args
+nopeer <- "nopeer" %in% args  # leave RobustCalibration out (a diagnosis run)
+extra <- grep("=", args, value = TRUE, fixed = TRUE)
+# experiments on the package's own constants (not arguments): ess=N the
+# warm-up's effective draws per block parameter (fbc_warmup$ess), growth=G
+# the stopping checks' growth factor (fbc_check_growth)
+internal <- grep("^(ess|growth)=", extra, value = TRUE)
+extra <- setdiff(extra, internal)
+for (a in internal) {
+  ns <- asNamespace("FBC")
+  v <- as.numeric(sub("^.*=", "", a))
+  nm <- if (startsWith(a, "ess=")) "fbc_warmup" else "fbc_check_growth"
+  val <- get(nm, ns)
+  if (nm == "fbc_warmup") val$ess <- v else val <- v
+  unlockBinding(nm, ns)
+  assign(nm, val, envir = ns)
+}
+extraArgs <- lapply(sub("^[^=]*=", "", extra), function(v) eval(str2lang(v)))
+names(extraArgs) <- sub("=.*$", "", extra)
+parts <- setdiff(args, c("quick", "trace", "nopeer", extra, internal))
 known <- c("precise", "ball", "m1000", "m5000", "m20000", "functional", "priors")
 if (!length(parts)) parts <- c("precise", "ball")
 if ("all" %in% parts) parts <- setdiff(known, "priors")
@@ -49,8 +74,32 @@ covers <- function(x, truth) {
 }
 # the default run: converge = TRUE and nothing else (quick: a short fixed run)
 default_fit <- function(sim, field, ...) {
-  if (quick) return(calibrate(sim, field, nMCMC = 600, nBurn = 200, ...))
-  calibrate(sim, field, converge = TRUE, ...)
+  if (quick) return(do.call(calibrate, c(list(sim, field, nMCMC = 600, nBurn = 200, ...), extraArgs)))
+  do.call(calibrate, c(list(sim, field, converge = TRUE, ...), extraArgs))
+}
+# trace: each check of the rule prints the sweeps, every chain's warm-up and
+# each parameter's R-hat and bulk ESS (the lagging ones first)
+if (trace) {
+  ns <- asNamespace("FBC")
+  rule_met0 <- get("rule_met", ns)
+  traced <- function(results, rule, cols) {
+    out <- rule_met0(results, rule, cols)
+    draws <- lapply(results, function(r) r$draws[seq_len(r$kept), cols, drop = FALSE])
+    chain <- rep(seq_along(draws), vapply(draws, nrow, integer(1)))
+    est <- FBC:::chain_diagnostics(do.call(rbind, draws), chain)
+    warm <- vapply(results, function(r) as.numeric(r$state$warmup %||% NA), numeric(1))
+    cat(sprintf("check at %s sweeps (warm-up %s; kept %s a chain), cpu %.1f s: max R-hat %.4f, min ESS %.0f\n",
+                paste(unique(vapply(results, function(r) r$state$iter, numeric(1))), collapse = "/"),
+                paste(warm, collapse = "/"), paste(unique(vapply(draws, nrow, integer(1))), collapse = "/"),
+                cpu(), out$rhat, out$ess))
+    tab <- data.frame(param = colnames(results[[1]]$draws)[cols] %||% cols,
+                      rhat = round(est$rhat, 4), ess = round(est$ess))
+    tab <- tab[order(-tab$rhat), ]
+    print(utils::head(tab[!is.na(tab$rhat), ], 8), row.names = FALSE)
+    out
+  }
+  unlockBinding("rule_met", ns)
+  assign("rule_met", traced, envir = ns)
 }
 # one row of the table from a fit
 row_of <- function(problem, fit, cpu, truth, peer = NA_real_) {
@@ -84,7 +133,7 @@ source("inst/bench/problems.R")
 
 # RobustCalibration's default run (S-GaSP, its 10,000 sweeps), CPU s
 peer_cpu <- function(sim, field, p) {
-  if (!requireNamespace("RobustCalibration", quietly = TRUE)) return(NA_real_)
+  if (nopeer || !requireNamespace("RobustCalibration", quietly = TRUE)) return(NA_real_)
   sim <- as.matrix(sim)
   field <- as.matrix(field)
   q <- ncol(sim) - 1L - p
@@ -189,6 +238,9 @@ cat(sprintf("FBC %s defaults benchmark, %s; %s; BLAS %s (%s); load %s\n",
             basename(extSoftVersion()[["BLAS"]]), FBC:::blas_kind(),
             paste(tryCatch(readLines("/proc/loadavg")[1], error = function(e) "?"))))
 if (quick) cat("(quick: short fixed runs, not the default)\n")
+if (length(extraArgs) || length(internal)) {
+  cat("(not the defaults: every calibrate() call adds", paste(c(extra, internal), collapse = ", "), ")\n")
+}
 for (part in parts) {
   cat("\n==", part, "==\n")
   res <- switch(part,

@@ -125,6 +125,62 @@ test_that("set.seed() reproduces a run of data-dependent length on every plan", 
   expect_gte(min(ua$estimates$ess), 800)
 })
 
+# The fewest effective draws per parameter in a joint block's running
+# covariance where its warm-up ended, by batch means over the windows since
+# the estimate started (src/sampler.cpp): B var_i / var(window means_i),
+# computed here in plain R from the block's state.
+block_ess <- function(b) {
+  m <- as.matrix(b$winMeans)
+  v <- diag(as.matrix(b$cov)) / (b$n - 1)
+  ncol(m) * v / apply(m, 1, stats::var)
+}
+
+# Runs `code` with the warm-up's effective-draws rule at `ess` per
+# parameter (fbc_warmup$ess, R/converge.R).
+with_warmup_ess <- function(ess, code) {
+  ns <- asNamespace("FBC")
+  old <- get("fbc_warmup", ns)
+  unlockBinding("fbc_warmup", ns)
+  on.exit(assign("fbc_warmup", old, envir = ns), add = TRUE)
+  assign("fbc_warmup", utils::modifyList(old, list(ess = ess)), envir = ns)
+  force(code)
+}
+
+test_that("warm-up waits for the joint blocks' shapes to be learnt from enough effective draws", {
+  # the ball drop with a second, irrelevant field input z: the simulator
+  # block is thetaS of h, z and g and sigma2S (4 parameters: the rule holds
+  # blocks of at least 4; the bias block's 3 are exempt)
+  set.seed(39)
+  sim <- cbind(ballSim[, 1:2], z = runif(nrow(ballSim)), ballSim[, 3, drop = FALSE])
+  field <- cbind(ballField, z = runif(nrow(ballField)))
+  args <- list(sim, field, nChains = 2, nMCMC = 3000)
+  set.seed(38)
+  fit <- with_warmup_ess(10, do.call(calibrate, args))
+  # where warm-up ended (but at its maximum, half of nMCMC, which the
+  # irrelevant input's slow length-scale makes one chain reach) each joint
+  # block of 4 or more parameters held at least 10 effective draws per
+  # parameter in its running covariance, over at least 4 windows of 100
+  # sweeps since its estimate started
+  capped <- fit$settings$warmupCapped
+  expect_true(all(fit$settings$warmup[capped] == 1500))
+  expect_lt(length(capped), 2)
+  for (k in setdiff(1:2, capped)) {
+    st <- fit$state$chains[[k]]$sampler
+    expect_identical(st$warmESS, 10)
+    big <- Filter(function(b) length(b$index) >= 4, st$blocks)
+    expect_length(big, 1)
+    for (b in big) {
+      expect_gte(ncol(as.matrix(b$winMeans)), 4)
+      expect_true(all(block_ess(b) >= 10 * length(b$index)))
+    }
+  }
+  # without the rule the same chains end warm-up sooner: it is what held them
+  set.seed(38)
+  off <- with_warmup_ess(0, do.call(calibrate, args))
+  expect_true(all(off$settings$warmup <= fit$settings$warmup))
+  expect_true(any(off$settings$warmup < fit$settings$warmup))
+})
+
 test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
   args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(37)
