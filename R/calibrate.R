@@ -596,7 +596,8 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), fit = TRUE) {
+                      sourceBias = c("shared", "own"), outputs = c("independent", "shared"),
+                      fit = TRUE) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery)
@@ -608,7 +609,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                        discrepancy = discrepancy, kernelS = kernelS, kernelB = kernelB,
                        sampler = sampler, blockSim = blockSim, algebra = algebra,
                        neighbours = neighbours, output = output, source = source,
-                       sourceBias = sourceBias, modelCall = call)
+                       sourceBias = sourceBias, outputs = outputs, modelCall = call)
   if (!fit) return(model)
   fit_model(model, run)
 }
