@@ -149,7 +149,9 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
     one <- if (sizes[i] == 0L) character(0)
     else if (model_classes$over[i] == "one" || (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
-    if (K > 1L && model_classes$perOutput[i]) paste0(rep(one, K), "[", rep(lab, each = length(one)), "]") else one
+    if (K > 1L && model_classes$perOutput[i] && length(one)) {
+      paste0(rep(one, K), "[", rep(lab, each = length(one)), "]")
+    } else one
   }), use.names = FALSE)
 }
 

@@ -85,3 +85,11 @@ outputs_line <- function(model) {
             length(out$levels), lev, if (model$discrepancy == "none") "" else " (bias: rhoB)")
   }
 }
+
+# The categorical inputs that have level correlations (rhoS, rhoB): all but
+# the output with independent outputs (each output its own GPs).
+level_factors <- function(model) {
+  fac <- model$scale$factors
+  if (!identical(model$options$outputs, "independent")) return(fac)
+  fac[names(fac) != model$scale$output$name]
+}
