@@ -596,7 +596,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), outputs = c("independent", "shared"),
+                      sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
