@@ -205,7 +205,8 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, K)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
-       classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
+       classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
+       priors = priors, fns = prior_functions(table, vars, cls_of, scale),
        model = compiled_model(p, q, discrepancy = discrepancy,
                               noise = if (noise > 1L) seq_len(noise), levels = levels,
                               source = source, outputs = outputs))
