@@ -36,11 +36,11 @@ sampler_moves <- function(sampler, spec, large = FALSE) {
     by <- split(idx, outOf[idx])
     stats::setNames(by, if (length(by) > 1L) paste0(m, names(by)) else rep(m, length(by)))
   }))
-  joint <- joint[lengths(joint) >= 2L]
+  joint <- if (is.null(joint)) list() else joint[lengths(joint) >= 2L]
   scaled <- which(model_classes$scaled[row])
   gibbs <- which(move == "gibbs")
   rep_each <- if (large) 1L else 3L
-  rep_joint <- as.integer(ifelse(startsWith(names(joint), "sim") & large, 1L, 2L))
+  rep_joint <- as.integer(ifelse(startsWith(as.character(names(joint)), "sim") & large, 1L, 2L))
   list(
     blocks = c(each, joint),
     repeats = c(rep(rep_each, length(each)), rep_joint),

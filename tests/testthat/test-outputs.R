@@ -95,3 +95,85 @@ test_that("independent outputs: likelihood, moves and predictions are each outpu
     }
   }
 })
+
+# Two outputs sharing a rate t: a decay and a linear response (as in
+# test-factors.R).
+two_shapes <- function(seed = 1, m = 40, noise = 0.05) {
+  set.seed(seed)
+  x <- runif(m); t <- runif(m, 0.5, 3)
+  f1 <- function(x, t) 5 * exp(-t * x)
+  f2 <- function(x, t) 2 * t * x
+  sim <- rbind(data.frame(y = f1(x, t), x = x, out = "conc", t = t),
+               data.frame(y = f2(x, t), x = x, out = "rate", t = t))
+  xf <- seq(0.05, 0.95, length.out = 10)
+  field <- rbind(data.frame(y = f1(xf, 1.7) + rnorm(10, 0, noise), x = xf, out = "conc"),
+                 data.frame(y = f2(xf, 1.7) + rnorm(10, 0, noise), x = xf, out = "rate"))
+  list(sim = sim, field = field, truth = 1.7)
+}
+
+test_that("two independent outputs: kappa draws match the grid posterior", {
+  # every hyperparameter fixed (each output the same values); the reference
+  # is the sum of each output's dense_loglik() times the Beta(1.1, 1.1)
+  # prior on the scaled kappa
+  pr <- two_shapes()
+  hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.7, 10, 0.4),
+                         thetaBDist = "fixed", thetaBInit = c(1, 5), sigma2SDist = "fixed",
+                         sigma2SInit = 3.5, sigma2BDist = "fixed", sigma2BInit = 0.5,
+                         sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0)
+  set.seed(9)
+  fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "independent", nMCMC = 9000,
+                   nBurn = 1000, thinning = 4, nChains = 1, hypers = hyp)
+  d <- fit$data
+  expect_identical(fit$spec$vars[fit$spec$classes == "sigma2S"], c("sigma2S[conc]", "sigma2S[rate]"))
+  expect_kappa_grid(fit, function(phi) outputs_loglik_dense(d$Xf, d$yf, d$Xs, d$ys, phi, 2L),
+                    u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
+})
+
+test_that("two outputs of different shapes pooled independently: kappa no wider than the better alone", {
+  # A = t1 exp(-t2 x), B = 100 (t1 + t2 x^2 / 2) (issue 31): 20 runs x 8
+  # x-points, 10 field points per output at the truth (2, 0.7), 1% noise,
+  # no discrepancy
+  set.seed(311)
+  fs <- list(A = function(x, t1, t2) t1 * exp(-t2 * x),
+             B = function(x, t1, t2) 100 * (t1 + t2 * x^2 / 2))
+  t1 <- runif(20, 1, 3); t2 <- runif(20, 0.2, 1.2); x <- seq(0, 2, length.out = 8)
+  sim <- do.call(rbind, lapply(names(fs), function(o) do.call(rbind, lapply(1:20, function(r)
+    data.frame(y = fs[[o]](x, t1[r], t2[r]), x = x, output = o, t1 = t1[r], t2 = t2[r])))))
+  xf <- seq(0.1, 1.9, length.out = 10)
+  field <- do.call(rbind, lapply(names(fs), function(o) {
+    y0 <- fs[[o]](xf, 2, 0.7)
+    data.frame(y = y0 + rnorm(10, 0, 0.01 * mean(abs(y0))), x = xf, output = o)
+  }))
+  args <- list(nMCMC = 1500, nBurn = 750, nChains = 2, discrepancy = "none")
+  width <- function(f) apply(f$Phi[, 1:2], 2, function(v) diff(quantile(v, c(0.05, 0.95), names = FALSE)))
+  set.seed(1)
+  both <- do.call(calibrate, c(list(sim, field, output = "output", outputs = "independent"), args))
+  alone <- lapply(names(fs), function(o) {
+    set.seed(1)
+    do.call(calibrate, c(list(sim[sim$output == o, -3], field[field$output == o, -3]), args))
+  })
+  best <- pmin(width(alone[[1]]), width(alone[[2]]))
+  expect_true(all(width(both) <= best))
+  q <- apply(both$Phi[, 1:2], 2, quantile, c(0.05, 0.95), names = FALSE)
+  expect_true(all(q[1, ] <= c(2, 0.7) & c(2, 0.7) <= q[2, ]))
+  # per output: loo groups, held-out runs, predictions in each output's units
+  skip_if_not_installed("loo")
+  # (loo groups by input: both outputs at an x leave together; 10 x values)
+  expect_equal(nrow(suppressWarnings(loo::loo(both, ndraws = 20))$pointwise), 10L)
+  expect_equal(nrow(suppressWarnings(loo::loo(both, ndraws = 20, unit = "observation"))$pointwise), 20L)
+  nd <- data.frame(x = c(1, 1), output = c("A", "B"))
+  pm <- predict(both, nd, type = "mean", method = "MAP")
+  expect_equal(pm$pred, c(fs$A(1, 2, 0.7), fs$B(1, 2, 0.7)), tolerance = 0.02)
+  expect_output(print(both), "independent: each its own simulator GP")
+})
+
+test_that("independent outputs: refusals, and level_correlation() says the outputs are uncorrelated", {
+  pr <- two_shapes()
+  expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field[pr$field$out == "conc", ],
+                                          output = "out", outputs = "independent", fit = FALSE))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field, output = "out", outputs = "independent",
+                                          algebra = "vecchia", fit = FALSE))
+  expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field, output = "out", outputs = "both"))
+  model <- calibrate(pr$sim, pr$field, output = "out", outputs = "independent", fit = FALSE)
+  expect_output(print(model), "Outputs: +2 \\(conc, rate\\), independent")
+})
