@@ -16,6 +16,9 @@
 # ("ratio"), the coverage, the CPU s, and the Gaussian independent
 # combination of the two single-output widths (1 / sqrt(1/wA^2 + 1/wB^2)).
 #   Rscript inst/bench/outputs-study.R [reps=20] [problems=AB,AR] [sweeps=2000]
+#     [runs=40] [nx=12] [lo=1,0.2] [hi=3,1.2] [xmax=2] [out=file.rds]
+# (runs, nx: the runs and x-points; lo, hi: the runs' ranges of t1, t2;
+# xmax: the x range [0, xmax]; out: the rows saved as they come)
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 arg <- function(name, default) {
@@ -30,6 +33,8 @@ truth <- c(2, 0.7)
 lo <- as.numeric(strsplit(arg("lo", "1,0.2"), ",")[[1]])
 hi <- as.numeric(strsplit(arg("hi", "3,1.2"), ",")[[1]])
 xmax <- as.numeric(arg("xmax", "2"))
+nRuns <- as.integer(arg("runs", "40"))
+nx <- as.integer(arg("nx", "12"))
 shapes <- list(
   AB = list(A = function(x, t1, t2) t1 * exp(-t2 * x), B = function(x, t1, t2) 100 * (t1 + t2 * x^2 / 2)),
   AR = list(A = function(x, t1, t2) t1 * exp(-t2 * x), R = function(x, t1, t2) t1 * t2 * exp(-t2 * x))
@@ -37,10 +42,10 @@ shapes <- list(
 
 make_problem <- function(fs, seed) {
   set.seed(seed)
-  u <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(40, 2) else cbind(runif(40), runif(40))
+  u <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(nRuns, 2) else cbind(runif(nRuns), runif(nRuns))
   t1 <- lo[1] + (hi[1] - lo[1]) * u[, 1]; t2 <- lo[2] + (hi[2] - lo[2]) * u[, 2]
-  x <- seq(0, xmax, length.out = 12)
-  sim <- do.call(rbind, lapply(names(fs), function(o) do.call(rbind, lapply(seq_len(40), function(r)
+  x <- seq(0, xmax, length.out = nx)
+  sim <- do.call(rbind, lapply(names(fs), function(o) do.call(rbind, lapply(seq_len(nRuns), function(r)
     data.frame(y = fs[[o]](x, t1[r], t2[r]), x = x, output = o, t1 = t1[r], t2 = t2[r])))))
   xf <- seq(0.05, 0.95, length.out = 15) * xmax
   field <- do.call(rbind, lapply(names(fs), function(o) {
