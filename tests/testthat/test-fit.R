@@ -309,3 +309,23 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_error(do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
                "written by another version of FBC")
 })
+
+test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", the model it was", {
+  set.seed(1)
+  x <- runif(12); t <- runif(12, 0.5, 3)
+  sim <- rbind(data.frame(y = exp(-t * x), x = x, out = "a", t = t),
+               data.frame(y = t * x, x = x, out = "b", t = t))
+  field <- rbind(data.frame(y = exp(-1.7 * (1:4) / 5), x = (1:4) / 5, out = "a"),
+                 data.frame(y = 1.7 * (1:4) / 5, x = (1:4) / 5, out = "b"))
+  fit <- calibrate(sim, field, output = "out", nMCMC = 60, nBurn = 20, nChains = 1)
+  expect_identical(fit$model$options$outputs, "shared")
+  old <- fit
+  old$version$format <- 4L
+  old$model$options$outputs <- NULL
+  up <- FBC:::upgrade_fbc(old)
+  expect_identical(up$version$format, 5L)
+  expect_identical(up$model$options$outputs, "shared")
+  expect_identical(up$call$outputs, "shared")
+  expect_equal(predict(up, data.frame(x = 0.5, out = "a"))$pred,
+               predict(fit, data.frame(x = 0.5, out = "a"))$pred)
+})
