@@ -204,24 +204,26 @@
 #' design and the Kronecker algebra applies.
 #'
 #' That is `outputs = "shared"`: one simulator GP for every output, so one
-#' set of length-scales, smoothness and variance. `outputs = "independent"`
-#' gives each output its own simulator GP and its own bias GP instead
-#' (`thetaS1[amount]`, `sigma2S[amount]`, `sigma2B[amount]`, ...: every
-#' hyperparameter class but `sigma2E` has a copy per output, named with the
-#' output in brackets), the GPs of different outputs independent: only
-#' \eqn{\kappa} is shared. The log-likelihood is then the sum of each
-#' output's, each output's block has its own algebra (Kronecker on a
-#' product design, dense otherwise; the nearest-neighbour algebra is not
-#' available with it yet), and the sampler moves each output's simulator
-#' and bias hyperparameters in blocks of their own. Every output needs
-#' field data (an unobserved output modelled on its own says nothing about
-#' \eqn{\kappa}). Which to choose: `"independent"` when the outputs differ
-#' in shape (one decays in x, another grows) so that one set of
-#' length-scales would fit them both badly; `"shared"` when they are alike
-#' or few runs must be shared between them. On known-truth problems
-#' (`inst/bench/RESULTS-outputs.md`: two outputs, 40 runs x 12 points, 20
-#' replicates) both pooled narrower than the better output alone and
-#' covered the truth; `"independent"` cost about 1.5 times the CPU.
+#' set of length-scales, smoothness and variance. The default,
+#' `outputs = "independent"`, gives each output its own simulator GP and
+#' its own bias GP instead (`thetaS1[amount]`, `sigma2S[amount]`,
+#' `sigma2B[amount]`, ...: every hyperparameter class but `sigma2E` has a
+#' copy per output, named with the output in brackets), the GPs of
+#' different outputs independent: only \eqn{\kappa} is shared. The
+#' log-likelihood is then the sum of each output's, each output's block has
+#' its own algebra (Kronecker on a product design, dense otherwise; the
+#' nearest-neighbour algebra is not available with it yet), and the sampler
+#' moves each output's simulator and bias hyperparameters in blocks of
+#' their own. Every output needs field data (an unobserved output modelled
+#' on its own says nothing about \eqn{\kappa}). Why it is the default: with
+#' outputs of different shapes (one decays in x, another grows) one set of
+#' length-scales fits them all worse than each its own. On the 3-output
+#' benchmark (`inst/bench/RESULTS-outputs.md`) the independent outputs gave
+#' intervals 30-45% narrower, both covering the truth, converged in about
+#' the same CPU time; on two-output known-truth problems (20 replicates
+#' each) both structures pooled to intervals about half the better output's
+#' alone. `"shared"` remains for outputs that are alike and share few runs,
+#' and to learn how the outputs correlate ([level_correlation()]).
 #' `print()` says how the outputs are modelled; `loo()`, the confounding
 #' check (per noise group) and the plots work per output under both.
 #'
@@ -536,11 +538,12 @@
 #' @param output For several outputs in long format: the name of a factor
 #'   (or character) column of both `sim` and `field` saying which output
 #'   each row holds; see "Categorical inputs, outputs and data sets".
-#' @param outputs With `output`: how the outputs are modelled. `"shared"`
-#'   (default): one simulator GP over the inputs and the output, the outputs
-#'   correlated by a learned level correlation (`rhoS`; the bias likewise,
-#'   `rhoB`). `"independent"`: each output its own simulator and bias GP
-#'   (its own length-scales, smoothness and variances), only `kappa` shared.
+#' @param outputs With `output`: how the outputs are modelled.
+#'   `"independent"` (default): each output its own simulator and bias GP
+#'   (its own length-scales, smoothness and variances), only `kappa`
+#'   shared. `"shared"`: one simulator GP over the inputs and the output,
+#'   the outputs correlated by a learned level correlation (`rhoS`; the
+#'   bias likewise, `rhoB`), as before version 0.3.
 #'   See "Categorical inputs, outputs and data sets".
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
@@ -624,7 +627,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
+                      sourceBias = c("shared", "own"), outputs = c("independent", "shared"),
                       fit = TRUE) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,

@@ -25,7 +25,7 @@
 # "independent" every output needs field rows (an output without them is
 # independent of kappa and would inform nothing).
 check_outputs <- function(outputs, dd, algebra, call = parent.frame()) {
-  outputs <- match_choice(outputs, c("shared", "independent"), "outputs", call = call)
+  outputs <- match_choice(outputs, c("independent", "shared"), "outputs", call = call)
   out <- dd$fac$output
   if (is.null(out)) return(NULL)
   if (outputs == "independent") {

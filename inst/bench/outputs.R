@@ -7,7 +7,7 @@
 # wider).
 # nburn=<sweeps> sets the burn-in (default 2000, calibrate()'s); the first stretch is
 # nburn + 1000 sweeps, then checks every 500.
-#   Rscript inst/bench/outputs.R [quick] [single] [nburn=2000]
+#   Rscript inst/bench/outputs.R [quick] [single] [nburn=2000] [outputs=independent|shared]
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
@@ -15,7 +15,7 @@ nburnArg <- grep("^nburn=", args, value = TRUE)
 nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 2000L
 # outputs=independent|shared: how the outputs are modelled (calibrate(outputs =))
 outArg <- grep("^outputs=", args, value = TRUE)
-outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "shared"
+outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "independent"
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else

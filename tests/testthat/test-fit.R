@@ -317,8 +317,8 @@ test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", t
                data.frame(y = t * x, x = x, out = "b", t = t))
   field <- rbind(data.frame(y = exp(-1.7 * (1:4) / 5), x = (1:4) / 5, out = "a"),
                  data.frame(y = 1.7 * (1:4) / 5, x = (1:4) / 5, out = "b"))
-  fit <- calibrate(sim, field, output = "out", nMCMC = 60, nBurn = 20, nChains = 1)
-  expect_identical(fit$model$options$outputs, "shared")
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", nMCMC = 60, nBurn = 20,
+                   nChains = 1)
   old <- fit
   old$version$format <- 4L
   old$model$options$outputs <- NULL
