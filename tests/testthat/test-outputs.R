@@ -165,9 +165,11 @@ test_that("two outputs of different shapes pooled independently: kappa no wider 
   pm <- predict(both, nd, type = "mean", method = "MAP")
   expect_equal(pm$pred, c(fs$A(1, 2, 0.7), fs$B(1, 2, 0.7)), tolerance = 0.02)
   expect_output(print(both), "independent: each its own simulator GP")
+  # the outputs have no correlation to show: said, with the way to one
+  expect_snapshot(error = TRUE, level_correlation(both, "output"))
 })
 
-test_that("independent outputs: refusals, and level_correlation() says the outputs are uncorrelated", {
+test_that("independent outputs: refusals, and print() says how the outputs are modelled", {
   pr <- two_shapes()
   expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field[pr$field$out == "conc", ],
                                           output = "out", outputs = "independent", fit = FALSE))
