@@ -543,7 +543,7 @@
 #'   (its own length-scales, smoothness and variances), only `kappa`
 #'   shared. `"shared"`: one simulator GP over the inputs and the output,
 #'   the outputs correlated by a learned level correlation (`rhoS`; the
-#'   bias likewise, `rhoB`), as before version 0.3.
+#'   bias likewise, `rhoB`): the one structure before `outputs` existed.
 #'   See "Categorical inputs, outputs and data sets".
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
