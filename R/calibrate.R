@@ -203,10 +203,10 @@
 #' output at the same experimental settings the design is still a product
 #' design and the Kronecker algebra applies.
 #'
-#' That is `outputs = "shared"`: one simulator GP for every output, so one
-#' set of length-scales, smoothness and variance. The default,
-#' `outputs = "independent"`, gives each output its own simulator GP and
-#' its own bias GP instead (`thetaS1[amount]`, `sigma2S[amount]`,
+#' That is `outputs = "shared"`, the default: one simulator GP for every
+#' output, so one set of length-scales, smoothness and variance.
+#' `outputs = "independent"` gives each output its own simulator GP and its
+#' own bias GP instead (`thetaS1[amount]`, `sigma2S[amount]`,
 #' `sigma2B[amount]`, ...: every hyperparameter class but `sigma2E` has a
 #' copy per output, named with the output in brackets), the GPs of
 #' different outputs independent: only \eqn{\kappa} is shared. The
@@ -215,15 +215,15 @@
 #' nearest-neighbour algebra is not available with it yet), and the sampler
 #' moves each output's simulator and bias hyperparameters in blocks of
 #' their own. Every output needs field data (an unobserved output modelled
-#' on its own says nothing about \eqn{\kappa}). Why it is the default: with
-#' outputs of different shapes (one decays in x, another grows) one set of
-#' length-scales fits them all worse than each its own. On the 3-output
-#' benchmark (`inst/bench/RESULTS-outputs.md`) the independent outputs gave
-#' intervals 30-45% narrower, both covering the truth, converged in about
-#' the same CPU time; on two-output known-truth problems (20 replicates
-#' each) both structures pooled to intervals about half the better output's
-#' alone. `"shared"` remains for outputs that are alike and share few runs,
-#' and to learn how the outputs correlate ([level_correlation()]).
+#' on its own says nothing about \eqn{\kappa}). Why shared stays the
+#' default (`inst/bench/RESULTS-outputs.md`): on two-output known-truth
+#' problems (20 replicates each, outputs of different and of alike shapes)
+#' both structures pooled to intervals about half the better output's
+#' alone, shared at about 0.7 times the CPU; on the 3-output benchmark
+#' shared gave intervals about half as wide as independent (both covering
+#' the truth) in about the same CPU time. Try `"independent"` when the
+#' outputs differ in smoothness or scale in ways one set of length-scales
+#' cannot follow (compare with [loo()]).
 #' `print()` says how the outputs are modelled; `loo()`, the confounding
 #' check (per noise group) and the plots work per output under both.
 #'
@@ -538,12 +538,11 @@
 #' @param output For several outputs in long format: the name of a factor
 #'   (or character) column of both `sim` and `field` saying which output
 #'   each row holds; see "Categorical inputs, outputs and data sets".
-#' @param outputs With `output`: how the outputs are modelled.
-#'   `"independent"` (default): each output its own simulator and bias GP
-#'   (its own length-scales, smoothness and variances), only `kappa`
-#'   shared. `"shared"`: one simulator GP over the inputs and the output,
-#'   the outputs correlated by a learned level correlation (`rhoS`; the
-#'   bias likewise, `rhoB`): the one structure before `outputs` existed.
+#' @param outputs With `output`: how the outputs are modelled. `"shared"`
+#'   (default): one simulator GP over the inputs and the output, the outputs
+#'   correlated by a learned level correlation (`rhoS`; the bias likewise,
+#'   `rhoB`). `"independent"`: each output its own simulator and bias GP
+#'   (its own length-scales, smoothness and variances), only `kappa` shared.
 #'   See "Categorical inputs, outputs and data sets".
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
@@ -627,7 +626,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), outputs = c("independent", "shared"),
+                      sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,

@@ -61,7 +61,7 @@ NULL
 # `kappaDefault`: kappaP1 and kappaP2 were left at their defaults).
 build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, kernelS, kernelB,
                         sampler, blockSim, algebra, neighbours, output, source, sourceBias,
-                        outputs = "independent", modelCall = NULL, call = parent.frame()) {
+                        outputs = "shared", modelCall = NULL, call = parent.frame()) {
   dd <- model_data(sim, field, output, source, call = call)
   opt <- model_options(dd, discrepancy, sampler, blockSim, algebra, neighbours, hypers,
                        kernelS, kernelB, sourceBias, call = call)

@@ -15,7 +15,7 @@ nburnArg <- grep("^nburn=", args, value = TRUE)
 nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 2000L
 # outputs=independent|shared: how the outputs are modelled (calibrate(outputs =))
 outArg <- grep("^outputs=", args, value = TRUE)
-outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "independent"
+outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "shared"
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else
