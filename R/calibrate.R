@@ -240,6 +240,30 @@
 #' output at the same experimental settings the design is still a product
 #' design and the Kronecker algebra applies.
 #'
+#' That is `outputs = "shared"`, the default: one simulator GP for every
+#' output, so one set of length-scales, smoothness and variance.
+#' `outputs = "independent"` gives each output its own simulator GP and its
+#' own bias GP instead (`thetaS1[amount]`, `sigma2S[amount]`,
+#' `sigma2B[amount]`, ...: every hyperparameter class but `sigma2E` has a
+#' copy per output, named with the output in brackets), the GPs of
+#' different outputs independent: only \eqn{\kappa} is shared. The
+#' log-likelihood is then the sum of each output's, each output's block has
+#' its own algebra (Kronecker on a product design, dense otherwise; the
+#' nearest-neighbour algebra is not available with it yet), and the sampler
+#' moves each output's simulator and bias hyperparameters in blocks of
+#' their own. Every output needs field data (an unobserved output modelled
+#' on its own says nothing about \eqn{\kappa}). Why shared stays the
+#' default (`inst/bench/RESULTS-outputs.md`): on two-output known-truth
+#' problems (20 replicates each, outputs of different and of alike shapes)
+#' both structures pooled to intervals about half the better output's
+#' alone, shared at about 0.7 times the CPU; on the 3-output benchmark
+#' shared gave intervals about half as wide as independent (both covering
+#' the truth) in about the same CPU time. Try `"independent"` when the
+#' outputs differ in smoothness or scale in ways one set of length-scales
+#' cannot follow (compare with [loo()]).
+#' `print()` says how the outputs are modelled; `loo()`, the confounding
+#' check (per noise group) and the plots work per output under both.
+#'
 #' `source = "name"` names a factor column of `field` only: several field
 #' data sets sharing \eqn{\kappa}, each with its own measurement-error
 #' variance (the groups are the output x data set combinations present).
@@ -558,6 +582,12 @@
 #' @param output For several outputs in long format: the name of a factor
 #'   (or character) column of both `sim` and `field` saying which output
 #'   each row holds; see "Categorical inputs, outputs and data sets".
+#' @param outputs With `output`: how the outputs are modelled. `"shared"`
+#'   (default): one simulator GP over the inputs and the output, the outputs
+#'   correlated by a learned level correlation (`rhoS`; the bias likewise,
+#'   `rhoB`). `"independent"`: each output its own simulator and bias GP
+#'   (its own length-scales, smoothness and variances), only `kappa` shared.
+#'   See "Categorical inputs, outputs and data sets".
 #' @param source For several field data sets stacked in `field`: the name
 #'   of a factor column of `field` only saying which data set each row
 #'   belongs to; each has its own measurement-error variance.
@@ -652,8 +682,8 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
-                      sourceBias = c("shared", "own"), fit = TRUE,
-                      nonFinite = c("error", "reject")) {
+                      sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
+                      fit = TRUE, nonFinite = c("error", "reject")) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery)
@@ -674,7 +704,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                        discrepancy = discrepancy, kernelS = kernelS, kernelB = kernelB,
                        sampler = sampler, blockSim = blockSim, algebra = algebra,
                        neighbours = neighbours, output = output, source = source,
-                       sourceBias = sourceBias, modelCall = call)
+                       sourceBias = sourceBias, outputs = outputs, modelCall = call)
   if (!fit) return(model)
   fit_model(model, run)
 }

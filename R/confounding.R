@@ -30,13 +30,18 @@ confounded_kappa <- function(x) {
   if (identical(x$model$discrepancy, "none")) return(NULL)
   Phi <- x$Phi
   noiseCols <- grep("^sigma2E[0-9]*$", colnames(Phi), value = TRUE)
-  if (!"sigma2B" %in% colnames(Phi) || !length(noiseCols)) return(NULL)
-  ratios <- stats::median(Phi[, "sigma2B"]) /
-    vapply(noiseCols, function(v) stats::median(Phi[, v]), numeric(1))
+  labels <- x$scale$noiseLabels
+  # each group's bias variance: sigma2B, or with independent outputs its
+  # output's sigma2B[output] (the group's label starts with the output)
+  biasCols <- if ("sigma2B" %in% colnames(Phi)) rep("sigma2B", length(noiseCols)) else
+    sprintf("sigma2B[%s]", sub(":.*$", "", labels %||% ""))
+  if (!all(biasCols %in% colnames(Phi)) || !length(noiseCols)) return(NULL)
+  ratios <- vapply(seq_along(noiseCols), function(i) {
+    stats::median(Phi[, biasCols[i]]) / stats::median(Phi[, noiseCols[i]])
+  }, numeric(1))
   g <- which.max(ratios)
   if (!length(g) || !(ratios[g] > 1)) return(NULL)
   ratio <- unname(ratios[g])
-  labels <- x$scale$noiseLabels
   noise <- if (length(noiseCols) > 1L && length(labels) == length(noiseCols)) {
     sprintf("%s (%s)", noiseCols[g], labels[g])
   } else noiseCols[g]

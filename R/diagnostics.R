@@ -309,8 +309,9 @@ convergence_messages <- function(x) {
 rho_bound_hint <- function(x, v, cls, bound) {
   pos <- match(v, x$spec$vars[x$spec$classes == cls])
   src <- x$scale$source
-  factors <- if (cls == "rhoD") list(list(name = src$name, levels = src$levels)) else x$scale$factors
-  lab <- level_labels(factors)[pos]
+  factors <- if (cls == "rhoD") list(list(name = src$name, levels = src$levels)) else level_factors(x$model)
+  lab <- level_labels(factors)
+  lab <- lab[(pos - 1L) %% length(lab) + 1L]  # independent outputs: a copy per output
   input <- sub(":.*$", "", lab)
   pair <- sub("^[^:]*: ", "", lab)
   given <- if (grepl(" | ", pair, fixed = TRUE)) paste0(" given ", sub("^.* \\| ", "", pair)) else ""

@@ -317,6 +317,15 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
     ))
   }
   input <- match_choice(input, c(names(fac), if (own) src$name), "input")
+  if (identical(fit$model$options$outputs, "independent")) {
+    if (identical(input, fit$scale$output$name)) {
+      cli::cli_abort(c(
+        "The outputs ({.val {input}}) of {.arg fit} are modelled independently ({.code outputs = \"independent\"}): each has its own GPs, uncorrelated with the others'.",
+        i = "{.code calibrate(..., outputs = \"shared\")} correlates them through one simulator GP, whose level correlation this shows."
+      ))
+    }
+    fac <- level_factors(fit$model)
+  }
   if (gp == "bias" && identical(fit$model$discrepancy, "none")) {
     cli::cli_abort("{.arg fit} has no bias GP ({.code discrepancy = \"none\"}).")
   }

@@ -61,23 +61,28 @@ NULL
 # `kappaDefault`: kappaP1 and kappaP2 were left at their defaults).
 build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, kernelS, kernelB,
                         sampler, blockSim, algebra, neighbours, output, source, sourceBias,
-                        modelCall = NULL, call = parent.frame()) {
+                        outputs = "shared", modelCall = NULL, call = parent.frame()) {
   dd <- model_data(sim, field, output, source, call = call)
   opt <- model_options(dd, discrepancy, sampler, blockSim, algebra, neighbours, hypers,
                        kernelS, kernelB, sourceBias, call = call)
   opt[c("output", "source")] <- list(output, source)
+  opt$outputs <- check_outputs(outputs, dd, opt$algebra, call = call)
   pr <- model_priors(dd, opt, kappa, kappaDefault, call = call)
   p <- dd$p
   dat <- pr$dat
-  alg <- choose_algebra(opt$algebra, opt$neighbours, dat$Xs, p, opt$kernelS, nrow(dat$Xf))
+  # independent outputs: the algebra of the largest output's block
+  XsAlg <- largest_output_sim(dat, opt$outputs)
+  alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf))
+  if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,
                                opt$discrepancy,
                                vecchia = if (alg$name == "vecchia") {
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
-                               }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource)
-  simAlgebra <- sim_algebra_info(dat, p, spec$model)
+                               }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
+                               outputs = pr$outputs)
+  simAlgebra <- sim_algebra_info(list(Xs = XsAlg), p, spec$model)
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), simAlgebra))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource,
@@ -86,7 +91,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
                 discrepancy = opt$discrepancy, sampler = opt$sampler, algebra = alg,
                 simAlgebra = simAlgebra, moves = moves,
-                options = opt[c("algebra", "neighbours", "output", "source", "sourceBias")],
+                options = opt[c("algebra", "neighbours", "output", "source", "sourceBias", "outputs")],
                 call = modelCall)
 }
 
@@ -157,7 +162,8 @@ model_priors <- function(dd, opt, kappa, kappaDefault, call) {
   p <- dd$p
   q <- dd$q
   biasSource <- if (opt$sourceBias == "own") list(codes = fac$source$codes, L = length(fac$source$levels))
-  levels <- model_levels(fac$factors, colnames(field)[-1])
+  lv <- output_levels(fac, colnames(field)[-1], opt$outputs)
+  levels <- lv$levels
   units <- if (dd$named) paste(colnames(sim)[-seq_len(p + 1L)], collapse = ", ") else "the calibration inputs"
   check_family_switch(kappa$dist, "beta", kappaDefault[[1]], kappaDefault[[2]], "kappa", units,
                       call = call)
@@ -173,8 +179,9 @@ model_priors <- function(dd, opt, kappa, kappaDefault, call) {
   kappaSpec <- check_class_spec(kappa, "kappa", q, call = call)
   check_kappa_design(kappaSpec, scale, call = call)
   spec <- build_priors(kappaSpec, opt$hypers, scale, p, q, opt$discrepancy, noise = noise,
-                       levels = levels, source = biasSource, call = call)
-  list(scale = scale, dat = dat, spec = spec, levels = levels, biasSource = biasSource)
+                       levels = levels, source = biasSource, outputs = lv$outputs, call = call)
+  list(scale = scale, dat = dat, spec = spec, levels = levels, biasSource = biasSource,
+       outputs = lv$outputs)
 }
 
 # Each row's distinct row of X (1, 2, ... in order of first appearance):
@@ -194,7 +201,7 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
     data = data, raw = raw, scale = scale, design = design,
     dims = list(p = scale$p, q = scale$q, m = nrow(data$Xs), n = nrow(data$Xf),
                 noise = noise_count(mc), levels = level_count(mc), sources = source_count(mc),
-                d = length(spec$vars)),
+                outputs = output_count(mc), d = length(spec$vars)),
     classes = data.frame(class = names(mc$offset), offset = unname(mc$offset),
                          length = unname(mc$length), stringsAsFactors = FALSE),
     priors = spec$priors, spec = spec, kernelS = kernelS, kernelB = kernelB,
@@ -238,7 +245,7 @@ fbc_model_problems <- function(x) {
   }
   if (length(out)) return(out)
   lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources,
-                      emulator = is.null(x$spec$model$simulator))
+                      outputs = d$outputs %||% 1L, emulator = is.null(x$spec$model$simulator))
   if (!identical(x$classes$length, unname(lay$length)) ||
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {
@@ -280,6 +287,7 @@ print.fbc_model <- function(x, ...) {
   } else {
     sprintf("  Discrepancy: %s; kernel %s (bias)\n", x$discrepancy, x$kernelB)
   })
+  if (!is.null(x$options$output)) cat(sprintf("  Outputs:     %s\n", outputs_line(x)))
   cat(sprintf("  Algebra:     %s%s\n", x$algebra$name,
               if (is.null(x$algebra$reason)) "" else paste0(": ", x$algebra$reason)))
   cat(sprintf("  Sampler:     %s, %d parameters\n", x$sampler, d$d))
@@ -309,7 +317,7 @@ check_run <- function(nMCMC, nBurn, thinning, nChains, converge, showProgress, c
 # run's settings).
 model_args <- c("field", "kappaDist", "kappaInit", "kappaP1", "kappaP2", "hypers", "discrepancy",
                 "kernelS", "kernelB", "sampler", "blockSim", "algebra", "neighbours", "output",
-                "source", "sourceBias", "nonFinite")
+                "source", "sourceBias", "outputs", "nonFinite")
 
 # calibrate(model, ...): the model, with the call that will be the fit's
 # (the model's call with this call's run settings). A model argument given
@@ -344,6 +352,7 @@ identity_settings <- function(model, run) {
   if (!is.null(o$output)) s$output <- o$output
   if (!is.null(o$source)) s$source <- o$source
   if (o$sourceBias == "own") s$sourceBias <- o$sourceBias
+  if (identical(o$outputs, "independent")) s$outputs <- o$outputs
   # a simulator given as a function: its code and what a non-finite value does
   if (!is.null(model$simulator)) s$simulator <- function_identity(model$simulator)
   s

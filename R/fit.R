@@ -14,9 +14,10 @@
 # Format of the fit: fit$version$format. Fits made before it existed have
 # no `version` (format 0), format 1 fits no discrepancy model, format 2
 # fits a layout without the S-GaSP scale, format 3 fits no model object
-# (the model's choices among the settings); upgrade_fit() brings each to
+# (the model's choices among the settings), format 4 fits with several
+# outputs no `outputs` choice (they were shared); upgrade_fit() brings each to
 # the current format by the steps keyed by format in fit_upgrades.
-fbc_fit_format <- 4L
+fbc_fit_format <- 5L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -229,6 +230,7 @@ fbc_spec_problems <- function(x) {
   }
   if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
                                                    source_count(spec$model),
+                                                   outputs = output_count(spec$model),
                                                    emulator = is.null(spec$model$simulator)))) {
     return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
@@ -368,12 +370,15 @@ fit_to_4 <- function(x) {
   s <- x$settings
   model <- model_of_fit(x)
   run <- c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint", "converge")
-  new_fbc(
+  out <- new_fbc(
     Phi = x$Phi, chain = x$chain, logPost = x$logPost, logLik = x$logLik,
     acceptance = x$acceptance, proposalSD = x$proposalSD, model = model,
     settings = s[intersect(names(s), run)], state = x$state, call = x$call,
     estimates = x$estimates
   )
+  # format 4 (new_fbc() stamps the current one): the later steps follow
+  out$version$format <- 4L
+  out
 }
 
 # The fbc_model of a format-3 fit, from its data, scale, spec and settings
@@ -399,7 +404,22 @@ model_of_fit <- function(x) {
                 call = x$call)
 }
 
-fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4)
+# Format 4 to 5: several outputs became independent by default
+# (calibrate(outputs =), R/outputs.R); a fit with several outputs made
+# before was a shared model, said in its options and calls so that a refit
+# from them builds the same model.
+fit_to_5 <- function(x) {
+  if (!is.null(x$model$options$output)) {
+    x$model$options$outputs <- "shared"
+    if (!is.null(x$model$call)) x$model$call$outputs <- "shared"
+    if (!is.null(x$call)) x$call$outputs <- "shared"
+  }
+  x$version$format <- 5L
+  x
+}
+
+fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4,
+                     `4` = fit_to_5)
 
 # The contents of a checkpoint file of format `x$format` (at most
 # fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format

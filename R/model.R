@@ -35,6 +35,10 @@
 #            the class, separated by spaces: the bias GP's classes have no
 #            parameters under "none", muB (the bias mean) none under the
 #            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
+#   perOutput  with outputs = "independent" (several outputs, each its own
+#            simulator and bias GP; see R/outputs.R) the class has one copy
+#            per output, output after output; kappa is shared and sigma2E
+#            is per measurement-error group (output x data set) already
 model_classes <- data.frame(
   class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
   over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one"),
@@ -46,6 +50,7 @@ model_classes <- data.frame(
   smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
   models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp",
              "gp sgasp", "gp sgasp", "sgasp", "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
+  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE),
   stringsAsFactors = FALSE
 )
 
@@ -108,13 +113,16 @@ discrepancy_having <- function(cls) {
 # How many parameters each class has with p experimental and q calibration
 # inputs under the discrepancy model `discrepancy`, with `noise`
 # measurement-error groups (named by class, in the table's order; the bias
-# classes have none without a bias).
+# classes have none without a bias), `outputs` independent outputs (the
+# perOutput classes have a copy per output) and, for a simulator given as
+# a function (`emulator` FALSE), no simulator-GP classes.
 class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
-                        emulator = TRUE) {
+                        outputs = 1L, emulator = TRUE) {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
          levels = levels, sources = sources)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
+  n[model_classes$perOutput] <- n[model_classes$perOutput] * as.integer(outputs)
   # a simulator given as a function (R/simulator_function.R) has no
   # simulator GP, hence none of its classes
   if (!emulator) n[model_classes$class %in% emulator_classes] <- 0L
@@ -128,30 +136,50 @@ emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
 param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                           sources = 0L, emulator = TRUE) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator)
+                           sources = 0L, outputs = 1L, emulator = TRUE) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, outputs = outputs,
+                       emulator = emulator)
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
 }
 
 # Parameter names in the order of phi: the class name, with an index when
-# the class expands over inputs (or over several noise groups).
+# the class expands over inputs (or over several noise groups); with
+# independent outputs (`outputs`: their labels, or a count) a perOutput
+# class's copies end in "[label]" (thetaS1[amount], sigma2S[amount]).
 param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                         sources = 0L, emulator = TRUE) {
-  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator)
+                         sources = 0L, outputs = 1L, emulator = TRUE) {
+  K <- if (is.character(outputs)) length(outputs) else as.integer(outputs)
+  lab <- if (is.character(outputs)) outputs else as.character(seq_len(K))
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator = emulator)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
-    if (sizes[i] == 0L) character(0)
+    one <- if (sizes[i] == 0L) character(0)
     else if (model_classes$over[i] == "one" || (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
+    if (K > 1L && model_classes$perOutput[i] && length(one)) {
+      paste0(rep(one, K), "[", rep(lab, each = length(one)), "]")
+    } else one
   }), use.names = FALSE)
 }
 
 # The class of each parameter of phi.
 param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                            sources = 0L, emulator = TRUE) {
-  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources, emulator))
+                            sources = 0L, outputs = 1L, emulator = TRUE) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources,
+                                       outputs = outputs, emulator = emulator))
+}
+
+# The output (1-based) each parameter of phi belongs to with `outputs`
+# independent outputs: 0 for the shared ones (kappa, sigma2E).
+param_output_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                             sources = 0L, outputs = 1L) {
+  one <- class_sizes(p, q, discrepancy, noise, levels, sources)
+  unlist(lapply(seq_along(one), function(i) {
+    if (outputs > 1L && model_classes$perOutput[i]) rep(seq_len(outputs), each = one[[i]])
+    else rep(0L, one[[i]])
+  }), use.names = FALSE)
 }
 
 # The classes that are not parameters for these correlation families: the
@@ -164,8 +192,9 @@ absent_classes <- function(kernS, kernB) {
 # The layout as the compiled core receives it (read_model() in src/model.cpp):
 # 0-based offsets and lengths named by class.
 layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                          sources = 0L, emulator = TRUE) {
-  idx <- param_indices(p, q, discrepancy, noise, levels, sources, emulator)
+                          sources = 0L, outputs = 1L, emulator = TRUE) {
+  idx <- param_indices(p, q, discrepancy, noise, levels, sources, outputs = outputs,
+                       emulator = emulator)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -181,15 +210,20 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # 1-based: sigma2E has max(noise) entries) and, with categorical inputs,
 # their indicator columns (`levels`, model_levels()) and, with a bias per
 # field data set, each field row's data set and their number (`source`:
-# list(codes, L), 1-based codes; the bias classes take it only with a bias).
+# list(codes, L), 1-based codes; the bias classes take it only with a bias)
+# and, with independent outputs (outputs = "independent", R/outputs.R), the
+# output's indicator columns (`outputs`: list(col, ncol, L) as
+# model_levels() gives one input; `levels` then leaves the output out).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
                            vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
-                           simulator = NULL) {
+                           outputs = NULL, simulator = NULL) {
   if (discrepancy == "none") source <- NULL
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
     layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
-                 source_count(source), emulator = is.null(simulator)),
+                 source_count(source), outputs = output_count(outputs),
+                 emulator = is.null(simulator)),
+    if (!is.null(outputs)) list(outputs = lapply(outputs, as.integer)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),
     if (!is.null(levels)) list(levels = levels),
@@ -205,6 +239,13 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepan
 source_count <- function(source) {
   L <- source$sourceLevels %||% source$L
   if (is.null(L)) 0L else as.integer(L * (L - 1L) / 2L)
+}
+
+# The number of independent outputs (1: none, or shared), from
+# list(col, ncol, L) or a compiled model.
+output_count <- function(outputs) {
+  if (!is.null(outputs$outputs)) outputs <- outputs$outputs
+  if (is.null(outputs$L)) 1L else as.integer(outputs$L)
 }
 
 # The number of measurement-error groups of a compiled model.

@@ -86,7 +86,8 @@ param_labels <- function(x, vars) {
   q <- x$scale$q
   inputs <- c(nm$inputs, nm$calibration)
   cls <- x$spec$classes[match(vars, x$spec$vars)]
-  k <- suppressWarnings(as.integer(sub("^[A-Za-z]+([0-9]+)$", "\\1", vars)))
+  # (independent outputs: "thetaS1[amount]", the output in brackets)
+  k <- suppressWarnings(as.integer(sub("^[A-Za-z]+([0-9]+)(\\[.*\\])?$", "\\1", vars)))
   out <- vars
   ok <- !is.na(k)
   if (length(nm$calibration) == q) {
@@ -97,7 +98,7 @@ param_labels <- function(x, vars) {
     per <- ok & cls %in% per_input_classes
     out[per] <- paste0(vars[per], " (", inputs[k[per]], ")")
   }
-  lev <- level_labels(x$scale$factors)
+  lev <- level_labels(level_factors(x$model))
   rho <- ok & cls %in% c("rhoS", "rhoB") & k <= length(lev)
   out[rho] <- paste0(vars[rho], " (", lev[k[rho]], ")")
   src <- level_labels(if (isTRUE(x$scale$sourceBias)) list(x$scale$source))

@@ -47,17 +47,19 @@ print.fbc <- function(x, digits = 3, ...) {
               sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
-  lev <- level_labels(sc$factors)
-  pos <- level_positions(sc$factors)
-  for (i in seq_along(sc$factors)) {
-    f <- sc$factors[[i]]
+  fac <- level_factors(mo)
+  lev <- level_labels(fac)
+  pos <- level_positions(fac)
+  for (i in seq_along(fac)) {
+    f <- fac[[i]]
     k <- pos[[i]]
     cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
                 paste(f$levels, collapse = ", "),
-                rho_list("rhoS", k, lev)))
+                if (output_count(mo$spec$model) > 1L) "rhoS (one per output)" else rho_list("rhoS", k, lev)))
   }
-  if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n",
-                                       sc$output$name, paste(sc$output$levels, collapse = ", ")))
+  if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n    %s\n",
+                                       sc$output$name, paste(sc$output$levels, collapse = ", "),
+                                       outputs_line(mo)))
   if (!is.null(sc$source)) {
     own <- if (isTRUE(sc$sourceBias)) {
       lab <- level_labels(list(sc$source))

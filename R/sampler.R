@@ -29,15 +29,18 @@ sampler_moves <- function(sampler, spec, large = FALSE) {
   # the user came for
   each <- which(move == "each" & free)
   each <- stats::setNames(as.list(each), spec$vars[each])
-  joint <- lapply(c(sim = "sim", bias = "bias"), function(m) {
+  # with independent outputs (spec$outputOf) a joint block per output
+  outOf <- spec$outputOf %||% integer(length(spec$vars))
+  joint <- do.call(c, lapply(c("sim", "bias"), function(m) {
     idx <- which(move == m & free)
-    if (length(idx) >= 2L) idx
-  })
-  joint <- joint[lengths(joint) > 0L]
+    by <- split(idx, outOf[idx])
+    stats::setNames(by, if (length(by) > 1L) paste0(m, names(by)) else rep(m, length(by)))
+  }))
+  joint <- if (is.null(joint)) list() else joint[lengths(joint) >= 2L]
   scaled <- which(model_classes$scaled[row])
   gibbs <- which(move == "gibbs")
   rep_each <- if (large) 1L else 3L
-  rep_joint <- as.integer(ifelse(names(joint) == "sim" & large, 1L, 2L))
+  rep_joint <- as.integer(ifelse(startsWith(as.character(names(joint)), "sim") & large, 1L, 2L))
   list(
     blocks = c(each, joint),
     repeats = c(rep(rep_each, length(each)), rep_joint),

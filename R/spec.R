@@ -95,10 +95,13 @@ phi_columns <- function(spec) {
 # rhoS's and rhoB's, and Phi leaves them out.
 indicator_positions <- function(model) {
   lv <- model$levels
-  if (is.null(lv)) return(integer(0))
-  pos <- unlist(Map(function(c, n) c + seq_len(n) - 1L, lv$col, lv$ncol))
+  out <- model$outputs  # independent outputs: the output's columns, per output
+  if (is.null(lv) && is.null(out)) return(integer(0))
+  pos <- unlist(Map(function(c, n) c + seq_len(n) - 1L, c(lv$col, out$col), c(lv$ncol, out$ncol)))
+  K <- output_count(model)
   unlist(lapply(c("thetaS", "alphaS", "thetaB", "alphaB"), function(cls) {
-    if (model$length[[cls]] == 0L) integer(0) else model$offset[[cls]] + pos
+    n <- model$length[[cls]] %/% K
+    if (n == 0L) integer(0) else model$offset[[cls]] + rep((seq_len(K) - 1L) * n, each = length(pos)) + pos
   }))
 }
 
@@ -130,15 +133,23 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # Expands every class to one row per parameter: the C++ prior table, the
 # initial values on the sampler's scale and the initial proposal SDs. The
 # classes without parameters under `discrepancy` have no prior.
+# With independent outputs (`outputs`: the output's list(col, ncol, L),
+# `levels` without it) each perOutput class's priors are one output's,
+# repeated for every output.
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
-                         levels = NULL, source = NULL, emulator = TRUE, call = parent.frame()) {
+                         levels = NULL, source = NULL, outputs = NULL, emulator = TRUE,
+                         call = parent.frame()) {
   nLev <- level_count(levels)
   nSrc <- source_count(source)
-  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator)
+  K <- output_count(outputs)
+  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator = emulator)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
     priors[[cls]] <- check_class_spec(hypers[[cls]], cls, sizes[[cls]], call = call)
+    if (K > 1L && model_classes$perOutput[match(cls, model_classes$class)]) {
+      priors[[cls]] <- lapply(priors[[cls]], rep, times = K)
+    }
   }
   cal <- p + seq_len(q)
   lo <- scale$xmin[cal]
@@ -190,14 +201,17 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
     }
   }
   table <- do.call(rbind, rows)
-  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc, emulator)
-  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, emulator)
+  vars <- param_names(p, q, discrepancy, noise, nLev, nSrc,
+                      outputs = if (K > 1L) scale$output$levels else 1L, emulator = emulator)
+  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, outputs = K, emulator = emulator)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
-       classes = cls_of, priors = priors, fns = prior_functions(table, vars, cls_of, scale),
+       classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
+       priors = priors, fns = prior_functions(table, vars, cls_of, scale),
        model = compiled_model(p, q, discrepancy = discrepancy,
                               noise = if (noise > 1L) seq_len(noise), levels = levels,
-                              source = source, simulator = if (!emulator) list()))
+                              source = source, outputs = outputs,
+                              simulator = if (!emulator) list()))
 }
 
 # One log-density function per parameter, in the units it is reported in.

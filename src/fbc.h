@@ -112,11 +112,20 @@ struct Model {
   // the simulator is a user's R function (function.cpp): no simulator GP,
   // so thetaS, alphaS, rhoS and sigma2S have length 0 in the layout
   bool emulator = true;
+  // independent outputs (R/outputs.R): the output's indicator columns and
+  // its number of levels K (outputs.L; 0: none). The perOutput classes
+  // (all but kappa and sigma2E) then hold K copies, output after output,
+  // and each output has its own simulator and bias GP (OutputsPosterior).
+  LevelInput outputs = LevelInput{0, 0, 0};
+  int nOutputs() const { return outputs.L > 1 && outputs.ncol > 0 ? outputs.L : 1; }
 };
 // Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
 // and length integer vectors named by class) and checks that the layout
 // tiles phi with the lengths p, q and the discrepancy model imply.
 Model read_model(const Rcpp::List& model, int p, int q);
+// Fills lay.d, lay.cls and lay.pos from lay.offset and lay.length (and
+// checks that the classes tile phi).
+void fill_layout(Layout& lay);
 
 // priors.cpp -----------------------------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
@@ -523,6 +532,52 @@ private:
   void fieldNeighbours(std::vector<int>& nbrF);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
   int gatherRun(int i);
+};
+
+// Independent outputs (outputs.cpp): the covariance of (yf, ys) is block
+// diagonal over the outputs, so log L = sum_o log L_o(kappa, phi_o), each
+// output's block a posterior of its own (its algebra chosen as for one
+// output) over its rows, its parameters a map into the common phi.
+class OutputsPosterior : public Posterior {
+public:
+  OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                   const arma::vec& ys, double nugget, const Model& model);
+  bool init(const arma::vec& phi0) override;
+  double logLik() const override { return ll_; }
+  double propose(const std::vector<int>& idx, const arma::vec& values) override;
+  double proposeScale(double c) override;
+  void accept() override;
+  void reject() override;
+  void muBQuadratic(double& aa, double& ab) const override;
+  void condition(const arma::mat& Xnew, int type, double* mean, double* var,
+                 const int* noise = nullptr, const int* source = nullptr) override;
+  bool heldout(const std::vector<std::vector<int> >& folds, arma::vec& mean,
+               arma::vec& var) override;
+  void fieldLoo(const std::vector<std::vector<int> >& groups,
+                arma::vec& logdens) const override;
+  std::string algebra() const override;
+
+private:
+  int K_;
+  LevelInput out_;
+  // each output's data (the sub-posteriors hold references into these)
+  std::vector<arma::mat> Xf_, Xs_;
+  std::vector<arma::vec> yf_, ys_;
+  std::vector<std::vector<int> > rowsF_, rowsS_;  // their rows in the whole data
+  std::vector<int> localF_, localS_;              // a row's place in its output's
+  std::vector<int> outF_, outS_;                  // ... and its output
+  std::vector<int> noise_;                        // each field row's noise group
+  std::vector<std::vector<int> > map_;            // output o's parameter k: phi[map_[o][k]]
+  std::vector<int> owner_, local_;                // phi[j]: its output (-1 kappa), place
+  std::vector<std::vector<int> > groupLocal_;     // output o: global noise group -> its own
+  std::vector<std::unique_ptr<Posterior> > sub_;
+  std::vector<double> llo_, llNew_;
+  std::vector<char> touched_;
+  std::vector<int> oldIdx_;
+  arma::vec oldVal_;
+  double ll_ = 0.0, llProp_ = 0.0;
+  bool scaleMove_ = false;
+  void sub_model(const Model& model, int o, Model& sub);
 };
 
 // The algebra for the data at hand: Kronecker on a product design unless

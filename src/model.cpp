@@ -152,8 +152,22 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   // a simulator given as a function (function.cpp) has no simulator GP
   out.emulator = !model.containsElementNamed("simulator");
   const int e = out.emulator ? 1 : 0;
-  const int want[PC_COUNT] = {q, e * (p + q), e * (p + q), b * p, b * p, e, b, G, mu, lz,
-                              e * lc, b * lc, b * ld};
+  // independent outputs: the output's indicator columns; the perOutput
+  // classes (all but kappa and sigma2E) hold one copy per output
+  if (model.containsElementNamed("outputs")) {
+    const Rcpp::List ov = model["outputs"];
+    LevelInput& o = out.outputs;
+    o.col = Rcpp::as<int>(ov["col"]) - 1; o.ncol = Rcpp::as<int>(ov["ncol"]);
+    o.L = Rcpp::as<int>(ov["L"]);
+    if (o.L < 2 || o.col < 0 || o.col + o.ncol > p || o.ncol != (o.L == 2 ? 1 : o.L))
+      Rcpp::stop("the outputs' indicator columns do not fit the inputs");
+    if (out.algebra == ALG_VECCHIA)
+      Rcpp::stop("independent outputs have no nearest-neighbour algebra");
+    if (!out.emulator) Rcpp::stop("a simulator function has no independent outputs");
+  }
+  const int K = out.nOutputs();
+  const int want[PC_COUNT] = {q, e * K * (p + q), e * K * (p + q), K * b * p, K * b * p, e * K,
+                              K * b, G, K * mu, K * lz, e * K * lc, K * b * lc, K * b * ld};
   const Rcpp::IntegerVector off = model["offset"], len = model["length"];
   Layout& lay = out.layout;
   lay.d = 0;
@@ -170,6 +184,13 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
     read_vecchia(model["vecchia"], out.vecchia);
   }
+  fill_layout(lay);
+  return out;
+}
+
+void fill_layout(Layout& lay) {
+  lay.d = 0;
+  for (int c = 0; c < PC_COUNT; ++c) lay.d += lay.length[c];
   lay.cls.assign(lay.d, -1);
   lay.pos.assign(lay.d, -1);
   for (int c = 0; c < PC_COUNT; ++c)
@@ -179,7 +200,6 @@ Model read_model(const Rcpp::List& model, int p, int q) {
         Rcpp::stop("the layout's classes overlap or leave phi");
       lay.cls[j] = c; lay.pos[j] = k;
     }
-  return out;
 }
 
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
@@ -189,6 +209,8 @@ std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& 
   check_kernel(model.kernB);
   if (model.algebra != ALG_AUTO && model.algebra != ALG_DENSE && model.algebra != ALG_VECCHIA)
     Rcpp::stop("unknown algebra code %d", model.algebra);
+  if (model.nOutputs() > 1)
+    return std::unique_ptr<Posterior>(new OutputsPosterior(Xf, yf, Xs, ys, nugget, model));
   if (model.algebra == ALG_VECCHIA)
     return std::unique_ptr<Posterior>(new VecchiaPosterior(Xf, yf, Xs, ys, nugget, model));
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");

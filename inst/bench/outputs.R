@@ -7,12 +7,15 @@
 # wider).
 # nburn=<sweeps> sets the burn-in (default 2000, calibrate()'s); the first stretch is
 # nburn + 1000 sweeps, then checks every 500.
-#   Rscript inst/bench/outputs.R [quick] [single] [nburn=2000]
+#   Rscript inst/bench/outputs.R [quick] [single] [nburn=2000] [outputs=independent|shared]
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(trailingOnly = TRUE)
 quick <- "quick" %in% args
 nburnArg <- grep("^nburn=", args, value = TRUE)
 nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 2000L
+# outputs=independent|shared: how the outputs are modelled (calibrate(outputs =))
+outArg <- grep("^outputs=", args, value = TRUE)
+outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "shared"
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else
@@ -35,13 +38,13 @@ field <- do.call(rbind, lapply(names(ef), function(o) {
 }))
 run <- function(sim, field, output) {
   t0 <- proc.time()
-  fit <- calibrate(sim, field, output = output, kernelS = "gaussian", kernelB = "gaussian",
+  fit <- calibrate(sim, field, output = output, outputs = outputs, kernelS = "gaussian", kernelB = "gaussian",
                    nMCMC = if (quick) 300 else nBurn + 1000, nBurn = if (quick) 150 else nBurn,
                    converge = until_converged(every = if (quick) 100 else 500,
                                               maxMCMC = if (quick) 400 else 30000))
   cpu <- sum((proc.time() - t0)[c(1, 2, 4, 5)], na.rm = TRUE)
   q <- apply(fit$Phi[, 1:2], 2, quantile, c(0.05, 0.95))
-  data.frame(m = nrow(sim), algebra = fit$model$simAlgebra$name, nBurn = fit$settings$nBurn,
+  data.frame(m = nrow(sim), outputs = if (is.null(output)) "one" else outputs, algebra = fit$model$simAlgebra$name, nBurn = fit$settings$nBurn,
              converged = fit$settings$converge$converged, sweeps = fit$settings$nMCMC,
              cpu.s = cpu, max.rhat = max(fit$estimates$rhat, na.rm = TRUE),
              min.ess = min(fit$estimates$ess, na.rm = TRUE),

@@ -446,7 +446,7 @@ test_that("a run with outputs and a bias per data set resumes to the uninterrupt
                  data.frame(y = 3.4 * xf + rnorm(6, 0, 0.05), x = xf, out = "rate", lab = "A"),
                  data.frame(y = 5 * exp(-1.7 * xf) + 0.3 + rnorm(6, 0, 0.05), x = xf, out = "conc",
                             lab = "B"))
-  args <- list(sim, field, output = "out", source = "lab", sourceBias = "own", nMCMC = 200,
+  args <- list(sim, field, output = "out", outputs = "shared", source = "lab", sourceBias = "own", nMCMC = 200,
                nBurn = 100, thinning = 2, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(6)
   ref <- do.call(calibrate, args)

@@ -209,7 +209,7 @@ test_that("two outputs: kappa draws match the grid posterior", {
                          sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0,
                          rhoSDist = "fixed", rhoSInit = -0.3, rhoBDist = "fixed", rhoBInit = 0.2)
   set.seed(9)
-  fit <- calibrate(pr$sim, pr$field, output = "out", nMCMC = 9000, nBurn = 1000, thinning = 4,
+  fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "shared", nMCMC = 9000, nBurn = 1000, thinning = 4,
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern52")
   expect_identical(colnames(fit$Phi)[grepl("sigma2E", colnames(fit$Phi))], c("sigma2E1", "sigma2E2"))
   d <- fit$data
@@ -225,7 +225,7 @@ test_that("two outputs recover kappa with an interval narrower than either outpu
   args <- list(nMCMC = 2500, nBurn = 1000, nChains = 2, kernelS = "matern52",
                kernelB = "matern52")
   set.seed(10)
-  both <- do.call(calibrate, c(list(pr$sim, pr$field, output = "out"), args))
+  both <- do.call(calibrate, c(list(pr$sim, pr$field, output = "out", outputs = "shared"), args))
   width <- function(f) diff(quantile(f$Phi[, "kappa1"], c(0.05, 0.95), names = FALSE))
   q <- quantile(both$Phi[, "kappa1"], c(0.05, 0.95), names = FALSE)
   expect_true(q[1] < pr$truth && pr$truth < q[2])
@@ -253,7 +253,7 @@ test_that("several field data sets: each its own noise; refusals name the column
   # proposals (a pivot floor), so every draw it keeps factors from scratch
   # and predicts (before: predict() stopped at draw 54, "not positive
   # definite", and 8 draws' log-likelihoods were -Inf from scratch).
-  fit <- calibrate(pr$sim, field, output = "out", source = "lab", nMCMC = 300, nBurn = 150,
+  fit <- calibrate(pr$sim, field, output = "out", outputs = "shared", source = "lab", nMCMC = 300, nBurn = 150,
                    nChains = 1, kernelS = "matern52", kernelB = "matern52")
   ll <- apply(FBC:::sampler_draws(fit), 1, function(x) FBC:::fit_loglik(fit, x))
   expect_true(all(is.finite(ll)))
@@ -341,7 +341,7 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
   field <- rbind(cbind(pr$field, lab = "A"),
                  transform(pr$field[pr$field$out == "conc", ], y = y + 0.3, lab = "B"))
   set.seed(12)
-  fit <- calibrate(pr$sim, field, output = "out", source = "lab", sourceBias = "own",
+  fit <- calibrate(pr$sim, field, output = "out", outputs = "shared", source = "lab", sourceBias = "own",
                    nMCMC = 300, nBurn = 150, nChains = 1, kernelS = "matern52",
                    kernelB = "matern52")
   expect_true("rhoD1" %in% colnames(fit$Phi))
@@ -392,7 +392,7 @@ test_that("a level correlation at +-1 is explained, and a split one is flagged b
   # support is wide enough"; draws split between +1 and -1 were averaged
   pr <- two_outputs(seed = 3)
   set.seed(12)
-  fit <- calibrate(pr$sim, pr$field, output = "out", nMCMC = 200, nBurn = 100, nChains = 1,
+  fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "shared", nMCMC = 200, nBurn = 100, nChains = 1,
                    kernelS = "matern52", kernelB = "matern52")
   n <- nrow(fit$Phi)
   up <- fit
@@ -427,7 +427,7 @@ test_that("messages name the output that is constant, and the field data sets' c
   field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
   expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "lab"))
   set.seed(1)
-  fit <- calibrate(pr$sim, field, output = "out", source = "lab", nMCMC = 60, nBurn = 30,
+  fit <- calibrate(pr$sim, field, output = "out", outputs = "shared", source = "lab", nMCMC = 60, nBurn = 30,
                    nChains = 1)
   expect_snapshot(error = TRUE, level_correlation(fit, "lab", gp = "bias"))
   ball <- data.frame(ballField, lab = rep(c("A", "B"), length.out = nrow(ballField)))

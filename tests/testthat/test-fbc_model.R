@@ -94,7 +94,7 @@ test_that("prior_conflicts() checks a correlation whose posterior sits in its pr
                data.frame(y = 2 * t * x, x = x, out = "rate", t = t))
   field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(10, 0, 0.05), x = xf, out = "conc"),
                  data.frame(y = 2 * 1.7 * xf + rnorm(10, 0, 0.05), x = xf, out = "rate"))
-  fit <- calibrate(sim, field, output = "out", nMCMC = 60, nBurn = 20, nChains = 1)
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", nMCMC = 60, nBurn = 20, nChains = 1)
   Phi <- fit$Phi[rep(seq_len(nrow(fit$Phi)), length.out = 400), ]
   Phi[, "rhoS1"] <- 0.985 + 0.004 * qnorm(ppoints(400))
   fit <- fit_with_draws(fit, Phi, rep(1:4, each = 100), -abs(seq_len(400) - 200.5))

@@ -35,7 +35,7 @@ as_format_3 <- function(fit) {
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 4L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 5L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
@@ -61,7 +61,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   expect_identical(up$model$discrepancy, "gp")
   expect_identical(up$spec$model, fit$spec$model)
   expect_identical(up$Phi, fit$Phi)
-  expect_identical(up$version$format, 4L)
+  expect_identical(up$version$format, 5L)
   # a fit without a bias validates; its layout is the "none" one
   set.seed(2)
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
@@ -115,7 +115,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 4L)
+    expect_identical(fit$version$format, 5L)
     expect_identical(FBC:::validate_fbc(fit), fit)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
@@ -159,7 +159,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(old$version$format, 2L)
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 4L)
+  expect_identical(fit$version$format, 5L)
   expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
@@ -187,7 +187,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(old$version$format, 3L)
   expect_null(old$model)
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 4L)
+  expect_identical(fit$version$format, 5L)
   expect_s3_class(fit$model, "fbc_model")
   expect_identical(fit$model$moves, old$settings$moves)
   expect_identical(fit$model$simAlgebra, old$settings$simAlgebra)
@@ -244,7 +244,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 4L)
+    expect_identical(up$version$format, 5L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -301,11 +301,31 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 4L)
+  expect_identical(fit$version$format, 5L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L
   saveRDS(run, file.path(dir, "run.rds"))
   expect_error(do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
                "written by another version of FBC")
+})
+
+test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", the model it was", {
+  set.seed(1)
+  x <- runif(12); t <- runif(12, 0.5, 3)
+  sim <- rbind(data.frame(y = exp(-t * x), x = x, out = "a", t = t),
+               data.frame(y = t * x, x = x, out = "b", t = t))
+  field <- rbind(data.frame(y = exp(-1.7 * (1:4) / 5), x = (1:4) / 5, out = "a"),
+                 data.frame(y = 1.7 * (1:4) / 5, x = (1:4) / 5, out = "b"))
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", nMCMC = 60, nBurn = 20,
+                   nChains = 1)
+  old <- fit
+  old$version$format <- 4L
+  old$model$options$outputs <- NULL
+  up <- FBC:::upgrade_fbc(old)
+  expect_identical(up$version$format, 5L)
+  expect_identical(up$model$options$outputs, "shared")
+  expect_identical(up$call$outputs, "shared")
+  expect_equal(predict(up, data.frame(x = 0.5, out = "a"))$pred,
+               predict(fit, data.frame(x = 0.5, out = "a"))$pred)
 })

@@ -109,7 +109,7 @@ test_that("unit = \"input\" leaves out every output and data set observed at an 
                  data.frame(y = 5 * exp(-1.7 * xf[1:3]) + rnorm(3, 0, 0.05), x = xf[1:3],
                             out = "conc", lab = "B"))
   set.seed(6)
-  fit <- calibrate(sim, field, output = "out", source = "lab", nMCMC = 200, nBurn = 100,
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", source = "lab", nMCMC = 200, nBurn = 100,
                    nChains = 2, kernelS = "matern52", kernelB = "matern52")
   g <- FBC:::loo_groups(fit$data$Xf, "input", FBC:::loo_input_columns(fit$scale))
   expect_identical(g, match(field$x, xf))

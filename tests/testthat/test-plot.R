@@ -159,7 +159,7 @@ test_that("fits plot: a row of panels per output and field data set", {
                             lab = rep(c("A", "B"), 4)),
                  data.frame(y = 3.4 * xf + rnorm(8, 0, 0.05), x = xf, out = "rate", lab = "A"))
   set.seed(1)
-  fit <- calibrate(sim, field, output = "out", source = "lab", nMCMC = 120, nBurn = 60,
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", source = "lab", nMCMC = 120, nBurn = 60,
                    nChains = 1, kernelS = "matern52", kernelB = "matern52")
   p <- plot(fit, type = "fits")
   expect_identical(levels(p$data$output), c("conc, lab A", "conc, lab B", "rate, lab A"))

@@ -261,7 +261,7 @@ test_that("with several outputs: an RMSE per output, and the output drawn as cat
   field <- rbind(data.frame(y = 5 * exp(-1.7 * xf) + rnorm(8, 0, 0.05), x = xf, out = "conc"),
                  data.frame(y = 340 * xf + rnorm(8, 0, 0.5), x = xf, out = "rate"))
   set.seed(1)
-  fit <- calibrate(sim, field, output = "out", nMCMC = 120, nBurn = 60, nChains = 1,
+  fit <- calibrate(sim, field, output = "out", outputs = "shared", nMCMC = 120, nBurn = 60, nChains = 1,
                    kernelS = "matern52", kernelB = "matern52")
   v <- validate_emulator(fit, method = "MAP")
   expect_identical(levels(v$runs$out), c("conc", "rate"))
