@@ -55,8 +55,9 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = 200L, converge = NULL,
   }
   allSim <- bind_runs(args$sim, sim)
   rest <- args[setdiff(names(args), "sim")]
-  model <- do.call(build_model, c(list(sim = allSim), rest,
-                                  list(modelCall = fit$call, call = environment())))
+  # (the call is set afterwards: do.call() would evaluate a call given to it)
+  model <- do.call(build_model, c(list(sim = allSim), rest, list(call = environment())))
+  model$call <- fit$call
   if (!identical(model$spec$vars, old$spec$vars)) {
     cli::cli_abort(c(
       "With the new runs the model has other parameters ({format_names(setdiff(union(model$spec$vars, old$spec$vars), intersect(model$spec$vars, old$spec$vars)))}), so the chains cannot go on from where they stopped.",
