@@ -176,3 +176,21 @@ test_that("propose_runs() refuses models it does not handle", {
                    nChains = 1, showProgress = FALSE)
   expect_snapshot(error = TRUE, propose_runs(fit))
 })
+
+test_that("design_loop() runs a function simulator through futures and adds runs", {
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  pb <- sinus_problem()
+  set.seed(2)
+  out <- design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
+                     batch = 2, budget = 3, discrepancy = "none", hypers = sinus_hypers(),
+                     nMCMC = 600, nBurn = 200, nChains = 1,
+                     design = list(ndraws = 40, nfantasy = 20))
+  # 8 initial runs, then a batch of 2 and the last 1 of the budget
+  expect_equal(out$history$runs, c(8, 10, 11))
+  expect_equal(nrow(out$sim), 11)
+  expect_equal(out$fit$model$dims$m, 11)
+  # the responses are the simulator's at the runs' inputs
+  expect_equal(out$sim$y, sin(10 * out$sim$u * out$sim$x))
+  expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
+  expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
+})
