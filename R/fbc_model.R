@@ -29,7 +29,8 @@
 #              runs (sim_algebra_info())
 #   moves      the sampler's schedule (sampler_moves())
 #   options    the other model arguments as checked (algebra asked for,
-#              neighbours, output, source, sourceBias)
+#              neighbours, output, source, sourceBias) and `args`, the
+#              arguments as given (update(fit, sim = ) rebuilds from them)
 #   call       the call that built it
 
 #' The model of a calibration, without fitting it
@@ -91,7 +92,17 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
                 discrepancy = opt$discrepancy, sampler = opt$sampler, algebra = alg,
                 simAlgebra = simAlgebra, moves = moves,
-                options = opt[c("algebra", "neighbours", "output", "source", "sourceBias", "outputs")],
+                options = c(opt[c("algebra", "neighbours", "output", "source", "sourceBias", "outputs")],
+                            # the arguments as given, to rebuild the model with more runs
+                            # (update(fit, sim = ...), R/design.R)
+                            list(args = list(sim = sim, field = field, kappa = kappa,
+                                             kappaDefault = kappaDefault, hypers = hypers,
+                                             discrepancy = discrepancy, kernelS = kernelS,
+                                             kernelB = kernelB, sampler = sampler,
+                                             blockSim = blockSim, algebra = algebra,
+                                             neighbours = neighbours, output = output,
+                                             source = source, sourceBias = sourceBias,
+                                             outputs = outputs))),
                 call = modelCall)
 }
 

@@ -24,6 +24,10 @@
 #' @param showProgress Show a progress bar over all chains: `NULL` (the
 #'   default) shows it in an interactive session and not in scripts or knitr,
 #'   as in [calibrate()].
+#' @param sim New simulator runs (rows in the form of `calibrate()`'s `sim`):
+#'   the model is rebuilt on all runs and refitted from the chains' last
+#'   states and adapted proposals (a warm start), see [update_runs()]. `nMCMC`
+#'   and `converge` are then the new run's, as in [calibrate()].
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
@@ -36,8 +40,12 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
 #' fit <- update(fit, nMCMC = 400)
 #' table(fit$chain)
-update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, ...) {
+update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim = NULL, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
+  if (!is.null(sim)) {
+    return(update_runs(object, sim, nMCMC = if (!missing(nMCMC)) nMCMC,
+                       converge = if (!missing(converge)) converge, showProgress = showProgress))
+  }
   converge <- check_converge(converge)
   if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every %||% fbc_first_check
   nMCMC <- check_count(nMCMC, "nMCMC", min = 1)

@@ -102,8 +102,8 @@ test_that("update() checks its arguments", {
 
 test_that("update() refuses arguments it does not use", {
   fit <- small_fit(nChains = 1)
-  # `sim` cannot be changed by update(): refit with calibrate()
-  expect_snapshot(error = TRUE, update(fit, nMCMC = 100, sim = ballSim))
+  # `field` cannot be changed by update(): refit with calibrate() (new runs: `sim =`)
+  expect_snapshot(error = TRUE, update(fit, nMCMC = 100, field = ballField))
   expect_snapshot(error = TRUE, update(fit, nmcmc = 100))
 })
 

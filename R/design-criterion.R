@@ -1,0 +1,297 @@
+# propose_runs(): where to run the simulator next, scored against the joint
+# posterior draws by a look-ahead (importance reweighting of the draws over
+# fantasised simulator values).
+
+#' Where to run the simulator next
+#'
+#' Chooses `n` new simulator inputs (experimental and calibration columns)
+#' expected to shrink the posterior of the calibration parameters
+#' \eqn{\kappa} most, integrating over the joint posterior of \eqn{\kappa}
+#' and every hyperparameter.
+#'
+#' @section Criterion:
+#' For each retained draw \eqn{\phi_s} (kappa and the hyperparameters) the
+#' simulator's value \eqn{y^*} at a candidate input \eqn{(x, t)} is Gaussian
+#' given the data (the GP conditional on the runs and the field data,
+#' \eqn{N(\mu_s, v_s)}). A run there observing \eqn{y^*} would turn the
+#' posterior into \eqn{p(\phi \mid D, y^*) \propto p(\phi \mid D)
+#' N(y^*; \mu_s, v_s)}: the draws reweighted, exactly (no refit). The
+#' criterion is the expected reduction of kappa's posterior variance (in
+#' the design's scaled units, \eqn{\kappa} on \eqn{[0, 1]}, summed over the
+#' calibration inputs), the expectation over \eqn{y^*} from the posterior
+#' predictive (a mixture over the draws), by `nfantasy` fantasised values
+#' with common random numbers across candidates:
+#' \deqn{G(x, t) = \mathrm{Var}(\kappa \mid D) - E_{y^*}[\mathrm{Var}_w(\kappa \mid D, y^*)].}
+#' A run near the field inputs at a likely \eqn{\kappa} scores high when
+#' the emulator is uncertain there and the draws disagree about its value;
+#' a run where the emulator is known, or where every draw predicts the
+#' same, scores near 0. A batch is chosen greedily: each next point with
+#' the pending points' values fantasised jointly with it (per draw their
+#' joint Gaussian), so a point close to a pending one gains little
+#' (re-running a deterministic simulator at the same input tells nothing).
+#' `gain` is each point's expected reduction given the points chosen
+#' before it, as a fraction of the current variance.
+#'
+#' `method = "plugin"` scores the same criterion with the hyperparameters
+#' fixed at the MAP draw's (kappa on a grid for one calibration input, a
+#' uniform sample otherwise, weighted by its likelihood and prior): what
+#' KOH-IMSPE and EIVAR do. It ignores the hyperparameters' uncertainty.
+#'
+#' @section When new runs cannot help:
+#' New runs shrink only the part of kappa's uncertainty that comes from the
+#' emulator's. When the field data cannot separate a change of kappa from
+#' a bias (the Kennedy-O'Hagan confounding, [convergence_messages()]) or
+#' the field data are few and noisy, kappa's posterior stays wide however
+#' many runs are made. `propose_runs()` says so when the best point's
+#' expected gain is below 1% of the current variance.
+#'
+#' @section Scope:
+#' The conditional is computed per draw with a dense Cholesky factor of
+#' the \eqn{(m + n)} covariance (exact, whatever algebra the fit ran;
+#' refused beyond 3000). One output, one noise group, no categorical
+#' inputs, and the `"gp"` or `"none"` discrepancy: other models are refused.
+#'
+#' @param fit An `fbc` object.
+#' @param n Number of points (a batch, chosen greedily with the pending
+#'   ones conditioned on).
+#' @param candidates Candidate inputs (data frame or matrix with the
+#'   experimental and calibration columns of `sim`, named), in any ranges
+#'   the user wants; `NULL` (default): `ncandidates` uniform points in the
+#'   ranges of the simulator design.
+#' @param ndraws Posterior draws the criterion integrates over (evenly
+#'   spaced over the retained ones).
+#' @param nfantasy Fantasised simulator values per candidate.
+#' @param method `"joint"` (the default) or `"plugin"` (see above).
+#' @param ncandidates Number of default candidates (default
+#'   `100 * (p + q)`, at most 1000).
+#' @param tol Candidates closer than `tol` (scaled units) to an existing
+#'   run are left out.
+#' @return A data frame of `n` rows: the inputs (natural units, columns
+#'   named as in `sim`), `gain` (the point's expected reduction of
+#'   kappa's posterior variance as a fraction of the current, given the
+#'   points above it). Attributes `variance` (current, scaled) and `time`
+#'   (CPU seconds).
+#' @seealso [update_runs()], [design_loop()]
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim[1:30, ], ballField, nChains = 2, nMCMC = 1000, nBurn = 400)
+#' propose_runs(fit, n = 2, ndraws = 50, ncandidates = 100)
+propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy = 50,
+                         method = c("joint", "plugin"), ncandidates = NULL, tol = 1e-3) {
+  t0 <- proc.time()
+  fit <- check_fbc(fit, "fit")
+  method <- match_choice(method, c("joint", "plugin"), "method")
+  n <- check_count(n, "n", min = 1)
+  ndraws <- check_count(ndraws, "ndraws", min = 2)
+  nfantasy <- check_count(nfantasy, "nfantasy", min = 1)
+  model <- fit$model
+  check_design_model(model)
+  sc <- model$scale
+  d <- sc$p + sc$q
+  U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * d), model$data$Xs, tol)
+  if (nrow(U) < n) {
+    cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
+  }
+  parts <- design_particles(fit, ndraws, method)
+  sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], model, U))
+  crit <- look_ahead(sys, parts, U, model, n, nfantasy)
+  out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
+  names(out) <- c(sc$names$inputs, sc$names$calibration)
+  out$gain <- crit$gain / crit$variance
+  tm <- proc.time() - t0
+  attr(out, "variance") <- crit$variance
+  attr(out, "time") <- sum(tm[c(1, 2)])
+  if (out$gain[1] < 0.01) {
+    cli::cli_inform(c(
+      "!" = "The best new run is expected to shrink kappa's posterior variance by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
+      i = "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
+    ))
+  }
+  out
+}
+
+# The models the look-ahead handles (the dense conditional of one output).
+check_design_model <- function(model, call = parent.frame()) {
+  d <- model$dims
+  why <- c(
+    if (!is.null(model$simulator)) "a simulator function (it has no runs to add to)",
+    if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
+    if (d$noise > 1L) "several noise groups",
+    if (d$sources > 0L) "a bias per data set",
+    if (model$discrepancy == "sgasp") "the S-GaSP discrepancy",
+    if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
+  )
+  if (length(why)) {
+    cli::cli_abort(c(
+      "{.fn propose_runs} does not handle {why[1]} yet.",
+      i = "It handles one output with the {.val gp} or {.val none} discrepancy."
+    ), call = call)
+  }
+}
+
+# The candidates on the scaled inputs (rows), those within `tol` of an
+# existing run left out.
+design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.frame()) {
+  d <- sc$p + sc$q
+  if (is.null(candidates)) {
+    U <- matrix(stats::runif(ncand * d), ncand, d)
+  } else {
+    nm <- c(sc$names$inputs, sc$names$calibration)
+    X <- as.matrix(if (is.data.frame(candidates)) candidates[intersect(nm, names(candidates))] else candidates)
+    if (!is.null(colnames(X)) && all(nm %in% colnames(X))) X <- X[, nm, drop = FALSE]
+    if (!is.numeric(X) || ncol(X) != d || anyNA(X)) {
+      cli::cli_abort("{.arg candidates} must have the {d} numeric input column{?s} {.val {nm}} without NA.", call = call)
+    }
+    U <- scale_inputs(X, sc, seq_len(d))
+  }
+  near <- apply(U, 1, function(u) min(sqrt(colSums((t(Xs) - u)^2)))) < tol
+  U[!near, , drop = FALSE]
+}
+
+# The draws scored over: `phi` (rows, sampler's scale), base log-weights
+# `lw0` (0 for posterior draws) and kappa (scaled). "plugin": the MAP
+# draw's hyperparameters with kappa on a grid (q = 1) or uniform, weighted
+# by likelihood times prior.
+design_particles <- function(fit, ndraws, method) {
+  N <- nrow(fit$Phi)
+  q <- fit$scale$q
+  if (method == "joint") {
+    rows <- unique(round(seq(1, N, length.out = min(ndraws, N))))
+    phi <- sampler_draws(fit, rows)
+    return(list(phi = phi, lw0 = rep(0, nrow(phi)), kappa = phi[, seq_len(q), drop = FALSE]))
+  }
+  phi0 <- sampler_draws(fit, which.max(fit$logPost))
+  K <- if (q == 1L) matrix((seq_len(ndraws) - 0.5) / ndraws) else matrix(stats::runif(ndraws * q), ndraws, q)
+  phi <- phi0[rep(1, ndraws), , drop = FALSE]
+  phi[, seq_len(q)] <- K
+  tab <- fit$spec$table
+  lp <- vapply(seq_len(ndraws), function(s) {
+    sum(vapply(seq_len(q), function(j) log_prior_row(tab, j, K[s, j]), numeric(1)))
+  }, numeric(1))
+  list(phi = phi, lw0 = lp, kappa = K, plugin = TRUE)
+}
+
+# One draw's Gaussian system (scaled data): the joint covariance C of
+# (ys, yf) under phi, its Cholesky factor, and for the candidates U the
+# conditional means `mu` and variances `v` of a new run's value (nugget
+# included) with A = L^-1 Cov(data, U) for the cross-covariances of a
+# batch; `ll` the log-likelihood, `corr` the simulator kernel at phi.
+draw_system <- function(phi, model, U) {
+  dat <- model$data
+  d <- model$dims
+  p <- d$p
+  q <- d$q
+  ix <- param_indices(p, q, model$discrepancy)
+  kS <- kernel_codes[[model$kernelS]]
+  thS <- phi[ix$thetaS]
+  alS <- phi[ix$alphaS]
+  s2S <- phi[ix$sigma2S]
+  corr <- function(X, Y) .corr_matrix(X, Y, thS, alS, kS)
+  Z <- rbind(dat$Xs, cbind(dat$Xf, matrix(phi[ix$kappa], d$n, q, byrow = TRUE)))
+  C <- s2S * corr(Z, Z)
+  sim <- seq_len(d$m)
+  fld <- d$m + seq_len(d$n)
+  C[cbind(sim, sim)] <- C[cbind(sim, sim)] * (1 + fbc_nugget)
+  mu0 <- rep(0, d$m + d$n)
+  if (model$discrepancy != "none") {
+    C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] *
+      .corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], kernel_codes[[model$kernelB]])
+    mu0[fld] <- phi[ix$muB]
+  }
+  C[cbind(fld, fld)] <- C[cbind(fld, fld)] + phi[ix$sigma2E]
+  R <- chol(C)
+  r <- backsolve(R, c(dat$ys, dat$yf) - mu0, transpose = TRUE)
+  A <- backsolve(R, s2S * corr(Z, U), transpose = TRUE)
+  list(A = A, mu = drop(crossprod(A, r)), v = s2S * (1 + fbc_nugget) - colSums(A^2),
+       ll = -0.5 * sum(r^2) - sum(log(diag(R))), s2S = s2S, corr = corr)
+}
+
+# The greedy look-ahead over the particles' systems `sys`: n points chosen
+# one at a time, each maximising the expected reduction of kappa's
+# (weighted) posterior variance with the pending points' fantasised values
+# (Y, one column per pending point, nfantasy rows) conditioned on per draw.
+look_ahead <- function(sys, parts, U, model, n, nfantasy) {
+  S <- length(sys)
+  lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
+  kap <- parts$kappa
+  w0 <- exp(lw0 - max(lw0))
+  variance <- weighted_var(kap, matrix(w0 / sum(w0)))
+  # each fantasy j comes from draw src[j] (drawn by the base weights)
+  src <- sample.int(S, nfantasy, replace = TRUE, prob = w0)
+  chosen <- integer()
+  gain <- numeric()
+  YP <- matrix(0, nfantasy, 0)
+  base <- matrix(lw0, S, nfantasy)  # log-weights given the pending fantasies
+  for (step in seq_len(n)) {
+    cond <- pending_conditionals(sys, U, chosen, YP)
+    z <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
+    sc <- score_candidates(cond, src, z, base, kap)
+    sc$gain[chosen] <- -Inf
+    best <- which.max(sc$gain)
+    chosen <- c(chosen, best)
+    gain <- c(gain, sc$gain[best])
+    YP <- cbind(YP, sc$Y[best, ])
+    base <- base + matrix(sc$logd[, best + (seq_len(nfantasy) - 1L) * nrow(U)], S, nfantasy)
+  }
+  list(chosen = chosen, gain = gain, variance = variance)
+}
+
+# Sum over the columns of kap of the variances under each column of the
+# normalised weights W (S x K): a K-vector.
+weighted_var <- function(kap, W) {
+  colSums(W * rowSums(kap^2)) - colSums(crossprod(kap, W)^2)
+}
+
+# Per draw, each candidate's value given the data and the pending points'
+# fantasised values YP (nfantasy x k): conditional means M (array S x Nc x
+# nfantasy, as S x (Nc nfantasy)) and variances cv (S x Nc).
+pending_conditionals <- function(sys, U, P, YP) {
+  S <- length(sys)
+  Nc <- nrow(U)
+  J <- nrow(YP)
+  M <- matrix(0, S, Nc * J)
+  cv <- matrix(0, S, Nc)
+  for (s in seq_len(S)) {
+    y <- sys[[s]]
+    if (length(P)) {
+      AP <- y$A[, P, drop = FALSE]
+      SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
+      diag(SPP) <- diag(SPP) * (1 + fbc_nugget)
+      SPP <- SPP - crossprod(AP)
+      ScP <- y$s2S * y$corr(U, U[P, , drop = FALSE]) - crossprod(y$A, AP)
+      ScP[P, ] <- SPP  # a candidate at a pending point: its own covariance
+      B <- t(solve(SPP, t(ScP)))
+      cv[s, ] <- y$v - rowSums(B * ScP)
+      M[s, ] <- as.vector(y$mu + B %*% (t(YP) - y$mu[P]))
+    } else {
+      cv[s, ] <- y$v
+      M[s, ] <- rep(y$mu, J)
+    }
+  }
+  cv <- pmax(cv, 1e-12 * vapply(sys, `[[`, numeric(1), "s2S"))
+  list(M = M, cv = cv, J = J, Nc = Nc)
+}
+
+# Expected posterior variance of kappa after a run at each candidate, given
+# the pending points: fantasy j of candidate c is draw src[j]'s conditional
+# value (z[j] its normal deviate, common to every candidate); the draws are
+# reweighted by its density under each. Returns the expected variance's
+# reduction (gain), the fantasised values Y (Nc x J) and the log-densities.
+score_candidates <- function(cond, src, z, base, kap) {
+  S <- nrow(cond$cv)
+  Nc <- cond$Nc
+  J <- length(src)
+  cols <- seq_len(Nc) + rep((seq_len(J) - 1L) * Nc, each = Nc)  # (c, j), c fastest
+  sdv <- sqrt(cond$cv)
+  Y <- matrix(cond$M[cbind(rep(src, each = Nc), cols)] +
+                sdv[cbind(rep(src, each = Nc), rep(seq_len(Nc), J))] * rep(z, each = Nc), Nc, J)
+  logd <- stats::dnorm(matrix(rep(as.vector(Y), each = S), S), cond$M,
+                       sdv[, rep(seq_len(Nc), J), drop = FALSE], log = TRUE)
+  L <- logd + base[, rep(seq_len(J), each = Nc), drop = FALSE]
+  L <- exp(L - rep(apply(L, 2, max), each = S))
+  after <- rowMeans(matrix(weighted_var(kap, L / rep(colSums(L), each = S)), Nc, J))
+  b <- exp(base - rep(apply(base, 2, max), each = S))
+  before <- mean(weighted_var(kap, b / rep(colSums(b), each = S)))
+  list(gain = before - after, Y = Y, logd = logd)
+}

@@ -1,0 +1,166 @@
+# design_loop(): a calibration campaign for a simulator given as an R
+# function: a small maximin design, then batches chosen by propose_runs(),
+# run through futures and added by update_runs().
+
+#' Run a design loop with a simulator function
+#'
+#' Starts from `n0` runs of a maximin Latin hypercube in the ranges given,
+#' fits, and then repeats: [propose_runs()] chooses `batch` runs, the
+#' simulator is called at them (each run one [future::future()], so a batch
+#' runs in parallel under [future::plan()] or on a cluster), and
+#' [update_runs()] refits on all runs from the last posterior; until
+#' `budget` runs have been added or the 90% interval of every calibration
+#' input is narrower than `width`.
+#'
+#' @param f The simulator: `f(x, kappa)` with `x` a data frame of the
+#'   field's input columns (one row per point) and `kappa` a named numeric
+#'   vector of the calibration inputs, returning one response per row.
+#' @param field The field data (response first, as in [calibrate()]).
+#' @param lower,upper Named numeric vectors: the ranges of the experimental
+#'   inputs (named as in `field`) and of the calibration inputs (their
+#'   names are the calibration inputs').
+#' @param n0 Runs of the initial design.
+#' @param batch Runs per step.
+#' @param budget Runs to add at most.
+#' @param width Stop when every calibration input's 90% interval is
+#'   narrower (in its units; a vector per input or one number); `NULL`:
+#'   run the whole budget.
+#' @param ... Passed to [calibrate()] (model and run settings; `nMCMC` and
+#'   `converge` to [update_runs()] too).
+#' @param design Arguments for [propose_runs()] (such as `ndraws`,
+#'   `method`).
+#' @param showProgress Report each step (`NULL`: in interactive sessions).
+#' @return A list: `fit` (the last fit), `sim` (every run), `history` (a
+#'   data frame per step: `runs`, each calibration input's posterior mean,
+#'   sd and 90% interval width, the design step's and the fit's CPU
+#'   seconds).
+#' @seealso [propose_runs()], [update_runs()]
+#' @export
+#' @examples
+#' \donttest{
+#' f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+#' xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
+#' field <- data.frame(y = sin(2 * pi * xf) + rnorm(10, 0, 0.1), x = xf)
+#' set.seed(1)
+#' out <- design_loop(f, field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
+#'                    n0 = 10, batch = 5, budget = 10, discrepancy = "none",
+#'                    nChains = 2, design = list(ndraws = 50))
+#' out$history
+#' }
+design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40, width = NULL,
+                        ..., design = list(), showProgress = NULL) {
+  if (!is.function(f)) {
+    cli::cli_abort("{.arg f} must be a function {.code f(x, kappa)}, not {.obj_type_friendly {f}}.")
+  }
+  showProgress <- default_progress(showProgress)
+  xnames <- names(field)[-1]
+  check_loop_ranges(lower, upper, xnames)
+  cal <- setdiff(names(lower), xnames)
+  n0 <- check_count(n0, "n0", min = 3)
+  batch <- check_count(batch, "batch", min = 1)
+  budget <- check_count(budget, "budget", min = 0)
+  dots <- list(...)
+  X <- maximin_lhs(n0, lower, upper)
+  sim <- run_simulator(f, X, xnames, cal, names(field)[1])
+  t0 <- proc.time()
+  fit <- calibrate(sim, field, showProgress = FALSE, ...)
+  history <- loop_row(fit, nrow(sim), 0, cpu_since(t0))
+  while (nrow(sim) - n0 < budget && !loop_done(fit, width, cal)) {
+    t0 <- proc.time()
+    pr <- do.call(propose_runs, c(list(fit, n = min(batch, budget - (nrow(sim) - n0)),
+                                       candidates = maximin_lhs(100 * length(lower), lower, upper, tries = 1)),
+                                  design))
+    tDesign <- cpu_since(t0)
+    new <- run_simulator(f, pr[names(lower)], xnames, cal, names(field)[1])
+    sim <- rbind(sim, new)
+    t0 <- proc.time()
+    fit <- update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge, showProgress = FALSE)
+    history <- rbind(history, loop_row(fit, nrow(sim), tDesign, cpu_since(t0)))
+    if (showProgress) {
+      h <- history[nrow(history), ]
+      cli::cli_inform("{nrow(sim)} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, fit {round(h$fitTime, 1)} s).")
+    }
+  }
+  list(fit = fit, sim = sim, history = history)
+}
+
+cpu_since <- function(t0) {
+  tm <- proc.time() - t0
+  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
+}
+
+check_loop_ranges <- function(lower, upper, xnames, call = parent.frame()) {
+  ok <- is.numeric(lower) && is.numeric(upper) && !is.null(names(lower)) &&
+    identical(names(lower), names(upper)) && all(upper > lower) && all(xnames %in% names(lower)) &&
+    length(setdiff(names(lower), xnames)) >= 1L
+  if (!ok) {
+    cli::cli_abort(c(
+      "{.arg lower} and {.arg upper} must be named numeric vectors with the same names, {.arg upper} above {.arg lower}: the field's inputs ({.val {xnames}}) and at least one calibration input.",
+      i = "Such as {.code lower = c(x = 0, u = 0), upper = c(x = 1, u = 1)}."
+    ), call = call)
+  }
+}
+
+# n points of a Latin hypercube in the box, the best of `tries` by the
+# smallest pairwise distance (scaled units); columns named as `lower`.
+maximin_lhs <- function(n, lower, upper, tries = 20) {
+  d <- length(lower)
+  best <- NULL
+  score <- -Inf
+  for (k in seq_len(tries)) {
+    U <- vapply(seq_len(d), function(j) (sample.int(n) - stats::runif(n)) / n, numeric(n))
+    U <- matrix(U, n, d)
+    s <- if (n > 1) min(stats::dist(U)) else 0
+    if (s > score) {
+      best <- U
+      score <- s
+    }
+  }
+  X <- sweep(sweep(best, 2, upper - lower, "*"), 2, lower, "+")
+  colnames(X) <- names(lower)
+  as.data.frame(X)
+}
+
+# The simulator at each row of X, one future per run; a data frame in the
+# form of calibrate()'s sim (response, experimental, calibration inputs).
+run_simulator <- function(f, X, xnames, cal, yname) {
+  futures <- lapply(seq_len(nrow(X)), function(i) {
+    x <- X[i, xnames, drop = FALSE]
+    kappa <- unlist(X[i, cal, drop = FALSE])
+    future::future(f(x, kappa), seed = TRUE, globals = list(f = f, x = x, kappa = kappa),
+                   label = sprintf("FBC simulator run %d", i))
+  })
+  y <- vapply(futures, function(ft) {
+    v <- future::value(ft)
+    if (!is.numeric(v) || length(v) != 1L || !is.finite(v)) {
+      cli::cli_abort("{.arg f} must return one finite number for one row of {.arg x}; it returned {.obj_type_friendly {v}}.")
+    }
+    v
+  }, numeric(1))
+  out <- data.frame(y, X[c(xnames, cal)])
+  names(out)[1] <- yname
+  rownames(out) <- NULL
+  out
+}
+
+loop_row <- function(fit, runs, tDesign, tFit) {
+  cal <- fit$scale$names$calibration
+  row <- data.frame(runs = runs)
+  for (j in seq_along(cal)) {
+    k <- fit$Phi[, j]
+    q <- stats::quantile(k, c(0.05, 0.95), names = FALSE)
+    row[[paste0(cal[j], ".mean")]] <- mean(k)
+    row[[paste0(cal[j], ".sd")]] <- stats::sd(k)
+    row[[paste0(cal[j], ".width")]] <- q[2] - q[1]
+  }
+  row$designTime <- tDesign
+  row$fitTime <- tFit
+  row
+}
+
+loop_done <- function(fit, width, cal) {
+  if (is.null(width)) return(FALSE)
+  w <- vapply(seq_along(cal), function(j) diff(stats::quantile(fit$Phi[, j], c(0.05, 0.95))),
+              numeric(1))
+  all(w < rep_len(width, length(w)))
+}

@@ -1,0 +1,166 @@
+# Design of new simulator runs (issue 30): adding runs to a fit with a warm
+# start (update_runs()), choosing where to run next from the joint
+# posterior (propose_runs(), R/design-criterion.R) and the loop for a
+# simulator given as an R function (design_loop(), R/design-loop.R).
+
+# ------------------------------------------------------- adding runs ----
+
+#' Add simulator runs to a calibration
+#'
+#' `update(fit, sim = more_runs)` rebuilds the model on all runs (the old
+#' and the new, exactly as `calibrate(rbind(old, new), field, ...)` with the
+#' fit's model arguments would: the same scaling, priors and algebra
+#' choice) and refits it from the chains' last states and adapted
+#' proposals (a warm start), with `nBurn` sweeps of re-tuning. The posterior is that of a fresh fit on all
+#' runs (tested against the grid posterior); only the way there is
+#' shorter: the chains start in the old posterior, which new runs move
+#' little, with proposals already tuned, so the warm-up settles in its
+#' first windows.
+#'
+#' The last states are carried to the new model's scaling: kappa in its
+#' own units, each length-scale `theta` by the change of its input's range
+#' (to the power `alpha` for the power exponential, 2 otherwise), the
+#' variances and `muB` by the change of the response's mean and sd (with
+#' several outputs by the first output's: the chains' warm-up corrects
+#' the rest). Fixed parameters take the new model's values.
+#'
+#' @param fit An `fbc` object.
+#' @param sim The new runs, with the columns of the fit's `sim` (a data
+#'   frame with its names, or a matrix with its columns in its order).
+#' @param nMCMC,converge The refit's run length, as in [calibrate()]: by
+#'   default until converged ([until_converged()]).
+#' @param nBurn Sweeps of re-tuning before draws are kept (fixed, default
+#'   200: the proposals come adapted; a fresh fit's adaptive warm-up takes
+#'   200 to 5000).
+#' @param showProgress As in [calibrate()].
+#' @return A new `fbc` object fitted to all runs (its draws are the new
+#'   run's only). `settings$warmStart` is `TRUE`.
+#' @seealso [propose_runs()], [design_loop()]
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim[1:40, ], ballField, nChains = 2)
+#' fit2 <- update(fit, sim = ballSim[41:50, ])
+#' fit2$model$dims$m
+update_runs <- function(fit, sim, nMCMC = NULL, nBurn = 200L, converge = NULL,
+                        showProgress = NULL) {
+  fit <- check_fbc(fit, "fit")
+  old <- fit$model
+  args <- old$options$args
+  if (!is.null(old$simulator)) {
+    cli::cli_abort(c(
+      "This fit calibrates a simulator function, which has no runs to add to.",
+      i = "{.fn propose_runs} and {.fn update_runs} work on fits of simulator runs; {.fn design_loop} builds such a fit from a function."
+    ))
+  }
+  if (is.null(args)) {
+    cli::cli_abort(c(
+      "This fit does not hold the arguments its model was built from (it was made by an earlier FBC), so runs cannot be added to it.",
+      i = "Fit it again with {.fn calibrate} on all runs."
+    ))
+  }
+  allSim <- bind_runs(args$sim, sim)
+  rest <- args[setdiff(names(args), "sim")]
+  # (the call is set afterwards: do.call() would evaluate a call given to it)
+  model <- do.call(build_model, c(list(sim = allSim), rest, list(call = environment())))
+  model$call <- fit$call
+  if (!identical(model$spec$vars, old$spec$vars)) {
+    cli::cli_abort(c(
+      "With the new runs the model has other parameters ({format_names(setdiff(union(model$spec$vars, old$spec$vars), intersect(model$spec$vars, old$spec$vars)))}), so the chains cannot go on from where they stopped.",
+      i = "Fit it again with {.fn calibrate} on all runs."
+    ))
+  }
+  states <- fit$state$chains
+  run <- check_run(nMCMC, nBurn, fit$settings$thinning, length(states), converge, showProgress,
+                   NULL, 60)
+  d <- length(model$spec$vars)
+  starts <- lapply(states, function(st) chain_start(warm_state(st$sampler, old, model), d, 0L))
+  t0 <- proc.time()[["elapsed"]]
+  assemble <- function(results, target) {
+    results <- check_chain_results(results, max(target))
+    settings <- list(nMCMC = max(target), nBurn = run$nBurn, thinning = run$thinning,
+                     nChains = length(results), nugget = fbc_nugget,
+                     time = proc.time()[["elapsed"]] - t0, checkpoint = NULL, warmStart = TRUE)
+    new_fbc_chains(results, model, fit$call, settings = settings)
+  }
+  run_rounds(starts, chain_seeds(length(starts)), rep(run$nMCMC, length(starts)), run$converge,
+             assemble, nBurn = run$nBurn, thinning = run$thinning,
+             showProgress = run$showProgress, dat = model$data, spec = model$spec,
+             moves = model$moves)
+}
+
+# The old runs and the new ones in one table of the old one's form.
+bind_runs <- function(old, new, call = parent.frame()) {
+  if (is.data.frame(old)) {
+    if (!is.data.frame(new) && !is.matrix(new)) {
+      cli::cli_abort("{.arg sim} must be a data frame with the columns of the fit's runs ({.val {names(old)}}), not {.obj_type_friendly {new}}.", call = call)
+    }
+    new <- as.data.frame(new)
+    miss <- setdiff(names(old), names(new))
+    if (length(miss)) {
+      cli::cli_abort("{.arg sim} lacks the column{?s} {.val {miss}} of the fit's runs.", call = call)
+    }
+    return(rbind(old, new[names(old)]))
+  }
+  new <- as.matrix(new)
+  if (!is.numeric(new) || ncol(new) != ncol(old)) {
+    cli::cli_abort("{.arg sim} must be a numeric matrix of {ncol(old)} columns, as the fit's runs; it has {NCOL(new)}.", call = call)
+  }
+  if (!is.null(colnames(old)) && !is.null(colnames(new))) {
+    miss <- setdiff(colnames(old), colnames(new))
+    if (length(miss)) {
+      cli::cli_abort("{.arg sim} lacks the column{?s} {.val {miss}} of the fit's runs.", call = call)
+    }
+    new <- new[, colnames(old), drop = FALSE]
+  }
+  rbind(old, new)
+}
+
+# A chain's sampler state carried to `new` (the model on more runs) from
+# `old`: parameters mapped to the new scaling (warm_phi()), adapted scales,
+# block shapes and adaptation counts kept, iterations and the warm-up's
+# bookkeeping reset: a fixed re-tuning of nBurn sweeps follows (its steps
+# small, the batch count going on; under 400 sweeps the blocks' running
+# covariance is not started afresh, so it keeps what it learnt).
+warm_state <- function(state, old, new) {
+  state$phi <- warm_phi(state$phi, old, new)
+  state$iter <- 0L
+  drop <- c("warmup", "warmMin", "warmMax", "warmCapped", "settled", "windows", "winAcc",
+            "winScale", "winShape")
+  state[intersect(names(state), drop)] <- NULL
+  state
+}
+
+# phi (sampler's scale) of model `old` in the scaling of `new`: kappa
+# through its own units; theta_k * (range_new / range_old)^a (a = alpha_k
+# for the power exponential, 2 otherwise: theta d^a is what the kernel
+# sees); variances by (sd_old / sd_new)^2 and muB by the change of mean;
+# fixed parameters at the new model's values.
+warm_phi <- function(phi, old, new) {
+  so <- old$scale
+  sn <- new$scale
+  cls <- new$spec$classes
+  p <- so$p
+  q <- so$q
+  out <- phi
+  cal <- p + seq_len(q)
+  k <- which(cls == "kappa")
+  out[k] <- (so$xmin[cal] + (so$xmax[cal] - so$xmin[cal]) * phi[k] - sn$xmin[cal]) /
+    (sn$xmax[cal] - sn$xmin[cal])
+  ratio <- (sn$xmax - sn$xmin) / (so$xmax - so$xmin)
+  power <- function(cl, kern) {
+    i <- which(cls == cl)
+    if (kernel_has_alpha(kern)) phi[i] else rep(2, length(i))
+  }
+  th <- which(cls == "thetaS")
+  out[th] <- phi[th] * ratio[seq_along(th)]^power("alphaS", new$kernelS)
+  tb <- which(cls == "thetaB")
+  if (length(tb)) out[tb] <- phi[tb] * ratio[seq_along(tb)]^power("alphaB", new$kernelB)
+  v <- cls %in% c("sigma2S", "sigma2B", "sigma2E")
+  out[v] <- phi[v] * (so$ysd[1] / sn$ysd[1])^2
+  mu <- which(cls == "muB")
+  out[mu] <- (phi[mu] * so$ysd[1] + so$ymean[1] - sn$ymean[1]) / sn$ysd[1]
+  fixed <- new$spec$table$family == prior_families[["fixed"]]
+  out[fixed] <- new$spec$init[fixed]
+  out
+}

@@ -1,0 +1,204 @@
+# Design of new runs (R/design.R, R/design-criterion.R): adding runs with a
+# warm start, the look-ahead criterion, batches.
+
+# The sinusoid of Koermer et al. (2024), eta(x, u) = sin(10 u x), without
+# its bias: m scattered runs on [0, 1]^2 (a Latin hypercube), 5 field
+# inputs x 2 replicates at u = pi / 5, noise sd 0.1.
+sinus_problem <- function(m = 12, seed = 1) {
+  set.seed(seed)
+  u <- (sample(m) - stats::runif(m)) / m
+  x <- (sample(m) - stats::runif(m)) / m
+  xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
+  list(sim = data.frame(y = sin(10 * u * x), x = x, u = u),
+       field = data.frame(y = sin(10 * pi / 5 * xf) + stats::rnorm(10, 0, 0.1), x = xf))
+}
+# every hyperparameter fixed (scaled units): kappa alone is sampled, so its
+# posterior is a 1-D grid (helper-grid.R)
+sinus_hypers <- function() {
+  set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(8, 8), sigma2SDist = "fixed",
+                  sigma2SInit = 1, sigma2EDist = "fixed", sigma2EInit = 0.02)
+}
+sinus_fit <- function(pb, nMCMC = 4200, seed = 3) {
+  set.seed(seed)
+  calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), nMCMC = nMCMC,
+            nBurn = 200, nChains = 1, showProgress = FALSE)
+}
+sinus_loglik <- function(d) {
+  function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
+                             discrepancy = "none")
+}
+
+test_that("update(fit, sim =) gives the posterior of a fit on all runs (grid)", {
+  pb <- sinus_problem(m = 20)
+  first <- pb
+  first$sim <- pb$sim[1:12, ]
+  fit <- sinus_fit(first)
+  fit2 <- update(fit, sim = pb$sim[13:20, ], nMCMC = 4200)
+  # the model is the one calibrate() builds on all runs
+  all <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), fit = FALSE)
+  expect_identical(fit2$model$data, all$data)
+  expect_identical(fit2$model$spec$table, all$spec$table)
+  expect_true(fit2$settings$warmStart)
+  expect_equal(nrow(fit2$Phi), 2000)
+  # kappa's draws against the grid posterior on all 20 runs; 8 runs more
+  # move it (the 12-run posterior is not the reference's)
+  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_gt(abs(mean(fit2$Phi[, 1]) - mean(fit$Phi[, 1])) / sd(fit2$Phi[, 1]), 0.1)
+})
+
+test_that("update(fit, sim =) carries the states to the new scaling", {
+  pb <- sinus_problem(m = 20)
+  old <- calibrate(pb$sim[1:12, ], pb$field, fit = FALSE)
+  new <- calibrate(pb$sim, pb$field, fit = FALSE)
+  phi <- old$spec$init
+  ix <- FBC:::param_indices(1, 1, "gp")
+  phi[ix$kappa] <- 0.3
+  phi[ix$thetaS] <- c(2, 3)
+  phi[ix$sigma2S] <- 1.5
+  phi[ix$muB] <- 0.2
+  out <- FBC:::warm_phi(phi, old, new)
+  so <- old$scale
+  sn <- new$scale
+  # kappa in its own units, theta d^2 and the variances in the data's units kept
+  expect_equal(sn$xmin[2] + (sn$xmax[2] - sn$xmin[2]) * out[ix$kappa],
+               so$xmin[2] + (so$xmax[2] - so$xmin[2]) * 0.3)
+  expect_equal(out[ix$thetaS] / (sn$xmax - sn$xmin)^2, c(2, 3) / (so$xmax - so$xmin)^2)
+  expect_equal(out[ix$sigma2S] * sn$ysd^2, 1.5 * so$ysd^2)
+  expect_equal(out[ix$muB] * sn$ysd + sn$ymean, 0.2 * so$ysd + so$ymean)
+})
+
+test_that("update(fit, sim =) checks the new runs", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 400)
+  expect_snapshot(error = TRUE, update(fit, sim = pb$sim[, c("y", "x")]))
+  expect_snapshot(error = TRUE, update(fit, sim = "runs"))
+})
+
+test_that("the look-ahead weights give the posterior of a refit with the fantasised run", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 6200)
+  d <- fit$data
+  sc <- fit$scale
+  # a run at x = 0.48, u = 0.58 returning the simulator's value there
+  run <- c(x = 0.48, u = 0.58)
+  ystar <- sin(10 * run[["u"]] * run[["x"]])
+  cs <- FBC:::scale_inputs(matrix(run, 1), sc, 1:2)
+  ys <- (ystar - sc$ymean) / sc$ysd
+  phis <- FBC:::sampler_draws(fit)
+  w <- vapply(seq_len(nrow(phis)), function(s) {
+    y <- FBC:::draw_system(phis[s, ], fit$model, cs)
+    stats::dnorm(ys, y$mu, sqrt(y$v))
+  }, numeric(1))
+  w <- w / sum(w)
+  k <- fit$Phi[, "kappa1"]
+  m1 <- sum(w * k)
+  s1 <- sqrt(sum(w * (k - m1)^2))
+  # brute force: the grid posterior with the run added (plain-R dense
+  # likelihood, the same scaling), Beta(1.1, 1.1) prior
+  u <- seq(0, 1, length.out = 401)
+  phi <- fit$state$chains[[1]]$last
+  lp <- vapply(u, function(a) {
+    phi[1] <- a
+    dense_loglik(d$Xf, d$yf, rbind(d$Xs, cs), c(d$ys, ys), phi, fbc_nugget, "matern52",
+                 "matern52", discrepancy = "none")
+  }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
+  g <- exp(lp - max(lp))
+  g <- g / sum(g)
+  kg <- sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * u
+  mg <- sum(g * kg)
+  sg <- sqrt(sum(g * (kg - mg)^2))
+  # the run moves the posterior (by 1.5 of its new sd, and shrinks it to
+  # 0.4 of the old: else the check would be empty) ...
+  expect_gt(abs(mg - mean(k)) / sg, 1)
+  expect_lt(sg / sd(k), 0.6)
+  # ... and the reweighted draws follow it within Monte Carlo error
+  # (effective sample size 1 / sum(w^2) ~ 1500 of 3000 draws: errors
+  # ~ 0.03 sd; 0.02 measured on writing this)
+  expect_gt(1 / sum(w^2), 500)
+  expect_lt(abs(m1 - mg) / sg, 0.1)
+  expect_lt(abs(s1 / sg - 1), 0.1)
+})
+
+test_that("proposed runs lie in the design's ranges and away from the runs", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 1200)
+  set.seed(5)
+  pr <- propose_runs(fit, n = 3, ndraws = 60, nfantasy = 30, ncandidates = 200)
+  expect_named(pr, c("x", "u", "gain"))
+  expect_equal(nrow(pr), 3)
+  rng <- apply(pb$sim[, c("x", "u")], 2, range)
+  for (v in c("x", "u")) {
+    expect_true(all(pr[[v]] >= rng[1, v] & pr[[v]] <= rng[2, v]))
+  }
+  U <- FBC:::scale_inputs(as.matrix(pr[c("x", "u")]), fit$scale, 1:2)
+  dist <- apply(U, 1, function(u) min(sqrt(colSums((t(fit$data$Xs) - u)^2))))
+  expect_true(all(dist > 1e-3))
+  expect_true(all(pr$gain > 0))
+  # the existing runs as candidates are left out
+  cand <- rbind(pb$sim[, c("x", "u")], data.frame(x = c(0.3, 0.6), u = c(0.6, 0.65)))
+  pr2 <- propose_runs(fit, n = 2, candidates = cand, ndraws = 60, nfantasy = 30)
+  expect_equal(sort(pr2$x), c(0.3, 0.6))
+})
+
+test_that("a batch conditions on its pending points; single picks repeat", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 1200)
+  cand <- data.frame(x = c(0.45, 0.45, 0.8, 0.2, 0.6), u = c(0.6, 0.6, 0.62, 0.64, 0.3))
+  one <- function() {
+    set.seed(9)
+    propose_runs(fit, n = 1, candidates = cand, ndraws = 80, nfantasy = 40)
+  }
+  a <- one()
+  b <- one()
+  # nothing changed between two single picks: the same point twice
+  expect_identical(a[c("x", "u")], b[c("x", "u")])
+  set.seed(9)
+  two <- propose_runs(fit, n = 2, candidates = cand, ndraws = 80, nfantasy = 40)
+  expect_equal(two[1, c("x", "u")], a[1, c("x", "u")])
+  # the second point is not the first again: re-running the same input of
+  # a deterministic simulator is worth nothing once it is pending
+  expect_false(isTRUE(all.equal(unlist(two[2, c("x", "u")]), unlist(two[1, c("x", "u")]))))
+  # a candidate at a pending point (row 2 is row 1 again), given that
+  # point, has no variance left in any draw: it can gain nothing
+  U <- FBC:::scale_inputs(as.matrix(cand), fit$scale, 1:2)
+  parts <- FBC:::design_particles(fit, 80, "joint")
+  sys <- lapply(seq_len(nrow(parts$phi)), function(s) FBC:::draw_system(parts$phi[s, ], fit$model, U))
+  cond <- FBC:::pending_conditionals(sys, U, 1L, matrix(stats::rnorm(40), 40, 1))
+  v2 <- vapply(sys, function(y) y$v[2], numeric(1))
+  expect_lt(max(cond$cv[, 2] / v2), 1e-3)
+  expect_gt(min(cond$cv[, 3:5] / t(vapply(sys, function(y) y$v[3:5], numeric(3)))), 1e-3)
+})
+
+test_that("propose_runs() refuses models it does not handle", {
+  pb <- sinus_problem()
+  set.seed(1)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "sgasp", nMCMC = 300, nBurn = 100,
+                   nChains = 1, showProgress = FALSE)
+  expect_snapshot(error = TRUE, propose_runs(fit))
+  # a simulator function has no runs to add to (R/simulator_function.R)
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  set.seed(1)
+  ffit <- calibrate(f, pb$field[, c("x", "y")], kappaDist = "uniform", kappaP1 = c(u = 0),
+                    kappaP2 = c(u = 1), discrepancy = "none", nMCMC = 200, nBurn = 100,
+                    nChains = 1, showProgress = FALSE)
+  expect_snapshot(error = TRUE, propose_runs(ffit))
+  expect_snapshot(error = TRUE, update(ffit, sim = pb$sim))
+})
+
+test_that("design_loop() runs a function simulator through futures and adds runs", {
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  pb <- sinus_problem()
+  set.seed(2)
+  out <- design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
+                     batch = 2, budget = 3, discrepancy = "none", hypers = sinus_hypers(),
+                     nMCMC = 600, nBurn = 200, nChains = 1,
+                     design = list(ndraws = 40, nfantasy = 20))
+  # 8 initial runs, then a batch of 2 and the last 1 of the budget
+  expect_equal(out$history$runs, c(8, 10, 11))
+  expect_equal(nrow(out$sim), 11)
+  expect_equal(out$fit$model$dims$m, 11)
+  # the responses are the simulator's at the runs' inputs
+  expect_equal(out$sim$y, sin(10 * out$sim$u * out$sim$x))
+  expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
+  expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
+})
