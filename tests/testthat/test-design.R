@@ -178,7 +178,7 @@ test_that("propose_runs() refuses models it does not handle", {
   # a simulator function has no runs to add to (R/simulator_function.R)
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
   set.seed(1)
-  ffit <- calibrate(f, pb$field[, c("x", "y")], kappaDist = "uniform", kappaP1 = c(u = 0),
+  ffit <- calibrate(f, pb$field, kappaDist = "uniform", kappaP1 = c(u = 0),
                     kappaP2 = c(u = 1), discrepancy = "none", nMCMC = 200, nBurn = 100,
                     nChains = 1, showProgress = FALSE)
   expect_snapshot(error = TRUE, propose_runs(ffit))
