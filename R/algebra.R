@@ -9,24 +9,29 @@
 # - else the nearest-neighbour (Vecchia) approximation with
 #   vecchia_neighbours(m) neighbours.
 #
-# Projected dense sweep: fbc_dense_flop_s[[blas]] * (m + n)^3 seconds. A
-# dense sweep costs about 1.2 Cholesky factorisations of the (m + n) x
-# (m + n) block (inst/bench/RESULTS-scale.md: 1.22 at m = 1000, 1.08 at
-# 2000), and R's chol() took 1.22e-10 to 1.56e-10 s per N^3 at N = 400 to
-# 1500 on the reference BLAS of our 2-core machine (timed for this rule,
-# 2026-11-25; RESULTS-scale.md: 125 ms at N = 1060): 1.2 * 1.3e-10 = 1.5e-10
-# s per (m + n)^3. An optimized BLAS factors about 9 times faster
-# (blas_hint(); RESULTS-scale.md). A fixed constant per BLAS, not a timing
-# at run time: the same data on the same machine always get the same
-# algebra (set.seed() reproduces the run).
-fbc_dense_flop_s <- c(reference = 1.5e-10, optimized = 1.5e-10 / 9, unknown = 1.5e-10)
+# Projected dense sweep: fbc_dense_flop_s * (m + n)^3 seconds on the
+# reference BLAS. A dense sweep costs about 1.2 Cholesky factorisations of
+# the (m + n) x (m + n) block (inst/bench/RESULTS-scale.md: 1.22 at m = 1000,
+# 1.08 at 2000), and R's chol() took 1.22e-10 to 1.56e-10 s per N^3 at N =
+# 400 to 1500 on the reference BLAS of our 2-core machine (timed for this
+# rule, 2026-11-25; RESULTS-scale.md: 125 ms at N = 1060): 1.2 * 1.3e-10 =
+# 1.5e-10 s per (m + n)^3.
+#
+# The choice is made on this projection whatever BLAS runs, so the same data
+# get the same algebra (and set.seed() the same draws, up to rounding) on
+# every machine. An optimized BLAS does not move the line in the dense
+# algebra's favour (measured 2026-11-25, OpenBLAS 0.3.21, one thread, m =
+# 1000 scattered runs, n = 60): a dense sweep cost 17.6 ms against the
+# Vecchia algebra's 7.0 ms, and the default run on the dense algebra had not
+# converged after 49 CPU minutes where the Vecchia one takes 5-8 minutes on
+# the reference BLAS (inst/bench/RESULTS-defaults.md).
+fbc_dense_flop_s <- 1.5e-10
 # The dense algebra while its projected sweep costs less than this (s),
-# m + n up to about 870 on the reference BLAS and 1800 on an optimized one.
-# At the limit 4 chains of 8000 sweeps (the default nMCMC) take about 53 CPU
-# minutes, 4 x 3000 (a run the stopping rule ends early) 20; the Vecchia
-# algebra's sweep costs 8 ms at m = 1000, k = 20 (RESULTS-vecchia.md), so
-# above the limit the exact algebra is an hour or more and the
-# approximation minutes.
+# m + n up to about 870. At the limit 4 chains of 8000 sweeps take about 53
+# CPU minutes on the reference BLAS, 4 x 3000 (a run the stopping rule ends
+# early) 20; the Vecchia algebra's sweep costs 8 ms at m = 1000, k = 20
+# (RESULTS-vecchia.md), so above the limit the exact algebra is an hour or
+# more and the approximation minutes.
 fbc_dense_sweep_max <- 0.1
 
 # Neighbours of the Vecchia algebra for m runs when not given (measured,
@@ -43,8 +48,8 @@ fbc_vecchia_k10_m <- 4000L
 vecchia_neighbours <- function(m) if (m < fbc_vecchia_k10_m) 20L else 10L
 
 # Projected CPU seconds of one dense sweep with m runs and n field rows.
-dense_sweep_cost <- function(m, n, blas = blas_kind()) {
-  fbc_dense_flop_s[[blas]] * (m + n)^3
+dense_sweep_cost <- function(m, n) {
+  fbc_dense_flop_s * (m + n)^3
 }
 
 # The algebra for a calibration (the contract shared with the model code):
@@ -57,9 +62,9 @@ dense_sweep_cost <- function(m, n, blas = blas_kind()) {
 # neighbours = the count for Vecchia, else NULL; reason = one sentence for
 # print(); forced = whether the user named the algebra). Says so when
 # `neighbours` is given for an algebra that does not use it.
-choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, blas = blas_kind()) {
+choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   m <- nrow(Xs)
-  cost <- dense_sweep_cost(m, n, blas)
+  cost <- dense_sweep_cost(m, n)
   costTxt <- sprintf("about %s s a sweep", format(signif(cost, 2), scientific = FALSE))
   dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]]) else integer(0)
   out <- if (algebra == "vecchia") {

@@ -189,12 +189,13 @@
 #' costs about 1.2 Cholesky factorisations of the \eqn{(m + n) \times (m +
 #' n)} block, projected as \eqn{1.5 \times 10^{-10} (m + n)^3} CPU seconds
 #' on the reference BLAS (timed on a 2-core machine: 0.16 s at \eqn{m + n =
-#' 1060}) and 9 times less on an optimized BLAS. While that is under 0.1 s
-#' (\eqn{m + n} up to about 870 on the reference BLAS, 1800 on an optimized
-#' one) the dense algebra runs, exact; above, the nearest-neighbour one,
-#' whose sweep costs milliseconds (8 ms at m = 1000). A fixed constant per
-#' BLAS, not a timing at run time, so the same data always get the same
-#' algebra on a machine. `print()` gives the projected dense cost and the
+#' 1060}). While that is under 0.1 s (\eqn{m + n} up to about 870) the
+#' dense algebra runs, exact; above, the nearest-neighbour one, whose sweep
+#' costs milliseconds (8 ms at m = 1000). The rule is the same on every BLAS,
+#' so the same data get the same algebra on every machine: an optimized BLAS
+#' does not favour the dense algebra enough to move it (OpenBLAS, m = 1000:
+#' a dense sweep 17.6 ms, a Vecchia one 7.0 ms).
+#' `print()` gives the projected dense cost and the
 #' ways towards exact (`algebra = "dense"`, a larger `neighbours`).
 #'
 #' @section Categorical inputs, outputs and data sets:
