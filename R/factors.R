@@ -50,23 +50,7 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   if (!is.null(output)) check_string(output, "output", call = call)
   if (!is.null(source)) check_string(source, "source", call = call)
   if (!length(catS) && !length(catF) && is.null(output) && is.null(source)) return(none)
-  for (nm in c(output, source)) {
-    where <- if (identical(nm, output)) c("sim", "field") else "field"
-    for (w in where) {
-      d <- if (w == "sim") sim else field
-      if (!is.data.frame(d) || !nm %in% names(d) || !is_categorical(d[[nm]])) {
-        arg <- if (identical(nm, output)) "output" else "source"
-        cli::cli_abort(c(
-          "{.arg {arg}} = {.val {nm}} must name a factor or character column of {.arg {w}}.",
-          i = if (arg == "output") "The outputs are in long format: one row per run (or observation) and output, the output's name in that column, its value in the response column." else
-            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column.",
-          i = if (arg == "output" && w == "sim" && is.data.frame(field) && nm %in% names(field)) {
-            "{.val {nm}} is a column of {.arg field} only: if it says which field data set each row comes from, name it with {.arg source} instead."
-          }
-        ), call = call)
-      }
-    }
-  }
+  check_role_columns(sim, field, output, source, call = call)
   check_no_missing_levels(sim, c(catS, output), "sim", output, source, call = call)
   check_no_missing_levels(field, c(catF, output, source), "field", output, source, call = call)
   if (!is.null(source) && is.data.frame(sim) && source %in% names(sim)) {
@@ -79,28 +63,7 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
     field <- field[, names(field) != source, drop = FALSE]
     catF <- setdiff(catF, source)
   }
-  onlySim <- setdiff(catS, names(field))
-  if (length(onlySim)) {
-    cli::cli_abort(c(
-      "{.arg sim} has categorical {cli::qty(length(onlySim))}column{?s} {.val {onlySim}} that {.arg field} lacks: a calibration input must be numeric.",
-      i = "A categorical input is an experimental input: give it in both {.arg sim} and {.arg field}."
-    ), call = call)
-  }
-  onlyField <- setdiff(catF, catS)
-  numInSim <- intersect(onlyField, if (is.data.frame(sim)) names(sim) else colnames(sim))
-  if (length(numInSim)) {
-    cli::cli_abort(c(
-      "{cli::qty(length(numInSim))}Column{?s} {.val {numInSim}} {?is/are} numeric in {.arg sim} but not in {.arg field}.",
-      i = "{cli::qty(length(numInSim))}Convert {?it/them} in {.arg field} (e.g. with {.fn as.numeric}), or make {?it/them} categorical in both."
-    ), call = call)
-  }
-  if (length(onlyField)) {
-    cli::cli_abort(c(
-      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} lacks: a column of {.arg field} alone is not an input of the simulator.",
-      i = if (is.null(source)) "If it says which field data set each row comes from, name it with {.arg source}; if it is an input, give it in {.arg sim} too; else drop it." else
-        "Give each categorical input in both {.arg sim} and {.arg field}; the field data sets' column ({.val {source}}) is the only column of {.arg field} alone."
-    ), call = call)
-  }
+  check_shared_categorical(sim, catS, catF, names(field), source, call = call)
   factors <- list()
   for (nm in catS) {
     levs <- if (is.factor(sim[[nm]])) levels(droplevels(sim[[nm]])) else sort(unique(sim[[nm]]))
@@ -122,9 +85,71 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
     attr(outS, "labels") <- out$levels
     outF <- match(as.character(attr(field, "fbc_codes")[[output]]), out$levels)
   }
+  ng <- noise_groups(outF, src, out, nrow(field))
+  attr(sim, "fbc_codes") <- NULL
+  attr(field, "fbc_codes") <- NULL
+  list(sim = sim, field = field, factors = factors, output = out, source = src,
+       outS = outS, outF = outF, noise = ng$noise, noiseLabels = ng$labels)
+}
+
+# `output` and `source` name a factor or character column: the output of
+# both `sim` and `field`, the data set of `field` only.
+check_role_columns <- function(sim, field, output, source, call = parent.frame()) {
+  for (nm in c(output, source)) {
+    where <- if (identical(nm, output)) c("sim", "field") else "field"
+    for (w in where) {
+      d <- if (w == "sim") sim else field
+      if (!is.data.frame(d) || !nm %in% names(d) || !is_categorical(d[[nm]])) {
+        arg <- if (identical(nm, output)) "output" else "source"
+        cli::cli_abort(c(
+          "{.arg {arg}} = {.val {nm}} must name a factor or character column of {.arg {w}}.",
+          i = if (arg == "output") "The outputs are in long format: one row per run (or observation) and output, the output's name in that column, its value in the response column." else
+            "The field data sets are stacked in {.arg field}, the data set of each row in that column; {.arg sim} has no such column.",
+          i = if (arg == "output" && w == "sim" && is.data.frame(field) && nm %in% names(field)) {
+            "{.val {nm}} is a column of {.arg field} only: if it says which field data set each row comes from, name it with {.arg source} instead."
+          }
+        ), call = call)
+      }
+    }
+  }
+}
+
+# A categorical column is an experimental input: in both `sim` and `field`
+# (`catS`, `catF` their categorical columns; `fieldNames` the columns of
+# `field`, the data sets' column removed).
+check_shared_categorical <- function(sim, catS, catF, fieldNames, source, call = parent.frame()) {
+  onlySim <- setdiff(catS, fieldNames)
+  if (length(onlySim)) {
+    cli::cli_abort(c(
+      "{.arg sim} has categorical {cli::qty(length(onlySim))}column{?s} {.val {onlySim}} that {.arg field} lacks: a calibration input must be numeric.",
+      i = "A categorical input is an experimental input: give it in both {.arg sim} and {.arg field}."
+    ), call = call)
+  }
+  onlyField <- setdiff(catF, catS)
+  numInSim <- intersect(onlyField, if (is.data.frame(sim)) names(sim) else colnames(sim))
+  if (length(numInSim)) {
+    cli::cli_abort(c(
+      "{cli::qty(length(numInSim))}Column{?s} {.val {numInSim}} {?is/are} numeric in {.arg sim} but not in {.arg field}.",
+      i = "{cli::qty(length(numInSim))}Convert {?it/them} in {.arg field} (e.g. with {.fn as.numeric}), or make {?it/them} categorical in both."
+    ), call = call)
+  }
+  if (length(onlyField)) {
+    cli::cli_abort(c(
+      "{.arg field} has categorical {cli::qty(length(onlyField))}column{?s} {.val {onlyField}} that {.arg sim} lacks: a column of {.arg field} alone is not an input of the simulator.",
+      i = if (is.null(source)) "If it says which field data set each row comes from, name it with {.arg source}; if it is an input, give it in {.arg sim} too; else drop it." else
+        "Give each categorical input in both {.arg sim} and {.arg field}; the field data sets' column ({.val {source}}) is the only column of {.arg field} alone."
+    ), call = call)
+  }
+}
+
+# The measurement-error groups: the output x data-set combinations present
+# in `field` (`outF` each field row's output, `src` the data sets, `out`
+# the outputs), as each row's group (1-based) and the groups' labels; NULL
+# for one group.
+noise_groups <- function(outF, src, out, n) {
   # measurement-error groups: output x source combinations present in field
-  go <- if (is.null(outF)) rep(1L, nrow(field)) else outF
-  gs <- if (is.null(src)) rep(1L, nrow(field)) else src$codes
+  go <- if (is.null(outF)) rep(1L, n) else outF
+  gs <- if (is.null(src)) rep(1L, n) else src$codes
   key <- paste(go, gs)
   ukey <- unique(key[order(go, gs)])
   noise <- match(key, ukey)
@@ -132,11 +157,8 @@ read_factors <- function(sim, field, output = NULL, source = NULL, call = parent
   labels <- vapply(first, function(i) paste(c(if (!is.null(out)) out$levels[go[i]],
                                               if (!is.null(src)) src$levels[gs[i]]), collapse = ":"),
                    character(1))
-  attr(sim, "fbc_codes") <- NULL
-  attr(field, "fbc_codes") <- NULL
-  list(sim = sim, field = field, factors = factors, output = out, source = src,
-       outS = outS, outF = outF, noise = if (length(ukey) > 1L) noise,
-       noiseLabels = if (length(ukey) > 1L) labels)
+  if (length(ukey) < 2L) return(list(noise = NULL, labels = NULL))
+  list(noise = noise, labels = labels)
 }
 
 # A missing value (NA, or "") in a categorical column (a categorical input,

@@ -47,6 +47,40 @@ print.fbc <- function(x, digits = 3, ...) {
               sc$p, sc$q))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
+  print_design(mo, sc, fn)
+  chains <- length(unique(x$chain))
+  cat(sprintf("  MCMC: %d iterations, %s, thinning %d -> %d draws%s (%.1f s)\n",
+              s$nMCMC, warmup_text(s), s$thinning, nrow(x$Phi),
+              if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
+  print_moves(x)
+  if (fn) {
+    if (gp) cat(sprintf("  kernel: bias %s\n", mo$kernelB))
+    cat(sprintf("  simulator: %s\n", mo$algebra$reason))
+  } else {
+    print_algebra(x, gp)
+  }
+  if (isTRUE(x$state$interrupted)) {
+    done <- vapply(x$state$chains, `[[`, numeric(1), "done")
+    stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")
+    cat(sprintf("  interrupted: chain %s after %s iterations\n",
+                paste(which(stopped), collapse = ", "), paste(done[stopped], collapse = ", ")))
+  }
+  cat("\n")
+  print(summary(x), digits = digits)
+  msgs <- convergence_messages(x)
+  if (length(msgs)) {
+    cat("\nWarning", if (length(msgs) > 1L) "s", ":\n", sep = "")
+    cat(paste0("! ", strwrap(msgs, width = getOption("width") - 2L, exdent = 2L,
+                             simplify = FALSE) |>
+                 vapply(paste, character(1), collapse = "\n")), sep = "\n")
+  }
+  invisible(x)
+}
+
+# The design's lines of print.fbc(): categorical inputs, outputs, data
+# sets, measurement-error groups and the calibration inputs (`fn`: the
+# simulator is a function, whose kappa ranges are its prior's).
+print_design <- function(mo, sc, fn) {
   fac <- level_factors(mo)
   lev <- level_labels(fac)
   pos <- level_positions(fac)
@@ -76,10 +110,13 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
               paste0("kappa", seq_len(sc$q), " = ", des$names, if (fn) " (prior " else " (design ",
                      des$range, ")", collapse = ", ")))
-  chains <- length(unique(x$chain))
-  cat(sprintf("  MCMC: %d iterations, %s, thinning %d -> %d draws%s (%.1f s)\n",
-              s$nMCMC, warmup_text(s), s$thinning, nrow(x$Phi),
-              if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
+}
+
+# The run's lines of print.fbc(): the stopping rule and each move's
+# acceptance.
+print_moves <- function(x) {
+  s <- x$settings
+  mo <- x$model
   cv <- s$converge
   if (!is.null(cv)) {
     cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked %s: %s\n",
@@ -101,28 +138,6 @@ print.fbc <- function(x, digits = 3, ...) {
                   if (length(mo$moves$blocks)) "; joint moves 0.234" else ""))
     }
   }
-  if (fn) {
-    if (gp) cat(sprintf("  kernel: bias %s\n", mo$kernelB))
-    cat(sprintf("  simulator: %s\n", mo$algebra$reason))
-  } else {
-    print_algebra(x, gp)
-  }
-  if (isTRUE(x$state$interrupted)) {
-    done <- vapply(x$state$chains, `[[`, numeric(1), "done")
-    stopped <- vapply(x$state$chains, `[[`, logical(1), "interrupted")
-    cat(sprintf("  interrupted: chain %s after %s iterations\n",
-                paste(which(stopped), collapse = ", "), paste(done[stopped], collapse = ", ")))
-  }
-  cat("\n")
-  print(summary(x), digits = digits)
-  msgs <- convergence_messages(x)
-  if (length(msgs)) {
-    cat("\nWarning", if (length(msgs) > 1L) "s", ":\n", sep = "")
-    cat(paste0("! ", strwrap(msgs, width = getOption("width") - 2L, exdent = 2L,
-                             simplify = FALSE) |>
-                 vapply(paste, character(1), collapse = "\n")), sep = "\n")
-  }
-  invisible(x)
 }
 
 # The kernels' and the algebra's lines of print.fbc() (a fit of runs).

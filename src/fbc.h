@@ -397,6 +397,7 @@ private:
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;
   double evaluate(const Touch& t);
+  bool fieldFactor(const arma::mat& Q, const arma::mat* Rb, double s2S, double s2B, double& ldS);
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
   // the bias's correlation with new inputs (see model.cpp)

@@ -97,20 +97,11 @@ static void read_vecchia(const Rcpp::List& v, VecchiaDesign& vd) {
   }
 }
 
-Model read_model(const Rcpp::List& model, int p, int q) {
-  const char* const* names = class_names;
-  Model out;
-  out.kernS = Rcpp::as<int>(model["kernS"]);
-  out.kernB = Rcpp::as<int>(model["kernB"]);
-  out.algebra = Rcpp::as<int>(model["algebra"]);
-  out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
-  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE && out.discrepancy != DS_SGASP)
-    Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
-  // what each class expands over: q, p + q, p or one; the bias classes
-  // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
-  // bias, lambdaZ only with the S-GaSP one
-  const int b = out.discrepancy != DS_NONE ? 1 : 0;
-  const int mu = out.discrepancy == DS_GP ? 1 : 0, lz = out.discrepancy == DS_SGASP ? 1 : 0;
+// The field rows' groups and the categorical inputs of `model` into `out`:
+// each row's measurement-error group (`noise`, 1-based in R), the
+// categorical inputs' indicator columns and levels (`levels`), and with a
+// bias per data set each row's data set (`source`, `sourceLevels`).
+static void read_groups(const Rcpp::List& model, int p, Model& out) {
   // sigma2E: one per measurement-error group of the field rows
   if (model.containsElementNamed("noise")) {
     const Rcpp::IntegerVector g = model["noise"];
@@ -120,7 +111,6 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       out.noise[i] = g[i] - 1;
     }
   }
-  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
   // the categorical inputs: their indicator columns and levels
   if (model.containsElementNamed("levels")) {
     const Rcpp::List lv = model["levels"];
@@ -136,7 +126,6 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       out.levels.push_back(in);
     }
   }
-  const int lc = level_count(out.levels);
   // a bias per field data set: the data set of each field row
   if (model.containsElementNamed("source")) {
     const Rcpp::IntegerVector s = model["source"];
@@ -148,6 +137,25 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       out.source[i] = s[i] - 1;
     }
   }
+}
+
+Model read_model(const Rcpp::List& model, int p, int q) {
+  const char* const* names = class_names;
+  Model out;
+  out.kernS = Rcpp::as<int>(model["kernS"]);
+  out.kernB = Rcpp::as<int>(model["kernB"]);
+  out.algebra = Rcpp::as<int>(model["algebra"]);
+  out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
+  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE && out.discrepancy != DS_SGASP)
+    Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
+  // what each class expands over: q, p + q, p or one; the bias classes
+  // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
+  // bias, lambdaZ only with the S-GaSP one
+  const int b = out.discrepancy != DS_NONE ? 1 : 0;
+  const int mu = out.discrepancy == DS_GP ? 1 : 0, lz = out.discrepancy == DS_SGASP ? 1 : 0;
+  read_groups(model, p, out);
+  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
+  const int lc = level_count(out.levels);
   const int ld = out.sourceL * (out.sourceL - 1) / 2;
   // a simulator given as a function (function.cpp) has no simulator GP
   out.emulator = !model.containsElementNamed("simulator");
@@ -511,6 +519,37 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
   }
 }
 
+// The Schur complement S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) +
+// sigma2E[noise_i] [i = j] (lower triangles of the distinct-row Q and Rb; no
+// Rb without a bias), factored into LS_.alt() with log|S| in `ldS`; false if
+// S is not positive definite. A proposal whose S is numerically singular,
+// some pivot L_ii^2 below S_PIVOT times S's largest diagonal entry, is
+// refused too: its log-likelihood is roundoff (from scratch and updated
+// values differed by 2.5 on such draws) and a draw accepted there could
+// fail to factor from scratch (predict()). init() factors from scratch
+// without the floor (scratch_), so every accepted draw initialises.
+bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double s2S,
+                                 double s2B, double& ldS) {
+  static const double S_PIVOT = 1e-10;
+  arma::mat& S = LS_.alt();
+  double dmax = 0;
+  for (int j = 0; j < n; ++j) {
+    const int gj = grp_[j];
+    double* sc = S.colptr(j);
+    for (int i = j; i < n; ++i) {
+      const int gi = grp_[i];
+      const int r = std::max(gi, gj), c = std::min(gi, gj);
+      sc[i] = s2S * Q.at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
+    }
+    sc[j] += phi[iSigma2E + noise_[j]];
+    dmax = std::max(dmax, sc[j]);
+  }
+  if (!chol_lower(S)) return false;
+  if (!scratch_ && arma::min(S.diag()) < std::sqrt(S_PIVOT * dmax)) return false;
+  ldS = logdet_chol(S);
+  return true;
+}
+
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double SchurPosterior::evaluate(const Touch& t) {
@@ -566,35 +605,12 @@ double SchurPosterior::evaluate(const Touch& t) {
     Rb = &Rb_.alt();
   }
 
-  // Schur complement S and its factor. A proposal whose S is numerically
-  // singular, some pivot L_ii^2 below S_PIVOT times S's largest diagonal
-  // entry, is refused: its log-likelihood is roundoff (from scratch and
-  // updated values differed by 2.5 on such draws) and a draw accepted
-  // there could fail to factor from scratch (predict()). init() factors
-  // from scratch without the floor, so every accepted draw initialises.
+  // Schur complement S and its factor (fieldFactor()).
   const arma::mat* LS = &LS_.cur();
   double ldS = ldS_.cur();
   if (t.field) {
-    static const double S_PIVOT = 1e-10;
-    // S(i,j) = s2S Q(g_i,g_j) + s2B Rb(g_i,g_j) + s2E [i = j], from the
-    // lower triangles of the distinct-row Q and Rb (no Rb without a bias)
-    arma::mat& S = LS_.alt();
-    double dmax = 0;
-    for (int j = 0; j < n; ++j) {
-      const int gj = grp_[j];
-      double* sc = S.colptr(j);
-      for (int i = j; i < n; ++i) {
-        const int gi = grp_[i];
-        const int r = std::max(gi, gj), c = std::min(gi, gj);
-        sc[i] = s2S * Q->at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
-      }
-      sc[j] += phi[iSigma2E + noise_[j]];
-      dmax = std::max(dmax, sc[j]);
-    }
-    if (!chol_lower(S)) return R_NegInf;
-    if (!scratch_ && arma::min(S.diag()) < std::sqrt(S_PIVOT * dmax)) return R_NegInf;
-    ldS = logdet_chol(S);
-    LS = &S;
+    if (!fieldFactor(*Q, Rb, s2S, s2B, ldS)) return R_NegInf;
+    LS = &LS_.alt();
   }
 
   // Residual of the field block given the simulator block.
