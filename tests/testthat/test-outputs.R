@@ -96,26 +96,11 @@ test_that("independent outputs: likelihood, moves and predictions are each outpu
   }
 })
 
-# Two outputs sharing a rate t: a decay and a linear response (as in
-# test-factors.R).
-two_shapes <- function(seed = 1, m = 40, noise = 0.05) {
-  set.seed(seed)
-  x <- runif(m); t <- runif(m, 0.5, 3)
-  f1 <- function(x, t) 5 * exp(-t * x)
-  f2 <- function(x, t) 2 * t * x
-  sim <- rbind(data.frame(y = f1(x, t), x = x, out = "conc", t = t),
-               data.frame(y = f2(x, t), x = x, out = "rate", t = t))
-  xf <- seq(0.05, 0.95, length.out = 10)
-  field <- rbind(data.frame(y = f1(xf, 1.7) + rnorm(10, 0, noise), x = xf, out = "conc"),
-                 data.frame(y = f2(xf, 1.7) + rnorm(10, 0, noise), x = xf, out = "rate"))
-  list(sim = sim, field = field, truth = 1.7)
-}
-
 test_that("two independent outputs: kappa draws match the grid posterior", {
   # every hyperparameter fixed (each output the same values); the reference
   # is the sum of each output's dense_loglik() times the Beta(1.1, 1.1)
   # prior on the scaled kappa
-  pr <- two_shapes()
+  pr <- two_outputs()
   hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.7, 10, 0.4),
                          thetaBDist = "fixed", thetaBInit = c(1, 5), sigma2SDist = "fixed",
                          sigma2SInit = 3.5, sigma2BDist = "fixed", sigma2BInit = 0.5,
@@ -170,7 +155,7 @@ test_that("two outputs of different shapes pooled independently: kappa no wider 
 })
 
 test_that("independent outputs: refusals, and print() says how the outputs are modelled", {
-  pr <- two_shapes()
+  pr <- two_outputs()
   expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field[pr$field$out == "conc", ],
                                           output = "out", outputs = "independent", fit = FALSE))
   expect_snapshot(error = TRUE, calibrate(pr$sim, pr$field, output = "out", outputs = "independent",
