@@ -261,7 +261,7 @@
 #' shared gave intervals about half as wide as independent (both covering
 #' the truth) in about the same CPU time. Try `"independent"` when the
 #' outputs differ in smoothness or scale in ways one set of length-scales
-#' cannot follow (compare with [loo()]).
+#' cannot follow (compare with [loo.fbc()]).
 #' `print()` says how the outputs are modelled; `loo()`, the confounding
 #' check (per noise group) and the plots work per output under both.
 #'
