@@ -141,17 +141,23 @@ struct LookAhead {
 
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
-// sum_k (sum_s w_s k_sk)^2. Weights below e^-36 of the largest (under the
-// rounding of the sum) are left out.
+// sum_k (sum_s w_s k_sk)^2.
 double weighted_var(const LookAhead& la, const double* L, double mx) {
   const int q = la.kap.n_cols;
+  const double* ksq = la.ksq.memptr();
   double sw = 0.0, s2 = 0.0, mk[16] = {0.0};
-  for (int s = 0; s < la.S; ++s) {
-    if (L[s] - mx < -36.0) continue;
-    const double e = std::exp(L[s] - mx);
-    sw += e;
-    s2 += e * la.ksq[s];
-    for (int k = 0; k < q; ++k) mk[k] += e * la.kap(s, k);
+  if (q == 1) {
+    const double* k0 = la.kap.memptr();
+    for (int s = 0; s < la.S; ++s) {
+      const double e = std::exp(L[s] - mx);
+      sw += e; s2 += e * ksq[s]; mk[0] += e * k0[s];
+    }
+  } else {
+    for (int s = 0; s < la.S; ++s) {
+      const double e = std::exp(L[s] - mx);
+      sw += e; s2 += e * ksq[s];
+      for (int k = 0; k < q; ++k) mk[k] += e * la.kap(s, k);
+    }
   }
   double out = s2 / sw;
   for (int k = 0; k < q; ++k) out -= (mk[k] / sw) * (mk[k] / sw);
