@@ -5,6 +5,14 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
+.design_systems <- function(Xf, yf, Xs, ys, phis, U, nugget, model) {
+    .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, nugget, model)
+}
+
+.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, nugget, model) {
+    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, nugget, model)
+}
+
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {
     .Call(`_FBC_fbc_heldout`, Xf, yf, Xs, ys, phis, nugget, fold, model)
 }

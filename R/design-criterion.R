@@ -94,8 +94,7 @@ propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy =
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
   parts <- design_particles(fit, ndraws, method)
-  sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], model, U))
-  crit <- look_ahead(sys, parts, U, model, n, nfantasy)
+  crit <- look_ahead(parts, U, model, n, nfantasy)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
@@ -172,126 +171,25 @@ design_particles <- function(fit, ndraws, method) {
   list(phi = phi, lw0 = lp, kappa = K, plugin = TRUE)
 }
 
-# One draw's Gaussian system (scaled data): the joint covariance C of
-# (ys, yf) under phi, its Cholesky factor, and for the candidates U the
-# conditional means `mu` and variances `v` of a new run's value (nugget
-# included) with A = L^-1 Cov(data, U) for the cross-covariances of a
-# batch; `ll` the log-likelihood, `corr` the simulator kernel at phi.
-draw_system <- function(phi, model, U) {
+# The greedy look-ahead (src/design.cpp, design_look_ahead()) over the
+# particles at the candidates U: n points chosen one at a time, each
+# maximising the expected reduction of kappa's (weighted) posterior
+# variance with the pending points' fantasised values conditioned on per
+# draw. Its random numbers are drawn here: nfantasy uniforms choosing each
+# fantasy's draw (by the base weights), then per step a random order of the
+# nfantasy normal quantiles (common to every candidate).
+look_ahead <- function(parts, U, model, n, nfantasy, call = parent.frame()) {
   dat <- model$data
-  d <- model$dims
-  p <- d$p
-  q <- d$q
-  ix <- param_indices(p, q, model$discrepancy)
-  kS <- kernel_codes[[model$kernelS]]
-  thS <- phi[ix$thetaS]
-  alS <- phi[ix$alphaS]
-  s2S <- phi[ix$sigma2S]
-  corr <- function(X, Y) .corr_matrix(X, Y, thS, alS, kS)
-  Z <- rbind(dat$Xs, cbind(dat$Xf, matrix(phi[ix$kappa], d$n, q, byrow = TRUE)))
-  C <- s2S * corr(Z, Z)
-  sim <- seq_len(d$m)
-  fld <- d$m + seq_len(d$n)
-  C[cbind(sim, sim)] <- C[cbind(sim, sim)] * (1 + fbc_nugget)
-  mu0 <- rep(0, d$m + d$n)
-  if (model$discrepancy != "none") {
-    C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] *
-      .corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], kernel_codes[[model$kernelB]])
-    mu0[fld] <- phi[ix$muB]
+  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf)) * nrow(U)
+  if (size > 5e7) {
+    cli::cli_abort(c(
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf)} runs and field rows x {nrow(U)} candidates).",
+      i = "Give fewer {.arg ndraws} or candidates."
+    ), call = call)
   }
-  C[cbind(fld, fld)] <- C[cbind(fld, fld)] + phi[ix$sigma2E]
-  R <- chol(C)
-  r <- backsolve(R, c(dat$ys, dat$yf) - mu0, transpose = TRUE)
-  A <- backsolve(R, s2S * corr(Z, U), transpose = TRUE)
-  list(A = A, mu = drop(crossprod(A, r)), v = s2S * (1 + fbc_nugget) - colSums(A^2),
-       ll = -0.5 * sum(r^2) - sum(log(diag(R))), s2S = s2S, corr = corr)
-}
-
-# The greedy look-ahead over the particles' systems `sys`: n points chosen
-# one at a time, each maximising the expected reduction of kappa's
-# (weighted) posterior variance with the pending points' fantasised values
-# (Y, one column per pending point, nfantasy rows) conditioned on per draw.
-look_ahead <- function(sys, parts, U, model, n, nfantasy) {
-  S <- length(sys)
-  lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
-  kap <- parts$kappa
-  w0 <- exp(lw0 - max(lw0))
-  variance <- weighted_var(kap, matrix(w0 / sum(w0)))
-  # each fantasy j comes from draw src[j] (drawn by the base weights)
-  src <- sample.int(S, nfantasy, replace = TRUE, prob = w0)
-  chosen <- integer()
-  gain <- numeric()
-  YP <- matrix(0, nfantasy, 0)
-  base <- matrix(lw0, S, nfantasy)  # log-weights given the pending fantasies
-  for (step in seq_len(n)) {
-    cond <- pending_conditionals(sys, U, chosen, YP)
-    z <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
-    sc <- score_candidates(cond, src, z, base, kap)
-    sc$gain[chosen] <- -Inf
-    best <- which.max(sc$gain)
-    chosen <- c(chosen, best)
-    gain <- c(gain, sc$gain[best])
-    YP <- cbind(YP, sc$Y[best, ])
-    base <- base + matrix(sc$logd[, best + (seq_len(nfantasy) - 1L) * nrow(U)], S, nfantasy)
-  }
-  list(chosen = chosen, gain = gain, variance = variance)
-}
-
-# Sum over the columns of kap of the variances under each column of the
-# normalised weights W (S x K): a K-vector.
-weighted_var <- function(kap, W) {
-  colSums(W * rowSums(kap^2)) - colSums(crossprod(kap, W)^2)
-}
-
-# Per draw, each candidate's value given the data and the pending points'
-# fantasised values YP (nfantasy x k): conditional means M (array S x Nc x
-# nfantasy, as S x (Nc nfantasy)) and variances cv (S x Nc).
-pending_conditionals <- function(sys, U, P, YP) {
-  S <- length(sys)
-  Nc <- nrow(U)
-  J <- nrow(YP)
-  M <- matrix(0, S, Nc * J)
-  cv <- matrix(0, S, Nc)
-  for (s in seq_len(S)) {
-    y <- sys[[s]]
-    if (length(P)) {
-      AP <- y$A[, P, drop = FALSE]
-      SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
-      diag(SPP) <- diag(SPP) * (1 + fbc_nugget)
-      SPP <- SPP - crossprod(AP)
-      ScP <- y$s2S * y$corr(U, U[P, , drop = FALSE]) - crossprod(y$A, AP)
-      ScP[P, ] <- SPP  # a candidate at a pending point: its own covariance
-      B <- t(solve(SPP, t(ScP)))
-      cv[s, ] <- y$v - rowSums(B * ScP)
-      M[s, ] <- as.vector(y$mu + B %*% (t(YP) - y$mu[P]))
-    } else {
-      cv[s, ] <- y$v
-      M[s, ] <- rep(y$mu, J)
-    }
-  }
-  cv <- pmax(cv, 1e-12 * vapply(sys, `[[`, numeric(1), "s2S"))
-  list(M = M, cv = cv, J = J, Nc = Nc)
-}
-
-# Expected posterior variance of kappa after a run at each candidate, given
-# the pending points: fantasy j of candidate c is draw src[j]'s conditional
-# value (z[j] its normal deviate, common to every candidate); the draws are
-# reweighted by its density under each. Returns the expected variance's
-# reduction (gain), the fantasised values Y (Nc x J) and the log-densities.
-score_candidates <- function(cond, src, z, base, kap) {
-  S <- nrow(cond$cv)
-  Nc <- cond$Nc
-  J <- length(src)
-  cols <- seq_len(Nc) + rep((seq_len(J) - 1L) * Nc, each = Nc)  # (c, j), c fastest
-  sdv <- sqrt(cond$cv)
-  Y <- matrix(cond$M[cbind(rep(src, each = Nc), cols)] +
-                sdv[cbind(rep(src, each = Nc), rep(seq_len(Nc), J))] * rep(z, each = Nc), Nc, J)
-  logd <- stats::dnorm(matrix(rep(as.vector(Y), each = S), S), cond$M,
-                       sdv[, rep(seq_len(Nc), J), drop = FALSE], log = TRUE)
-  L <- logd + base[, rep(seq_len(J), each = Nc), drop = FALSE]
-  L <- exp(L - rep(apply(L, 2, max), each = S))
-  after <- rowMeans(matrix(weighted_var(kap, L / rep(colSums(L), each = S)), Nc, J))
-  b <- exp(base - rep(apply(base, 2, max), each = S))
-  before <- mean(weighted_var(kap, b / rep(colSums(b), each = S)))
-  list(gain = before - after, Y = Y, logd = logd)
+  usrc <- stats::runif(nfantasy)
+  Z <- matrix(0, nfantasy, n)
+  for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
+  .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
+                     isTRUE(parts$plugin), usrc, Z, fbc_nugget, model$spec$model)
 }

@@ -1,31 +1,47 @@
 # Design of new runs (issue 30): kappa's posterior against a reference as
-# runs are added by each method, from the same 10 maximin runs and field
-# noise per replicate (paired).
+# runs are added by each method, from the same maximin start and field
+# noise per replicate (paired). A script, not a timed test:
 #
-#   Rscript inst/bench/design.R [reps] [batch] [added] [problem]
+#   Rscript inst/bench/design.R [reps] [batch] [added] [problem] [first]
 #
-# Problem "sinus-none": eta(x, u) = sin(10 u x) on [0, 1]^2, field at u =
-# pi/5, 5 inputs x 2 replicates, noise sd 0.1, no bias, discrepancy "none";
-# "sinus-gp": the same with the bias 1 - x/3 - 2x^2/3 (Koermer et al. 2024)
-# and discrepancy "gp". Reference: kappa's posterior with the true
-# simulator in place of the emulator (grid; noise sd 0.1 known, no bias for
-# "sinus-none"; for "sinus-gp" the bias GP at the hyperparameters' posterior
-# is not available in closed form, so the reference is a fit on 150
-# maximin runs). Methods: ours (propose_runs, joint), plug-in (MAP),
-# lhs::augmentLHS (nested maximin augmentation), random. Metrics per step:
-# Hellinger distance to the reference (kappa's draws by a kernel density on
-# the grid), posterior sd, whether the 90% interval covers pi/5, CPU s of
-# the design step and of the fit (warm-started update) against a fresh fit.
+# (replicates first .. first + reps - 1; each replicate's rows are saved to
+# design-<problem>-b<batch>-r<rep>.rds as it ends, so a run stopped early
+# keeps what it did; summarise with inst/bench/design-table.R.)
+#
+# Problems, all with discrepancy "none" (where new runs can matter: with a
+# KOH bias the confounding sets kappa's width, see ?propose_runs):
+# - "sinus": eta(x, u) = sin(10 u x) on [0, 1]^2 (Koermer et al. 2024,
+#   without their bias), field at u = pi / 5, 5 inputs x 2 replicates,
+#   noise sd 0.1.
+# - "two": two calibration inputs, eta(x, u1, u2) = exp(-2 u1 x) sin(8 u2 x)
+#   on [0, 1]^3, field at u = (0.5, 0.6), 8 inputs x 2 replicates, sd 0.1.
+# Reference: the same model fitted on 150 maximin runs of the true
+# simulator (the emulator's error is then negligible; same priors and
+# noise model), per replicate (its field noise).
+# Methods: ours (propose_runs, joint), plug-in (the same criterion at the
+# MAP hyperparameters, kappa weighted on a grid: KOH-IMSPE/EIVAR's way),
+# lhs::augmentLHS (nested maximin augmentation), random; ours and the
+# plug-in choose among 100 d uniform candidates on [0, 1]^d per step.
+# Metrics per step: Hellinger distance of kappa's posterior to the
+# reference (kernel densities on a grid; the largest over the calibration
+# inputs' marginals), kappa1's sd, whether the 90% intervals cover the
+# truth, CPU s of the design step and of the (warm-started) fit before it.
 suppressPackageStartupMessages(library(FBC))
 args <- commandArgs(TRUE)
 reps <- if (length(args) >= 1) as.integer(args[1]) else 3L
 batch <- if (length(args) >= 2) as.integer(args[2]) else 5L
-added <- if (length(args) >= 3) as.integer(args[3]) else 20L
-problem <- if (length(args) >= 4) args[4] else "sinus-none"
-u0 <- pi / 5
-eta <- function(x, u) sin(10 * u * x)
-bias <- function(x) if (problem == "sinus-gp") 1 - x / 3 - 2 * x^2 / 3 else 0 * x
-disc <- if (problem == "sinus-gp") "gp" else "none"
+added <- if (length(args) >= 3) as.integer(args[3]) else 40L
+problem <- if (length(args) >= 4) args[4] else "sinus"
+first <- if (length(args) >= 5) as.integer(args[5]) else 1L
+pb <- switch(problem,
+  sinus = list(eta = function(x, u) sin(10 * u[, 1] * x), u0 = pi / 5,
+               xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
+  two = list(eta = function(x, u) exp(-2 * u[, 1] * x) * sin(8 * u[, 2] * x), u0 = c(0.5, 0.6),
+             xf = rep(seq(0.05, 0.95, length.out = 8), 2)),
+  stop("problem must be sinus or two"))
+q <- length(pb$u0)
+d <- 1 + q
+unames <- paste0("u", seq_len(q))
 grid <- seq(0.0025, 0.9975, by = 0.005)
 
 cpu <- function(expr) {
@@ -34,53 +50,62 @@ cpu <- function(expr) {
   tm <- proc.time() - t0
   sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
 }
-reference <- function(field) {
-  lp <- vapply(grid, function(u) sum(dnorm(field$y, eta(field$x, u), 0.1, log = TRUE)), 0) +
-    dbeta(grid, 1.1, 1.1, log = TRUE)
-  d <- exp(lp - max(lp))
-  d / sum(d * 0.005)
+dens <- function(v) {
+  k <- density(v, from = min(grid), to = max(grid), n = length(grid), bw = "SJ")$y
+  k / sum(k * 0.005)
 }
-hellinger <- function(draws, ref) {
-  k <- density(draws, from = min(grid), to = max(grid), n = length(grid), bw = "SJ")$y
-  k <- k / sum(k * 0.005)
-  sqrt(max(0, 1 - sum(sqrt(k * ref) * 0.005)))
+# largest Hellinger distance over the calibration inputs' marginals
+hellinger <- function(K, ref) {
+  max(vapply(seq_len(q), function(j) {
+    sqrt(max(0, 1 - sum(sqrt(dens(K[, j]) * ref[[j]]) * 0.005)))
+  }, 0))
 }
-runs_at <- function(X) data.frame(y = eta(X[, 1], X[, 2]), x = X[, 1], u = X[, 2])
-fit_runs <- function(sim, field) {
-  suppressWarnings(calibrate(sim, field, discrepancy = disc, nChains = 2, showProgress = FALSE))
+runs_at <- function(X) {
+  X <- matrix(X, ncol = d)
+  out <- data.frame(y = pb$eta(X[, 1], X[, -1, drop = FALSE]), x = X[, 1])
+  out[unames] <- X[, -1]
+  out
 }
-next_runs <- function(method, fit, sim, n, lhsState) {
-  X <- as.matrix(sim[c("x", "u")])
+fit_runs <- function(sim, field, ...) {
+  suppressWarnings(calibrate(sim, field, discrepancy = "none", nChains = 2, showProgress = FALSE, ...))
+}
+kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
+next_runs <- function(method, fit, n, lhsState) {
+  cand <- function() stats::setNames(as.data.frame(matrix(runif(100 * d * d), ncol = d)), c("x", unames))
   switch(method,
-    ours = as.matrix(propose_runs(fit, n = n)[c("x", "u")]),
-    plugin = as.matrix(propose_runs(fit, n = n, method = "plugin")[c("x", "u")]),
-    random = matrix(runif(2 * n), n, 2),
+    ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[c("x", unames)]),
+    plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[c("x", unames)]),
+    random = matrix(runif(d * n), n, d),
     lhs = {
       A <- lhs::augmentLHS(lhsState, n)
       A[(nrow(A) - n + 1):nrow(A), , drop = FALSE]
     })
 }
 
-rows <- list()
-for (r in seq_len(reps)) {
+one_replicate <- function(r) {
+  rows <- list()
   set.seed(1000 + r)
-  xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
-  field <- data.frame(y = eta(xf, u0) + bias(xf) + rnorm(10, 0, 0.1), x = xf)
-  ref <- reference(field)
-  start <- lhs::maximinLHS(10, 2)
+  field <- data.frame(y = pb$eta(pb$xf, matrix(pb$u0, length(pb$xf), q, byrow = TRUE)) +
+                        rnorm(length(pb$xf), 0, 0.1), x = pb$xf)
+  start <- lhs::maximinLHS(10, d)
+  tRef <- cpu(refFit <- fit_runs(runs_at(lhs::maximinLHS(150, d)), field))
+  ref <- lapply(seq_len(q), function(j) dens(kappas(refFit)[, j]))
   for (method in c("ours", "plugin", "lhs", "random")) {
     set.seed(2000 + r)
     sim <- runs_at(start)
     lhsState <- start
     tFit <- cpu(fit <- fit_runs(sim, field))
     repeat {
-      k <- fit$Phi[, "kappa1"]
-      q <- quantile(k, c(0.05, 0.95))
-      row <- data.frame(rep = r, method = method, runs = nrow(sim), hellinger = hellinger(k, ref),
-                        sd = sd(k), covers = q[1] <= u0 && u0 <= q[2], fitCpu = tFit,
-                        designCpu = NA_real_, freshCpu = NA_real_)
+      K <- kappas(fit)
+      cov <- all(vapply(seq_len(q), function(j) {
+        b <- quantile(K[, j], c(0.05, 0.95))
+        b[1] <= pb$u0[j] && pb$u0[j] <= b[2]
+      }, TRUE))
+      row <- data.frame(problem = problem, batch = batch, rep = r, method = method,
+                        runs = nrow(sim), hellinger = hellinger(K, ref), sd = sd(K[, 1]),
+                        covers = cov, fitCpu = tFit, designCpu = NA_real_, refCpu = tRef)
       if (nrow(sim) >= 10 + added) { rows[[length(rows) + 1]] <- row; break }
-      tDesign <- cpu(X <- next_runs(method, fit, sim, batch, lhsState))
+      tDesign <- cpu(X <- next_runs(method, fit, batch, lhsState))
       row$designCpu <- tDesign
       rows[[length(rows) + 1]] <- row
       if (method == "lhs") lhsState <- rbind(lhsState, X)
@@ -88,27 +113,13 @@ for (r in seq_len(reps)) {
       sim <- rbind(sim, new)
       tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
     }
-    cat(sprintf("rep %d %-6s done: Hellinger %s\n", r, method,
-                paste(sprintf("%.3f", vapply(rows[vapply(rows, function(x) x$rep == r && x$method == method, TRUE)], `[[`, 0, "hellinger")), collapse = " ")))
+    h <- vapply(rows[vapply(rows, function(x) x$method == method, TRUE)], `[[`, 0, "hellinger")
+    cat(sprintf("%s b%d rep %d %-6s Hellinger %s\n", problem, batch, r, method,
+                paste(sprintf("%.2f", h), collapse = " ")))
   }
-  # a fresh fit on the last design, against the warm-started update
-  rows[[length(rows)]]$freshCpu <- cpu(fit_runs(sim, field))
+  res <- do.call(rbind, rows)
+  saveRDS(res, sprintf("design-%s-b%d-r%02d.rds", problem, batch, r))
+  res
 }
-res <- do.call(rbind, rows)
-saveRDS(res, sprintf("design-%s-b%d.rds", problem, batch))
-cat(sprintf("\n%s, batches of %d, %d replicates (median [quartiles] over replicates)\n", problem, batch, reps))
-q3 <- function(v) sprintf("%.3f [%.3f, %.3f]", median(v), quantile(v, 0.25), quantile(v, 0.75))
-tab <- aggregate(cbind(hellinger, sd) ~ method + runs, res, function(v) c(med = median(v)))
-for (m in unique(res$method)) for (n in sort(unique(res$runs))) {
-  s <- res[res$method == m & res$runs == n, ]
-  cat(sprintf("%-6s runs %3d  Hellinger %s  sd %s  covers %d/%d  design CPU %s\n", m, n,
-              q3(s$hellinger), q3(s$sd), sum(s$covers), nrow(s),
-              if (all(is.na(s$designCpu))) "-" else q3(s$designCpu)))
-}
-up <- res[res$runs > 10, ]
-cat(sprintf("\nwarm-started update CPU s: %s; fresh fit on the last design: %s\n",
-            q3(up$fitCpu), q3(res$freshCpu[!is.na(res$freshCpu)])))
-# runs to reach Hellinger <= 0.1 (NA: not within the budget)
-reach <- aggregate(cbind(runs = ifelse(hellinger <= 0.1, runs, NA)) ~ rep + method, res,
-                   function(v) if (all(is.na(v))) NA else min(v, na.rm = TRUE), na.action = na.pass)
-print(reach)
+
+for (r in first:(first + reps - 1L)) one_replicate(r)

@@ -85,10 +85,8 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
   cs <- FBC:::scale_inputs(matrix(run, 1), sc, 1:2)
   ys <- (ystar - sc$ymean) / sc$ysd
   phis <- FBC:::sampler_draws(fit)
-  w <- vapply(seq_len(nrow(phis)), function(s) {
-    y <- FBC:::draw_system(phis[s, ], fit$model, cs)
-    stats::dnorm(ys, y$mu, sqrt(y$v))
-  }, numeric(1))
+  sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, fbc_nugget, fit$spec$model)
+  w <- stats::dnorm(ys, drop(sys$mu), sqrt(drop(sys$v)))
   w <- w / sum(w)
   k <- fit$Phi[, "kappa1"]
   m1 <- sum(w * k)
@@ -162,11 +160,37 @@ test_that("a batch conditions on its pending points; single picks repeat", {
   # point, has no variance left in any draw: it can gain nothing
   U <- FBC:::scale_inputs(as.matrix(cand), fit$scale, 1:2)
   parts <- FBC:::design_particles(fit, 80, "joint")
-  sys <- lapply(seq_len(nrow(parts$phi)), function(s) FBC:::draw_system(parts$phi[s, ], fit$model, U))
-  cond <- FBC:::pending_conditionals(sys, U, 1L, matrix(stats::rnorm(40), 40, 1))
+  # (the plain-R reference, helper-design.R, which the C++ equals: below)
+  sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U))
+  cond <- pending_conditionals(sys, U, 1L, matrix(stats::rnorm(40), 40, 1))
   v2 <- vapply(sys, function(y) y$v[2], numeric(1))
   expect_lt(max(cond$cv[, 2] / v2), 1e-3)
   expect_gt(min(cond$cv[, 3:5] / t(vapply(sys, function(y) y$v[3:5], numeric(3)))), 1e-3)
+})
+
+test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
+  pb <- sinus_problem()
+  # with the bias GP (KOH) and without, joint and plug-in particles
+  for (disc in c("none", "gp")) {
+    set.seed(4)
+    fit <- calibrate(pb$sim, pb$field, discrepancy = disc, nMCMC = 600, nBurn = 200,
+                     nChains = 1, showProgress = FALSE)
+    U <- matrix(stats::runif(60), 30, 2)
+    for (method in c("joint", "plugin")) {
+      parts <- FBC:::design_particles(fit, 40, method)
+      set.seed(11)
+      cpp <- FBC:::look_ahead(parts, U, fit$model, 3, 25)
+      set.seed(11)
+      sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U))
+      ref <- look_ahead_r(sys, parts, U, fit$model, 3, 25)
+      expect_identical(cpp$chosen, as.integer(ref$chosen))
+      expect_equal(cpp$variance, ref$variance, tolerance = 1e-8)
+      expect_equal(cpp$gain, ref$gain, tolerance = 1e-8)
+      # every candidate's gain at every step (the picks' -Inf included)
+      expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+      expect_gt(max(cpp$scores[, 1]), 0)
+    }
+  }
 })
 
 test_that("propose_runs() refuses models it does not handle", {

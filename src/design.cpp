@@ -1,0 +1,332 @@
+// Design of new simulator runs (propose_runs(), R/design-criterion.R): the
+// look-ahead criterion over retained draws phi_s (kappa and every
+// hyperparameter, scaled space).
+//
+// For each draw the simulator's value y* at a candidate input u = (x, t)
+// is Gaussian given the data y = (ys, yf): N(mu_s(u), v_s(u)). A run at u
+// returning y* reweights the draws by N(y*; mu_s, v_s), exactly. The
+// criterion is the expected reduction of kappa's posterior variance (summed
+// over the calibration inputs) over fantasised values y*, and a batch is
+// chosen greedily, each next point scored with the pending points' values
+// fantasised jointly with it (per draw their joint Gaussian).
+//
+// The per-draw loop is prediction's (for_each_draw(), fbc.h: the posterior
+// set to each draw from scratch on the dense algebra, which checks that the
+// covariance is positive definite and gives the exact log-likelihood); the
+// conditional at candidates with any calibration input t (not the draw's
+// kappa, as Posterior::condition() has it) and their cross-covariances come
+// from one dense factor of the joint covariance of y per draw.
+#include "fbc.h"
+
+namespace {
+
+// The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
+// Cov_s(y, eta(U)) (N x Nc, slice s), the means mu and variances v (Nc x S),
+// the log-likelihoods ll, the simulator variances s2S and the kernel's
+// parameters per draw (thS, alS: (p + q) x S).
+struct DesignSystems {
+  arma::cube A;
+  arma::mat mu, muT, v, thS, alS;  // muT = mu' (S x Nc)
+  arma::vec ll, s2S;
+};
+
+// One draw's workspace: Z = (Xs; Xf, kappa) (N x (p + q)), C (N x N), the
+// bias correlation Rb (n x n) and the residual r (N).
+struct SystemWork {
+  arma::mat Z, C, Rb;
+  arma::vec r;
+};
+
+// One draw's system. With Xk = (Xf, kappa) and prior mean mu0 = (0, muB):
+//   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
+//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E I        ]
+//   L = chol(C), r = L^-1 (y - mu0), A = L^-1 s2S Rs(Z, U),
+//   mu = A' r, v = s2S (1 + nugget) - diag(A'A).
+// False if C is not positive definite.
+bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
+                   const arma::vec& yf, const arma::vec& ys, const arma::mat& U, double nugget,
+                   SystemWork& w, DesignSystems& out, arma::uword s) {
+  const arma::vec& phi = post.phi;
+  const int m = post.m, n = post.n, p = post.p, q = post.q, N = m + n;
+  const double s2S = phi[post.iSigma2S];
+  for (int k = 0; k < q; ++k)
+    for (int i = 0; i < n; ++i) w.Z(m + i, p + k) = phi[post.iKappa + k];
+  const double* thS = phi.memptr() + post.iThetaS;
+  const double* alS = phi.memptr() + post.iAlphaS;
+  kernel_corr(mod.kernS, w.Z, w.Z, p + q, thS, alS, w.C, true);
+  w.C *= s2S;
+  for (int i = 0; i < m; ++i) w.C(i, i) *= 1.0 + nugget;
+  for (int i = 0; i < m; ++i) w.r[i] = ys[i];
+  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
+  for (int i = 0; i < n; ++i) w.r[m + i] = yf[i] - muB;
+  if (post.bias) {
+    kernel_corr(mod.kernB, Xf, Xf, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
+                w.Rb, true);
+    const double s2B = phi[post.iSigma2B];
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) w.C(m + i, m + j) += s2B * w.Rb(i, j);
+  }
+  for (int i = 0; i < n; ++i) w.C(m + i, m + i) += phi[post.iSigma2E];
+  if (!chol_lower(w.C)) return false;
+  solve_lower(w.C, w.r);
+  arma::mat A(out.A.slice_memptr(s), N, U.n_rows, false, true);
+  kernel_corr(mod.kernS, w.Z, U, p + q, thS, alS, A, false);
+  A *= s2S;
+  solve_lower(w.C, A);
+  for (arma::uword c = 0; c < U.n_rows; ++c) {
+    const double* a = A.colptr(c);
+    double ar = 0.0, aa = 0.0;
+    for (int i = 0; i < N; ++i) { ar += a[i] * w.r[i]; aa += a[i] * a[i]; }
+    out.mu(c, s) = ar;
+    out.v(c, s) = s2S * (1.0 + nugget) - aa;
+  }
+  out.ll[s] = post.logLik();
+  out.s2S[s] = s2S;
+  std::copy(thS, thS + p + q, out.thS.colptr(s));
+  std::copy(alS, alS + p + q, out.alS.colptr(s));
+  return true;
+}
+
+// Every draw's system (rows of phis) at the candidates U, through
+// prediction's per-draw loop on the dense algebra.
+DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
+                             double nugget, const Rcpp::List& model, Model& mod) {
+  const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
+  mod = read_model(model, p, q);
+  if (!mod.emulator || mod.nOutputs() > 1 || !mod.levels.empty())
+    Rcpp::stop("the look-ahead handles one output of simulator runs without categorical inputs");
+  mod.algebra = ALG_DENSE;
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
+  Posterior& post = *pp;
+  if (post.sgasp || post.layout.length[PC_SIGMA2E] != 1)
+    Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
+  if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
+  const int m = Xs.n_rows, n = Xf.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
+  DesignSystems out;
+  out.A.set_size(N, Nc, S);
+  out.mu.set_size(Nc, S);
+  out.v.set_size(Nc, S);
+  out.thS.set_size(p + q, S);
+  out.alS.set_size(p + q, S);
+  out.ll.set_size(S);
+  out.s2S.set_size(S);
+  SystemWork w;
+  w.Z.set_size(N, p + q);
+  w.Z.rows(0, m - 1) = Xs;
+  w.Z.submat(m, 0, N - 1, p - 1) = Xf;
+  w.C.set_size(N, N);
+  w.Rb.set_size(n, n);
+  w.r.set_size(N);
+  for_each_draw(post, phis, [&](arma::uword s) {
+    return design_system(post, mod, Xf, yf, ys, U, nugget, w, out, s);
+  });
+  out.muT = out.mu.t();
+  return out;
+}
+
+// The greedy look-ahead's state: S draws, Nc candidates, J fantasies.
+// kap (S x q) kappa, ksq (S) |kappa_s|^2, base (S x J) the draws'
+// log-weights given the pending points' fantasies, YP (J x k) those values,
+// P the pending candidates; per step the conditional means given them M
+// (s fastest: M[s + S (c + Nc j)], with pending points), the standard
+// deviations sd, their inverses and logs (S x Nc).
+struct LookAhead {
+  int S, Nc, J;
+  arma::mat kap, base, YP, sd, isd, lsd;
+  arma::vec ksq, Lbuf;
+  std::vector<double> M;
+  std::vector<int> P;
+};
+
+// Sum over kappa's columns of its variance under the weights
+// w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
+// sum_k (sum_s w_s k_sk)^2.
+double weighted_var(const LookAhead& la, const double* L, double mx) {
+  const int q = la.kap.n_cols;
+  const double* ksq = la.ksq.memptr();
+  double sw = 0.0, s2 = 0.0, mk[16] = {0.0};
+  if (q == 1) {
+    const double* k0 = la.kap.memptr();
+    for (int s = 0; s < la.S; ++s) {
+      const double e = std::exp(L[s] - mx);
+      sw += e; s2 += e * ksq[s]; mk[0] += e * k0[s];
+    }
+  } else {
+    for (int s = 0; s < la.S; ++s) {
+      const double e = std::exp(L[s] - mx);
+      sw += e; s2 += e * ksq[s];
+      for (int k = 0; k < q; ++k) mk[k] += e * la.kap(s, k);
+    }
+  }
+  double out = s2 / sw;
+  for (int k = 0; k < q; ++k) out -= (mk[k] / sw) * (mk[k] / sw);
+  return out;
+}
+
+double weighted_var(const LookAhead& la, const double* L) {
+  double mx = R_NegInf;
+  for (int s = 0; s < la.S; ++s) mx = std::max(mx, L[s]);
+  return weighted_var(la, L, mx);
+}
+
+// Per draw, the candidates' values given the data and the pending points'
+// fantasised values: with A_P the pending columns of A,
+//   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
+//   ScP = s2S Rs(U, U_P) - A'A_P (a pending candidate's rows: SPP),
+//   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
+// cv floored at 1e-12 s2S. Without pending points M is mu (not stored).
+void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Model& mod,
+                          double nugget, LookAhead& la) {
+  const int k = la.P.size(), q = U.n_cols;
+  const arma::uvec Pu = arma::conv_to<arma::uvec>::from(la.P);
+  const arma::mat UP = U.rows(Pu);
+  arma::mat SPP(k, k), ScP(la.Nc, k), B, D;
+  for (int s = 0; s < la.S; ++s) {
+    const double s2S = sys.s2S[s];
+    arma::vec cv = sys.v.col(s);
+    if (k > 0) {
+      const arma::mat& As = sys.A.slice(s);
+      const arma::mat AP = As.cols(Pu);
+      kernel_corr(mod.kernS, UP, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), SPP, false);
+      SPP *= s2S;
+      SPP.diag() *= 1.0 + nugget;
+      SPP -= AP.t() * AP;
+      kernel_corr(mod.kernS, U, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), ScP, false);
+      ScP = s2S * ScP - As.t() * AP;
+      for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
+      B = arma::solve(SPP, ScP.t()).t();
+      cv -= arma::sum(B % ScP, 1);
+      arma::vec muP(k);
+      for (int i = 0; i < k; ++i) muP[i] = sys.mu(la.P[i], s);
+      D = B * (la.YP.t() - arma::repmat(muP, 1, la.J));  // Nc x J
+      for (int j = 0; j < la.J; ++j)
+        for (int c = 0; c < la.Nc; ++c)
+          la.M[s + (size_t)la.S * (c + (size_t)la.Nc * j)] = sys.mu(c, s) + D(c, j);
+    }
+    for (int c = 0; c < la.Nc; ++c) {
+      la.sd(s, c) = std::sqrt(std::max(cv[c], 1e-12 * s2S));
+      la.isd(s, c) = 1.0 / la.sd(s, c);
+      la.lsd(s, c) = std::log(la.sd(s, c));
+    }
+  }
+}
+
+// The draws' conditional means at candidate c in fantasy j (S values).
+inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, int c, int j) {
+  return la.P.empty() ? sys.muT.colptr(c) : la.M.data() + (size_t)la.S * (c + (size_t)la.Nc * j);
+}
+
+// Each candidate's gain given the pending points: fantasy j of candidate c
+// is Y(c, j) = M_src[j](c, j) + sd_src[j](c) z_j (z common to every
+// candidate); the draws are reweighted by N(Y; M_s(c, j), sd_s(c)^2), the
+// normal's constant left out (it cancels):
+//   gain(c) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa).
+void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
+                      const double* z, arma::vec& gain, arma::mat& Y) {
+  double before = 0.0;
+  for (int j = 0; j < la.J; ++j) before += weighted_var(la, la.base.colptr(j));
+  before /= la.J;
+  double* L = la.Lbuf.memptr();
+  for (int c = 0; c < la.Nc; ++c) {
+    double after = 0.0;
+    for (int j = 0; j < la.J; ++j) {
+      const double* mu = cond_means(sys, la, c, j);
+      const double* isd = la.isd.colptr(c);
+      const double* lsd = la.lsd.colptr(c);
+      const int r = src[j];
+      const double y = mu[r] + la.sd(r, c) * z[j];
+      Y(c, j) = y;
+      const double* b = la.base.colptr(j);
+      double mx = R_NegInf;
+      for (int s = 0; s < la.S; ++s) {
+        const double e = (y - mu[s]) * isd[s];
+        L[s] = b[s] - 0.5 * e * e - lsd[s];
+        mx = std::max(mx, L[s]);
+      }
+      after += weighted_var(la, L, mx);
+    }
+    gain[c] = before - after / la.J;
+  }
+}
+
+}  // namespace
+
+// The draws' conditionals at candidates (scaled): mean and variance of the
+// simulator's value given the data (Nc x S) and the log-likelihood of each
+// draw (design_system()).
+// [[Rcpp::export(.design_systems)]]
+Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                            const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
+                            double nugget, const Rcpp::List& model) {
+  Model mod;
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, nugget, model, mod);
+  return Rcpp::List::create(Rcpp::Named("mu") = sys.mu, Rcpp::Named("v") = sys.v,
+                            Rcpp::Named("ll") = sys.ll);
+}
+
+// The greedy look-ahead: n points chosen one at a time, each maximising
+// the expected reduction of kappa's weighted posterior variance given the
+// pending points (score_candidates()). Base log-weights lw0 (+ ll with
+// `plugin`), normalised w; fantasy j comes from draw src[j], the first s
+// with sum_{r <= s} w_r >= usrc[j] (usrc uniforms: the draws by w), with the
+// normal deviate Z(j, step) in each step; after a pick the base
+// log-weights gain its log-densities. Returns the picks (1-based), their gains, the current
+// variance and every candidate's gain per step (scores, Nc x n).
+// [[Rcpp::export(.design_look_ahead)]]
+Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
+                             const arma::mat& kappa, const arma::vec& lw0, bool plugin,
+                             const arma::vec& usrc, const arma::mat& Z, double nugget,
+                             const Rcpp::List& model) {
+  Model mod;
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, nugget, model, mod);
+  LookAhead la;
+  la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows;
+  const int n = Z.n_cols;
+  if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
+  if (kappa.n_rows != phis.n_rows || kappa.n_cols > 16 || lw0.n_elem != phis.n_rows)
+    Rcpp::stop("kappa and lw0 must have a row per draw (at most 16 calibration inputs)");
+  la.kap = kappa;
+  la.ksq = arma::sum(arma::square(kappa), 1);
+  const arma::vec lw = plugin ? arma::vec(lw0 + sys.ll) : lw0;
+  const arma::vec cw = arma::cumsum(arma::exp(lw - lw.max()));
+  std::vector<int> s0(la.J);
+  for (int j = 0; j < la.J; ++j) {
+    int s = 0;
+    while (s < la.S - 1 && cw[s] < usrc[j] * cw[la.S - 1]) ++s;
+    s0[j] = s;
+  }
+  la.base = arma::repmat(lw, 1, la.J);
+  la.YP.set_size(la.J, 0);
+  la.sd.set_size(la.S, la.Nc);
+  la.isd.set_size(la.S, la.Nc);
+  la.lsd.set_size(la.S, la.Nc);
+  la.Lbuf.set_size(la.S);
+  la.M.resize((size_t)la.S * la.Nc * la.J);
+  const double variance = weighted_var(la, lw.memptr());
+  arma::vec gain(la.Nc), best(n);
+  arma::mat Y(la.Nc, la.J), scores(la.Nc, n);
+  Rcpp::IntegerVector chosen(n);
+  for (int step = 0; step < n; ++step) {
+    pending_conditionals(sys, U, mod, nugget, la);
+    score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
+    for (int c : la.P) gain[c] = R_NegInf;
+    scores.col(step) = gain;
+    const int b = gain.index_max();
+    chosen[step] = b + 1;
+    best[step] = gain[b];
+    for (int j = 0; j < la.J; ++j) {
+      const double* mu = cond_means(sys, la, b, j);
+      for (int s = 0; s < la.S; ++s) {
+        const double e = (Y(b, j) - mu[s]) * la.isd(s, b);
+        la.base(s, j) += -0.5 * e * e - la.lsd(s, b);
+      }
+    }
+    la.P.push_back(b);
+    la.YP.insert_cols(step, Y.row(b).t());
+    Rcpp::checkUserInterrupt();
+  }
+  return Rcpp::List::create(Rcpp::Named("chosen") = chosen, Rcpp::Named("gain") = Rcpp::NumericVector(best.begin(), best.end()),
+                            Rcpp::Named("variance") = variance, Rcpp::Named("scores") = scores);
+}
