@@ -50,6 +50,9 @@
 #' the \eqn{(m + n)} covariance (exact, whatever algebra the fit ran;
 #' refused beyond 3000). One output, one noise group, no categorical
 #' inputs, and the `"gp"` or `"none"` discrepancy: other models are refused.
+#' The look-ahead holds draws x (m + n) x candidates numbers; beyond
+#' 5e7 (400 MB) it is refused, naming the sizes (give fewer `ndraws` or
+#' candidates).
 #'
 #' @param fit An `fbc` object.
 #' @param n Number of points (a batch, chosen greedily with the pending

@@ -135,7 +135,10 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   # the existing runs as candidates are left out
   cand <- rbind(pb$sim[, c("x", "u")], data.frame(x = c(0.3, 0.6), u = c(0.6, 0.65)))
   pr2 <- propose_runs(fit, n = 2, candidates = cand, ndraws = 60, nfantasy = 30)
-  expect_equal(sort(pr2$x), c(0.3, 0.6))
+  expect_equal(sort(pr2$x), c(0.3, 0.6))  # a look-ahead over 5e7 numbers (60 draws x 22 rows x 40,000 candidates)
+  # is refused, naming the sizes
+  big <- data.frame(x = stats::runif(40000), u = stats::runif(40000))
+  expect_snapshot(error = TRUE, propose_runs(fit, candidates = big, ndraws = 60))
 })
 
 test_that("a batch conditions on its pending points; single picks repeat", {
