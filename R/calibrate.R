@@ -330,11 +330,13 @@
 #' parameters is that of its joint move (1 for `muB`'s exact draw), and
 #' `proposalSD` the proposal's marginal step on the walk's scale (for a joint
 #' move \eqn{e^s} times the spread \eqn{L} gives the parameter; `NA` for an
-#' exact draw or a fixed parameter). `print()` reports each move by name
-#' (`kappa1`, `sim`, `bias`, `sigma2E`, `muB`, `scale`) with its acceptance
-#' over the retained sweeps of all chains;
+#' exact draw or a fixed parameter). The sampler counts acceptance once, per
+#' move: `print()` reports each move by name (`kappa1`, `sim`, `bias`,
+#' `sigma2E`, `muB`, `scale`) with its acceptance over the retained sweeps
+#' of all chains, and `acceptance` gives each parameter its move's rate;
 #' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
-#' scales, and `state$chains[[k]]$scaleAcceptance` the scale move's rate.
+#' scales, `state$chains[[k]]$acceptance` the chain's rates by parameter and
+#' `state$chains[[k]]$scaleAcceptance` its scale move's rate.
 #' `inst/bench/mixing.R` measures both samplers and Stan's NUTS on the same
 #' model (see "Defaults").
 #'

@@ -73,12 +73,17 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     Phi[, seq_len(q)] <- unscale_inputs(Phi[, seq_len(q), drop = FALSE], scale, cal)
     list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
   })
-  states <- lapply(results, function(r) {
-    names(r$acceptance) <- spec$vars
+  states <- lapply(seq_along(results), function(k) {
+    r <- results[[k]]
+    # acceptance over all retained sweeps of the fit: the moves' counts
+    # (carried through every update()); a chain still without them (a fit
+    # from before moves were reported, skipped after an interrupt) keeps its
+    # old rates
+    acc <- move_acceptance(r$state$moves, spec$vars, stored = prev$state$chains[[k]])
     logsd <- stats::setNames(r$state$logsd, spec$vars)
     list(last = r$state$phi, logsd = logsd, done = r$done, nPost = r$nPost,
-         interrupted = r$interrupted, acceptance = r$acceptance,
-         scaleAcceptance = r$scaleAcceptance, kept = r$kept, sampler = r$state)
+         interrupted = r$interrupted, acceptance = c(acc),
+         scaleAcceptance = attr(acc, "scale"), kept = r$kept, sampler = r$state)
   })
   if (!is.null(prev)) {
     # append chain k's new draws after its old ones
@@ -91,18 +96,7 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     states <- lapply(seq_along(states), function(k) {
       s <- states[[k]]
       o <- prev$state$chains[[k]]
-      # acceptance over all post-burn-in iterations
-      nNew <- s$nPost
-      nOld <- o$postDone
-      if (nNew > 0) {
-        s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
-        if (!is.na(o$scaleAcceptance) && !is.na(s$scaleAcceptance))
-          s$scaleAcceptance <- (o$scaleAcceptance * nOld + s$scaleAcceptance * nNew) / (nOld + nNew)
-      } else {
-        s$acceptance <- o$acceptance
-        s$scaleAcceptance <- o$scaleAcceptance
-      }
-      s$postDone <- nOld + nNew
+      s$postDone <- o$postDone + s$nPost
       s$done <- o$done + s$done
       s$kept <- o$kept + s$kept
       s
@@ -124,7 +118,7 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     Phi = Phi, chain = chain,
     logPost = unlist(lapply(pieces, `[[`, "logPost")),
     logLik = unlist(lapply(pieces, `[[`, "logLik")),
-    acceptance = (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols],
+    acceptance = fit_acceptance(states, spec$vars)[cols],
     proposalSD = exp(Reduce(`+`, logSD) / length(states))[cols],
     model = model, settings = settings,
     state = list(chains = states,
