@@ -159,7 +159,7 @@
 #' pays) and otherwise uses the dense algebra, Cholesky factors of the
 #' \eqn{m \times m} simulator block: a design with one run missing is not a
 #' product design. `algebra = "dense"` forces the dense algebra (the same
-#' posterior, slower). `print()` and `fit$model$simAlgebra` say which one
+#' posterior, slower). `print()` and `fit$model$algebra` say which one
 #' ran; [predict.fbc()] uses the same.
 #'
 #' Beyond a few thousand scattered runs no exact algebra is practical (a
@@ -631,7 +631,8 @@
 #'   (the run's: MCMC sizes, nugget, run time, checkpoint directory, the
 #'   convergence rule), `model` (the [fbc_model] fitted: `kernelS`,
 #'   `kernelB`, `discrepancy`, `sampler` and its `moves`, the `algebra`
-#'   chosen and the `simAlgebra` used, ...), `state` (`chains`: where
+#'   that ran (`name`, `dims` of a product design, `neighbours`, `reason`),
+#'   ...), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
 #'   the sampler's full parameter vector; `interrupted`), `spec` (the model
 #'   description the copies `priors`, `vars`, `indices` and `priorFns` come

@@ -15,9 +15,11 @@
 # no `version` (format 0), format 1 fits no discrepancy model, format 2
 # fits a layout without the S-GaSP scale, format 3 fits no model object
 # (the model's choices among the settings), format 4 fits with several
-# outputs no `outputs` choice (they were shared); upgrade_fit() brings each to
-# the current format by the steps keyed by format in fit_upgrades.
-fbc_fit_format <- 5L
+# outputs no `outputs` choice (they were shared), format 5 fits the algebra
+# twice (model$algebra, chosen, beside model$simAlgebra, run, without the
+# product design's size); upgrade_fit() brings each to the current format by
+# the steps keyed by format in fit_upgrades.
+fbc_fit_format <- 6L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -325,7 +327,6 @@ fit_to_3 <- function(x) {
   s$kernelB <- s$kernelB %||% "powexp"
   s$discrepancy <- s$discrepancy %||% "gp"
   s$algebra <- s$algebra %||% "auto"
-  s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, sc$p, spec$model)
   # - the chains (before several chains: one, its state at the top of
   #   `state`)
   chain <- x$chain %||% rep(1L, nrow(x$Phi))
@@ -381,17 +382,14 @@ model_of_fit <- function(x) {
   s <- x$settings
   sc <- x$scale
   mc <- x$spec$model
-  alg <- s$simAlgebra
-  name <- switch(alg$name, Kronecker = "kronecker", Vecchia = "vecchia", "dense")
-  algebra <- list(name = name, code = mc$algebra, neighbours = alg$k, forced = !identical(s$algebra, "auto"),
-                  reason = alg$reason)  # NULL: the FBC that made it gave none
+  algebra <- old_fit_algebra(x)
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
                  fieldRows = distinct_rows(x$data$Xf, bias$codes))
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
-                sampler = s$sampler %||% "single", algebra = algebra, simAlgebra = alg,
+                sampler = s$sampler %||% "single", algebra = algebra,
                 moves = s$moves,
                 options = list(algebra = s$algebra, neighbours = s$neighbours, output = s$output,
                                source = s$source, sourceBias = s$sourceBias %||% "shared"),
@@ -412,8 +410,38 @@ fit_to_5 <- function(x) {
   x
 }
 
+# The algebra record (as choose_algebra() makes it) of a format-3 fit: from
+# the simAlgebra its settings kept, or (fits before it kept one) from the
+# product design the compiled core finds under the model's algebra code.
+old_fit_algebra <- function(x) {
+  s <- x$settings
+  mc <- x$spec$model
+  vecchia <- identical(mc$algebra, algebra_codes[["vecchia"]])
+  dims <- if (!is.null(s$simAlgebra)) s$simAlgebra$dims else if (!vecchia) {
+    .sim_algebra(x$data$Xs, x$scale$p, mc$algebra)
+  }
+  name <- if (vecchia) "vecchia" else if (length(dims)) "kronecker" else "dense"
+  list(name = name, code = mc$algebra, neighbours = mc$vecchia$k,
+       forced = !identical(s$algebra %||% "auto", "auto"),
+       reason = s$simAlgebra$reason,  # NULL: the FBC that made it gave none
+       dims = if (length(dims)) dims)
+}
+
+# Format 5 to 6: the algebra is one record, model$algebra (with the product
+# design's size, `dims`), no longer restated by a model$simAlgebra.
+fit_to_6 <- function(x) {
+  m <- x$model
+  if (!is.null(m$simAlgebra)) {
+    m$algebra["dims"] <- list(if (identical(m$algebra$name, "kronecker")) m$simAlgebra$dims)
+    m$simAlgebra <- NULL
+    x$model <- m
+  }
+  x$version$format <- 6L
+  x
+}
+
 fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4,
-                     `4` = fit_to_5)
+                     `4` = fit_to_5, `5` = fit_to_6)
 
 # The contents of a checkpoint file of format `x$format` (at most
 # fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format
