@@ -34,7 +34,8 @@ enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
 // Correlation family codes, one per GP; R/correlation.R keeps the same table
 // (kernel_codes()).
-enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4 };
+// (KF_END: one past the last, so that a new family is one entry here.)
+enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4, KF_END };
 
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
@@ -57,7 +58,8 @@ struct VecchiaDesign {
 // GP of Gu and Wang (2018), S-GaSP: the bias GP's correlation R on the nu
 // distinct field inputs replaced by Rz = R - R (R + (nu / lambdaZ) I)^-1 R,
 // with mean 0 (no muB).
-enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
+// (DS_END: one past the last code.)
+enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2, DS_END };
 
 // What a prediction is of (R/predict.R, type): a new field observation
 // (eta + delta + eps), the mean of the field (eta + delta), the simulator

@@ -146,7 +146,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
   out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
-  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE && out.discrepancy != DS_SGASP)
+  if (out.discrepancy < DS_GP || out.discrepancy >= DS_END)
     Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
   // what each class expands over: q, p + q, p or one; the bias classes
   // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
