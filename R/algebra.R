@@ -60,7 +60,11 @@ dense_sweep_cost <- function(m, n) {
 # list(name = "dense", "kronecker" or "vecchia"; code = the integer the
 # compiled core takes (0 auto: Kronecker or dense, 1 dense, 2 Vecchia);
 # neighbours = the count for Vecchia, else NULL; reason = one sentence for
-# print(); forced = whether the user named the algebra). Says so when
+# print(); forced = whether the user named the algebra; dims = c(I, J), the
+# product design's experimental x calibration settings, for Kronecker, else
+# NULL). The model records this one choice (model$algebra): the product
+# design is detected here only (the compiled core finds the same one from
+# the same code, src/kronecker.cpp). Says so when
 # `neighbours` is given for an algebra that does not use it.
 choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   m <- nrow(Xs)
@@ -76,7 +80,8 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
          reason = sprintf("as asked (`algebra = \"dense\"`); exact, projected at %s", costTxt))
   } else if (length(dims)) {
     list(name = "kronecker", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
-         reason = "exact; the runs are a product design, so no m x m matrix is formed")
+         reason = "exact; the runs are a product design, so no m x m matrix is formed",
+         dims = dims)
   } else if (cost < fbc_dense_sweep_max) {
     list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = sprintf("exact; projected at %s (m + n = %d; under %g s)", costTxt,
@@ -95,5 +100,6 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
       " " = "It applies to the nearest-neighbour algebra ({.code algebra = \"vecchia\"}, or {.code \"auto\"} on a large scattered design)."
     ))
   }
-  out[c("name", "code", "neighbours", "reason", "forced")]
+  out["dims"] <- list(out$dims)
+  out[c("name", "code", "neighbours", "reason", "forced", "dims")]
 }

@@ -159,7 +159,7 @@
 #' pays) and otherwise uses the dense algebra, Cholesky factors of the
 #' \eqn{m \times m} simulator block: a design with one run missing is not a
 #' product design. `algebra = "dense"` forces the dense algebra (the same
-#' posterior, slower). `print()` and `fit$model$simAlgebra` say which one
+#' posterior, slower). `print()` and `fit$model$algebra` say which one
 #' ran; [predict.fbc()] uses the same.
 #'
 #' Beyond a few thousand scattered runs no exact algebra is practical (a
@@ -330,11 +330,13 @@
 #' parameters is that of its joint move (1 for `muB`'s exact draw), and
 #' `proposalSD` the proposal's marginal step on the walk's scale (for a joint
 #' move \eqn{e^s} times the spread \eqn{L} gives the parameter; `NA` for an
-#' exact draw or a fixed parameter). `print()` reports each move by name
-#' (`kappa1`, `sim`, `bias`, `sigma2E`, `muB`, `scale`) with its acceptance
-#' over the retained sweeps of all chains;
+#' exact draw or a fixed parameter). The sampler counts acceptance once, per
+#' move: `print()` reports each move by name (`kappa1`, `sim`, `bias`,
+#' `sigma2E`, `muB`, `scale`) with its acceptance over the retained sweeps
+#' of all chains, and `acceptance` gives each parameter its move's rate;
 #' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
-#' scales, and `state$chains[[k]]$scaleAcceptance` the scale move's rate.
+#' scales, `state$chains[[k]]$acceptance` the chain's rates by parameter and
+#' `state$chains[[k]]$scaleAcceptance` its scale move's rate.
 #' `inst/bench/mixing.R` measures both samplers and Stan's NUTS on the same
 #' model (see "Defaults").
 #'
@@ -629,7 +631,8 @@
 #'   (the run's: MCMC sizes, nugget, run time, checkpoint directory, the
 #'   convergence rule), `model` (the [fbc_model] fitted: `kernelS`,
 #'   `kernelB`, `discrepancy`, `sampler` and its `moves`, the `algebra`
-#'   chosen and the `simAlgebra` used, ...), `state` (`chains`: where
+#'   that ran (`name`, `dims` of a product design, `neighbours`, `reason`),
+#'   ...), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
 #'   the sampler's full parameter vector; `interrupted`), `spec` (the model
 #'   description the copies `priors`, `vars`, `indices` and `priorFns` come

@@ -71,7 +71,7 @@ confounded_kappa <- function(x) {
 confounding_messages <- function(x) {
   b <- confounded_kappa(x)
   if (is.null(b)) return(character())
-  other <- setdiff(c("gp", "sgasp", "none"), x$model$discrepancy)
+  other <- setdiff(names(discrepancy_codes), x$model$discrepancy)
   fits <- paste(sprintf("`fit_%s <- calibrate(sim, field, discrepancy = \"%s\")`", other, other),
                 collapse = " and ")
   cmp <- paste(c("loo::loo(fit)", sprintf("loo::loo(fit_%s)", other)), collapse = ", ")

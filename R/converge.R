@@ -195,9 +195,7 @@ meets_rule <- function(fit, rule) {
 # of result_from_start() in run.R).
 start_from_result <- function(r, iter0) {
   list(state = r$state, iter0 = as.integer(iter0), draws = r$draws,
-       logPost = r$logPost, logLik = r$logLik,
-       accSum = r$acceptance * r$nPost, scaleAccSum = r$scaleAcceptance * r$nPost,
-       nPost = r$nPost, finished = FALSE)
+       logPost = r$logPost, logLik = r$logLik, nPost = r$nPost, finished = FALSE)
 }
 
 # A chain's result cut to the draws it kept up to sweep `target` (a chain

@@ -25,8 +25,8 @@
 #              and classes of phi, prior functions and the compiled model
 #              description (R/spec.R)
 #   kernelS, kernelB, discrepancy, sampler   the choices, by name
-#   algebra    choose_algebra()'s choice; simAlgebra what the compiled core
-#              runs (sim_algebra_info())
+#   algebra    choose_algebra()'s choice, the one record of the algebra the
+#              compiled core runs (name, code, neighbours, dims, reason)
 #   moves      the sampler's schedule (sampler_moves())
 #   options    the other model arguments as checked (algebra asked for,
 #              neighbours, output, source, sourceBias) and `args`, the
@@ -83,15 +83,14 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
                                outputs = pr$outputs)
-  simAlgebra <- sim_algebra_info(list(Xs = XsAlg), p, spec$model)
-  moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), simAlgebra))
+  moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource,
                    fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes)))
   new_fbc_model(data = dat, raw = list(sim = dd$sim, field = dd$field), scale = pr$scale,
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
                 discrepancy = opt$discrepancy, sampler = opt$sampler, algebra = alg,
-                simAlgebra = simAlgebra, moves = moves,
+                moves = moves,
                 options = c(opt[c("algebra", "neighbours", "output", "source", "sourceBias", "outputs")],
                             # the arguments as given, to rebuild the model with more runs
                             # (update(fit, sim = ...), R/design.R)
@@ -206,7 +205,7 @@ distinct_rows <- function(X, group = NULL) {
 # --------------------------------------------------------- constructor ----
 
 new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, discrepancy, sampler,
-                          algebra, simAlgebra, moves, options, call) {
+                          algebra, moves, options, call) {
   mc <- spec$model
   x <- structure(list(
     data = data, raw = raw, scale = scale, design = design,
@@ -216,7 +215,7 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
     classes = data.frame(class = names(mc$offset), offset = unname(mc$offset),
                          length = unname(mc$length), stringsAsFactors = FALSE),
     priors = spec$priors, spec = spec, kernelS = kernelS, kernelB = kernelB,
-    discrepancy = discrepancy, sampler = sampler, algebra = algebra, simAlgebra = simAlgebra,
+    discrepancy = discrepancy, sampler = sampler, algebra = algebra,
     moves = moves, options = options, call = call
   ), class = "fbc_model")
   validate_fbc_model(x)
@@ -377,7 +376,7 @@ fit_model <- function(model, run, call = model$call) {
   d <- model$dims
   check_run_length_size(run, length(param_names(d$p, d$q, model$discrepancy)), run$nChains)
   # only the dense algebra factors an m x m block
-  if (identical(model$simAlgebra$name, "dense")) blas_hint(d$m)
+  if (identical(model$algebra$name, "dense")) blas_hint(d$m)
   inits <- dispersed_inits(run$nChains, dat, spec)
   seeds <- chain_seeds(run$nChains)
   starts <- lapply(inits, function(x) chain_start(initial_state(x, spec), length(x), 0L))

@@ -15,9 +15,11 @@
 # no `version` (format 0), format 1 fits no discrepancy model, format 2
 # fits a layout without the S-GaSP scale, format 3 fits no model object
 # (the model's choices among the settings), format 4 fits with several
-# outputs no `outputs` choice (they were shared); upgrade_fit() brings each to
-# the current format by the steps keyed by format in fit_upgrades.
-fbc_fit_format <- 5L
+# outputs no `outputs` choice (they were shared), format 5 fits the algebra
+# twice (model$algebra, chosen, beside model$simAlgebra, run, without the
+# product design's size); upgrade_fit() brings each to the current format by
+# the steps keyed by format in fit_upgrades.
+fbc_fit_format <- 6L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -73,12 +75,17 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     Phi[, seq_len(q)] <- unscale_inputs(Phi[, seq_len(q), drop = FALSE], scale, cal)
     list(Phi = Phi, logPost = r$logPost[kept], logLik = r$logLik[kept])
   })
-  states <- lapply(results, function(r) {
-    names(r$acceptance) <- spec$vars
+  states <- lapply(seq_along(results), function(k) {
+    r <- results[[k]]
+    # acceptance over all retained sweeps of the fit: the moves' counts
+    # (carried through every update()); a chain still without them (a fit
+    # from before moves were reported, skipped after an interrupt) keeps its
+    # old rates
+    acc <- move_acceptance(r$state$moves, spec$vars, stored = prev$state$chains[[k]])
     logsd <- stats::setNames(r$state$logsd, spec$vars)
     list(last = r$state$phi, logsd = logsd, done = r$done, nPost = r$nPost,
-         interrupted = r$interrupted, acceptance = r$acceptance,
-         scaleAcceptance = r$scaleAcceptance, kept = r$kept, sampler = r$state)
+         interrupted = r$interrupted, acceptance = c(acc),
+         scaleAcceptance = attr(acc, "scale"), kept = r$kept, sampler = r$state)
   })
   if (!is.null(prev)) {
     # append chain k's new draws after its old ones
@@ -91,18 +98,7 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     states <- lapply(seq_along(states), function(k) {
       s <- states[[k]]
       o <- prev$state$chains[[k]]
-      # acceptance over all post-burn-in iterations
-      nNew <- s$nPost
-      nOld <- o$postDone
-      if (nNew > 0) {
-        s$acceptance <- (o$acceptance * nOld + s$acceptance * nNew) / (nOld + nNew)
-        if (!is.na(o$scaleAcceptance) && !is.na(s$scaleAcceptance))
-          s$scaleAcceptance <- (o$scaleAcceptance * nOld + s$scaleAcceptance * nNew) / (nOld + nNew)
-      } else {
-        s$acceptance <- o$acceptance
-        s$scaleAcceptance <- o$scaleAcceptance
-      }
-      s$postDone <- nOld + nNew
+      s$postDone <- o$postDone + s$nPost
       s$done <- o$done + s$done
       s$kept <- o$kept + s$kept
       s
@@ -124,7 +120,7 @@ new_fbc_chains <- function(results, model, call, settings, prev = NULL) {
     Phi = Phi, chain = chain,
     logPost = unlist(lapply(pieces, `[[`, "logPost")),
     logLik = unlist(lapply(pieces, `[[`, "logLik")),
-    acceptance = (Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states))[cols],
+    acceptance = fit_acceptance(states, spec$vars)[cols],
     proposalSD = exp(Reduce(`+`, logSD) / length(states))[cols],
     model = model, settings = settings,
     state = list(chains = states,
@@ -331,7 +327,6 @@ fit_to_3 <- function(x) {
   s$kernelB <- s$kernelB %||% "powexp"
   s$discrepancy <- s$discrepancy %||% "gp"
   s$algebra <- s$algebra %||% "auto"
-  s$simAlgebra <- s$simAlgebra %||% sim_algebra_info(x$data, sc$p, spec$model)
   # - the chains (before several chains: one, its state at the top of
   #   `state`)
   chain <- x$chain %||% rep(1L, nrow(x$Phi))
@@ -387,17 +382,14 @@ model_of_fit <- function(x) {
   s <- x$settings
   sc <- x$scale
   mc <- x$spec$model
-  alg <- s$simAlgebra
-  name <- switch(alg$name, Kronecker = "kronecker", Vecchia = "vecchia", "dense")
-  algebra <- list(name = name, code = mc$algebra, neighbours = alg$k, forced = !identical(s$algebra, "auto"),
-                  reason = alg$reason)  # NULL: the FBC that made it gave none
+  algebra <- old_fit_algebra(x)
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
                  fieldRows = distinct_rows(x$data$Xf, bias$codes))
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
-                sampler = s$sampler %||% "single", algebra = algebra, simAlgebra = alg,
+                sampler = s$sampler %||% "single", algebra = algebra,
                 moves = s$moves,
                 options = list(algebra = s$algebra, neighbours = s$neighbours, output = s$output,
                                source = s$source, sourceBias = s$sourceBias %||% "shared"),
@@ -418,8 +410,38 @@ fit_to_5 <- function(x) {
   x
 }
 
+# The algebra record (as choose_algebra() makes it) of a format-3 fit: from
+# the simAlgebra its settings kept, or (fits before it kept one) from the
+# product design the compiled core finds under the model's algebra code.
+old_fit_algebra <- function(x) {
+  s <- x$settings
+  mc <- x$spec$model
+  vecchia <- identical(mc$algebra, algebra_codes[["vecchia"]])
+  dims <- if (!is.null(s$simAlgebra)) s$simAlgebra$dims else if (!vecchia) {
+    .sim_algebra(x$data$Xs, x$scale$p, mc$algebra)
+  }
+  name <- if (vecchia) "vecchia" else if (length(dims)) "kronecker" else "dense"
+  list(name = name, code = mc$algebra, neighbours = mc$vecchia$k,
+       forced = !identical(s$algebra %||% "auto", "auto"),
+       reason = s$simAlgebra$reason,  # NULL: the FBC that made it gave none
+       dims = if (length(dims)) dims)
+}
+
+# Format 5 to 6: the algebra is one record, model$algebra (with the product
+# design's size, `dims`), no longer restated by a model$simAlgebra.
+fit_to_6 <- function(x) {
+  m <- x$model
+  if (!is.null(m$simAlgebra)) {
+    m$algebra["dims"] <- list(if (identical(m$algebra$name, "kronecker")) m$simAlgebra$dims)
+    m$simAlgebra <- NULL
+    x$model <- m
+  }
+  x$version$format <- 6L
+  x
+}
+
 fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4,
-                     `4` = fit_to_5)
+                     `4` = fit_to_5, `5` = fit_to_6)
 
 # The contents of a checkpoint file of format `x$format` (at most
 # fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format

@@ -66,8 +66,7 @@ loo.fbc <- function(x, unit = c("input", "observation"), ndraws = 4000, ...) {
   rows <- loo_rows(x$chain, ndraws)
   d <- x$data
   group <- loo_groups(d$Xf, unit, loo_input_columns(x$scale))
-  ll <- .fbc_loo(d$Xf, d$yf, d$Xs, d$ys, sampler_draws(x, rows$rows), x$settings$nugget,
-                 group, model = x$spec$model)
+  ll <- at_draws(x, .fbc_loo, sampler_draws(x, rows$rows), group = group)
   # densities in the response's units: y = ymean + ysd * y_scaled (each
   # row by its output's sd)
   logsd <- log(y_sd(x$scale, d$outF))

@@ -312,20 +312,8 @@ level_count <- function(levels) {
 # The dense algebra with at least this many simulator runs gets the
 # large-problem move schedule (sampler_moves(large = TRUE)).
 fbc_large_m <- 500L
-large_dense <- function(m, simAlgebra) {
-  simAlgebra$name %in% c("dense", "Vecchia") && m >= fbc_large_m
-}
-
-# Which algebra the compiled code uses for the simulator block: the
-# Kronecker one on a product design (`dims`: I experimental x J calibration
-# settings), else the dense one.
-sim_algebra_info <- function(dat, p, model) {
-  if (identical(model$algebra, algebra_codes[["vecchia"]])) {
-    return(list(name = "Vecchia", dims = NULL, k = model$vecchia$k,
-                scaling = model$vecchia$scaling))
-  }
-  dims <- .sim_algebra(dat$Xs, p, model$algebra)
-  if (length(dims)) list(name = "Kronecker", dims = dims) else list(name = "dense", dims = NULL)
+large_dense <- function(m, algebra) {
+  algebra$name %in% c("dense", "vecchia") && m >= fbc_large_m
 }
 
 # The sampler's walk scale (calibrate(), "Sampler") and back, by walk

@@ -263,10 +263,9 @@ pp_check.fbc <- function(object, type = "dens_overlay", ndraws = 50, ...) {
 field_conditionals <- function(fit, phis, code) {
   dat <- fit$data
   sc <- fit$scale
-  res <- .fbc_predict(dat$Xf, dat$yf, dat$Xs, dat$ys, phis, dat$Xf, code,
-                      fit$settings$nugget, 500L, model = fit$spec$model,
-                      noise = if (code == 1L) fit$spec$model$noise %||% integer() else integer(),
-                      source = if (code != 3L) fit$spec$model$source %||% integer() else integer())
+  res <- at_draws(fit, .fbc_predict, phis, Xnew = dat$Xf, type = code, block = 500L,
+                  noise = if (code == 1L) fit$spec$model$noise %||% integer() else integer(),
+                  source = if (code != 3L) fit$spec$model$source %||% integer() else integer())
   shift <- if (code == 4L) 0 else y_mean(sc, dat$outF)
   list(mean = shift + y_sd(sc, dat$outF) * res$mean,
        sd = y_sd(sc, dat$outF) * sqrt(pmax(res$var, 0)))

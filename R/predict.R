@@ -138,8 +138,6 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   N <- nrow(Xn)
   M <- length(rows)
   code <- predict_type_codes[[type]]
-  nugget <- object$settings$nugget
-  model <- object$spec$model
   shift <- if (type == "bias") 0 else y_mean(sc, nf$output)
   ysd <- y_sd(sc, nf$output)
   z <- stats::qnorm((1 + level) / 2)
@@ -152,40 +150,32 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   # as much as predicting at a few dozen points, so blocks of >= 500 points
   # lose a few percent to it, and buy a bounded memory and a progress bar.
   B <- predict_block_size(N, M)
-  starts <- seq.int(1L, N, by = B)
   pred <- se <- lower <- upper <- numeric(N)
   D <- if (draws) matrix(NA_real_, N, M) else NULL
-  bar <- NULL
-  if (length(starts) > 1L && (interactive() || isTRUE(getOption("FBC.progress")))) {
-    bar <- cli::cli_progress_bar("Predicting", total = N, clear = TRUE)
-  }
-  for (r0 in starts) {
-    idx <- seq.int(r0, min(N, r0 + B - 1L))
-    res <- .fbc_predict(object$data$Xf, object$data$yf, object$data$Xs, object$data$ys,
-                        phis, Xn[idx, , drop = FALSE], code, nugget, 500L, model = model,
-                        noise = nf$noise[idx[idx <= length(nf$noise)]],
-                        source = nf$source[idx[idx <= length(nf$source)]])
+  in_blocks(N, B, "Predicting", function(idx) {
+    res <- at_draws(object, .fbc_predict, phis, Xnew = Xn[idx, , drop = FALSE], type = code,
+                    block = 500L, noise = nf$noise[idx[idx <= length(nf$noise)]],
+                    source = nf$source[idx[idx <= length(nf$source)]])
     at <- function(v) if (length(v) > 1L) v[idx] else v
     m <- at(shift) + at(ysd) * res$mean
     s <- at(ysd) * sqrt(pmax(res$var, 0))
     res <- NULL
     if (method == "MAP") {
-      pred[idx] <- m[, 1]
-      se[idx] <- s[, 1]
-      lower[idx] <- m[, 1] - z * s[, 1]
-      upper[idx] <- m[, 1] + z * s[, 1]
+      pred[idx] <<- m[, 1]
+      se[idx] <<- s[, 1]
+      lower[idx] <<- m[, 1] - z * s[, 1]
+      upper[idx] <<- m[, 1] + z * s[, 1]
     } else {
       mbar <- rowMeans(m)
       spread <- if (M > 1L) rowSums((m - mbar)^2) / (M - 1L) else 0
-      pred[idx] <- mbar
-      se[idx] <- sqrt(rowMeans(s^2) + spread)
-      lower[idx] <- mixture_quantile(m, s, (1 - level) / 2)
-      upper[idx] <- mixture_quantile(m, s, (1 + level) / 2)
+      pred[idx] <<- mbar
+      se[idx] <<- sqrt(rowMeans(s^2) + spread)
+      lower[idx] <<- mixture_quantile(m, s, (1 - level) / 2)
+      upper[idx] <<- mixture_quantile(m, s, (1 + level) / 2)
     }
-    if (draws) D[idx, ] <- m
-    if (!is.null(bar)) cli::cli_progress_update(id = bar, set = max(idx))
-  }
-  if (!is.null(bar)) cli::cli_progress_done(id = bar)
+    if (draws) D[idx, ] <<- m
+    NULL
+  })
   out <- list(pred = pred, se = se, lower = lower, upper = upper)
   if (draws) out$draws <- D
   attr(out, "draw_rows") <- rows

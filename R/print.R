@@ -144,16 +144,16 @@ print_moves <- function(x) {
 print_algebra <- function(x, gp) {
   mo <- x$model
   cat(sprintf("  kernels: simulator %s%s\n", mo$kernelS, if (gp) paste(", bias", mo$kernelB) else ""))
-  alg <- mo$simAlgebra
+  alg <- mo$algebra
   # why it ran (choose_algebra()'s reason; a fit made before it has none)
-  reason <- mo$algebra$reason
-  why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "Vecchia" && identical(mo$options$algebra, "auto")) {
+  reason <- alg$reason
+  why <- if (!is.null(reason)) paste0(": ", reason) else if (alg$name == "vecchia" && identical(mo$options$algebra, "auto")) {
     sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
   } else ""
   cat(sprintf("  algebra: %s%s\n", switch(alg$name,
-    Kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
+    kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
                         alg$dims[1], alg$dims[2]),
-    Vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$k),
+    vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$neighbours),
     "dense"), why))
 }
 

@@ -36,8 +36,7 @@ chain_seeds <- function(n) {
 # (calibrate() or update()) started at, and what it has kept since then.
 chain_start <- function(state, d, iter0 = state$iter) {
   list(state = state, iter0 = as.integer(iter0), draws = matrix(0, 0, d),
-       logPost = numeric(), logLik = numeric(), accSum = rep(0, d),
-       scaleAccSum = 0, nPost = 0L, finished = FALSE)
+       logPost = numeric(), logLik = numeric(), nPost = 0L, finished = FALSE)
 }
 
 # A chain's burn-in (warm-up) length: `nBurn` when fixed; for a warm-up of
@@ -72,15 +71,13 @@ temp_run <- function(every) {
   list(dir = dir, id = basename(dir), every = every, user = FALSE, resumed = FALSE)
 }
 
-# A chain's result (as the compiled sampler returns one) from its checkpoint.
+# A chain's result (as the compiled sampler returns one) from its checkpoint
+# (its acceptance: the moves' counts in its state; a checkpoint's accSum and
+# scaleAccSum, from before, are not read).
 result_from_start <- function(start, interrupted) {
-  d <- length(start$state$phi)
-  nPost <- start$nPost
   list(draws = start$draws, logPost = start$logPost, logLik = start$logLik,
        kept = nrow(start$draws),
-       acceptance = if (nPost > 0) start$accSum / nPost else rep(NA_real_, d),
-       scaleAcceptance = if (nPost > 0) start$scaleAccSum / nPost else NA_real_,
-       done = start$state$iter - start$iter0, nPost = nPost,
+       done = start$state$iter - start$iter0, nPost = start$nPost,
        interrupted = interrupted, state = start$state)
 }
 
@@ -108,13 +105,12 @@ run_chain <- function(job, k, start) {
     logPost[seq_len(n0)] <- start$logPost
     logLik[seq_len(n0)] <- start$logLik
   }
-  cur <- list(state = start$state, kept = n0, accSum = start$accSum,
-              scaleAccSum = start$scaleAccSum, nPost = start$nPost, seed = genv$.Random.seed)
+  cur <- list(state = start$state, kept = n0, nPost = start$nPost, seed = genv$.Random.seed)
   snapshot <- function() {
     kept <- seq_len(cur$kept)
     list(state = cur$state, iter0 = start$iter0,
          draws = draws[kept, , drop = FALSE], logPost = logPost[kept], logLik = logLik[kept],
-         accSum = cur$accSum, scaleAccSum = cur$scaleAccSum, nPost = cur$nPost,
+         nPost = cur$nPost,
          finished = cur$state$iter >= stopAt(cur$state))
   }
   status <- "done"
@@ -192,12 +188,10 @@ chain_room <- function(start, job, stopAt) {
 }
 
 # The chain's bookkeeping after piece `r` of the compiled sampler: its state,
-# draws kept, acceptance sums over retained sweeps, and RNG state `seed`.
+# draws kept, retained sweeps, and RNG state `seed` (acceptance: the moves'
+# counts in the state).
 merge_piece <- function(cur, r, seed) {
-  post <- r$nPost > 0
   list(state = r$state, kept = cur$kept + r$kept,
-       accSum = if (post) cur$accSum + r$acceptance * r$nPost else cur$accSum,
-       scaleAccSum = if (post) cur$scaleAccSum + r$scaleAcceptance * r$nPost else cur$scaleAccSum,
        nPost = cur$nPost + r$nPost, seed = seed)
 }
 
@@ -231,7 +225,7 @@ chain_tick <- function(cx, cur, force = FALSE) {
   now <- proc.time()[["elapsed"]]
   if (!force && now - cx$lastTick < 0.25) return(invisible())
   cx$lastTick <- now
-  acc <- if (cur$nPost > 0) mean(cur$accSum / cur$nPost, na.rm = TRUE) else NA_real_
+  acc <- if (cur$nPost > 0) mean(move_acceptance(cur$state$moves, job$moves$params), na.rm = TRUE) else NA_real_
   job$progress(amount = 0, fbcChain = k, fbcDone = cur$state$iter - job$from[k],
                fbcAcceptance = acc, fbcBurn = in_warmup(cur$state, job$nBurn),
                fbcTotal = expected_stop(cur$state, job$target[k], job$post[k], job$nBurn) - job$from[k])

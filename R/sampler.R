@@ -62,13 +62,62 @@ sampler_moves <- function(sampler, spec, large = FALSE) {
 move_report <- function(fit) {
   ms <- lapply(fit$state$chains, function(s) s$sampler$moves)
   if (any(vapply(ms, is.null, logical(1)))) return(NULL)
-  first <- ms[[1]]
-  sum_of <- function(field) Reduce(`+`, lapply(ms, `[[`, field))
+  all <- pool_moves(ms)
   scale <- exp(Reduce(`+`, lapply(ms, function(m) log(m$scale))) / length(ms))
-  data.frame(move = first$name, kind = first$kind, parameters = first$params,
-             repeats = first$repeats,
-             acceptance = ifelse(sum_of("tries") > 0, sum_of("accepted") / sum_of("tries"), NA_real_),
+  data.frame(move = all$name, kind = all$kind, parameters = all$params,
+             repeats = all$repeats, acceptance = move_rates(all),
              scale = scale, stringsAsFactors = FALSE)
+}
+
+# The chains' move records (each chain's state$moves, the same schedule)
+# as one: accepted and tries summed over the chains.
+pool_moves <- function(ms) {
+  out <- ms[[1]]
+  out$accepted <- Reduce(`+`, lapply(ms, `[[`, "accepted"))
+  out$tries <- Reduce(`+`, lapply(ms, `[[`, "tries"))
+  out
+}
+
+# Each move's acceptance rate over the retained sweeps: accepted / tries
+# (NA before a retained try).
+move_rates <- function(moves) {
+  ifelse(moves$tries > 0, moves$accepted / moves$tries, NA_real_)
+}
+
+# The acceptance of each parameter of `vars` (named by them), from a moves
+# record (a chain's state$moves, or pool_moves() of all chains'): the rate
+# of the move that moves it (NA: fixed, or no retained try yet); the scale
+# move's rate apart, as attribute "scale" (NA without one). The compiled
+# sampler counts acceptance once, per move; this is the only place it
+# becomes per parameter. `moves` NULL (a fit from before moves were
+# reported): the rates `stored` kept (a chain's state: acceptance,
+# scaleAcceptance).
+move_acceptance <- function(moves, vars, stored = NULL) {
+  if (is.null(moves)) {
+    acc <- stored$acceptance %||% stats::setNames(rep(NA_real_, length(vars)), vars)
+    return(structure(acc, scale = stored$scaleAcceptance %||% NA_real_))
+  }
+  acc <- stats::setNames(rep(NA_real_, length(vars)), vars)
+  rate <- move_rates(moves)
+  scale <- NA_real_
+  for (i in seq_along(rate)) {
+    if (moves$kind[i] == "scale") {
+      scale <- rate[i]
+    } else {
+      acc[match(strsplit(moves$params[i], ",", fixed = TRUE)[[1]], vars)] <- rate[i]
+    }
+  }
+  structure(acc, scale = scale)
+}
+
+# The fit's acceptance per parameter (chain states `states`, see
+# new_fbc_chains()): that of the chains' moves pooled (the move report's,
+# print()); the mean of the chains' kept rates for chains from before moves
+# were reported.
+fit_acceptance <- function(states, vars) {
+  ms <- lapply(states, function(s) s$sampler$moves)
+  if (!any(vapply(ms, is.null, logical(1)))) return(c(move_acceptance(pool_moves(ms), vars)))
+  Reduce(`+`, lapply(states, function(s) s$acceptance)) / length(states)
 }
 
 # The proposal SD of each parameter of phi on its walk's scale, from a

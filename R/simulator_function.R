@@ -59,14 +59,15 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
                                algebra = algebra_codes[["dense"]], discrepancy, noise = src$noise,
                                simulator = function_closures(f, x, scale, nonFinite))
   alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
-              forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)")
+              forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)",
+              dims = NULL)
   design <- list(factors = list(), output = NULL, source = src$source, noise = src$noise,
                  noiseLabels = src$noiseLabels, levels = NULL, biasSource = NULL,
                  fieldRows = distinct_rows(dat$Xf))
   model <- new_fbc_model(
     data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
     kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,
-    algebra = alg, simAlgebra = list(name = "function", dims = NULL),
+    algebra = alg,
     moves = sampler_moves(sampler, spec, large = FALSE),
     options = list(algebra = "auto", neighbours = NULL, output = NULL, source = source,
                    sourceBias = "shared"),

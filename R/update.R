@@ -76,8 +76,7 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
       if (is.null(results[[k]])) {
         st <- states[[k]]
         results[[k]] <- list(draws = matrix(0, 0, length(st$last)), logPost = numeric(),
-                             logLik = numeric(), kept = 0L, acceptance = st$acceptance,
-                             scaleAcceptance = st$scaleAcceptance, done = 0L, nPost = 0L,
+                             logLik = numeric(), kept = 0L, done = 0L, nPost = 0L,
                              interrupted = TRUE, state = st$sampler)
       }
     }

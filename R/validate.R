@@ -195,19 +195,9 @@ emulator_folds <- function(folds, m, call = parent.frame()) {
 fbc_validate_block <- 10L
 
 heldout_draws <- function(fit, phis, labels) {
-  d <- fit$data
-  blocks <- split(seq_len(nrow(phis)), (seq_len(nrow(phis)) - 1L) %/% fbc_validate_block)
-  bar <- NULL
-  if (length(blocks) > 1L && (interactive() || isTRUE(getOption("FBC.progress")))) {
-    bar <- cli::cli_progress_bar("Validating", total = nrow(phis), clear = TRUE)
-  }
-  parts <- lapply(blocks, function(b) {
-    r <- .fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis[b, , drop = FALSE], fit$settings$nugget,
-                      labels, model = fit$spec$model)
-    if (!is.null(bar)) cli::cli_progress_update(id = bar, inc = length(b))
-    r
+  parts <- in_blocks(nrow(phis), fbc_validate_block, "Validating", function(b) {
+    at_draws(fit, .fbc_heldout, phis[b, , drop = FALSE], fold = labels)
   })
-  if (!is.null(bar)) cli::cli_progress_done(id = bar)
   list(mean = do.call(cbind, lapply(parts, `[[`, "mean")),
        var = do.call(cbind, lapply(parts, `[[`, "var")))
 }

@@ -34,7 +34,8 @@ enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
 // Correlation family codes, one per GP; R/correlation.R keeps the same table
 // (kernel_codes()).
-enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4 };
+// (KF_END: one past the last, so that a new family is one entry here.)
+enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4, KF_END };
 
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
@@ -57,7 +58,8 @@ struct VecchiaDesign {
 // GP of Gu and Wang (2018), S-GaSP: the bias GP's correlation R on the nu
 // distinct field inputs replaced by Rz = R - R (R + (nu / lambdaZ) I)^-1 R,
 // with mean 0 (no muB).
-enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2 };
+// (DS_END: one past the last code.)
+enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2, DS_END };
 
 // What a prediction is of (R/predict.R, type): a new field observation
 // (eta + delta + eps), the mean of the field (eta + delta), the simulator
@@ -312,6 +314,36 @@ protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
+
+  // The parameters a proposal overwrote and their old values, so that
+  // reject() puts them back: every subclass's propose() and proposeScale()
+  // go through saveSet() / saveScale(), its reject() through restore().
+  std::vector<int> oldIdx_;
+  arma::vec oldVal_;
+  // phi[idx[i]] = values[i] for every i, the old values saved.
+  void saveSet(const std::vector<int>& idx, const arma::vec& values) {
+    oldIdx_ = idx;
+    oldVal_.set_size(idx.size());
+    for (size_t i = 0; i < idx.size(); ++i) {
+      oldVal_[i] = phi[idx[i]];
+      phi[idx[i]] = values[i];
+    }
+  }
+  // phi[scaled] *= c, the old values saved.
+  void saveScale(double c) {
+    oldIdx_ = scaled;
+    oldVal_.set_size(scaled.size());
+    for (size_t i = 0; i < scaled.size(); ++i) {
+      oldVal_[i] = phi[scaled[i]];
+      phi[scaled[i]] *= c;
+    }
+  }
+  // The factor c of the pending scale move: new / old of its first variance.
+  double pendingScale() const { return phi[oldIdx_[0]] / oldVal_[0]; }
+  // Put back what the pending proposal overwrote.
+  void restore() {
+    for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
+  }
 };
 
 // The one per-draw loop of the entry points that evaluate the posterior at
@@ -386,8 +418,6 @@ protected:
 
 private:
   Touch touch_;
-  std::vector<int> oldIdx_;
-  arma::vec oldVal_;
   std::vector<Buf2<arma::mat> > Pfs_, Pfb_;
   std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
   std::vector<arma::mat> Gfb_; // ... for the bias GP's family when it differs
@@ -574,8 +604,6 @@ private:
   std::vector<std::unique_ptr<Posterior> > sub_;
   std::vector<double> llo_, llNew_;
   std::vector<char> touched_;
-  std::vector<int> oldIdx_;
-  arma::vec oldVal_;
   double ll_ = 0.0, llProp_ = 0.0;
   bool scaleMove_ = false;
   void sub_model(const Model& model, int o, Model& sub);

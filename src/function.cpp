@@ -53,14 +53,10 @@ public:
   double logLik() const override { return loglik_.cur(); }
 
   double propose(const std::vector<int>& idx, const arma::vec& values) override {
-    oldIdx_ = idx;
-    oldVal_.set_size(idx.size());
+    saveSet(idx, values);
     tk_ = tb_ = tf_ = sc_ = false;
     for (size_t i = 0; i < idx.size(); ++i) {
-      const int j = idx[i];
-      oldVal_[i] = phi[j];
-      phi[j] = values[i];
-      switch (layout.cls[j]) {
+      switch (layout.cls[idx[i]]) {
       case PC_KAPPA: tk_ = true; break;
       case PC_THETAB: case PC_ALPHAB: case PC_LAMBDAZ: tb_ = tf_ = true; break;
       case PC_SIGMA2B: case PC_SIGMA2E: tf_ = true; break;
@@ -72,12 +68,7 @@ public:
 
   // S -> c S: log|S| + n log c, v'v / c (the variances sigma2B, sigma2E).
   double proposeScale(double c) override {
-    oldIdx_ = scaled;
-    oldVal_.set_size(scaled.size());
-    for (size_t i = 0; i < scaled.size(); ++i) {
-      oldVal_[i] = phi[scaled[i]];
-      phi[scaled[i]] *= c;
-    }
+    saveScale(c);
     tk_ = tb_ = tf_ = false;
     sc_ = true;
     if (!(c > 0) || !std::isfinite(c)) return R_NegInf;
@@ -88,12 +79,10 @@ public:
   }
 
   void accept() override {
-    if (sc_) LS_.alt() = std::sqrt(phi[oldIdx_[0]] / oldVal_[0]) * LS_.cur();
+    if (sc_) LS_.alt() = std::sqrt(pendingScale()) * LS_.cur();
     flip();
   }
-  void reject() override {
-    for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
-  }
+  void reject() override { restore(); }
 
   // a = LS^-1 1, b = LS^-1 (yf - fs): the log-likelihood is
   // -0.5 |b - muB a|^2 + const.
@@ -140,8 +129,6 @@ private:
   std::vector<int> grp_, noise_;
   Rcpp::Function fieldFn_, atFn_;
   bool tk_ = false, tb_ = false, tf_ = false, sc_ = false;
-  std::vector<int> oldIdx_;
-  arma::vec oldVal_;
   Buf2<arma::vec> f_;
   Buf2<arma::mat> Rb_, LS_;
   Buf2<double> ldS_, vv_, loglik_;

@@ -18,10 +18,10 @@
 //   power exponential, Gaussian: s += theta t,  r = exp(-s);
 //   Matern:  a = sqrt(3 or 5) sqrt(theta) t,  s += a,  w *= poly(a),
 //            r = w exp(-s)  (poly(a) = 1 + a, or 1 + a + a^2 / 3).
-// A new family adds its case to these helpers and to check_kernel().
+// A new family adds its case to these helpers.
 
 void check_kernel(int kern) {
-  if (kern < KF_POWEXP || kern > KF_MATERN52)
+  if (kern < KF_POWEXP || kern >= KF_END)
     Rcpp::stop("unknown correlation family code %d", kern);
 }
 

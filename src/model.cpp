@@ -146,7 +146,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
   out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
-  if (out.discrepancy != DS_GP && out.discrepancy != DS_NONE && out.discrepancy != DS_SGASP)
+  if (out.discrepancy < DS_GP || out.discrepancy >= DS_END)
     Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
   // what each class expands over: q, p + q, p or one; the bias classes
   // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
@@ -339,27 +339,16 @@ bool SchurPosterior::init(const arma::vec& phi0) {
 }
 
 double SchurPosterior::propose(const std::vector<int>& idx, const arma::vec& values) {
-  const int k = idx.size();
-  oldIdx_ = idx;
-  oldVal_.set_size(k);
+  saveSet(idx, values);
   touch_.reset(p + q, p);
-  for (int i = 0; i < k; ++i) {
-    oldVal_[i] = phi[idx[i]];
-    phi[idx[i]] = values[i];
-    add_touch(idx[i], touch_);
-  }
+  for (size_t i = 0; i < idx.size(); ++i) add_touch(idx[i], touch_);
   return evaluate(touch_);
 }
 
 // C -> c C: log|Ds| and z'z are unchanged, S -> c S (LS -> sqrt(c) LS,
 // log|S| + n log c, v'v / c) and sigma2S -> c sigma2S.
 double SchurPosterior::proposeScale(double c) {
-  oldIdx_ = scaled;
-  oldVal_.set_size(scaled.size());
-  for (size_t i = 0; i < scaled.size(); ++i) {
-    oldVal_[i] = phi[scaled[i]];
-    phi[scaled[i]] *= c;
-  }
+  saveScale(c);
   touch_.reset(p + q, p);
   touch_.scale = true;
   const double s2S = phi[iSigma2S];
@@ -374,14 +363,14 @@ double SchurPosterior::proposeScale(double c) {
 
 void SchurPosterior::accept() {
   if (touch_.scale) {
-    const double c = phi[oldIdx_[0]] / oldVal_[0];  // sigma2S comes first
+    const double c = pendingScale();  // sigma2S comes first
     LS_.alt() = std::sqrt(c) * LS_.cur();
   }
   flip(touch_);
 }
 
 void SchurPosterior::reject() {
-  for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
+  restore();
 }
 
 void SchurPosterior::muBQuadratic(double& aa, double& ab) const {

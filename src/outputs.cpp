@@ -120,15 +120,12 @@ bool OutputsPosterior::init(const arma::vec& phi0) {
 // Each touched output proposes its own parameters among idx; log L moves by
 // the touched outputs' changes.
 double OutputsPosterior::propose(const std::vector<int>& idx, const arma::vec& values) {
-  oldIdx_ = idx;
-  oldVal_.set_size(idx.size());
+  saveSet(idx, values);
   scaleMove_ = false;
   std::vector<std::vector<int> > li(K_);
   std::vector<std::vector<double> > lv(K_);
   for (size_t i = 0; i < idx.size(); ++i) {
     const int j = idx[i];
-    oldVal_[i] = phi[j];
-    phi[j] = values[i];
     for (int o = 0; o < K_; ++o)
       if (owner_[j] == -1 || owner_[j] == o) { li[o].push_back(local_[j]); lv[o].push_back(values[i]); }
   }
@@ -144,12 +141,7 @@ double OutputsPosterior::propose(const std::vector<int>& idx, const arma::vec& v
 
 // Every output's variances times c.
 double OutputsPosterior::proposeScale(double c) {
-  oldIdx_ = scaled;
-  oldVal_.set_size(scaled.size());
-  for (size_t i = 0; i < scaled.size(); ++i) {
-    oldVal_[i] = phi[scaled[i]];
-    phi[scaled[i]] *= c;
-  }
+  saveScale(c);
   scaleMove_ = true;
   llProp_ = 0.0;
   for (int o = 0; o < K_; ++o) {
@@ -170,7 +162,7 @@ void OutputsPosterior::accept() {
 void OutputsPosterior::reject() {
   for (int o = 0; o < K_; ++o)
     if (touched_[o]) sub_[o]->reject();
-  for (size_t i = 0; i < oldIdx_.size(); ++i) phi[oldIdx_[i]] = oldVal_[i];
+  restore();
 }
 
 // The exact muB draw moves the first output's muB (iMuB), its quadratic.

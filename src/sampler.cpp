@@ -262,7 +262,6 @@ struct Move {
   std::string name;
   std::vector<int> idx;     // the parameters it moves (0-based, in phi)
   int repeats = 1;
-  double accPiece = 0;      // acceptances / repeats over this call's retained sweeps
   double accepted = 0, tries = 0;  // over retained sweeps of every piece of the run
   virtual ~Move() {}
   virtual bool step(Chain& ch) = 0;
@@ -576,7 +575,7 @@ static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
       if (acc) mv->batchCount() += 1.0 / mv->repeats;
       if (!burn) {
         mv->tries += 1;
-        if (acc) { mv->accepted += 1; mv->accPiece += 1.0 / mv->repeats; }
+        if (acc) mv->accepted += 1;
       }
     }
   }
@@ -750,21 +749,14 @@ static Schedule start_chain(Chain& ch, const Rcpp::List& moves, const Rcpp::List
 
 // The result of a call (the chain-result record of one piece; R's
 // result_from_start() builds the run's from it): the `kept` retained draws
-// (the first rows of draws, logPost, logLik), the acceptance of each
-// parameter over this call's `nPost` retained sweeps (that of the move that
-// moves it; the scale move's apart), the sweeps done and the state.
+// (the first rows of draws, logPost, logLik), the retained sweeps `nPost`,
+// the sweeps done and the state (acceptance: each move's counts in the
+// state's `moves`, the only count; R's move_acceptance() reads them).
 static Rcpp::List piece_result(const Chain& ch, const Schedule& schedule,
                                const Rcpp::List& state, Rcpp::NumericMatrix draws,
                                Rcpp::NumericVector logPost, Rcpp::NumericVector logLik,
                                int kept, int nPost, int done, bool interrupted) {
   const int d = ch.post.d, nKeep = draws.nrow();
-  Rcpp::NumericVector acceptance(d, NA_REAL);
-  double scaleAcceptance = NA_REAL;
-  for (auto& mv : schedule) {
-    const double a = nPost > 0 ? mv->accPiece / nPost : NA_REAL;
-    if (std::string(mv->kind()) == "scale") scaleAcceptance = a;
-    else for (int j : mv->idx) acceptance[j] = a;
-  }
   if (kept < nKeep) {  // a warm-up that ended in this piece
     Rcpp::NumericMatrix cut(kept, d);
     for (int j = 0; j < d; ++j)
@@ -776,8 +768,6 @@ static Rcpp::List piece_result(const Chain& ch, const Schedule& schedule,
   return Rcpp::List::create(
     Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
     Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
-    Rcpp::Named("acceptance") = acceptance,
-    Rcpp::Named("scaleAcceptance") = scaleAcceptance,
     Rcpp::Named("done") = done, Rcpp::Named("nPost") = nPost,
     Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = write_chain(ch, schedule, state));
 }

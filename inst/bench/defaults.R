@@ -113,7 +113,7 @@ row_of <- function(problem, fit, cpu, truth, peer = NA_real_) {
              max.rhat = round(max(est$rhat, na.rm = TRUE), 3),
              min.ess = round(min(est$ess, na.rm = TRUE)),
              covers = all(mapply(function(j, t) covers(fit$Phi[, j], t), kap, truth)),
-             algebra = (fit$model %||% s)$simAlgebra$name,
+             algebra = fit$model$algebra$name,
              robustcal.s = round(peer, 1))
 }
 # ---------------------------------------------------------------- problems --

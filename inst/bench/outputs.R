@@ -44,7 +44,7 @@ run <- function(sim, field, output) {
                                               maxMCMC = if (quick) 400 else 30000))
   cpu <- sum((proc.time() - t0)[c(1, 2, 4, 5)], na.rm = TRUE)
   q <- apply(fit$Phi[, 1:2], 2, quantile, c(0.05, 0.95))
-  data.frame(m = nrow(sim), outputs = if (is.null(output)) "one" else outputs, algebra = fit$model$simAlgebra$name, nBurn = fit$settings$nBurn,
+  data.frame(m = nrow(sim), outputs = if (is.null(output)) "one" else outputs, algebra = fit$model$algebra$name, nBurn = fit$settings$nBurn,
              converged = fit$settings$converge$converged, sweeps = fit$settings$nMCMC,
              cpu.s = cpu, max.rhat = max(fit$estimates$rhat, na.rm = TRUE),
              min.ess = min(fit$estimates$ess, na.rm = TRUE),

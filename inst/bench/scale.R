@@ -126,7 +126,7 @@ helpers <- function() {
       ch[i] <- t_chol(n + m, budget = 0.5)
     }
     data.frame(case = name, kernel = kernel %||% "powexp", n = n, m = m,
-               algebra = fit$model$simAlgebra$name,
+               algebra = fit$model$algebra$name,
                sweeps = per * chunks, `ms/sweep` = stats::median(ms),
                `chol ms` = stats::median(ch), ratio = stats::median(ms / ch),
                `peak MB` = peak_mb(), blas = FBC:::blas_kind(), check.names = FALSE)

@@ -77,7 +77,7 @@ bench <- function(name, sim, field, nMCMC, nBurn) {
   old_s <- cpu_of(o <- old_heldout(fit, phi))
   sc <- fit$scale
   diff <- max(abs(v$runs$mean - (sc$ymean + sc$ysd * o$mean)), abs(v$runs$sd - sc$ysd * o$sd)) / sc$ysd
-  data.frame(case = name, m = nrow(fit$data$Xs), algebra = fit$model$simAlgebra$name,
+  data.frame(case = name, m = nrow(fit$data$Xs), algebra = fit$model$algebra$name,
              folds = v$nFolds, new_cpu_s = round(new_s, 2), old_cpu_s = round(old_s, 2),
              max_rel_diff = signif(diff, 2))
 }

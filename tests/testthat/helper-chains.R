@@ -37,8 +37,15 @@ fake_interrupt_sampler <- function(stopAt, calls = 1L) {
 run_sampler <- function(dat, sp, sampler, nIter, nBurn, thinning, state = NULL) {
   moves <- FBC:::sampler_moves(sampler, sp)
   state <- state %||% FBC:::initial_state(sp$init, sp)
-  FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), moves, state,
-                    nIter, nBurn, thinning, 1e-6, NULL, model = sp$model)
+  res <- FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(sp$table), moves, state,
+                           nIter, nBurn, thinning, 1e-6, NULL, model = sp$model)
+  # each parameter's acceptance, from the moves' counts (the sampler's only)
+  d <- length(state$phi)
+  vars <- if (length(moves$params) == d) moves$params else paste0("phi", seq_len(d))
+  acc <- FBC:::move_acceptance(res$state$moves, vars)
+  res$acceptance <- unname(c(acc))
+  res$scaleAcceptance <- attr(acc, "scale")
+  res
 }
 `%||%` <- function(x, y) if (is.null(x)) y else x
 

@@ -60,7 +60,7 @@ test_that("a named algebra is used as asked, and neighbours without Vecchia gets
 test_that("print() says which algebra ran and why", {
   set.seed(3)
   fit <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 10, nChains = 1, discrepancy = "none")
-  expect_identical(fit$model$simAlgebra$name, "dense")
+  expect_identical(fit$model$algebra$name, "dense")
   # the projected cost depends on the BLAS (0.00065 s on the reference one)
   expect_output(print(fit), "algebra: dense: exact; projected at about [0-9.]+ s a sweep \\(m \\+ n = 163; under 0.1 s\\)")
   # a fit made before the reason was kept prints the old line

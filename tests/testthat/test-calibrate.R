@@ -243,7 +243,7 @@ test_that("large dense problems move each kappa and the simulator block once a s
   sim <- cbind(y = sin(3 * X[, 1]) + X[, 2], x = X[, 1], t = X[, 2])
   field <- cbind(y = sin(3 * c(0.2, 0.5, 0.8)) + 0.5, x = c(0.2, 0.5, 0.8))
   fit <- suppressMessages(calibrate(sim, field, nMCMC = 4, nBurn = 2, thinning = 1, nChains = 1))
-  expect_identical(fit$model$simAlgebra$name, "dense")
+  expect_identical(fit$model$algebra$name, "dense")
   expect_identical(fit$model$moves$repeats, c(1L, 1L, 2L))
 })
 

@@ -17,6 +17,14 @@ skip_if_not_reference_blas <- function() {
 # (with FBC 0.1.0's kernels and noise prior, as the fixtures were made)
 old_args <- c(list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2), defaults_010)
 
+# The simulator algebra as formats 3 to 5 kept it beside the choice (the
+# retired sim_algebra_info()): name capitalised, the product design's dims.
+old_sim_algebra <- function(a) {
+  switch(a$name, kronecker = list(name = "Kronecker", dims = a$dims),
+         vecchia = list(name = "Vecchia", dims = NULL, k = a$neighbours),
+         list(name = a$name, dims = NULL))
+}
+
 # A current fit as format 3 wrote it: no model object, the model's choices
 # among the settings.
 as_format_3 <- function(fit) {
@@ -24,7 +32,7 @@ as_format_3 <- function(fit) {
   fit$settings <- c(fit$settings[c("nMCMC", "nBurn", "thinning", "nChains", "nugget")],
                     list(sampler = m$sampler, moves = m$moves, time = fit$settings$time,
                          checkpoint = fit$settings$checkpoint, algebra = m$options$algebra,
-                         simAlgebra = m$simAlgebra, kernelS = m$kernelS, kernelB = m$kernelB,
+                         simAlgebra = old_sim_algebra(m$algebra), kernelS = m$kernelS, kernelB = m$kernelB,
                          discrepancy = m$discrepancy, output = m$options$output,
                          source = m$options$source, sourceBias = m$options$sourceBias))
   fit$model <- NULL
@@ -35,7 +43,7 @@ as_format_3 <- function(fit) {
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 5L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 6L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
@@ -61,7 +69,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   expect_identical(up$model$discrepancy, "gp")
   expect_identical(up$spec$model, fit$spec$model)
   expect_identical(up$Phi, fit$Phi)
-  expect_identical(up$version$format, 5L)
+  expect_identical(up$version$format, 6L)
   # a fit without a bias validates; its layout is the "none" one
   set.seed(2)
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
@@ -115,7 +123,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 5L)
+    expect_identical(fit$version$format, 6L)
     expect_identical(FBC:::validate_fbc(fit), fit)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
@@ -159,7 +167,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(old$version$format, 2L)
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 5L)
+  expect_identical(fit$version$format, 6L)
   expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
@@ -187,10 +195,11 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(old$version$format, 3L)
   expect_null(old$model)
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 5L)
+  expect_identical(fit$version$format, 6L)
   expect_s3_class(fit$model, "fbc_model")
   expect_identical(fit$model$moves, old$settings$moves)
-  expect_identical(fit$model$simAlgebra, old$settings$simAlgebra)
+  expect_identical(fit$model$algebra$dims, old$settings$simAlgebra$dims)
+  expect_identical(fit$model$algebra$name, tolower(old$settings$simAlgebra$name))
   expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy", "sampler")],
                    old$settings[c("kernelS", "kernelB", "discrepancy", "sampler")])
   expect_identical(names(fit$settings),
@@ -211,8 +220,10 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   back <- FBC:::upgrade_fbc(as_format_3(now))
   # (settings$warmup, each chain's warm-up, is newer than format 3)
   expect_identical(back$settings, now$settings[setdiff(names(now$settings), "warmup")])
-  expect_identical(back$model[c("spec", "moves", "simAlgebra", "kernelS", "discrepancy", "dims", "classes")],
-                   now$model[c("spec", "moves", "simAlgebra", "kernelS", "discrepancy", "dims", "classes")])
+  expect_identical(back$model[c("spec", "moves", "kernelS", "discrepancy", "dims", "classes")],
+                   now$model[c("spec", "moves", "kernelS", "discrepancy", "dims", "classes")])
+  keep <- c("name", "code", "neighbours", "dims")
+  expect_identical(back$model$algebra[keep], now$model$algebra[keep])
   expect_identical(back$model$design$fieldRows, now$model$design$fieldRows)
   # the same call and seed today: the same draws, to the bit (on the BLAS
   # the fixture was made with)
@@ -244,7 +255,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 5L)
+    expect_identical(up$version$format, 6L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -301,13 +312,33 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 5L)
+  expect_identical(fit$version$format, 6L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L
   saveRDS(run, file.path(dir, "run.rds"))
   expect_error(do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
                "written by another version of FBC")
+})
+
+test_that("a fit of format 5 is upgraded to one algebra record, the model it was (issue 28)", {
+  # a product design: the Kronecker algebra, 5 x 5 settings
+  g <- expand.grid(x = (1:5) / 6, t = seq(0.5, 3, length.out = 5))
+  sim <- data.frame(y = exp(-g$t * g$x), x = g$x, t = g$t)
+  field <- data.frame(y = exp(-1.7 * (1:4) / 5), x = (1:4) / 5)
+  set.seed(1)
+  fit <- calibrate(sim, field, nMCMC = 40, nBurn = 10, nChains = 1)
+  expect_identical(fit$model$algebra[c("name", "dims")], list(name = "kronecker", dims = c(5L, 5L)))
+  expect_null(fit$model$simAlgebra)
+  # format 5 kept the algebra twice: the choice without dims, and what ran
+  old <- fit
+  old$version$format <- 5L
+  old$model$simAlgebra <- list(name = "Kronecker", dims = c(5L, 5L))
+  old$model$algebra$dims <- NULL
+  up <- FBC:::upgrade_fbc(old)
+  expect_identical(up$version$format, 6L)
+  expect_identical(up$model, fit$model)
+  expect_output(print(up), "algebra: Kronecker, 5 x 5", fixed = TRUE)
 })
 
 test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", the model it was", {
@@ -323,7 +354,7 @@ test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", t
   old$version$format <- 4L
   old$model$options$outputs <- NULL
   up <- FBC:::upgrade_fbc(old)
-  expect_identical(up$version$format, 5L)
+  expect_identical(up$version$format, 6L)
   expect_identical(up$model$options$outputs, "shared")
   expect_identical(up$call$outputs, "shared")
   expect_equal(predict(up, data.frame(x = 0.5, out = "a"))$pred,

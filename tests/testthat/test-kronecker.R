@@ -216,14 +216,14 @@ test_that("calibrate() uses the Kronecker algebra on a product design and says s
   set.seed(13)
   fit <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1)
   expect_identical(fit$model$options$algebra, "auto")
-  expect_identical(fit$model$simAlgebra[c("name", "dims")], list(name = "Kronecker", dims = c(6L, 5L)))
+  expect_identical(fit$model$algebra[c("name", "dims")], list(name = "kronecker", dims = c(6L, 5L)))
   out <- capture.output(print(fit))
   expect_true(any(out == "  algebra: Kronecker, 6 x 5 (experimental x calibration settings): exact; the runs are a product design, so no m x m matrix is formed"))
   # the dense algebra on request: the same chain (the same posterior, the
   # same random numbers) up to rounding
   set.seed(13)
   dense <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1, algebra = "dense")
-  expect_identical(dense$model$simAlgebra$name, "dense")
+  expect_identical(dense$model$algebra$name, "dense")
   expect_true(any(startsWith(capture.output(print(dense)), "  algebra: dense: as asked (`algebra = \"dense\"`)")))
   expect_equal(dense$Phi, fit$Phi, tolerance = 1e-6)
   # prediction goes through the fit's algebra
@@ -231,7 +231,7 @@ test_that("calibrate() uses the Kronecker algebra on a product design and says s
   # a near-product design (one run missing) falls back to the dense algebra
   set.seed(13)
   near <- calibrate(sim[-4, ], field, nMCMC = 60, nBurn = 20, nChains = 1)
-  expect_identical(near$model$simAlgebra$name, "dense")
+  expect_identical(near$model$algebra$name, "dense")
 })
 
 test_that("kappa draws on a product design match the grid posterior", {
@@ -259,7 +259,7 @@ test_that("kappa draws on a product design match the grid posterior", {
   # (the power exponential: the data are drawn from it, dense_cov())
   fit <- calibrate(sim, field, nMCMC = 8000, nBurn = 1000, thinning = 2, nChains = 2,
                    hypers = hyp, kernelS = "powexp", kernelB = "powexp")
-  expect_identical(fit$model$simAlgebra$name, "Kronecker")
+  expect_identical(fit$model$algebra$name, "kronecker")
   d <- fit$data
   # 7000 draws of kappa (ESS a few thousand): quantile errors ~0.03 sd
   expect_kappa_grid(fit, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6),

@@ -209,7 +209,7 @@ test_that("validate_emulator() on a product design goes through the Kronecker al
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi, d = product_koh_data(5, 7, n = 7, seed = 11))
-  expect_identical(fit$model$simAlgebra[c("name", "dims")], list(name = "Kronecker", dims = c(5L, 7L)))
+  expect_identical(fit$model$algebra[c("name", "dims")], list(name = "kronecker", dims = c(5L, 7L)))
   sc <- fit$scale
   th <- unpack_phi(phi, 2, 1)
   m <- length(fit$data$ys)

@@ -98,7 +98,7 @@ test_that("with few neighbours the kappa draws match the approximation's own gri
   set.seed(16)
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
                    hypers = hyp, kernelS = "matern52", algebra = "vecchia", neighbours = 5)
-  expect_identical(fit$model$simAlgebra$name, "Vecchia")
+  expect_identical(fit$model$algebra$name, "vecchia")
   expect_identical(fit$spec$model$vecchia$k, 5L)
   d <- fit$data
   expect_kappa_grid(fit, function(phi) {
