@@ -69,6 +69,15 @@
 #'   row of `x`. It is called once per proposal of kappa with all the field
 #'   rows (never once per point), and at the new inputs by [predict.fbc()]
 #'   (once per draw); the rest of a sweep is compiled code.
+#' * Besides its adapted random walk, each \eqn{\kappa_l} makes a jump
+#'   move once a sweep: an independence proposal drawn from its uniform
+#'   prior, accepted with the likelihood ratio (exact Metropolis-Hastings,
+#'   not adapted; one more call of `f` a sweep, reported by `print()` as
+#'   `"kappa1 jump"`). A walk adapted within one mode rarely leaves it; the
+#'   jump visits every mode of a multimodal posterior. On
+#'   RobustCalibration's documented example (`sin(theta x) + x`, no
+#'   discrepancy; a second mode near 0.27 holding 18% of the mass) it
+#'   finds both modes on every seed tried (`inst/bench/RESULTS-function.md`).
 #' * The calibration inputs come from the kappa prior:
 #'   `kappaDist = "uniform", kappaP1 = lower, kappaP2 = upper`, one entry
 #'   per input; a named `kappaP1` (or `kappaP2`) names them (else `kappa1`,

@@ -13,8 +13,18 @@
 # exact draw of the "gibbs" class (when it has a parameter). `large`: a
 # large simulator block on the dense algebra, where a move of the simulator
 # block costs a Cholesky factor of it and a kappa move an m x m x n
-# triangular solve: each moves once a sweep.
-sampler_moves <- function(sampler, spec, large = FALSE) {
+# triangular solve: each moves once a sweep. `jump`: also a jump move of
+# each free kappa with a uniform prior (an independence proposal from its
+# prior, once a sweep after the walks: `jump`, 1-based in phi), the default
+# for a simulator function, whose multimodal kappa posteriors a walk
+# adapted within one mode rarely leaves (issue 29).
+sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
+  if (jump) {
+    out <- sampler_moves(sampler, spec, large)
+    fam <- names(prior_families)[match(spec$table$family, prior_families)]
+    out$jump <- which(spec$classes == "kappa" & fam == "uniform")
+    return(out)
+  }
   if (sampler == "single") {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
                 params = spec$vars))

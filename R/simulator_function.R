@@ -67,7 +67,7 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
     data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
     kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,
     algebra = alg, simAlgebra = list(name = "function", dims = NULL),
-    moves = sampler_moves(sampler, spec, large = FALSE),
+    moves = sampler_moves(sampler, spec, large = FALSE, jump = TRUE),
     options = list(algebra = "auto", neighbours = NULL, output = NULL, source = source,
                    sourceBias = "shared"),
     call = modelCall)

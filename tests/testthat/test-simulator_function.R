@@ -37,6 +37,61 @@ test_that("discrepancy none, sigma2E fixed: theta's draws match the grid posteri
   expect_lt(ks, 0.06)
 })
 
+# RobustCalibration's own documented example (?rcalibration, simul_type =
+# 1): reality x cos(1.5 x) + x, 15 points, noise sd 0.1, set.seed(1); the
+# model sin(theta x) + x, theta in [0, 3]. With no discrepancy theta's
+# posterior is bimodal: a main mode near 1.87 and a small one near 0.27.
+rc_example <- function() {
+  set.seed(1)
+  x <- seq(0, 5, 5 / 14)
+  data.frame(y = x * cos(3 / 2 * x) + x + stats::rnorm(15, 0, 0.1), x = x)
+}
+
+test_that("the bimodal example: the default run's theta matches the grid posterior, small mode included", {
+  field <- rc_example()
+  # plain R: theta uniform on [0, 3]; on the scaled response (divided by
+  # sd(y), ?calibrate) the noise sd s is half-Cauchy(0, 1) (sigma2E's
+  # default halft_sd(1, 1)), integrated out on a grid of log s
+  ysd <- stats::sd(field$y)
+  th <- seq(0, 3, length.out = 3001)
+  ls <- seq(log(1e-3), log(10), length.out = 2001)
+  lps <- log(2 / pi) - log1p(exp(2 * ls)) + ls  # log density of log s
+  lpost <- vapply(th, function(t) {
+    ss <- sum(((field$y - fn_model(field, c(theta = t))) / ysd)^2)
+    l <- -nrow(field) * ls - ss / (2 * exp(2 * ls)) + lps
+    max(l) + log(sum(exp(l - max(l))))
+  }, numeric(1))
+  dens <- exp(lpost - max(lpost))
+  small <- sum(dens[th < 1]) / sum(dens)  # 0.179: the small mode's mass
+  expect_gt(small, 0.15)
+  set.seed(2)  # the seed whose run missed the small mode before the jump move
+  fit <- do.call(calibrate, c(list(fn_model, field, discrepancy = "none", showProgress = FALSE),
+                              fn_kappa))
+  expect_true(fit$settings$converge$converged)
+  draws <- fit$Phi[, "kappa1"]
+  # the small mode's mass within 4 Monte Carlo standard errors (the
+  # indicator's ESS over the chains)
+  ind <- matrix(as.numeric(draws < 1), ncol = fit$settings$nChains)
+  mcse <- sqrt(small * (1 - small) / posterior::ess_basic(ind))
+  expect_lt(abs(mean(draws < 1) - small), 4 * mcse)
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  got <- stats::quantile(draws, probs, names = FALSE)
+  expect_lt(max(abs(got - grid_quantile(th, dens, probs))), 0.1)
+  ks <- suppressWarnings(stats::ks.test(draws, grid_cdf(th, dens))$statistic)
+  expect_lt(ks, 0.06)
+  # the jump move is reported by name; set.seed() reproduces a run
+  mv <- FBC:::move_report(fit)
+  jump <- mv[mv$move == "kappa1 jump", ]
+  expect_identical(jump$kind, "jump")
+  expect_true(jump$acceptance > 0.02 && jump$acceptance < 0.5)
+  short <- function() {
+    set.seed(5)
+    do.call(calibrate, c(list(fn_model, field, discrepancy = "none", nMCMC = 300, nBurn = 100,
+                              nChains = 2, showProgress = FALSE), fn_kappa))$Phi
+  }
+  expect_identical(short(), short())
+})
+
 # The log-likelihood of the function model in plain R: yf - muB - fs ~
 # N(0, sigma2B Rb + sigma2E I) on the scaled space (Rb: matern52 over the
 # scaled inputs; S-GaSP: its discretized kernel; none: sigma2E I).
@@ -112,9 +167,10 @@ test_that("f is called once per kappa proposal, with every field row", {
   fit <- do.call(calibrate, c(list(f, field, discrepancy = "gp", nMCMC = 200, nBurn = 100,
                                    nChains = 1, thinning = 1), fn_kappa))
   expect_true(all(rows == nrow(field)))
-  # kappa moves three times a sweep (sampler_moves()); the other moves reuse
-  # f's value: 200 sweeps x 3 proposals, plus the start's and the scaling's calls
-  tries <- 200 * 3
+  # kappa's walk moves three times a sweep and its jump once
+  # (sampler_moves(jump = TRUE)); the other moves reuse f's value: 200
+  # sweeps x 4 proposals, plus the start's and the scaling's calls
+  tries <- 200 * 4
   expect_gte(calls, tries)
   expect_lte(calls, tries + 5L)
 })
