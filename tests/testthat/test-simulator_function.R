@@ -288,7 +288,7 @@ test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; v
   expect_snapshot(error = TRUE, validate_emulator(fit))
 })
 
-test_that("a matrix field gives f a matrix; converge runs until its rule; output and source are refused", {
+test_that("a matrix field gives f a matrix; converge runs until its rule; output needs a data frame", {
   field <- as.matrix(fn_field(n = 8))
   seen <- NULL
   f <- function(x, kappa) {
@@ -307,7 +307,55 @@ test_that("a matrix field gives f a matrix; converge runs until its rule; output
   # predict() hands f the new inputs the same way
   pr <- predict(fit, c(1, 2), type = "simulator", method = "MAP")
   expect_identical(dim(seen), c(2L, 1L))
-  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", fit = FALSE), fn_kappa)))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", discrepancy = "none",
+                                                          fit = FALSE), fn_kappa)))
+})
+
+test_that("several outputs (output, no discrepancy): f sees the output column; log-likelihood, predict() against plain R", {
+  # two outputs of one theta in long format, each with its own noise sd
+  set.seed(11)
+  x <- rep(seq(0, 5, length.out = 8), 2)
+  o <- factor(rep(c("level", "slope"), each = 8))
+  g <- function(x, theta, o) ifelse(o == "level", sin(theta * x) + x, 2 * cos(theta * x))
+  field <- data.frame(y = g(x, 1.2, o) + stats::rnorm(16, 0, ifelse(o == "level", 0.2, 0.4)),
+                      x = x, out = o)
+  seen <- NULL
+  f <- function(x, kappa) {
+    seen <<- x
+    ifelse(x$out == "level", sin(kappa[["theta"]] * x$x) + x$x, 2 * cos(kappa[["theta"]] * x$x))
+  }
+  model <- do.call(calibrate, c(list(f, field, output = "out", discrepancy = "none", fit = FALSE),
+                                fn_kappa))
+  expect_identical(names(seen), c("x", "out"))
+  expect_identical(seen$out, o)
+  expect_identical(model$spec$vars, c("kappa1", "sigma2E1", "sigma2E2"))
+  expect_identical(model$scale$noiseLabels, c("level", "slope"))
+  # plain R: each output standardised on its own, by the mean of f at the
+  # prior's centre (theta = 1.5) and the sd of its field response; a noise
+  # variance each; phi = (theta / 3, sigma2E1, sigma2E2)
+  ym <- tapply(g(x, 1.5, o), o, mean)
+  ys <- tapply(field$y, o, stats::sd)
+  ref_ll <- function(phi) {
+    sum(stats::dnorm((field$y - ym[o]) / ys[o], (g(x, 3 * phi[1], o) - ym[o]) / ys[o],
+                     sqrt(phi[2:3][o]), log = TRUE))
+  }
+  phis <- cbind(c(0.2, 0.4, 0.7), c(0.3, 0.1, 1), c(0.5, 2, 0.05))
+  d <- model$data
+  got <- apply(phis, 1, function(phi) FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6,
+                                                         model = model$spec$model))
+  expect_equal(got, apply(phis, 1, ref_ll), tolerance = 1e-8)
+  set.seed(12)
+  fit <- do.call(calibrate, c(list(f, field, output = "out", discrepancy = "none", nChains = 2,
+                                   nMCMC = 600, nBurn = 200, showProgress = FALSE), fn_kappa))
+  expect_lt(abs(stats::median(fit$Phi[, "kappa1"]) - 1.2), 0.1)
+  # type = "simulator" is f itself (no emulator), per output in native units
+  new <- data.frame(x = c(0.5, 2.5, 4), out = c("slope", "level", "slope"))
+  pr <- predict(fit, new, type = "simulator", method = "MAP")
+  th <- fit$Phi[which.max(fit$logPost), "kappa1"]
+  expect_equal(pr$pred, g(new$x, th, new$out), tolerance = 1e-10)
+  expect_identical(as.character(seen$out), new$out)
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "out", fit = FALSE),
+                                                     fn_kappa)))
 })
 
 test_that("several field data sets (source): a noise variance each, one shared bias", {
