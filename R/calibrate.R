@@ -69,6 +69,15 @@
 #'   row of `x`. It is called once per proposal of kappa with all the field
 #'   rows (never once per point), and at the new inputs by [predict.fbc()]
 #'   (once per draw); the rest of a sweep is compiled code.
+#' * Besides its adapted random walk, each \eqn{\kappa_l} makes a jump
+#'   move once a sweep: an independence proposal drawn from its uniform
+#'   prior, accepted with the likelihood ratio (exact Metropolis-Hastings,
+#'   not adapted; one more call of `f` a sweep, reported by `print()` as
+#'   `"kappa1 jump"`). A walk adapted within one mode rarely leaves it; the
+#'   jump visits every mode of a multimodal posterior. On
+#'   RobustCalibration's documented example (`sin(theta x) + x`, no
+#'   discrepancy; a second mode near 0.27 holding 18% of the mass) it
+#'   finds both modes on every seed tried (`inst/bench/RESULTS-function.md`).
 #' * The calibration inputs come from the kappa prior:
 #'   `kappaDist = "uniform", kappaP1 = lower, kappaP2 = upper`, one entry
 #'   per input; a named `kappaP1` (or `kappaP2`) names them (else `kappa1`,
@@ -92,8 +101,14 @@
 #'   `validate_emulator()` has no emulator to check; [emulator_check()]
 #'   compares an emulator-based fit with the function's. `source` works
 #'   (a noise variance per field data set, one shared bias; `f` does not
-#'   see the data set's column); `output`, `sourceBias = "own"` and
-#'   categorical inputs are not taken yet.
+#'   see the data set's column).
+#' * `output` works with `discrepancy = "none"`: the field in long format,
+#'   `f` sees the output column (a factor) in `x` and returns each row's
+#'   output; kappa is shared, each output is standardised on its own (the
+#'   mean of `f` at the prior's centre and the sd of its field response)
+#'   and has its own noise variance. With a bias it is refused (the bias
+#'   over the outputs, their level correlation, is built for runs only), as
+#'   are `sourceBias = "own"` and other categorical inputs.
 #'
 #' @section Correlation families:
 #' `kernelS` and `kernelB` choose the family of the simulator GP
@@ -584,7 +599,9 @@
 #'   saves when it stops); `0` saves after every piece of 50 iterations.
 #' @param output For several outputs in long format: the name of a factor
 #'   (or character) column of both `sim` and `field` saying which output
-#'   each row holds; see "Categorical inputs, outputs and data sets".
+#'   each row holds; see "Categorical inputs, outputs and data sets" (with
+#'   a simulator function, a column of `field`: see "The simulator as a
+#'   function").
 #' @param outputs With `output`: how the outputs are modelled. `"shared"`
 #'   (default): one simulator GP over the inputs and the output, the outputs
 #'   correlated by a learned level correlation (`rhoS`; the bias likewise,

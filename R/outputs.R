@@ -77,6 +77,10 @@ largest_output_sim <- function(dat, outputs) {
 outputs_line <- function(model) {
   out <- model$scale$output
   lev <- paste(out$levels, collapse = ", ")
+  if (!is.null(model$simulator)) {
+    return(sprintf("%d (%s) of the simulator function (it sees the output column), kappa shared, a noise variance each, no discrepancy",
+                   length(out$levels), lev))
+  }
   if (identical(model$options$outputs, "independent")) {
     sprintf("%d (%s), independent: each its own simulator GP (thetaS, alphaS, sigma2S)%s; only kappa shared",
             length(out$levels), lev, if (model$discrepancy == "none") "" else " and bias GP")
@@ -87,8 +91,10 @@ outputs_line <- function(model) {
 }
 
 # The categorical inputs that have level correlations (rhoS, rhoB): all but
-# the output with independent outputs (each output its own GPs).
+# the output with independent outputs (each output its own GPs); none for a
+# simulator function (no GP over its output).
 level_factors <- function(model) {
+  if (!is.null(model$simulator)) return(list())
   fac <- model$scale$factors
   if (!identical(model$options$outputs, "independent")) return(fac)
   fac[names(fac) != model$scale$output$name]

@@ -13,8 +13,18 @@
 # exact draw of the "gibbs" class (when it has a parameter). `large`: a
 # large simulator block on the dense algebra, where a move of the simulator
 # block costs a Cholesky factor of it and a kappa move an m x m x n
-# triangular solve: each moves once a sweep.
-sampler_moves <- function(sampler, spec, large = FALSE) {
+# triangular solve: each moves once a sweep. `jump`: also a jump move of
+# each free kappa with a uniform prior (an independence proposal from its
+# prior, once a sweep after the walks: `jump`, 1-based in phi), the default
+# for a simulator function, whose multimodal kappa posteriors a walk
+# adapted within one mode rarely leaves (issue 29).
+sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
+  if (jump) {
+    out <- sampler_moves(sampler, spec, large)
+    fam <- names(prior_families)[match(spec$table$family, prior_families)]
+    out$jump <- which(spec$classes == "kappa" & fam == "uniform")
+    return(out)
+  }
   if (sampler == "single") {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
                 params = spec$vars))
@@ -87,7 +97,8 @@ move_rates <- function(moves) {
 # The acceptance of each parameter of `vars` (named by them), from a moves
 # record (a chain's state$moves, or pool_moves() of all chains'): the rate
 # of the move that moves it (NA: fixed, or no retained try yet); the scale
-# move's rate apart, as attribute "scale" (NA without one). The compiled
+# move's rate apart, as attribute "scale" (NA without one); a jump move
+# (function simulators) is reported by name only. The compiled
 # sampler counts acceptance once, per move; this is the only place it
 # becomes per parameter. `moves` NULL (a fit from before moves were
 # reported): the rates `stored` kept (a chain's state: acceptance,
@@ -103,7 +114,7 @@ move_acceptance <- function(moves, vars, stored = NULL) {
   for (i in seq_along(rate)) {
     if (moves$kind[i] == "scale") {
       scale <- rate[i]
-    } else {
+    } else if (moves$kind[i] != "jump") {  # a jump: by name only (kappa's rate is its walk's)
       acc[match(strsplit(moves$params[i], ",", fixed = TRUE)[[1]], vars)] <- rate[i]
     }
   }

@@ -9,6 +9,10 @@
 #   - the response standardised by the mean of f over the field inputs at
 #     the prior's centre (kappaInit when given) and the sd of the field
 #     response (see ?calibrate, "The simulator as a function");
+#   - several outputs (`output`, discrepancy "none" only): the output column
+#     of the field becomes its indicator columns as for runs (R/factors.R),
+#     f sees the column itself; each output standardised on its own, a
+#     noise variance each;
 #   - `simulator`: list(f, x, nonFinite), and in the compiled model the two
 #     closures the compiled core calls (function_closures()): the scaled f
 #     at the field rows for one kappa (once per kappa proposal), and at new
@@ -20,16 +24,20 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
                                  modelCall = NULL, call = parent.frame()) {
   check_simulator_function(f, call = call)
   nonFinite <- match_choice(nonFinite, c("error", "reject"), "nonFinite", call = call)
-  refuse_function_options(output, sourceBias, call = call)
+  discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy", call = call)
+  refuse_function_options(output, sourceBias, discrepancy, call = call)
   src <- function_source(field, source, call = call)
-  field <- src$field
+  out <- function_output(src$field, output, call = call)
+  field <- out$field
   fm <- check_data_matrix(field, "field", min_cols = 2L, min_rows = 1L, call = call)
   p <- ncol(fm) - 1L
   inputNames <- usable_names(fm)[-1] %||% paste0("x", seq_len(p))
-  x <- function_inputs(fm[, -1, drop = FALSE], inputNames, is.data.frame(field))
-  kap <- function_kappa(kappa, inputNames, call = call)
+  x <- function_inputs(fm[, -1, drop = FALSE], inputNames, is.data.frame(field), out$output,
+                       out$codes)
+  kap <- function_kappa(kappa, c(inputNames, out$output$name), call = call)
   q <- length(kap$lower)
-  discrepancy <- match_choice(discrepancy, names(discrepancy_codes), "discrepancy", call = call)
+  ng <- if (!is.null(out$output)) noise_groups(out$codes, src$source, out$output, nrow(fm)) else
+    list(noise = src$noise, labels = src$noiseLabels)
   sampler <- check_sampler(sampler, blockSim, call = call)
   kernelB <- check_kernel(kernelB, "kernelB", call = call)
   if (!inherits(hypers, "fbc_hypers")) {
@@ -48,28 +56,32 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
       i = "Give {.arg kappaInit} where the function is finite."
     ), call = call)
   }
-  scale <- function_scale(fm, f0, kap, inputNames, named = !is.null(usable_names(fm)))
+  scale <- function_scale(fm, f0, kap, inputNames, named = !is.null(usable_names(fm)), out$codes)
   dat <- list(Xf = unname(scale_inputs(fm[, -1, drop = FALSE], scale, seq_len(p))),
-              yf = unname((fm[, 1] - scale$ymean) / scale$ysd),
+              yf = unname((fm[, 1] - y_mean(scale, out$codes)) / y_sd(scale, out$codes)),
               Xs = matrix(numeric(0), 0L, p + q), ys = numeric(0))
-  scale[c("source", "noiseLabels")] <- list(src$source[c("name", "levels")], src$noiseLabels)
+  scale[c("source", "noiseLabels")] <- list(src$source[c("name", "levels")], ng$labels)
+  if (!is.null(out$output)) {
+    scale$output <- out$output
+    scale$factors <- stats::setNames(list(out$output), out$output$name)
+  }
   spec <- build_priors(kap$spec, hypers, scale, p, q, discrepancy,
-                       noise = length(src$noiseLabels %||% 1L), emulator = FALSE, call = call)
+                       noise = length(ng$labels %||% 1L), emulator = FALSE, call = call)
   spec$model <- compiled_model(p, q, kernel_codes[["matern52"]], kernel_codes[[kernelB]],
-                               algebra = algebra_codes[["dense"]], discrepancy, noise = src$noise,
-                               simulator = function_closures(f, x, scale, nonFinite))
+                               algebra = algebra_codes[["dense"]], discrepancy, noise = ng$noise,
+                               simulator = function_closures(f, x, scale, nonFinite, out$codes))
   alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
               forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)",
               dims = NULL)
-  design <- list(factors = list(), output = NULL, source = src$source, noise = src$noise,
-                 noiseLabels = src$noiseLabels, levels = NULL, biasSource = NULL,
+  design <- list(factors = scale$factors, output = out$output, source = src$source,
+                 noise = ng$noise, noiseLabels = ng$labels, levels = NULL, biasSource = NULL,
                  fieldRows = distinct_rows(dat$Xf))
   model <- new_fbc_model(
     data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
     kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,
     algebra = alg,
-    moves = sampler_moves(sampler, spec, large = FALSE),
-    options = list(algebra = "auto", neighbours = NULL, output = NULL, source = source,
+    moves = sampler_moves(sampler, spec, large = FALSE, jump = TRUE),
+    options = list(algebra = "auto", neighbours = NULL, output = output, source = source,
                    sourceBias = "shared"),
     call = modelCall)
   model$simulator <- list(f = f, x = x, nonFinite = nonFinite)
@@ -88,17 +100,48 @@ check_simulator_function <- function(f, call = parent.frame()) {
   invisible(f)
 }
 
-# What the function model does not take yet: several outputs, a bias per
-# field data set.
-refuse_function_options <- function(output, sourceBias, call = parent.frame()) {
-  given <- c(output = !is.null(output),
-             sourceBias = !identical(sourceBias, c("shared", "own")) && !identical(sourceBias, "shared"))
-  if (any(given)) {
+# What the function model does not take yet: several outputs with a bias
+# (the bias would need the outputs' level correlation), a bias per field
+# data set.
+refuse_function_options <- function(output, sourceBias, discrepancy, call = parent.frame()) {
+  if (!is.null(output) && discrepancy != "none") {
     cli::cli_abort(c(
-      "{.arg {names(given)[given]}} cannot be used with a simulator function yet.",
-      i = "A simulator function calibrates one output, with one bias shared by the field data sets ({.arg source}); give runs as {.arg sim} for several outputs or a bias per data set."
+      "{.arg output} with a simulator function needs {.code discrepancy = \"none\"}, not {.val {discrepancy}}, yet.",
+      i = "Several outputs of a function share kappa with a noise variance each; a bias over the outputs (their level correlation) is only built for runs: give runs as {.arg sim} for it."
     ), call = call)
   }
+  if (!identical(sourceBias, c("shared", "own")) && !identical(sourceBias, "shared")) {
+    cli::cli_abort(c(
+      "{.arg sourceBias} cannot be used with a simulator function yet.",
+      i = "A simulator function calibrates one bias shared by the field data sets ({.arg source}); give runs as {.arg sim} for a bias per data set."
+    ), call = call)
+  }
+}
+
+# Several outputs in long format (`output`, a factor or character column of
+# field; discrepancy "none"): list(field with that column replaced by its
+# indicator columns (as for runs, R/factors.R), output = list(name, levels,
+# columns), codes: each row's output, 1-based). f sees the column itself.
+function_output <- function(field, output, call = parent.frame()) {
+  if (is.null(output)) return(list(field = field))
+  check_string(output, "output", call = call)
+  if (!is.data.frame(field) || !output %in% names(field) || !is_categorical(field[[output]])) {
+    cli::cli_abort(c(
+      "{.arg output} = {.val {output}} must name a factor or character column of {.arg field}.",
+      i = "The outputs are in long format: one row per observation and output, the output's name in that column, its value in the response column."
+    ), call = call)
+  }
+  check_no_missing_levels(field, output, "field", output, NULL, call = call)
+  fo <- factor(field[[output]])
+  levs <- levels(fo)
+  if (length(levs) < 2L) {
+    cli::cli_abort("{.arg output} = {.val {output}} has one level in {.arg field} ({.val {levs}}): several outputs need at least two.", call = call)
+  }
+  cols <- indicator_names(output, levs)
+  num <- replace_by_indicators(field, output, levs, cols)
+  attr(num, "fbc_codes") <- NULL
+  list(field = num, output = list(name = output, levels = levs, columns = cols),
+       codes = as.integer(fo))
 }
 
 # Several field data sets (`source`, a factor or character column of
@@ -122,11 +165,25 @@ function_source <- function(field, source, call = parent.frame()) {
 }
 
 # The field inputs as f receives them: a data frame when the field was one,
-# else a matrix, with the field's input names.
-function_inputs <- function(X, names, frame) {
+# else a matrix, with the field's input names; with several outputs the
+# output's indicator columns become the output column again (a factor,
+# levels `output$levels`, rows' codes `codes`).
+function_inputs <- function(X, names, frame, output = NULL, codes = NULL) {
   X <- unname(X)
   colnames(X) <- names
-  if (frame) as.data.frame(X) else X
+  if (is.null(output)) return(if (frame) as.data.frame(X) else X)
+  at <- match(output$columns, names)
+  d <- as.data.frame(X[, -at, drop = FALSE])
+  before <- sum(seq_along(names)[-at] < at[1])
+  col <- stats::setNames(data.frame(factor(output$levels[codes], levels = output$levels)), output$name)
+  cbind(d[, seq_len(before), drop = FALSE], col, d[, setdiff(seq_along(d), seq_len(before)), drop = FALSE])
+}
+
+# Each row's output (1-based) from its output's indicator columns (native
+# units): one column for two levels, one per level from three.
+output_codes <- function(X, names, output) {
+  ind <- X[, match(output$columns, names), drop = FALSE]
+  if (length(output$levels) == 2L) as.integer(round(ind[, 1])) + 1L else max.col(ind, "first")
 }
 
 # The calibration inputs from the kappa prior arguments: list(spec (as
@@ -157,15 +214,21 @@ function_kappa <- function(kappa, inputNames, call = parent.frame()) {
 # over the field's range (an input the field holds constant over a unit
 # range), kappa over its prior's range, the response by the mean of f at
 # the prior's centre `f0` and the sd of the field response (of f0 when the
-# field's is 0, e.g. one row; 1 when both are).
-function_scale <- function(fm, f0, kap, inputNames, named) {
+# field's is 0, e.g. one row; 1 when both are); with several outputs
+# (`codes`, each row's) each output by its own.
+function_scale <- function(fm, f0, kap, inputNames, named, codes = NULL) {
   X <- fm[, -1, drop = FALSE]
   xmin <- apply(X, 2, min)
   xmax <- apply(X, 2, max)
   xmax[xmax == xmin] <- xmin[xmax == xmin] + 1
-  sds <- c(if (nrow(fm) > 1L) stats::sd(fm[, 1]), if (length(f0) > 1L) stats::sd(f0), 1)
+  groups <- split(seq_len(nrow(fm)), codes %||% rep(1L, nrow(fm)))
+  ysd <- vapply(groups, function(g) {
+    sds <- c(if (length(g) > 1L) stats::sd(fm[g, 1]), if (length(g) > 1L) stats::sd(f0[g]), 1)
+    sds[sds > 0][1]
+  }, numeric(1), USE.NAMES = FALSE)
   list(xmin = unname(c(xmin, kap$lower)), xmax = unname(c(xmax, kap$upper)),
-       ymean = mean(f0), ysd = sds[sds > 0][1], p = ncol(X), q = length(kap$lower),
+       ymean = vapply(groups, function(g) mean(f0[g]), numeric(1), USE.NAMES = FALSE),
+       ysd = ysd, p = ncol(X), q = length(kap$lower),
        named = named,
        names = list(response = usable_names(fm)[1] %||% "y", inputs = inputNames,
                     calibration = kap$names),
@@ -211,22 +274,28 @@ kappa_text <- function(kappa) {
 # u), f at new scaled experimental inputs (prediction). Built here, with
 # only what they need in their environment (they travel to parallel
 # workers with the model).
-function_closures <- function(f, x, scale, nonFinite) {
+function_closures <- function(f, x, scale, nonFinite, codes = NULL) {
   p <- scale$p
   cal <- p + seq_len(scale$q)
   lo <- scale$xmin[cal]
   rng <- scale$xmax[cal] - lo
   kn <- scale$names$calibration
+  inputs <- scale$names$inputs
+  out <- scale$output
   frame <- is.data.frame(x)
   kappa_of <- function(u) stats::setNames(lo + rng * u, kn)
+  ym <- y_mean(scale, codes)
+  ys <- y_sd(scale, codes)
   list(
     field = function(u) {
       y <- function_values(f, x, kappa_of(u), NROW(x), nonFinite)
-      if (is.null(y)) NULL else (y - scale$ymean) / scale$ysd
+      if (is.null(y)) NULL else (y - ym) / ys
     },
     at = function(Xnew, u) {
-      xn <- function_inputs(unscale_inputs(Xnew, scale, seq_len(p)), colnames(x), frame)
-      (function_values(f, xn, kappa_of(u), nrow(Xnew), "error") - scale$ymean) / scale$ysd
+      X <- unscale_inputs(Xnew, scale, seq_len(p))
+      cn <- if (!is.null(out)) output_codes(X, inputs, out)
+      xn <- function_inputs(X, inputs, frame, out, cn)
+      (function_values(f, xn, kappa_of(u), nrow(Xnew), "error") - y_mean(scale, cn)) / y_sd(scale, cn)
     }
   )
 }

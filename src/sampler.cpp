@@ -439,6 +439,43 @@ struct ScaleMove : Move {
   }
 };
 
+// Independence proposal of kappa_j from its uniform prior (issue 29: a
+// mode-jumping move; the walk's adapted step stays within a mode). With
+// x* ~ U(lo, hi), the prior's support on the sampler's scale, the proposal
+// density is constant and cancels:
+//   log r = log L(phi*) + log p(x*) - log L(phi) - log p(x).
+// Not adapted; one call of f (function simulator) or one kappa move's
+// algebra per step.
+struct JumpMove : Move {
+  int j;
+  double lo, hi, accBatch;  // support on the sampler's scale; acceptances this batch
+  JumpMove(int j_, const Chain& ch) : j(j_), accBatch(0) {
+    const Priors& pr = ch.pr;
+    if (pr.family[j] != PF_UNIFORM || pr.b[j] == 0)
+      Rcpp::stop("the jump move needs a uniform prior on %s", ch.param_name(j_).c_str());
+    const double u1 = (pr.p1[j] - pr.a[j]) / pr.b[j], u2 = (pr.p2[j] - pr.a[j]) / pr.b[j];
+    lo = std::min(u1, u2); hi = std::max(u1, u2);
+    idx = {j_};
+    name = ch.param_name(j_) + " jump";
+  }
+  const char* kind() const override { return "jump"; }
+  bool step(Chain& ch) override {
+    Posterior& post = ch.post;
+    const double xNew = lo + (hi - lo) * R::unif_rand();
+    const double lpNew = ch.pr(j, xNew);
+    if (!std::isfinite(lpNew)) return false;
+    const double llNew = post.propose(j, xNew);
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j]) {
+      post.accept();
+      ch.ll = llNew; ch.lp[j] = lpNew;
+      return true;
+    }
+    post.reject();
+    return false;
+  }
+  double& batchCount() override { return accBatch; }
+};
+
 typedef std::vector<std::unique_ptr<Move> > Schedule;
 
 // The chain's adapted state from `state` (an earlier piece's, or the
@@ -554,6 +591,9 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       schedule.back()->name = ch.param_name(j);
     }
   }
+  // the jump moves (R's sampler_moves()$jump, 1-based), after the walks
+  if (moves.containsElementNamed("jump"))
+    for (int j : Rcpp::as<std::vector<int> >(moves["jump"])) schedule.emplace_back(new JumpMove(j - 1, ch));
   if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
     const Rcpp::List old = state["moves"];

@@ -21,8 +21,9 @@
 #
 #   R_LIBS=<FBC lib>:/work/lib/bench Rscript inst/bench/function.R [reps]
 #
-# reps: repeats of each FBC fit with seeds 1, 2, ... (default 2). Results:
-# inst/bench/RESULTS-function.md.
+# reps: repeats of each FBC fit with seeds 1, 2, ... (default 2). Then the
+# bimodal example (no discrepancy): its exact posterior on a grid against
+# 10 default runs. Results: inst/bench/RESULTS-function.md.
 library(FBC)
 args <- commandArgs(trailingOnly = TRUE)
 reps <- if (length(args) >= 1) as.integer(args[1]) else 2L
@@ -118,6 +119,48 @@ for (name in names(problems)) {
     }
   }
 }
+# The bimodal example with no discrepancy: the exact posterior of theta on
+# a grid (plain R: theta uniform on [0, 3], the scaled noise sd half-Cauchy
+# (0, 1), FBC's default, integrated out on a grid of log s) against 10
+# default runs (seeds 1-10): the small mode's mass (theta < 1), the 5% and
+# 95% quantiles.
+bimodal_grid <- function(pr) {
+  y <- pr$field$y
+  ysd <- stats::sd(y)
+  th <- seq(0, 3, length.out = 30001)
+  ls <- seq(log(1e-4), log(10), length.out = 4001)
+  lps <- log(2 / pi) - log1p(exp(2 * ls)) + ls
+  lpost <- vapply(th, function(t) {
+    ss <- sum(((y - pr$f(pr$field, c(theta = t))) / ysd)^2)
+    l <- -length(y) * ls - ss / (2 * exp(2 * ls)) + lps
+    max(l) + log(sum(exp(l - max(l))))
+  }, numeric(1))
+  w <- exp(lpost - max(lpost))
+  w <- w / sum(w)
+  cdf <- cumsum(w)
+  qs <- vapply(c(0.05, 0.5, 0.95), function(p) th[which(cdf >= p)[1]], numeric(1))
+  data.frame(seed = NA, cpu = NA, sweeps = NA, small = sum(w[th < 1]), lo90 = qs[1],
+             median = qs[2], hi90 = qs[3], rhat = NA, ess = NA)
+}
+pr <- problems$rc_example
+bim <- list(cbind(run = "exact (grid)", bimodal_grid(pr)))
+for (s in 1:10) {
+  set.seed(s)
+  t0 <- cpu()
+  fit <- calibrate(pr$f, pr$field, kappaDist = "uniform", kappaP1 = pr$lower,
+                   kappaP2 = pr$upper, discrepancy = "none", showProgress = FALSE)
+  th <- fit$Phi[, "kappa1"]
+  q <- stats::quantile(th, c(0.05, 0.5, 0.95), names = FALSE)
+  bim[[length(bim) + 1]] <- data.frame(run = "FBC defaults", seed = s, cpu = cpu() - t0,
+                                       sweeps = fit$settings$nMCMC, small = mean(th < 1),
+                                       lo90 = q[1], median = q[2], hi90 = q[3],
+                                       rhat = fit$estimates["kappa1", "rhat"],
+                                       ess = fit$estimates["kappa1", "ess"])
+}
+bim <- do.call(rbind, bim)
+print(bim, digits = 3, row.names = FALSE)
+saveRDS(bim, "function-bimodal.rds")
+
 tab <- do.call(rbind, lapply(rows, function(r) r[, c("problem", "discrepancy", "software", "seed",
                                                      "cpu", "sweeps", "median", "lo90", "hi90",
                                                      "rhat", "ess", "essPerSec", "converged")]))

@@ -37,6 +37,61 @@ test_that("discrepancy none, sigma2E fixed: theta's draws match the grid posteri
   expect_lt(ks, 0.06)
 })
 
+# RobustCalibration's own documented example (?rcalibration, simul_type =
+# 1): reality x cos(1.5 x) + x, 15 points, noise sd 0.1, set.seed(1); the
+# model sin(theta x) + x, theta in [0, 3]. With no discrepancy theta's
+# posterior is bimodal: a main mode near 1.87 and a small one near 0.27.
+rc_example <- function() {
+  set.seed(1)
+  x <- seq(0, 5, 5 / 14)
+  data.frame(y = x * cos(3 / 2 * x) + x + stats::rnorm(15, 0, 0.1), x = x)
+}
+
+test_that("the bimodal example: the default run's theta matches the grid posterior, small mode included", {
+  field <- rc_example()
+  # plain R: theta uniform on [0, 3]; on the scaled response (divided by
+  # sd(y), ?calibrate) the noise sd s is half-Cauchy(0, 1) (sigma2E's
+  # default halft_sd(1, 1)), integrated out on a grid of log s
+  ysd <- stats::sd(field$y)
+  th <- seq(0, 3, length.out = 3001)
+  ls <- seq(log(1e-3), log(10), length.out = 2001)
+  lps <- log(2 / pi) - log1p(exp(2 * ls)) + ls  # log density of log s
+  lpost <- vapply(th, function(t) {
+    ss <- sum(((field$y - fn_model(field, c(theta = t))) / ysd)^2)
+    l <- -nrow(field) * ls - ss / (2 * exp(2 * ls)) + lps
+    max(l) + log(sum(exp(l - max(l))))
+  }, numeric(1))
+  dens <- exp(lpost - max(lpost))
+  small <- sum(dens[th < 1]) / sum(dens)  # 0.179: the small mode's mass
+  expect_gt(small, 0.15)
+  set.seed(2)  # the seed whose run missed the small mode before the jump move
+  fit <- do.call(calibrate, c(list(fn_model, field, discrepancy = "none", showProgress = FALSE),
+                              fn_kappa))
+  expect_true(fit$settings$converge$converged)
+  draws <- fit$Phi[, "kappa1"]
+  # the small mode's mass within 4 Monte Carlo standard errors (the
+  # indicator's ESS over the chains)
+  ind <- matrix(as.numeric(draws < 1), ncol = fit$settings$nChains)
+  mcse <- sqrt(small * (1 - small) / posterior::ess_basic(ind))
+  expect_lt(abs(mean(draws < 1) - small), 4 * mcse)
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  got <- stats::quantile(draws, probs, names = FALSE)
+  expect_lt(max(abs(got - grid_quantile(th, dens, probs))), 0.1)
+  ks <- suppressWarnings(stats::ks.test(draws, grid_cdf(th, dens))$statistic)
+  expect_lt(ks, 0.06)
+  # the jump move is reported by name; set.seed() reproduces a run
+  mv <- FBC:::move_report(fit)
+  jump <- mv[mv$move == "kappa1 jump", ]
+  expect_identical(jump$kind, "jump")
+  expect_true(jump$acceptance > 0.02 && jump$acceptance < 0.5)
+  short <- function() {
+    set.seed(5)
+    do.call(calibrate, c(list(fn_model, field, discrepancy = "none", nMCMC = 300, nBurn = 100,
+                              nChains = 2, showProgress = FALSE), fn_kappa))$Phi
+  }
+  expect_identical(short(), short())
+})
+
 # The log-likelihood of the function model in plain R: yf - muB - fs ~
 # N(0, sigma2B Rb + sigma2E I) on the scaled space (Rb: matern52 over the
 # scaled inputs; S-GaSP: its discretized kernel; none: sigma2E I).
@@ -112,9 +167,10 @@ test_that("f is called once per kappa proposal, with every field row", {
   fit <- do.call(calibrate, c(list(f, field, discrepancy = "gp", nMCMC = 200, nBurn = 100,
                                    nChains = 1, thinning = 1), fn_kappa))
   expect_true(all(rows == nrow(field)))
-  # kappa moves three times a sweep (sampler_moves()); the other moves reuse
-  # f's value: 200 sweeps x 3 proposals, plus the start's and the scaling's calls
-  tries <- 200 * 3
+  # kappa's walk moves three times a sweep and its jump once
+  # (sampler_moves(jump = TRUE)); the other moves reuse f's value: 200
+  # sweeps x 4 proposals, plus the start's and the scaling's calls
+  tries <- 200 * 4
   expect_gte(calls, tries)
   expect_lte(calls, tries + 5L)
 })
@@ -232,7 +288,7 @@ test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; v
   expect_snapshot(error = TRUE, validate_emulator(fit))
 })
 
-test_that("a matrix field gives f a matrix; converge runs until its rule; output and source are refused", {
+test_that("a matrix field gives f a matrix; converge runs until its rule; output needs a data frame", {
   field <- as.matrix(fn_field(n = 8))
   seen <- NULL
   f <- function(x, kappa) {
@@ -251,7 +307,55 @@ test_that("a matrix field gives f a matrix; converge runs until its rule; output
   # predict() hands f the new inputs the same way
   pr <- predict(fit, c(1, 2), type = "simulator", method = "MAP")
   expect_identical(dim(seen), c(2L, 1L))
-  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", fit = FALSE), fn_kappa)))
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "o", discrepancy = "none",
+                                                          fit = FALSE), fn_kappa)))
+})
+
+test_that("several outputs (output, no discrepancy): f sees the output column; log-likelihood, predict() against plain R", {
+  # two outputs of one theta in long format, each with its own noise sd
+  set.seed(11)
+  x <- rep(seq(0, 5, length.out = 8), 2)
+  o <- factor(rep(c("level", "slope"), each = 8))
+  g <- function(x, theta, o) ifelse(o == "level", sin(theta * x) + x, 2 * cos(theta * x))
+  field <- data.frame(y = g(x, 1.2, o) + stats::rnorm(16, 0, ifelse(o == "level", 0.2, 0.4)),
+                      x = x, out = o)
+  seen <- NULL
+  f <- function(x, kappa) {
+    seen <<- x
+    ifelse(x$out == "level", sin(kappa[["theta"]] * x$x) + x$x, 2 * cos(kappa[["theta"]] * x$x))
+  }
+  model <- do.call(calibrate, c(list(f, field, output = "out", discrepancy = "none", fit = FALSE),
+                                fn_kappa))
+  expect_identical(names(seen), c("x", "out"))
+  expect_identical(seen$out, o)
+  expect_identical(model$spec$vars, c("kappa1", "sigma2E1", "sigma2E2"))
+  expect_identical(model$scale$noiseLabels, c("level", "slope"))
+  # plain R: each output standardised on its own, by the mean of f at the
+  # prior's centre (theta = 1.5) and the sd of its field response; a noise
+  # variance each; phi = (theta / 3, sigma2E1, sigma2E2)
+  ym <- tapply(g(x, 1.5, o), o, mean)
+  ys <- tapply(field$y, o, stats::sd)
+  ref_ll <- function(phi) {
+    sum(stats::dnorm((field$y - ym[o]) / ys[o], (g(x, 3 * phi[1], o) - ym[o]) / ys[o],
+                     sqrt(phi[2:3][o]), log = TRUE))
+  }
+  phis <- cbind(c(0.2, 0.4, 0.7), c(0.3, 0.1, 1), c(0.5, 2, 0.05))
+  d <- model$data
+  got <- apply(phis, 1, function(phi) FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6,
+                                                         model = model$spec$model))
+  expect_equal(got, apply(phis, 1, ref_ll), tolerance = 1e-8)
+  set.seed(12)
+  fit <- do.call(calibrate, c(list(f, field, output = "out", discrepancy = "none", nChains = 2,
+                                   nMCMC = 600, nBurn = 200, showProgress = FALSE), fn_kappa))
+  expect_lt(abs(stats::median(fit$Phi[, "kappa1"]) - 1.2), 0.1)
+  # type = "simulator" is f itself (no emulator), per output in native units
+  new <- data.frame(x = c(0.5, 2.5, 4), out = c("slope", "level", "slope"))
+  pr <- predict(fit, new, type = "simulator", method = "MAP")
+  th <- fit$Phi[which.max(fit$logPost), "kappa1"]
+  expect_equal(pr$pred, g(new$x, th, new$out), tolerance = 1e-10)
+  expect_identical(as.character(seen$out), new$out)
+  expect_snapshot(error = TRUE, do.call(calibrate, c(list(f, field, output = "out", fit = FALSE),
+                                                     fn_kappa)))
 })
 
 test_that("several field data sets (source): a noise variance each, one shared bias", {
