@@ -705,8 +705,6 @@ static void start_windows(Chain& ch, const Schedule& schedule) {
 // The end of warm-up window `it` (see the top): have the proposals settled
 // over it? Then the window's bookkeeping starts afresh.
 static bool window_settled(Chain& ch, const Schedule& schedule) {
-  static const bool TR = std::getenv("FBC_WARM_TRACE") != nullptr;
-  std::string why;
   ++ch.windows;
   const double step = WARM_DRIFT * std::min(0.5, 1.0 / std::sqrt((double) std::max(ch.batch, 1)));
   bool ok = ch.windows >= 2;  // the log scales two windows back to compare with
@@ -714,11 +712,11 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
   for (int i = 0; i < nm; ++i) {
     const double target = schedule[i]->target(), ls = schedule[i]->warmScale();
     if (!ISNAN(target)) {
-      if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) { ok = false; why += " acc:" + schedule[i]->name; }
+      if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) ok = false;
       // the drift since two windows back (since the first window's end at
       // the second: the first window is the exploring one)
       const double ref = ISNAN(ch.winScale(0, i)) ? ch.winScale(1, i) : ch.winScale(0, i);
-      if (!ISNAN(ref) && std::fabs(ls - ref) > step) { ok = false; why += " drift:" + schedule[i]->name; }
+      if (!ISNAN(ref) && std::fabs(ls - ref) > step) ok = false;
     }
     ch.winScale(0, i) = ch.winScale(1, i);
     ch.winScale(1, i) = ls;
@@ -729,12 +727,10 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     // a joint block's shape learnt from enough effective draws
     const double ess = b->window_ess();
     const int k = b->idx.size();
-    if (k >= WARM_ESS_K && ess < ch.warmESS * k) { ok = false; why += " ess"; }
-    if (TR) why += " [k" + std::to_string(k) + " ess " + std::to_string((int) ess) + "]";
+    if (k >= WARM_ESS_K && ess < ch.warmESS * k) ok = false;
   }
   if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
-    { ok = false; why += " shape"; }
-  if (TR) Rprintf("W %d %s%s\n", ch.iter + 1, ok ? "OK" : "no", why.c_str());
+    ok = false;
   ch.winShape = sh;
   ch.winAcc.zeros();
   return ok;
