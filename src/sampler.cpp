@@ -273,24 +273,45 @@ struct Block {
     return count;
   }
   // End of a warm-up window: it joins the closed windows, and the fewest
-  // effective draws of a parameter in the weighted estimate, by weighted
-  // batch means over the windows (0 with fewer than 4 weighed):
-  //   ESS_i = C_ii / (sum pi^2 s2_i),  s2_i = sum pi (m_i - mu_i)^2 / (1 - sum pi^2)
-  // (with equal weights B C_ii / var(window means_i)).
+  // effective draws of a parameter in the weighted estimate (0 with fewer
+  // than 4 recent windows): its effective size for independent draws,
+  //   N = (sum a n)^2 / sum a^2 n,
+  // over each parameter's mixing time measured by batch means over the
+  // recent windows (the newest two epochs; the newest alone when forget = 0),
+  //   tau_i = nbar var(window means_i) / v_i
+  // (v_i the recent windows' pooled variance, nbar their mean count), so
+  // ESS_i = N / tau_i; with forget = 0, B v_i / var(window means_i). The
+  // older windows' drift from the start does not count against the
+  // recent mixing.
   double window_ess() {
     close_window();
-    arma::vec mu, pi;
-    const int count = pooled(false, mu, tmp, pi);
-    const int B = arma::accu(pi > 0), k = idx.size();
-    if (B < 4 || count < 2) return 0;
-    const double sp2 = arma::accu(arma::square(pi));
+    const int B = winCount.n_elem, k = idx.size();
+    if (B == 0) return 0;
+    const int E = epoch((int) winIndex[B - 1]), from = forget > 0 ? E - 1 : E;
+    double sa = 0, sa2 = 0, nR = 0;
+    std::vector<int> recent;
+    for (int b = 0; b < B; ++b) {
+      const int eb = epoch((int) winIndex[b]);
+      const double a = std::pow(forget, E - eb);
+      sa += a * winCount[b]; sa2 += a * a * winCount[b];
+      if (eb >= from) { recent.push_back(b); nR += winCount[b]; }
+    }
+    const int R = recent.size();
+    if (R < 4 || sa2 <= 0) return 0;
+    const double N = sa * sa / sa2, nbar = nR / R;
     double ess = INFINITY;
     for (int i = 0; i < k; ++i) {
-      double s2 = 0;
-      for (arma::uword b = 0; b < pi.n_elem; ++b)
-        if (pi[b] > 0) s2 += pi[b] * std::pow(winMeans(i, b) - mu[i], 2);
-      s2 /= 1 - sp2;
-      ess = std::min(ess, s2 > 0 ? tmp(i, i) / (sp2 * s2) : (double) count);
+      double mu = 0;
+      for (int b : recent) mu += winCount[b] * winMeans(i, b) / nR;
+      double v = 0, mm = 0, s2 = 0;
+      for (int b : recent) {
+        const double d = winMeans(i, b) - mu;
+        v += winM2(i, b * k + i) + winCount[b] * d * d;
+        mm += winMeans(i, b) / R;
+      }
+      v /= nR;
+      for (int b : recent) s2 += std::pow(winMeans(i, b) - mm, 2) / (R - 1);
+      ess = std::min(ess, s2 > 0 ? N * v / (nbar * s2) : N);
     }
     return ess;
   }

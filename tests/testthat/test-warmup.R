@@ -132,22 +132,26 @@ warm_epoch <- function(j) ifelse(j < 2, 0, floor(log2(j / 2)) + 1)
 
 # The fewest effective draws per parameter in a joint block's estimate where
 # its warm-up ended, in plain R from the block's state: its windows' draws
-# weighted a = forget^(E - epoch) (E the newest window's epoch), shares
-# pi = a n / sum(a n), pooled variance v, and by weighted batch means
-# ESS_i = v_i / (sum(pi^2) s2_i), s2_i = sum(pi (m_i - mu_i)^2) / (1 - sum(pi^2)).
+# weighted a = forget^(E - epoch) (E the newest window's epoch), of
+# effective size N = sum(a n)^2 / sum(a^2 n) for independent draws, over the
+# mixing time tau_i = nbar var(window means_i) / v_i measured on the recent
+# windows (the newest two epochs; the newest alone when forget = 0: v_i
+# their pooled variance, nbar their mean count): ESS_i = N / tau_i.
 block_ess <- function(b, forget) {
   m <- as.matrix(b$winMeans)
   k <- nrow(m)
-  j <- b$winIndex
-  a <- forget^(warm_epoch(max(j)) - warm_epoch(j))
-  pi <- a * b$winCount / sum(a * b$winCount)
-  mu <- drop(m %*% pi)
-  m2 <- vapply(seq_along(j), function(i) diag(as.matrix(b$winM2)[, (i - 1) * k + seq_len(k), drop = FALSE]),
+  n <- b$winCount
+  ep <- warm_epoch(b$winIndex)
+  E <- ep[length(ep)]
+  a <- forget^(E - ep)
+  N <- sum(a * n)^2 / sum(a^2 * n)
+  r <- ep >= (if (forget > 0) E - 1 else E)
+  mu <- drop(m[, r, drop = FALSE] %*% n[r]) / sum(n[r])
+  m2 <- vapply(which(r), function(i) diag(as.matrix(b$winM2)[, (i - 1) * k + seq_len(k), drop = FALSE]),
                numeric(k))
-  v <- drop((matrix(m2, k) %*% a + ((m - mu)^2 * rep(b$winCount, each = k)) %*% a) / sum(a * b$winCount))
-  sp2 <- sum(pi^2)
-  s2 <- drop((m - mu)^2 %*% pi) / (1 - sp2)
-  v / (sp2 * s2)
+  v <- (rowSums(matrix(m2, k)) + drop((m[, r, drop = FALSE] - mu)^2 %*% n[r])) / sum(n[r])
+  s2 <- apply(m[, r, drop = FALSE], 1, stats::var)
+  N * v / (mean(n[r]) * s2)
 }
 
 # Runs `code` with the warm-up's effective-draws rule at `ess` per
@@ -184,7 +188,7 @@ test_that("warm-up waits for the joint blocks' shapes to be learnt from enough e
     big <- Filter(function(b) length(b$index) >= 2, st$blocks)
     expect_length(big, 2)
     for (b in big) {
-      expect_gte(length(b$winIndex), 4)
+      expect_gte(sum(warm_epoch(b$winIndex) >= max(warm_epoch(b$winIndex)) - 1), 4)
       expect_true(all(block_ess(b, st$warmForget) >= 10 * length(b$index)))
     }
   }
@@ -220,6 +224,16 @@ test_that("a block's warm-up estimate keeps the earlier epochs at falling weight
               })))
     expect_equal(est$ess, min(block_ess(b, forget)), tolerance = 1e-10)
   }
+  # a known mixing time: independent AR(1) walks with rho = 0.9 (integrated
+  # autocorrelation time (1 + rho) / (1 - rho) = 19 sweeps), 6400 sweeps: the
+  # effective draws are the weighted estimate's effective size over 19
+  # (batch means over the 48 recent windows: within about 25%)
+  set.seed(41)
+  Z <- apply(matrix(rnorm(6400 * 3), ncol = 3), 2, function(e) stats::filter(e, 0.9, method = "recursive"))
+  jz <- (seq_len(6400) - 1) %/% 100
+  az <- 0.5^(warm_epoch(63) - warm_epoch(jz))
+  N <- sum(az)^2 / sum(az^2)
+  expect_equal(FBC:::.fbc_block_estimate_c(Z, 0.5)$ess / (N / 19), 1, tolerance = 0.25)
   # forget = 0 is the estimate started afresh at 200, 400, 800, ...: 650
   # draws since sweep 800; forget = 0.5 keeps all 1450, the epoch of sweeps
   # 801-1600 weighted 1, 401-800 1/2, 201-400 1/4, 1-200 1/8
