@@ -21,6 +21,9 @@
 # holds this many effective draws per parameter (src/sampler.cpp): at
 # m = 1000 scattered runs the simulator block's bulk ESS at 875 retained
 # draws a chain was 373 with it against 168 without (RESULTS-defaults.md).
+# `forget`: the weight of each earlier epoch of a block's estimate
+# (epochs of 200, 200, 400, 800, ... sweeps) relative to the next one's;
+# 0 would start the estimate afresh at 200, 400, 800, ... (RESULTS-defaults.md).
 fbc_warmup <- list(min = 200L, max = 5000L, ess = 10, forget = 0.5)
 fbc_first_check <- 500L
 # Without `every`, each check after the first comes when the retained

@@ -39,17 +39,22 @@
 // every block is shaped, the SD its shape gives each parameter relative to
 // the shape's size within a factor exp(WARM_SHAPE) of the previous
 // window's, and learnt from enough draws: a joint block of at least
-// WARM_ESS_K parameters must hold in its running covariance at least
-// warmESS effective draws per parameter (R's
-// fbc_warmup$ess, carried in the state; 0 in a state written before the
-// rule, which resumes as it began), counted by batch means over the
-// windows since the estimate started (B >= 4 window means,
-// ESS_i = B var_i / var(means_i)). Warm-up ends at the end of the second settled window in a row,
-// at the earliest after warmMin sweeps, and at warmMax sweeps in any case
-// (warmCapped). The joint proposals' running covariance starts afresh at
-// sweeps 200, 400, 800, ... (each estimate leaves out at least the first
-// half of the sweeps so far, as a fixed burn-in's leaves out its first
-// half), and a reshaped block keeps its proposal's size (log s absorbs the
+// WARM_ESS_K parameters must hold in its covariance estimate at least
+// warmESS effective draws per parameter (R's fbc_warmup$ess, carried in the
+// state; 0 in a state written before the rule, which resumes as it began;
+// Block::window_ess()). Warm-up ends at the end of the second settled
+// window in a row, at the earliest after warmMin sweeps, and at warmMax
+// sweeps in any case (warmCapped). The joint proposals' covariance estimate
+// is kept by window of 100 sweeps, the windows grouped in epochs that
+// double (sweeps 1-200, 201-400, 401-800, ...); each earlier epoch's draws
+// weigh `forget` times the next one's (R's fbc_warmup$forget, in the state
+// as warmForget; Block::pooled()). forget = 0 is an estimate started afresh
+// at 200, 400, 800, ... (as a fixed burn-in's leaves out its first half),
+// whose effective draws had to be earned again after every restart; 0.5
+// keeps the older epochs at falling weight, so the estimate changes
+// smoothly, leaves the drift from the start little weight, and its
+// effective draws keep growing. A reshaped block keeps its proposal's size
+// (log s absorbs the
 // change of log det(L)^(1/k)). The decision is part of the chain's state, so
 // a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
@@ -79,9 +84,10 @@ static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
 // the effective-draws rule holds blocks of at least this many parameters
-// (a smaller block's shape is learnt soon enough: the ball drop's blocks of
-// 2 and 3 end warm-up at 500 sweeps without it, 1300-1400 with it, as the
-// rule needs 4 windows since the estimate's restart at 800)
+// (every joint block: with the estimate kept across epochs the count no
+// longer restarts at 200, 400, 800, ..., which made it cost the ball
+// drop's blocks of 2 and 3 parameters 1300-1400 sweeps of warm-up against
+// 500 when it held only blocks of 4 or more)
 static const int WARM_ESS_K = 2;
 
 // prior on parameter j: family code, parameters, and the affine map
