@@ -84,11 +84,12 @@ static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
 // the effective-draws rule holds blocks of at least this many parameters
-// (every joint block: with the estimate kept across epochs the count no
-// longer restarts at 200, 400, 800, ..., which made it cost the ball
-// drop's blocks of 2 and 3 parameters 1300-1400 sweeps of warm-up against
-// 500 when it held only blocks of 4 or more)
-static const int WARM_ESS_K = 2;
+// (a smaller block's shape is learnt soon enough: with the rule on every
+// joint block the ball drop's blocks of 2 and 3 parameters ran warm-up to
+// 700-900 sweeps and the default run took 10.5 CPU s against
+// RobustCalibration's 10.2 in the same process; held to blocks of 4 or
+// more, 300-500 sweeps and 4.9 s against 5.7; RESULTS-defaults.md)
+static const int WARM_ESS_K = 4;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).

@@ -168,7 +168,7 @@ with_warmup_ess <- function(ess, code) {
 test_that("warm-up waits for the joint blocks' shapes to be learnt from enough effective draws", {
   # the ball drop with a second, irrelevant field input z: the simulator
   # block is thetaS of h, z and g and sigma2S (4 parameters), the bias block
-  # thetaB of h and z and sigma2B (3): the rule holds every joint block
+  # thetaB of h and z and sigma2B (3): the rule holds blocks of 4 or more
   set.seed(39)
   sim <- cbind(ballSim[, 1:2], z = runif(nrow(ballSim)), ballSim[, 3, drop = FALSE])
   field <- cbind(ballField, z = runif(nrow(ballField)))
@@ -185,8 +185,8 @@ test_that("warm-up waits for the joint blocks' shapes to be learnt from enough e
     st <- fit$state$chains[[k]]$sampler
     expect_identical(st$warmESS, 10)
     expect_identical(st$warmForget, 0.5)
-    big <- Filter(function(b) length(b$index) >= 2, st$blocks)
-    expect_length(big, 2)
+    big <- Filter(function(b) length(b$index) >= 4, st$blocks)
+    expect_length(big, 1)
     for (b in big) {
       expect_gte(sum(warm_epoch(b$winIndex) >= max(warm_epoch(b$winIndex)) - 1), 4)
       expect_true(all(block_ess(b, st$warmForget) >= 10 * length(b$index)))
