@@ -61,6 +61,10 @@
     .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 
+.fbc_block_estimate_c <- function(W, forget) {
+    .Call(`_FBC_fbc_block_estimate`, W, forget)
+}
+
 .vecchia_order <- function(X, w) {
     .Call(`_FBC_vecchia_order`, X, w)
 }

@@ -21,7 +21,10 @@
 # holds this many effective draws per parameter (src/sampler.cpp): at
 # m = 1000 scattered runs the simulator block's bulk ESS at 875 retained
 # draws a chain was 373 with it against 168 without (RESULTS-defaults.md).
-fbc_warmup <- list(min = 200L, max = 5000L, ess = 10)
+# `forget`: the weight of each earlier epoch of a block's estimate
+# (epochs of 200, 200, 400, 800, ... sweeps) relative to the next one's;
+# 0 would start the estimate afresh at 200, 400, 800, ... (RESULTS-defaults.md).
+fbc_warmup <- list(min = 200L, max = 5000L, ess = 10, forget = 0.5)
 fbc_first_check <- 500L
 # Without `every`, each check after the first comes when the retained
 # sweeps have grown by this factor (rounded up to a piece of 50 sweeps).
@@ -158,7 +161,8 @@ check_run_length <- function(nMCMC, nBurn, thinning, converge, call = parent.fra
         i = "Give {.arg nMCMC} of at least 200, or a fixed {.arg nBurn}."
       ), call = call)
     }
-    nBurn <- list(min = min(fbc_warmup$min, cap), max = cap, ess = fbc_warmup$ess)
+    nBurn <- list(min = min(fbc_warmup$min, cap), max = cap, ess = fbc_warmup$ess,
+                  forget = fbc_warmup$forget)
   }
   list(nMCMC = nMCMC, nBurn = nBurn, thinning = thinning, converge = rule)
 }

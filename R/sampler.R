@@ -169,6 +169,7 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
     state$warmMin <- state$warmMin %||% as.integer(nBurn$min)
     state$warmMax <- state$warmMax %||% as.integer(nBurn$max)
     state$warmESS <- state$warmESS %||% as.numeric(nBurn$ess %||% 0)
+    state$warmForget <- state$warmForget %||% as.numeric(nBurn$forget %||% 0)
     nBurn <- -1L
   }
   args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,

@@ -255,6 +255,18 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// fbc_block_estimate
+Rcpp::List fbc_block_estimate(const arma::mat& W, double forget);
+RcppExport SEXP _FBC_fbc_block_estimate(SEXP WSEXP, SEXP forgetSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type W(WSEXP);
+    Rcpp::traits::input_parameter< double >::type forget(forgetSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_block_estimate(W, forget));
+    return rcpp_result_gen;
+END_RCPP
+}
 // vecchia_order
 Rcpp::IntegerVector vecchia_order(const arma::mat& X, const arma::vec& w);
 RcppExport SEXP _FBC_vecchia_order(SEXP XSEXP, SEXP wSEXP) {
@@ -298,6 +310,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
+    {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 2},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
     {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},
     {NULL, NULL, 0}

@@ -39,17 +39,22 @@
 // every block is shaped, the SD its shape gives each parameter relative to
 // the shape's size within a factor exp(WARM_SHAPE) of the previous
 // window's, and learnt from enough draws: a joint block of at least
-// WARM_ESS_K parameters must hold in its running covariance at least
-// warmESS effective draws per parameter (R's
-// fbc_warmup$ess, carried in the state; 0 in a state written before the
-// rule, which resumes as it began), counted by batch means over the
-// windows since the estimate started (B >= 4 window means,
-// ESS_i = B var_i / var(means_i)). Warm-up ends at the end of the second settled window in a row,
-// at the earliest after warmMin sweeps, and at warmMax sweeps in any case
-// (warmCapped). The joint proposals' running covariance starts afresh at
-// sweeps 200, 400, 800, ... (each estimate leaves out at least the first
-// half of the sweeps so far, as a fixed burn-in's leaves out its first
-// half), and a reshaped block keeps its proposal's size (log s absorbs the
+// WARM_ESS_K parameters must hold in its covariance estimate at least
+// warmESS effective draws per parameter (R's fbc_warmup$ess, carried in the
+// state; 0 in a state written before the rule, which resumes as it began;
+// Block::window_ess()). Warm-up ends at the end of the second settled
+// window in a row, at the earliest after warmMin sweeps, and at warmMax
+// sweeps in any case (warmCapped). The joint proposals' covariance estimate
+// is kept by window of 100 sweeps, the windows grouped in epochs that
+// double (sweeps 1-200, 201-400, 401-800, ...); each earlier epoch's draws
+// weigh `forget` times the next one's (R's fbc_warmup$forget, in the state
+// as warmForget; Block::pooled()). forget = 0 is an estimate started afresh
+// at 200, 400, 800, ... (as a fixed burn-in's leaves out its first half),
+// whose effective draws had to be earned again after every restart; 0.5
+// keeps the older epochs at falling weight, so the estimate changes
+// smoothly, leaves the drift from the start little weight, and its
+// effective draws keep growing. A reshaped block keeps its proposal's size
+// (log s absorbs the
 // change of log det(L)^(1/k)). The decision is part of the chain's state, so
 // a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
@@ -79,9 +84,11 @@ static const int BATCH = 50;
 static const int WINDOW = 100;  // sweeps per warm-up window (a multiple of BATCH)
 static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
 // the effective-draws rule holds blocks of at least this many parameters
-// (a smaller block's shape is learnt soon enough: the ball drop's blocks of
-// 2 and 3 end warm-up at 500 sweeps without it, 1300-1400 with it, as the
-// rule needs 4 windows since the estimate's restart at 800)
+// (a smaller block's shape is learnt soon enough: with the rule on every
+// joint block the ball drop's blocks of 2 and 3 parameters ran warm-up to
+// 700-900 sweeps and the default run took 10.5 CPU s against
+// RobustCalibration's 10.2 in the same process; held to blocks of 4 or
+// more, 300-500 sweeps and 4.9 s against 5.7; RESULTS-defaults.md)
 static const int WARM_ESS_K = 4;
 
 // prior on parameter j: family code, parameters, and the affine map
@@ -109,12 +116,16 @@ struct Block {
   std::vector<int> idx;
   arma::vec mean, w, wNew, e, lpNew, vals;
   arma::mat cov, L, tmp;  // cov: Welford sums of squares (lower triangle)
-  // warm-up of data-dependent length: the sum of w over this window's
-  // records (winN of them) and the window means since the estimate started
-  arma::vec winSum;
-  arma::mat winMeans;
-  double logscale = 0, accBatch = 0;
-  int n = 0, batch = 0, restart = 0, winN = 0;  // restart < 0: a warm-up of data-dependent length
+  // warm-up of data-dependent length (restart < 0): the draws recorded, by
+  // window of WINDOW sweeps (window j: sweeps WINDOW j + 1 ... WINDOW (j + 1)):
+  // each closed window's count, index, mean (a column of winMeans) and
+  // centred sums of squares (a k x k slice of winM2, side by side); the open
+  // window's likewise (curN, curWin, curMean, curM2); `forget` the weight
+  // of each earlier epoch (see pooled())
+  arma::vec winCount, winIndex, curMean;
+  arma::mat winMeans, winM2, curM2;
+  double logscale = 0, accBatch = 0, forget = 0;
+  int n = 0, batch = 0, restart = 0, curN = 0, curWin = -1;  // restart < 0: a warm-up of data-dependent length
   bool shaped = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
@@ -123,12 +134,17 @@ struct Block {
     mean.zeros(k); cov.zeros(k, k); L.zeros(k, k);
     for (int i = 0; i < k; ++i) L(i, i) = std::exp(logsd[idx[i]]);
     logscale = -0.5 * std::log((double) k);
-    winSum.zeros(k); winMeans.set_size(k, 0);
+    clear_windows();
     alloc();
   }
   void alloc() {
     const int k = idx.size();
     w.set_size(k); wNew.set_size(k); e.set_size(k); lpNew.set_size(k); vals.set_size(k);
+  }
+  void clear_windows() {
+    const int k = idx.size();
+    winCount.reset(); winIndex.reset(); winMeans.set_size(k, 0); winM2.set_size(k, 0);
+    curN = 0; curWin = -1; curMean.zeros(k); curM2.zeros(k, k);
   }
   void read(const Rcpp::List& s) {
     const Rcpp::IntegerVector ix = s["index"];
@@ -139,15 +155,23 @@ struct Block {
     L = Rcpp::as<arma::mat>(s["chol"]);
     logscale = s["logscale"]; accBatch = s["accBatch"];
     n = s["n"]; batch = s["batch"]; shaped = s["shaped"];
-    // (a state written before the effective-draws rule: none recorded)
-    const int k = idx.size();
-    winSum = s.containsElementNamed("winSum") ? Rcpp::as<arma::vec>(s["winSum"]) : arma::vec(k, arma::fill::zeros);
-    winMeans = s.containsElementNamed("winMeans") ? Rcpp::as<arma::mat>(s["winMeans"]) : arma::mat(k, 0);
-    winN = s.containsElementNamed("winN") ? Rcpp::as<int>(s["winN"]) : 0;
+    // (a state written before the windows' estimate: it starts afresh)
+    clear_windows();
+    if (s.containsElementNamed("winM2")) {
+      winCount = Rcpp::as<arma::vec>(s["winCount"]);
+      winIndex = Rcpp::as<arma::vec>(s["winIndex"]);
+      winMeans = Rcpp::as<arma::mat>(s["winMeans"]);
+      winM2 = Rcpp::as<arma::mat>(s["winM2"]);
+      curN = s["curN"]; curWin = s["curWin"];
+      curMean = Rcpp::as<arma::vec>(s["curMean"]);
+      curM2 = Rcpp::as<arma::mat>(s["curM2"]);
+      const int k = idx.size();
+      if (winCount.n_elem == 0) { winMeans.set_size(k, 0); winM2.set_size(k, 0); }
+    }
     alloc();
   }
-  // (the window means only under a warm-up of data-dependent length: a
-  // fixed burn-in's state is as it was before them)
+  // (the windows only under a warm-up of data-dependent length: a fixed
+  // burn-in's state is as it was before them)
   Rcpp::List write() const {
     Rcpp::IntegerVector ix(idx.size());
     for (size_t i = 0; i < idx.size(); ++i) ix[i] = idx[i] + 1;
@@ -157,9 +181,14 @@ struct Block {
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
       Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
     if (restart >= 0) return out;
-    out.push_back(Rcpp::wrap(winSum), "winSum");
+    out.push_back(Rcpp::NumericVector(winCount.begin(), winCount.end()), "winCount");
+    out.push_back(Rcpp::NumericVector(winIndex.begin(), winIndex.end()), "winIndex");
     out.push_back(Rcpp::wrap(winMeans), "winMeans");
-    out.push_back(winN, "winN");
+    out.push_back(Rcpp::wrap(winM2), "winM2");
+    out.push_back(curN, "curN");
+    out.push_back(curWin, "curWin");
+    out.push_back(Rcpp::NumericVector(curMean.begin(), curMean.end()), "curMean");
+    out.push_back(Rcpp::wrap(curM2), "curM2");
     return out;
   }
   // log det(L)^(1/k): the log size of the shape.
@@ -169,33 +198,127 @@ struct Block {
     return 0.5 * arma::log(arma::sum(arma::square(L), 1)) - log_volume();
   }
   // Start the running mean and covariance afresh (L is kept).
-  void forget() {
-    n = 0; mean.zeros(); cov.zeros();
-    winSum.zeros(); winN = 0; winMeans.set_size(idx.size(), 0);
-  }
+  void forget_all() { n = 0; mean.zeros(); cov.zeros(); }
   // Welford update of the running mean and covariance of w.
   void record() {
     ++n;
-    if (restart < 0) { winSum += w; ++winN; }
     const int k = idx.size();
     for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
     mean += e / n;
     for (int a = 0; a < k; ++a)
       for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
   }
-  // End of a warm-up window: its mean of w joins the window means (a window
-  // the estimate started in is left out), and the fewest effective draws
-  // of a parameter in the running covariance, by batch means (0 with fewer
-  // than 4 windows): ESS_i = B var_i / var(window means_i).
+  // Warm-up of data-dependent length: w at sweep `it` joins its window
+  // (Welford within the window).
+  void record_window(int it) {
+    const int j = (it - 1) / WINDOW;
+    if (curN > 0 && j != curWin) close_window();
+    curWin = j; ++curN; ++n;
+    const int k = idx.size();
+    for (int i = 0; i < k; ++i) e[i] = w[i] - curMean[i];
+    curMean += e / curN;
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b <= a; ++b) curM2(a, b) += e[a] * (w[b] - curMean[b]);
+  }
+  // The open window joins the closed ones.
+  void close_window() {
+    if (curN == 0) return;
+    const int k = idx.size();
+    winCount.resize(winCount.n_elem + 1); winCount.back() = curN;
+    winIndex.resize(winIndex.n_elem + 1); winIndex.back() = curWin;
+    winMeans.insert_cols(winMeans.n_cols, curMean);
+    winM2.insert_cols(winM2.n_cols, arma::symmatl(curM2));
+    curN = 0; curMean.zeros(k); curM2.zeros(k, k);
+  }
+  // Window j's epoch: 0 for windows 0-1 (sweeps 1-200), e for windows
+  // 2^e ... 2^(e+1) - 1 (sweeps 200 2^(e-1) + 1 ... 200 2^e): the epochs
+  // double, as the restarts of a fixed estimate did.
+  static int epoch(int j) {
+    int e = 0;
+    if (j >= 2) { e = 1; while (j >= 4) { j /= 2; ++e; } }
+    return e;
+  }
+  // Weighted pooled estimate (see the top): every window's draws weighted
+  // a = forget^(E - its epoch), E the newest window's epoch (forget = 0: the
+  // newest epoch alone, an estimate started afresh at 200, 400, 800, ...;
+  // forget > 0: each earlier epoch kept at a fraction of the next one's
+  // weight, so a new epoch changes nothing until its draws come). Mean
+  // mu = sum a n m / S, covariance
+  //   C = sum a (M2 + n (m - mu)(m - mu)') / S,  S = sum a n
+  // (cov.wt(method = "ML") with the weights a per draw), over the closed
+  // windows and the open one (withOpen). `count` the draws weighed (a > 0);
+  // pi the closed windows' shares a n / S (withOpen false).
+  int pooled(bool withOpen, arma::vec& mu, arma::mat& C, arma::vec& pi) const {
+    const int B = winCount.n_elem, k = idx.size();
+    const int newest = withOpen && curN > 0 ? curWin : (B ? (int) winIndex[B - 1] : curWin);
+    const int E = epoch(std::max(newest, 0));
+    arma::vec a(B);
+    double S = 0;
+    int count = 0;
+    for (int b = 0; b < B; ++b) {
+      a[b] = std::pow(forget, E - epoch((int) winIndex[b]));
+      S += a[b] * winCount[b];
+      if (a[b] > 0) count += winCount[b];
+    }
+    const bool open = withOpen && curN > 0;
+    if (open) { S += curN; count += curN; }
+    mu.zeros(k); C.zeros(k, k); pi.zeros(B);
+    if (S <= 0) return 0;
+    for (int b = 0; b < B; ++b) mu += a[b] * winCount[b] * winMeans.col(b) / S;
+    if (open) mu += curN * curMean / S;
+    for (int b = 0; b < B; ++b) {
+      if (a[b] == 0) continue;
+      const arma::vec d = winMeans.col(b) - mu;
+      C += a[b] * (winM2.cols(b * k, b * k + k - 1) + winCount[b] * d * d.t());
+      pi[b] = a[b] * winCount[b] / S;
+    }
+    if (open) {
+      const arma::vec d = curMean - mu;
+      C += arma::symmatl(curM2) + curN * d * d.t();
+    }
+    C /= S;
+    return count;
+  }
+  // End of a warm-up window: it joins the closed windows, and the fewest
+  // effective draws of a parameter in the weighted estimate (0 with fewer
+  // than 4 recent windows): its effective size for independent draws,
+  //   N = (sum a n)^2 / sum a^2 n,
+  // over each parameter's mixing time measured by batch means over the
+  // recent windows (the newest two epochs; the newest alone when forget = 0),
+  //   tau_i = nbar var(window means_i) / v_i
+  // (v_i the recent windows' pooled variance, nbar their mean count), so
+  // ESS_i = N / tau_i; with forget = 0, B v_i / var(window means_i). The
+  // older windows' drift from the start does not count against the
+  // recent mixing.
   double window_ess() {
-    if (winN >= WINDOW / 2) winMeans.insert_cols(winMeans.n_cols, winSum / winN);
-    winSum.zeros(); winN = 0;
-    const int B = winMeans.n_cols, k = idx.size();
-    if (B < 4 || n < 2) return 0;
+    close_window();
+    const int B = winCount.n_elem, k = idx.size();
+    if (B == 0) return 0;
+    const int E = epoch((int) winIndex[B - 1]), from = forget > 0 ? E - 1 : E;
+    double sa = 0, sa2 = 0, nR = 0;
+    std::vector<int> recent;
+    for (int b = 0; b < B; ++b) {
+      const int eb = epoch((int) winIndex[b]);
+      const double a = std::pow(forget, E - eb);
+      sa += a * winCount[b]; sa2 += a * a * winCount[b];
+      if (eb >= from) { recent.push_back(b); nR += winCount[b]; }
+    }
+    const int R = recent.size();
+    if (R < 4 || sa2 <= 0) return 0;
+    const double N = sa * sa / sa2, nbar = nR / R;
     double ess = INFINITY;
     for (int i = 0; i < k; ++i) {
-      const double vb = arma::var(winMeans.row(i).t()), v = cov(i, i) / (n - 1);
-      ess = std::min(ess, vb > 0 ? B * v / vb : (double) n);
+      double mu = 0;
+      for (int b : recent) mu += winCount[b] * winMeans(i, b) / nR;
+      double v = 0, mm = 0, s2 = 0;
+      for (int b : recent) {
+        const double d = winMeans(i, b) - mu;
+        v += winM2(i, b * k + i) + winCount[b] * d * d;
+        mm += winMeans(i, b) / R;
+      }
+      v /= nR;
+      for (int b : recent) s2 += std::pow(winMeans(i, b) - mm, 2) / (R - 1);
+      ess = std::min(ess, s2 > 0 ? N * v / (nbar * s2) : N);
     }
     return ess;
   }
@@ -205,8 +328,14 @@ struct Block {
     const int k = idx.size();
     ++batch;
     logscale = adapt_step(logscale, rate, k == 1 ? 0.44 : 0.234, batch);
-    if (n >= 2 * BATCH) {
+    bool enough = n >= 2 * BATCH;
+    if (restart < 0) {
+      arma::vec mu, pi;
+      enough = pooled(true, mu, tmp, pi) >= 2 * BATCH;
+    } else if (enough) {
       tmp = cov / (n - 1);
+    }
+    if (enough) {
       const double eps = 1e-10 * (1 + arma::max(tmp.diag()));
       for (int i = 0; i < k; ++i) tmp(i, i) += eps;
       if (chol_lower(tmp)) {
@@ -243,7 +372,7 @@ struct Chain {
   // log SD of the shape at the end of the last window
   bool adaptive = false, warmCapped = false;
   int warmup = 0, warmMin = 200, warmMax = 5000, settled = 0, windows = 0;
-  double warmESS = 0;
+  double warmESS = 0, warmForget = 0;
   arma::vec winAcc, winShape;
   arma::mat winScale;
   Chain(Posterior& p, const Priors& r) : post(p), pr(r) {}
@@ -356,9 +485,8 @@ struct BlockMove : Move {
   // the restart sweep on)
   void after(bool burn, int it, int rep) override {
     if (!burn) return;
-    const bool restart = b.restart < 0 ?
-      it >= 200 && it % 200 == 0 && ((it / 200) & (it / 200 - 1)) == 0 : it == b.restart;
-    if (restart && rep == 0) b.forget();
+    if (b.restart < 0) { b.record_window(it); return; }
+    if (it == b.restart && rep == 0) b.forget_all();
     b.record();
   }
   double& batchCount() override { return b.accBatch; }
@@ -490,6 +618,7 @@ static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
   ch.warmMin = (int) list_num(state, "warmMin", 200);
   ch.warmMax = (int) list_num(state, "warmMax", 5000);
   ch.warmESS = list_num(state, "warmESS", 0);
+  ch.warmForget = list_num(state, "warmForget", 0);
   ch.warmCapped = list_num(state, "warmCapped", 0) != 0;
   ch.settled = (int) list_num(state, "settled", 0);
   ch.windows = (int) list_num(state, "windows", 0);
@@ -529,6 +658,7 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
     if ((int) blocks[b].idx.size() != ix.size())
       Rcpp::stop("the block proposal to continue from has the wrong size");
     blocks[b].restart = restartAt;
+    blocks[b].forget = ch.warmForget;
     for (int j : blocks[b].idx) {
       if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || inBlock[j])
         Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
@@ -742,7 +872,7 @@ static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule,
     Rcpp::Named("scaleAccBatch") = list_num(state, "scaleAccBatch", 0),
     Rcpp::Named("scaleBatch") = (int) list_num(state, "scaleBatch", 0));
   for (const auto& mv : schedule) mv->write(logsd, accBatch, scale);
-  return Rcpp::List::create(
+  Rcpp::List out = Rcpp::List::create(
     Rcpp::Named("phi") = Rcpp::NumericVector(phi.begin(), phi.end()),
     Rcpp::Named("logsd") = Rcpp::NumericVector(logsd.begin(), logsd.end()),
     Rcpp::Named("iter") = ch.iter, Rcpp::Named("batch") = ch.batch,
@@ -759,6 +889,8 @@ static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule,
     Rcpp::Named("winAcc") = Rcpp::NumericVector(ch.winAcc.begin(), ch.winAcc.end()),
     Rcpp::Named("winScale") = Rcpp::wrap(ch.winScale),
     Rcpp::Named("winShape") = Rcpp::NumericVector(ch.winShape.begin(), ch.winShape.end()));
+  out.push_back(ch.warmForget, "warmForget");
+  return out;
 }
 
 // The chain continued from `state`: its own state, its moves' schedule, the
@@ -886,4 +1018,31 @@ double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                   const Rcpp::List& model) {
   std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, model);
   return post->init(phi) ? post->logLik() : R_NegInf;
+}
+
+// The warm-up's estimate of a block's covariance (Block::pooled()) from the
+// walk positions W (one row per sweep 1, 2, ..., as a block records them
+// during a warm-up of data-dependent length), each earlier epoch weighted
+// `forget` times the next: mean, covariance (the open window included),
+// the draws weighed, and the fewest effective draws per parameter at the
+// last window's end (Block::window_ess()), for the tests.
+// [[Rcpp::export(.fbc_block_estimate_c)]]
+Rcpp::List fbc_block_estimate(const arma::mat& W, double forget) {
+  Block b;
+  std::vector<int> idx(W.n_cols);
+  for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+  b.start(idx, arma::zeros<arma::vec>(W.n_cols));
+  b.restart = -1;
+  b.forget = forget;
+  double ess = 0;
+  for (arma::uword it = 1; it <= W.n_rows; ++it) {
+    b.w = W.row(it - 1).t();
+    b.record_window(it);
+    if (it % WINDOW == 0) ess = b.window_ess();
+  }
+  arma::vec mu, pi;
+  arma::mat C;
+  const int count = b.pooled(true, mu, C, pi);
+  return Rcpp::List::create(Rcpp::Named("mean") = mu, Rcpp::Named("cov") = C,
+                            Rcpp::Named("count") = count, Rcpp::Named("ess") = ess);
 }

@@ -40,16 +40,18 @@ trace <- "trace" %in% args
 nopeer <- "nopeer" %in% args  # leave RobustCalibration out (a diagnosis run)
 extra <- grep("=", args, value = TRUE, fixed = TRUE)
 # experiments on the package's own constants (not arguments): ess=N the
-# warm-up's effective draws per block parameter (fbc_warmup$ess), growth=G
+# warm-up's effective draws per block parameter (fbc_warmup$ess), forget=F
+# the weight of each earlier epoch in a block's estimate (fbc_warmup$forget), growth=G
 # the stopping checks' growth factor (fbc_check_growth)
-internal <- grep("^(ess|growth)=", extra, value = TRUE)
+internal <- grep("^(ess|forget|growth)=", extra, value = TRUE)
 extra <- setdiff(extra, internal)
 for (a in internal) {
   ns <- asNamespace("FBC")
   v <- as.numeric(sub("^.*=", "", a))
-  nm <- if (startsWith(a, "ess=")) "fbc_warmup" else "fbc_check_growth"
+  key <- sub("=.*$", "", a)
+  nm <- if (key == "growth") "fbc_check_growth" else "fbc_warmup"
   val <- get(nm, ns)
-  if (nm == "fbc_warmup") val$ess <- v else val <- v
+  if (nm == "fbc_warmup") val[[key]] <- v else val <- v
   unlockBinding(nm, ns)
   assign(nm, val, envir = ns)
 }

@@ -125,14 +125,33 @@ test_that("set.seed() reproduces a run of data-dependent length on every plan", 
   expect_gte(min(ua$estimates$ess), 800)
 })
 
-# The fewest effective draws per parameter in a joint block's running
-# covariance where its warm-up ended, by batch means over the windows since
-# the estimate started (src/sampler.cpp): B var_i / var(window means_i),
-# computed here in plain R from the block's state.
-block_ess <- function(b) {
+# A warm-up's epochs (src/sampler.cpp, Block::epoch()): window j (sweeps
+# 100 j + 1 ... 100 (j + 1)) is in epoch 0 for j < 2, else floor(log2(j / 2)) + 1
+# (sweeps 1-200, 201-400, 401-800, ...).
+warm_epoch <- function(j) ifelse(j < 2, 0, floor(log2(j / 2)) + 1)
+
+# The fewest effective draws per parameter in a joint block's estimate where
+# its warm-up ended, in plain R from the block's state: its windows' draws
+# weighted a = forget^(E - epoch) (E the newest window's epoch), of
+# effective size N = sum(a n)^2 / sum(a^2 n) for independent draws, over the
+# mixing time tau_i = nbar var(window means_i) / v_i measured on the recent
+# windows (the newest two epochs; the newest alone when forget = 0: v_i
+# their pooled variance, nbar their mean count): ESS_i = N / tau_i.
+block_ess <- function(b, forget) {
   m <- as.matrix(b$winMeans)
-  v <- diag(as.matrix(b$cov)) / (b$n - 1)
-  ncol(m) * v / apply(m, 1, stats::var)
+  k <- nrow(m)
+  n <- b$winCount
+  ep <- warm_epoch(b$winIndex)
+  E <- ep[length(ep)]
+  a <- forget^(E - ep)
+  N <- sum(a * n)^2 / sum(a^2 * n)
+  r <- ep >= (if (forget > 0) E - 1 else E)
+  mu <- drop(m[, r, drop = FALSE] %*% n[r]) / sum(n[r])
+  m2 <- vapply(which(r), function(i) diag(as.matrix(b$winM2)[, (i - 1) * k + seq_len(k), drop = FALSE]),
+               numeric(k))
+  v <- (rowSums(matrix(m2, k)) + drop((m[, r, drop = FALSE] - mu)^2 %*% n[r])) / sum(n[r])
+  s2 <- apply(m[, r, drop = FALSE], 1, stats::var)
+  N * v / (mean(n[r]) * s2)
 }
 
 # Runs `code` with the warm-up's effective-draws rule at `ess` per
@@ -148,30 +167,29 @@ with_warmup_ess <- function(ess, code) {
 
 test_that("warm-up waits for the joint blocks' shapes to be learnt from enough effective draws", {
   # the ball drop with a second, irrelevant field input z: the simulator
-  # block is thetaS of h, z and g and sigma2S (4 parameters: the rule holds
-  # blocks of at least 4; the bias block's 3 are exempt)
+  # block is thetaS of h, z and g and sigma2S (4 parameters), the bias block
+  # thetaB of h and z and sigma2B (3): the rule holds blocks of 4 or more
   set.seed(39)
   sim <- cbind(ballSim[, 1:2], z = runif(nrow(ballSim)), ballSim[, 3, drop = FALSE])
   field <- cbind(ballField, z = runif(nrow(ballField)))
   args <- list(sim, field, nChains = 2, nMCMC = 3000)
   set.seed(38)
   fit <- with_warmup_ess(10, do.call(calibrate, args))
-  # where warm-up ended (but at its maximum, half of nMCMC, which the
-  # irrelevant input's slow length-scale makes one chain reach) each joint
-  # block of 4 or more parameters held at least 10 effective draws per
-  # parameter in its running covariance, over at least 4 windows of 100
-  # sweeps since its estimate started
+  # where warm-up ended (but at its maximum, half of nMCMC) each joint
+  # block held at least 10 effective draws per parameter in its weighted
+  # estimate, over at least 4 windows of 100 sweeps
   capped <- fit$settings$warmupCapped
   expect_true(all(fit$settings$warmup[capped] == 1500))
   expect_lt(length(capped), 2)
   for (k in setdiff(1:2, capped)) {
     st <- fit$state$chains[[k]]$sampler
     expect_identical(st$warmESS, 10)
+    expect_identical(st$warmForget, 0.5)
     big <- Filter(function(b) length(b$index) >= 4, st$blocks)
     expect_length(big, 1)
     for (b in big) {
-      expect_gte(ncol(as.matrix(b$winMeans)), 4)
-      expect_true(all(block_ess(b) >= 10 * length(b$index)))
+      expect_gte(sum(warm_epoch(b$winIndex) >= max(warm_epoch(b$winIndex)) - 1), 4)
+      expect_true(all(block_ess(b, st$warmForget) >= 10 * length(b$index)))
     }
   }
   # without the rule the same chains end warm-up sooner: it is what held them
@@ -179,6 +197,54 @@ test_that("warm-up waits for the joint blocks' shapes to be learnt from enough e
   off <- with_warmup_ess(0, do.call(calibrate, args))
   expect_true(all(off$settings$warmup <= fit$settings$warmup))
   expect_true(any(off$settings$warmup < fit$settings$warmup))
+})
+
+test_that("a block's warm-up estimate keeps the earlier epochs at falling weights", {
+  # walk positions of a 3-parameter block, correlated and drifting (as
+  # early in a warm-up); 1450 sweeps: epochs 0-3 closed or open
+  set.seed(40)
+  S <- matrix(c(1, 0.5, 0.2, 0.5, 2, 0.3, 0.2, 0.3, 1), 3)
+  W <- matrix(rnorm(1450 * 3), ncol = 3) %*% chol(S) + outer(1:1450, c(0.002, 0, -0.001))
+  j <- (seq_len(nrow(W)) - 1) %/% 100
+  for (forget in c(0, 0.5, 1)) {
+    est <- FBC:::.fbc_block_estimate_c(W, forget)
+    # the same draws, each weighted forget^(epochs before the newest)
+    a <- forget^(warm_epoch(max(j)) - warm_epoch(j))
+    ref <- stats::cov.wt(W, wt = a / sum(a), method = "ML")
+    expect_equal(est$cov, ref$cov, tolerance = 1e-12)
+    expect_equal(drop(est$mean), ref$center, tolerance = 1e-12)
+    expect_identical(est$count, sum(a > 0))
+    # the effective draws at the last window's end (1400) as block_ess() counts them
+    w14 <- j < 14
+    b <- list(winIndex = 0:13, winCount = rep(100, 14),
+              winMeans = t(apply(W[w14, ], 2, function(x) tapply(x, j[w14], mean))),
+              winM2 = do.call(cbind, lapply(0:13, function(i) {
+                x <- W[j == i, ]
+                crossprod(sweep(x, 2, colMeans(x)))
+              })))
+    expect_equal(est$ess, min(block_ess(b, forget)), tolerance = 1e-10)
+  }
+  # a known mixing time: independent AR(1) walks with rho = 0.9 (integrated
+  # autocorrelation time (1 + rho) / (1 - rho) = 19 sweeps), 6400 sweeps: the
+  # effective draws are the weighted estimate's effective size over 19
+  # (batch means over the 48 recent windows: within about 25%)
+  set.seed(41)
+  Z <- apply(matrix(rnorm(6400 * 3), ncol = 3), 2, function(e) stats::filter(e, 0.9, method = "recursive"))
+  jz <- (seq_len(6400) - 1) %/% 100
+  az <- 0.5^(warm_epoch(63) - warm_epoch(jz))
+  N <- sum(az)^2 / sum(az^2)
+  expect_equal(FBC:::.fbc_block_estimate_c(Z, 0.5)$ess / (N / 19), 1, tolerance = 0.25)
+  # forget = 0 is the estimate started afresh at 200, 400, 800, ...: 650
+  # draws since sweep 800; forget = 0.5 keeps all 1450, the epoch of sweeps
+  # 801-1600 weighted 1, 401-800 1/2, 201-400 1/4, 1-200 1/8
+  expect_identical(FBC:::.fbc_block_estimate_c(W, 0)$count, 650L)
+  expect_identical(FBC:::.fbc_block_estimate_c(W, 0.5)$count, 1450L)
+  # a new epoch's first draw barely moves the estimate (no restart): from
+  # 800 to 801 draws the covariance moves by about 1/(weighted draws)
+  e800 <- FBC:::.fbc_block_estimate_c(W[1:800, ], 0.5)$cov
+  e801 <- FBC:::.fbc_block_estimate_c(W[1:801, ], 0.5)$cov
+  expect_lt(max(abs(e801 - e800)), 0.05)
+  expect_gt(max(abs(FBC:::.fbc_block_estimate_c(W[1:801, ], 0)$cov - e800)), 0.5)
 })
 
 test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
