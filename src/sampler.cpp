@@ -409,6 +409,20 @@ struct Move {
   virtual const char* kind() const = 0;
 };
 
+// The Metropolis decision of a move of parameter j whose proposal gave the
+// log-likelihood llNew and log prior lpNew: accept when
+// log u < llNew + lpNew - ll - lp_j + extra (extra: a Jacobian term, 0 for
+// a symmetric or prior proposal); keeps or restores the posterior's state.
+static bool metropolis(Chain& ch, int j, double llNew, double lpNew, double extra) {
+  if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j] + extra) {
+    ch.post.accept();
+    ch.ll = llNew; ch.lp[j] = lpNew;
+    return true;
+  }
+  ch.post.reject();
+  return false;
+}
+
 // Single-site random-walk Metropolis move of parameter j.
 struct SiteMove : Move {
   int j;
@@ -426,15 +440,7 @@ struct SiteMove : Move {
     if (!std::isfinite(lpNew)) return false;
     const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
     if (!std::isfinite(jac)) return false;
-    const double llNew = post.propose(j, xNew);
-    const double logr = llNew + lpNew - ch.ll - ch.lp[j] + jac;
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < logr) {
-      post.accept();
-      ch.ll = llNew; ch.lp[j] = lpNew;
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, j, post.propose(j, xNew), lpNew, jac);
   }
   double& batchCount() override { return accBatch; }
   void adapt(const Chain& ch) override {
@@ -592,14 +598,7 @@ struct JumpMove : Move {
     const double xNew = lo + (hi - lo) * R::unif_rand();
     const double lpNew = ch.pr(j, xNew);
     if (!std::isfinite(lpNew)) return false;
-    const double llNew = post.propose(j, xNew);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j]) {
-      post.accept();
-      ch.ll = llNew; ch.lp[j] = lpNew;
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
   }
   double& batchCount() override { return accBatch; }
 };
