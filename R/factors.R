@@ -215,6 +215,13 @@ indicator_names <- function(nm, levs) {
   sprintf("%s[%s]", nm, use)
 }
 
+# Each row's level (1-based) from its indicator columns `ind` (a matrix,
+# native units, indicator_names()' layout): one column for two levels, one
+# per level from three.
+indicator_codes <- function(ind) {
+  if (ncol(ind) == 1L) 1L + as.integer(round(ind[, 1])) else max.col(ind, "first")
+}
+
 # Levels of x not among `levs` are refused, naming the column and levels.
 check_levels <- function(x, levs, nm, arg, call = parent.frame()) {
   bad <- setdiff(unique(as.character(x)), levs)

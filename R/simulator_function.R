@@ -180,10 +180,9 @@ function_inputs <- function(X, names, frame, output = NULL, codes = NULL) {
 }
 
 # Each row's output (1-based) from its output's indicator columns (native
-# units): one column for two levels, one per level from three.
+# units; indicator_codes()).
 output_codes <- function(X, names, output) {
-  ind <- X[, match(output$columns, names), drop = FALSE]
-  if (length(output$levels) == 2L) as.integer(round(ind[, 1])) + 1L else max.col(ind, "first")
+  indicator_codes(X[, match(output$columns, names), drop = FALSE])
 }
 
 # The calibration inputs from the kappa prior arguments: list(spec (as

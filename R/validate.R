@@ -146,7 +146,7 @@ categorical_runs <- function(runs, inputs, scale) {
     cols <- f$columns
     if (!all(cols %in% names(runs))) next
     ind <- as.matrix(runs[, cols, drop = FALSE])
-    code <- if (length(cols) == 1L) 1L + as.integer(round(ind[, 1])) else max.col(ind, "first")
+    code <- indicator_codes(ind)
     j <- match(cols[1], names(runs))
     runs[[cols[1]]] <- factor(f$levels[code], f$levels)
     names(runs)[j] <- f$name
