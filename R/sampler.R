@@ -60,8 +60,8 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
     # ys' Ds^-1 ys ahead of a proposal, the Vecchia one: elsewhere the plain
     # joint walk): at m = 1000 (inst/bench/RESULTS-defaults.md) the joint
     # walk's mixing of sigma2S and the length-scales limited the run
-    collapse = which(startsWith(as.character(names(blocks)), "sim") &
-                       vapply(blocks, function(b) spec$classes[b[length(b)]] == "sigma2S", logical(1))),
+    collapse = unname(which(startsWith(as.character(names(blocks)), "sim") &
+                       vapply(blocks, function(b) spec$classes[b[length(b)]] == "sigma2S", logical(1)))),
     scale = all(free[scaled]),
     gibbsMuB = length(gibbs) > 0L &&
       all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &
