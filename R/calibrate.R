@@ -319,8 +319,8 @@
 #'   runs' own conditional (inverse gamma, given the proposed correlation),
 #'   corrected for the field data by Metropolis-Hastings, so that it need
 #'   not follow the ridge between `sigma2S` and the length-scales (at
-#'   m = 1000 twice the simulator block's ESS per CPU second,
-#'   `inst/bench/RESULTS-defaults.md`);
+#'   m = 1000 1.1-2.3 times the slowest parameter's ESS per CPU second in
+#'   two paired runs, `inst/bench/RESULTS-defaults.md`);
 #' * two joint moves of the bias GP's parameters (`thetaB`, `alphaB`,
 #'   `sigma2B`), which touch only the field block (none under
 #'   `discrepancy = "none"`);
