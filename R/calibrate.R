@@ -314,7 +314,13 @@
 #'   came for);
 #' * two joint moves of the simulator GP's parameters (`thetaS`, `alphaS`,
 #'   `sigma2S`, whose range and scale trade off), each costing one
-#'   factorisation of the simulator block;
+#'   factorisation of the simulator block; on the Vecchia algebra the move
+#'   walks the correlation parameters alone and draws `sigma2S` from the
+#'   runs' own conditional (inverse gamma, given the proposed correlation),
+#'   corrected for the field data by Metropolis-Hastings, so that it need
+#'   not follow the ridge between `sigma2S` and the length-scales (at
+#'   m = 1000 1.1-2.3 times the slowest parameter's ESS per CPU second in
+#'   two paired runs, `inst/bench/RESULTS-defaults.md`);
 #' * two joint moves of the bias GP's parameters (`thetaB`, `alphaB`,
 #'   `sigma2B`), which touch only the field block (none under
 #'   `discrepancy = "none"`);

@@ -51,9 +51,17 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
   gibbs <- which(move == "gibbs")
   rep_each <- if (large) 1L else 3L
   rep_joint <- as.integer(ifelse(startsWith(as.character(names(joint)), "sim") & large, 1L, 2L))
+  blocks <- c(each, joint)
   list(
-    blocks = c(each, joint),
+    blocks = blocks,
     repeats = c(rep(rep_each, length(each)), rep_joint),
+    # the simulator blocks whose sigma2S is drawn from the runs' own
+    # conditional (src/sampler.cpp, BlockMove; only where the algebra gives
+    # ys' Ds^-1 ys ahead of a proposal, the Vecchia one: elsewhere the plain
+    # joint walk): at m = 1000 (inst/bench/RESULTS-defaults.md) the joint
+    # walk's mixing of sigma2S and the length-scales limited the run
+    collapse = unname(which(startsWith(as.character(names(blocks)), "sim") &
+                       vapply(blocks, function(b) spec$classes[b[length(b)]] == "sigma2S", logical(1)))),
     scale = all(free[scaled]),
     gibbsMuB = length(gibbs) > 0L &&
       all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &

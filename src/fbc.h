@@ -309,6 +309,21 @@ public:
                         arma::vec& logdens) const = 0;
   // A short description of the algebra (for tests and messages).
   virtual std::string algebra() const = 0;
+  // The simulator runs' quadratic form zz = ys' Ds^-1 ys (correlation units)
+  // at a proposal of the simulator GP's correlation parameters alone
+  // (phi[idx[i]] = values[i]; no variance among them), ahead of propose():
+  // an algebra that can (Vecchia) computes it without changing the state and
+  // keeps it, so that a propose() of the same correlation parameters right
+  // after does not compute it again. Returns false where the algebra cannot
+  // (the sampler then makes the plain joint move); ok = false when Ds is not
+  // positive definite at the proposal.
+  virtual bool simPreview(const std::vector<int>&, const arma::vec&, double& zz, bool& ok) {
+    zz = NA_REAL; ok = false;
+    return false;
+  }
+  // Can it (simPreview())? And zz at the current state (NaN where not).
+  virtual bool canPreview() const { return false; }
+  virtual double currentZz() const { return NA_REAL; }
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
@@ -440,6 +455,9 @@ private:
                   arma::mat& out, bool lower) const;
   arma::mat Bz_, Wz_;  // S-GaSP workspaces
 
+public:
+  double currentZz() const override { return zz_.cur(); }
+
 protected:
   // Q and wz at the current state (Q: lower triangle), for an algebra's
   // prediction.
@@ -538,6 +556,9 @@ public:
   VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                    const arma::vec& ys, double nugget, const Model& model);
   std::string algebra() const override;
+  bool simPreview(const std::vector<int>& idx, const arma::vec& values, double& zz,
+                  bool& ok) override;
+  bool canPreview() const override { return true; }
 
 protected:
   bool simUpdate(const Touch& t, double& ldDs, double& zz) override;
@@ -548,6 +569,15 @@ protected:
                   std::vector<arma::mat>& QBB) override;
 
 private:
+  // the runs' pass (simUpdate()) at phi: log|Ds|, zz; false if not PD
+  bool runsPass(double& ldDs, double& zz);
+  // the simulator GP's correlation parameters of phi (thetaS, alphaS, rhoS)
+  arma::vec simKey() const;
+  // the last simPreview(): at correlation parameters previewKey_ its
+  // log|Ds|, zz and whether Ds was PD (previewSet_: not used yet)
+  arma::vec previewKey_;
+  double previewLd_ = 0, previewZz_ = 0;
+  bool previewOk_ = false, previewSet_ = false;
   VecchiaDesign vd_;
   std::vector<std::vector<int> > nbrL_;  // each field latent's earlier latents
   Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa

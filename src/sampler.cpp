@@ -72,6 +72,7 @@
 #include "fbc.h"
 #include <cli/progress.h>
 #include <climits>
+#include <algorithm>
 
 static void check_interrupt_fn(void*) { R_CheckUserInterrupt(); }
 // TRUE when the user pressed Ctrl-C (the interrupt is consumed here so the
@@ -454,12 +455,88 @@ struct SiteMove : Move {
 };
 
 // Joint random-walk move of a block (w* = w + exp(s) L e); it records the
-// burn-in draws that shape L.
+// burn-in draws that shape L. `collapse`: the simulator block with sigma2S
+// last, on an algebra that gives zz = ys' Ds^-1 ys ahead of the proposal
+// (Posterior::simPreview()): the walk moves the correlation parameters
+// (the first k - 1 entries of w, with L's leading block: the Cholesky
+// factor of their marginal covariance) and sigma2S is drawn from the
+// runs' own full conditional
+//   q(s2 | theta) = IG(a0 + m / 2, b0 + zz(theta) / 2)
+// ((a0, b0) the inverse gamma prior's, else 0), the exact conditional of
+// sigma2S given the runs alone; the field data's share is corrected by
+//   log r = log L* + log p* - log L - log p + jac(theta)
+//           + log q(s2 | theta) - log q(s2* | theta*),
+// a Metropolis-Hastings ratio with the walk's symmetric part cancelled.
+// sigma2S's posterior is dominated by the m runs, so the walk need not
+// follow the ridge between sigma2S and the length-scales
+// (sigma2S / theta^(2 nu) is what the runs pin down), which a joint walk of
+// all k must.
 struct BlockMove : Move {
   Block b;
+  bool collapse = false;
+  double a0 = 0, b0 = 0;  // q's prior part
+  std::vector<int> idxT;  // the walk's parameters (collapse: all but sigma2S)
+  arma::vec valsT;
   BlockMove(Block&& b_, int rep) : b(std::move(b_)) { idx = b.idx; repeats = rep; }
-  const char* kind() const override { return idx.size() == 1 ? "walk" : "joint"; }
+  const char* kind() const override {
+    return idx.size() == 1 ? "walk" : "joint";
+  }
+  // log density of IG(a, bb) at x
+  static double log_ig(double x, double a, double bb) {
+    return a * std::log(bb) - R::lgammafn(a) - (a + 1.0) * std::log(x) - bb / x;
+  }
+  bool step_collapsed(Chain& ch) {
+    Posterior& post = ch.post;
+    const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
+    for (int i = 0; i < kt; ++i) b.e[i] = R::norm_rand();
+    const double sc = std::exp(b.logscale);
+    double lpDiff = 0, jac = 0;
+    for (int i = 0; i < kt; ++i) {
+      const int j = b.idx[i], tr = ch.pr.transform[j];
+      b.w[i] = to_walk(tr, post.phi[j]);
+      double step = 0;
+      for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
+      b.wNew[i] = b.w[i] + sc * step;
+      b.vals[i] = valsT[i] = from_walk(tr, b.wNew[i]);
+      b.lpNew[i] = ch.pr(j, b.vals[i]);
+      lpDiff += b.lpNew[i] - ch.lp[j];
+      jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
+    }
+    if (!std::isfinite(lpDiff) || !std::isfinite(jac)) return false;
+    double zzNew;
+    bool ok;
+    post.simPreview(idxT, valsT, zzNew, ok);
+    if (!ok) return false;
+    const double aq = a0 + 0.5 * post.m, bNew = b0 + 0.5 * zzNew;
+    const double bOld = b0 + 0.5 * post.currentZz();
+    const double s2 = post.phi[js], s2New = 1.0 / R::rgamma(aq, 1.0 / bNew);
+    b.vals[kt] = s2New;
+    b.lpNew[kt] = ch.pr(js, s2New);
+    if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
+    lpDiff += b.lpNew[kt] - ch.lp[js];
+    const double lq = log_ig(s2, aq, bOld) - log_ig(s2New, aq, bNew);
+    const double llNew = post.propose(b.idx, b.vals);
+    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac + lq) {
+      post.accept();
+      ch.ll = llNew;
+      for (int i = 0; i < k; ++i) ch.lp[b.idx[i]] = b.lpNew[i];
+      return true;
+    }
+    post.reject();
+    return false;
+  }
+  // the walk's positions w of every parameter of the block (what a burn-in
+  // records)
+  void position(const Chain& ch) {
+    for (size_t i = 0; i < b.idx.size(); ++i)
+      b.w[i] = to_walk(ch.pr.transform[b.idx[i]], ch.post.phi[b.idx[i]]);
+  }
   bool step(Chain& ch) override {
+    if (collapse) {
+      const bool acc = step_collapsed(ch);
+      position(ch);
+      return acc;
+    }
     Posterior& post = ch.post;
     const int k = b.idx.size();
     for (int i = 0; i < k; ++i) b.e[i] = R::norm_rand();
@@ -667,6 +744,27 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
   return blocks;
 }
 
+// Makes block move mv draw sigma2S from the runs' conditional (BlockMove)
+// when asked (`want`), the block ends with sigma2S among other parameters
+// and the algebra gives zz ahead of a proposal; else it stays the plain
+// joint walk.
+static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
+  const Posterior& post = ch.post;
+  const std::vector<int>& idx = mv.b.idx;
+  const int k = idx.size();
+  if (!want || k < 2 || !post.canPreview() || post.layout.length[PC_SIGMA2S] != 1 ||
+      idx[k - 1] != post.iSigma2S)
+    return;
+  mv.collapse = true;
+  mv.idxT.assign(idx.begin(), idx.end() - 1);
+  mv.valsT.set_size(k - 1);
+  const int j = post.iSigma2S;
+  const Priors& pr = ch.pr;
+  if (pr.family[j] == PF_INVGAMMA && pr.a[j] == 0 && pr.b[j] == 1) {
+    mv.a0 = pr.p1[j]; mv.b0 = pr.p2[j];
+  }
+}
+
 // The schedule of `moves` (R's sampler_moves()): the moves in sweep order.
 // Each free parameter in the order of phi gets its block's move at the
 // block's first parameter (the block continued from `state` when it has
@@ -691,6 +789,9 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
     Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
   std::vector<Block> blocks = make_blocks(ch, blockSpec, state, nBurn);
+  // the blocks (1-based) whose sigma2S is drawn from the runs' conditional
+  const std::vector<int> collapse = moves.containsElementNamed("collapse") ?
+    Rcpp::as<std::vector<int> >(moves["collapse"]) : std::vector<int>();
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
@@ -708,6 +809,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       if (blockAt[j] < 0) continue;
       const int b = blockAt[j];
       BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
+      collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
       schedule.emplace_back(mv);
       ch.blocks[b] = &mv->b;
       const std::string nm(blockNames[b]);

@@ -223,9 +223,49 @@ double VecchiaPosterior::conditional(int s, int runs, bool coef) {
   return R_NaN;
 }
 
-// log|Ds| and ys' Ds^-1 ys over the runs' conditionals.
+// log|Ds| and ys' Ds^-1 ys over the runs' conditionals (those of the last
+// simPreview() when it was at the same correlation parameters).
 bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   if (!t.simCorr) return true;
+  if (previewSet_) {
+    previewSet_ = false;
+    if (arma::all(simKey() == previewKey_)) {
+      if (!previewOk_) return false;
+      ldDs = previewLd_; zz = previewZz_;
+      return true;
+    }
+  }
+  return runsPass(ldDs, zz);
+}
+
+// The simulator GP's correlation parameters in phi: thetaS, alphaS, rhoS
+// (what the runs' conditionals depend on).
+arma::vec VecchiaPosterior::simKey() const {
+  arma::vec key;
+  for (int c : {PC_THETAS, PC_ALPHAS, PC_RHOS}) {
+    const int o = layout.offset[c], l = layout.length[c];
+    if (l > 0) key = arma::join_cols(key, phi.subvec(o, o + l - 1));
+  }
+  return key;
+}
+
+// zz (and log|Ds|) at phi[idx] = values, phi left as it was; kept for the
+// propose() of the same values that follows (simUpdate()).
+bool VecchiaPosterior::simPreview(const std::vector<int>& idx, const arma::vec& values,
+                                  double& zz, bool& ok) {
+  arma::vec old(idx.size());
+  for (size_t i = 0; i < idx.size(); ++i) { old[i] = phi[idx[i]]; phi[idx[i]] = values[i]; }
+  previewKey_ = simKey();
+  previewOk_ = runsPass(previewLd_, previewZz_);
+  previewSet_ = true;
+  for (size_t i = 0; i < idx.size(); ++i) phi[idx[i]] = old[i];
+  ok = previewOk_;
+  zz = previewOk_ ? previewZz_ : NA_REAL;
+  return true;
+}
+
+// The runs' conditionals at phi: log|Ds| ~ sum log d_i, zz ~ sum e_i^2 / d_i.
+bool VecchiaPosterior::runsPass(double& ldDs, double& zz) {
   const int k = vd_.k;
   double ld = 0.0, qq = 0.0;
   for (int i = 0; i < m; ++i) {

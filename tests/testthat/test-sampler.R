@@ -74,3 +74,48 @@ test_that("single-site and adapted moves follow the one adaptation rule", {
   expect_equal(moved[free] / 0.5, round(moved[free] / 0.5))
   expect_true(all(abs(moved[free]) <= 2 + 1e-12))
 })
+
+test_that("the simulator block's sigma2S drawn from the runs' conditional targets the grid posterior", {
+  # 30 runs, 12 field rows (p = q = 1), the Vecchia algebra with 5
+  # neighbours (the algebra that gives ys' Ds^-1 ys ahead of a proposal),
+  # every parameter fixed but thetaS1, thetaS2 and sigma2S: the sim block's
+  # move walks the length-scales and draws sigma2S from IG(a + m/2, b +
+  # zz/2), corrected by Metropolis-Hastings for the field data. Reference:
+  # the compiled approximate log-likelihood times the priors on a 3-d grid
+  # of (log thetaS1, log thetaS2, log sigma2S), its marginals' quantiles.
+  d <- random_koh_data(12, 30, 1, 1, seed = 7)
+  sim <- data.frame(y = d$ys, x = d$Xs[, 1], t = d$Xs[, 2])
+  field <- data.frame(y = d$yf, x = d$Xf[, 1])
+  hyp <- set_hyperPriors(thetaBDist = "fixed", thetaBInit = 2, sigma2BDist = "fixed",
+                         sigma2BInit = 0.2, sigma2EDist = "fixed", sigma2EInit = 0.1,
+                         muBDist = "fixed", muBInit = 0)
+  set.seed(5)
+  fit <- calibrate(sim, field, kappaDist = "fixed", kappaInit = 0.5, hypers = hyp,
+                   algebra = "vecchia", neighbours = 5, nMCMC = 12000, nBurn = 2000,
+                   nChains = 1)
+  expect_identical(fit$model$moves$collapse, match("sim", names(fit$model$moves$blocks)))
+  rep <- FBC:::move_report(fit)
+  expect_identical(rep$parameters[rep$move == "sim"], "thetaS1,thetaS2,sigma2S")
+  tab <- fit$spec$table
+  cols <- match(c("thetaS1", "thetaS2", "sigma2S"), fit$spec$vars)
+  W <- log(FBC:::sampler_draws(fit)[, cols])
+  phi <- fit$state$chains[[1]]$last
+  dat <- fit$data
+  g <- lapply(1:3, function(i) seq(mean(W[, i]) - 5 * sd(W[, i]), mean(W[, i]) + 5 * sd(W[, i]),
+                                   length.out = 22))
+  grid <- as.matrix(expand.grid(g))
+  lp <- apply(grid, 1, function(w) {
+    x <- exp(w)
+    phi[cols] <- x
+    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$spec$model) +
+      sum(vapply(1:3, function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) + sum(w)
+  })
+  dens <- array(exp(lp - max(lp)), c(22, 22, 22))
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  for (i in 1:3) {
+    marg <- apply(dens, i, sum)
+    ref <- grid_quantile(g[[i]], marg, probs)
+    got <- stats::quantile(W[, i], probs, names = FALSE)
+    expect_lt(max(abs(got - ref)) / sd(W[, i]), 0.15)
+  }
+})
