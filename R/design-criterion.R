@@ -80,8 +80,9 @@
 #' set.seed(1)
 #' fit <- calibrate(ballSim[1:30, ], ballField, nChains = 2, nMCMC = 1000, nBurn = 400)
 #' propose_runs(fit, n = 2, ndraws = 50, ncandidates = 100)
-propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy = 50,
-                         method = c("joint", "plugin"), ncandidates = NULL, tol = 1e-3) {
+propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws = 100,
+                         nfantasy = 50, method = c("joint", "plugin"), ncandidates = NULL,
+                         tol = 1e-3) {
   t0 <- proc.time()
   fit <- check_fbc(fit, "fit")
   method <- match_choice(method, c("joint", "plugin"), "method")
@@ -92,12 +93,13 @@ propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy =
   check_design_model(model)
   sc <- model$scale
   d <- sc$p + sc$q
+  XT <- design_target(target, sc)
   U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * d), model$data$Xs, tol)
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
   parts <- design_particles(fit, ndraws, method)
-  crit <- look_ahead(parts, U, model, n, nfantasy)
+  crit <- look_ahead(parts, U, model, n, nfantasy, XT)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
@@ -105,12 +107,34 @@ propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy =
   attr(out, "variance") <- crit$variance
   attr(out, "time") <- sum(tm[c(1, 2)])
   if (out$gain[1] < 0.01) {
+    what <- if (nrow(XT)) "the calibrated prediction's variance at the target points" else "kappa's posterior variance"
     cli::cli_inform(c(
-      "!" = "The best new run is expected to shrink kappa's posterior variance by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
-      i = "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
+      "!" = "The best new run is expected to shrink {what} by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
+      i = if (nrow(XT)) "Such as the bias's and the measurement's uncertainty, which runs of the simulator do not reduce." else "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
     ))
   }
   out
+}
+
+# The criterion's target on the scaled experimental inputs: no rows for
+# kappa's variance, else the rows of `target` (experimental inputs where
+# calibrated predictions are wanted, as predict()'s newdata).
+design_target <- function(target, sc, call = parent.frame()) {
+  if (is.character(target) && identical(target, "kappa")) return(matrix(0, 0, sc$p))
+  if (!is.data.frame(target) && !is.numeric(target)) {
+    cli::cli_abort(c(
+      "{.arg target} must be {.val kappa} or experimental inputs where calibrated predictions are wanted (as {.fn predict}'s {.arg newdata}), not {.obj_type_friendly {target}}.",
+      i = "Such as {.code target = data.frame({sc$names$inputs[1]} = 0.5)}."
+    ), call = call)
+  }
+  X <- tryCatch(check_newdata(target, sc), error = function(e) {
+    cli::cli_abort("{.arg target} must be {.val kappa} or experimental inputs as {.fn predict}'s {.arg newdata}.",
+                   parent = e, call = call)
+  })
+  if (nrow(X) < 1L || nrow(X) > 100L) {
+    cli::cli_abort("{.arg target} must have 1 to 100 points (the look-ahead's cost grows with their number), not {nrow(X)}.", call = call)
+  }
+  scale_inputs(X, sc, seq_len(sc$p))
 }
 
 # The models the look-ahead handles (the dense conditional of one output).
@@ -181,12 +205,14 @@ design_particles <- function(fit, ndraws, method) {
 # draw. Its random numbers are drawn here: nfantasy uniforms choosing each
 # fantasy's draw (by the base weights), then per step a random order of the
 # nfantasy normal quantiles (common to every candidate).
-look_ahead <- function(parts, U, model, n, nfantasy, call = parent.frame()) {
+look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
+                       call = parent.frame()) {
   dat <- model$data
-  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf)) * nrow(U)
+  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
   if (size > 5e7) {
+    rows <- if (nrow(XT)) "runs, field rows and targets" else "runs and field rows"
     cli::cli_abort(c(
-      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf)} runs and field rows x {nrow(U)} candidates).",
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)} {rows} x {nrow(U)} candidates).",
       i = "Give fewer {.arg ndraws} or candidates."
     ), call = call)
   }
@@ -194,5 +220,5 @@ look_ahead <- function(parts, U, model, n, nfantasy, call = parent.frame()) {
   Z <- matrix(0, nfantasy, n)
   for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
-                     isTRUE(parts$plugin), usrc, Z, fbc_nugget, model$spec$model)
+                     isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model)
 }

@@ -85,7 +85,8 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
   cs <- FBC:::scale_inputs(matrix(run, 1), sc, 1:2)
   ys <- (ystar - sc$ymean) / sc$ysd
   phis <- FBC:::sampler_draws(fit)
-  sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, fbc_nugget, fit$spec$model)
+  sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, matrix(0, 0, 1), fbc_nugget,
+                                fit$spec$model)
   w <- stats::dnorm(ys, drop(sys$mu), sqrt(drop(sys$v)))
   w <- w / sum(w)
   k <- fit$Phi[, "kappa1"]
