@@ -2,9 +2,9 @@
 # (src/design.cpp) is checked against (test-design.R). This is the
 # implementation the package ran before the criterion moved to C++ (dense
 # algebra throughout), with the random numbers drawn as look_ahead()
-# (R/design-criterion.R) draws them: nfantasy uniforms choosing each
-# fantasy's draw by the base weights, then per step a random order of the
-# normal quantiles.
+# (R/design-criterion.R) draws them: the fantasies' draws by systematic
+# resampling of the base weights (one uniform), then per step a random
+# order of the normal quantiles.
 
 # One draw's Gaussian system (scaled data): the joint covariance C of
 # (ys, yf) under phi, its Cholesky factor, and for the candidates U the
@@ -77,9 +77,10 @@ look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
   } else {
     weighted_var(kap, matrix(w0 / sum(w0)))
   }
-  # each fantasy j comes from draw src[j] (drawn by the base weights)
+  # each fantasy j comes from draw src[j] (systematic resampling by the base weights)
   cw <- cumsum(w0)
-  src <- vapply(stats::runif(nfantasy), function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
+  usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic resampling
+  src <- vapply(usrc, function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
   zs <- vapply(seq_len(n), function(k) stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy),
                numeric(nfantasy))
   scores <- matrix(0, nrow(U), n)
