@@ -77,7 +77,7 @@ for (r in seq_len(reps)) {
   worth <- function(idx) sum(look(100, 400, length(idx), U[idx, , drop = FALSE])$gain)
   ref <- look(100, 400, 1)$scores[, 1]
   refBatch <- worth(look(100, 400, 5)$chosen)
-  for (S in c(100, 50)) for (J in c(50, 30, 20, 12)) {
+  for (S in c(100, 50)) for (J in c(50, 30, 25, 12)) {
     g <- look(S, J, 1)$scores[, 1]
     b <- look(S, J, 5)
     big <- ref > 0.1 * max(ref)
