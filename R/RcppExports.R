@@ -5,12 +5,12 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
-.design_systems <- function(Xf, yf, Xs, ys, phis, U, nugget, model) {
-    .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, nugget, model)
+.design_systems <- function(Xf, yf, Xs, ys, phis, U, XT, nugget, model) {
+    .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }
 
-.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, nugget, model) {
-    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, nugget, model)
+.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model) {
+    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model)
 }
 
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {

@@ -6,8 +6,9 @@
 #'
 #' Chooses `n` new simulator inputs (experimental and calibration columns)
 #' expected to shrink the posterior of the calibration parameters
-#' \eqn{\kappa} most, integrating over the joint posterior of \eqn{\kappa}
-#' and every hyperparameter.
+#' \eqn{\kappa} most (the default), or the uncertainty of calibrated
+#' predictions at inputs the user names (`target`), integrating over the
+#' joint posterior of \eqn{\kappa} and every hyperparameter.
 #'
 #' @section Criterion:
 #' For each retained draw \eqn{\phi_s} (kappa and the hyperparameters) the
@@ -32,6 +33,30 @@
 #' `gain` is each point's expected reduction given the points chosen
 #' before it, as a fraction of the current variance.
 #'
+#' @section A prediction target:
+#' With `target` a set of experimental inputs \eqn{x_1, \dots, x_T} (as
+#' [predict()]'s `newdata`), the criterion is the expected reduction of the
+#' calibrated prediction's posterior predictive variance averaged over
+#' them (an integrated variance), the prediction being
+#' \eqn{\zeta(x) = \eta(x, \kappa) + \delta(x)}, `predict(type = "mean")`.
+#' Per draw, \eqn{\zeta(x_t)} and the simulator's value at a candidate are
+#' jointly Gaussian given the data, so a fantasised run does two things:
+#' it reweights the draws as above, and it moves each draw's predictive
+#' mean and shrinks its variance (the GP update with the run's value). The
+#' variance after is the mixture's (law of total variance over the
+#' reweighted draws):
+#' \deqn{G_T(x, t) = \frac1T \sum_{t'} \left(\mathrm{Var}(\zeta(x_{t'}) \mid D) -
+#'   E_{y^*}[\mathrm{Var}_w(\zeta(x_{t'}) \mid D, y^*)]\right),}
+#' with the same fantasies, batches and `gain` (a fraction of the current
+#' integrated variance). Runs then go near the target inputs at likely
+#' values of \eqn{\kappa}, and where they also narrow \eqn{\kappa}
+#' (tested: a batch of 5 for a target at \eqn{x = 0.15} on the sinusoid
+#' put 4 runs within 0.05 of it, one for \eqn{x = 0.85} 3 within 0.08 of
+#' it, while for kappa they spread over \eqn{x} = 0.39-0.90). The part of the variance runs cannot reduce (the bias's, and
+#' \eqn{\kappa}'s where the field data leave it wide) stays. The cost grows
+#' with the number of target points (at most 100; a few dozen are plenty
+#' for an integrated variance).
+#'
 #' `method = "plugin"` scores the same criterion with the hyperparameters
 #' fixed at the MAP draw's (kappa on a grid for one calibration input, a
 #' uniform sample otherwise, weighted by its likelihood and prior): what
@@ -43,7 +68,27 @@
 #' a bias (the Kennedy-O'Hagan confounding, [convergence_messages()]) or
 #' the field data are few and noisy, kappa's posterior stays wide however
 #' many runs are made. `propose_runs()` says so when the best point's
-#' expected gain is below 1% of the current variance.
+#' expected gain is below 1% of the current variance (of kappa, or of the
+#' prediction at the targets), in a message.
+#'
+#' @section Defaults and cost:
+#' The look-ahead costs draws x candidates x fantasies per point of a
+#' batch (one `exp()` each), plus a dense factor per draw, whatever the
+#' fit's length. The defaults (`ndraws = 100`, `nfantasy = 50`,
+#' `100 (p + q)` candidates) were chosen by measurement
+#' (`inst/bench/design-cost.R`, the sinusoid with 10 runs, 20 replicates,
+#' against 100 draws x 400 fantasies): with them the first pick's
+#' reference gain was at least 96% of the best candidate's in every
+#' replicate; with 30 fantasies it fell to 79% in one, with 25 to 30%,
+#' and with 50 draws to 17%. The fantasies' draws are chosen by systematic
+#' resampling and their normal deviates are stratified, and all candidates
+#' share them, so the picks are steadier than the gains themselves
+#' (relative error about 10% per candidate with the defaults). On that
+#' problem a pick costs 0.02-0.03 CPU s and a batch of 5 0.06-0.14: a
+#' median 4% of the fit it follows for one point, 12% for a batch of 5
+#' (the fits take 0.2-6 CPU s; for the shortest the step is up to a third
+#' of the fit). Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
+#' step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
@@ -61,6 +106,11 @@
 #'   experimental and calibration columns of `sim`, named), in any ranges
 #'   the user wants; `NULL` (default): `ncandidates` uniform points in the
 #'   ranges of the simulator design.
+#' @param target `"kappa"` (the default: shrink kappa's posterior) or
+#'   experimental inputs where calibrated predictions are wanted (a data
+#'   frame or matrix with the field's input columns, as [predict()]'s
+#'   `newdata`, 1 to 100 rows): shrink the prediction's integrated
+#'   variance there (see "A prediction target").
 #' @param ndraws Posterior draws the criterion integrates over (evenly
 #'   spaced over the retained ones).
 #' @param nfantasy Fantasised simulator values per candidate.
@@ -71,17 +121,20 @@
 #'   run are left out.
 #' @return A data frame of `n` rows: the inputs (natural units, columns
 #'   named as in `sim`), `gain` (the point's expected reduction of
-#'   kappa's posterior variance as a fraction of the current, given the
-#'   points above it). Attributes `variance` (current, scaled) and `time`
-#'   (CPU seconds).
+#'   kappa's posterior variance, or of the prediction's integrated
+#'   variance, as a fraction of the current, given the points above it).
+#'   Attributes `variance` (current, scaled) and `time` (CPU seconds).
 #' @seealso [update_runs()], [design_loop()]
 #' @export
 #' @examples
 #' set.seed(1)
 #' fit <- calibrate(ballSim[1:30, ], ballField, nChains = 2, nMCMC = 1000, nBurn = 400)
 #' propose_runs(fit, n = 2, ndraws = 50, ncandidates = 100)
-propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy = 50,
-                         method = c("joint", "plugin"), ncandidates = NULL, tol = 1e-3) {
+#' # runs for calibrated predictions at x = 2.5
+#' propose_runs(fit, n = 2, target = c(2.5), ndraws = 50, ncandidates = 100)
+propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws = 100,
+                         nfantasy = 50, method = c("joint", "plugin"), ncandidates = NULL,
+                         tol = 1e-3) {
   t0 <- proc.time()
   fit <- check_fbc(fit, "fit")
   method <- match_choice(method, c("joint", "plugin"), "method")
@@ -92,12 +145,13 @@ propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy =
   check_design_model(model)
   sc <- model$scale
   d <- sc$p + sc$q
+  XT <- design_target(target, sc)
   U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * d), model$data$Xs, tol)
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
   parts <- design_particles(fit, ndraws, method)
-  crit <- look_ahead(parts, U, model, n, nfantasy)
+  crit <- look_ahead(parts, U, model, n, nfantasy, XT)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
@@ -105,12 +159,34 @@ propose_runs <- function(fit, n = 1, candidates = NULL, ndraws = 100, nfantasy =
   attr(out, "variance") <- crit$variance
   attr(out, "time") <- sum(tm[c(1, 2)])
   if (out$gain[1] < 0.01) {
+    what <- if (nrow(XT)) "the calibrated prediction's variance at the target points" else "kappa's posterior variance"
     cli::cli_inform(c(
-      "!" = "The best new run is expected to shrink kappa's posterior variance by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
-      i = "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
+      "!" = "The best new run is expected to shrink {what} by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
+      i = if (nrow(XT)) "Such as kappa's uncertainty that the field data leave, or the bias's: runs of the simulator do not reduce them." else "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
     ))
   }
   out
+}
+
+# The criterion's target on the scaled experimental inputs: no rows for
+# kappa's variance, else the rows of `target` (experimental inputs where
+# calibrated predictions are wanted, as predict()'s newdata).
+design_target <- function(target, sc, call = parent.frame()) {
+  if (is.character(target) && identical(target, "kappa")) return(matrix(0, 0, sc$p))
+  if (!is.data.frame(target) && !is.numeric(target)) {
+    cli::cli_abort(c(
+      "{.arg target} must be {.val kappa} or experimental inputs where calibrated predictions are wanted (as {.fn predict}'s {.arg newdata}), not {.obj_type_friendly {target}}.",
+      i = "Such as {.code target = data.frame({sc$names$inputs[1]} = 0.5)}."
+    ), call = call)
+  }
+  X <- tryCatch(check_newdata(target, sc), error = function(e) {
+    cli::cli_abort("{.arg target} must be {.val kappa} or experimental inputs as {.fn predict}'s {.arg newdata}.",
+                   parent = e, call = call)
+  })
+  if (nrow(X) < 1L || nrow(X) > 100L) {
+    cli::cli_abort("{.arg target} must have 1 to 100 points (the look-ahead's cost grows with their number), not {nrow(X)}.", call = call)
+  }
+  scale_inputs(X, sc, seq_len(sc$p))
 }
 
 # The models the look-ahead handles (the dense conditional of one output).
@@ -177,22 +253,25 @@ design_particles <- function(fit, ndraws, method) {
 # The greedy look-ahead (src/design.cpp, design_look_ahead()) over the
 # particles at the candidates U: n points chosen one at a time, each
 # maximising the expected reduction of kappa's (weighted) posterior
-# variance with the pending points' fantasised values conditioned on per
-# draw. Its random numbers are drawn here: nfantasy uniforms choosing each
-# fantasy's draw (by the base weights), then per step a random order of the
-# nfantasy normal quantiles (common to every candidate).
-look_ahead <- function(parts, U, model, n, nfantasy, call = parent.frame()) {
+# variance (or of the prediction's at the targets XT) with the pending
+# points' fantasised values conditioned on per draw. Its random numbers are
+# drawn here: the fantasies' draws by systematic resampling of the base
+# weights (uniforms (j - U) / nfantasy, one U), then per step a random
+# order of the nfantasy normal quantiles (common to every candidate).
+look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
+                       call = parent.frame()) {
   dat <- model$data
-  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf)) * nrow(U)
+  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
   if (size > 5e7) {
+    rows <- if (nrow(XT)) "runs, field rows and targets" else "runs and field rows"
     cli::cli_abort(c(
-      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf)} runs and field rows x {nrow(U)} candidates).",
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)} {rows} x {nrow(U)} candidates).",
       i = "Give fewer {.arg ndraws} or candidates."
     ), call = call)
   }
-  usrc <- stats::runif(nfantasy)
+  usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic: the draws evenly
   Z <- matrix(0, nfantasy, n)
   for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
-                     isTRUE(parts$plugin), usrc, Z, fbc_nugget, model$spec$model)
+                     isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model)
 }

@@ -28,7 +28,9 @@
 #' @param ... Passed to [calibrate()] (model and run settings; `nMCMC` and
 #'   `converge` to [update_runs()] too).
 #' @param design Arguments for [propose_runs()] (such as `ndraws`,
-#'   `method`).
+#'   `method`, or `target` for runs that serve calibrated predictions at
+#'   given inputs rather than kappa; `width` still stops on kappa's
+#'   intervals).
 #' @param showProgress Report each step (`NULL`: in interactive sessions).
 #' @return A list: `fit` (the last fit), `sim` (every run), `history` (a
 #'   data frame per step: `runs`, each calibration input's posterior mean,

@@ -23,8 +23,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // design_systems_r
-Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, double nugget, const Rcpp::List& model);
-RcppExport SEXP _FBC_design_systems_r(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
+Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& XT, double nugget, const Rcpp::List& model);
+RcppExport SEXP _FBC_design_systems_r(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -34,15 +34,16 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type U(USEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type XT(XTSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_systems_r(Xf, yf, Xs, ys, phis, U, nugget, model));
+    rcpp_result_gen = Rcpp::wrap(design_systems_r(Xf, yf, Xs, ys, phis, U, XT, nugget, model));
     return rcpp_result_gen;
 END_RCPP
 }
 // design_look_ahead
-Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, double nugget, const Rcpp::List& model);
-RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
+Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model);
+RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -57,9 +58,10 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< bool >::type plugin(pluginSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type usrc(usrcSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type Z(ZSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type XT(XTSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, nugget, model));
+    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -296,8 +298,8 @@ END_RCPP
 
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
-    {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 8},
-    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 13},
+    {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
+    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 14},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

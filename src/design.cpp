@@ -10,6 +10,14 @@
 // chosen greedily, each next point scored with the pending points' values
 // fantasised jointly with it (per draw their joint Gaussian).
 //
+// With a prediction target (target points XT, T > 0) the criterion is the
+// expected reduction of the calibrated prediction's integrated posterior
+// predictive variance instead: zeta(x) = eta(x, kappa) + delta(x) (predict(
+// type = "mean")) averaged over the T points. Per draw zeta(XT), the
+// candidates' values and the pending points' are jointly Gaussian given the
+// data, so a fantasised run both reweights the draws and moves each draw's
+// predictive mean and variance (target_var()).
+//
 // The per-draw loop is prediction's (for_each_draw(), fbc.h: the posterior
 // set to each draw from scratch on the dense algebra, which checks that the
 // covariance is positive definite and gives the exact log-likelihood); the
@@ -23,19 +31,53 @@ namespace {
 // The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
 // Cov_s(y, eta(U)) (N x Nc, slice s), the means mu and variances v (Nc x S),
 // the log-likelihoods ll, the simulator variances s2S and the kernel's
-// parameters per draw (thS, alS: (p + q) x S).
+// parameters per draw (thS, alS: (p + q) x S). With T target points: the
+// predictive means mT and variances VT of zeta(XT) (T x S) and their
+// covariances with the candidates' values CTU (T x Nc x S), given the data.
 struct DesignSystems {
-  arma::cube A;
-  arma::mat mu, muT, v, thS, alS;  // muT = mu' (S x Nc)
+  arma::cube A, CTU;
+  arma::mat mu, muT, v, thS, alS, mT, VT;  // muT = mu' (S x Nc)
   arma::vec ll, s2S;
+  int T = 0;
 };
 
 // One draw's workspace: Z = (Xs; Xf, kappa) (N x (p + q)), C (N x N), the
-// bias correlation Rb (n x n) and the residual r (N).
+// bias correlation Rb (n x n) and the residual r (N); for targets Tk =
+// (XT, kappa) (T x (p + q)), KT (N x T), RbT (n x T) and RTU (T x Nc).
 struct SystemWork {
-  arma::mat Z, C, Rb;
+  arma::mat Z, C, Rb, Tk, KT, RbT, RTU;
   arma::vec r;
 };
+
+// One draw's target part (L, r the factor and residual of design_system()):
+//   KT = L^-1 Cov(y, zeta(XT)), Cov(y, zeta) = [s2S Rs(Xs, Tk); s2S Rs(Xk, Tk) + s2B Rb(Xf, XT)],
+//   mT = muB + KT' r,  VT = s2S + s2B - diag(KT'KT)   (predict()'s type "mean"),
+//   CTU = s2S Rs(Tk, U) - KT' A   (A = L^-1 Cov(y, eta(U))).
+void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xf,
+                    const arma::mat& XT, const arma::mat& U, const arma::mat& A,
+                    SystemWork& w, DesignSystems& out, arma::uword s) {
+  const arma::vec& phi = post.phi;
+  const int m = post.m, N = m + post.n, p = post.p, q = post.q;
+  const double s2S = phi[post.iSigma2S];
+  const double* thS = phi.memptr() + post.iThetaS;
+  const double* alS = phi.memptr() + post.iAlphaS;
+  for (int k = 0; k < q; ++k) w.Tk.col(p + k).fill(phi[post.iKappa + k]);
+  kernel_corr(mod.kernS, w.Z, w.Tk, p + q, thS, alS, w.KT, false);
+  w.KT *= s2S;
+  double s2B = 0.0;
+  if (post.bias) {
+    s2B = phi[post.iSigma2B];
+    kernel_corr(mod.kernB, Xf, XT, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
+                w.RbT, false);
+    w.KT.rows(m, N - 1) += s2B * w.RbT;
+  }
+  solve_lower(w.C, w.KT);
+  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
+  out.mT.col(s) = muB + w.KT.t() * w.r;
+  out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.KT), 0).t();
+  kernel_corr(mod.kernS, w.Tk, U, p + q, thS, alS, w.RTU, false);
+  out.CTU.slice(s) = s2S * w.RTU - w.KT.t() * A;
+}
 
 // One draw's system. With Xk = (Xf, kappa) and prior mean mu0 = (0, muB):
 //   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
@@ -44,8 +86,9 @@ struct SystemWork {
 //   mu = A' r, v = s2S (1 + nugget) - diag(A'A).
 // False if C is not positive definite.
 bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
-                   const arma::vec& yf, const arma::vec& ys, const arma::mat& U, double nugget,
-                   SystemWork& w, DesignSystems& out, arma::uword s) {
+                   const arma::vec& yf, const arma::vec& ys, const arma::mat& U,
+                   const arma::mat& XT, double nugget, SystemWork& w, DesignSystems& out,
+                   arma::uword s) {
   const arma::vec& phi = post.phi;
   const int m = post.m, n = post.n, p = post.p, q = post.q, N = m + n;
   const double s2S = phi[post.iSigma2S];
@@ -80,6 +123,7 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
     out.mu(c, s) = ar;
     out.v(c, s) = s2S * (1.0 + nugget) - aa;
   }
+  if (out.T > 0) design_targets(post, mod, Xf, XT, U, A, w, out, s);
   out.ll[s] = post.logLik();
   out.s2S[s] = s2S;
   std::copy(thS, thS + p + q, out.thS.colptr(s));
@@ -87,11 +131,13 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
   return true;
 }
 
-// Every draw's system (rows of phis) at the candidates U, through
-// prediction's per-draw loop on the dense algebra.
+// Every draw's system (rows of phis) at the candidates U (and the target
+// points XT, T x p, none for kappa's criterion), through prediction's
+// per-draw loop on the dense algebra.
 DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
-                             double nugget, const Rcpp::List& model, Model& mod) {
+                             const arma::mat& XT, double nugget, const Rcpp::List& model,
+                             Model& mod) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
   mod = read_model(model, p, q);
   if (!mod.emulator || mod.nOutputs() > 1 || !mod.levels.empty())
@@ -102,8 +148,11 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   if (post.sgasp || post.layout.length[PC_SIGMA2E] != 1)
     Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
+  if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
   const int m = Xs.n_rows, n = Xf.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
+  const int T = XT.n_rows;
   DesignSystems out;
+  out.T = T;
   out.A.set_size(N, Nc, S);
   out.mu.set_size(Nc, S);
   out.v.set_size(Nc, S);
@@ -118,8 +167,18 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   w.C.set_size(N, N);
   w.Rb.set_size(n, n);
   w.r.set_size(N);
+  if (T > 0) {
+    out.mT.set_size(T, S);
+    out.VT.set_size(T, S);
+    out.CTU.set_size(T, Nc, S);
+    w.Tk.set_size(T, p + q);
+    w.Tk.cols(0, p - 1) = XT;
+    w.KT.set_size(N, T);
+    w.RbT.set_size(n, T);
+    w.RTU.set_size(T, Nc);
+  }
   for_each_draw(post, phis, [&](arma::uword s) {
-    return design_system(post, mod, Xf, yf, ys, U, nugget, w, out, s);
+    return design_system(post, mod, Xf, yf, ys, U, XT, nugget, w, out, s);
   });
   out.muT = out.mu.t();
   return out;
@@ -130,12 +189,14 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
 // log-weights given the pending points' fantasies, YP (J x k) those values,
 // P the pending candidates; per step the conditional means given them M
 // (s fastest: M[s + S (c + Nc j)], with pending points), the standard
-// deviations sd, their inverses and logs (S x Nc).
+// deviations sd, their inverses and logs (S x Nc). With T targets, given
+// the pending points: the targets' means MT[s + S (t + T j)], variances
+// VTP (S x T) and covariances with the candidates CP[s + S (t + T c)].
 struct LookAhead {
-  int S, Nc, J;
-  arma::mat kap, base, YP, sd, isd, lsd;
-  arma::vec ksq, Lbuf;
-  std::vector<double> M;
+  int S, Nc, J, T = 0;
+  arma::mat kap, base, YP, sd, isd, lsd, VTP;
+  arma::vec ksq, Lbuf, wbuf;
+  std::vector<double> M, MT, CP;
   std::vector<int> P;
 };
 
@@ -170,12 +231,79 @@ double weighted_var(const LookAhead& la, const double* L) {
   return weighted_var(la, L, mx);
 }
 
+// The calibrated prediction's variance averaged over the T targets under
+// the weights w_s = exp(L_s - mx), in fantasy j given the pending points;
+// with a run at candidate c returning y (draw means mu_s there): per draw
+// b = CP_stc / cv_sc (cv = sd^2), m_st = MT_stj + b (y - mu_s),
+// v_st = max(VTP_st - b CP_stc, 0); without a run (c < 0) m = MT, v = VTP.
+//   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
+double target_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
+                  const double* mu) {
+  const int S = la.S;
+  double* w = la.wbuf.memptr();
+  double sw = 0.0;
+  for (int s = 0; s < S; ++s) { w[s] = std::exp(L[s] - mx); sw += w[s]; }
+  double out = 0.0;
+  for (int t = 0; t < la.T; ++t) {
+    const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
+    const double* vt = la.VTP.colptr(t);
+    double a1 = 0.0, a2 = 0.0;
+    if (c < 0) {
+      for (int s = 0; s < S; ++s) { a1 += w[s] * (vt[s] + mt[s] * mt[s]); a2 += w[s] * mt[s]; }
+    } else {
+      const double* cp = la.CP.data() + (size_t)S * (t + (size_t)la.T * c);
+      const double* isd = la.isd.colptr(c);
+      for (int s = 0; s < S; ++s) {
+        const double b = cp[s] * isd[s] * isd[s];
+        const double ms = mt[s] + b * (y - mu[s]);
+        const double vs = std::max(vt[s] - b * cp[s], 0.0);
+        a1 += w[s] * (vs + ms * ms);
+        a2 += w[s] * ms;
+      }
+    }
+    out += a1 / sw - (a2 / sw) * (a2 / sw);
+  }
+  return out / la.T;
+}
+
+// The criterion's variance: kappa's (weighted_var()) or the targets'.
+double crit_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
+                const double* mu) {
+  return la.T > 0 ? target_var(la, L, mx, j, c, y, mu) : weighted_var(la, L, mx);
+}
+
 // Per draw, the candidates' values given the data and the pending points'
 // fantasised values: with A_P the pending columns of A,
 //   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
 //   ScP = s2S Rs(U, U_P) - A'A_P (a pending candidate's rows: SPP),
 //   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
 // cv floored at 1e-12 s2S. Without pending points M is mu (not stored).
+// With targets (CT = CTU_s, CTP its pending columns):
+//   BT = CTP SPP^-1,  VTP = VT - diag(BT CTP'),  MT(:, j) = mT + BT (YP(j, :)' - mu_P),
+//   CP = CT - BT ScP'  (without pending points VTP = VT, MT = mT, CP = CT).
+void pending_targets(const DesignSystems& sys, const arma::mat& SPP, const arma::mat& ScP,
+                     const arma::uvec& Pu, int s, LookAhead& la) {
+  const int k = Pu.n_elem, T = la.T, S = la.S;
+  const arma::mat& CT = sys.CTU.slice(s);
+  arma::vec vt = sys.VT.col(s);
+  arma::mat DT(T, la.J, arma::fill::zeros), CPs;
+  if (k > 0) {
+    const arma::mat CTP = CT.cols(Pu);
+    const arma::mat BT = arma::solve(SPP, CTP.t()).t();
+    vt -= arma::sum(BT % CTP, 1);
+    arma::vec muP(k);
+    for (int i = 0; i < k; ++i) muP[i] = sys.mu(Pu[i], s);
+    DT = BT * (la.YP.t() - arma::repmat(muP, 1, la.J));
+    CPs = CT - BT * ScP.t();
+  }
+  const arma::mat& C = k > 0 ? CPs : CT;
+  for (int t = 0; t < T; ++t) {
+    la.VTP(s, t) = vt[t];
+    for (int j = 0; j < la.J; ++j) la.MT[s + (size_t)S * (t + (size_t)T * j)] = sys.mT(t, s) + DT(t, j);
+    for (int c = 0; c < la.Nc; ++c) la.CP[s + (size_t)S * (t + (size_t)T * c)] = C(t, c);
+  }
+}
+
 void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Model& mod,
                           double nugget, LookAhead& la) {
   const int k = la.P.size(), q = U.n_cols;
@@ -204,6 +332,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
         for (int c = 0; c < la.Nc; ++c)
           la.M[s + (size_t)la.S * (c + (size_t)la.Nc * j)] = sys.mu(c, s) + D(c, j);
     }
+    if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
     for (int c = 0; c < la.Nc; ++c) {
       la.sd(s, c) = std::sqrt(std::max(cv[c], 1e-12 * s2S));
       la.isd(s, c) = 1.0 / la.sd(s, c);
@@ -221,11 +350,15 @@ inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, i
 // is Y(c, j) = M_src[j](c, j) + sd_src[j](c) z_j (z common to every
 // candidate); the draws are reweighted by N(Y; M_s(c, j), sd_s(c)^2), the
 // normal's constant left out (it cancels):
-//   gain(c) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa).
+//   gain(c) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa)
+// (with targets the prediction's variance, target_var(), before and after).
 void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
                       const double* z, arma::vec& gain, arma::mat& Y) {
   double before = 0.0;
-  for (int j = 0; j < la.J; ++j) before += weighted_var(la, la.base.colptr(j));
+  for (int j = 0; j < la.J; ++j) {
+    const double* b = la.base.colptr(j);
+    before += crit_var(la, b, *std::max_element(b, b + la.S), j, -1, 0.0, nullptr);
+  }
   before /= la.J;
   double* L = la.Lbuf.memptr();
   for (int c = 0; c < la.Nc; ++c) {
@@ -244,7 +377,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
         L[s] = b[s] - 0.5 * e * e - lsd[s];
         mx = std::max(mx, L[s]);
       }
-      after += weighted_var(la, L, mx);
+      after += crit_var(la, L, mx, j, c, y, mu);
     }
     gain[c] = before - after / la.J;
   }
@@ -254,20 +387,23 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
 
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each
-// draw (design_system()).
+// draw (design_system()); with target points XT (T x p) their predictive
+// means mT and variances VT (T x S).
 // [[Rcpp::export(.design_systems)]]
 Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
-                            double nugget, const Rcpp::List& model) {
+                            const arma::mat& XT, double nugget, const Rcpp::List& model) {
   Model mod;
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, nugget, model, mod);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod);
   return Rcpp::List::create(Rcpp::Named("mu") = sys.mu, Rcpp::Named("v") = sys.v,
-                            Rcpp::Named("ll") = sys.ll);
+                            Rcpp::Named("ll") = sys.ll, Rcpp::Named("mT") = sys.mT,
+                            Rcpp::Named("VT") = sys.VT);
 }
 
 // The greedy look-ahead: n points chosen one at a time, each maximising
-// the expected reduction of kappa's weighted posterior variance given the
-// pending points (score_candidates()). Base log-weights lw0 (+ ll with
+// the expected reduction of kappa's weighted posterior variance (or, with
+// target points XT, T x p, of the calibrated prediction's integrated
+// variance there) given the pending points (score_candidates()). Base log-weights lw0 (+ ll with
 // `plugin`), normalised w; fantasy j comes from draw src[j], the first s
 // with sum_{r <= s} w_r >= usrc[j] (usrc uniforms: the draws by w), with the
 // normal deviate Z(j, step) in each step; after a pick the base
@@ -277,12 +413,12 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& kappa, const arma::vec& lw0, bool plugin,
-                             const arma::vec& usrc, const arma::mat& Z, double nugget,
-                             const Rcpp::List& model) {
+                             const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
+                             double nugget, const Rcpp::List& model) {
   Model mod;
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, nugget, model, mod);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod);
   LookAhead la;
-  la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows;
+  la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
   const int n = Z.n_cols;
   if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
   if (kappa.n_rows != phis.n_rows || kappa.n_cols > 16 || lw0.n_elem != phis.n_rows)
@@ -304,12 +440,19 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   la.lsd.set_size(la.S, la.Nc);
   la.Lbuf.set_size(la.S);
   la.M.resize((size_t)la.S * la.Nc * la.J);
-  const double variance = weighted_var(la, lw.memptr());
+  la.wbuf.set_size(la.S);
+  if (la.T > 0) {
+    la.VTP.set_size(la.S, la.T);
+    la.MT.resize((size_t)la.S * la.T * la.J);
+    la.CP.resize((size_t)la.S * la.T * la.Nc);
+  }
+  double variance = 0.0;
   arma::vec gain(la.Nc), best(n);
   arma::mat Y(la.Nc, la.J), scores(la.Nc, n);
   Rcpp::IntegerVector chosen(n);
   for (int step = 0; step < n; ++step) {
     pending_conditionals(sys, U, mod, nugget, la);
+    if (step == 0) variance = crit_var(la, lw.memptr(), lw.max(), 0, -1, 0.0, nullptr);
     score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
     for (int c : la.P) gain[c] = R_NegInf;
     scores.col(step) = gain;

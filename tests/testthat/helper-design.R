@@ -2,16 +2,19 @@
 # (src/design.cpp) is checked against (test-design.R). This is the
 # implementation the package ran before the criterion moved to C++ (dense
 # algebra throughout), with the random numbers drawn as look_ahead()
-# (R/design-criterion.R) draws them: nfantasy uniforms choosing each
-# fantasy's draw by the base weights, then per step a random order of the
-# normal quantiles.
+# (R/design-criterion.R) draws them: the fantasies' draws by systematic
+# resampling of the base weights (one uniform), then per step a random
+# order of the normal quantiles.
 
 # One draw's Gaussian system (scaled data): the joint covariance C of
 # (ys, yf) under phi, its Cholesky factor, and for the candidates U the
 # conditional means `mu` and variances `v` of a new run's value (nugget
 # included) with A = L^-1 Cov(data, U) for the cross-covariances of a
-# batch; `ll` the log-likelihood, `corr` the simulator kernel at phi.
-draw_system <- function(phi, model, U) {
+# batch; `ll` the log-likelihood, `corr` the simulator kernel at phi. With
+# target points XT (scaled experimental inputs): the calibrated
+# prediction's (predict(type = "mean")) means mT and variances VT there and
+# its covariances CTU (T x Nc) with the candidates' values, given the data.
+draw_system <- function(phi, model, U, XT = NULL) {
   dat <- model$data
   d <- model$dims
   p <- d$p
@@ -37,23 +40,47 @@ draw_system <- function(phi, model, U) {
   R <- chol(C)
   r <- backsolve(R, c(dat$ys, dat$yf) - mu0, transpose = TRUE)
   A <- backsolve(R, s2S * corr(Z, U), transpose = TRUE)
-  list(A = A, mu = drop(crossprod(A, r)), v = s2S * (1 + FBC:::fbc_nugget) - colSums(A^2),
-       ll = -0.5 * sum(r^2) - sum(log(diag(R))), s2S = s2S, corr = corr)
+  out <- list(A = A, mu = drop(crossprod(A, r)), v = s2S * (1 + FBC:::fbc_nugget) - colSums(A^2),
+              ll = -0.5 * sum(r^2) - sum(log(diag(R))), s2S = s2S, corr = corr)
+  if (length(XT)) {
+    Tk <- cbind(XT, matrix(phi[ix$kappa], nrow(XT), q, byrow = TRUE))
+    KT <- s2S * corr(Z, Tk)
+    s2B <- 0
+    if (model$discrepancy != "none") {
+      s2B <- phi[ix$sigma2B]
+      KT[fld, ] <- KT[fld, ] + s2B * FBC:::.corr_matrix(dat$Xf, XT, phi[ix$thetaB], phi[ix$alphaB],
+                                                        FBC:::kernel_codes[[model$kernelB]])
+    }
+    KT <- backsolve(R, KT, transpose = TRUE)
+    out$mT <- mu0[d$m + 1] + drop(crossprod(KT, r))
+    out$VT <- s2S + s2B - colSums(KT^2)
+    out$CTU <- s2S * corr(Tk, U) - crossprod(KT, A)
+  }
+  out
 }
 
 # The greedy look-ahead over the particles' systems `sys`: n points chosen
 # one at a time, each maximising the expected reduction of kappa's
 # (weighted) posterior variance with the pending points' fantasised values
 # (Y, one column per pending point, nfantasy rows) conditioned on per draw.
+# With targets (sys from draw_system(XT =)) the criterion is the calibrated
+# prediction's variance averaged over them (target_var()).
 look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
   S <- length(sys)
   lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
   kap <- parts$kappa
   w0 <- exp(lw0 - max(lw0))
-  variance <- weighted_var(kap, matrix(w0 / sum(w0)))
-  # each fantasy j comes from draw src[j] (drawn by the base weights)
+  targets <- !is.null(sys[[1]]$mT)
+  variance <- if (targets) {
+    cond0 <- pending_conditionals(sys, U, integer(), matrix(0, nfantasy, 0))
+    target_var(w0 / sum(w0), cond0$MT[, , 1], cond0$VTP)
+  } else {
+    weighted_var(kap, matrix(w0 / sum(w0)))
+  }
+  # each fantasy j comes from draw src[j] (systematic resampling by the base weights)
   cw <- cumsum(w0)
-  src <- vapply(stats::runif(nfantasy), function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
+  usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic resampling
+  src <- vapply(usrc, function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
   zs <- vapply(seq_len(n), function(k) stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy),
                numeric(nfantasy))
   scores <- matrix(0, nrow(U), n)
@@ -81,17 +108,36 @@ weighted_var <- function(kap, W) {
   colSums(W * rowSums(kap^2)) - colSums(crossprod(kap, W)^2)
 }
 
+# The calibrated prediction's variance averaged over the targets under the
+# normalised weights w (S), each draw's predictive means MT and variances
+# VT (S x T): the mixture's variance per target (law of total variance).
+target_var <- function(w, MT, VT) {
+  MT <- matrix(MT, length(w))
+  mean(colSums(w * (VT + MT^2)) - colSums(w * MT)^2)
+}
+
 # Per draw, each candidate's value given the data and the pending points'
 # fantasised values YP (nfantasy x k): conditional means M (array S x Nc x
-# nfantasy, as S x (Nc nfantasy)) and variances cv (S x Nc).
+# nfantasy, as S x (Nc nfantasy)) and variances cv (S x Nc). With targets
+# also their means MT (S x T x J), variances VTP (S x T) and covariances with
+# the candidates CP (S x T x Nc), given the pending points.
 pending_conditionals <- function(sys, U, P, YP) {
   S <- length(sys)
   Nc <- nrow(U)
   J <- nrow(YP)
   M <- matrix(0, S, Nc * J)
   cv <- matrix(0, S, Nc)
+  nT <- length(sys[[1]]$mT)
+  MT <- array(0, c(S, nT, J))
+  VTP <- matrix(0, S, nT)
+  CP <- array(0, c(S, nT, Nc))
   for (s in seq_len(S)) {
     y <- sys[[s]]
+    if (nT) {
+      MT[s, , ] <- y$mT
+      VTP[s, ] <- y$VT
+      CP[s, , ] <- y$CTU
+    }
     if (length(P)) {
       AP <- y$A[, P, drop = FALSE]
       SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
@@ -102,13 +148,20 @@ pending_conditionals <- function(sys, U, P, YP) {
       B <- t(solve(SPP, t(ScP)))
       cv[s, ] <- y$v - rowSums(B * ScP)
       M[s, ] <- as.vector(y$mu + B %*% (t(YP) - y$mu[P]))
+      if (nT) {
+        CTP <- y$CTU[, P, drop = FALSE]
+        BT <- t(solve(SPP, t(CTP)))
+        VTP[s, ] <- y$VT - rowSums(BT * CTP)
+        MT[s, , ] <- y$mT + BT %*% (t(YP) - y$mu[P])
+        CP[s, , ] <- y$CTU - BT %*% t(ScP)
+      }
     } else {
       cv[s, ] <- y$v
       M[s, ] <- rep(y$mu, J)
     }
   }
   cv <- pmax(cv, 1e-12 * vapply(sys, `[[`, numeric(1), "s2S"))
-  list(M = M, cv = cv, J = J, Nc = Nc)
+  list(M = M, cv = cv, J = J, Nc = Nc, MT = MT, VTP = VTP, CP = CP, nT = nT)
 }
 
 # Expected posterior variance of kappa after a run at each candidate, given
@@ -128,8 +181,25 @@ score_candidates <- function(cond, src, z, base, kap) {
                        sdv[, rep(seq_len(Nc), J), drop = FALSE], log = TRUE)
   L <- logd + base[, rep(seq_len(J), each = Nc), drop = FALSE]
   L <- exp(L - rep(apply(L, 2, max), each = S))
-  after <- rowMeans(matrix(weighted_var(kap, L / rep(colSums(L), each = S)), Nc, J))
+  W <- L / rep(colSums(L), each = S)
   b <- exp(base - rep(apply(base, 2, max), each = S))
-  before <- mean(weighted_var(kap, b / rep(colSums(b), each = S)))
+  b <- b / rep(colSums(b), each = S)
+  if (cond$nT == 0) {
+    after <- rowMeans(matrix(weighted_var(kap, W), Nc, J))
+    before <- mean(weighted_var(kap, b))
+  } else {
+    # per draw the run at c moves the targets' means by b (y - M) and their
+    # variances by -b CP, b = CP / cv
+    after <- vapply(seq_len(Nc), function(c) {
+      B <- matrix(cond$CP[, , c], S) / cond$cv[, c]
+      mean(vapply(seq_len(J), function(j) {
+        e <- Y[c, j] - cond$M[, c + (j - 1L) * Nc]
+        target_var(W[, c + (j - 1L) * Nc], matrix(cond$MT[, , j], S) + B * e,
+                   pmax(cond$VTP - B * matrix(cond$CP[, , c], S), 0))
+      }, numeric(1)))
+    }, numeric(1))
+    before <- mean(vapply(seq_len(J), function(j) target_var(b[, j], cond$MT[, , j], cond$VTP),
+                          numeric(1)))
+  }
   list(gain = before - after, Y = Y, logd = logd)
 }

@@ -85,7 +85,8 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
   cs <- FBC:::scale_inputs(matrix(run, 1), sc, 1:2)
   ys <- (ystar - sc$ymean) / sc$ysd
   phis <- FBC:::sampler_draws(fit)
-  sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, fbc_nugget, fit$spec$model)
+  sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, matrix(0, 0, 1), fbc_nugget,
+                                fit$spec$model)
   w <- stats::dnorm(ys, drop(sys$mu), sqrt(drop(sys$v)))
   w <- w / sum(w)
   k <- fit$Phi[, "kappa1"]
@@ -192,8 +193,81 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
       # every candidate's gain at every step (the picks' -Inf included)
       expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
       expect_gt(max(cpp$scores[, 1]), 0)
+      # a prediction target (two field inputs): the calibrated prediction's
+      # integrated variance, the draws reweighted and each draw's
+      # predictive mean and variance moved by the fantasised run
+      XT <- matrix(c(0.2, 0.7), 2, 1)
+      set.seed(11)
+      cpp <- FBC:::look_ahead(parts, U, fit$model, 3, 25, XT)
+      set.seed(11)
+      sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U, XT))
+      ref <- look_ahead_r(sys, parts, U, fit$model, 3, 25)
+      expect_identical(cpp$chosen, as.integer(ref$chosen))
+      expect_equal(cpp$variance, ref$variance, tolerance = 1e-8)
+      expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+      expect_gt(max(cpp$scores[, 1]), 0)
     }
+    # each draw's target mean and variance are predict(type = "mean")'s
+    # (its compiled per-draw conditional, src/predict.cpp)
+    phis <- FBC:::sampler_draws(fit, 1:5)
+    pr <- FBC:::at_draws(fit, FBC:::.fbc_predict, phis, Xnew = XT,
+                         type = FBC:::predict_type_codes[["mean"]], block = 500L,
+                         noise = integer(), source = integer())
+    d <- fit$data
+    ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, U, XT, fbc_nugget, fit$spec$model)
+    expect_equal(ds$mT, pr$mean, tolerance = 1e-8)
+    expect_equal(ds$VT, pr$var, tolerance = 1e-8)
   }
+})
+
+test_that("a prediction target draws the runs to its inputs", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 1200)
+  set.seed(7)
+  cand <- data.frame(x = stats::runif(200), u = stats::runif(200))
+  picks <- lapply(c(0.15, 0.85), function(x0) {
+    set.seed(8)
+    propose_runs(fit, n = 5, candidates = cand, target = data.frame(x = x0), ndraws = 60,
+                 nfantasy = 30)
+  })
+  # measured on writing this: the batch for x0 = 0.15 at x = 0.16, 0.48,
+  # 0.10, 0.18, 0.19 (first gain 79% of the prediction's variance), for
+  # x0 = 0.85 at 0.84, 0.80, 0.48, 0.77, 0.66; for kappa (the default
+  # target) the same call spreads them over x = 0.39-0.90
+  near <- function(pr, x0) stats::median(abs(pr$x - x0))
+  expect_lt(abs(picks[[1]]$x[1] - 0.15), 0.05)
+  expect_lt(abs(picks[[2]]$x[1] - 0.85), 0.05)
+  expect_lt(near(picks[[1]], 0.15), 0.1)
+  expect_lt(near(picks[[2]], 0.85), 0.1)
+  expect_gt(near(picks[[1]], 0.85), 0.5)
+  expect_gt(near(picks[[2]], 0.15), 0.5)
+  # and near kappa's posterior (u = 0.54-0.65, 90%)
+  expect_lt(abs(picks[[1]]$u[1] - 0.6), 0.1)
+  expect_gt(picks[[1]]$gain[1], 0.2)
+  expect_snapshot(error = TRUE, propose_runs(fit, target = "x"))
+  expect_snapshot(error = TRUE, propose_runs(fit, target = data.frame(x = "a")))
+})
+
+test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
+  # field data so noisy (sigma2E fixed at 50, scaled: sd 7 of the
+  # response's) that kappa's posterior is about its prior: the emulator's
+  # error is not what limits it. Measured: the best gain 0.02% of the
+  # variance (the message's threshold is 1%).
+  pb <- sinus_problem(m = 20)
+  noisy <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(8, 8), sigma2SDist = "fixed",
+                           sigma2SInit = 1, sigma2EDist = "fixed", sigma2EInit = 50)
+  set.seed(3)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = noisy, nMCMC = 1200,
+                   nBurn = 200, nChains = 1, showProgress = FALSE)
+  set.seed(8)
+  expect_message(pr <- propose_runs(fit, ndraws = 60, nfantasy = 30, ncandidates = 200),
+                 "limited by something new runs cannot change")
+  expect_lt(pr$gain, 0.01)
+  # with the field's noise known (sd 0.14), a run can halve kappa's variance: no message
+  fit <- sinus_fit(pb, nMCMC = 1200)
+  set.seed(8)
+  expect_silent(pr <- propose_runs(fit, ndraws = 60, nfantasy = 30, ncandidates = 200))
+  expect_gt(pr$gain, 0.1)
 })
 
 test_that("propose_runs() refuses models it does not handle", {
@@ -219,8 +293,9 @@ test_that("design_loop() runs a function simulator through futures and adds runs
   out <- design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
                      batch = 2, budget = 3, discrepancy = "none", hypers = sinus_hypers(),
                      nMCMC = 600, nBurn = 200, nChains = 1,
-                     design = list(ndraws = 40, nfantasy = 20))
-  # 8 initial runs, then a batch of 2 and the last 1 of the budget
+                     design = list(ndraws = 40, nfantasy = 20, target = data.frame(x = 0.5)))
+  # 8 initial runs, then a batch of 2 and the last 1 of the budget (chosen
+  # for a prediction target, passed through `design`)
   expect_equal(out$history$runs, c(8, 10, 11))
   expect_equal(nrow(out$sim), 11)
   expect_equal(out$fit$model$dims$m, 11)
