@@ -44,7 +44,10 @@ extra <- grep("=", args, value = TRUE, fixed = TRUE)
 # the weight of each earlier epoch in a block's estimate (fbc_warmup$forget), growth=G
 # the stopping checks' growth factor (fbc_check_growth)
 internal <- grep("^(ess|forget|growth)=", extra, value = TRUE)
-extra <- setdiff(extra, internal)
+# seed=N: the seed of the scattered rows' fits (default 1), for repeats
+seedArg <- grep("^seed=", extra, value = TRUE)
+fitSeed <- if (length(seedArg)) as.integer(sub("^seed=", "", seedArg)) else 1L
+extra <- setdiff(extra, c(internal, seedArg))
 for (a in internal) {
   ns <- asNamespace("FBC")
   v <- as.numeric(sub("^.*=", "", a))
@@ -57,7 +60,7 @@ for (a in internal) {
 }
 extraArgs <- lapply(sub("^[^=]*=", "", extra), function(v) eval(str2lang(v)))
 names(extraArgs) <- sub("=.*$", "", extra)
-parts <- setdiff(args, c("quick", "trace", "nopeer", extra, internal))
+parts <- setdiff(args, c("quick", "trace", "nopeer", extra, internal, seedArg))
 known <- c("precise", "ball", "m1000", "m5000", "m20000", "functional", "priors")
 if (!length(parts)) parts <- c("precise", "ball")
 if ("all" %in% parts) parts <- setdiff(known, "priors")
@@ -179,7 +182,7 @@ ball_part <- function() {
 
 scattered_part <- function(m) {
   pr <- scattered_problem(m)
-  set.seed(1)
+  set.seed(fitSeed)
   r <- timed(default_fit(pr$sim, pr$field))
   # FBC's row first, in case the peer's run fails or is stopped
   print(row_of(sprintf("m%d scattered", m), r$value, r$cpu, pr$truth), row.names = FALSE)
