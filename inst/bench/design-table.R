@@ -20,7 +20,6 @@ res <- do.call(rbind, lapply(files, function(f) {
   x[c("problem", "batch", "rep", "method", "runs", "hellinger", "sd", "covers", "rmse",
       "fitCpu", "designCpu")]
 }))
-methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(res$method))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
   s <- function(x) if (is.infinite(x)) paste0(">", budget) else sprintf(fmt, x)
   sprintf("%s [%s, %s]", s(median(v)), s(quantile(v, 0.25, type = 1)), s(quantile(v, 0.75, type = 1)))
@@ -34,6 +33,7 @@ reach_runs <- function(s) {
 for (st in unique(paste(res$problem, res$batch))) {
   r <- res[paste(res$problem, res$batch) == st, ]
   budget <- max(r$runs)
+  methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(r$method))
   # only replicates every method finished (paired)
   done <- Reduce(intersect, lapply(methods, function(m) unique(r$rep[r$method == m & r$runs == budget])))
   r <- r[r$rep %in% done, ]
