@@ -1,48 +1,82 @@
 # Summarises inst/bench/design.R's per-replicate results (design-*.rds in
-# the working directory): runs to reach Hellinger <= 0.1 to the reference
-# per method and problem (median and quartiles over replicates; a
-# replicate that does not reach it within the budget counts as beyond it,
-# "> max"), Hellinger, kappa1's sd and coverage at chosen run counts, and
-# the design step's CPU s against the fit's.
+# the directory given, default the working directory), per problem and
+# batch size:
+# - runs to reach Hellinger <= 0.1 to the reference per method (median and
+#   quartiles over replicates; a replicate that does not reach it within
+#   the budget is censored: "> max"), and the goals' ratios (LHS's and the
+#   plug-in's median over ours; a censored median gives a lower bound);
+# - the curves: Hellinger, kappa1's sd, coverage and the RMSE of the
+#   calibrated field mean at chosen run counts (median [quartiles]);
+# - the design step's CPU s against the fit it follows (same runs, same
+#   process).
 #
-#   Rscript inst/bench/design-table.R
-files <- list.files(".", "^design-.*-r[0-9]+\\.rds$")
-res <- do.call(rbind, lapply(files, readRDS))
-res$setting <- paste0(res$problem, ", batches of ", res$batch)
-q3 <- function(v, fmt = "%.0f") {
-  s <- function(x) if (is.infinite(x)) paste0(">", max(res$runs)) else sprintf(fmt, x)
+#   Rscript inst/bench/design-table.R [dir]
+args <- commandArgs(TRUE)
+dir <- if (length(args)) args[1] else "."
+files <- list.files(dir, "^design-.*-b[0-9]+-r[0-9]+\\.rds$", full.names = TRUE)
+res <- do.call(rbind, lapply(files, function(f) {
+  x <- readRDS(f)
+  if (is.null(x$rmse)) x$rmse <- NA_real_
+  x[c("problem", "batch", "rep", "method", "runs", "hellinger", "sd", "covers", "rmse",
+      "fitCpu", "designCpu")]
+}))
+q3 <- function(v, fmt = "%.0f", budget = Inf) {
+  s <- function(x) if (is.infinite(x)) paste0(">", budget) else sprintf(fmt, x)
   sprintf("%s [%s, %s]", s(median(v)), s(quantile(v, 0.25, type = 1)), s(quantile(v, 0.75, type = 1)))
 }
-for (st in unique(res$setting)) {
-  r <- res[res$setting == st, ]
-  cat(sprintf("\n### %s (%d paired replicates)\n\n", st, length(unique(r$rep))))
+reach_runs <- function(s) {
+  vapply(split(s, s$rep), function(x) {
+    h <- x$runs[x$hellinger <= 0.1]
+    if (length(h)) min(h) else Inf
+  }, 0)
+}
+for (st in unique(paste(res$problem, res$batch))) {
+  r <- res[paste(res$problem, res$batch) == st, ]
+  budget <- max(r$runs)
+  methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(r$method))
+  # only replicates every method finished (paired)
+  done <- Reduce(intersect, lapply(methods, function(m) unique(r$rep[r$method == m & r$runs == budget])))
+  r <- r[r$rep %in% done, ]
+  if (!nrow(r)) next
+  cat(sprintf("\n### %s, batches of %d (%d paired replicates)\n\n", r$problem[1], r$batch[1], length(done)))
   cat("| method | runs to Hellinger <= 0.1, median [quartiles] | replicates reaching it |\n|---|---|---|\n")
-  for (m in c("ours", "plugin", "lhs", "random")) {
-    s <- r[r$method == m, ]
-    reach <- vapply(split(s, s$rep), function(x) {
-      h <- x$runs[x$hellinger <= 0.1]
-      if (length(h)) min(h) else Inf
-    }, 0)
-    cat(sprintf("| %s | %s | %d/%d |\n", m, q3(reach), sum(is.finite(reach)), length(reach)))
+  reach <- lapply(stats::setNames(methods, methods), function(m) reach_runs(r[r$method == m, ]))
+  for (m in methods) {
+    cat(sprintf("| %s | %s | %d/%d |\n", m, q3(reach[[m]], budget = budget),
+                sum(is.finite(reach[[m]])), length(reach[[m]])))
   }
-  steps <- intersect(c(10, 15, 20, 30, 50), r$runs)
-  cat("\n| method | runs | Hellinger | kappa1 sd | covers | design CPU s | fit CPU s |\n|---|---|---|---|---|---|---|\n")
-  for (m in c("ours", "plugin", "lhs", "random")) for (n in steps) {
+  if ("ours" %in% methods) {
+    mo <- median(reach$ours)
+    for (m in intersect(c("lhs", "plugin"), methods)) {
+      mm <- median(reach[[m]])
+      txt <- if (is.infinite(mo)) "ours censored: no ratio" else if (is.infinite(mm))
+        sprintf(">= %.2f (%s censored at %d)", budget / mo, m, budget) else sprintf("%.2f", mm / mo)
+      # paired: replicates where ours reached it no later than the other method
+      cat(sprintf("\n%s / ours, median runs: %s; ours no later in %d/%d replicates",
+                  m, txt, sum(reach$ours <= reach[[m]]), length(done)))
+    }
+    cat("\n")
+  }
+  steps <- intersect(c(10, 11, 12, 15, 20, 25, 30, 40, 50), r$runs)
+  cat("\n| method | runs | Hellinger | kappa1 sd | covers | RMSE field mean |\n|---|---|---|---|---|---|\n")
+  for (m in methods) for (n in steps) {
     s <- r[r$method == m & r$runs == n, ]
-    rng <- function(v) if (all(is.na(v))) "-" else sprintf("%.3f-%.3f", min(v, na.rm = TRUE), max(v, na.rm = TRUE))
-    cat(sprintf("| %s | %d | %s | %s | %d/%d | %s | %s |\n", m, n, q3(s$hellinger, "%.3f"),
-                q3(s$sd, "%.4f"), sum(s$covers), nrow(s), rng(s$designCpu), rng(s$fitCpu)))
+    cat(sprintf("| %s | %d | %s | %s | %d/%d | %s |\n", m, n, q3(s$hellinger, "%.3f"),
+                q3(s$sd, "%.4f"), sum(s$covers), nrow(s),
+                if (all(is.na(s$rmse))) "-" else q3(s$rmse, "%.4f")))
   }
-  for (m in c("ours", "plugin")) {
-    s <- r[r$method == m & !is.na(r$designCpu) & r$runs > 10, ]
-    # the design step against the warm-started fit it follows (the fit on
-    # the same runs, the row's fitCpu)
+  cat("\n| method | design CPU s, median [range] | fit it follows, CPU s | design / fit, median [quartiles] (range) | steps |\n|---|---|---|---|---|\n")
+  for (m in methods) {
+    s <- r[r$method == m & !is.na(r$designCpu), ]
     ratio <- s$designCpu / s$fitCpu
-    cat(sprintf("\n%s: design step / the fit it follows: median %.2f, range %.2f-%.2f (%d steps)\n",
-                m, median(ratio), min(ratio), max(ratio), length(ratio)))
+    cat(sprintf("| %s | %.3f [%.3f, %.3f] | %.2f [%.2f, %.2f] | %.3f [%.3f, %.3f] (%.3f-%.3f) | %d |\n", m,
+                median(s$designCpu), min(s$designCpu), max(s$designCpu),
+                median(s$fitCpu), min(s$fitCpu), max(s$fitCpu),
+                median(ratio), quantile(ratio, 0.25), quantile(ratio, 0.75), min(ratio), max(ratio),
+                nrow(s)))
   }
   up <- r[r$runs > 10, ]
-  cat(sprintf("warm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; fresh fits on the 10 starting runs: median %.2f, range %.2f-%.2f\n",
+  cat(sprintf("\nWarm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; the fresh fit on the 10 starting runs: median %.2f, range %.2f-%.2f\n",
               median(up$fitCpu), min(up$fitCpu), max(up$fitCpu),
               median(r$fitCpu[r$runs == 10]), min(r$fitCpu[r$runs == 10]), max(r$fitCpu[r$runs == 10])))
 }

@@ -2,11 +2,15 @@
 # runs are added by each method, from the same maximin start and field
 # noise per replicate (paired). A script, not a timed test:
 #
-#   Rscript inst/bench/design.R [reps] [batch] [added] [problem] [first]
+#   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
+#                               [--first=1] [--added=40]
+#                               [--methods=ours,plugin,lhs,random] [--out=.]
 #
 # (replicates first .. first + reps - 1; each replicate's rows are saved to
-# design-<problem>-b<batch>-r<rep>.rds as it ends, so a run stopped early
-# keeps what it did; summarise with inst/bench/design-table.R.)
+# <out>/design-<problem>-b<batch>-r<rep>.rds as it ends, so a run stopped
+# early keeps what it did; summarise with inst/bench/design-table.R. The
+# old positional form `design.R reps batch added problem first` still
+# works.)
 #
 # Problems, all with discrepancy "none" (where new runs can matter: with a
 # KOH bias the confounding sets kappa's width, see ?propose_runs):
@@ -15,34 +19,83 @@
 #   noise sd 0.1.
 # - "two": two calibration inputs, eta(x, u1, u2) = exp(-2 u1 x) sin(8 u2 x)
 #   on [0, 1]^3, field at u = (0.5, 0.6), 8 inputs x 2 replicates, sd 0.1.
-# Reference: the same model fitted on 150 maximin runs of the true
-# simulator (the emulator's error is then negligible; same priors and
-# noise model), per replicate (its field noise).
+# - "kinetics": the kinetics model of Bayarri et al. (2007) (FBC's
+#   kineticSim / kineticField), eta(t, u) = 5 exp(-u t), t in [0, 3.1],
+#   u in [0.5, 3]; field simulated at kineticField's 30 inputs (10 times x
+#   3) at u = 1.2 with noise sd 0.2 (the real data need a bias: this is the
+#   model's own problem, with a known truth).
+# Reference: kappa's exact posterior given the true simulator (no emulator:
+# the limit of infinitely many runs), on a grid, with the fits' priors:
+# kappa Beta(1.1, 1.1) on the calibration range, the noise sd half-Cauchy
+# with scale the simulator response's sd (calibrate()'s default halft_sd
+# prior on the standardised scale; that sd from 2000 uniform runs), the sd
+# integrated out on a log grid. Per replicate (its field noise). It
+# replaces the earlier 150-run fit (9-30 CPU s a replicate, and a second
+# Monte Carlo error in the distance); the two agree (see RESULTS-design.md).
 # Methods: ours (propose_runs, joint), plug-in (the same criterion at the
 # MAP hyperparameters, kappa weighted on a grid: KOH-IMSPE/EIVAR's way),
 # lhs::augmentLHS (nested maximin augmentation), random; ours and the
-# plug-in choose among 100 d uniform candidates on [0, 1]^d per step.
+# plug-in choose among 100 d uniform candidates per step.
+# Fits: calibrate() and update(fit, sim =) with the package defaults (4
+# chains, until converged) but discrepancy = "none".
 # Metrics per step: Hellinger distance of kappa's posterior to the
-# reference (kernel densities on a grid; the largest over the calibration
-# inputs' marginals), kappa1's sd, whether the 90% intervals cover the
-# truth, CPU s of the design step and of the (warm-started) fit before it.
+# reference (kernel density of the draws against the exact density on the
+# grid; the largest over the calibration inputs' marginals), kappa1's sd,
+# whether the 90% intervals cover the truth, the RMSE of the calibrated
+# prediction of the field mean (predict(type = "mean"), 200 draws) on 50
+# inputs over the field's range against the true process, CPU s of the
+# design step and of the fit on the same runs it follows (the same
+# process, so their ratio comes out of these runs).
 suppressPackageStartupMessages(library(FBC))
+opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L,
+             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0")
 args <- commandArgs(TRUE)
-reps <- if (length(args) >= 1) as.integer(args[1]) else 3L
-batch <- if (length(args) >= 2) as.integer(args[2]) else 5L
-added <- if (length(args) >= 3) as.integer(args[3]) else 40L
-problem <- if (length(args) >= 4) args[4] else "sinus"
-first <- if (length(args) >= 5) as.integer(args[5]) else 1L
+if (length(args) && !any(grepl("^--", args))) {
+  # the old positional form: reps batch added problem first
+  names(args) <- c("reps", "batch", "added", "problem", "first")[seq_along(args)]
+  opts[names(args)] <- args
+} else {
+  for (a in args) {
+    kv <- regmatches(a, regexec("^--([a-z]+)=(.*)$", a))[[1]]
+    if (length(kv) != 3 || !kv[2] %in% names(opts)) stop("unknown option ", a)
+    opts[[kv[2]]] <- kv[3]
+  }
+}
+reps <- as.integer(opts$reps)
+batch <- as.integer(opts$batch)
+added <- as.integer(opts$added)
+problem <- opts$problem
+first <- as.integer(opts$first)
+methods <- strsplit(opts$methods, ",")[[1]]
+stopifnot(all(methods %in% c("ours", "plugin", "lhs", "random")))
+
+# eta(X): X in natural units, columns (experimental, calibration...)
 pb <- switch(problem,
-  sinus = list(eta = function(x, u) sin(10 * u[, 1] * x), u0 = pi / 5,
+  sinus = list(eta = function(X) sin(10 * X[, 2] * X[, 1]), u0 = pi / 5,
+               lower = c(0, 0), upper = c(1, 1), sd = 0.1, ngrid = 1000,
                xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
-  two = list(eta = function(x, u) exp(-2 * u[, 1] * x) * sin(8 * u[, 2] * x), u0 = c(0.5, 0.6),
+  two = list(eta = function(X) exp(-2 * X[, 2] * X[, 1]) * sin(8 * X[, 3] * X[, 1]),
+             u0 = c(0.5, 0.6), lower = c(0, 0, 0), upper = c(1, 1, 1), sd = 0.1, ngrid = 400,
              xf = rep(seq(0.05, 0.95, length.out = 8), 2)),
-  stop("problem must be sinus or two"))
+  kinetics = list(eta = function(X) 5 * exp(-X[, 2] * X[, 1]), u0 = 1.2,
+                  lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
+                  xf = as.data.frame(kineticField)$t),
+  stop("problem must be sinus, two or kinetics"))
 q <- length(pb$u0)
 d <- 1 + q
+xname <- if (problem == "kinetics") "t" else "x"
 unames <- paste0("u", seq_len(q))
-grid <- seq(0.0025, 0.9975, by = 0.005)
+cols <- c(xname, unames)
+# kappa's grid per calibration input (cell midpoints over its range)
+ugrid <- lapply(seq_len(q), function(j) {
+  lo <- pb$lower[1 + j]
+  w <- (pb$upper[1 + j] - lo) / pb$ngrid
+  lo + w * (seq_len(pb$ngrid) - 0.5)
+})
+uwidth <- (pb$upper[-1] - pb$lower[-1]) / pb$ngrid
+# the field's prediction inputs (RMSE against the true process)
+xpred <- seq(min(pb$xf), max(pb$xf), length.out = 50)
+truePred <- pb$eta(cbind(xpred, matrix(pb$u0, 50, q, byrow = TRUE)))
 
 cpu <- function(expr) {
   t0 <- proc.time()
@@ -50,31 +103,74 @@ cpu <- function(expr) {
   tm <- proc.time() - t0
   sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
 }
-dens <- function(v) {
-  k <- density(v, from = min(grid), to = max(grid), n = length(grid), bw = "SJ")$y
-  k / sum(k * 0.005)
+to_natural <- function(U) {
+  U <- matrix(U, ncol = d)
+  sweep(sweep(U, 2, pb$upper - pb$lower, "*"), 2, pb$lower, "+")
+}
+runs_at <- function(X) {
+  X <- matrix(X, ncol = d)
+  out <- data.frame(y = pb$eta(X), X[, 1])
+  names(out)[2] <- xname
+  out[unames] <- X[, -1]
+  out
+}
+
+# The reference: kappa's exact posterior marginals on the grid (see above).
+reference <- function(field) {
+  ysd <- local({
+    set.seed(1)
+    sd(pb$eta(to_natural(matrix(runif(2000 * d), ncol = d))))
+  })
+  U <- as.matrix(do.call(expand.grid, ugrid))
+  nf <- length(pb$xf)
+  E <- matrix(pb$eta(cbind(rep(pb$xf, each = nrow(U)), U[rep(seq_len(nrow(U)), nf), , drop = FALSE])),
+              nrow(U), nf)
+  rss <- rowSums(sweep(E, 2, field$y)^2)
+  # log of the integral over the noise sd s (log grid, half-Cauchy prior
+  # with scale ysd, times s for the log grid's Jacobian), accumulated as a
+  # log-sum-exp over the grid
+  s <- exp(seq(log(0.005), log(20), length.out = 400)) * ysd
+  post <- rep(-Inf, nrow(U))
+  for (sk in s) {
+    v <- dcauchy(sk, 0, ysd, log = TRUE) + log(sk) - nf * log(sk) - rss / (2 * sk^2)
+    mx <- pmax(post, v)
+    post <- mx + log(exp(post - mx) + exp(v - mx))
+  }
+  for (j in seq_len(q)) {
+    z <- (U[, j] - pb$lower[1 + j]) / (pb$upper[1 + j] - pb$lower[1 + j])
+    post <- post + dbeta(z, 1.1, 1.1, log = TRUE)
+  }
+  post <- exp(post - max(post))
+  arr <- array(post, dim = rep(pb$ngrid, q))
+  lapply(seq_len(q), function(j) {
+    v <- if (q == 1) as.vector(arr) else apply(arr, j, sum)
+    v / sum(v * uwidth[j])
+  })
+}
+dens <- function(v, j) {
+  k <- density(v, from = min(ugrid[[j]]), to = max(ugrid[[j]]), n = pb$ngrid, bw = "SJ")$y
+  k / sum(k * uwidth[j])
 }
 # largest Hellinger distance over the calibration inputs' marginals
 hellinger <- function(K, ref) {
   max(vapply(seq_len(q), function(j) {
-    sqrt(max(0, 1 - sum(sqrt(dens(K[, j]) * ref[[j]]) * 0.005)))
+    sqrt(max(0, 1 - sum(sqrt(dens(K[, j], j) * ref[[j]]) * uwidth[j])))
   }, 0))
 }
-runs_at <- function(X) {
-  X <- matrix(X, ncol = d)
-  out <- data.frame(y = pb$eta(X[, 1], X[, -1, drop = FALSE]), x = X[, 1])
-  out[unames] <- X[, -1]
-  out
-}
-fit_runs <- function(sim, field, ...) {
-  suppressWarnings(calibrate(sim, field, discrepancy = "none", nChains = 2, showProgress = FALSE, ...))
+fit_runs <- function(sim, field) {
+  suppressWarnings(calibrate(sim, field, discrepancy = "none", showProgress = FALSE))
 }
 kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
+rmse <- function(fit) {
+  nd <- stats::setNames(data.frame(xpred), xname)
+  p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
+  sqrt(mean((p - truePred)^2))
+}
 next_runs <- function(method, fit, n, lhsState) {
-  cand <- function() stats::setNames(as.data.frame(matrix(runif(100 * d * d), ncol = d)), c("x", unames))
+  cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
   switch(method,
-    ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[c("x", unames)]),
-    plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[c("x", unames)]),
+    ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[cols]),
+    plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[cols]),
     random = matrix(runif(d * n), n, d),
     lhs = {
       A <- lhs::augmentLHS(lhsState, n)
@@ -82,44 +178,71 @@ next_runs <- function(method, fit, n, lhsState) {
     })
 }
 
-one_replicate <- function(r) {
+# fit0: the fit on the starting runs after set.seed(2000 + r), shared by
+# the methods (each continues from the RNG state after it, as if it had
+# fitted it itself)
+one_method <- function(method, r, start, field, ref, tRef, fit0) {
   rows <- list()
-  set.seed(1000 + r)
-  field <- data.frame(y = pb$eta(pb$xf, matrix(pb$u0, length(pb$xf), q, byrow = TRUE)) +
-                        rnorm(length(pb$xf), 0, 0.1), x = pb$xf)
-  start <- lhs::maximinLHS(10, d)
-  tRef <- cpu(refFit <- fit_runs(runs_at(lhs::maximinLHS(150, d)), field))
-  ref <- lapply(seq_len(q), function(j) dens(kappas(refFit)[, j]))
-  for (method in c("ours", "plugin", "lhs", "random")) {
-    set.seed(2000 + r)
-    sim <- runs_at(start)
-    lhsState <- start
-    tFit <- cpu(fit <- fit_runs(sim, field))
-    repeat {
-      K <- kappas(fit)
-      cov <- all(vapply(seq_len(q), function(j) {
-        b <- quantile(K[, j], c(0.05, 0.95))
-        b[1] <= pb$u0[j] && pb$u0[j] <= b[2]
-      }, TRUE))
-      row <- data.frame(problem = problem, batch = batch, rep = r, method = method,
-                        runs = nrow(sim), hellinger = hellinger(K, ref), sd = sd(K[, 1]),
-                        covers = cov, fitCpu = tFit, designCpu = NA_real_, refCpu = tRef)
-      if (nrow(sim) >= 10 + added) { rows[[length(rows) + 1]] <- row; break }
-      tDesign <- cpu(X <- next_runs(method, fit, batch, lhsState))
-      row$designCpu <- tDesign
-      rows[[length(rows) + 1]] <- row
-      if (method == "lhs") lhsState <- rbind(lhsState, X)
-      new <- runs_at(X)
-      sim <- rbind(sim, new)
-      tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
+  assign(".Random.seed", fit0$seed, envir = globalenv())
+  sim <- runs_at(to_natural(start))
+  lhsState <- start
+  fit <- fit0$fit
+  tFit <- fit0$cpu
+  repeat {
+    K <- kappas(fit)
+    cov <- all(vapply(seq_len(q), function(j) {
+      b <- quantile(K[, j], c(0.05, 0.95))
+      b[1] <= pb$u0[j] && pb$u0[j] <= b[2]
+    }, TRUE))
+    tMetric <- cpu(row <- data.frame(
+      problem = problem, batch = batch, rep = r, method = method, runs = nrow(sim),
+      hellinger = hellinger(K, ref), sd = sd(K[, 1]), covers = cov, rmse = rmse(fit),
+      draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef))
+    row$metricCpu <- tMetric
+    if (nrow(sim) >= 10 + added) return(rbind(do.call(rbind, rows), row))
+    tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState))
+    row$designCpu <- tDesign
+    rows[[length(rows) + 1]] <- row
+    if (method %in% c("lhs", "random")) {
+      if (method == "lhs") lhsState <- rbind(lhsState, U)
+      U <- to_natural(U)
     }
-    h <- vapply(rows[vapply(rows, function(x) x$method == method, TRUE)], `[[`, 0, "hellinger")
-    cat(sprintf("%s b%d rep %d %-6s Hellinger %s\n", problem, batch, r, method,
-                paste(sprintf("%.2f", h), collapse = " ")))
+    new <- runs_at(U)
+    sim <- rbind(sim, new)
+    tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
   }
-  res <- do.call(rbind, rows)
-  saveRDS(res, sprintf("design-%s-b%d-r%02d.rds", problem, batch, r))
+}
+
+one_replicate <- function(r) {
+  set.seed(1000 + r)
+  X0 <- cbind(pb$xf, matrix(pb$u0, length(pb$xf), q, byrow = TRUE))
+  field <- stats::setNames(data.frame(pb$eta(X0) + rnorm(length(pb$xf), 0, pb$sd), pb$xf),
+                           c("y", xname))
+  start <- lhs::maximinLHS(10, d)
+  tRef <- cpu(ref <- reference(field))
+  if (opts$refcheck == "1") {
+    # the grid reference against a fit on 150 maximin runs (the earlier
+    # reference)
+    t150 <- cpu(fit150 <- fit_runs(runs_at(to_natural(lhs::maximinLHS(150, d))), field))
+    cat(sprintf("%s rep %d: Hellinger of a 150-run fit to the grid reference %.3f (grid %.2f CPU s, 150-run fit %.1f CPU s, %d draws)\n",
+                problem, r, hellinger(kappas(fit150), ref), tRef, t150, nrow(fit150$Phi)))
+    return(invisible())
+  }
+  set.seed(2000 + r)
+  fit0 <- list()
+  fit0$cpu <- cpu(fit0$fit <- fit_runs(runs_at(to_natural(start)), field))
+  fit0$seed <- get(".Random.seed", envir = globalenv())
+  res <- do.call(rbind, lapply(methods, function(method) {
+    out <- one_method(method, r, start, field, ref, tRef, fit0)
+    cat(sprintf("%s b%d rep %d %-6s Hellinger %s (fits %.1f s, design %.1f s, metrics %.1f s)\n",
+                problem, batch, r, method, paste(sprintf("%.2f", out$hellinger), collapse = " "),
+                sum(out$fitCpu), sum(out$designCpu, na.rm = TRUE), sum(out$metricCpu)))
+    out
+  }))
+  saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-r%02d.rds", problem, batch, r)))
   res
 }
 
+cat(sprintf("FBC %s, problem %s, batches of %d, replicates %d-%d\n",
+            utils::packageVersion("FBC"), problem, batch, first, first + reps - 1L))
 for (r in first:(first + reps - 1L)) one_replicate(r)
