@@ -10,12 +10,11 @@
 #' `update(fit, sim = more_runs)` rebuilds the model on all runs (the old
 #' and the new, exactly as `calibrate(rbind(old, new), field, ...)` with the
 #' fit's model arguments would: the same scaling, priors and algebra
-#' choice) and refits it from the chains' last states and adapted
-#' proposals (a warm start), with `nBurn` sweeps of re-tuning. The posterior is that of a fresh fit on all
-#' runs (tested against the grid posterior); only the way there is
-#' shorter: the chains start in the old posterior, which new runs move
-#' little, with proposals already tuned, so the warm-up settles in its
-#' first windows.
+#' choice) and refits it from the chains' last states (a warm start) with a fresh adaptive warm-up (or `nBurn` sweeps). The
+#' posterior is that of a fresh fit on all runs (tested against the grid
+#' posterior). On the small fits measured (inst/bench/design-warm.R) a warm
+#' refit costs about what a fresh fit does: the chains start in the old
+#' posterior, but the proposals must still adapt to the new one.
 #'
 #' The last states are carried to the new model's scaling: kappa in its
 #' own units, each length-scale `theta` by the change of its input's range
@@ -29,9 +28,13 @@
 #'   frame with its names, or a matrix with its columns in its order).
 #' @param nMCMC,converge The refit's run length, as in [calibrate()]: by
 #'   default until converged ([until_converged()]).
-#' @param nBurn Sweeps of re-tuning before draws are kept (fixed, default
-#'   200: the proposals come adapted; a fresh fit's adaptive warm-up takes
-#'   200 to 5000).
+#' @param nBurn Warm-up sweeps before draws are kept. `NULL` (the default)
+#'   runs the adaptive warm-up of [calibrate()] from the chains' last
+#'   states, so it ends when the proposals have settled on the new
+#'   posterior. Until this was measured (inst/bench/design-warm.R) the
+#'   refit re-tuned the old adapted proposals for a fixed 200 sweeps,
+#'   which kept the chains' move to the new posterior among the draws and
+#'   cost 1.5-3.5 times a fresh fit.
 #' @param showProgress As in [calibrate()].
 #' @return A new `fbc` object fitted to all runs (its draws are the new
 #'   run's only). `settings$warmStart` is `TRUE`.
@@ -42,7 +45,7 @@
 #' fit <- calibrate(ballSim[1:40, ], ballField, nChains = 2)
 #' fit2 <- update(fit, sim = ballSim[41:50, ])
 #' fit2$model$dims$m
-update_runs <- function(fit, sim, nMCMC = NULL, nBurn = 200L, converge = NULL,
+update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
                         showProgress = NULL) {
   fit <- check_fbc(fit, "fit")
   old <- fit$model
@@ -116,19 +119,15 @@ bind_runs <- function(old, new, call = parent.frame()) {
   rbind(old, new)
 }
 
-# A chain's sampler state carried to `new` (the model on more runs) from
-# `old`: parameters mapped to the new scaling (warm_phi()), adapted scales,
-# block shapes and adaptation counts kept, iterations and the warm-up's
-# bookkeeping reset: a fixed re-tuning of nBurn sweeps follows (its steps
-# small, the batch count going on; under 400 sweeps the blocks' running
-# covariance is not started afresh, so it keeps what it learnt).
+# A chain's start on `new` (the model on more runs) from its last state on
+# `old`: the parameters mapped to the new scaling (warm_phi()), the
+# proposals and the warm-up started afresh (initial_state()). Carrying the
+# adapted scales, block shapes and adaptation counts over was measured
+# slower: their small late steps re-tune slowly to the new posterior
+# (inst/bench/design-warm.R: the ball's refit warmed up 800-3400 sweeps
+# with them, 300-500 without).
 warm_state <- function(state, old, new) {
-  state$phi <- warm_phi(state$phi, old, new)
-  state$iter <- 0L
-  drop <- c("warmup", "warmMin", "warmMax", "warmCapped", "settled", "windows", "winAcc",
-            "winScale", "winShape")
-  state[intersect(names(state), drop)] <- NULL
-  state
+  initial_state(warm_phi(state$phi, old, new), new$spec)
 }
 
 # phi (sampler's scale) of model `old` in the scaling of `new`: kappa

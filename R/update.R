@@ -26,7 +26,7 @@
 #'   as in [calibrate()].
 #' @param sim New simulator runs (rows in the form of `calibrate()`'s `sim`):
 #'   the model is rebuilt on all runs and refitted from the chains' last
-#'   states and adapted proposals (a warm start), see [update_runs()]. `nMCMC`
+#'   states (a warm start), see [update_runs()]. `nMCMC`
 #'   and `converge` are then the new run's, as in [calibrate()].
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).

@@ -39,7 +39,11 @@ test_that("update(fit, sim =) gives the posterior of a fit on all runs (grid)", 
   expect_identical(fit2$model$data, all$data)
   expect_identical(fit2$model$spec$table, all$spec$table)
   expect_true(fit2$settings$warmStart)
-  expect_equal(nrow(fit2$Phi), 2000)
+  # the refit's warm-up is the adaptive one (nBurn = NULL): its length is the
+  # data's, and the draws kept are the sweeps after it
+  w <- fit2$settings$warmup
+  expect_true(w >= 200 && w < 4200)
+  expect_equal(nrow(fit2$Phi), (4200 - w) / fit2$settings$thinning)
   # kappa's draws against the grid posterior on all 20 runs; 8 runs more
   # move it (the 12-run posterior is not the reference's)
   expect_kappa_grid(fit2, sinus_loglik(fit2$data))
