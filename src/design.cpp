@@ -99,7 +99,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (post.sgasp || post.layout.length[PC_SIGMA2E] != 1)
+  if (post.sgasp || post.layout.length_of("sigma2E") != 1)
     Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   const int m = Xs.n_rows, n = Xf.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
