@@ -6,6 +6,12 @@
 # compiled_model() (R/model.R) is the one function that turns the model
 # into the list the compiled entry points take.
 
+# A table written row by row (one list per row, the same names in each),
+# so that a new entry of a code table is one line.
+rows_table <- function(...) {
+  do.call(rbind, lapply(list(...), as.data.frame, stringsAsFactors = FALSE))
+}
+
 # The walks of the model description's `walk` column (src/fbc.h, enum
 # Transform).
 walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)

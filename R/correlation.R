@@ -89,15 +89,13 @@ correlation <- function(X, Y = NULL, theta, alpha = NULL, kernel = "powexp") {
 # The correlation families, one row each: name, code (its struct in
 # src/kernels.cpp holds the same; checked at load), label (for print()) and
 # whether it has a smoothness parameter alpha (class alphaS/alphaB).
-kernels <- data.frame(
-  name = c("powexp", "gaussian", "matern32", "matern52"),
-  code = 1:4,
-  label = c("power exponential", "Gaussian", "Matern 3/2", "Matern 5/2"),
-  alpha = c(TRUE, FALSE, FALSE, FALSE),
-  stringsAsFactors = FALSE
+kernels <- rows_table(
+  list(name = "powexp", code = 1L, label = "power exponential", alpha = TRUE),
+  list(name = "gaussian", code = 2L, label = "Gaussian", alpha = FALSE),
+  list(name = "matern32", code = 3L, label = "Matern 3/2", alpha = FALSE),
+  list(name = "matern52", code = 4L, label = "Matern 5/2", alpha = FALSE)
 )
 kernel_codes <- stats::setNames(kernels$code, kernels$name)
-kernel_labels <- stats::setNames(kernels$label, kernels$name)
 
 # The name of a family given by name or code.
 kernel_name <- function(kernel) {

@@ -88,14 +88,13 @@ class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes
 #   classes  the classes of the bias GP it has (space separated); a class
 #            named by no model is in every model
 #   design   why propose_runs() does not handle it ("": it does)
-discrepancy_models <- data.frame(
-  name = c("gp", "sgasp", "none"),
-  code = c(0L, 2L, 1L),
-  label = c("Kennedy-O'Hagan", "S-GaSP discrepancy, Gu and Wang 2018",
-            "no discrepancy: y_f = eta(x, kappa) + eps"),
-  classes = c("thetaB alphaB rhoB rhoD sigma2B muB", "thetaB alphaB rhoB rhoD sigma2B lambdaZ", ""),
-  design = c("", "the S-GaSP discrepancy", ""),
-  stringsAsFactors = FALSE
+discrepancy_models <- rows_table(
+  list(name = "gp", code = 0L, label = "Kennedy-O'Hagan",
+       classes = "thetaB alphaB rhoB rhoD sigma2B muB", design = ""),
+  list(name = "sgasp", code = 2L, label = "S-GaSP discrepancy, Gu and Wang 2018",
+       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ", design = "the S-GaSP discrepancy"),
+  list(name = "none", code = 1L, label = "no discrepancy: y_f = eta(x, kappa) + eps",
+       classes = "", design = "")
 )
 discrepancy_codes <- stats::setNames(discrepancy_models$code, discrepancy_models$name)
 

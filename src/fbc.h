@@ -19,6 +19,7 @@
 #define R_NO_REMAP
 #endif
 #include <RcppArmadillo.h>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -336,6 +337,11 @@ public:
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
+  // The discrepancy model's bias correlation on the distinct field inputs
+  // from the bias GP's R, and its cross-correlation and variance at new
+  // inputs (model.cpp; Ruu() gives R on the distinct inputs if needed).
+  bool biasModel(arma::mat& R, arma::mat& B, arma::mat& W) const;
+  void biasModelCross(const std::function<arma::mat()>& Ruu, arma::mat& K, arma::vec& r) const;
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 
@@ -471,8 +477,6 @@ protected:
   const arma::mat& curQ() const { return Q_.cur(); }
   const arma::vec& curWz() const { return wz_.cur(); }
 };
-// Rz = R - R (R + (nu / lambda) I)^-1 R over R's lower triangle (model.cpp).
-bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W);
 
 // The dense algebra: the Cholesky factor of the m x m simulator block
 // (dense.cpp). Per-dimension power matrices are cached while they fit in the

@@ -155,11 +155,11 @@ private:
     out = Rcpp::as<arma::vec>(v);
     return true;
   }
-  // The bias correlation on the distinct rows (S-GaSP: scaled).
+  // The bias correlation on the distinct rows (the discrepancy model's).
   bool biasCorr(arma::mat& R) {
     R = corr_matrix(Xu_, Xu_, phi.subvec(iThetaB, iThetaB + p - 1),
                     phi.subvec(iAlphaB, iAlphaB + p - 1), kernB_);
-    if (sgasp && !sgasp_corr(R, phi[iLambdaZ], Bz_, Wz_)) return false;
+    if (!biasModel(R, Bz_, Wz_)) return false;
     R = arma::symmatl(R);
     return true;
   }
@@ -220,16 +220,8 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
     const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
     arma::mat K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
-    arma::vec r0(b, arma::fill::ones);
-    if (sgasp) {
-      const double c = nu_ / phi[iLambdaZ];
-      arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
-      L.diag() += c;
-      if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
-      solve_lower(L, K);
-      r0 -= arma::sum(arma::square(K), 0).t();
-      K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
-    }
+    arma::vec r0;
+    biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, K, r0);
     arma::mat H(n, b);
     for (int c = 0; c < b; ++c)
       for (int i = 0; i < n; ++i) H(i, c) = s2B * K(grp_[i], c);

@@ -415,7 +415,7 @@ void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
 //   Rz = R - R (R + c I)^-1 R,  c = nu / lambda,
 // through L = chol(R + c I), W = L^-1 R: Rz = R - W'W (written over R,
 // lower triangle). False when R + c I is not positive definite.
-bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
+static bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
   const int nu = R.n_rows;
   if (!(lambda > 0) || !std::isfinite(lambda)) return false;
   R = arma::symmatl(R);
@@ -428,6 +428,35 @@ bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
   return true;
 }
 
+// The discrepancy model's computations on the bias GP's correlation R (the
+// model is read off the layout, set_sizes()): the KOH bias keeps R; the
+// S-GaSP (lambdaZ) scales it. On the nu distinct field inputs (lower
+// triangle, in place; B, W workspaces): Rz = sgasp_corr(R). False when it
+// is not positive definite.
+bool Posterior::biasModel(arma::mat& R, arma::mat& B, arma::mat& W) const {
+  return !sgasp || sgasp_corr(R, phi[iLambdaZ], B, W);
+}
+
+// At new inputs: K = R(Xu, Xnew) -> the model's cross-correlation, r its
+// variance at them (1 for the KOH bias). S-GaSP: the discretized kernel
+// Kz(x, x') = R(x, x') - R(x, Xu) (R + c I)^-1 R(Xu, x'), c = nu / lambdaZ,
+// so with L = chol(R(Xu, Xu) + c I) (Ruu() gives R(Xu, Xu)) and
+// H = L^-1 R(Xu, Xnew):
+//   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
+//   r = 1 - colsums(H^2).
+void Posterior::biasModelCross(const std::function<arma::mat()>& Ruu, arma::mat& K,
+                               arma::vec& r) const {
+  r.ones(K.n_cols);
+  if (!sgasp) return;
+  arma::mat L = Ruu();
+  const double c = L.n_rows / phi[iLambdaZ];
+  L.diag() += c;
+  if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
+  solve_lower(L, K);  // H
+  r -= arma::sum(arma::square(K), 0).t();
+  K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+}
+
 // out(i, j) *= prod_f C_f[a_f(i), a_f(j)] (rhoB: each categorical input f's
 // level correlation) * D[srcX[i], srcY[j]] (rhoD: the field data sets'
 // biases' correlation, with a bias per data set); lower: only i >= j.
@@ -438,12 +467,8 @@ void SchurPosterior::biasLevels(const arma::mat& X, const int* srcX, const arma:
 }
 
 // The bias GP's correlation between the distinct field inputs and new
-// inputs Xnew (K, nu x b) and at the new inputs themselves (r, b): for the
-// KOH bias K = R(Xu, Xnew), r = 1; for the S-GaSP one the discretized
-// kernel Kz(x, x') = R(x, x') - R(x, Xu) (R + c I)^-1 R(Xu, x'), c = nu /
-// lambdaZ, so with L = chol(R(Xu, Xu) + c I) and H = L^-1 R(Xu, Xnew):
-//   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
-//   r = 1 - colsums(H^2).
+// inputs Xnew (K, nu x b) and at the new inputs themselves (r, b), as the
+// discrepancy model has it (biasModelCross()).
 void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
                                const int* source) const {
   const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
@@ -456,16 +481,11 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
   }
   K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
   biasLevels(Xu_, srcU_.data(), Xnew, source, K, false);
-  r.ones(Xnew.n_rows);
-  if (!sgasp) return;
-  const double c = nu_ / phi[iLambdaZ];
-  arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
-  biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), L, false);
-  L.diag() += c;
-  if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
-  solve_lower(L, K);  // H
-  r -= arma::sum(arma::square(K), 0).t();
-  K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+  biasModelCross([&] {
+    arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+    biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), L, false);
+    return L;
+  }, K, r);
 }
 
 // GP conditional of a target with covariance ks = s2S k with ys and kf with
@@ -615,7 +635,7 @@ double SchurPosterior::evaluate(const Touch& t) {
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
     biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), Rb_.alt(), true);
-    if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
+    if (!biasModel(Rb_.alt(), Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }
 
