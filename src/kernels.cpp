@@ -32,46 +32,40 @@ struct KernelBase {
   static double finish(double s, double) { return std::exp(-s); }
 };
 struct PowExp : KernelBase {
-  static constexpr int code = 1;
-  static const char* name() { return "powexp"; }
+  static constexpr int code = 1; static const char* name() { return "powexp"; }
   static constexpr bool alpha = true;
   static double dist(double d) { return std::log(std::fabs(d)); }
   static double term(double g, double alpha) { return std::exp(alpha * g); }
 };
 struct Gaussian : KernelBase {
-  static constexpr int code = 2;
-  static const char* name() { return "gaussian"; }
+  static constexpr int code = 2; static const char* name() { return "gaussian"; }
   static double dist(double d) { const double a = std::fabs(d); return a * a; }
 };
-// The Matern families: s the sum in the exponent, w the polynomials' product.
-struct MaternBase : KernelBase {
+// The Matern families: s the sum in the exponent, w the product of the
+// polynomials poly(a) (M::factor).
+template <class M> struct MaternBase : KernelBase {
   static constexpr bool poly = true;
   static double dist(double d) { return std::fabs(d); }
+  static void accum(double c, double t, double& s, double& w) {
+    const double a = c * t;
+    s += a;
+    w *= M::factor(a);
+  }
   // w exp(-s) <= 1; beyond exp(-700) w could overflow in products of many
   // dimensions: go through logs there
   static double finish(double s, double w) {
     return s < 700.0 ? w * std::exp(-s) : std::exp(std::log(w) - s);
   }
 };
-struct Matern32 : MaternBase {
-  static constexpr int code = 3;
-  static const char* name() { return "matern32"; }
+struct Matern32 : MaternBase<Matern32> {
+  static constexpr int code = 3; static const char* name() { return "matern32"; }
   static double coef(double theta) { return std::sqrt(3.0 * theta); }
-  static void accum(double c, double t, double& s, double& w) {
-    const double a = c * t;
-    s += a;
-    w *= 1.0 + a;
-  }
+  static double factor(double a) { return 1.0 + a; }
 };
-struct Matern52 : MaternBase {
-  static constexpr int code = 4;
-  static const char* name() { return "matern52"; }
+struct Matern52 : MaternBase<Matern52> {
+  static constexpr int code = 4; static const char* name() { return "matern52"; }
   static double coef(double theta) { return std::sqrt(5.0 * theta); }
-  static void accum(double c, double t, double& s, double& w) {
-    const double a = c * t;
-    s += a;
-    w *= 1.0 + a + a * a / 3.0;
-  }
+  static double factor(double a) { return 1.0 + a + a * a / 3.0; }
 };
 
 // The families, the one list.
