@@ -6,12 +6,15 @@
 # compiled_model() (R/model.R) is the one function that turns the model
 # into the list the compiled entry points take.
 
+# A table written row by row (one list per row, the same names in each),
+# so that a new entry of a code table is one line.
+rows_table <- function(...) {
+  do.call(rbind, lapply(list(...), as.data.frame, stringsAsFactors = FALSE))
+}
+
 # The walks of the model description's `walk` column (src/fbc.h, enum
 # Transform).
 walk_codes <- c(identity = 0L, log = 1L, logit12 = 2L, atanh = 3L)
-
-# The discrepancy models of calibrate(discrepancy =) (enum Discrepancy).
-discrepancy_codes <- c(gp = 0L, sgasp = 2L, none = 1L)
 
 # The algebras of calibrate(algebra =) (enum AlgebraChoice): "auto" lets
 # the compiled core use the Kronecker algebra on a product design.
@@ -20,19 +23,22 @@ algebra_codes <- c(auto = 0L, dense = 1L, vecchia = 2L)
 # The types of predict.fbc() (enum PredictType).
 predict_type_codes <- c(field = 1L, mean = 2L, simulator = 3L, bias = 4L)
 
-# R's code tables, as .model_codes() gives the compiled core's; the classes
-# are handed over by name, so only their names must agree.
-model_code_tables <- function() {
-  list(walk = walk_codes, kernel = kernel_codes, algebra = algebra_codes,
-       discrepancy = discrepancy_codes, type = predict_type_codes,
-       class = sort(model_classes$class))
+# R's code tables, as .model_codes() gives the compiled core's (the
+# discrepancy models' codes stay in R: the compiled core reads the model off
+# the layout). The classes are handed over by name: every class the
+# compiled core computes with must be one of model_classes (`class`: those
+# of them it names).
+model_code_tables <- function(compiled = NULL) {
+  list(walk = walk_codes, kernel = kernel_codes, kernelAlpha = kernels$name[kernels$alpha],
+       algebra = algebra_codes, type = predict_type_codes,
+       class = sort(intersect(compiled$class, model_classes$class)))
 }
 
 # Every code table of R against the compiled core's (`compiled`), name for
 # name; the package refuses to load when one differs.
 check_model_codes <- function(compiled = .model_codes()) {
-  compiled$class <- sort(names(compiled$class))
-  mine <- model_code_tables()
+  compiled$class <- sort(as.character(compiled$class))
+  mine <- model_code_tables(compiled)
   tables <- union(names(mine), names(compiled))
   differ <- tables[!vapply(tables, function(t) {
     a <- mine[[t]]

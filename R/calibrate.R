@@ -703,7 +703,7 @@
 #' fit
 calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       nChains = 4, kappaDist = "beta", kappaInit = NA, kappaP1 = 1.1,
-                      kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = c("gp", "sgasp", "none"),
+                      kappaP2 = 1.1, hypers = set_hyperPriors(), discrepancy = "gp",
                       kernelS = "matern52",
                       kernelB = "matern52", showProgress = NULL, sampler = c("blocks", "single"),
                       blockSim = NULL, algebra = c("auto", "dense", "vecchia"),

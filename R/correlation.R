@@ -86,19 +86,24 @@ correlation <- function(X, Y = NULL, theta, alpha = NULL, kernel = "powexp") {
   .corr_matrix(X, Y, as.numeric(theta), as.numeric(alpha), kernel_codes[[kernel]])
 }
 
-# Correlation family codes (src/fbc.h, KernelFamily) and names.
-kernel_codes <- c(powexp = 1L, gaussian = 2L, matern32 = 3L, matern52 = 4L)
-kernel_labels <- c(powexp = "power exponential", gaussian = "Gaussian",
-                   matern32 = "Matern 3/2", matern52 = "Matern 5/2")
+# The correlation families, one row each: name, code (its struct in
+# src/kernels.cpp holds the same; checked at load), label (for print()) and
+# whether it has a smoothness parameter alpha (class alphaS/alphaB).
+kernels <- rows_table(
+  list(name = "powexp", code = 1L, label = "power exponential", alpha = TRUE),
+  list(name = "gaussian", code = 2L, label = "Gaussian", alpha = FALSE),
+  list(name = "matern32", code = 3L, label = "Matern 3/2", alpha = FALSE),
+  list(name = "matern52", code = 4L, label = "Matern 5/2", alpha = FALSE)
+)
+kernel_codes <- stats::setNames(kernels$code, kernels$name)
 
 # The name of a family given by name or code.
 kernel_name <- function(kernel) {
   if (is.numeric(kernel)) names(kernel_codes)[match(kernel, kernel_codes)] else kernel
 }
 
-# Does the family have a smoothness parameter alpha? (Only the power
-# exponential; name or code.)
-kernel_has_alpha <- function(kernel) identical(kernel_name(kernel), "powexp")
+# Does the family have a smoothness parameter alpha? (Name or code.)
+kernel_has_alpha <- function(kernel) isTRUE(kernels$alpha[match(kernel_name(kernel), kernels$name)])
 
 # A family name, checked.
 check_kernel <- function(kernel, arg, call = parent.frame()) {

@@ -197,7 +197,7 @@ check_design_model <- function(model, call = parent.frame()) {
     if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
     if (d$noise > 1L) "several noise groups",
     if (d$sources > 0L) "a bias per data set",
-    if (model$discrepancy == "sgasp") "the S-GaSP discrepancy",
+    if (nzchar(discrepancy_info(model$discrepancy, "design"))) discrepancy_info(model$discrepancy, "design"),
     if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
   )
   if (length(why)) {

@@ -2,10 +2,11 @@
 # table that all code reads (the parameter layout, priors' domains, walks,
 # initial proposal scales, the sampler's moves, Phi's columns, plot labels,
 # the conflict check, checkpoints' identity and the tests' helpers). Adding a
-# class is one row here, its default prior in set_hyperPriors(), its name in
-# src/fbc.h (ParamClass) and src/model.cpp (class_names, read_model()'s
-# expected length), and the code that computes with it; the package checks
-# when it loads that R's classes are the compiled core's
+# class is one row here, its default prior in set_hyperPriors() and the code
+# that computes with it: the compiled core keeps no list of the classes, it
+# receives each class's offset and length by name (compiled_model()) and
+# looks up those it computes with (src/model.cpp, class_needs()); the
+# package checks when it loads that R's table names every one of them
 # (check_model_codes(), R/boundary.R).
 #
 # Columns:
@@ -31,10 +32,6 @@
 #   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
-#   models   the discrepancy models (calibrate(discrepancy =)) that have
-#            the class, separated by spaces: the bias GP's classes have no
-#            parameters under "none", muB (the bias mean) none under the
-#            S-GaSP (whose bias has mean 0), lambdaZ (its scale) only there
 #   perOutput  with outputs = "independent" (several outputs, each its own
 #            simulator and bias GP; see R/outputs.R) the class has one copy
 #            per output, output after output; kappa is shared and sigma2E
@@ -48,8 +45,6 @@ model_classes <- data.frame(
   move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
   smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
-  models = c("gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp none", "gp sgasp", "gp sgasp",
-             "gp sgasp", "gp sgasp", "sgasp", "gp sgasp none", "gp sgasp", "gp sgasp none", "gp"),
   perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE),
   stringsAsFactors = FALSE
 )
@@ -83,14 +78,39 @@ param_classes <- model_classes$class
 class_domain <- stats::setNames(model_classes$domain, model_classes$class)
 class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
 
-# The discrepancy model of a code (discrepancy_codes, R/boundary.R).
+# The discrepancy models of calibrate(discrepancy =), one row each, the one
+# description all code reads (the compiled core sees a model only through
+# its layout: a bias GP when sigma2B has parameters, see src/fbc.h):
+#   name     the choice's name (the first is the default)
+#   code     its code in a fit's compiled model (spec$model$discrepancy;
+#            fits store it, so a code never changes)
+#   label    print()'s name of the model
+#   classes  the classes of the bias GP it has (space separated); a class
+#            named by no model is in every model
+#   design   why propose_runs() does not handle it ("": it does)
+discrepancy_models <- rows_table(
+  list(name = "gp", code = 0L, label = "Kennedy-O'Hagan",
+       classes = "thetaB alphaB rhoB rhoD sigma2B muB", design = ""),
+  list(name = "sgasp", code = 2L, label = "S-GaSP discrepancy, Gu and Wang 2018",
+       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ", design = "the S-GaSP discrepancy"),
+  list(name = "none", code = 1L, label = "no discrepancy: y_f = eta(x, kappa) + eps",
+       classes = "", design = "")
+)
+discrepancy_codes <- stats::setNames(discrepancy_models$code, discrepancy_models$name)
+
+# The discrepancy model of a code, and column `what` of a model's row.
 discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
+discrepancy_info <- function(discrepancy, what) {
+  discrepancy_models[[what]][match(discrepancy, discrepancy_models$name)]
+}
 
 # Does each class have parameters under the discrepancy model? (A logical
 # vector over model_classes.)
 class_in_model <- function(discrepancy) {
-  vapply(strsplit(model_classes$models, " ", fixed = TRUE), function(m) discrepancy %in% m,
-         logical(1))
+  has <- strsplit(discrepancy_models$classes, " ", fixed = TRUE)
+  some <- unique(unlist(has))
+  !model_classes$class %in% some |
+    model_classes$class %in% has[[match(discrepancy, discrepancy_models$name)]]
 }
 
 

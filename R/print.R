@@ -37,10 +37,7 @@ print.fbc <- function(x, digits = 3, ...) {
   mo <- x$model
   sc <- x$scale
   gp <- mo$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
-  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", switch(mo$discrepancy,
-    gp = "Kennedy-O'Hagan",
-    sgasp = "S-GaSP discrepancy, Gu and Wang 2018",
-    none = "no discrepancy: y_f = eta(x, kappa) + eps")))
+  cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", discrepancy_info(mo$discrepancy, "label")))
   fn <- !is.null(mo$simulator)  # the simulator is a function (R/simulator_function.R)
   cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$data$yf),
               if (fn) "the simulator a function" else sprintf("m = %d simulator runs", length(x$data$ys)),

@@ -145,7 +145,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (post.sgasp || post.layout.length[PC_SIGMA2E] != 1)
+  if (post.sgasp || post.layout.length_of("sigma2E") != 1)
     Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);

@@ -19,6 +19,7 @@
 #define R_NO_REMAP
 #endif
 #include <RcppArmadillo.h>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -32,10 +33,9 @@ enum PriorFamily {
 // Transformation on which a parameter's random walk runs.
 enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
-// Correlation family codes, one per GP; R/correlation.R keeps the same table
-// (kernel_codes()).
-// (KF_END: one past the last, so that a new family is one entry here.)
-enum KernelFamily { KF_POWEXP = 1, KF_GAUSSIAN = 2, KF_MATERN32 = 3, KF_MATERN52 = 4, KF_END };
+// Correlation family codes, one per GP: each family's struct in kernels.cpp
+// holds its code (R/correlation.R's `kernels` table, checked at load by
+// kernel_table()); 1 is the power exponential.
 
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
@@ -53,36 +53,45 @@ struct VecchiaDesign {
   arma::vec w;
 };
 
-// The discrepancy model (R/model.R, discrepancy_codes): the KOH bias GP,
-// none (then the bias classes have length 0 in the layout), or the scaled
-// GP of Gu and Wang (2018), S-GaSP: the bias GP's correlation R on the nu
-// distinct field inputs replaced by Rz = R - R (R + (nu / lambdaZ) I)^-1 R,
-// with mean 0 (no muB).
-// (DS_END: one past the last code.)
-enum Discrepancy { DS_GP = 0, DS_NONE = 1, DS_SGASP = 2, DS_END };
+// The discrepancy model (R/model.R, discrepancy_models) reaches the compiled
+// core only through the layout: a bias GP when sigma2B has parameters, with
+// a mean when muB has, scaled (the S-GaSP of Gu and Wang 2018: the bias
+// GP's correlation R on the nu distinct field inputs replaced by
+// Rz = R - R (R + (nu / lambdaZ) I)^-1 R) when lambdaZ has
+// (Posterior::set_sizes()).
 
 // What a prediction is of (R/predict.R, type): a new field observation
 // (eta + delta + eps), the mean of the field (eta + delta), the simulator
 // (eta), the bias (delta).
 enum PredictType { PT_FIELD = 1, PT_MEAN = 2, PT_SIMULATOR = 3, PT_BIAS = 4 };
 
-// Parameter classes of the model. Where each lives in phi is not assumed
-// here: R's model description (R/model.R, model_classes) owns the layout and
-// hands the offsets and lengths over by name (read_model()).
-enum ParamClass {
-  PC_KAPPA = 0, PC_THETAS, PC_ALPHAS, PC_THETAB, PC_ALPHAB,
-  PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E, PC_MUB, PC_LAMBDAZ, PC_RHOS, PC_RHOB, PC_RHOD,
-  PC_COUNT
-};
-
-// Where each class lives in phi: offset[c], length[c] (0-based), and for
-// every position j of phi its class cls[j] and its place within the class
-// pos[j] (thetaS and alphaS: the p experimental inputs, then the q
-// calibration inputs; thetaB, alphaB: the p experimental inputs).
+// Parameter classes of the model. C++ keeps no list of them: R's model
+// description (R/model.R, model_classes) owns the classes and the layout,
+// and hands each class's offset and length over by name (read_model()).
+// Code that computes with a class looks it up by name, once, when a
+// posterior is built (Layout::offset_of(), Posterior::set_sizes()); a class
+// the layout does not name has no parameters.
+//
+// Where each class lives in phi: names[c], offset[c], length[c] (0-based, in
+// R's table order), and for every position j of phi its class cls[j] (an
+// index into names) and its place within the class pos[j] (thetaS and
+// alphaS: the p experimental inputs, then the q calibration inputs; thetaB,
+// alphaB: the p experimental inputs).
 struct Layout {
-  int offset[PC_COUNT], length[PC_COUNT];
+  std::vector<std::string> names;
+  std::vector<int> offset, length;
   int d = 0;
   std::vector<int> cls, pos;
+  // The index of class `name` (-1: the layout has no such class).
+  int index(const char* name) const {
+    for (size_t c = 0; c < names.size(); ++c) if (names[c] == name) return (int) c;
+    return -1;
+  }
+  // Its offset and length (0 and 0 for a class the layout does not name).
+  int offset_of(const char* name) const { const int c = index(name); return c < 0 ? 0 : offset[c]; }
+  int length_of(const char* name) const { const int c = index(name); return c < 0 ? 0 : length[c]; }
+  // Is position j of phi in class `name`?
+  bool is(int j, const char* name) const { return names[cls[j]] == name; }
 };
 
 // The model as the compiled entry points receive it from R
@@ -99,7 +108,7 @@ struct LevelInput {
 };
 
 struct Model {
-  int kernS = KF_POWEXP, kernB = KF_POWEXP, algebra = ALG_AUTO, discrepancy = DS_GP;
+  int kernS = 1, kernB = 1, algebra = ALG_AUTO;  // kernels: the power exponential
   Layout layout;
   std::vector<LevelInput> levels;  // the categorical inputs, if any
   // a bias per field data set: each field row's data set (0-based; empty:
@@ -121,13 +130,24 @@ struct Model {
   LevelInput outputs = LevelInput{0, 0, 0};
   int nOutputs() const { return outputs.L > 1 && outputs.ncol > 0 ? outputs.L : 1; }
 };
-// Reads list(kernS, kernB, algebra, discrepancy, offset, length) (offset
-// and length integer vectors named by class) and checks that the layout
-// tiles phi with the lengths p, q and the discrepancy model imply.
+// Reads list(kernS, kernB, algebra, offset, length) (offset and length
+// integer vectors named by class) and checks that the layout tiles phi and
+// gives the classes the compiled core computes with the lengths p and q
+// imply (class_needs(), model.cpp).
 Model read_model(const Rcpp::List& model, int p, int q);
 // Fills lay.d, lay.cls and lay.pos from lay.offset and lay.length (and
 // checks that the classes tile phi).
 void fill_layout(Layout& lay);
+// For each class of `lay`, the kind `table` gives its name (0 for a class
+// the table does not name): how code that computes with classes looks them
+// up, once, when it is built.
+template <size_t N>
+std::vector<int> class_kinds(const Layout& lay, const std::pair<const char*, int> (&table)[N]) {
+  std::vector<int> kind(lay.names.size(), 0);
+  for (size_t c = 0; c < lay.names.size(); ++c)
+    for (size_t t = 0; t < N; ++t) if (lay.names[c] == table[t].first) kind[c] = table[t].second;
+  return kind;
+}
 
 // priors.cpp -----------------------------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
@@ -142,6 +162,9 @@ double from_walk(int transform, double w);
 // The first K columns of X and Y are the inputs; theta and alpha point to K
 // values. `lower`: X == Y and only the lower triangle is wanted.
 void check_kernel(int kern);
+// The families' codes by name and the names of those with a smoothness:
+// list(code, alpha) (.model_codes()).
+Rcpp::List kernel_table();
 // Does the family have a smoothness alpha? (Only the power exponential:
 // for the others alpha is ignored, and a cached term is the distance cache
 // itself, so callers point at G instead of calling kernel_term.)
@@ -174,7 +197,7 @@ void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* 
                       const double* alpha, arma::mat& out);
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
-                      const arma::vec& alpha, int kern = KF_POWEXP);
+                      const arma::vec& alpha, int kern = 1);
 
 // levels.cpp: the categorical inputs' level correlations ---------------------
 // The number of canonical partial correlations of the categorical inputs.
@@ -252,9 +275,11 @@ struct Touch {
 // Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
 // kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
 // sigma2B, sigma2E, muB, lambdaZ and the level correlations rhoS, rhoB,
-// rhoD at the offsets of `layout` (iKappa ... iRhoD). Without a bias (`bias` false) thetaB, alphaB, sigma2B and muB
-// have length 0, and muB has none under S-GaSP (`biasMean` false), lambdaZ
-// only under S-GaSP (`sgasp`): the offsets of empty classes are never read.
+// rhoD at the offsets of `layout` (iKappa ... iRhoD, looked up by name in
+// set_sizes()). The discrepancy model is read off the layout: a bias GP
+// (`bias`) when sigma2B has parameters (else thetaB, alphaB, muB ... have
+// none), with a mean (`biasMean`) when muB has, scaled (`sgasp`) when
+// lambdaZ has: the offsets of empty classes are never read.
 class Posterior {
 public:
   virtual ~Posterior() {}
@@ -327,6 +352,11 @@ public:
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
+  // The discrepancy model's bias correlation on the distinct field inputs
+  // from the bias GP's R, and its cross-correlation and variance at new
+  // inputs (model.cpp; Ruu() gives R on the distinct inputs if needed).
+  bool biasModel(arma::mat& R, arma::mat& B, arma::mat& W) const;
+  void biasModelCross(const std::function<arma::mat()>& Ruu, arma::mat& K, arma::vec& r) const;
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 
@@ -433,6 +463,7 @@ protected:
 
 private:
   Touch touch_;
+  std::vector<int> touchKind_;  // by class: what a move of it touches (add_touch())
   std::vector<Buf2<arma::mat> > Pfs_, Pfb_;
   std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
   std::vector<arma::mat> Gfb_; // ... for the bias GP's family when it differs
@@ -464,8 +495,6 @@ protected:
   const arma::mat& curQ() const { return Q_.cur(); }
   const arma::vec& curWz() const { return wz_.cur(); }
 };
-// Rz = R - R (R + (nu / lambda) I)^-1 R over R's lower triangle (model.cpp).
-bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W);
 
 // The dense algebra: the Cholesky factor of the m x m simulator block
 // (dense.cpp). Per-dimension power matrices are cached while they fit in the

@@ -13,6 +13,14 @@
 
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
+// What a move of a class touches, by the class's name: kappa calls f, the
+// bias GP's correlation moves S, the variances S's factor; a class not named
+// here (muB) moves only the residual.
+enum FunctionTouch { FK_RESIDUAL = 0, FK_KAPPA, FK_BIAS, FK_FIELD };
+static const std::pair<const char*, int> class_touch[] = {
+    {"kappa", FK_KAPPA}, {"thetaB", FK_BIAS}, {"alphaB", FK_BIAS}, {"lambdaZ", FK_BIAS},
+    {"sigma2B", FK_FIELD}, {"sigma2E", FK_FIELD}};
+
 class FunctionPosterior : public Posterior {
 public:
   FunctionPosterior(const arma::mat& Xf, const arma::vec& yf, const Model& model,
@@ -21,7 +29,8 @@ public:
       atFn_(Rcpp::as<Rcpp::Function>(sim["at"])) {
     if (!model.levels.empty() || model.sourceL)
       Rcpp::stop("a function simulator takes no categorical inputs or bias per data set");
-    set_sizes(Xf.n_rows, 0, Xf.n_cols, model.layout.length[PC_KAPPA], model);
+    set_sizes(Xf.n_rows, 0, Xf.n_cols, model.layout.length_of("kappa"), model);
+    kind_ = class_kinds(layout, class_touch);
     noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
     if ((int) noise_.size() != n) Rcpp::stop("the noise groups must give one group per field row");
     // distinct field rows (as SchurPosterior's)
@@ -56,10 +65,10 @@ public:
     saveSet(idx, values);
     tk_ = tb_ = tf_ = sc_ = false;
     for (size_t i = 0; i < idx.size(); ++i) {
-      switch (layout.cls[idx[i]]) {
-      case PC_KAPPA: tk_ = true; break;
-      case PC_THETAB: case PC_ALPHAB: case PC_LAMBDAZ: tb_ = tf_ = true; break;
-      case PC_SIGMA2B: case PC_SIGMA2E: tf_ = true; break;
+      switch (kind_[layout.cls[idx[i]]]) {
+      case FK_KAPPA: tk_ = true; break;
+      case FK_BIAS: tb_ = tf_ = true; break;
+      case FK_FIELD: tf_ = true; break;
       default: break;  // muB: the residual only
       }
     }
@@ -129,6 +138,7 @@ private:
   std::vector<int> grp_, noise_;
   Rcpp::Function fieldFn_, atFn_;
   bool tk_ = false, tb_ = false, tf_ = false, sc_ = false;
+  std::vector<int> kind_;  // by class: what a move of it touches (class_touch)
   Buf2<arma::vec> f_;
   Buf2<arma::mat> Rb_, LS_;
   Buf2<double> ldS_, vv_, loglik_;
@@ -145,11 +155,11 @@ private:
     out = Rcpp::as<arma::vec>(v);
     return true;
   }
-  // The bias correlation on the distinct rows (S-GaSP: scaled).
+  // The bias correlation on the distinct rows (the discrepancy model's).
   bool biasCorr(arma::mat& R) {
     R = corr_matrix(Xu_, Xu_, phi.subvec(iThetaB, iThetaB + p - 1),
                     phi.subvec(iAlphaB, iAlphaB + p - 1), kernB_);
-    if (sgasp && !sgasp_corr(R, phi[iLambdaZ], Bz_, Wz_)) return false;
+    if (!biasModel(R, Bz_, Wz_)) return false;
     R = arma::symmatl(R);
     return true;
   }
@@ -210,16 +220,8 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
     const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
     const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
     arma::mat K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
-    arma::vec r0(b, arma::fill::ones);
-    if (sgasp) {
-      const double c = nu_ / phi[iLambdaZ];
-      arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
-      L.diag() += c;
-      if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
-      solve_lower(L, K);
-      r0 -= arma::sum(arma::square(K), 0).t();
-      K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
-    }
+    arma::vec r0;
+    biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, K, r0);
     arma::mat H(n, b);
     for (int c = 0; c < b; ++c)
       for (int i = 0; i < n; ++i) H(i, c) = s2B * K(grp_[i], c);
@@ -229,7 +231,7 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
     bm = muB + H.t() * v;
     bv = s2B * r0 - arma::sum(arma::square(H), 0).t();
   }
-  const int G = layout.length[PC_SIGMA2E];
+  const int G = layout.length_of("sigma2E");
   for (int c = 0; c < b; ++c) {
     mean[c] = (type == PT_BIAS ? 0.0 : fn[c]) + (type == PT_SIMULATOR ? 0.0 : bm[c]);
     var[c] = type == PT_SIMULATOR ? 0.0 : bv[c];

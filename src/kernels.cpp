@@ -4,66 +4,104 @@
 // Every correlation of both GPs is computed by the functions below, for the
 // family code `kern` of that GP. Separable families,
 //   R(x, x') = prod_k r(d_k),  d_k = |x_k - x'_k|,  h_k = sqrt(theta_k) d_k:
-//   power exponential (KF_POWEXP):  r = exp(-theta d^alpha);
-//   Gaussian (KF_GAUSSIAN):         r = exp(-theta d^2);
-//   Matern 3/2 (KF_MATERN32):       r = (1 + sqrt(3) h) exp(-sqrt(3) h);
-//   Matern 5/2 (KF_MATERN52):       r = (1 + sqrt(5) h + 5 h^2 / 3) exp(-sqrt(5) h).
+//   power exponential (PowExp):  r = exp(-theta d^alpha);
+//   Gaussian (Gaussian):         r = exp(-theta d^2);
+//   Matern 3/2 (Matern32):       r = (1 + sqrt(3) h) exp(-sqrt(3) h);
+//   Matern 5/2 (Matern52):       r = (1 + sqrt(5) h + 5 h^2 / 3) exp(-sqrt(5) h).
 // All are 1 - c theta d^2 + ... near 0 (c = 1, 3/2, 5/6) but the power
 // exponential with alpha < 2. Every function works through the same three
 // per-dimension steps, so the cached and on-the-fly paths give the same
-// numbers: a fixed value g(d) (dist_of: log d, d^2 or d), a term t(g, alpha)
-// (term_of: exp(alpha g) for the power exponential, g for the others) and
-// an accumulation over dimensions with coefficient c(theta) (coef_of),
-// finished once per entry (finish_of):
+// numbers: a fixed value g(d) (dist: log d, d^2 or d), a term t(g, alpha)
+// (term: exp(alpha g) for the power exponential, g for the others) and an
+// accumulation over dimensions with coefficient c(theta) (coef), finished
+// once per entry (finish):
 //   power exponential, Gaussian: s += theta t,  r = exp(-s);
-//   Matern:  a = sqrt(3 or 5) sqrt(theta) t,  s += a,  w *= poly(a),
+//   Matern (poly):  a = sqrt(3 or 5) sqrt(theta) t,  s += a,  w *= poly(a),
 //            r = w exp(-s)  (poly(a) = 1 + a, or 1 + a + a^2 / 3).
-// A new family adds its case to these helpers.
+// A family is one struct with its code and name (R/correlation.R's
+// `kernels` table must agree: check_model_codes() at load), whether it has
+// a smoothness alpha, and these steps; a new family is its struct and its
+// entry in `Kernels`.
 
-void check_kernel(int kern) {
-  if (kern < KF_POWEXP || kern >= KF_END)
-    Rcpp::stop("unknown correlation family code %d", kern);
-}
-
-bool kernel_has_alpha(int kern) { return kern == KF_POWEXP; }
-
-template <int F> static inline double dist_of(double d) {
-  if (F == KF_POWEXP) return std::log(std::fabs(d));
-  if (F == KF_GAUSSIAN) { const double a = std::fabs(d); return a * a; }
-  return std::fabs(d);
-}
-template <int F> static inline double term_of(double g, double alpha) {
-  return F == KF_POWEXP ? std::exp(alpha * g) : g;
-}
-template <int F> static inline double coef_of(double theta) {
-  if (F == KF_MATERN32) return std::sqrt(3.0 * theta);
-  if (F == KF_MATERN52) return std::sqrt(5.0 * theta);
-  return theta;
-}
-// s: the sum in the exponent; w: the Matern polynomial product.
-template <int F> static inline void accum_of(double c, double t, double& s, double& w) {
-  const double a = c * t;
-  s += a;
-  if (F == KF_MATERN32) w *= 1.0 + a;
-  if (F == KF_MATERN52) w *= 1.0 + a + a * a / 3.0;
-}
-template <int F> static inline double finish_of(double s, double w) {
-  if (F == KF_POWEXP || F == KF_GAUSSIAN) return std::exp(-s);
+// The defaults: no smoothness, exp(-sum theta g).
+struct KernelBase {
+  static constexpr bool alpha = false, poly = false;
+  static double term(double g, double) { return g; }
+  static double coef(double theta) { return theta; }
+  static void accum(double, double, double&, double&) {}
+  static double finish(double s, double) { return std::exp(-s); }
+};
+struct PowExp : KernelBase {
+  static constexpr int code = 1; static const char* name() { return "powexp"; }
+  static constexpr bool alpha = true;
+  static double dist(double d) { return std::log(std::fabs(d)); }
+  static double term(double g, double alpha) { return std::exp(alpha * g); }
+};
+struct Gaussian : KernelBase {
+  static constexpr int code = 2; static const char* name() { return "gaussian"; }
+  static double dist(double d) { const double a = std::fabs(d); return a * a; }
+};
+// The Matern families: s the sum in the exponent, w the product of the
+// polynomials poly(a) (M::factor).
+template <class M> struct MaternBase : KernelBase {
+  static constexpr bool poly = true;
+  static double dist(double d) { return std::fabs(d); }
+  static void accum(double c, double t, double& s, double& w) {
+    const double a = c * t;
+    s += a;
+    w *= M::factor(a);
+  }
   // w exp(-s) <= 1; beyond exp(-700) w could overflow in products of many
   // dimensions: go through logs there
-  return s < 700.0 ? w * std::exp(-s) : std::exp(std::log(w) - s);
-}
-static inline bool matern(int kern) { return kern == KF_MATERN32 || kern == KF_MATERN52; }
-
-// Calls fn<F>(args...) for the family code kern.
-#define KERNEL_DISPATCH(kern, fn, ...)                         \
-  switch (kern) {                                              \
-  case KF_POWEXP: fn<KF_POWEXP>(__VA_ARGS__); break;           \
-  case KF_GAUSSIAN: fn<KF_GAUSSIAN>(__VA_ARGS__); break;       \
-  case KF_MATERN32: fn<KF_MATERN32>(__VA_ARGS__); break;       \
-  case KF_MATERN52: fn<KF_MATERN52>(__VA_ARGS__); break;       \
-  default: check_kernel(kern);                                 \
+  static double finish(double s, double w) {
+    return s < 700.0 ? w * std::exp(-s) : std::exp(std::log(w) - s);
   }
+};
+struct Matern32 : MaternBase<Matern32> {
+  static constexpr int code = 3; static const char* name() { return "matern32"; }
+  static double coef(double theta) { return std::sqrt(3.0 * theta); }
+  static double factor(double a) { return 1.0 + a; }
+};
+struct Matern52 : MaternBase<Matern52> {
+  static constexpr int code = 4; static const char* name() { return "matern52"; }
+  static double coef(double theta) { return std::sqrt(5.0 * theta); }
+  static double factor(double a) { return 1.0 + a + a * a / 3.0; }
+};
+
+// The families, the one list.
+template <class... Ks> struct KernelList {};
+using Kernels = KernelList<PowExp, Gaussian, Matern32, Matern52>;
+
+// f(K()) for the family K whose code is kern (an error for no family).
+template <class F> static void for_kernel(int kern, F, KernelList<>) {
+  Rcpp::stop("unknown correlation family code %d", kern);
+}
+template <class F, class K, class... Ks>
+static void for_kernel(int kern, F f, KernelList<K, Ks...>) {
+  if (kern == K::code) f(K()); else for_kernel(kern, f, KernelList<Ks...>());
+}
+// Calls fn<K>(args...) for the family K of code kern.
+#define KERNEL_DISPATCH(kern, fn, ...) \
+  for_kernel(kern, [&](auto k) { fn<decltype(k)>(__VA_ARGS__); }, Kernels())
+
+void check_kernel(int kern) { for_kernel(kern, [](auto) {}, Kernels()); }
+
+bool kernel_has_alpha(int kern) {
+  bool a = false;
+  for_kernel(kern, [&](auto k) { a = decltype(k)::alpha; }, Kernels());
+  return a;
+}
+
+// The families' codes by name, and the names of those with a smoothness
+// (.model_codes(): R's table is checked against them).
+template <class... Ks> static Rcpp::List kernel_table_of(KernelList<Ks...>) {
+  Rcpp::IntegerVector code = Rcpp::IntegerVector::create(int(Ks::code)...);
+  code.names() = Rcpp::CharacterVector::create(Ks::name()...);
+  Rcpp::CharacterVector alpha;
+  for (const auto& a : {std::make_pair(bool(Ks::alpha), Ks::name())...}) if (a.first) alpha.push_back(a.second);
+  return Rcpp::List::create(Rcpp::Named("code") = code, Rcpp::Named("alpha") = alpha);
+}
+Rcpp::List kernel_table() { return kernel_table_of(Kernels()); }
 
 // P(i,j) = |a_i - b_j|^alpha (pow; exact squares and absolute values).
 static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma::mat& out) {
@@ -81,13 +119,13 @@ static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma:
 // Per-dimension cache of what does not move: G(i,j) = g(a_i - b_j) (power
 // exponential: log |a_i - b_j|, -Inf where they coincide, so that a move of
 // alpha needs an exp per entry instead of a pow).
-template <int F>
+template <class F>
 static void kernel_dist_t(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
   const arma::uword na = a.n_elem, nb = b.n_elem;
   for (arma::uword j = 0; j < nb; ++j) {
     double* col = out.colptr(j);
     const double bj = b[j];
-    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = dist_of<F>(a[i] - bj);
+    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = F::dist(a[i] - bj);
   }
 }
 void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
@@ -97,40 +135,42 @@ void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& ou
 // The alpha-dependent part from the cache: P(i,j) = exp(alpha G(i,j)) =
 // |a_i - b_j|^alpha for the power exponential; the families without a
 // smoothness have none (P = G: callers use G itself, see kernel_has_alpha()).
-void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& out, bool lower) {
-  check_kernel(kern);
+template <class F>
+static void kernel_term_t(const arma::mat& G, double alpha, arma::mat& out, bool lower) {
   const arma::uword nr = G.n_rows, nc = G.n_cols;
-  const bool pe = kern == KF_POWEXP;
   for (arma::uword j = 0; j < nc; ++j) {
     const double* g = G.colptr(j);
     double* col = out.colptr(j);
-    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] = pe ? std::exp(alpha * g[i]) : g[i];
+    for (arma::uword i = lower ? j : 0; i < nr; ++i) col[i] = F::term(g[i], alpha);
   }
+}
+void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& out, bool lower) {
+  KERNEL_DISPATCH(kern, kernel_term_t, G, alpha, out, lower);
 }
 
 // The correlation from the terms: R(i,j) = finish(accumulate_k over
 // coef(theta_k) P_k(i,j)); power exponential: exp(-sum_k theta_k P_k(i,j)).
 // `w` is a workspace for the Matern products.
-template <int F>
+template <class F>
 static void kernel_combine_t(const std::vector<const arma::mat*>& P, const arma::vec& theta,
                              arma::mat& out, bool lower) {
   const arma::uword nr = out.n_rows, nc = out.n_cols, K = P.size();
-  std::vector<double> w(matern(F) ? nr : 0);
+  std::vector<double> w(F::poly ? nr : 0);
   for (arma::uword j = 0; j < nc; ++j) {
     double* col = out.colptr(j);
     const arma::uword i0 = lower ? j : 0;
     for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
-    if (matern(F)) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
+    if (F::poly) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
     for (arma::uword k = 0; k < K; ++k) {
       const double* pk = P[k]->colptr(j);
-      const double c = coef_of<F>(theta[k]);
-      if (matern(F)) {
-        for (arma::uword i = i0; i < nr; ++i) accum_of<F>(c, pk[i], col[i], w[i]);
+      const double c = F::coef(theta[k]);
+      if (F::poly) {
+        for (arma::uword i = i0; i < nr; ++i) F::accum(c, pk[i], col[i], w[i]);
       } else {
         for (arma::uword i = i0; i < nr; ++i) col[i] += c * pk[i];
       }
     }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
+    for (arma::uword i = i0; i < nr; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
   }
 }
 void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
@@ -141,27 +181,27 @@ void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
 // kernel_combine(kernel_term(kernel_dist(...))) with no per-dimension
 // storage: the same operations in the same order, so the same numbers.
 // Power exponential: R(i,j) = exp(-sum_k theta_k exp(alpha_k log|X_ik - Y_jk|)).
-template <int F>
+template <class F>
 static void kernel_corr_t(const arma::mat& X, const arma::mat& Y, int K, const double* theta,
                           const double* alpha, arma::mat& out, bool lower) {
   const arma::uword nr = X.n_rows, nc = Y.n_rows;
-  std::vector<double> w(matern(F) ? nr : 0);
+  std::vector<double> w(F::poly ? nr : 0);
   for (arma::uword j = 0; j < nc; ++j) {
     double* col = out.colptr(j);
     const arma::uword i0 = lower ? j : 0;
     for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
-    if (matern(F)) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
+    if (F::poly) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
     for (int k = 0; k < K; ++k) {
       const double* x = X.colptr(k);
-      const double yj = Y.at(j, k), c = coef_of<F>(theta[k]), a = alpha[k];
-      if (matern(F)) {
+      const double yj = Y.at(j, k), c = F::coef(theta[k]), a = alpha[k];
+      if (F::poly) {
         for (arma::uword i = i0; i < nr; ++i)
-          accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - yj), a), col[i], w[i]);
+          F::accum(c, F::term(F::dist(x[i] - yj), a), col[i], w[i]);
       } else {
-        for (arma::uword i = i0; i < nr; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - yj), a);
+        for (arma::uword i = i0; i < nr; ++i) col[i] += c * F::term(F::dist(x[i] - yj), a);
       }
     }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
+    for (arma::uword i = i0; i < nr; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
   }
 }
 void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
@@ -171,7 +211,7 @@ void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const 
 
 // kernel_corr(X, X, lower) over the first s rows of X only, into the
 // leading s x s block of out (the Vecchia algebra's small systems).
-template <int F>
+template <class F>
 static void kernel_corr_rows_t(const arma::mat& X, int s, int K, const double* theta,
                                const double* alpha, arma::mat& out) {
   double w[1024];
@@ -180,14 +220,14 @@ static void kernel_corr_rows_t(const arma::mat& X, int s, int K, const double* t
     for (int i = j; i < s; ++i) { col[i] = 0.0; w[i] = 1.0; }
     for (int k = 0; k < K; ++k) {
       const double* x = X.colptr(k);
-      const double xj = x[j], c = coef_of<F>(theta[k]), a = alpha[k];
-      if (matern(F)) {
-        for (int i = j; i < s; ++i) accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - xj), a), col[i], w[i]);
+      const double xj = x[j], c = F::coef(theta[k]), a = alpha[k];
+      if (F::poly) {
+        for (int i = j; i < s; ++i) F::accum(c, F::term(F::dist(x[i] - xj), a), col[i], w[i]);
       } else {
-        for (int i = j; i < s; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - xj), a);
+        for (int i = j; i < s; ++i) col[i] += c * F::term(F::dist(x[i] - xj), a);
       }
     }
-    for (int i = j; i < s; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
+    for (int i = j; i < s; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
   }
 }
 void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
@@ -201,14 +241,14 @@ void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* 
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
 
 // kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles).
-template <int F>
+template <class F>
 static void kernel_dist_packed_t(const arma::vec& a, std::vector<double>& G) {
   const size_t m = a.n_elem;
   G.resize(m * (m + 1) / 2);
   for (size_t j = 0; j < m; ++j) {
     double* g = G.data() + packed_offset(j, m);
     const double aj = a[j];
-    for (size_t i = j; i < m; ++i) g[i - j] = dist_of<F>(a[i] - aj);
+    for (size_t i = j; i < m; ++i) g[i - j] = F::dist(a[i] - aj);
   }
 }
 void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
@@ -217,37 +257,37 @@ void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
 
 // kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()
 // caches G[k] where given (non-null), on the fly elsewhere: the same numbers.
-template <int F>
+template <class F>
 static void kernel_corr_self_t(const arma::mat& X, int K, const double* theta,
                                const double* alpha, const std::vector<const double*>& G,
                                arma::mat& out) {
   const size_t m = X.n_rows;
-  std::vector<double> w(matern(F) ? m : 0);
+  std::vector<double> w(F::poly ? m : 0);
   for (size_t j = 0; j < m; ++j) {
     double* col = out.colptr(j);
     for (size_t i = j; i < m; ++i) col[i] = 0.0;
-    if (matern(F)) for (size_t i = j; i < m; ++i) w[i] = 1.0;
+    if (F::poly) for (size_t i = j; i < m; ++i) w[i] = 1.0;
     for (int k = 0; k < K; ++k) {
-      const double c = coef_of<F>(theta[k]), a = alpha[k];
+      const double c = F::coef(theta[k]), a = alpha[k];
       if (k < (int) G.size() && G[k]) {
         const double* g = G[k] + packed_offset(j, m) - j;
-        if (matern(F)) {
-          for (size_t i = j; i < m; ++i) accum_of<F>(c, term_of<F>(g[i], a), col[i], w[i]);
+        if (F::poly) {
+          for (size_t i = j; i < m; ++i) F::accum(c, F::term(g[i], a), col[i], w[i]);
         } else {
-          for (size_t i = j; i < m; ++i) col[i] += c * term_of<F>(g[i], a);
+          for (size_t i = j; i < m; ++i) col[i] += c * F::term(g[i], a);
         }
       } else {
         const double* x = X.colptr(k);
         const double xj = x[j];
-        if (matern(F)) {
+        if (F::poly) {
           for (size_t i = j; i < m; ++i)
-            accum_of<F>(c, term_of<F>(dist_of<F>(x[i] - xj), a), col[i], w[i]);
+            F::accum(c, F::term(F::dist(x[i] - xj), a), col[i], w[i]);
         } else {
-          for (size_t i = j; i < m; ++i) col[i] += c * term_of<F>(dist_of<F>(x[i] - xj), a);
+          for (size_t i = j; i < m; ++i) col[i] += c * F::term(F::dist(x[i] - xj), a);
         }
       }
     }
-    for (size_t i = j; i < m; ++i) col[i] = finish_of<F>(col[i], matern(F) ? w[i] : 1.0);
+    for (size_t i = j; i < m; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
   }
 }
 void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
@@ -258,22 +298,21 @@ void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
 
 // out_i = prod_l r(|X(i, col0 + l) - point_l|; theta_l, alpha_l), l < K.
 // Power exponential: exp(-sum_l theta_l |X(i, col0 + l) - point_l|^alpha_l).
-template <int F>
+template <class F>
 static void kernel_corr_point_t(const arma::mat& X, int col0, int K, const double* point,
                                 const double* theta, const double* alpha, arma::vec& out) {
   const int nr = X.n_rows;
   out.zeros();
-  std::vector<double> w(matern(F) ? nr : 0, 1.0);
+  std::vector<double> w(F::poly ? nr : 0, 1.0);
   for (int l = 0; l < K; ++l) {
-    const double kap = point[l], c = coef_of<F>(theta[l]), al = alpha[l];
+    const double kap = point[l], c = F::coef(theta[l]), al = alpha[l];
     const double* xs = X.colptr(col0 + l);
     for (int i = 0; i < nr; ++i) {
-      const double t = F == KF_POWEXP ? std::pow(std::fabs(xs[i] - kap), al)
-                                      : dist_of<F>(xs[i] - kap);
-      if (matern(F)) accum_of<F>(c, t, out[i], w[i]); else out[i] += c * t;
+      const double t = F::alpha ? std::pow(std::fabs(xs[i] - kap), al) : F::dist(xs[i] - kap);
+      if (F::poly) F::accum(c, t, out[i], w[i]); else out[i] += c * t;
     }
   }
-  for (int i = 0; i < nr; ++i) out[i] = finish_of<F>(out[i], matern(F) ? w[i] : 1.0);
+  for (int i = 0; i < nr; ++i) out[i] = F::finish(out[i], F::poly ? w[i] : 1.0);
 }
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
                        const double* theta, const double* alpha, arma::vec& out) {
@@ -284,7 +323,7 @@ void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const doub
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
                       const arma::vec& theta, const arma::vec& alpha, int kern) {
   check_kernel(kern);
-  if (kern == KF_POWEXP) {
+  if (kern == PowExp::code) {
     arma::mat out(X.n_rows, Y.n_rows, arma::fill::zeros);
     arma::mat P(X.n_rows, Y.n_rows);
     for (arma::uword k = 0; k < X.n_cols; ++k) {

@@ -22,54 +22,71 @@ static double koh_loglik(int n, int m, double s2S, double ldDs, double ldS, doub
   return -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS + zz / s2S + vv);
 }
 
+// Sizes, the layout and the offsets of the classes computed with, looked up
+// by name; the discrepancy model read off the layout (see Posterior).
 void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   n = n_; m = m_; p = p_; q = q_;
   const Layout& lay = model.layout;
   layout = lay;
-  bias = model.discrepancy != DS_NONE;
-  sgasp = model.discrepancy == DS_SGASP;
-  biasMean = lay.length[PC_MUB] > 0;
+  bias = lay.length_of("sigma2B") > 0;
+  sgasp = lay.length_of("lambdaZ") > 0;
+  biasMean = lay.length_of("muB") > 0;
   d = lay.d;
-  iKappa = lay.offset[PC_KAPPA]; iThetaS = lay.offset[PC_THETAS];
-  iAlphaS = lay.offset[PC_ALPHAS]; iThetaB = lay.offset[PC_THETAB];
-  iAlphaB = lay.offset[PC_ALPHAB]; iSigma2S = lay.offset[PC_SIGMA2S];
-  iSigma2B = lay.offset[PC_SIGMA2B]; iSigma2E = lay.offset[PC_SIGMA2E];
-  iMuB = lay.offset[PC_MUB]; iLambdaZ = lay.offset[PC_LAMBDAZ];
-  iRhoS = lay.offset[PC_RHOS]; iRhoB = lay.offset[PC_RHOB]; iRhoD = lay.offset[PC_RHOD];
+  iKappa = lay.offset_of("kappa"); iThetaS = lay.offset_of("thetaS");
+  iAlphaS = lay.offset_of("alphaS"); iThetaB = lay.offset_of("thetaB");
+  iAlphaB = lay.offset_of("alphaB"); iSigma2S = lay.offset_of("sigma2S");
+  iSigma2B = lay.offset_of("sigma2B"); iSigma2E = lay.offset_of("sigma2E");
+  iMuB = lay.offset_of("muB"); iLambdaZ = lay.offset_of("lambdaZ");
+  iRhoS = lay.offset_of("rhoS"); iRhoB = lay.offset_of("rhoB"); iRhoD = lay.offset_of("rhoD");
   levels = model.levels;
   scaled.clear();
-  for (int c : {PC_SIGMA2S, PC_SIGMA2B, PC_SIGMA2E})
-    for (int k = 0; k < lay.length[c]; ++k) scaled.push_back(lay.offset[c] + k);
+  for (const char* c : {"sigma2S", "sigma2B", "sigma2E"})
+    for (int k = 0; k < lay.length_of(c); ++k) scaled.push_back(lay.offset_of(c) + k);
   phi.zeros(d);
 }
 
-// The classes' names, by ParamClass: the layout is handed over by name.
-static const char* class_names[PC_COUNT] = {"kappa", "thetaS", "alphaS", "thetaB", "alphaB",
-                                            "sigma2S", "sigma2B", "sigma2E", "muB", "lambdaZ",
-                                            "rhoS", "rhoB", "rhoD"};
+// The classes the compiled core computes with and the number of parameters
+// each must have for a model of `m` with p experimental and q calibration
+// inputs (K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
+// ld level correlations): thetaS and alphaS p + q per output, the bias
+// classes p or 1 per output with a bias, none without. -1: 0 or one per
+// output with a bias (muB, lambdaZ: which is the discrepancy model's).
+// R's table (model_classes) may hold more classes.
+struct ClassNeed { const char* name; int length; };
+static std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc,
+                                          int ld) {
+  return {{"kappa", q}, {"thetaS", e * K * (p + q)}, {"alphaS", e * K * (p + q)},
+          {"thetaB", K * b * p}, {"alphaB", K * b * p}, {"sigma2S", e * K}, {"sigma2B", K * b},
+          {"sigma2E", G}, {"muB", -1}, {"lambdaZ", -1}, {"rhoS", e * K * lc},
+          {"rhoB", K * b * lc}, {"rhoD", K * b * ld}};
+}
+
+// What a move of a class touches (add_touch()), by the class's name; a class
+// not named here moves only the residual (muB).
+enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
+                 TK_FIELD };
+static const std::pair<const char*, int> class_touch[] = {
+    {"kappa", TK_KAPPA}, {"thetaS", TK_SIM}, {"alphaS", TK_SIMPOW}, {"rhoS", TK_SIMLEVELS},
+    {"thetaB", TK_BIAS}, {"alphaB", TK_BIASPOW}, {"lambdaZ", TK_BIAS}, {"rhoB", TK_BIAS},
+    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD}};
 
 // The compiled core's code tables by name (walks, kernels, algebras,
-// discrepancy models, prediction types, parameter classes): R's tables
-// (R/boundary.R) must agree, which the package checks when it loads
-// (check_model_codes()).
+// prediction types) and the names of the classes it computes with: R's
+// tables (R/boundary.R) must agree and R's model_classes name every such
+// class, which the package checks when it loads (check_model_codes()).
 // [[Rcpp::export(.model_codes)]]
 Rcpp::List model_codes() {
   using Rcpp::_;
-  Rcpp::IntegerVector cls(PC_COUNT);
-  Rcpp::CharacterVector cn(PC_COUNT);
-  for (int c = 0; c < PC_COUNT; ++c) { cls[c] = c; cn[c] = class_names[c]; }
-  cls.names() = cn;
+  const std::vector<ClassNeed> need = class_needs(1, 1, 1, 1, 1, 1, 0, 0);
+  Rcpp::CharacterVector cls(need.size());
+  for (size_t c = 0; c < need.size(); ++c) cls[c] = need[c].name;
+  const Rcpp::List kern = kernel_table();
   return Rcpp::List::create(
       _["walk"] = Rcpp::IntegerVector::create(_["identity"] = TR_IDENTITY, _["log"] = TR_LOG,
                                               _["logit12"] = TR_LOGIT12, _["atanh"] = TR_ATANH),
-      _["kernel"] = Rcpp::IntegerVector::create(_["powexp"] = KF_POWEXP,
-                                                _["gaussian"] = KF_GAUSSIAN,
-                                                _["matern32"] = KF_MATERN32,
-                                                _["matern52"] = KF_MATERN52),
+      _["kernel"] = kern["code"], _["kernelAlpha"] = kern["alpha"],
       _["algebra"] = Rcpp::IntegerVector::create(_["auto"] = ALG_AUTO, _["dense"] = ALG_DENSE,
                                                  _["vecchia"] = ALG_VECCHIA),
-      _["discrepancy"] = Rcpp::IntegerVector::create(_["gp"] = DS_GP, _["sgasp"] = DS_SGASP,
-                                                     _["none"] = DS_NONE),
       _["type"] = Rcpp::IntegerVector::create(_["field"] = PT_FIELD, _["mean"] = PT_MEAN,
                                               _["simulator"] = PT_SIMULATOR, _["bias"] = PT_BIAS),
       _["class"] = cls);
@@ -139,69 +156,76 @@ static void read_groups(const Rcpp::List& model, int p, Model& out) {
   }
 }
 
+// The layout of `model` (offset and length named by class, R's table order).
+static Layout read_layout(const Rcpp::List& model) {
+  const Rcpp::IntegerVector off = model["offset"], len = model["length"];
+  const Rcpp::CharacterVector nm = off.names(), nl = len.names();
+  if (off.size() != len.size() || Rf_isNull(off.names()))
+    Rcpp::stop("the layout needs an offset and a length named by class");
+  Layout lay;
+  for (int c = 0; c < off.size(); ++c) {
+    if (nm[c] != nl[c]) Rcpp::stop("the layout's offsets and lengths name different classes");
+    lay.names.push_back(Rcpp::as<std::string>(nm[c]));
+    lay.offset.push_back(off[c]);
+    lay.length.push_back(len[c]);
+  }
+  fill_layout(lay);
+  return lay;
+}
+
+// The independent outputs' indicator columns of `model` into out.outputs.
+static void read_outputs(const Rcpp::List& model, int p, Model& out) {
+  if (!model.containsElementNamed("outputs")) return;
+  const Rcpp::List ov = model["outputs"];
+  LevelInput& o = out.outputs;
+  o.col = Rcpp::as<int>(ov["col"]) - 1; o.ncol = Rcpp::as<int>(ov["ncol"]);
+  o.L = Rcpp::as<int>(ov["L"]);
+  if (o.L < 2 || o.col < 0 || o.col + o.ncol > p || o.ncol != (o.L == 2 ? 1 : o.L))
+    Rcpp::stop("the outputs' indicator columns do not fit the inputs");
+  if (out.algebra == ALG_VECCHIA)
+    Rcpp::stop("independent outputs have no nearest-neighbour algebra");
+  if (!out.emulator) Rcpp::stop("a simulator function has no independent outputs");
+}
+
 Model read_model(const Rcpp::List& model, int p, int q) {
-  const char* const* names = class_names;
   Model out;
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
-  out.discrepancy = Rcpp::as<int>(model["discrepancy"]);
-  if (out.discrepancy < DS_GP || out.discrepancy >= DS_END)
-    Rcpp::stop("unknown discrepancy code %d", out.discrepancy);
-  // what each class expands over: q, p + q, p or one; the bias classes
-  // (thetaB, alphaB, sigma2B) nothing without a bias, muB only with the KOH
-  // bias, lambdaZ only with the S-GaSP one
-  const int b = out.discrepancy != DS_NONE ? 1 : 0;
-  const int mu = out.discrepancy == DS_GP ? 1 : 0, lz = out.discrepancy == DS_SGASP ? 1 : 0;
   read_groups(model, p, out);
-  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
-  const int lc = level_count(out.levels);
-  const int ld = out.sourceL * (out.sourceL - 1) / 2;
   // a simulator given as a function (function.cpp) has no simulator GP
   out.emulator = !model.containsElementNamed("simulator");
-  const int e = out.emulator ? 1 : 0;
-  // independent outputs: the output's indicator columns; the perOutput
-  // classes (all but kappa and sigma2E) hold one copy per output
-  if (model.containsElementNamed("outputs")) {
-    const Rcpp::List ov = model["outputs"];
-    LevelInput& o = out.outputs;
-    o.col = Rcpp::as<int>(ov["col"]) - 1; o.ncol = Rcpp::as<int>(ov["ncol"]);
-    o.L = Rcpp::as<int>(ov["L"]);
-    if (o.L < 2 || o.col < 0 || o.col + o.ncol > p || o.ncol != (o.L == 2 ? 1 : o.L))
-      Rcpp::stop("the outputs' indicator columns do not fit the inputs");
-    if (out.algebra == ALG_VECCHIA)
-      Rcpp::stop("independent outputs have no nearest-neighbour algebra");
-    if (!out.emulator) Rcpp::stop("a simulator function has no independent outputs");
-  }
-  const int K = out.nOutputs();
-  const int want[PC_COUNT] = {q, e * K * (p + q), e * K * (p + q), K * b * p, K * b * p, e * K,
-                              K * b, G, K * mu, K * lz, e * K * lc, K * b * lc, K * b * ld};
-  const Rcpp::IntegerVector off = model["offset"], len = model["length"];
+  // independent outputs: the perOutput classes (all but kappa and sigma2E)
+  // hold one copy per output
+  read_outputs(model, p, out);
   Layout& lay = out.layout;
-  lay.d = 0;
-  for (int c = 0; c < PC_COUNT; ++c) {
-    lay.offset[c] = off[names[c]];
-    lay.length[c] = len[names[c]];
-    if (lay.length[c] != want[c])
-      Rcpp::stop("the layout gives %s %d entries where the data need %d", names[c],
-                 lay.length[c], want[c]);
-    lay.d += lay.length[c];
+  lay = read_layout(model);
+  // what each class expands over (class_needs()); a bias when sigma2B has
+  // parameters
+  const int K = out.nOutputs(), b = lay.length_of("sigma2B") > 0 ? 1 : 0;
+  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
+  for (const ClassNeed& c : class_needs(p, q, K, out.emulator ? 1 : 0, b, G, level_count(out.levels),
+                                        out.sourceL * (out.sourceL - 1) / 2)) {
+    const int have = lay.length_of(c.name), want = c.length < 0 ? have : c.length;
+    if (have != want || (c.length < 0 && have != 0 && have != K * b))
+      Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have,
+                 c.length < 0 ? K * b : want);
   }
   if (out.algebra == ALG_VECCHIA) {
     if (!model.containsElementNamed("vecchia"))
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
     read_vecchia(model["vecchia"], out.vecchia);
   }
-  fill_layout(lay);
   return out;
 }
 
 void fill_layout(Layout& lay) {
   lay.d = 0;
-  for (int c = 0; c < PC_COUNT; ++c) lay.d += lay.length[c];
+  const int C = lay.names.size();
+  for (int c = 0; c < C; ++c) lay.d += lay.length[c];
   lay.cls.assign(lay.d, -1);
   lay.pos.assign(lay.d, -1);
-  for (int c = 0; c < PC_COUNT; ++c)
+  for (int c = 0; c < C; ++c)
     for (int k = 0; k < lay.length[c]; ++k) {
       const int j = lay.offset[c] + k;
       if (j < 0 || j >= lay.d || lay.cls[j] >= 0)
@@ -244,6 +268,7 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(model.kernS),
     kernB_(model.kernB) {
   set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
+  touchKind_ = class_kinds(layout, class_touch);
   touch_.reset(p + q, p);
   if (!model.noise.empty() && (int) model.noise.size() != n)
     Rcpp::stop("the noise groups must give one group per field row (%d)", n);
@@ -299,27 +324,27 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
 // Add what a move of parameter j touches to t (by j's class in the layout).
 void SchurPosterior::add_touch(int j, Touch& t) const {
   const int k = layout.pos[j];
-  switch (layout.cls[j]) {
-  case PC_KAPPA:
+  switch (touchKind_[layout.cls[j]]) {
+  case TK_KAPPA:
     t.cChange = t.cross = t.field = true;
     break;
-  case PC_ALPHAS:
+  case TK_SIMPOW:
     t.simPow[k] = 1;
     // fall through
-  case PC_THETAS:
+  case TK_SIM:
     t.simCorr = t.cross = t.field = true;
     if (k < p) t.expDim = true; else t.calDim = t.cChange = true;
     break;
-  case PC_RHOS:  // the levels' correlation: as an experimental input's thetaS
+  case TK_SIMLEVELS:  // the levels' correlation: as an experimental input's thetaS
     t.simCorr = t.cross = t.field = t.expDim = true;
     break;
-  case PC_ALPHAB:
+  case TK_BIASPOW:
     t.biasPow[k] = 1;
     // fall through
-  case PC_THETAB: case PC_LAMBDAZ: case PC_RHOB: case PC_RHOD:
+  case TK_BIAS:
     t.biasCorr = t.field = true;
     break;
-  case PC_SIGMA2S: case PC_SIGMA2B: case PC_SIGMA2E:
+  case TK_FIELD:
     t.field = true;
     break;
   default:  // muB: only the residual moves
@@ -390,7 +415,7 @@ void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
 //   Rz = R - R (R + c I)^-1 R,  c = nu / lambda,
 // through L = chol(R + c I), W = L^-1 R: Rz = R - W'W (written over R,
 // lower triangle). False when R + c I is not positive definite.
-bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
+static bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
   const int nu = R.n_rows;
   if (!(lambda > 0) || !std::isfinite(lambda)) return false;
   R = arma::symmatl(R);
@@ -403,6 +428,35 @@ bool sgasp_corr(arma::mat& R, double lambda, arma::mat& B, arma::mat& W) {
   return true;
 }
 
+// The discrepancy model's computations on the bias GP's correlation R (the
+// model is read off the layout, set_sizes()): the KOH bias keeps R; the
+// S-GaSP (lambdaZ) scales it. On the nu distinct field inputs (lower
+// triangle, in place; B, W workspaces): Rz = sgasp_corr(R). False when it
+// is not positive definite.
+bool Posterior::biasModel(arma::mat& R, arma::mat& B, arma::mat& W) const {
+  return !sgasp || sgasp_corr(R, phi[iLambdaZ], B, W);
+}
+
+// At new inputs: K = R(Xu, Xnew) -> the model's cross-correlation, r its
+// variance at them (1 for the KOH bias). S-GaSP: the discretized kernel
+// Kz(x, x') = R(x, x') - R(x, Xu) (R + c I)^-1 R(Xu, x'), c = nu / lambdaZ,
+// so with L = chol(R(Xu, Xu) + c I) (Ruu() gives R(Xu, Xu)) and
+// H = L^-1 R(Xu, Xnew):
+//   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
+//   r = 1 - colsums(H^2).
+void Posterior::biasModelCross(const std::function<arma::mat()>& Ruu, arma::mat& K,
+                               arma::vec& r) const {
+  r.ones(K.n_cols);
+  if (!sgasp) return;
+  arma::mat L = Ruu();
+  const double c = L.n_rows / phi[iLambdaZ];
+  L.diag() += c;
+  if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
+  solve_lower(L, K);  // H
+  r -= arma::sum(arma::square(K), 0).t();
+  K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+}
+
 // out(i, j) *= prod_f C_f[a_f(i), a_f(j)] (rhoB: each categorical input f's
 // level correlation) * D[srcX[i], srcY[j]] (rhoD: the field data sets'
 // biases' correlation, with a bias per data set); lower: only i >= j.
@@ -413,12 +467,8 @@ void SchurPosterior::biasLevels(const arma::mat& X, const int* srcX, const arma:
 }
 
 // The bias GP's correlation between the distinct field inputs and new
-// inputs Xnew (K, nu x b) and at the new inputs themselves (r, b): for the
-// KOH bias K = R(Xu, Xnew), r = 1; for the S-GaSP one the discretized
-// kernel Kz(x, x') = R(x, x') - R(x, Xu) (R + c I)^-1 R(Xu, x'), c = nu /
-// lambdaZ, so with L = chol(R(Xu, Xu) + c I) and H = L^-1 R(Xu, Xnew):
-//   K = R(Xu, Xnew) - R (R + c I)^-1 R(Xu, Xnew) = c L^-T H,
-//   r = 1 - colsums(H^2).
+// inputs Xnew (K, nu x b) and at the new inputs themselves (r, b), as the
+// discrepancy model has it (biasModelCross()).
 void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r,
                                const int* source) const {
   const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
@@ -431,16 +481,11 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
   }
   K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
   biasLevels(Xu_, srcU_.data(), Xnew, source, K, false);
-  r.ones(Xnew.n_rows);
-  if (!sgasp) return;
-  const double c = nu_ / phi[iLambdaZ];
-  arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
-  biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), L, false);
-  L.diag() += c;
-  if (!chol_lower(L)) Rcpp::stop("the S-GaSP correlation is not positive definite");
-  solve_lower(L, K);  // H
-  r -= arma::sum(arma::square(K), 0).t();
-  K = c * arma::solve(arma::trimatu(arma::trimatl(L).t()), K);
+  biasModelCross([&] {
+    arma::mat L = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+    biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), L, false);
+    return L;
+  }, K, r);
 }
 
 // GP conditional of a target with covariance ks = s2S k with ys and kf with
@@ -466,7 +511,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
   arma::vec v0(b, arma::fill::zeros);
   if (simPart) v0 += s2S;
   if (type == PT_FIELD) {
-    const int G = layout.length[PC_SIGMA2E];
+    const int G = layout.length_of("sigma2E");
     for (int c = 0; c < b; ++c) {
       const int g = noise ? noise[c] : 0;
       if (g < 0 || g >= G) Rcpp::stop("noise group %d of a new point is not one of the %d", g + 1, G);
@@ -590,7 +635,7 @@ double SchurPosterior::evaluate(const Touch& t) {
     }
     kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
     biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), Rb_.alt(), true);
-    if (sgasp && !sgasp_corr(Rb_.alt(), phi[iLambdaZ], Bz_, Wz_)) return R_NegInf;
+    if (!biasModel(Rb_.alt(), Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
   }
 

@@ -13,8 +13,8 @@
 // A move touches the outputs whose parameters it moves (kappa: all).
 #include "fbc.h"
 
-// Output o's model: the layout of one output (its classes in the order of
-// ParamClass, kappa first), its rows' measurement-error groups renumbered
+// Output o's model: the layout of one output (its classes in the layout's order,
+// kappa first), its rows' measurement-error groups renumbered
 // among its own, the data sets of its rows; map_[o] the place in phi of
 // each of its parameters.
 void OutputsPosterior::sub_model(const Model& model, int o, Model& sub) {
@@ -22,7 +22,7 @@ void OutputsPosterior::sub_model(const Model& model, int o, Model& sub) {
   sub.outputs = LevelInput{0, 0, 0};
   const Layout& g = model.layout;
   // output o's measurement-error groups, in order of the global ones
-  const int G = g.length[PC_SIGMA2E];
+  const int G = g.length_of("sigma2E");
   std::vector<int> has(G, 0);
   for (int i : rowsF_[o]) has[noise_.empty() ? 0 : noise_[i]] = 1;
   groupLocal_[o].assign(G, -1);
@@ -38,17 +38,21 @@ void OutputsPosterior::sub_model(const Model& model, int o, Model& sub) {
   Layout& lay = sub.layout;
   map_[o].clear();
   int at = 0;
-  for (int c = 0; c < PC_COUNT; ++c) {
-    const bool shared = c == PC_KAPPA || c == PC_SIGMA2E;
-    const int len = c == PC_SIGMA2E ? (int) groups.size() : shared ? g.length[c] : g.length[c] / K_;
+  const int C = g.names.size();
+  lay.names = g.names;
+  lay.offset.assign(C, 0); lay.length.assign(C, 0);
+  for (int c = 0; c < C; ++c) {
+    // shared: kappa; sigma2E per measurement-error group (output o's own)
+    const bool kappa = g.names[c] == "kappa", noise = g.names[c] == "sigma2E";
+    const int len = noise ? (int) groups.size() : kappa ? g.length[c] : g.length[c] / K_;
     lay.offset[c] = at;
     lay.length[c] = len;
     for (int k = 0; k < len; ++k)
-      map_[o].push_back(c == PC_SIGMA2E ? g.offset[c] + groups[k]
-                        : shared ? g.offset[c] + k : g.offset[c] + o * len + k);
+      map_[o].push_back(noise ? g.offset[c] + groups[k]
+                        : kappa ? g.offset[c] + k : g.offset[c] + o * len + k);
     at += len;
   }
-  // map_[o] is in the order of ParamClass; fill_layout() wants offsets
+  // map_[o] is in the layout's class order; fill_layout() wants offsets
   fill_layout(lay);
 }
 
@@ -89,7 +93,7 @@ OutputsPosterior::OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, con
     sub_model(model, o, sub);
     for (size_t k = 0; k < map_[o].size(); ++k) {
       const int j = map_[o][k];
-      owner_[j] = layout.cls[j] == PC_KAPPA ? -1 : o;
+      owner_[j] = layout.is(j, "kappa") ? -1 : o;
       local_[j] = k;
     }
     sub_.push_back(make_posterior(Xf_[o], yf_[o], Xs_[o], ys_[o], nugget, sub));

@@ -375,30 +375,43 @@ test_that("the S-GaSP shrinks towards no discrepancy and grows back to the bias 
                tolerance = 1e-6)
 })
 
-test_that("the compiled core refuses a layout of another discrepancy model", {
+test_that("the compiled core reads the discrepancy model off the layout and refuses one that does not fit", {
   dat <- random_koh_data(5, 12, 1, 1, seed = 3)
+  # a layout from lengths named by class (R's table order)
+  lay <- function(model, len) {
+    model$offset <- stats::setNames(as.integer(cumsum(len) - len), names(len))
+    model$length <- stats::setNames(as.integer(len), names(len))
+    model
+  }
   gp <- FBC:::compiled_model(1, 1)
-  gp$discrepancy <- 1L  # "none" with the bias classes laid out
-  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1), 1e-6, model = gp),
+  len <- gp$length
+  # the discrepancy code is not what the compiled core reads: a "none" code
+  # with the bias classes laid out is the KOH model
+  phi <- random_phi(1, 1)
+  coded <- gp
+  coded$discrepancy <- 1L
+  expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = coded),
+                   .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = gp))
+  # the bias classes without sigma2B (no bias GP)
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi[-9], 1e-6,
+                           model = lay(gp, replace(len, "sigma2B", 0L))),
                "thetaB 1 entries where the data need 0")
-  none <- FBC:::compiled_model(1, 1, discrepancy = "none")
-  none$discrepancy <- 0L  # the bias GP without its classes
-  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
-                           model = none),
+  # a bias without its length-scale
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi[-6], 1e-6,
+                           model = lay(gp, replace(len, "thetaB", 0L))),
                "thetaB 0 entries where the data need 1")
-  none$discrepancy <- 2L  # the S-GaSP, whose bias GP has classes
-  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
-                           model = none),
-               "thetaB 0 entries where the data need 1")
-  sg <- FBC:::compiled_model(1, 1, discrepancy = "sgasp")
-  sg$discrepancy <- 0L  # the KOH bias: it needs a muB (and no lambdaZ)
-  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "sgasp"), 1e-6,
-                           model = sg),
-               "muB 0 entries where the data need 1")
-  none$discrepancy <- 7L
-  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, random_phi(1, 1, "none"), 1e-6,
-                           model = none),
-               "unknown discrepancy code 7")
+  # muB and lambdaZ: none, or one per output with a bias
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, c(phi, 0), 1e-6,
+                           model = lay(gp, replace(len, "muB", 2L))),
+               "muB 2 entries where the data need 1")
+  # a class the compiled core does not compute with has no say (its
+  # parameters are the sampler's alone); a class it needs may not be missing
+  extra <- lay(gp, c(len, zeta = 1L))
+  expect_identical(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, c(phi, 0.5), 1e-6, model = extra),
+                   .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = gp))
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi[-1], 1e-6,
+                           model = lay(gp, len[names(len) != "kappa"])),
+               "kappa 0 entries where the data need 1")
 })
 
 test_that("without a discrepancy the sampler retains dense log-likelihoods and has no bias moves", {
