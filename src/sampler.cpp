@@ -752,7 +752,7 @@ static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
   const Posterior& post = ch.post;
   const std::vector<int>& idx = mv.b.idx;
   const int k = idx.size();
-  if (!want || k < 2 || !post.canPreview() || post.layout.length[PC_SIGMA2S] != 1 ||
+  if (!want || k < 2 || !post.canPreview() || post.layout.length_of("sigma2S") != 1 ||
       idx[k - 1] != post.iSigma2S)
     return;
   mv.collapse = true;

@@ -242,8 +242,8 @@ bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
 // (what the runs' conditionals depend on).
 arma::vec VecchiaPosterior::simKey() const {
   arma::vec key;
-  for (int c : {PC_THETAS, PC_ALPHAS, PC_RHOS}) {
-    const int o = layout.offset[c], l = layout.length[c];
+  for (const char* c : {"thetaS", "alphaS", "rhoS"}) {
+    const int o = layout.offset_of(c), l = layout.length_of(c);
     if (l > 0) key = arma::join_cols(key, phi.subvec(o, o + l - 1));
   }
   return key;
