@@ -485,24 +485,33 @@ struct BlockMove : Move {
   static double log_ig(double x, double a, double bb) {
     return a * std::log(bb) - R::lgammafn(a) - (a + 1.0) * std::log(x) - bb / x;
   }
-  bool step_collapsed(Chain& ch) {
-    Posterior& post = ch.post;
-    const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
-    for (int i = 0; i < kt; ++i) b.e[i] = R::norm_rand();
+  // The walk's proposal for the block's first n parameters: w' = w + exp(s)
+  // L e, e ~ N(0, I_n), values from_walk(w'); lpDiff = sum of log prior
+  // changes, jac = sum of log Jacobian changes. False when either is not
+  // finite.
+  bool walk_proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
+    const Posterior& post = ch.post;
+    for (int i = 0; i < n; ++i) b.e[i] = R::norm_rand();
     const double sc = std::exp(b.logscale);
-    double lpDiff = 0, jac = 0;
-    for (int i = 0; i < kt; ++i) {
+    for (int i = 0; i < n; ++i) {
       const int j = b.idx[i], tr = ch.pr.transform[j];
       b.w[i] = to_walk(tr, post.phi[j]);
       double step = 0;
       for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
       b.wNew[i] = b.w[i] + sc * step;
-      b.vals[i] = valsT[i] = from_walk(tr, b.wNew[i]);
+      b.vals[i] = from_walk(tr, b.wNew[i]);
       b.lpNew[i] = ch.pr(j, b.vals[i]);
       lpDiff += b.lpNew[i] - ch.lp[j];
       jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
     }
-    if (!std::isfinite(lpDiff) || !std::isfinite(jac)) return false;
+    return std::isfinite(lpDiff) && std::isfinite(jac);
+  }
+  bool step_collapsed(Chain& ch) {
+    Posterior& post = ch.post;
+    const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
+    double lpDiff = 0, jac = 0;
+    if (!walk_proposal(ch, kt, lpDiff, jac)) return false;
+    for (int i = 0; i < kt; ++i) valsT[i] = b.vals[i];
     double zzNew;
     bool ok;
     post.simPreview(idxT, valsT, zzNew, ok);
@@ -539,21 +548,8 @@ struct BlockMove : Move {
     }
     Posterior& post = ch.post;
     const int k = b.idx.size();
-    for (int i = 0; i < k; ++i) b.e[i] = R::norm_rand();
-    const double sc = std::exp(b.logscale);
     double lpDiff = 0, jac = 0;
-    for (int i = 0; i < k; ++i) {
-      const int j = b.idx[i], tr = ch.pr.transform[j];
-      b.w[i] = to_walk(tr, post.phi[j]);
-      double step = 0;
-      for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
-      b.wNew[i] = b.w[i] + sc * step;
-      b.vals[i] = from_walk(tr, b.wNew[i]);
-      b.lpNew[i] = ch.pr(j, b.vals[i]);
-      lpDiff += b.lpNew[i] - ch.lp[j];
-      jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
-    }
-    if (!std::isfinite(lpDiff) || !std::isfinite(jac)) return false;
+    if (!walk_proposal(ch, k, lpDiff, jac)) return false;
     const double llNew = post.propose(b.idx, b.vals);
     if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
       post.accept();
