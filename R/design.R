@@ -10,11 +10,12 @@
 #' `update(fit, sim = more_runs)` rebuilds the model on all runs (the old
 #' and the new, exactly as `calibrate(rbind(old, new), field, ...)` with the
 #' fit's model arguments would: the same scaling, priors and algebra
-#' choice) and refits it from the chains' last states (a warm start) with a fresh adaptive warm-up (or `nBurn` sweeps). The
-#' posterior is that of a fresh fit on all runs (tested against the grid
-#' posterior). On the small fits measured (inst/bench/design-warm.R) a warm
-#' refit costs about what a fresh fit does: the chains start in the old
-#' posterior, but the proposals must still adapt to the new one.
+#' choice) and refits it from the chains' last states (a warm start) with
+#' a fresh adaptive warm-up (or `nBurn` sweeps). The posterior is that of a
+#' fresh fit on all runs (tested against the grid posterior). On the small
+#' fits measured (inst/bench/design-warm.R) a warm refit costs about what a
+#' fresh fit does: the chains start in the old posterior, but the proposals
+#' must still adapt to the new one.
 #'
 #' The last states are carried to the new model's scaling: kappa in its
 #' own units, each length-scale `theta` by the change of its input's range
@@ -124,8 +125,8 @@ bind_runs <- function(old, new, call = parent.frame()) {
 # proposals and the warm-up started afresh (initial_state()). Carrying the
 # adapted scales, block shapes and adaptation counts over was measured
 # slower: their small late steps re-tune slowly to the new posterior
-# (inst/bench/design-warm.R: the ball's refit warmed up 800-3400 sweeps
-# with them, 300-500 without).
+# (the ball's refit, 3 replicates: warm-ups of 400-3400 sweeps a chain
+# with them, 11 of 12 chains over 700; 300-500 without).
 warm_state <- function(state, old, new) {
   initial_state(warm_phi(state$phi, old, new), new$spec)
 }
