@@ -35,7 +35,7 @@
 #'   posterior. Until this was measured (inst/bench/design-warm.R) the
 #'   refit re-tuned the old adapted proposals for a fixed 200 sweeps,
 #'   which kept the chains' move to the new posterior among the draws and
-#'   cost 1.5-3.5 times a fresh fit.
+#'   cost 1.5-9 times a fresh fit (now 0.65-1.94 times).
 #' @param showProgress As in [calibrate()].
 #' @return A new `fbc` object fitted to all runs (its draws are the new
 #'   run's only). `settings$warmStart` is `TRUE`.
