@@ -61,8 +61,8 @@
     .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 
-.fbc_block_estimate_c <- function(W, forget) {
-    .Call(`_FBC_fbc_block_estimate`, W, forget)
+.fbc_block_estimate_c <- function(W, forget, walked = 0L) {
+    .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }
 
 .vecchia_order <- function(X, w) {

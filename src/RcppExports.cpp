@@ -258,14 +258,15 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_block_estimate
-Rcpp::List fbc_block_estimate(const arma::mat& W, double forget);
-RcppExport SEXP _FBC_fbc_block_estimate(SEXP WSEXP, SEXP forgetSEXP) {
+Rcpp::List fbc_block_estimate(const arma::mat& W, double forget, int walked);
+RcppExport SEXP _FBC_fbc_block_estimate(SEXP WSEXP, SEXP forgetSEXP, SEXP walkedSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
     Rcpp::traits::input_parameter< const arma::mat& >::type W(WSEXP);
     Rcpp::traits::input_parameter< double >::type forget(forgetSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_block_estimate(W, forget));
+    Rcpp::traits::input_parameter< int >::type walked(walkedSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_block_estimate(W, forget, walked));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -312,7 +313,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
-    {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 2},
+    {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
     {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},
     {NULL, NULL, 0}

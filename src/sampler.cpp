@@ -128,6 +128,10 @@ struct Block {
   double logscale = 0, accBatch = 0, forget = 0;
   int n = 0, batch = 0, restart = 0, curN = 0, curWin = -1;  // restart < 0: a warm-up of data-dependent length
   bool shaped = false;
+  // how many leading parameters the walk moves (the rest drawn otherwise:
+  // BlockMove's collapse); 0 for all. The warm-up's effective-draws rule
+  // counts these only, whose shape (L's leading block) the walk uses.
+  int walked = 0;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
     idx = index;
@@ -192,6 +196,7 @@ struct Block {
     out.push_back(Rcpp::wrap(curM2), "curM2");
     return out;
   }
+  int walk_count() const { return walked > 0 ? walked : (int) idx.size(); }
   // log det(L)^(1/k): the log size of the shape.
   double log_volume() const { return arma::mean(arma::log(L.diag())); }
   // Log SD the shape L gives each parameter, relative to its size.
@@ -290,10 +295,10 @@ struct Block {
   // (v_i the recent windows' pooled variance, nbar their mean count), so
   // ESS_i = N / tau_i; with forget = 0, B v_i / var(window means_i). The
   // older windows' drift from the start does not count against the
-  // recent mixing.
+  // recent mixing. Only the walked parameters count (walk_count()).
   double window_ess() {
     close_window();
-    const int B = winCount.n_elem, k = idx.size();
+    const int B = winCount.n_elem, k = idx.size(), kw = walk_count();
     if (B == 0) return 0;
     const int E = epoch((int) winIndex[B - 1]), from = forget > 0 ? E - 1 : E;
     double sa = 0, sa2 = 0, nR = 0;
@@ -308,7 +313,7 @@ struct Block {
     if (R < 4 || sa2 <= 0) return 0;
     const double N = sa * sa / sa2, nbar = nR / R;
     double ess = INFINITY;
-    for (int i = 0; i < k; ++i) {
+    for (int i = 0; i < kw; ++i) {
       double mu = 0;
       for (int b : recent) mu += winCount[b] * winMeans(i, b) / nR;
       double v = 0, mm = 0, s2 = 0;
@@ -752,6 +757,7 @@ static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
       idx[k - 1] != post.iSigma2S)
     return;
   mv.collapse = true;
+  mv.b.walked = k - 1;
   mv.idxT.assign(idx.begin(), idx.end() - 1);
   mv.valsT.set_size(k - 1);
   const int j = post.iSigma2S;
@@ -890,7 +896,7 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
     if (!b->shaped) ok = false;
     // a joint block's shape learnt from enough effective draws
     const double ess = b->window_ess();
-    const int k = b->idx.size();
+    const int k = b->walk_count();
     if (k >= WARM_ESS_K && ess < ch.warmESS * k) ok = false;
   }
   if (sh.n_elem != ch.winShape.n_elem || arma::any(arma::abs(sh - ch.winShape) > WARM_SHAPE))
@@ -1122,15 +1128,17 @@ double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
 // during a warm-up of data-dependent length), each earlier epoch weighted
 // `forget` times the next: mean, covariance (the open window included),
 // the draws weighed, and the fewest effective draws per parameter at the
-// last window's end (Block::window_ess()), for the tests.
+// last window's end (Block::window_ess(); over the first `walked` columns
+// when positive, as for a block whose walk moves only those), for the tests.
 // [[Rcpp::export(.fbc_block_estimate_c)]]
-Rcpp::List fbc_block_estimate(const arma::mat& W, double forget) {
+Rcpp::List fbc_block_estimate(const arma::mat& W, double forget, int walked = 0) {
   Block b;
   std::vector<int> idx(W.n_cols);
   for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
   b.start(idx, arma::zeros<arma::vec>(W.n_cols));
   b.restart = -1;
   b.forget = forget;
+  b.walked = walked;
   double ess = 0;
   for (arma::uword it = 1; it <= W.n_rows; ++it) {
     b.w = W.row(it - 1).t();

@@ -224,6 +224,19 @@ test_that("a block's warm-up estimate keeps the earlier epochs at falling weight
               })))
     expect_equal(est$ess, min(block_ess(b, forget)), tolerance = 1e-10)
   }
+  # a block whose walk moves its first k - 1 parameters (sigma2S drawn from
+  # its conditional, BlockMove's collapse) counts their effective draws
+  # only: a last column that barely mixes (a slow drift) does not hold it
+  Wd <- W
+  Wd[, 3] <- Wd[, 3] + cumsum(rnorm(1450, 0, 0.3))
+  bd <- b
+  bd$winMeans[3, ] <- tapply(Wd[w14, 3], j[w14], mean)
+  bd$winM2 <- do.call(cbind, lapply(0:13, function(i) crossprod(sweep(Wd[j == i, ], 2, colMeans(Wd[j == i, ])))))
+  ess3 <- block_ess(bd, 0.5)
+  expect_lt(ess3[3], min(ess3[1:2]))
+  expect_equal(FBC:::.fbc_block_estimate_c(Wd, 0.5)$ess, min(ess3), tolerance = 1e-10)
+  expect_equal(FBC:::.fbc_block_estimate_c(Wd, 0.5, walked = 2L)$ess, min(ess3[1:2]),
+               tolerance = 1e-10)
   # a known mixing time: independent AR(1) walks with rho = 0.9 (integrated
   # autocorrelation time (1 + rho) / (1 - rho) = 19 sweeps), 6400 sweeps: the
   # effective draws are the weighted estimate's effective size over 19
