@@ -192,9 +192,14 @@ void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
 // calibration factor of Rs(Xs, Xk): every field row shares kappa).
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
                        const double* theta, const double* alpha, arma::vec& out);
-// kernel_corr(X, X, lower) over the first s rows of X (Vecchia's systems).
-void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
-                      const double* alpha, arma::mat& out);
+// The lower triangle of the first s rows of X, column by column, as ne =
+// s (s + 1) / 2 flat entries (Vecchia's systems): kernel_dist_tri() the
+// per-dimension values G (K ne doubles, dimension after dimension),
+// kernel_corr_flat() the correlations from them (kernel_corr()'s numbers;
+// w: ne doubles of workspace).
+void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G);
+void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double* theta,
+                      const double* alpha, double* out, double* w);
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = 1);
@@ -618,7 +623,17 @@ private:
                                          // the field inputs, experimental part
   arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
   std::vector<std::pair<double, int> > heap_;  // k nearest workspace
-  double conditional(int s, int runs, bool coef);
+  // the runs' conditioning sets' distance values (cacheRuns()): run i's
+  // c_i = runC_[i] neighbours, its values from runOff_[i] in runG_ (empty:
+  // not cached)
+  std::vector<int> runC_;
+  std::vector<size_t> runOff_;
+  std::vector<double> runG_;
+  std::vector<double> Gw_, Cw_, Ww_;     // one system's distances, correlations, products
+  void cacheRuns();
+  const double* runDist(int i) const { return runG_.empty() ? nullptr : runG_.data() + runOff_[i]; }
+  double conditional(int s, int runs, bool coef, const double* G = nullptr,
+                     const double* y = nullptr);
   void fieldNeighbours(std::vector<int>& nbrF);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
   int gatherRun(int i);

@@ -26,23 +26,43 @@
 // the field latents' neighbours among the runs follow kappa.
 #include "fbc.h"
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 
+// Two doubles at a time where the compiler has vector types (GCC, clang):
+// the same IEEE operations lane by lane as one double at a time.
+#if defined(__GNUC__)
+#define FBC_V2D 1
+typedef double v2d __attribute__((vector_size(16)));
+static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
+static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
+#endif
+
 // In-place lower Cholesky of the leading s x s block of A (leading dimension
-// lda); false when not positive definite. Small matrices: no LAPACK call.
-static bool small_chol(double* A, int s, int lda) {
+// lda), carried on over rows s .. rows - 1 (A[r, j] -> (A[r, j] - sum_l<j
+// A[r, l] L[j, l]) / L[j, j]: a row b there becomes L^-1 b); false when not
+// positive definite. Small matrices: no LAPACK call. Left-looking by
+// columns: column j less L[j, l] times column l for l = 0 .. j - 1 (each
+// entry subtracts its products in the order of l, as the dot-product form
+// does; the columns are contiguous and their entries independent).
+static bool small_chol(double* A, int s, int lda, int rows) {
   for (int j = 0; j < s; ++j) {
     double* cj = A + (size_t) j * lda;
+    for (int l = 0; l < j; ++l) {
+      const double* cl = A + (size_t) l * lda;
+      const double ljl = cl[j];
+      int i = j;
+#ifdef FBC_V2D
+      const v2d lv = {ljl, ljl};
+      for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) - load2(cl + i) * lv);
+#endif
+      for (; i < rows; ++i) cj[i] -= cl[i] * ljl;
+    }
     double d = cj[j];
-    for (int l = 0; l < j; ++l) { const double v = A[(size_t) l * lda + j]; d -= v * v; }
     if (!(d > 0)) return false;
     d = std::sqrt(d);
     cj[j] = d;
-    for (int i = j + 1; i < s; ++i) {
-      double v = cj[i];
-      for (int l = 0; l < j; ++l) v -= A[(size_t) l * lda + i] * A[(size_t) l * lda + j];
-      cj[i] = v / d;
-    }
+    for (int i = j + 1; i < rows; ++i) cj[i] = cj[i] / d;
   }
   return true;
 }
@@ -159,9 +179,14 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   if ((int) vd_.ord.size() != m || (int) vd_.nbr.size() != m * vd_.k || (int) vd_.w.n_elem != K)
     Rcpp::stop("the Vecchia design does not fit the simulator runs");
   const int smax = vd_.k + vd_.kf + 1;
-  Kw_.set_size(smax, smax);
+  Kw_.set_size(smax + 1, smax);  // a row more: runsPass()'s L^-1 y
   Xg_.set_size(smax, K);
   rhs_.set_size(smax);
+  const size_t nemax = (size_t) smax * (smax + 1) / 2;
+  Gw_.resize(nemax * K);
+  Cw_.resize(nemax);
+  Ww_.resize(nemax);
+  cacheRuns();
   // each field latent's earlier latents: the kf nearest in the scaled
   // experimental inputs (they share kappa)
   nbrL_.resize(nu_);
@@ -192,15 +217,47 @@ std::string VecchiaPosterior::algebra() const {
   return "Vecchia (k = " + std::to_string(vd_.k) + ")";
 }
 
+// The per-dimension distance values of every run's conditioning set
+// (kernel_dist_tri() of gatherRun()'s rows, runG_ from runOff_[i]): they
+// never change, and recomputing them cost a fifth of a sweep. m (k + 1)
+// (k + 2) / 2 (p + q) doubles (m = 1000, k = 20: 7.4 MB); none above the
+// option FBC.vecchia_cache_mb (default 256; 0: never), where the
+// conditionals compute them on the fly (the same numbers).
+void VecchiaPosterior::cacheRuns() {
+  const int K = p + q, k = vd_.k;
+  runC_.assign(m, 0);
+  runOff_.assign(m + 1, 0);
+  for (int i = 0; i < m; ++i) {
+    const int* nb = vd_.nbr.data() + (size_t) i * k;
+    int c = 0;
+    while (c < k && nb[c] >= 0) ++c;
+    runC_[i] = c;
+    runOff_[i + 1] = runOff_[i] + (size_t) (c + 1) * (c + 2) / 2 * K;
+  }
+  double mb = 256;
+  SEXP opt = Rf_GetOption1(Rf_install("FBC.vecchia_cache_mb"));
+  if (opt != R_NilValue && Rf_length(opt) == 1) mb = Rf_asReal(opt);
+  runG_.clear();
+  if (!(runOff_[m] * sizeof(double) <= mb * 1048576.0)) return;
+  runG_.resize(runOff_[m]);
+  for (int i = 0; i < m; ++i) {
+    const int c = gatherRun(i);
+    kernel_dist_tri(kernS_, Xg_, c + 1, K, runG_.data() + runOff_[i]);
+  }
+}
+
 // The conditional of the node in the last of the s rows of Xg_ given the
 // others (the first `runs` of them simulator runs, with the nugget): the
 // factor of their joint correlation in Kw_, coefficients into rhs_[0 .. s-2]
 // (when `coef`), returns the conditional variance (NaN when the factor
-// fails even with a jitter on the latents).
-double VecchiaPosterior::conditional(int s, int runs, bool coef) {
+// fails even with a jitter on the latents). G: the rows' per-dimension
+// distance values (kernel_dist_tri(); null: computed here from Xg_). y (s
+// values, or null): L^-1 y into row s of Kw_.
+double VecchiaPosterior::conditional(int s, int runs, bool coef, const double* G,
+                                     const double* y) {
   const int K = p + q, lda = Kw_.n_rows;
-  const arma::vec thetaS = phi.subvec(iThetaS, iThetaS + K - 1);
-  const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + K - 1);
+  const double* thetaS = phi.memptr() + iThetaS;
+  const double* alphaS = phi.memptr() + iAlphaS;
   // the levels' correlations, recomputed only when their rhoS moved
   const int nz = level_count(levels);
   if (nz && (levelZ_.n_elem != (arma::uword) nz ||
@@ -208,11 +265,22 @@ double VecchiaPosterior::conditional(int s, int runs, bool coef) {
     levelZ_ = phi.subvec(iRhoS, iRhoS + nz - 1);
     level_corr(levels, levelZ_.memptr(), levelC_);
   }
+  const size_t ne = (size_t) s * (s + 1) / 2;
+  if (!G) {
+    kernel_dist_tri(kernS_, Xg_, s, K, Gw_.data());
+    G = Gw_.data();
+  }
+  kernel_corr_flat(kernS_, G, ne, K, thetaS, alphaS, Cw_.data(), Ww_.data());
   for (double jitter = 0.0; jitter < 1e-3; jitter = jitter == 0.0 ? 1e-10 : 100 * jitter) {
-    kernel_corr_rows(kernS_, Xg_, s, K, thetaS.memptr(), alphaS.memptr(), Kw_);
+    const double* r = Cw_.data();
+    for (int j = 0; j < s; ++j) {
+      std::memcpy(Kw_.colptr(j) + j, r, (s - j) * sizeof(double));
+      r += s - j;
+    }
     level_scale(levels, levelC_, Xg_, Xg_, Kw_, true, s);
     for (int i = 0; i < s; ++i) Kw_.at(i, i) += i < runs ? nugget_ : jitter;
-    if (!small_chol(Kw_.memptr(), s, lda)) continue;
+    if (y) for (int j = 0; j < s; ++j) Kw_.at(s, j) = y[j];
+    if (!small_chol(Kw_.memptr(), s, lda, y ? s + 1 : s)) continue;
     if (coef) {
       for (int l = 0; l < s - 1; ++l) rhs_[l] = Kw_.at(s - 1, l);
       small_back(Kw_.memptr(), s - 1, lda, rhs_.memptr());
@@ -241,11 +309,10 @@ bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
 // The simulator GP's correlation parameters in phi: thetaS, alphaS, rhoS
 // (what the runs' conditionals depend on).
 arma::vec VecchiaPosterior::simKey() const {
-  arma::vec key;
-  for (const char* c : {"thetaS", "alphaS", "rhoS"}) {
-    const int o = layout.offset_of(c), l = layout.length_of(c);
-    if (l > 0) key = arma::join_cols(key, phi.subvec(o, o + l - 1));
-  }
+  const int K = p + q, nz = level_count(levels);
+  arma::vec key(2 * K + nz);
+  for (int d = 0; d < K; ++d) { key[d] = phi[iThetaS + d]; key[K + d] = phi[iAlphaS + d]; }
+  for (int z = 0; z < nz; ++z) key[2 * K + z] = phi[iRhoS + z];
   return key;
 }
 
@@ -267,23 +334,19 @@ bool VecchiaPosterior::simPreview(const std::vector<int>& idx, const arma::vec& 
 // The runs' conditionals at phi: log|Ds| ~ sum log d_i, zz ~ sum e_i^2 / d_i.
 bool VecchiaPosterior::runsPass(double& ldDs, double& zz) {
   const int k = vd_.k;
+  const bool gather = runG_.empty() || !levels.empty();
   double ld = 0.0, qq = 0.0;
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
-    const int c = gatherRun(i);
+    const int c = gather ? gatherRun(i) : runC_[i];
     for (int r = 0; r < c; ++r) rhs_[r] = ys_[nb[r]];
     rhs_[c] = ys_[vd_.ord[i]];
-    const double v = conditional(c + 1, c + 1, false);
+    // z = L^-1 [ys_N; ys_s] in row c + 1 of Kw_: its last entry is e / sqrt(d)
+    const double v = conditional(c + 1, c + 1, false, runDist(i), rhs_.memptr());
     if (!(v > 0)) return false;
-    // z = L^-1 [ys_N; ys_s]: its last entry is e / sqrt(d)
-    double* z = rhs_.memptr();
-    for (int r = 0; r <= c; ++r) {
-      double u = z[r];
-      for (int l = 0; l < r; ++l) u -= Kw_.at(r, l) * z[l];
-      z[r] = u / Kw_.at(r, r);
-    }
+    const double z = Kw_.at(c + 1, c);
     ld += std::log(v);
-    qq += z[c] * z[c];
+    qq += z * z;
   }
   ldDs = ld; zz = qq;
   return true;
@@ -452,7 +515,7 @@ void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, a
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
     const int c = gatherRun(i), s = vd_.ord[i];
-    const double v = conditional(c + 1, c + 1, true);
+    const double v = conditional(c + 1, c + 1, true, runDist(i));
     const double sd = std::sqrt(v);
     std::vector<std::pair<int, double> >& col = cols[i];
     col.emplace_back(s, 1.0 / sd);
