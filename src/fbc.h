@@ -631,6 +631,14 @@ private:
   std::vector<double> runG_;
   std::vector<double> Gw_, Cw_, Ww_;     // one system's distances, correlations, products
   void cacheRuns();
+  // simCross()'s latent algebra: each latent's earlier latents by index
+  // (latent, place in nbrL_), M's entries of each row, g and h, Mi and Mi
+  // diag(g) (latentSolve())
+  std::vector<std::vector<std::pair<int, int> > > rowL_;
+  std::vector<std::vector<double> > cL_;
+  arma::vec hL_, gL_;
+  arma::mat Mi_, Ag_;
+  void latentSolve(arma::mat& Q, arma::vec& wz);
   const double* runDist(int i) const { return runG_.empty() ? nullptr : runG_.data() + runOff_[i]; }
   double conditional(int s, int runs, bool coef, const double* G = nullptr,
                      const double* y = nullptr);
