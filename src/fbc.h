@@ -622,7 +622,8 @@ private:
   arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
                                          // the field inputs, experimental part
   arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
-  std::vector<std::pair<double, int> > heap_;  // k nearest workspace
+  std::vector<double> d2w_;              // fieldNeighbours(): one latent's d2 to the runs
+  std::vector<int> cand_;                //   and the runs that may be among its k nearest
   // the runs' conditioning sets' distance values (cacheRuns()): run i's
   // c_i = runC_[i] neighbours, its values from runOff_[i] in runG_ (empty:
   // not cached)
@@ -642,7 +643,7 @@ private:
   const double* runDist(int i) const { return runG_.empty() ? nullptr : runG_.data() + runOff_[i]; }
   double conditional(int s, int runs, bool coef, const double* G = nullptr,
                      const double* y = nullptr);
-  void fieldNeighbours(std::vector<int>& nbrF);
+  void fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
   int gatherRun(int i);
 };

@@ -377,36 +377,47 @@ int VecchiaPosterior::gatherRun(int i) {
 // with the distances' experimental part precomputed (dx2_) and the kappa
 // part computed once per run for all latents:
 //   d2(j, i) = dx2(i, j) + sum_d (w_d (t_id - kappa_d))^2,
-// added in scaled_d2()'s order; the k smallest by a bounded max-heap over
-// the runs in index order (ties to the lower index, as nearest()).
+// added in scaled_d2()'s order; the k smallest in the order (d2, run
+// index). The latent's neighbours at the previous kappa (prev) bound the
+// k-th smallest d2 at the new one by the largest of their new d2, T: only
+// the runs with d2 <= T are sorted (kappa moves a little: about k of them;
+// every run when prev has none).
 // O(nu m q) per kappa instead of O(nu m (p + q) + nu m log k).
-void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF) {
+void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev) {
   const int k = vd_.k, kk = std::min(k, m);
   for (int d = 0; d < q; ++d) {
     const double wd = vd_.w[p + d], kap = phi[iKappa + d];
     double* out = dt_.colptr(d);
     for (int i = 0; i < m; ++i) { const double e = wd * (Xs_.at(i, p + d) - kap); out[i] = e * e; }
   }
-  auto later = [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
-    return a.first < b.first || (a.first == b.first && a.second < b.second);
-  };
+  d2w_.resize(m);
+  double* s2 = d2w_.data();
+  auto before = [s2](int a, int b) { return s2[a] < s2[b] || (s2[a] == s2[b] && a < b); };
   for (int j = 0; j < nu_; ++j) {
     const double* dx = dx2_.colptr(j);
-    heap_.clear();
-    for (int i = 0; i < m; ++i) {
-      double s2 = dx[i];
-      for (int d = 0; d < q; ++d) s2 += dt_.at(i, d);
-      if ((int) heap_.size() < kk) {
-        heap_.emplace_back(s2, i);
-        std::push_heap(heap_.begin(), heap_.end(), later);
-      } else if (s2 < heap_.front().first) {  // a tie keeps the lower index
-        std::pop_heap(heap_.begin(), heap_.end(), later);
-        heap_.back() = std::make_pair(s2, i);
-        std::push_heap(heap_.begin(), heap_.end(), later);
-      }
+    for (int i = 0; i < m; ++i) s2[i] = dx[i];
+    for (int d = 0; d < q; ++d) {
+      const double* t = dt_.colptr(d);
+      int i = 0;
+#ifdef FBC_V2D
+      for (; i + 2 <= m; i += 2) store2(s2 + i, load2(s2 + i) + load2(t + i));
+#endif
+      for (; i < m; ++i) s2[i] += t[i];
     }
-    std::sort_heap(heap_.begin(), heap_.end(), later);
-    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? heap_[r].second : -1;
+    const int* pj = prev.data() + (size_t) j * k;
+    double T = R_PosInf;
+    if (kk > 0 && pj[kk - 1] >= 0) {
+      T = s2[pj[0]];
+      for (int r = 1; r < kk; ++r) T = std::max(T, s2[pj[r]]);
+    }
+    cand_.clear();
+    for (int i = 0; i < m; ++i) if (s2[i] <= T) cand_.push_back(i);
+    if ((int) cand_.size() < kk) {  // NaN distances: every run
+      cand_.resize(m);
+      std::iota(cand_.begin(), cand_.end(), 0);
+    }
+    std::partial_sort(cand_.begin(), cand_.begin() + kk, cand_.end(), before);
+    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? cand_[r] : -1;
   }
 }
 
@@ -432,7 +443,7 @@ int VecchiaPosterior::gather(const int* nb, int c, const std::vector<int>& L, co
 // algebra.
 void VecchiaPosterior::simCross(const Touch& t, const arma::mat&, arma::mat& Q, arma::vec& wz) {
   std::vector<int>& nbrF = t.cChange ? nbrF_.alt() : nbrF_.cur();
-  if (t.cChange) fieldNeighbours(nbrF);
+  if (t.cChange) fieldNeighbours(nbrF, nbrF_.cur());
   const int k = vd_.k;
   hL_.set_size(nu_);
   gL_.set_size(nu_);
