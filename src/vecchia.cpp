@@ -62,7 +62,12 @@ static bool small_chol(double* A, int s, int lda, int rows) {
     if (!(d > 0)) return false;
     d = std::sqrt(d);
     cj[j] = d;
-    for (int i = j + 1; i < rows; ++i) cj[i] = cj[i] / d;
+    int i = j + 1;
+#ifdef FBC_V2D
+    const v2d dv = {d, d};
+    for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) / dv);
+#endif
+    for (; i < rows; ++i) cj[i] = cj[i] / d;
   }
   return true;
 }
