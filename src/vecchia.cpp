@@ -247,7 +247,10 @@ void VecchiaPosterior::cacheRuns() {
   }
   double mb = 256;
   SEXP opt = Rf_GetOption1(Rf_install("FBC.vecchia_cache_mb"));
-  if (opt != R_NilValue && Rf_length(opt) == 1) mb = Rf_asReal(opt);
+  if (opt != R_NilValue) {
+    mb = Rf_length(opt) == 1 && Rf_isNumeric(opt) ? Rf_asReal(opt) : R_NaN;
+    if (!(mb >= 0)) Rcpp::stop("option FBC.vecchia_cache_mb must be one number >= 0 (megabytes)");
+  }
   runG_.clear();
   if (!(runOff_[m] * sizeof(double) <= mb * 1048576.0)) return;
   runG_.resize(runOff_[m]);
