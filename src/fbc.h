@@ -619,11 +619,11 @@ private:
   arma::vec levelZ_;                     // rhoS the level correlations levelC_ are of
   std::vector<arma::mat> levelC_;
   arma::vec rhs_;
-  arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
-                                         // the field inputs, experimental part
+  std::vector<int> xOrd_;                // per field input the runs by their scaled
+  std::vector<double> xD2_;              // squared distance's experimental part (m x nu)
   arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
-  std::vector<double> d2w_;              // fieldNeighbours(): one latent's d2 to the runs
-  std::vector<int> cand_;                //   and the runs that may be among its k nearest
+  std::vector<std::pair<double, int> > cand_;  // fieldNeighbours(): (d2, run) of the runs
+                                               // that may be among a latent's k nearest
   // the runs' conditioning sets' distance values (cacheRuns()): run i's
   // c_i = runC_[i] neighbours, its values from runOff_[i] in runG_ (empty:
   // not cached)

@@ -289,7 +289,11 @@ static void kernel_corr_flat_t(const double* G, size_t ne, int K, const double* 
       flat_accum<F>(g, ne, c, out, w);
     }
   }
-  for (size_t e = 0; e < ne; ++e) out[e] = F::finish(out[e], F::poly ? w[e] : 1.0);
+  // finish(0, w) = w exp(-0) = w (the diagonal, coinciding inputs): no exp
+  for (size_t e = 0; e < ne; ++e) {
+    const double wf = F::poly ? w[e] : 1.0;
+    out[e] = out[e] == 0.0 ? wf : F::finish(out[e], wf);
+  }
 }
 void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double* theta,
                       const double* alpha, double* out, double* w) {

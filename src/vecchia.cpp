@@ -212,14 +212,21 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   for (int b = 0; b < 2; ++b) { nbrF_.b[b].assign((size_t) nu_ * vd_.k, -1); }
   // the experimental part of every field latent's distance to every run,
   // summed in scaled_d2()'s order, so fieldNeighbours() adds the kappa part
-  // and finds the same neighbours as nearest() (O(nu m) memory: the cross
-  // terms' share)
-  dx2_.set_size(m, nu_);
-  std::vector<double> xj(p);
+  // and finds the same neighbours as nearest(); per latent the runs sorted
+  // by it (O(nu m) memory: the cross terms' share, 12 bytes each)
+  xOrd_.resize((size_t) m * nu_);
+  xD2_.resize((size_t) m * nu_);
+  std::vector<double> xj(p), v(m);
+  std::vector<int> o(m);
   for (int j = 0; j < nu_; ++j) {
     for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-    double* col = dx2_.colptr(j);
-    for (int i = 0; i < m; ++i) col[i] = scaled_d2(Xs_, i, xj.data(), vd_.w, p);
+    for (int i = 0; i < m; ++i) v[i] = scaled_d2(Xs_, i, xj.data(), vd_.w, p);
+    std::iota(o.begin(), o.end(), 0);
+    std::sort(o.begin(), o.end(), [&v](int a, int b) { return v[a] < v[b] || (v[a] == v[b] && a < b); });
+    for (int r = 0; r < m; ++r) {
+      xOrd_[(size_t) j * m + r] = o[r];
+      xD2_[(size_t) j * m + r] = v[o[r]];
+    }
   }
   dt_.set_size(m, q);
 }
@@ -382,15 +389,16 @@ int VecchiaPosterior::gatherRun(int i) {
 
 // The field latents' nearest runs at kappa (into nbrF, nu x k): the same
 // runs, in the same order, as nearest() of each latent (x_j, kappa), but
-// with the distances' experimental part precomputed (dx2_) and the kappa
-// part computed once per run for all latents:
+// with the distances' experimental part dx2 precomputed (xD2_, each
+// latent's runs in its ascending order xOrd_) and the kappa part computed
+// once per run for all latents:
 //   d2(j, i) = dx2(i, j) + sum_d (w_d (t_id - kappa_d))^2,
 // added in scaled_d2()'s order; the k smallest in the order (d2, run
 // index). The latent's neighbours at the previous kappa (prev) bound the
 // k-th smallest d2 at the new one by the largest of their new d2, T: only
-// the runs with d2 <= T are sorted (kappa moves a little: about k of them;
-// every run when prev has none).
-// O(nu m q) per kappa instead of O(nu m (p + q) + nu m log k).
+// runs with dx2 <= T can have d2 <= T (the kappa part is >= 0), so the
+// scan of the sorted dx2 stops there and only runs with d2 <= T are sorted
+// (every run when prev has none).
 void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev) {
   const int k = vd_.k, kk = std::min(k, m);
   for (int d = 0; d < q; ++d) {
@@ -398,34 +406,33 @@ void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF, const std::vector
     double* out = dt_.colptr(d);
     for (int i = 0; i < m; ++i) { const double e = wd * (Xs_.at(i, p + d) - kap); out[i] = e * e; }
   }
-  d2w_.resize(m);
-  double* s2 = d2w_.data();
-  auto before = [s2](int a, int b) { return s2[a] < s2[b] || (s2[a] == s2[b] && a < b); };
+  auto d2 = [this](double s2, int i) {
+    for (int d = 0; d < q; ++d) s2 += dt_.at(i, d);
+    return s2;
+  };
+  std::vector<double> xj(p);
   for (int j = 0; j < nu_; ++j) {
-    const double* dx = dx2_.colptr(j);
-    for (int i = 0; i < m; ++i) s2[i] = dx[i];
-    for (int d = 0; d < q; ++d) {
-      const double* t = dt_.colptr(d);
-      int i = 0;
-#ifdef FBC_V2D
-      for (; i + 2 <= m; i += 2) store2(s2 + i, load2(s2 + i) + load2(t + i));
-#endif
-      for (; i < m; ++i) s2[i] += t[i];
-    }
+    const int* oj = xOrd_.data() + (size_t) j * m;
+    const double* vj = xD2_.data() + (size_t) j * m;
     const int* pj = prev.data() + (size_t) j * k;
     double T = R_PosInf;
     if (kk > 0 && pj[kk - 1] >= 0) {
-      T = s2[pj[0]];
-      for (int r = 1; r < kk; ++r) T = std::max(T, s2[pj[r]]);
+      for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
+      T = R_NegInf;
+      for (int r = 0; r < kk; ++r)
+        T = std::max(T, d2(scaled_d2(Xs_, pj[r], xj.data(), vd_.w, p), pj[r]));
     }
     cand_.clear();
-    for (int i = 0; i < m; ++i) if (s2[i] <= T) cand_.push_back(i);
-    if ((int) cand_.size() < kk) {  // NaN distances: every run
-      cand_.resize(m);
-      std::iota(cand_.begin(), cand_.end(), 0);
+    for (int r = 0; r < m && !(vj[r] > T); ++r) {
+      const double s2 = d2(vj[r], oj[r]);
+      if (!(s2 > T)) cand_.emplace_back(s2, oj[r]);
     }
-    std::partial_sort(cand_.begin(), cand_.begin() + kk, cand_.end(), before);
-    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? cand_[r] : -1;
+    if ((int) cand_.size() < kk) {  // NaN distances: every run
+      cand_.clear();
+      for (int r = 0; r < m; ++r) cand_.emplace_back(d2(vj[r], oj[r]), oj[r]);
+    }
+    std::partial_sort(cand_.begin(), cand_.begin() + kk, cand_.end());
+    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? cand_[r].second : -1;
   }
 }
 
