@@ -216,16 +216,15 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   // by it (O(nu m) memory: the cross terms' share, 12 bytes each)
   xOrd_.resize((size_t) m * nu_);
   xD2_.resize((size_t) m * nu_);
-  std::vector<double> xj(p), v(m);
-  std::vector<int> o(m);
+  std::vector<double> xj(p);
+  std::vector<std::pair<double, int> > v(m);
   for (int j = 0; j < nu_; ++j) {
     for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-    for (int i = 0; i < m; ++i) v[i] = scaled_d2(Xs_, i, xj.data(), vd_.w, p);
-    std::iota(o.begin(), o.end(), 0);
-    std::sort(o.begin(), o.end(), [&v](int a, int b) { return v[a] < v[b] || (v[a] == v[b] && a < b); });
+    for (int i = 0; i < m; ++i) v[i] = std::make_pair(scaled_d2(Xs_, i, xj.data(), vd_.w, p), i);
+    std::sort(v.begin(), v.end());
     for (int r = 0; r < m; ++r) {
-      xOrd_[(size_t) j * m + r] = o[r];
-      xD2_[(size_t) j * m + r] = v[o[r]];
+      xD2_[(size_t) j * m + r] = v[r].first;
+      xOrd_[(size_t) j * m + r] = v[r].second;
     }
   }
   dt_.set_size(m, q);
