@@ -236,10 +236,12 @@ std::string VecchiaPosterior::algebra() const {
 
 // The per-dimension distance values of every run's conditioning set
 // (kernel_dist_tri() of gatherRun()'s rows, runG_ from runOff_[i]): they
-// never change, and recomputing them cost a fifth of a sweep. m (k + 1)
-// (k + 2) / 2 (p + q) doubles (m = 1000, k = 20: 7.4 MB); none above the
-// option FBC.vecchia_cache_mb (default 256; 0: never), where the
-// conditionals compute them on the fly (the same numbers).
+// never change. m (k + 1) (k + 2) / 2 (p + q) doubles (m = 1000, k = 20:
+// 7.4 MB; m = 20,000, k = 10: 53 MB); none above the option
+// FBC.vecchia_cache_mb (default 16; 0: never), where the conditionals
+// compute them on the fly (the same numbers). Measured (RESULTS-vecchia.md):
+// 3-8% less CPU at m = 1000, k = 20; 5-9% more at m = 20,000, k = 10, where
+// reading the cache costs more than recomputing.
 void VecchiaPosterior::cacheRuns() {
   const int K = p + q, k = vd_.k;
   runC_.assign(m, 0);
@@ -251,7 +253,7 @@ void VecchiaPosterior::cacheRuns() {
     runC_[i] = c;
     runOff_[i + 1] = runOff_[i] + (size_t) (c + 1) * (c + 2) / 2 * K;
   }
-  double mb = 256;
+  double mb = 16;
   SEXP opt = Rf_GetOption1(Rf_install("FBC.vecchia_cache_mb"));
   if (opt != R_NilValue) {
     mb = Rf_length(opt) == 1 && Rf_isNumeric(opt) ? Rf_asReal(opt) : R_NaN;
