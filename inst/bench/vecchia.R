@@ -8,6 +8,7 @@
 #                                                   #   -2000): kappa quantiles, predictions
 #   Rscript inst/bench/vecchia.R peer               # RobustCalibration at m = 1000 (if installed)
 #   ... k=10 nburn=4000                             # neighbours and burn-in of converged/accuracy
+#   sweep sizes=1000:20,5000:10,20000:10            # the sweep part at these m:k only
 # Add `quick` for a smoke test. Each part runs in a fresh R process (callr),
 # so its peak memory (VmHWM) is its own; CPU seconds are user + system of
 # that process and its children. Run under the BLAS you want to measure
