@@ -44,8 +44,8 @@ struct Gaussian : KernelBase {
 };
 // The Matern families: s the sum in the exponent, w the product of the
 // polynomials poly(a) (M::factor).
-// (accum and factor are templates so that vectors of two entries,
-// VecchiaFlat below, take the same operations as one double.)
+// (accum and factor are templates so that a vector of two entries,
+// flat_accum() below, takes the same operations as one double.)
 template <class M> struct MaternBase : KernelBase {
   static constexpr bool poly = true;
   static double dist(double d) { return std::fabs(d); }
