@@ -192,9 +192,14 @@ void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
 // calibration factor of Rs(Xs, Xk): every field row shares kappa).
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
                        const double* theta, const double* alpha, arma::vec& out);
-// kernel_corr(X, X, lower) over the first s rows of X (Vecchia's systems).
-void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
-                      const double* alpha, arma::mat& out);
+// The lower triangle of the first s rows of X, column by column, as ne =
+// s (s + 1) / 2 flat entries (Vecchia's systems): kernel_dist_tri() the
+// per-dimension values G (K ne doubles, dimension after dimension),
+// kernel_corr_flat() the correlations from them (kernel_corr()'s numbers;
+// w: ne doubles of workspace).
+void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G);
+void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double* theta,
+                      const double* alpha, double* out, double* w);
 // Full correlation matrix between rows of X and Y (prediction, correlation()).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y, const arma::vec& theta,
                       const arma::vec& alpha, int kern = 1);
@@ -614,12 +619,31 @@ private:
   arma::vec levelZ_;                     // rhoS the level correlations levelC_ are of
   std::vector<arma::mat> levelC_;
   arma::vec rhs_;
-  arma::mat dx2_;                        // m x nu: runs' scaled squared distances to
-                                         // the field inputs, experimental part
+  std::vector<int> xOrd_;                // per field input the runs by their scaled
+  std::vector<double> xD2_;              // squared distance's experimental part (m x nu)
   arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
-  std::vector<std::pair<double, int> > heap_;  // k nearest workspace
-  double conditional(int s, int runs, bool coef);
-  void fieldNeighbours(std::vector<int>& nbrF);
+  std::vector<std::pair<double, int> > cand_;  // fieldNeighbours(): (d2, run) of the runs
+                                               // that may be among a latent's k nearest
+  // the runs' conditioning sets' distance values (cacheRuns()): run i's
+  // c_i = runC_[i] neighbours, its values from runOff_[i] in runG_ (empty:
+  // not cached)
+  std::vector<int> runC_;
+  std::vector<size_t> runOff_;
+  std::vector<double> runG_;
+  std::vector<double> Gw_, Cw_, Ww_;     // one system's distances, correlations, products
+  void cacheRuns();
+  // simCross()'s latent algebra: each latent's earlier latents by index
+  // (latent, place in nbrL_), M's entries of each row, g and h, Mi and Mi
+  // diag(g) (latentSolve())
+  std::vector<std::vector<std::pair<int, int> > > rowL_;
+  std::vector<std::vector<double> > cL_;
+  arma::vec hL_, gL_;
+  arma::mat Mi_, Ag_;
+  void latentSolve(arma::mat& Q, arma::vec& wz);
+  const double* runDist(int i) const { return runG_.empty() ? nullptr : runG_.data() + runOff_[i]; }
+  double conditional(int s, int runs, bool coef, const double* G = nullptr,
+                     const double* y = nullptr);
+  void fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev);
   int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
   int gatherRun(int i);
 };

@@ -1,5 +1,6 @@
 // The kernel module: every correlation of both GPs, for the family chosen per GP.
 #include "fbc.h"
+#include <cstring>
 
 // Every correlation of both GPs is computed by the functions below, for the
 // family code `kern` of that GP. Separable families,
@@ -28,7 +29,7 @@ struct KernelBase {
   static constexpr bool alpha = false, poly = false;
   static double term(double g, double) { return g; }
   static double coef(double theta) { return theta; }
-  static void accum(double, double, double&, double&) {}
+  template <class T> static void accum(T, T, T&, T&) {}
   static double finish(double s, double) { return std::exp(-s); }
 };
 struct PowExp : KernelBase {
@@ -43,11 +44,13 @@ struct Gaussian : KernelBase {
 };
 // The Matern families: s the sum in the exponent, w the product of the
 // polynomials poly(a) (M::factor).
+// (accum and factor are templates so that a vector of two entries,
+// flat_accum() below, takes the same operations as one double.)
 template <class M> struct MaternBase : KernelBase {
   static constexpr bool poly = true;
   static double dist(double d) { return std::fabs(d); }
-  static void accum(double c, double t, double& s, double& w) {
-    const double a = c * t;
+  template <class T> static void accum(T c, T t, T& s, T& w) {
+    const T a = c * t;
     s += a;
     w *= M::factor(a);
   }
@@ -60,12 +63,12 @@ template <class M> struct MaternBase : KernelBase {
 struct Matern32 : MaternBase<Matern32> {
   static constexpr int code = 3; static const char* name() { return "matern32"; }
   static double coef(double theta) { return std::sqrt(3.0 * theta); }
-  static double factor(double a) { return 1.0 + a; }
+  template <class T> static T factor(T a) { return 1.0 + a; }
 };
 struct Matern52 : MaternBase<Matern52> {
   static constexpr int code = 4; static const char* name() { return "matern52"; }
   static double coef(double theta) { return std::sqrt(5.0 * theta); }
-  static double factor(double a) { return 1.0 + a + a * a / 3.0; }
+  template <class T> static T factor(T a) { return 1.0 + a + a * a / 3.0; }
 };
 
 // The families, the one list.
@@ -209,31 +212,92 @@ void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const 
   KERNEL_DISPATCH(kern, kernel_corr_t, X, Y, K, theta, alpha, out, lower);
 }
 
-// kernel_corr(X, X, lower) over the first s rows of X only, into the
-// leading s x s block of out (the Vecchia algebra's small systems).
+// The Vecchia algebra's small systems as flat sets of entries: the lower
+// triangle of the first s rows of X, column by column (entry e: column j,
+// rows i = j .. s - 1), ne = s (s + 1) / 2 entries. Per dimension k the
+// fixed values G[k ne + e] = dist(X_ik - X_jk) (vecchia.cpp caches them per
+// run: the runs' conditioning sets never change).
 template <class F>
-static void kernel_corr_rows_t(const arma::mat& X, int s, int K, const double* theta,
-                               const double* alpha, arma::mat& out) {
-  double w[1024];
-  for (int j = 0; j < s; ++j) {
-    double* col = out.colptr(j);
-    for (int i = j; i < s; ++i) { col[i] = 0.0; w[i] = 1.0; }
-    for (int k = 0; k < K; ++k) {
-      const double* x = X.colptr(k);
-      const double xj = x[j], c = F::coef(theta[k]), a = alpha[k];
-      if (F::poly) {
-        for (int i = j; i < s; ++i) F::accum(c, F::term(F::dist(x[i] - xj), a), col[i], w[i]);
-      } else {
-        for (int i = j; i < s; ++i) col[i] += c * F::term(F::dist(x[i] - xj), a);
-      }
+static void kernel_dist_tri_t(const arma::mat& X, int s, int K, double* G) {
+  for (int k = 0; k < K; ++k) {
+    const double* x = X.colptr(k);
+    for (int j = 0; j < s; ++j) {
+      const double xj = x[j];
+      for (int i = j; i < s; ++i) *G++ = F::dist(x[i] - xj);
     }
-    for (int i = j; i < s; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
   }
 }
-void kernel_corr_rows(int kern, const arma::mat& X, int s, int K, const double* theta,
-                      const double* alpha, arma::mat& out) {
-  if (s > 1024) Rcpp::stop("at most 1024 rows in a Vecchia conditioning set");
-  KERNEL_DISPATCH(kern, kernel_corr_rows_t, X, s, K, theta, alpha, out);
+void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G) {
+  KERNEL_DISPATCH(kern, kernel_dist_tri_t, X, s, K, G);
+}
+
+// Two entries at a time where the compiler has vector types (GCC, clang):
+// the same IEEE operations lane by lane, so the same numbers as one double
+// at a time (loads and stores through memcpy: no alignment, no aliasing).
+#if defined(__GNUC__)
+#define FBC_V2D 1
+typedef double v2d __attribute__((vector_size(16)));
+static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
+static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
+#endif
+
+// One dimension's share of ne flat entries: s_e += c t_e (Matern:
+// accum(c, t_e, s_e, w_e)) for t = g (the families without a smoothness,
+// whose term is the distance value itself).
+template <class F>
+static void flat_accum(const double* g, size_t ne, double c, double* s, double* w) {
+  size_t e = 0;
+#ifdef FBC_V2D
+  const v2d cv = {c, c};
+  for (; e + 2 <= ne; e += 2) {
+    v2d sv = load2(s + e);
+    const v2d tv = load2(g + e);
+    if (F::poly) {
+      v2d wv = load2(w + e);
+      F::accum(cv, tv, sv, wv);
+      store2(w + e, wv);
+    } else {
+      sv += cv * tv;
+    }
+    store2(s + e, sv);
+  }
+#endif
+  for (; e < ne; ++e) {
+    if (F::poly) F::accum(c, g[e], s[e], w[e]); else s[e] += c * g[e];
+  }
+}
+
+// The correlations of ne flat entries from their per-dimension values G:
+//   out_e = finish(accumulate_k coef(theta_k) term(G[k ne + e], alpha_k)),
+// each entry in the same operations and order as kernel_corr() (so the
+// same numbers whether G was cached or just computed). w: ne doubles of
+// workspace (the Matern products).
+template <class F>
+static void kernel_corr_flat_t(const double* G, size_t ne, int K, const double* theta,
+                               const double* alpha, double* out, double* w) {
+  for (size_t e = 0; e < ne; ++e) out[e] = 0.0;
+  if (F::poly) for (size_t e = 0; e < ne; ++e) w[e] = 1.0;
+  for (int k = 0; k < K; ++k) {
+    const double* g = G + (size_t) k * ne;
+    const double c = F::coef(theta[k]), a = alpha[k];
+    if (F::alpha) {
+      for (size_t e = 0; e < ne; ++e) {
+        if (F::poly) F::accum(c, F::term(g[e], a), out[e], w[e]);
+        else out[e] += c * F::term(g[e], a);
+      }
+    } else {
+      flat_accum<F>(g, ne, c, out, w);
+    }
+  }
+  // finish(0, w) = w exp(-0) = w (the diagonal, coinciding inputs): no exp
+  for (size_t e = 0; e < ne; ++e) {
+    const double wf = F::poly ? w[e] : 1.0;
+    out[e] = out[e] == 0.0 ? wf : F::finish(out[e], wf);
+  }
+}
+void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double* theta,
+                      const double* alpha, double* out, double* w) {
+  KERNEL_DISPATCH(kern, kernel_corr_flat_t, G, ne, K, theta, alpha, out, w);
 }
 
 // Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),

@@ -8,6 +8,7 @@
 #                                                   #   -2000): kappa quantiles, predictions
 #   Rscript inst/bench/vecchia.R peer               # RobustCalibration at m = 1000 (if installed)
 #   ... k=10 nburn=4000                             # neighbours and burn-in of converged/accuracy
+#   sweep sizes=1000:20,5000:10,20000:10            # the sweep part at these m:k only
 # Add `quick` for a smoke test. Each part runs in a fresh R process (callr),
 # so its peak memory (VmHWM) is its own; CPU seconds are user + system of
 # that process and its children. Run under the BLAS you want to measure
@@ -33,7 +34,14 @@ nBurnLong <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else
 # k=<neighbours>: the converged and accuracy parts' neighbours (default 20)
 kArg <- grep("^k=", args, value = TRUE)
 kNeighbours <- if (length(kArg)) as.integer(sub("^k=", "", kArg)) else 20L
-parts <- setdiff(args, c("quick", nburnArg, kArg))
+# sizes=<m>:<k>,...: the sweep part's problems (default 1000:20, 5000:20,
+# 20000:20, 20000:30, 100000:20; e.g. sizes=1000:20,5000:10,20000:10 for
+# the sizes and neighbours the default rule picks)
+sizesArg <- grep("^sizes=", args, value = TRUE)
+sweepSizes <- if (length(sizesArg)) {
+  lapply(strsplit(strsplit(sub("^sizes=", "", sizesArg), ",")[[1]], ":"), as.numeric)
+} else list(c(1000, 20), c(5000, 20), c(20000, 20), c(20000, 30), c(100000, 20))
+parts <- setdiff(args, c("quick", nburnArg, kArg, sizesArg))
 if (!length(parts)) parts <- "sweep"
 
 helpers <- function() {
@@ -184,8 +192,7 @@ for (part in parts) {
   cat("\n==", part, "==\n")
   res <- switch(sub("-[0-9]+$", "", part),
     sweep = do.call(rbind, lapply(
-      if (quick) list(c(1000, 20)) else list(c(1000, 20), c(5000, 20), c(20000, 20),
-                                             c(20000, 30), c(100000, 20)),
+      if (quick) list(c(1000, 20)) else sweepSizes,
       function(a) sweep_part(a[1], a[2], if (quick) 20 else if (a[1] >= 1e5) 20 else 100))),
     converged = converged_part(as.integer(sub("^.*-", "", part)), k = kNeighbours, quick = quick),
     exact = converged_part(as.integer(sub("^.*-", "", part)), "dense", quick = quick),

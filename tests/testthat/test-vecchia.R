@@ -140,3 +140,35 @@ test_that("bad neighbours and algebras are refused (auto's choice: test-algebra.
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, algebra = "vecchia", neighbours = 2.5))
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, algebra = "nn"))
 })
+
+test_that("the runs' cached distance values give the on-the-fly log-likelihoods to the bit", {
+  # src/vecchia.cpp caches each run's conditioning set's per-dimension
+  # distance values unless they exceed the option FBC.vecchia_cache_mb (0:
+  # never): both paths must give the same numbers, with a categorical input
+  # (rhoS) and the power exponential (alphaS: the cached value is log d) as
+  # well as Matern 5/2, along the sampler's cached moves
+  set.seed(52)
+  m <- 40
+  lev <- list(col = 2L, ncol = 3L, L = 3L)
+  Xs <- cbind(runif(m), diag(3)[rep(1:3, length.out = m), ], runif(m))
+  d <- list(Xf = cbind(runif(7), diag(3)[c(1, 2, 3, 1, 2, 3, 2), ]), yf = rnorm(7), Xs = Xs,
+            ys = sin(4 * Xs[, 1]) + Xs[, 5] + rnorm(m, 0, 0.1))
+  for (kern in c(1L, 4L)) {
+    des <- FBC:::vecchia_design(d$Xs, d$ys, kern, 6L, 3L)
+    model <- FBC:::compiled_model(4, 1, kernS = kern, algebra = 2L, vecchia = des, levels = lev)
+    phis <- t(replicate(3, random_phi(4, 1, nLev = 3L)))
+    path <- function(mb) {
+      old <- options(FBC.vecchia_cache_mb = mb)
+      on.exit(options(old))
+      .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = model)
+    }
+    cached <- path(NULL)
+    expect_true(all(is.finite(cached)))
+    expect_identical(path(0), cached)
+    expect_identical(path(1e-4), cached)  # 100 bytes: below this problem's cache
+  }
+  old <- options(FBC.vecchia_cache_mb = "a lot")
+  on.exit(options(old))
+  expect_error(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, model = model),
+               "FBC.vecchia_cache_mb must be one number")
+})
