@@ -15,7 +15,7 @@
 #   Rscript inst/bench/design-table.R [dir]
 args <- commandArgs(TRUE)
 dir <- if (length(args)) args[1] else "."
-files <- list.files(dir, "^design-.*-b[0-9]+(-i[0-9]+)?-r[0-9]+\\.rds$", full.names = TRUE)
+files <- list.files(dir, "^design-.*-b[0-9]+(-i[0-9]+)?-r[0-9]+(-[A-Za-z0-9]+)?\\.rds$", full.names = TRUE)
 res <- do.call(rbind, lapply(files, function(f) {
   x <- readRDS(f)
   if (is.null(x$rmse)) x$rmse <- NA_real_
@@ -40,6 +40,8 @@ for (st in unique(key)) {
   init <- r$init[1]
   budget <- max(r$runs)
   methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(r$method))
+  variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
+  rv <- r
   # only replicates every method finished (paired)
   done <- Reduce(intersect, lapply(methods, function(m) unique(r$rep[r$method == m & r$runs == budget])))
   r <- r[r$rep %in% done, ]
@@ -78,18 +80,33 @@ for (st in unique(key)) {
     cat(sprintf("\nPosterior sd of log thetaS (largest over the inputs) at the fit on the %d starting runs, per replicate: %s\n",
                 init, paste(sprintf("%.2f", th0), collapse = ", ")))
   }
-  # paired, per step: replicates where ours is closer to the reference than
-  # the plug-in (finer than the runs-to-threshold, which moves in whole runs)
-  if (all(c("ours", "plugin") %in% methods)) {
+  # paired, per step: replicates where method a is closer to the reference
+  # than b (finer than the runs-to-threshold, which moves in whole runs)
+  closer <- function(r, a, b) {
     cmp <- vapply(steps[-1], function(n) {
-      o <- r[r$method == "ours" & r$runs == n, ]
-      p <- r[r$method == "plugin" & r$runs == n, ]
+      o <- r[r$method == a & r$runs == n, ]
+      p <- r[r$method == b & r$runs == n, ]
       p <- p[match(o$rep, p$rep), ]
       sprintf("%d: %d/%d (%+.3f)", n, sum(o$hellinger < p$hellinger), nrow(o),
               median(p$hellinger - o$hellinger))
     }, "")
-    cat(sprintf("\nOurs closer to the reference than the plug-in (paired replicates; median plug-in minus ours Hellinger), at runs %s\n",
-                paste(cmp, collapse = "; ")))
+    cat(sprintf("\n%s closer to the reference than %s (paired replicates; median %s minus %s Hellinger), at runs %s\n",
+                a, b, b, a, paste(cmp, collapse = "; ")))
+  }
+  if (all(c("ours", "plugin") %in% methods)) closer(r, "ours", "plugin")
+  # ours with more draws, on the replicates where it ran
+  for (v in variants) {
+    vr <- unique(rv$rep[rv$method == v & rv$runs == budget])
+    s <- rv[rv$rep %in% intersect(vr, done) & rv$method %in% c("ours", "plugin", v), ]
+    if (!nrow(s)) next
+    cat(sprintf("\n%s (ours with %s draws) on %d of these replicates: runs to Hellinger <= 0.1 %s",
+                v, sub("ours", "", v), length(unique(s$rep)),
+                paste(vapply(c("ours", "plugin", v), function(m) {
+                  sprintf("%s %s", m, q3(reach_runs(s[s$method == m, ]), budget = budget))
+                }, ""), collapse = ", ")))
+    cat("\n")
+    closer(s, v, "ours")
+    closer(s, v, "plugin")
   }
   cat("\n| method | design CPU s, median [range] | fit it follows, CPU s | design / fit, median [quartiles] (range) | steps |\n|---|---|---|---|---|\n")
   for (m in methods) {
@@ -101,8 +118,8 @@ for (st in unique(key)) {
                 median(ratio), quantile(ratio, 0.25), quantile(ratio, 0.75), min(ratio), max(ratio),
                 nrow(s)))
   }
-  up <- r[r$runs > init, ]
-  f0 <- r$fitCpu[r$runs == init]
+  up <- r[r$runs > init & r$method %in% methods, ]
+  f0 <- r$fitCpu[r$runs == init & r$method %in% methods]
   cat(sprintf("\nWarm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; the fresh fit on the %d starting runs: median %.2f, range %.2f-%.2f\n",
               median(up$fitCpu), min(up$fitCpu), max(up$fitCpu), init,
               median(f0), min(f0), max(f0)))

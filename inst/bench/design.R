@@ -5,12 +5,14 @@
 #   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
 #                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
+#                               [--tag=]
 #
 # (replicates first .. first + reps - 1, each starting from `init` maximin
 # runs (10 by default: the results of the runs before the option existed,
 # to the bit); each replicate's rows are saved to
 # <out>/design-<problem>-b<batch>-i<init>-r<rep>.rds as it ends, so a run stopped
-# early keeps what it did; summarise with inst/bench/design-table.R. The
+# early keeps what it did; a --tag adds -<tag> to the file names, for
+# methods run separately on the same replicates; summarise with inst/bench/design-table.R. The
 # old positional form `design.R reps batch added problem first` still
 # works.)
 #
@@ -51,7 +53,7 @@
 # process, so their ratio comes out of these runs).
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
-             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0")
+             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "")
 args <- commandArgs(TRUE)
 if (length(args) && !any(grepl("^--", args))) {
   # the old positional form: reps batch added problem first
@@ -72,7 +74,8 @@ first <- as.integer(opts$first)
 init <- as.integer(opts$init)
 stopifnot(init >= 2L)
 methods <- strsplit(opts$methods, ",")[[1]]
-stopifnot(all(methods %in% c("ours", "plugin", "lhs", "random")))
+# "ours<N>": ours with N draws (propose_runs()'s ndraws; 100 by default)
+stopifnot(all(methods %in% c("ours", "plugin", "lhs", "random") | grepl("^ours[0-9]+$", methods)))
 
 # eta(X): X in natural units, columns (experimental, calibration...)
 pb <- switch(problem,
@@ -178,6 +181,10 @@ rmse <- function(fit) {
 }
 next_runs <- function(method, fit, n, lhsState) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
+  if (grepl("^ours[0-9]+$", method)) {
+    nd <- as.integer(sub("ours", "", method))
+    return(as.matrix(propose_runs(fit, n = n, candidates = cand(), ndraws = nd)[cols]))
+  }
   switch(method,
     ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[cols]),
     plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[cols]),
@@ -249,7 +256,8 @@ one_replicate <- function(r) {
                 sum(out$fitCpu), sum(out$designCpu, na.rm = TRUE), sum(out$metricCpu)))
     out
   }))
-  saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-i%d-r%02d.rds", problem, batch, init, r)))
+  saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-i%d-r%02d%s.rds", problem, batch, init, r,
+                                          if (nzchar(opts$tag)) paste0("-", opts$tag) else "")))
   res
 }
 
