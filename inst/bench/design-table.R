@@ -104,7 +104,10 @@ for (st in unique(key)) {
                 paste(vapply(c("ours", "plugin", v), function(m) {
                   sprintf("%s %s", m, q3(reach_runs(s[s$method == m, ]), budget = budget))
                 }, ""), collapse = ", ")))
-    cat("\n")
+    dv <- s[s$method == v & !is.na(s$designCpu), ]
+    cat(sprintf("; its design step %.3f CPU s (median), design / fit median %.3f [%.3f, %.3f]\n",
+                median(dv$designCpu), median(dv$designCpu / dv$fitCpu),
+                quantile(dv$designCpu / dv$fitCpu, 0.25), quantile(dv$designCpu / dv$fitCpu, 0.75)))
     closer(s, v, "ours")
     closer(s, v, "plugin")
   }
