@@ -25,7 +25,8 @@ res <- do.call(rbind, lapply(files, function(f) {
       "covers", "rmse", "fitCpu", "designCpu")]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
-  s <- function(x) if (is.infinite(x)) paste0(">", budget) else sprintf(fmt, x)
+  # (run counts as integers, but a median between two as x.5)
+  s <- function(x) if (is.infinite(x)) paste0(">", budget) else if (fmt == "%.0f") format(x) else sprintf(fmt, x)
   sprintf("%s [%s, %s]", s(median(v)), s(quantile(v, 0.25, type = 1)), s(quantile(v, 0.75, type = 1)))
 }
 reach_runs <- function(s) {
