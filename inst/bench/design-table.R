@@ -1,11 +1,13 @@
 # Summarises inst/bench/design.R's per-replicate results (design-*.rds in
-# the directory given, default the working directory), per problem and
-# batch size:
+# the directory given, default the working directory), per problem, batch
+# size and number of starting runs (files without it: 10, the runs before
+# design.R's --init option):
 # - runs to reach Hellinger <= 0.1 to the reference per method (median and
 #   quartiles over replicates; a replicate that does not reach it within
 #   the budget is censored: "> max"), and the goals' ratios (LHS's and the
 #   plug-in's median over ours; a censored median gives a lower bound);
-# - the curves: Hellinger, kappa1's sd, coverage and the RMSE of the
+# - the curves: Hellinger, kappa1's sd, the posterior sd of log thetaS
+#   (largest over the inputs; where recorded), coverage and the RMSE of the
 #   calibrated field mean at chosen run counts (median [quartiles]);
 # - the design step's CPU s against the fit it follows (same runs, same
 #   process).
@@ -13,15 +15,18 @@
 #   Rscript inst/bench/design-table.R [dir]
 args <- commandArgs(TRUE)
 dir <- if (length(args)) args[1] else "."
-files <- list.files(dir, "^design-.*-b[0-9]+-r[0-9]+\\.rds$", full.names = TRUE)
+files <- list.files(dir, "^design-.*-b[0-9]+(-i[0-9]+)?-r[0-9]+(-[A-Za-z0-9]+)?\\.rds$", full.names = TRUE)
 res <- do.call(rbind, lapply(files, function(f) {
   x <- readRDS(f)
   if (is.null(x$rmse)) x$rmse <- NA_real_
-  x[c("problem", "batch", "rep", "method", "runs", "hellinger", "sd", "covers", "rmse",
-      "fitCpu", "designCpu")]
+  if (is.null(x$init)) x$init <- 10L
+  if (is.null(x$thetaSd)) x$thetaSd <- NA_real_
+  x[c("problem", "batch", "init", "rep", "method", "runs", "hellinger", "sd", "thetaSd",
+      "covers", "rmse", "fitCpu", "designCpu")]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
-  s <- function(x) if (is.infinite(x)) paste0(">", budget) else sprintf(fmt, x)
+  # (run counts as integers, but a median between two as x.5)
+  s <- function(x) if (is.infinite(x)) paste0(">", budget) else if (fmt == "%.0f") format(x) else sprintf(fmt, x)
   sprintf("%s [%s, %s]", s(median(v)), s(quantile(v, 0.25, type = 1)), s(quantile(v, 0.75, type = 1)))
 }
 reach_runs <- function(s) {
@@ -30,15 +35,20 @@ reach_runs <- function(s) {
     if (length(h)) min(h) else Inf
   }, 0)
 }
-for (st in unique(paste(res$problem, res$batch))) {
-  r <- res[paste(res$problem, res$batch) == st, ]
+key <- paste(res$problem, res$batch, res$init)
+for (st in unique(key)) {
+  r <- res[key == st, ]
+  init <- r$init[1]
   budget <- max(r$runs)
   methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(r$method))
+  variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
+  rv <- r
   # only replicates every method finished (paired)
   done <- Reduce(intersect, lapply(methods, function(m) unique(r$rep[r$method == m & r$runs == budget])))
   r <- r[r$rep %in% done, ]
   if (!nrow(r)) next
-  cat(sprintf("\n### %s, batches of %d (%d paired replicates)\n\n", r$problem[1], r$batch[1], length(done)))
+  cat(sprintf("\n### %s, batches of %d, %d starting runs (%d paired replicates)\n\n",
+              r$problem[1], r$batch[1], init, length(done)))
   cat("| method | runs to Hellinger <= 0.1, median [quartiles] | replicates reaching it |\n|---|---|---|\n")
   reach <- lapply(stats::setNames(methods, methods), function(m) reach_runs(r[r$method == m, ]))
   for (m in methods) {
@@ -57,13 +67,50 @@ for (st in unique(paste(res$problem, res$batch))) {
     }
     cat("\n")
   }
-  steps <- intersect(c(10, 11, 12, 15, 20, 25, 30, 40, 50), r$runs)
-  cat("\n| method | runs | Hellinger | kappa1 sd | covers | RMSE field mean |\n|---|---|---|---|---|---|\n")
+  steps <- intersect(init + c(0, 1, 2, 5, 10, 15, 20, 25, 30, 40), r$runs)
+  cat("\n| method | runs | Hellinger | kappa1 sd | log thetaS sd | covers | RMSE field mean |\n|---|---|---|---|---|---|---|\n")
   for (m in methods) for (n in steps) {
     s <- r[r$method == m & r$runs == n, ]
-    cat(sprintf("| %s | %d | %s | %s | %d/%d | %s |\n", m, n, q3(s$hellinger, "%.3f"),
-                q3(s$sd, "%.4f"), sum(s$covers), nrow(s),
+    cat(sprintf("| %s | %d | %s | %s | %s | %d/%d | %s |\n", m, n, q3(s$hellinger, "%.3f"),
+                q3(s$sd, "%.4f"), if (all(is.na(s$thetaSd))) "-" else q3(s$thetaSd, "%.2f"),
+                sum(s$covers), nrow(s),
                 if (all(is.na(s$rmse))) "-" else q3(s$rmse, "%.4f")))
+  }
+  th0 <- r$thetaSd[r$runs == init & r$method == methods[1]]
+  if (!all(is.na(th0))) {
+    cat(sprintf("\nPosterior sd of log thetaS (largest over the inputs) at the fit on the %d starting runs, per replicate: %s\n",
+                init, paste(sprintf("%.2f", th0), collapse = ", ")))
+  }
+  # paired, per step: replicates where method a is closer to the reference
+  # than b (finer than the runs-to-threshold, which moves in whole runs)
+  closer <- function(r, a, b) {
+    cmp <- vapply(steps[-1], function(n) {
+      o <- r[r$method == a & r$runs == n, ]
+      p <- r[r$method == b & r$runs == n, ]
+      p <- p[match(o$rep, p$rep), ]
+      sprintf("%d: %d/%d (%+.3f)", n, sum(o$hellinger < p$hellinger), nrow(o),
+              median(p$hellinger - o$hellinger))
+    }, "")
+    cat(sprintf("\n%s closer to the reference than %s (paired replicates; median %s minus %s Hellinger), at runs %s\n",
+                a, b, b, a, paste(cmp, collapse = "; ")))
+  }
+  if (all(c("ours", "plugin") %in% methods)) closer(r, "ours", "plugin")
+  # ours with more draws, on the replicates where it ran
+  for (v in variants) {
+    vr <- unique(rv$rep[rv$method == v & rv$runs == budget])
+    s <- rv[rv$rep %in% intersect(vr, done) & rv$method %in% c("ours", "plugin", v), ]
+    if (!nrow(s)) next
+    cat(sprintf("\n%s (ours with %s draws) on %d of these replicates: runs to Hellinger <= 0.1 %s",
+                v, sub("ours", "", v), length(unique(s$rep)),
+                paste(vapply(c("ours", "plugin", v), function(m) {
+                  sprintf("%s %s", m, q3(reach_runs(s[s$method == m, ]), budget = budget))
+                }, ""), collapse = ", ")))
+    dv <- s[s$method == v & !is.na(s$designCpu), ]
+    cat(sprintf("; its design step %.3f CPU s (median), design / fit median %.3f [%.3f, %.3f]\n",
+                median(dv$designCpu), median(dv$designCpu / dv$fitCpu),
+                quantile(dv$designCpu / dv$fitCpu, 0.25), quantile(dv$designCpu / dv$fitCpu, 0.75)))
+    closer(s, v, "ours")
+    closer(s, v, "plugin")
   }
   cat("\n| method | design CPU s, median [range] | fit it follows, CPU s | design / fit, median [quartiles] (range) | steps |\n|---|---|---|---|---|\n")
   for (m in methods) {
@@ -75,8 +122,9 @@ for (st in unique(paste(res$problem, res$batch))) {
                 median(ratio), quantile(ratio, 0.25), quantile(ratio, 0.75), min(ratio), max(ratio),
                 nrow(s)))
   }
-  up <- r[r$runs > 10, ]
-  cat(sprintf("\nWarm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; the fresh fit on the 10 starting runs: median %.2f, range %.2f-%.2f\n",
-              median(up$fitCpu), min(up$fitCpu), max(up$fitCpu),
-              median(r$fitCpu[r$runs == 10]), min(r$fitCpu[r$runs == 10]), max(r$fitCpu[r$runs == 10])))
+  up <- r[r$runs > init & r$method %in% methods, ]
+  f0 <- r$fitCpu[r$runs == init & r$method %in% methods]
+  cat(sprintf("\nWarm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; the fresh fit on the %d starting runs: median %.2f, range %.2f-%.2f\n",
+              median(up$fitCpu), min(up$fitCpu), max(up$fitCpu), init,
+              median(f0), min(f0), max(f0)))
 }

@@ -3,12 +3,16 @@
 # noise per replicate (paired). A script, not a timed test:
 #
 #   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
-#                               [--first=1] [--added=40]
+#                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
+#                               [--tag=]
 #
-# (replicates first .. first + reps - 1; each replicate's rows are saved to
-# <out>/design-<problem>-b<batch>-r<rep>.rds as it ends, so a run stopped
-# early keeps what it did; summarise with inst/bench/design-table.R. The
+# (replicates first .. first + reps - 1, each starting from `init` maximin
+# runs (10 by default: the results of the runs before the option existed,
+# to the bit); each replicate's rows are saved to
+# <out>/design-<problem>-b<batch>-i<init>-r<rep>.rds as it ends, so a run stopped
+# early keeps what it did; a --tag adds -<tag> to the file names, for
+# methods run separately on the same replicates; summarise with inst/bench/design-table.R. The
 # old positional form `design.R reps batch added problem first` still
 # works.)
 #
@@ -38,7 +42,8 @@
 # plug-in choose among 100 d uniform candidates per step.
 # Fits: calibrate() and update(fit, sim =) with the package defaults (4
 # chains, until converged) but discrepancy = "none".
-# Metrics per step: Hellinger distance of kappa's posterior to the
+# Metrics per step (also the posterior sd of log thetaS, the largest over
+# the inputs: the spread of the emulator's length-scales): Hellinger distance of kappa's posterior to the
 # reference (kernel density of the draws against the exact density on the
 # grid; the largest over the calibration inputs' marginals), kappa1's sd,
 # whether the 90% intervals cover the truth, the RMSE of the calibrated
@@ -47,8 +52,8 @@
 # design step and of the fit on the same runs it follows (the same
 # process, so their ratio comes out of these runs).
 suppressPackageStartupMessages(library(FBC))
-opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L,
-             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0")
+opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
+             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "")
 args <- commandArgs(TRUE)
 if (length(args) && !any(grepl("^--", args))) {
   # the old positional form: reps batch added problem first
@@ -66,8 +71,11 @@ batch <- as.integer(opts$batch)
 added <- as.integer(opts$added)
 problem <- opts$problem
 first <- as.integer(opts$first)
+init <- as.integer(opts$init)
+stopifnot(init >= 2L)
 methods <- strsplit(opts$methods, ",")[[1]]
-stopifnot(all(methods %in% c("ours", "plugin", "lhs", "random")))
+# "ours<N>": ours with N draws (propose_runs()'s ndraws; 100 by default)
+stopifnot(all(methods %in% c("ours", "plugin", "lhs", "random") | grepl("^ours[0-9]+$", methods)))
 
 # eta(X): X in natural units, columns (experimental, calibration...)
 pb <- switch(problem,
@@ -161,6 +169,11 @@ fit_runs <- function(sim, field) {
   suppressWarnings(calibrate(sim, field, discrepancy = "none", showProgress = FALSE))
 }
 kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
+# the largest posterior sd of log thetaS over the inputs
+theta_sd <- function(fit) {
+  th <- grep("^thetaS", colnames(fit$Phi))
+  max(apply(log(as.matrix(fit$Phi[, th, drop = FALSE])), 2, sd))
+}
 rmse <- function(fit) {
   nd <- stats::setNames(data.frame(xpred), xname)
   p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
@@ -168,6 +181,10 @@ rmse <- function(fit) {
 }
 next_runs <- function(method, fit, n, lhsState) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
+  if (grepl("^ours[0-9]+$", method)) {
+    nd <- as.integer(sub("ours", "", method))
+    return(as.matrix(propose_runs(fit, n = n, candidates = cand(), ndraws = nd)[cols]))
+  }
   switch(method,
     ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[cols]),
     plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[cols]),
@@ -195,11 +212,11 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       b[1] <= pb$u0[j] && pb$u0[j] <= b[2]
     }, TRUE))
     tMetric <- cpu(row <- data.frame(
-      problem = problem, batch = batch, rep = r, method = method, runs = nrow(sim),
-      hellinger = hellinger(K, ref), sd = sd(K[, 1]), covers = cov, rmse = rmse(fit),
+      problem = problem, batch = batch, init = init, rep = r, method = method, runs = nrow(sim),
+      hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef))
     row$metricCpu <- tMetric
-    if (nrow(sim) >= 10 + added) return(rbind(do.call(rbind, rows), row))
+    if (nrow(sim) >= init + added) return(rbind(do.call(rbind, rows), row))
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState))
     row$designCpu <- tDesign
     rows[[length(rows) + 1]] <- row
@@ -218,7 +235,7 @@ one_replicate <- function(r) {
   X0 <- cbind(pb$xf, matrix(pb$u0, length(pb$xf), q, byrow = TRUE))
   field <- stats::setNames(data.frame(pb$eta(X0) + rnorm(length(pb$xf), 0, pb$sd), pb$xf),
                            c("y", xname))
-  start <- lhs::maximinLHS(10, d)
+  start <- lhs::maximinLHS(init, d)
   tRef <- cpu(ref <- reference(field))
   if (opts$refcheck == "1") {
     # the grid reference against a fit on 150 maximin runs (the earlier
@@ -234,15 +251,16 @@ one_replicate <- function(r) {
   fit0$seed <- get(".Random.seed", envir = globalenv())
   res <- do.call(rbind, lapply(methods, function(method) {
     out <- one_method(method, r, start, field, ref, tRef, fit0)
-    cat(sprintf("%s b%d rep %d %-6s Hellinger %s (fits %.1f s, design %.1f s, metrics %.1f s)\n",
-                problem, batch, r, method, paste(sprintf("%.2f", out$hellinger), collapse = " "),
+    cat(sprintf("%s b%d i%d rep %d %-6s Hellinger %s (fits %.1f s, design %.1f s, metrics %.1f s)\n",
+                problem, batch, init, r, method, paste(sprintf("%.2f", out$hellinger), collapse = " "),
                 sum(out$fitCpu), sum(out$designCpu, na.rm = TRUE), sum(out$metricCpu)))
     out
   }))
-  saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-r%02d.rds", problem, batch, r)))
+  saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-i%d-r%02d%s.rds", problem, batch, init, r,
+                                          if (nzchar(opts$tag)) paste0("-", opts$tag) else "")))
   res
 }
 
-cat(sprintf("FBC %s, problem %s, batches of %d, replicates %d-%d\n",
-            utils::packageVersion("FBC"), problem, batch, first, first + reps - 1L))
+cat(sprintf("FBC %s, problem %s, batches of %d, %d starting runs, replicates %d-%d\n",
+            utils::packageVersion("FBC"), problem, batch, init, first, first + reps - 1L))
 for (r in first:(first + reps - 1L)) one_replicate(r)
