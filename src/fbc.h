@@ -19,6 +19,7 @@
 #define R_NO_REMAP
 #endif
 #include <RcppArmadillo.h>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -716,5 +717,15 @@ std::vector<std::vector<int> > label_groups(const Rcpp::IntegerVector& labels, i
 
 // Bytes the dense algebra may spend on per-dimension caches (dense.cpp).
 extern double fbc_cache_budget;
+
+// Two entries at a time where the compiler has vector types (GCC, clang):
+// the same IEEE operations lane by lane, so the same numbers as one double
+// at a time (loads and stores through memcpy: no alignment, no aliasing).
+#if defined(__GNUC__)
+#define FBC_V2D 1
+typedef double v2d __attribute__((vector_size(16)));
+static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
+static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
+#endif
 
 #endif

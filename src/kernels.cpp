@@ -1,6 +1,5 @@
 // The kernel module: every correlation of both GPs, for the family chosen per GP.
 #include "fbc.h"
-#include <cstring>
 
 // Every correlation of both GPs is computed by the functions below, for the
 // family code `kern` of that GP. Separable families,
@@ -230,16 +229,6 @@ static void kernel_dist_tri_t(const arma::mat& X, int s, int K, double* G) {
 void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G) {
   KERNEL_DISPATCH(kern, kernel_dist_tri_t, X, s, K, G);
 }
-
-// Two entries at a time where the compiler has vector types (GCC, clang):
-// the same IEEE operations lane by lane, so the same numbers as one double
-// at a time (loads and stores through memcpy: no alignment, no aliasing).
-#if defined(__GNUC__)
-#define FBC_V2D 1
-typedef double v2d __attribute__((vector_size(16)));
-static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
-static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
-#endif
 
 // One dimension's share of ne flat entries: s_e += c t_e (Matern:
 // accum(c, t_e, s_e, w_e)) for t = g (the families without a smoothness,

@@ -26,17 +26,7 @@
 // the field latents' neighbours among the runs follow kappa.
 #include "fbc.h"
 #include <algorithm>
-#include <cstring>
 #include <numeric>
-
-// Two doubles at a time where the compiler has vector types (GCC, clang):
-// the same IEEE operations lane by lane as one double at a time.
-#if defined(__GNUC__)
-#define FBC_V2D 1
-typedef double v2d __attribute__((vector_size(16)));
-static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
-static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
-#endif
 
 // In-place lower Cholesky of the leading s x s block of A (leading dimension
 // lda), carried on over rows s .. rows - 1 (A[r, j] -> (A[r, j] - sum_l<j
