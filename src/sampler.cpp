@@ -460,7 +460,8 @@ struct SiteMove : Move {
 };
 
 // Joint random-walk move of a block (w* = w + exp(s) L e); it records the
-// burn-in draws that shape L. `collapse`: the simulator block with sigma2S
+// burn-in draws that shape L. Collapsed (collapsed(): b.walked set by
+// collapse_sigma2S()): the simulator block with sigma2S
 // last, on an algebra that gives zz = ys' Ds^-1 ys ahead of the proposal
 // (Posterior::simPreview()): the walk moves the correlation parameters
 // (the first k - 1 entries of w, with L's leading block: the Cholesky
@@ -478,11 +479,11 @@ struct SiteMove : Move {
 // all k must.
 struct BlockMove : Move {
   Block b;
-  bool collapse = false;
   double a0 = 0, b0 = 0;  // q's prior part
-  std::vector<int> idxT;  // the walk's parameters (collapse: all but sigma2S)
+  std::vector<int> idxT;  // the walk's parameters (collapsed: all but sigma2S)
   arma::vec valsT;
   BlockMove(Block&& b_, int rep) : b(std::move(b_)) { idx = b.idx; repeats = rep; }
+  bool collapsed() const { return b.walk_count() < (int) b.idx.size(); }
   const char* kind() const override {
     return idx.size() == 1 ? "walk" : "joint";
   }
@@ -546,7 +547,7 @@ struct BlockMove : Move {
       b.w[i] = to_walk(ch.pr.transform[b.idx[i]], ch.post.phi[b.idx[i]]);
   }
   bool step(Chain& ch) override {
-    if (collapse) {
+    if (collapsed()) {
       const bool acc = step_collapsed(ch);
       position(ch);
       return acc;
@@ -756,7 +757,6 @@ static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
   if (!want || k < 2 || !post.canPreview() || post.layout.length_of("sigma2S") != 1 ||
       idx[k - 1] != post.iSigma2S)
     return;
-  mv.collapse = true;
   mv.b.walked = k - 1;
   mv.idxT.assign(idx.begin(), idx.end() - 1);
   mv.valsT.set_size(k - 1);
