@@ -66,6 +66,15 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
     gibbsMuB = length(gibbs) > 0L &&
       all(free[gibbs] & fam[gibbs] == "gaussian" & spec$table$a[gibbs] == 0 &
             spec$table$b[gibbs] == 1),
+    # the simulator blocks that, after a warm-up of data-dependent length,
+    # propose from the warm-up's estimate of their posterior (a multivariate
+    # t; src/sampler.cpp, BlockMove) instead of walking: the m runs pin the
+    # simulator GP's parameters down to a nearly Gaussian posterior on the
+    # walk's scale, which a walk crosses slowly (at m = 1000 the length-
+    # scales' bulk ESS was 0.03-0.05 a sweep, within 2x of what an optimally
+    # scaled 4-parameter walk can do). Only blocks of at least 4 walked
+    # parameters, whose estimate the warm-up's effective-draws rule held
+    independent = unname(which(startsWith(as.character(names(blocks)), "sim"))),
     params = spec$vars
   )
 }

@@ -91,6 +91,14 @@ static const double WARM_BAND = 0.15, WARM_DRIFT = 2.5, WARM_SHAPE = 0.3;
 // RobustCalibration's 10.2 in the same process; held to blocks of 4 or
 // more, 300-500 sweeps and 4.9 s against 5.7; RESULTS-defaults.md)
 static const int WARM_ESS_K = 4;
+// the independence proposal of a simulator block after warm-up
+// (BlockMove): a multivariate t with IND_NU degrees of freedom whose scale
+// matrix is IND_INFLATE^2 times the warm-up's covariance estimate. At
+// m = 1000 (inst/bench/RESULTS-defaults.md, 2 chains x 6000 sweeps, seed 1)
+// inflation 1.0 accepted 0.28 and gave the slowest thetaS a bulk ESS of
+// 1072 per 3700 draws, 1.2 (nu = 7 or 20) 0.22 and 797-968, 1.5 0.12 and
+// 460; the walk it replaces 236.
+static const double IND_NU = 7, IND_INFLATE = 1.0;
 
 // prior on parameter j: family code, parameters, and the affine map
 // prior argument = a + b * phi_j (kappa is stored on the [0,1] scale).
@@ -369,6 +377,8 @@ struct Chain {
   arma::vec logsd, lp, accBatch;
   std::vector<Block*> blocks;  // the block moves' blocks, in R's order
   int iter = 0, batch = 0;
+  bool burn = true;  // the sweep under way is a burn-in sweep
+  int rep = 0;       // the repeat under way of the move under way
   double ll = 0;
   Rcpp::CharacterVector params;  // parameter names (R's spec$vars), for the report
   // warm-up of data-dependent length (see the top): sweeps of warm-up once
@@ -485,7 +495,7 @@ struct BlockMove : Move {
   BlockMove(Block&& b_, int rep) : b(std::move(b_)) { idx = b.idx; repeats = rep; }
   bool collapsed() const { return b.walk_count() < (int) b.idx.size(); }
   const char* kind() const override {
-    return idx.size() == 1 ? "walk" : "joint";
+    return indOn ? "independent" : idx.size() == 1 ? "walk" : "joint";
   }
   // log density of IG(a, bb) at x
   static double log_ig(double x, double a, double bb) {
@@ -512,11 +522,77 @@ struct BlockMove : Move {
     }
     return std::isfinite(lpDiff) && std::isfinite(jac);
   }
+  // The independence proposal (independent: R's sampler_moves()$independent;
+  // used after warm-up only, see the comment above the struct): built once,
+  // at the first retained step, from the block's warm-up estimate.
+  bool independent = false, indTried = false, indOn = false;
+  arma::vec indMu, indU;
+  arma::mat indL;
+  // Builds it when the block qualifies: a warm-up of data-dependent length
+  // that was not cut at its maximum, at least WARM_ESS_K walked parameters
+  // (whose estimate the effective-draws rule held), a positive-definite
+  // estimate. Otherwise the walk goes on.
+  void build_independent(const Chain& ch) {
+    indTried = true;
+    const int kw = b.walk_count();
+    if (!independent || b.restart >= 0 || ch.warmCapped || kw < WARM_ESS_K) return;
+    arma::vec mu, pi;
+    arma::mat C;
+    if (b.pooled(true, mu, C, pi) < 2 * BATCH) return;
+    indMu = mu.head(kw);
+    indL = C.submat(0, 0, kw - 1, kw - 1) * (IND_INFLATE * IND_INFLATE);
+    if (!chol_lower(indL)) return;
+    indL = arma::trimatl(indL);
+    indU.set_size(kw);
+    indOn = true;
+  }
+  // log q(w) of the first n entries up to a constant, q = t_nu(mu, L L'):
+  //   -(nu + n)/2 log(1 + |L^-1 (w - mu)|^2 / nu)
+  double log_q(const arma::vec& w, int n) {
+    double d = 0;
+    for (int i = 0; i < n; ++i) {
+      double s = w[i] - indMu[i];
+      for (int l = 0; l < i; ++l) s -= indL(i, l) * indU[l];
+      indU[i] = s / indL(i, i);
+      d += indU[i] * indU[i];
+    }
+    return -0.5 * (IND_NU + n) * std::log1p(d / IND_NU);
+  }
+  // The independence proposal for the first n parameters:
+  // w' = mu + sqrt(nu / c) L e, e ~ N(0, I_n), c ~ chi2(nu); as
+  // walk_proposal(), with jac also holding log q(w) - log q(w').
+  bool independent_proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
+    const Posterior& post = ch.post;
+    for (int i = 0; i < n; ++i) b.e[i] = R::norm_rand();
+    const double g = std::sqrt(IND_NU / R::rchisq(IND_NU));
+    for (int i = 0; i < n; ++i) {
+      const int j = b.idx[i], tr = ch.pr.transform[j];
+      b.w[i] = to_walk(tr, post.phi[j]);
+      double step = 0;
+      for (int l = 0; l <= i; ++l) step += indL(i, l) * b.e[l];
+      b.wNew[i] = indMu[i] + g * step;
+      b.vals[i] = from_walk(tr, b.wNew[i]);
+      b.lpNew[i] = ch.pr(j, b.vals[i]);
+      lpDiff += b.lpNew[i] - ch.lp[j];
+      jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
+    }
+    jac += log_q(b.w, n) - log_q(b.wNew, n);
+    return std::isfinite(lpDiff) && std::isfinite(jac);
+  }
+  // The step's proposal: the independence one after warm-up where it was
+  // built, else the walk.
+  bool proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
+    if (!ch.burn) {
+      if (!indTried) build_independent(ch);
+      if (indOn) return independent_proposal(ch, n, lpDiff, jac);
+    }
+    return walk_proposal(ch, n, lpDiff, jac);
+  }
   bool step_collapsed(Chain& ch) {
     Posterior& post = ch.post;
     const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
     double lpDiff = 0, jac = 0;
-    if (!walk_proposal(ch, kt, lpDiff, jac)) return false;
+    if (!proposal(ch, kt, lpDiff, jac)) return false;
     for (int i = 0; i < kt; ++i) valsT[i] = b.vals[i];
     double zzNew;
     bool ok;
@@ -555,7 +631,7 @@ struct BlockMove : Move {
     Posterior& post = ch.post;
     const int k = b.idx.size();
     double lpDiff = 0, jac = 0;
-    if (!walk_proposal(ch, k, lpDiff, jac)) return false;
+    if (!proposal(ch, k, lpDiff, jac)) return false;
     const double llNew = post.propose(b.idx, b.vals);
     if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
       post.accept();
@@ -576,7 +652,8 @@ struct BlockMove : Move {
   }
   double& batchCount() override { return b.accBatch; }
   void adapt(const Chain&) override { b.adapt(b.accBatch / BATCH); }
-  double logScale() const override { return b.logscale; }
+  // (an independence proposal has no adapted scale)
+  double logScale() const override { return indOn ? NA_REAL : b.logscale; }
   double warmScale() const override { return b.logscale + b.log_volume(); }
   double target() const override { return idx.size() == 1 ? 0.44 : 0.234; }
 };
@@ -794,6 +871,9 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   // the blocks (1-based) whose sigma2S is drawn from the runs' conditional
   const std::vector<int> collapse = moves.containsElementNamed("collapse") ?
     Rcpp::as<std::vector<int> >(moves["collapse"]) : std::vector<int>();
+  // the blocks (1-based) that switch to the independence proposal after warm-up
+  const std::vector<int> independent = moves.containsElementNamed("independent") ?
+    Rcpp::as<std::vector<int> >(moves["independent"]) : std::vector<int>();
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
@@ -812,6 +892,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       const int b = blockAt[j];
       BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
       collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
+      mv->independent = std::find(independent.begin(), independent.end(), b + 1) != independent.end();
       schedule.emplace_back(mv);
       ch.blocks[b] = &mv->b;
       const std::string nm(blockNames[b]);
@@ -841,8 +922,10 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
 
 // One sweep: `repeats` steps of every move in the schedule's order.
 static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
+  ch.burn = burn;
   for (auto& mv : schedule) {
     for (int r = 0; r < mv->repeats; ++r) {
+      ch.rep = r;
       const bool acc = mv->step(ch);
       mv->after(burn, it, r);
       if (acc) mv->batchCount() += 1.0 / mv->repeats;
