@@ -223,7 +223,11 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
     }
     U <- scale_inputs(X, sc, seq_len(d))
   }
-  near <- apply(U, 1, function(u) min(sqrt(colSums((t(Xs) - u)^2)))) < tol
+  # distances to every run, a column of runs at a time (the per-candidate
+  # apply() was an eighth of a design step)
+  D2 <- matrix(0, nrow(U), nrow(Xs))
+  for (k in seq_len(d)) D2 <- D2 + outer(U[, k], Xs[, k], "-")^2
+  near <- rowSums(sqrt(D2) < tol) > 0
   U[!near, , drop = FALSE]
 }
 
