@@ -460,6 +460,16 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
 
 }  // namespace
 
+// solve_lower_cols() (L lower triangular, B N x nc) on a copy of B, for the
+// tests (against the BLAS solve, with exact zeros in B).
+// [[Rcpp::export(.design_solve_lower)]]
+arma::mat design_solve_lower_r(const arma::mat& L, const arma::mat& B) {
+  if (L.n_rows != L.n_cols || B.n_rows != L.n_rows) Rcpp::stop("L must be square with B's rows");
+  arma::mat X = B;
+  solve_lower_cols(L, X);
+  return X;
+}
+
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each
 // draw (design_system()); with target points XT (T x p) their predictive
