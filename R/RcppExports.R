@@ -5,6 +5,10 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
+.design_solve_lower <- function(L, B) {
+    .Call(`_FBC_design_solve_lower_r`, L, B)
+}
+
 .design_systems <- function(Xf, yf, Xs, ys, phis, U, XT, nugget, model) {
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }

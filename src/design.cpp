@@ -29,7 +29,8 @@
 namespace {
 
 // The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
-// Cov_s(y, eta(U)) (N x Nc, slice s), the means mu and variances v (Nc x S),
+// Cov_s(y, eta(U)) (N x Nc, slice s; kept for every draw only when a batch
+// needs them, else one slice reused), the means mu and variances v (Nc x S),
 // the log-likelihoods ll, the simulator variances s2S and the kernel's
 // parameters per draw (thS, alS: (p + q) x S). With T target points: the
 // predictive means mT and variances VT of zeta(XT) (T x S) and their
@@ -40,6 +41,56 @@ struct DesignSystems {
   arma::vec ll, s2S;
   int T = 0;
 };
+
+// Column j of L X = B in place, from row k0 on (the rows above solved):
+// reference BLAS dtrsm's operations in its order, for k = k0..N-1:
+//   if B(k,j) != 0: B(k,j) /= L(k,k), B(i,j) -= B(k,j) L(i,k) (i > k).
+void solve_lower_col(const arma::mat& L, double* b, arma::uword k0) {
+  const arma::uword N = L.n_rows;
+  for (arma::uword k = k0; k < N; ++k) {
+    if (b[k] == 0.0) continue;
+    const double* l = L.colptr(k);
+    b[k] /= l[k];
+    const double x = b[k];
+    for (arma::uword i = k + 1; i < N; ++i) b[i] -= x * l[i];
+  }
+}
+
+// Solves L X = B in place (L lower triangular N x N, B N x nc) with each
+// entry's operations those of solve_lower_col() (reference dtrsm's), so
+// the same numbers as solve_lower() with the reference BLAS; four columns
+// at a time, two rows per vector operation (a column whose B(k,j) is 0
+// finishes alone). The candidates' N x Nc solve by dtrsm was a sixth of a
+// design step.
+void solve_lower_cols(const arma::mat& L, arma::mat& B) {
+  const arma::uword N = L.n_rows, nc = B.n_cols;
+  arma::uword j = 0;
+#ifdef FBC_V2D
+  for (; j + 4 <= nc; j += 4) {
+    double* b[4] = {B.colptr(j), B.colptr(j + 1), B.colptr(j + 2), B.colptr(j + 3)};
+    arma::uword k = 0;
+    for (; k < N; ++k) {
+      if (b[0][k] == 0.0 || b[1][k] == 0.0 || b[2][k] == 0.0 || b[3][k] == 0.0) break;
+      const double* l = L.colptr(k);
+      double x[4];
+      for (int c = 0; c < 4; ++c) x[c] = (b[c][k] /= l[k]);
+      const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
+      arma::uword i = k + 1;
+      for (; i + 2 <= N; i += 2) {
+        const v2d li = load2(l + i);
+        store2(b[0] + i, load2(b[0] + i) - x0 * li);
+        store2(b[1] + i, load2(b[1] + i) - x1 * li);
+        store2(b[2] + i, load2(b[2] + i) - x2 * li);
+        store2(b[3] + i, load2(b[3] + i) - x3 * li);
+      }
+      for (; i < N; ++i)
+        for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
+    }
+    if (k < N) for (int c = 0; c < 4; ++c) solve_lower_col(L, b[c], k);
+  }
+#endif
+  for (; j < nc; ++j) solve_lower_col(L, B.colptr(j), 0);
+}
 
 // One draw's workspace: Z = (Xs; Xf, kappa) (N x (p + q)), C (N x N), the
 // bias correlation Rb (n x n) and the residual r (N); for targets Tk =
@@ -79,6 +130,35 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xf
   out.CTU.slice(s) = s2S * w.RTU - w.KT.t() * A;
 }
 
+// The candidates' conditional means and variances from A (N x Nc) and the
+// residual r: mu_c = sum_i A_ic r_i, v_c = v0 - sum_i A_ic^2 (sums in i's
+// order; four columns at a time for independent chains).
+void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* mu, double* v) {
+  const arma::uword N = A.n_rows, nc = A.n_cols;
+  arma::uword c = 0;
+  for (; c + 4 <= nc; c += 4) {
+    const double* a0 = A.colptr(c);
+    const double* a1 = A.colptr(c + 1);
+    const double* a2 = A.colptr(c + 2);
+    const double* a3 = A.colptr(c + 3);
+    double ar[4] = {0.0, 0.0, 0.0, 0.0}, aa[4] = {0.0, 0.0, 0.0, 0.0};
+    for (arma::uword i = 0; i < N; ++i) {
+      ar[0] += a0[i] * r[i]; aa[0] += a0[i] * a0[i];
+      ar[1] += a1[i] * r[i]; aa[1] += a1[i] * a1[i];
+      ar[2] += a2[i] * r[i]; aa[2] += a2[i] * a2[i];
+      ar[3] += a3[i] * r[i]; aa[3] += a3[i] * a3[i];
+    }
+    for (int k = 0; k < 4; ++k) { mu[c + k] = ar[k]; v[c + k] = v0 - aa[k]; }
+  }
+  for (; c < nc; ++c) {
+    const double* a = A.colptr(c);
+    double ar = 0.0, aa = 0.0;
+    for (arma::uword i = 0; i < N; ++i) { ar += a[i] * r[i]; aa += a[i] * a[i]; }
+    mu[c] = ar;
+    v[c] = v0 - aa;
+  }
+}
+
 // One draw's system. With Xk = (Xf, kappa) and prior mean mu0 = (0, muB):
 //   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
 //       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E I        ]
@@ -112,17 +192,11 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
   for (int i = 0; i < n; ++i) w.C(m + i, m + i) += phi[post.iSigma2E];
   if (!chol_lower(w.C)) return false;
   solve_lower(w.C, w.r);
-  arma::mat A(out.A.slice_memptr(s), N, U.n_rows, false, true);
+  arma::mat A(out.A.slice_memptr(out.A.n_slices > 1 ? s : 0), N, U.n_rows, false, true);
   kernel_corr(mod.kernS, w.Z, U, p + q, thS, alS, A, false);
   A *= s2S;
-  solve_lower(w.C, A);
-  for (arma::uword c = 0; c < U.n_rows; ++c) {
-    const double* a = A.colptr(c);
-    double ar = 0.0, aa = 0.0;
-    for (int i = 0; i < N; ++i) { ar += a[i] * w.r[i]; aa += a[i] * a[i]; }
-    out.mu(c, s) = ar;
-    out.v(c, s) = s2S * (1.0 + nugget) - aa;
-  }
+  solve_lower_cols(w.C, A);
+  design_moments(A, w.r, s2S * (1.0 + nugget), out.mu.colptr(s), out.v.colptr(s));
   if (out.T > 0) design_targets(post, mod, Xf, XT, U, A, w, out, s);
   out.ll[s] = post.logLik();
   out.s2S[s] = s2S;
@@ -133,11 +207,12 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
 
 // Every draw's system (rows of phis) at the candidates U (and the target
 // points XT, T x p, none for kappa's criterion), through prediction's
-// per-draw loop on the dense algebra.
+// per-draw loop on the dense algebra; keepA: every draw's A (a batch's
+// pending points need them).
 DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& XT, double nugget, const Rcpp::List& model,
-                             Model& mod) {
+                             Model& mod, bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
   mod = read_model(model, p, q);
   if (!mod.emulator || mod.nOutputs() > 1 || !mod.levels.empty())
@@ -153,7 +228,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   const int T = XT.n_rows;
   DesignSystems out;
   out.T = T;
-  out.A.set_size(N, Nc, S);
+  out.A.set_size(N, Nc, keepA ? S : 1);
   out.mu.set_size(Nc, S);
   out.v.set_size(Nc, S);
   out.thS.set_size(p + q, S);
@@ -385,6 +460,16 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
 
 }  // namespace
 
+// solve_lower_cols() (L lower triangular, B N x nc) on a copy of B, for the
+// tests (against the BLAS solve, with exact zeros in B).
+// [[Rcpp::export(.design_solve_lower)]]
+arma::mat design_solve_lower_r(const arma::mat& L, const arma::mat& B) {
+  if (L.n_rows != L.n_cols || B.n_rows != L.n_rows) Rcpp::stop("L must be square with B's rows");
+  arma::mat X = B;
+  solve_lower_cols(L, X);
+  return X;
+}
+
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each
 // draw (design_system()); with target points XT (T x p) their predictive
@@ -394,7 +479,7 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                             const arma::mat& XT, double nugget, const Rcpp::List& model) {
   Model mod;
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod, false);
   return Rcpp::List::create(Rcpp::Named("mu") = sys.mu, Rcpp::Named("v") = sys.v,
                             Rcpp::Named("ll") = sys.ll, Rcpp::Named("mT") = sys.mT,
                             Rcpp::Named("VT") = sys.VT);
@@ -416,10 +501,10 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model) {
   Model mod;
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod);
+  const int n = Z.n_cols;
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod, n > 1);
   LookAhead la;
   la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
-  const int n = Z.n_cols;
   if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
   if (kappa.n_rows != phis.n_rows || kappa.n_cols > 16 || lw0.n_elem != phis.n_rows)
     Rcpp::stop("kappa and lw0 must have a row per draw (at most 16 calibration inputs)");
@@ -439,7 +524,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   la.isd.set_size(la.S, la.Nc);
   la.lsd.set_size(la.S, la.Nc);
   la.Lbuf.set_size(la.S);
-  la.M.resize((size_t)la.S * la.Nc * la.J);
+  if (n > 1) la.M.resize((size_t)la.S * la.Nc * la.J);  // pending points' means
   la.wbuf.set_size(la.S);
   if (la.T > 0) {
     la.VTP.set_size(la.S, la.T);

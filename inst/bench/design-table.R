@@ -12,17 +12,24 @@
 # - the design step's CPU s against the fit it follows (same runs, same
 #   process).
 #
+# - with design.R --fresh=1: the warm refit against a fresh fit on the same
+#   runs, per range of runs (warm / fresh CPU and sweeps, warm-ups, draws,
+#   convergence, Hellinger between the two).
+#
 #   Rscript inst/bench/design-table.R [dir]
 args <- commandArgs(TRUE)
 dir <- if (length(args)) args[1] else "."
 files <- list.files(dir, "^design-.*-b[0-9]+(-i[0-9]+)?-r[0-9]+(-[A-Za-z0-9]+)?\\.rds$", full.names = TRUE)
+fresh_cols <- c(outer(c("warm", "fresh"), c("Cpu", "Sweeps", "Warmup", "Draws", "Rhat", "Ess", "Converged"),
+                     paste0), "warmFresh")
 res <- do.call(rbind, lapply(files, function(f) {
   x <- readRDS(f)
   if (is.null(x$rmse)) x$rmse <- NA_real_
   if (is.null(x$init)) x$init <- 10L
   if (is.null(x$thetaSd)) x$thetaSd <- NA_real_
+  for (f in fresh_cols) if (is.null(x[[f]])) x[[f]] <- NA
   x[c("problem", "batch", "init", "rep", "method", "runs", "hellinger", "sd", "thetaSd",
-      "covers", "rmse", "fitCpu", "designCpu")]
+      "covers", "rmse", "fitCpu", "designCpu", fresh_cols)]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
   # (run counts as integers, but a median between two as x.5)
@@ -127,4 +134,24 @@ for (st in unique(key)) {
   cat(sprintf("\nWarm-started fits (update(fit, sim =)): CPU s median %.2f, range %.2f-%.2f; the fresh fit on the %d starting runs: median %.2f, range %.2f-%.2f\n",
               median(up$fitCpu), min(up$fitCpu), max(up$fitCpu), init,
               median(f0), min(f0), max(f0)))
+  wf <- r[!is.na(r$warmCpu) & !is.na(r$freshCpu), ]
+  if (nrow(wf)) {
+    cat("\nWarm refit (update(fit, sim =)) against a fresh default fit on the same runs (each step's pair; median [quartiles]):\n")
+    cat("\n| runs | pairs | warm / fresh CPU | warm / fresh sweeps | warm-up, warm | warm-up, fresh | sweeps, warm | sweeps, fresh | draws warm / fresh | converged (warm, fresh) | Hellinger warm-fresh |\n|---|---|---|---|---|---|---|---|---|---|---|\n")
+    bins <- list(c(init, 10), c(10, 20), c(20, 35))
+    for (b in bins) {
+      s <- wf[wf$runs > b[1] & wf$runs <= b[2], ]
+      if (!nrow(s)) next
+      ok <- function(pre) sum(s[[paste0(pre, "Converged")]] & s[[paste0(pre, "Rhat")]] < 1.01 &
+                              s[[paste0(pre, "Ess")]] >= 400)
+      cat(sprintf("| %d-%d | %d | %s | %s | %s | %s | %s | %s | %s | %d, %d | %s |\n", b[1] + 1, b[2], nrow(s),
+                  q3(s$warmCpu / s$freshCpu, "%.2f"), q3(s$warmSweeps / s$freshSweeps, "%.2f"),
+                  q3(s$warmWarmup), q3(s$freshWarmup), q3(s$warmSweeps), q3(s$freshSweeps),
+                  q3(s$warmDraws / s$freshDraws, "%.2f"), ok("warm"), ok("fresh"),
+                  q3(s$warmFresh, "%.3f")))
+    }
+    cat(sprintf("\nAll pairs: warm / fresh CPU %s; warm cheaper in %d of %d; CPU s warm %s, fresh %s\n",
+                q3(wf$warmCpu / wf$freshCpu, "%.2f"), sum(wf$warmCpu < wf$freshCpu), nrow(wf),
+                q3(wf$warmCpu, "%.2f"), q3(wf$freshCpu, "%.2f")))
+  }
 }

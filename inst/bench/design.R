@@ -5,7 +5,7 @@
 #   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
 #                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
-#                               [--tag=]
+#                               [--tag=] [--fresh=0]
 #
 # (replicates first .. first + reps - 1, each starting from `init` maximin
 # runs (10 by default: the results of the runs before the option existed,
@@ -51,9 +51,17 @@
 # inputs over the field's range against the true process, CPU s of the
 # design step and of the fit on the same runs it follows (the same
 # process, so their ratio comes out of these runs).
+# With --fresh=1, after each warm refit (update(fit, sim =)) also a fresh
+# default calibrate() on the same runs (its own seed; the method's random
+# stream is restored after it, so the picks and warm fits are those of a
+# run without it): CPU s, sweeps a chain, warm-ups, draws kept, max R-hat
+# and min bulk ESS over the parameters, whether the stop rule was met, for
+# both fits, and the Hellinger distance between their kappa posteriors
+# (columns warm*, fresh*, warmFresh; NA on the starting fit).
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
-             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "")
+             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
+             fresh = "0")
 args <- commandArgs(TRUE)
 if (length(args) && !any(grepl("^--", args))) {
   # the old positional form: reps batch added problem first
@@ -159,6 +167,39 @@ dens <- function(v, j) {
   k <- density(v, from = min(ugrid[[j]]), to = max(ugrid[[j]]), n = pb$ngrid, bw = "SJ")$y
   k / sum(k * uwidth[j])
 }
+# the Hellinger distance between two draws' kappa posteriors (largest over
+# the marginals)
+hellinger2 <- function(K1, K2) {
+  max(vapply(seq_len(q), function(j) {
+    sqrt(max(0, 1 - sum(sqrt(dens(K1[, j], j) * dens(K2[, j], j)) * uwidth[j])))
+  }, 0))
+}
+# a fit's cost and convergence (the --fresh comparison; NULL: NA)
+fit_facts <- function(fit, tm, pre) {
+  out <- if (is.null(fit)) {
+    data.frame(cpu = NA_real_, sweeps = NA_real_, warmup = NA_real_, draws = NA_real_,
+               rhat = NA_real_, ess = NA_real_, converged = NA)
+  } else {
+    s <- fit$settings
+    data.frame(cpu = tm, sweeps = if (is.null(s$converge$sweeps)) s$nMCMC else s$converge$sweeps,
+               warmup = mean(s$warmup), draws = nrow(fit$Phi),
+               rhat = max(fit$estimates$rhat, na.rm = TRUE),
+               ess = min(fit$estimates$ess, na.rm = TRUE),
+               converged = isTRUE(s$converge$converged))
+  }
+  stats::setNames(out, paste0(pre, c("Cpu", "Sweeps", "Warmup", "Draws", "Rhat", "Ess", "Converged")))
+}
+# the warm refit `fit` (tFit CPU s) against a fresh fit on its runs, under
+# its own seed, the caller's random stream left as it was
+compare_fresh <- function(fit, tFit, sim, field, seed) {
+  if (is.null(fit)) return(cbind(fit_facts(NULL, NA, "warm"), fit_facts(NULL, NA, "fresh"), warmFresh = NA_real_))
+  old <- get(".Random.seed", envir = globalenv())
+  on.exit(assign(".Random.seed", old, envir = globalenv()))
+  set.seed(seed)
+  tFresh <- cpu(fresh <- fit_runs(sim, field))
+  cbind(fit_facts(fit, tFit, "warm"), fit_facts(fresh, tFresh, "fresh"),
+        warmFresh = hellinger2(kappas(fit), kappas(fresh)))
+}
 # largest Hellinger distance over the calibration inputs' marginals
 hellinger <- function(K, ref) {
   max(vapply(seq_len(q), function(j) {
@@ -205,6 +246,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
   lhsState <- start
   fit <- fit0$fit
   tFit <- fit0$cpu
+  fresh <- if (opts$fresh == "1") compare_fresh(NULL)
   repeat {
     K <- kappas(fit)
     cov <- all(vapply(seq_len(q), function(j) {
@@ -216,6 +258,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef))
     row$metricCpu <- tMetric
+    if (!is.null(fresh)) row <- cbind(row, fresh)
     if (nrow(sim) >= init + added) return(rbind(do.call(rbind, rows), row))
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState))
     row$designCpu <- tDesign
@@ -227,6 +270,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     new <- runs_at(U)
     sim <- rbind(sim, new)
     tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
+    if (opts$fresh == "1") fresh <- compare_fresh(fit, tFit, sim, field, 7000 + 100 * r + nrow(sim))
   }
 }
 

@@ -176,6 +176,34 @@ test_that("a batch conditions on its pending points; single picks repeat", {
   expect_gt(min(cond$cv[, 3:5] / t(vapply(sys, function(y) y$v[3:5], numeric(3)))), 1e-3)
 })
 
+test_that("the candidates' triangular solve does dtrsm's operations, zeros included", {
+  # reference: reference BLAS dtrsm's loop (Left, Lower, NoTrans) in plain R,
+  # whose separate multiply and subtract give each entry's exact operations
+  dtrsm_loop <- function(L, B) {
+    N <- nrow(L)
+    for (j in seq_len(ncol(B))) for (k in seq_len(N)) {
+      if (B[k, j] == 0) next
+      B[k, j] <- B[k, j] / L[k, k]
+      if (k < N) B[(k + 1):N, j] <- B[(k + 1):N, j] - B[k, j] * L[(k + 1):N, k]
+    }
+    B
+  }
+  set.seed(3)
+  for (N in c(1, 2, 7)) {
+    A <- crossprod(matrix(rnorm(N * N), N)) + diag(N)
+    L <- t(chol(A))
+    B <- matrix(rnorm(N * 9), N, 9)
+    B[1, 2] <- 0                          # a zero at the start of a block of 4
+    if (N > 2) B[2:3, 6] <- 0             # zeros further down (the lane finishes alone)
+    B[, 9] <- 0                           # a zero column in the remainder
+    for (nc in 1:9) {
+      X <- FBC:::.design_solve_lower(L, B[, seq_len(nc), drop = FALSE])
+      expect_identical(X, dtrsm_loop(L, B[, seq_len(nc), drop = FALSE]))
+      expect_equal(X, forwardsolve(L, B[, seq_len(nc), drop = FALSE]), tolerance = 1e-12)
+    }
+  }
+})
+
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
   pb <- sinus_problem()
   # with the bias GP (KOH) and without, joint and plug-in particles
