@@ -72,8 +72,9 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
     # simulator GP's parameters down to a nearly Gaussian posterior on the
     # walk's scale, which a walk crosses slowly (at m = 1000 the length-
     # scales' bulk ESS was 0.03-0.05 a sweep, within 2x of what an optimally
-    # scaled 4-parameter walk can do). Only blocks of at least 4 walked
-    # parameters, whose estimate the warm-up's effective-draws rule held
+    # scaled 4-parameter walk can do). Only blocks of 4 walked parameters,
+    # whose estimate the warm-up's effective-draws rule held and where it
+    # was measured to pay (not at 5: see IND_MAX_K in src/sampler.cpp)
     independent = unname(which(startsWith(as.character(names(blocks)), "sim"))),
     params = spec$vars
   )
