@@ -15,7 +15,10 @@
 //   over the block. L starts as diag(proposal SDs) and, after 100 burn-in
 //   sweeps, becomes the Cholesky factor of the running covariance of w over
 //   burn-in (refreshed every 50 sweeps, Haario et al. 2001); s adapts towards
-//   acceptance 0.234 (0.44 for one parameter);
+//   acceptance 0.234 (0.44 for one parameter). After a warm-up of
+//   data-dependent length a simulator block of 4 walked parameters proposes
+//   instead w* ~ t_7(mu, C) (mu, C its warm-up estimate; independence
+//   Metropolis-Hastings, log r adding log q(w) - log q(w*));
 // * muB (gaussian prior N(m0, s0^2)): drawn exactly from its full conditional,
 //   log L being Gaussian in muB (Posterior::muBQuadratic): precision
 //   a'a + 1/s0^2, mean (a'b + m0/s0^2) / precision (no muB without a bias);
@@ -96,8 +99,8 @@ static const int WARM_ESS_K = 4;
 // matrix is IND_INFLATE^2 times the warm-up's covariance estimate. At
 // m = 1000 (inst/bench/RESULTS-defaults.md, 2 chains x 6000 sweeps, seed 1)
 // inflation 1.0 accepted 0.28 and gave the slowest thetaS a bulk ESS of
-// 1072 per 3700 draws, 1.2 (nu = 7 or 20) 0.22 and 797-968, 1.5 0.12 and
-// 460; the walk it replaces 236.
+// 1072 per 3700 draws; inflation 1.2 797 (nu = 20: 968, acceptance 0.22),
+// 1.5 460 (acceptance 0.12); the walk it replaces 236.
 static const double IND_NU = 7, IND_INFLATE = 1.0;
 // ... and only for blocks of at most IND_MAX_K walked parameters: at
 // m = 20,000 (5 walked) the warm-up's estimate was 1.6-3.9 times wider than
@@ -385,7 +388,6 @@ struct Chain {
   std::vector<Block*> blocks;  // the block moves' blocks, in R's order
   int iter = 0, batch = 0;
   bool burn = true;  // the sweep under way is a burn-in sweep
-  int rep = 0;       // the repeat under way of the move under way
   double ll = 0;
   Rcpp::CharacterVector params;  // parameter names (R's spec$vars), for the report
   // warm-up of data-dependent length (see the top): sweeps of warm-up once
@@ -530,8 +532,8 @@ struct BlockMove : Move {
     return std::isfinite(lpDiff) && std::isfinite(jac);
   }
   // The independence proposal (independent: R's sampler_moves()$independent;
-  // used after warm-up only, see the comment above the struct): built once,
-  // at the first retained step, from the block's warm-up estimate.
+  // after warm-up only; IND_NU, IND_INFLATE, IND_MAX_K at the top): built
+  // once, at the first retained step, from the block's warm-up estimate.
   bool independent = false, indTried = false, indOn = false;
   arma::vec indMu, indU;
   arma::mat indL;
@@ -933,7 +935,6 @@ static void sweep(Chain& ch, Schedule& schedule, bool burn, int it) {
   ch.burn = burn;
   for (auto& mv : schedule) {
     for (int r = 0; r < mv->repeats; ++r) {
-      ch.rep = r;
       const bool acc = mv->step(ch);
       mv->after(burn, it, r);
       if (acc) mv->batchCount() += 1.0 / mv->repeats;
