@@ -81,8 +81,10 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
 }
 
 # The report of a fit's moves, one row per move of the schedule: its kind
-# ("walk": a one-parameter adapted walk, "joint", "single", "gibbs",
-# "scale"), the parameters it moves, its repeats per sweep, its acceptance
+# ("walk": a one-parameter adapted walk, "joint", "independent": a joint
+# block proposing from its warm-up estimate after warm-up, "single",
+# "gibbs", "scale"; the kind chain 1 ran), the parameters it moves, its
+# repeats per sweep, its acceptance
 # rate over the retained sweeps of all chains (accepted / tries), and its
 # adapted proposal scale (exp(s) of its walk; for a "single" move its SD on
 # the walk's scale), the geometric mean over the chains. NULL for fits made
