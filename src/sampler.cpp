@@ -510,26 +510,32 @@ struct BlockMove : Move {
   static double log_ig(double x, double a, double bb) {
     return a * std::log(bb) - R::lgammafn(a) - (a + 1.0) * std::log(x) - bb / x;
   }
-  // The walk's proposal for the block's first n parameters: w' = w + exp(s)
-  // L e, e ~ N(0, I_n), values from_walk(w'); lpDiff = sum of log prior
-  // changes, jac = sum of log Jacobian changes. False when either is not
-  // finite.
-  bool walk_proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
+  // A proposal for the block's first n parameters, e (drawn by the caller)
+  // given: w'_i = c_i + s (Lp e)_i on the walk's scale, values from_walk(w');
+  // the current positions into w; lpDiff = sum of log prior changes, jac =
+  // sum of log Jacobian changes. False when either is not finite. (c may be
+  // w itself: each c_i is read after w_i is set.)
+  bool fill_proposal(const Chain& ch, int n, const arma::vec& c, double s, const arma::mat& Lp,
+                     double& lpDiff, double& jac) {
     const Posterior& post = ch.post;
-    for (int i = 0; i < n; ++i) b.e[i] = R::norm_rand();
-    const double sc = std::exp(b.logscale);
     for (int i = 0; i < n; ++i) {
       const int j = b.idx[i], tr = ch.pr.transform[j];
       b.w[i] = to_walk(tr, post.phi[j]);
       double step = 0;
-      for (int l = 0; l <= i; ++l) step += b.L(i, l) * b.e[l];
-      b.wNew[i] = b.w[i] + sc * step;
+      for (int l = 0; l <= i; ++l) step += Lp(i, l) * b.e[l];
+      b.wNew[i] = c[i] + s * step;
       b.vals[i] = from_walk(tr, b.wNew[i]);
       b.lpNew[i] = ch.pr(j, b.vals[i]);
       lpDiff += b.lpNew[i] - ch.lp[j];
       jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
     }
     return std::isfinite(lpDiff) && std::isfinite(jac);
+  }
+  // The walk's proposal for the block's first n parameters: w' = w + exp(s)
+  // L e, e ~ N(0, I_n) (fill_proposal()).
+  bool walk_proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
+    for (int i = 0; i < n; ++i) b.e[i] = R::norm_rand();
+    return fill_proposal(ch, n, b.w, std::exp(b.logscale), b.L, lpDiff, jac);
   }
   // The independence proposal (independent: R's sampler_moves()$independent;
   // after warm-up only; IND_NU, IND_INFLATE, IND_MAX_K at the top): built
@@ -570,24 +576,13 @@ struct BlockMove : Move {
   }
   // The independence proposal for the first n parameters:
   // w' = mu + sqrt(nu / c) L e, e ~ N(0, I_n), c ~ chi2(nu); as
-  // walk_proposal(), with jac also holding log q(w) - log q(w').
+  // fill_proposal(), with jac also holding log q(w) - log q(w').
   bool independent_proposal(const Chain& ch, int n, double& lpDiff, double& jac) {
-    const Posterior& post = ch.post;
     for (int i = 0; i < n; ++i) b.e[i] = R::norm_rand();
     const double g = std::sqrt(IND_NU / R::rchisq(IND_NU));
-    for (int i = 0; i < n; ++i) {
-      const int j = b.idx[i], tr = ch.pr.transform[j];
-      b.w[i] = to_walk(tr, post.phi[j]);
-      double step = 0;
-      for (int l = 0; l <= i; ++l) step += indL(i, l) * b.e[l];
-      b.wNew[i] = indMu[i] + g * step;
-      b.vals[i] = from_walk(tr, b.wNew[i]);
-      b.lpNew[i] = ch.pr(j, b.vals[i]);
-      lpDiff += b.lpNew[i] - ch.lp[j];
-      jac += log_jacobian(tr, b.vals[i]) - log_jacobian(tr, post.phi[j]);
-    }
+    if (!fill_proposal(ch, n, indMu, g, indL, lpDiff, jac)) return false;
     jac += log_q(b.w, n) - log_q(b.wNew, n);
-    return std::isfinite(lpDiff) && std::isfinite(jac);
+    return std::isfinite(jac);
   }
   // The step's proposal: the independence one after warm-up where it was
   // built, else the walk.
