@@ -65,6 +65,10 @@
     .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 
+.fbc_loglik_draws_c <- function(Xf, yf, Xs, ys, phis, nugget, model) {
+    .Call(`_FBC_fbc_loglik_draws`, Xf, yf, Xs, ys, phis, nugget, model)
+}
+
 .fbc_block_estimate_c <- function(W, forget, walked = 0L) {
     .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }

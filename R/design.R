@@ -50,7 +50,7 @@
 #' fit2 <- update(fit, sim = ballSim[41:50, ])
 #' fit2$model$dims$m
 update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
-                        showProgress = NULL) {
+                        showProgress = NULL, reweight = TRUE) {
   fit <- check_fbc(fit, "fit")
   old <- fit$model
   args <- old$options$args
@@ -80,6 +80,13 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
   states <- fit$state$chains
   run <- check_run(nMCMC, nBurn, fit$settings$thinning, length(states), converge, showProgress,
                    NULL, 60)
+  reweight <- check_flag(reweight, "reweight")
+  tried <- NULL
+  if (reweight && is.null(nMCMC) && is.null(nBurn) && !is.null(run$converge)) {
+    rw <- reweight_runs(fit, model, run$converge)
+    if (rw$info$used) return(rw$fit)
+    tried <- rw$info
+  }
   d <- length(model$spec$vars)
   starts <- lapply(states, function(st) chain_start(warm_state(st$sampler, old, model), d, 0L))
   t0 <- proc.time()[["elapsed"]]
@@ -87,13 +94,121 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
     results <- check_chain_results(results, max(target))
     settings <- list(nMCMC = max(target), nBurn = run$nBurn, thinning = run$thinning,
                      nChains = length(results), nugget = fbc_nugget,
-                     time = proc.time()[["elapsed"]] - t0, checkpoint = NULL, warmStart = TRUE)
+                     time = proc.time()[["elapsed"]] - t0, checkpoint = NULL, warmStart = TRUE,
+                     reweight = tried)
     new_fbc_chains(results, model, fit$call, settings = settings)
   }
   run_rounds(starts, chain_seeds(length(starts)), rep(run$nMCMC, length(starts)), run$converge,
              assemble, nBurn = run$nBurn, thinning = run$thinning,
              showProgress = run$showProgress, dat = model$data, spec = model$spec,
              moves = model$moves)
+}
+
+# ------------------------------------------------ reweighting draws ----
+
+# At most this many of the old fit's draws are reweighted (each chain
+# thinned evenly): the draws' autocorrelation leaves their effective
+# number nearly whole, and each costs one likelihood from scratch.
+fbc_reweight_draws <- 2000L
+
+# update_runs()'s first try: the old fit's draws as draws of `model` (the
+# model on all runs). Each draw phi is carried to the new scaling, phi' =
+# T(phi) (warm_phi()), and weighed by the importance weight of the old
+# posterior as a proposal for the new one,
+#   w = p_new(phi' | all runs) |dT/dphi| / p_old(phi | old runs),
+# exact up to a constant: log p_new is the new model's log prior plus its
+# log-likelihood on all runs (.fbc_loglik_draws_c(), its own algebra),
+# log p_old the fit's logPost (log prior plus log-likelihood, the same
+# units), and log |dT/dphi| varies only through theta_k r_k^alpha_k (+
+# alpha_k log r_k; the other maps scale by constants). Each chain is then
+# resampled systematically in its draws' order by their weights, so it
+# keeps its length and its R-hat and bulk ESS see the repeated draws; the
+# bulk ESS is capped by the old one times the weights' Kish share
+# ((sum w)^2 / (N sum w^2)). Used when these meet the stop rule `rule`.
+# Returns list(fit (NULL when not used), info = list(used, runs (the old
+# fit's), draws, kish, rhat, ess)).
+reweight_runs <- function(fit, model, rule) {
+  t0 <- proc.time()[["elapsed"]]
+  old <- fit$model
+  chains <- sort(unique(fit$chain))
+  N <- length(fit$chain)
+  by <- max(1L, N %/% fbc_reweight_draws)
+  rows <- unlist(lapply(chains, function(k) {
+    i <- which(fit$chain == k)
+    i[rev(seq(length(i), 1L, by = -by))]  # evenly, the last draw kept
+  }))
+  chain <- fit$chain[rows]
+  lw <- reweight_log_weights(fit, model, rows)
+  phiNew <- attr(lw, "phi")
+  ll <- attr(lw, "logLik")
+  lp <- attr(lw, "logPrior")
+  info <- list(used = FALSE, runs = old$dims$m, draws = length(rows), kish = 0, rhat = NA_real_,
+               ess = 0)
+  w <- if (any(is.finite(lw))) exp(lw - max(lw)) else rep(0, length(lw))
+  perChain <- vapply(chains, function(k) sum(w[chain == k]), numeric(1))
+  if (!all(perChain > 0)) return(list(fit = NULL, info = info))
+  info$kish <- sum(w)^2 / sum(w^2) / length(w)
+  results <- lapply(seq_along(chains), function(c) {
+    i <- which(chain == chains[c])
+    cw <- cumsum(w[i]) / perChain[c]
+    pick <- i[pmin(findInterval((seq_along(i) - stats::runif(1)) / length(i), cw,
+                                left.open = TRUE) + 1L, length(i))]
+    st <- fit$state$chains[[c]]
+    state <- st$sampler
+    state$phi <- phiNew[pick[length(pick)], ]
+    list(draws = phiNew[pick, , drop = FALSE], logPost = ll[pick] + lp[pick], logLik = ll[pick],
+         kept = length(pick), done = st$done, nPost = st$nPost, interrupted = FALSE,
+         state = state)
+  })
+  est <- chain_diagnostics(do.call(rbind, lapply(results, function(r) r$draws[, phi_columns(model$spec), drop = FALSE])),
+                           rep(seq_along(results), vapply(results, `[[`, integer(1), "kept")))
+  ess <- pmin(est$ess, fit$estimates$ess * info$kish)
+  ok <- !is.na(est$rhat) & !is.na(ess)
+  info$rhat <- if (any(ok)) max(est$rhat[ok]) else NA_real_
+  info$ess <- if (any(ok)) min(ess[ok]) else 0
+  info$used <- any(ok) && all(est$rhat[ok] < rule$rhat) && all(ess[ok] >= rule$ess)
+  if (!info$used) return(list(fit = NULL, info = info))
+  s <- fit$settings
+  s[c("time", "checkpoint", "warmStart", "reweight", "converge")] <-
+    list(proc.time()[["elapsed"]] - t0, NULL, TRUE, info, rule)
+  out <- new_fbc_chains(results, model, fit$call, s)
+  out$estimates$ess <- ess
+  list(fit = out, info = info)
+}
+
+# The log importance weights of the old fit's draws `rows` as draws of
+# `model` (up to a constant; reweight_runs()), with attributes phi (the
+# draws on the new scaling), logLik and logPrior (the new model's).
+reweight_log_weights <- function(fit, model, rows) {
+  old <- fit$model
+  phiOld <- sampler_draws(fit, rows)
+  phiNew <- matrix(t(apply(phiOld, 1, warm_phi, old = old, new = model)), ncol = ncol(phiOld))
+  dat <- model$data
+  ll <- drop(.fbc_loglik_draws_c(dat$Xf, dat$yf, dat$Xs, dat$ys, phiNew, fbc_nugget,
+                                  model$spec$model))
+  tab <- model$spec$table
+  free <- which(tab$family != prior_families[["fixed"]])
+  lp <- Reduce(`+`, lapply(free, function(j) log_prior_row(tab, j, phiNew[, j])), 0)
+  lw <- ll + lp + reweight_log_jacobian(phiOld, old, model) - fit$logPost[rows]
+  lw[is.na(lw)] <- -Inf
+  structure(lw, phi = phiNew, logLik = ll, logPrior = lp)
+}
+
+# log |dT/dphi| of warm_phi() up to a constant, per row of phis (sampler
+# scale of `old`): sum_k alpha_k log r_k over the length-scales whose
+# kernel has a smoothness alpha (theta_k -> theta_k r_k^alpha_k, r_k the
+# change of input k's range); every other map scales by a constant.
+reweight_log_jacobian <- function(phis, old, new) {
+  cls <- new$spec$classes
+  ratio <- log((new$scale$xmax - new$scale$xmin) / (old$scale$xmax - old$scale$xmin))
+  out <- numeric(nrow(phis))
+  for (part in list(c("thetaS", "alphaS", "kernelS"), c("thetaB", "alphaB", "kernelB"))) {
+    th <- which(cls == part[1])
+    if (!length(th) || !kernel_has_alpha(new[[part[3]]])) next
+    al <- which(cls == part[2])
+    out <- out + drop(phis[, al, drop = FALSE] %*% ratio[seq_along(th)])
+  }
+  out
 }
 
 # The old runs and the new ones in one table of the old one's form.

@@ -49,6 +49,11 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  MCMC: %d iterations, %s, thinning %d -> %d draws%s (%.1f s)\n",
               s$nMCMC, warmup_text(s), s$thinning, nrow(x$Phi),
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
+  rw <- s$reweight
+  if (isTRUE(rw$used)) {
+    cat(sprintf("  draws: the fit on %d runs, reweighted by the new runs and resampled (%d draws weighed, Kish share %.2f; bulk ESS at least %.0f)\n",
+                rw$runs, rw$draws, rw$kish, rw$ess))
+  }
   print_moves(x)
   if (fn) {
     if (gp) cat(sprintf("  kernel: bias %s\n", mo$kernelB))

@@ -25,9 +25,12 @@
 #'   default) shows it in an interactive session and not in scripts or knitr,
 #'   as in [calibrate()].
 #' @param sim New simulator runs (rows in the form of `calibrate()`'s `sim`):
-#'   the model is rebuilt on all runs and refitted from the chains' last
-#'   states (a warm start), see [update_runs()]. `nMCMC`
-#'   and `converge` are then the new run's, as in [calibrate()].
+#'   the model is rebuilt on all runs and its posterior drawn from the old
+#'   draws reweighted, or refitted from the chains' last states (a warm
+#'   start), see [update_runs()]. `nMCMC` and `converge` are then the new
+#'   run's, as in [calibrate()].
+#' @param reweight With `sim`: try the old draws reweighted first (see
+#'   [update_runs()]); `FALSE` always refits.
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
@@ -40,11 +43,13 @@
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
 #' fit <- update(fit, nMCMC = 400)
 #' table(fit$chain)
-update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim = NULL, ...) {
+update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim = NULL,
+                       reweight = TRUE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
   if (!is.null(sim)) {
     return(update_runs(object, sim, nMCMC = if (!missing(nMCMC)) nMCMC,
-                       converge = if (!missing(converge)) converge, showProgress = showProgress))
+                       converge = if (!missing(converge)) converge, showProgress = showProgress,
+                       reweight = reweight))
   }
   converge <- check_converge(converge)
   if (missing(nMCMC) && !is.null(converge)) nMCMC <- converge$every %||% fbc_first_check

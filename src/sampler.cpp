@@ -1210,6 +1210,24 @@ double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
   return post->init(phi) ? post->logLik() : R_NegInf;
 }
 
+// Log-likelihood log p(y | phi_s) at each row phi_s of `phis`, from
+// scratch on one posterior (its workspaces reused; -Inf where the
+// covariance is not positive definite); update(fit, sim = ) weighs the
+// old draws by it (R/design.R, reweight_runs()).
+// [[Rcpp::export(.fbc_loglik_draws_c)]]
+arma::vec fbc_loglik_draws(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                           const arma::vec& ys, const arma::mat& phis, double nugget,
+                           const Rcpp::List& model) {
+  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, model);
+  arma::vec out(phis.n_rows);
+  for (arma::uword s = 0; s < phis.n_rows; ++s) {
+    if (s % 100 == 99) Rcpp::checkUserInterrupt();
+    const arma::vec phi = phis.row(s).t();
+    out[s] = post->init(phi) ? post->logLik() : R_NegInf;
+  }
+  return out;
+}
+
 // The warm-up's estimate of a block's covariance (Block::pooled()) from the
 // walk positions W (one row per sweep 1, 2, ..., as a block records them
 // during a warm-up of data-dependent length), each earlier epoch weighted

@@ -256,7 +256,8 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     tMetric <- cpu(row <- data.frame(
       problem = problem, batch = batch, init = init, rep = r, method = method, runs = nrow(sim),
       hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
-      draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef))
+      draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef,
+      reweighted = isTRUE(fit$settings$reweight$used)))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
     if (nrow(sim) >= init + added) return(rbind(do.call(rbind, rows), row))

@@ -71,6 +71,107 @@ test_that("update(fit, sim =) carries the states to the new scaling", {
   expect_equal(out[ix$muB] * sn$ysd + sn$ymean, 0.2 * so$ysd + so$ymean)
 })
 
+test_that("the reweighting's weights are the new posterior over the old (plain-R dense)", {
+  # the power exponential with alphaS sampled, and new runs that stretch the
+  # design's ranges and the response's sd: every part of the map T and its
+  # Jacobian is exercised
+  pb <- sinus_problem(m = 14)
+  pb$sim$x[13:14] <- c(-0.2, 1.3)
+  pb$sim$y[13:14] <- sin(10 * pb$sim$u[13:14] * pb$sim$x[13:14]) * 1.5
+  set.seed(4)
+  fit <- calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", kernelS = "powexp",
+                   nMCMC = 400, nBurn = 200, nChains = 2, showProgress = FALSE)
+  new <- calibrate(pb$sim, pb$field, discrepancy = "none", kernelS = "powexp", fit = FALSE)
+  expect_true(all(new$scale$xmax - new$scale$xmin != fit$scale$xmax - fit$scale$xmin))
+  rows <- round(seq(3, nrow(fit$Phi), length.out = 6))
+  lw <- FBC:::reweight_log_weights(fit, new, rows)
+  # the reference: the new model's log posterior at T(phi) (plain-R dense
+  # likelihood, the spec's prior functions in reported units), plus
+  # log |det dT/dphi| by central differences over the free parameters,
+  # minus the old fit's logPost
+  tab <- new$spec$table
+  free <- which(tab$family != FBC:::prior_families[["fixed"]])
+  phis <- FBC:::sampler_draws(fit, rows)
+  ref <- vapply(seq_along(rows), function(r) {
+    phi <- phis[r, ]
+    T <- function(v) {
+      x <- phi
+      x[free] <- v
+      FBC:::warm_phi(x, fit$model, new)[free]
+    }
+    J <- vapply(seq_along(free), function(j) {
+      h <- 1e-6 * max(1, abs(phi[free[j]]))
+      e <- replace(numeric(length(free)), j, h)
+      (T(phi[free] + e) - T(phi[free] - e)) / (2 * h)
+    }, numeric(length(free)))
+    out <- FBC:::warm_phi(phi, fit$model, new)
+    reported <- out
+    reported[1] <- new$scale$xmin[2] + (new$scale$xmax[2] - new$scale$xmin[2]) * out[1]
+    lp <- sum(vapply(free, function(j) new$spec$fns[[j]](reported[j]), numeric(1)))
+    ll <- dense_loglik(new$data$Xf, new$data$yf, new$data$Xs, new$data$ys, out, fbc_nugget,
+                       "powexp", "powexp", discrepancy = "none")
+    ll + lp + determinant(J)$modulus - fit$logPost[rows[r]]
+  }, numeric(1))
+  # equal up to one constant (the weights' normalisation)
+  expect_lt(max(abs((lw - ref) - mean(lw - ref))), 1e-5)
+  expect_gt(sd(ref), 0.1)
+  expect_equal(attr(lw, "logLik") + attr(lw, "logPrior") - as.vector(lw),
+               fit$logPost[rows] - FBC:::reweight_log_jacobian(phis, fit$model, new))
+})
+
+test_that("update(fit, sim =) reweights the old draws when they suffice (grid)", {
+  # 8 runs more that move kappa's posterior by half its sd
+  pb <- sinus_problem(m = 20)
+  first <- pb
+  first$sim <- pb$sim[1:12, ]
+  fit <- sinus_fit(first)
+  fit2 <- update(fit, sim = pb$sim[13:20, ])
+  expect_gt(abs(mean(fit2$Phi[, 1]) - mean(fit$Phi[, 1])) / sd(fit2$Phi[, 1]), 0.5)
+  rw <- fit2$settings$reweight
+  expect_true(rw$used)
+  expect_equal(rw$runs, 12)
+  expect_equal(rw$draws, 2000)  # every draw (fbc_reweight_draws)
+  expect_gte(rw$ess, 400)
+  expect_true(fit2$settings$warmStart)
+  # the model is calibrate()'s on all runs; the draws are its posterior
+  all <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), fit = FALSE)
+  expect_identical(fit2$model$data, all$data)
+  expect_equal(nrow(fit2$Phi), 2000)
+  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_equal(fit2$estimates["kappa1", "ess"], rw$ess)
+  # the draws and their log densities are the new model's
+  phi <- FBC:::sampler_draws(fit2, 1:3)
+  expect_equal(fit2$logLik[1:3], apply(phi, 1, sinus_loglik(fit2$data)), tolerance = 1e-8)
+  expect_output(print(fit2), "reweighted")
+  # the chains go on from the reweighted draws
+  fit3 <- update(fit2, nMCMC = 200)
+  expect_equal(nrow(fit3$Phi), 2100)  # thinning 2
+  expect_equal(fit3$Phi[1:2000, ], fit2$Phi)
+  # without reweighting, a refit
+  set.seed(5)
+  fit4 <- update(fit, sim = pb$sim[13:20, ], reweight = FALSE)
+  expect_null(fit4$settings$reweight)
+  expect_gt(nrow(fit4$Phi), 400)
+})
+
+test_that("update(fit, sim =) refits when the reweighted draws fall short", {
+  # from 6 runs to 40 kappa's posterior moves 10 sds: the old draws cannot
+  # carry it
+  pb <- sinus_problem(m = 40)
+  first <- pb
+  first$sim <- pb$sim[1:6, ]
+  fit <- suppressWarnings(sinus_fit(first))  # (6 runs do not span the field's x)
+  # (a stricter rule than the default for the grid check's sake)
+  fit2 <- update(fit, sim = pb$sim[7:40, ], converge = until_converged(ess = 1500))
+  rw <- fit2$settings$reweight
+  expect_false(rw$used)
+  expect_lt(rw$ess, 400)
+  expect_true(fit2$settings$warmStart)
+  expect_true(fit2$settings$warmup >= 200)
+  # (kappa's sd is 0.01 of its range: a grid finer than the default's)
+  expect_kappa_grid(fit2, sinus_loglik(fit2$data), u = seq(0.5, 0.75, length.out = 501))
+})
+
 test_that("update(fit, sim =) checks the new runs", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 400)
