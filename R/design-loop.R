@@ -35,7 +35,8 @@
 #' @return A list: `fit` (the last fit), `sim` (every run), `history` (a
 #'   data frame per step: `runs`, each calibration input's posterior mean,
 #'   sd and 90% interval width, the design step's and the fit's CPU
-#'   seconds).
+#'   seconds, and `reweighted`: whether the step's posterior is the last
+#'   fit's draws reweighted, see [update_runs()]).
 #' @seealso [propose_runs()], [update_runs()]
 #' @export
 #' @examples
@@ -80,7 +81,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     history <- rbind(history, loop_row(fit, nrow(sim), tDesign, cpu_since(t0)))
     if (showProgress) {
       h <- history[nrow(history), ]
-      cli::cli_inform("{nrow(sim)} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, fit {round(h$fitTime, 1)} s).")
+      cli::cli_inform("{nrow(sim)} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, {if (h$reweighted) 'last fit reweighted' else 'fit'} {round(h$fitTime, 1)} s).")
     }
   }
   list(fit = fit, sim = sim, history = history)
@@ -157,6 +158,7 @@ loop_row <- function(fit, runs, tDesign, tFit) {
   }
   row$designTime <- tDesign
   row$fitTime <- tFit
+  row$reweighted <- isTRUE(fit$settings$reweight$used)
   row
 }
 

@@ -10,22 +10,42 @@
 #' `update(fit, sim = more_runs)` rebuilds the model on all runs (the old
 #' and the new, exactly as `calibrate(rbind(old, new), field, ...)` with the
 #' fit's model arguments would: the same scaling, priors and algebra
-#' choice) and refits it from the chains' last states (a warm start) with
-#' a fresh adaptive warm-up (or `nBurn` sweeps). The posterior is that of a
-#' fresh fit on all runs (tested against the grid posterior). A warm refit
-#' costs about what a fresh fit does (a design loop on a sinusoid from 6 to
-#' 35 runs, 600 paired steps: 0.94 times a fresh fit's CPU time in the
-#' median, quartiles 0.72-1.15; inst/bench/RESULTS-design.md): the warm
-#' start shortens the warm-up a little, but both need the same sampling
-#' for the stop rule's effective draws of the new posterior, about three
-#' quarters of a fit.
+#' choice) and draws its posterior in one of two ways; the fit says which
+#' (`settings$reweight`, and a line of `print()`).
 #'
-#' The last states are carried to the new model's scaling: kappa in its
-#' own units, each length-scale `theta` by the change of its input's range
-#' (to the power `alpha` for the power exponential, 2 otherwise), the
-#' variances and `muB` by the change of the response's mean and sd (with
-#' several outputs by the first output's: the chains' warm-up corrects
-#' the rest). Fixed parameters take the new model's values.
+#' **Reweighted** (tried first when the run length is the stop rule's, the
+#' default): the old fit's draws, carried to the new scaling (below), are
+#' weighed by the new posterior over the old one. The weight
+#' \eqn{p_{new}(T\phi \mid \textrm{all runs}) |dT/d\phi| / p_{old}(\phi \mid
+#' \textrm{old runs})} is exact up to a constant (the new model's prior and
+#' likelihood on all runs, one likelihood per draw, at most 2000 draws), so
+#' the weighted draws are importance draws of the new posterior, not an
+#' approximation of it. Each chain is resampled in order by the weights,
+#' and the result is used when it meets the stop rule: R-hat of the
+#' resampled chains, and a bulk ESS counted as the smaller of the resampled
+#' chains' and the old bulk ESS times the weights' Kish share
+#' (\eqn{(\sum w)^2 / (N \sum w^2)}); the fit's `estimates$ess` are these
+#' counts. New runs that move the posterior little cost a few percent of a
+#' fit this way.
+#'
+#' **Refitted** otherwise (and with `reweight = FALSE`, `nMCMC` or `nBurn`
+#' given): from the chains' last states (a warm start) with a fresh
+#' adaptive warm-up (or `nBurn` sweeps). The posterior is that of a fresh
+#' fit on all runs (tested against the grid posterior). A warm refit costs
+#' about what a fresh fit does (a design loop on a sinusoid from 6 to 35
+#' runs, 600 paired steps: 0.94 times a fresh fit's CPU time in the median,
+#' quartiles 0.72-1.15; inst/bench/RESULTS-design.md): the warm start
+#' shortens the warm-up a little, but both need the same sampling for the
+#' stop rule's effective draws of the new posterior, about three quarters of
+#' a fit.
+#'
+#' The draws and last states are carried to the new model's scaling (the
+#' map \eqn{T}): kappa in its own units, each length-scale `theta` by the
+#' change of its input's range (to the power `alpha` for the power
+#' exponential, 2 otherwise), the variances and `muB` by the change of the
+#' response's mean and sd (with several outputs by the first output's: the
+#' weights, or the chains' warm-up, correct the rest). Fixed parameters
+#' take the new model's values.
 #'
 #' @param fit An `fbc` object.
 #' @param sim The new runs, with the columns of the fit's `sim` (a data
@@ -40,8 +60,15 @@
 #'   which kept the chains' move to the new posterior among the draws and
 #'   cost 1.5-9 times a fresh fit (now 0.65-1.94 times).
 #' @param showProgress As in [calibrate()].
-#' @return A new `fbc` object fitted to all runs (its draws are the new
-#'   run's only). `settings$warmStart` is `TRUE`.
+#' @param reweight Try the old draws reweighted first (`TRUE`, the default;
+#'   only when `nMCMC` and `nBurn` are `NULL`), or always refit (`FALSE`).
+#' @return A new `fbc` object of the model on all runs (its draws are the
+#'   reweighted old draws or the refit's only). `settings$warmStart` is
+#'   `TRUE`; `settings$reweight` (`NULL` when not tried) is a list: `used`,
+#'   `runs` (the old fit's), `draws` (weighed), `kish` (the weights' Kish
+#'   share), `rhat` and `ess` (the largest R-hat and smallest bulk ESS of
+#'   the resampled draws). A reweighted fit is continued by `update(fit,
+#'   nMCMC = )` from its resampled draws with the old adapted proposals.
 #' @seealso [propose_runs()], [design_loop()]
 #' @export
 #' @examples
@@ -148,6 +175,9 @@ reweight_runs <- function(fit, model, rule) {
   perChain <- vapply(chains, function(k) sum(w[chain == k]), numeric(1))
   if (!all(perChain > 0)) return(list(fit = NULL, info = info))
   info$kish <- sum(w)^2 / sum(w^2) / length(w)
+  bound <- fit$estimates$ess * info$kish
+  info$ess <- min(bound, na.rm = TRUE)
+  if (!(info$ess >= rule$ess)) return(list(fit = NULL, info = info))  # too few: no resampling
   results <- lapply(seq_along(chains), function(c) {
     i <- which(chain == chains[c])
     cw <- cumsum(w[i]) / perChain[c]
@@ -160,19 +190,21 @@ reweight_runs <- function(fit, model, rule) {
          kept = length(pick), done = st$done, nPost = st$nPost, interrupted = FALSE,
          state = state)
   })
-  est <- chain_diagnostics(do.call(rbind, lapply(results, function(r) r$draws[, phi_columns(model$spec), drop = FALSE])),
-                           rep(seq_along(results), vapply(results, `[[`, integer(1), "kept")))
-  ess <- pmin(est$ess, fit$estimates$ess * info$kish)
+  s <- fit$settings
+  cv <- rule
+  cv[c("converged", "sweeps", "checks", "reweighted")] <- list(TRUE, NA_integer_, 0L, TRUE)
+  s[c("checkpoint", "warmStart", "converge")] <- list(NULL, TRUE, cv)
+  out <- new_fbc_chains(results, model, fit$call, s)
+  est <- out$estimates
+  ess <- pmin(est$ess, bound)
   ok <- !is.na(est$rhat) & !is.na(ess)
   info$rhat <- if (any(ok)) max(est$rhat[ok]) else NA_real_
   info$ess <- if (any(ok)) min(ess[ok]) else 0
   info$used <- any(ok) && all(est$rhat[ok] < rule$rhat) && all(ess[ok] >= rule$ess)
   if (!info$used) return(list(fit = NULL, info = info))
-  s <- fit$settings
-  s[c("time", "checkpoint", "warmStart", "reweight", "converge")] <-
-    list(proc.time()[["elapsed"]] - t0, NULL, TRUE, info, rule)
-  out <- new_fbc_chains(results, model, fit$call, s)
   out$estimates$ess <- ess
+  out$settings$reweight <- info
+  out$settings$time <- proc.time()[["elapsed"]] - t0
   list(fit = out, info = info)
 }
 
@@ -182,7 +214,7 @@ reweight_runs <- function(fit, model, rule) {
 reweight_log_weights <- function(fit, model, rows) {
   old <- fit$model
   phiOld <- sampler_draws(fit, rows)
-  phiNew <- matrix(t(apply(phiOld, 1, warm_phi, old = old, new = model)), ncol = ncol(phiOld))
+  phiNew <- warm_phi(phiOld, old, model)
   dat <- model$data
   ll <- drop(.fbc_loglik_draws_c(dat$Xf, dat$yf, dat$Xs, dat$ys, phiNew, fbc_nugget,
                                   model$spec$model))
@@ -249,36 +281,42 @@ warm_state <- function(state, old, new) {
   initial_state(warm_phi(state$phi, old, new), new$spec)
 }
 
-# phi (sampler's scale) of model `old` in the scaling of `new`: kappa
+# phi (sampler's scale; a vector, or a matrix with a row per draw) of
+# model `old` in the scaling of `new`: kappa
 # through its own units; theta_k * (range_new / range_old)^a (a = alpha_k
 # for the power exponential, 2 otherwise: theta d^a is what the kernel
 # sees); variances by (sd_old / sd_new)^2 and muB by the change of mean;
 # fixed parameters at the new model's values.
 warm_phi <- function(phi, old, new) {
+  if (is.null(dim(phi))) return(warm_phi(matrix(phi, 1L), old, new)[1L, ])
+  # one row per draw (reweight_runs()), one column per parameter
   so <- old$scale
   sn <- new$scale
   cls <- new$spec$classes
   p <- so$p
   q <- so$q
+  n <- nrow(phi)
   out <- phi
   cal <- p + seq_len(q)
   k <- which(cls == "kappa")
-  out[k] <- (so$xmin[cal] + (so$xmax[cal] - so$xmin[cal]) * phi[k] - sn$xmin[cal]) /
-    (sn$xmax[cal] - sn$xmin[cal])
+  scaleCols <- function(X, a, b) X * rep(a, each = n) + rep(b, each = n)  # X_j a_j + b_j
+  out[, k] <- scaleCols(phi[, k, drop = FALSE], (so$xmax[cal] - so$xmin[cal]) / (sn$xmax[cal] - sn$xmin[cal]),
+                        (so$xmin[cal] - sn$xmin[cal]) / (sn$xmax[cal] - sn$xmin[cal]))
   ratio <- (sn$xmax - sn$xmin) / (so$xmax - so$xmin)
-  power <- function(cl, kern) {
+  stretch <- function(cl, al, kern) {
     i <- which(cls == cl)
-    if (kernel_has_alpha(kern)) phi[i] else rep(2, length(i))
+    r <- rep(ratio[seq_along(i)], each = n)
+    if (kernel_has_alpha(kern)) phi[, i] * r^phi[, which(cls == al)] else phi[, i] * r^2
   }
   th <- which(cls == "thetaS")
-  out[th] <- phi[th] * ratio[seq_along(th)]^power("alphaS", new$kernelS)
+  out[, th] <- stretch("thetaS", "alphaS", new$kernelS)
   tb <- which(cls == "thetaB")
-  if (length(tb)) out[tb] <- phi[tb] * ratio[seq_along(tb)]^power("alphaB", new$kernelB)
+  if (length(tb)) out[, tb] <- stretch("thetaB", "alphaB", new$kernelB)
   v <- cls %in% c("sigma2S", "sigma2B", "sigma2E")
-  out[v] <- phi[v] * (so$ysd[1] / sn$ysd[1])^2
+  out[, v] <- phi[, v] * (so$ysd[1] / sn$ysd[1])^2
   mu <- which(cls == "muB")
-  out[mu] <- (phi[mu] * so$ysd[1] + so$ymean[1] - sn$ymean[1]) / sn$ysd[1]
+  out[, mu] <- (phi[, mu] * so$ysd[1] + so$ymean[1] - sn$ymean[1]) / sn$ysd[1]
   fixed <- new$spec$table$family == prior_families[["fixed"]]
-  out[fixed] <- new$spec$init[fixed]
+  out[, fixed] <- rep(new$spec$init[fixed], each = n)
   out
 }

@@ -123,7 +123,8 @@ print_moves <- function(x) {
   if (!is.null(cv)) {
     cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked %s: %s\n",
                 cv$rhat, cv$ess, check_schedule(cv),
-                if (isTRUE(cv$converged)) sprintf("met at %d sweeps per chain (check %d)", cv$sweeps, cv$checks)
+                if (isTRUE(cv$reweighted)) "met by the reweighted draws"
+                else if (isTRUE(cv$converged)) sprintf("met at %d sweeps per chain (check %d)", cv$sweeps, cv$checks)
                 else sprintf("not met by %d sweeps per chain (%d checks)", cv$sweeps, cv$checks)))
   }
   mv <- move_report(x)
