@@ -112,6 +112,7 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
   if (reweight && is.null(nMCMC) && is.null(nBurn) && !is.null(run$converge)) {
     rw <- reweight_runs(fit, model, run$converge)
     if (rw$info$used) return(rw$fit)
+    if (!is.null(rw$fit)) return(top_up(rw$fit, run$converge, run$showProgress))
     tried <- rw$info
   }
   d <- length(model$spec$vars)
@@ -137,6 +138,10 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
 # thinned evenly): the draws' autocorrelation leaves their effective
 # number nearly whole, and each costs one likelihood from scratch.
 fbc_reweight_draws <- 2000L
+# Below this share of the stop rule's effective draws (the old bulk ESS
+# times the weights' Kish share) the reweighted draws are not continued
+# (top_up()) but refitted.
+fbc_reweight_floor <- 0.25
 
 # update_runs()'s first try: the old fit's draws as draws of `model` (the
 # model on all runs). Each draw phi is carried to the new scaling, phi' =
@@ -177,7 +182,8 @@ reweight_runs <- function(fit, model, rule) {
   info$kish <- sum(w)^2 / sum(w^2) / length(w)
   bound <- fit$estimates$ess * info$kish
   info$ess <- min(bound, na.rm = TRUE)
-  if (!(info$ess >= rule$ess)) return(list(fit = NULL, info = info))  # too few: no resampling
+  # too few for a top-up to pay: no resampling (the caller refits)
+  if (!(info$ess >= fbc_reweight_floor * rule$ess)) return(list(fit = NULL, info = info))
   results <- lapply(seq_along(chains), function(c) {
     i <- which(chain == chains[c])
     cw <- cumsum(w[i]) / perChain[c]
@@ -201,8 +207,8 @@ reweight_runs <- function(fit, model, rule) {
   info$rhat <- if (any(ok)) max(est$rhat[ok]) else NA_real_
   info$ess <- if (any(ok)) min(ess[ok]) else 0
   info$used <- any(ok) && all(est$rhat[ok] < rule$rhat) && all(ess[ok] >= rule$ess)
-  if (!info$used) return(list(fit = NULL, info = info))
   out$estimates$ess <- ess
+  info$topUp <- 0L
   out$settings$reweight <- info
   out$settings$time <- proc.time()[["elapsed"]] - t0
   list(fit = out, info = info)
@@ -224,6 +230,23 @@ reweight_log_weights <- function(fit, model, rows) {
   lw <- ll + lp + reweight_log_jacobian(phiOld, old, model) - fit$logPost[rows]
   lw[is.na(lw)] <- -Inf
   structure(lw, phi = phiNew, logLik = ll, logPrior = lp)
+}
+
+# The reweighted draws `fit` (reweight_runs()) short of the stop rule `rule`
+# continued as chains, from the last resampled draw with the old adapted
+# proposals, until the old and new draws meet it (update(fit, converge =
+# rule)): resample-move. settings$reweight$topUp counts the sweeps a chain
+# added, settings$converge says whether the rule was met.
+top_up <- function(fit, rule, showProgress) {
+  info <- fit$settings$reweight
+  before <- fit$settings$nMCMC
+  rule$first <- NULL  # (calibrate()'s first check, counted from the warm-up's end)
+  out <- update.fbc(fit, converge = rule, showProgress = showProgress)
+  info$topUp <- as.integer(out$settings$nMCMC - before)
+  info$used <- TRUE
+  out$settings$converge$reweighted <- TRUE
+  out$settings[c("reweight", "warmStart")] <- list(info, TRUE)
+  out
 }
 
 # log |dT/dphi| of warm_phi() up to a constant, per row of phis (sampler

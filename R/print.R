@@ -51,8 +51,9 @@ print.fbc <- function(x, digits = 3, ...) {
               if (chains > 1L) sprintf(" from %d chains", chains) else "", s$time))
   rw <- s$reweight
   if (isTRUE(rw$used)) {
-    cat(sprintf("  draws: the fit on %d runs, reweighted by the new runs and resampled (%d draws weighed, Kish share %.2f; bulk ESS at least %.0f)\n",
-                rw$runs, rw$draws, rw$kish, rw$ess))
+    cat(sprintf("  draws: the fit on %d runs, reweighted by the new runs and resampled (%d draws weighed, Kish share %.2f; bulk ESS %.0f)%s\n",
+                rw$runs, rw$draws, rw$kish, rw$ess,
+                if (isTRUE(rw$topUp > 0)) sprintf(", then continued %d sweeps a chain", rw$topUp) else ""))
   }
   print_moves(x)
   if (fn) {
@@ -123,7 +124,10 @@ print_moves <- function(x) {
   if (!is.null(cv)) {
     cat(sprintf("  stopping rule: every R-hat < %g and bulk ESS >= %d, checked %s: %s\n",
                 cv$rhat, cv$ess, check_schedule(cv),
-                if (isTRUE(cv$reweighted)) "met by the reweighted draws"
+                if (isTRUE(cv$reweighted)) {
+                  paste0(if (isTRUE(cv$converged)) "met" else "not met", " by the reweighted draws",
+                         if (isTRUE(s$reweight$topUp > 0)) " and their continuation")
+                }
                 else if (isTRUE(cv$converged)) sprintf("met at %d sweeps per chain (check %d)", cv$sweeps, cv$checks)
                 else sprintf("not met by %d sweeps per chain (%d checks)", cv$sweeps, cv$checks)))
   }

@@ -154,6 +154,29 @@ test_that("update(fit, sim =) reweights the old draws when they suffice (grid)",
   expect_gt(nrow(fit4$Phi), 400)
 })
 
+test_that("update(fit, sim =) continues reweighted draws short of the rule", {
+  # one run more that moves kappa's posterior: the weights' Kish share
+  # (0.13) leaves 178 of the rule's 400 effective draws, so the resampled
+  # chains go on from their last draws (resample-move)
+  pb <- sinus_problem(m = 13)
+  first <- pb
+  first$sim <- pb$sim[1:12, ]
+  fit <- sinus_fit(first)
+  fit2 <- update(fit, sim = pb$sim[13, ])
+  rw <- fit2$settings$reweight
+  expect_true(rw$used)
+  expect_gte(rw$ess, 100)
+  expect_lt(rw$ess, 400)
+  expect_gt(rw$topUp, 0)
+  # the resampled draws first, then the continuation's (thinning 2)
+  expect_equal(nrow(fit2$Phi), rw$draws + rw$topUp / 2)
+  expect_equal(fit2$settings$nMCMC, fit$settings$nMCMC + rw$topUp)
+  expect_true(fit2$settings$converge$converged)
+  expect_gte(min(fit2$estimates$ess, na.rm = TRUE), 400)
+  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_output(print(fit2), "then continued")
+})
+
 test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   # from 6 runs to 40 kappa's posterior moves 10 sds: the old draws cannot
   # carry it
@@ -165,7 +188,7 @@ test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   fit2 <- update(fit, sim = pb$sim[7:40, ], converge = until_converged(ess = 1500))
   rw <- fit2$settings$reweight
   expect_false(rw$used)
-  expect_lt(rw$ess, 400)
+  expect_lt(rw$ess, 100)  # below a quarter of the rule's: no continuation
   expect_true(fit2$settings$warmStart)
   expect_true(fit2$settings$warmup >= 200)
   # (kappa's sd is 0.01 of its range: a grid finer than the default's)
