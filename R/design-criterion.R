@@ -163,7 +163,7 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
     cli::cli_inform(c(
       "!" = "The best new run is expected to shrink {what} by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
       i = if (nrow(XT)) "Such as kappa's uncertainty that the field data leave, or the bias's: runs of the simulator do not reduce them." else "Such as the bias's confounding with kappa or few, noisy field data: see {.fn convergence_messages}."
-    ))
+    ), class = "fbc_design_limited")
   }
   out
 }

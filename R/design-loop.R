@@ -68,11 +68,18 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   t0 <- proc.time()
   fit <- calibrate(sim, field, showProgress = FALSE, ...)
   history <- loop_row(fit, nrow(sim), 0, cpu_since(t0))
+  limited <- FALSE
   while (nrow(sim) - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
-    pr <- do.call(propose_runs, c(list(fit, n = min(batch, budget - (nrow(sim) - n0)),
-                                       candidates = maximin_lhs(100 * length(lower), lower, upper, tries = 1)),
-                                  design))
+    # propose_runs()'s "limited" message once a loop, not at every step
+    pr <- withCallingHandlers(
+      do.call(propose_runs, c(list(fit, n = min(batch, budget - (nrow(sim) - n0)),
+                                   candidates = maximin_lhs(100 * length(lower), lower, upper, tries = 1)),
+                              design)),
+      fbc_design_limited = function(m) {
+        if (limited) invokeRestart("muffleMessage")
+        limited <<- TRUE
+      })
     tDesign <- cpu_since(t0)
     new <- run_simulator(f, pr[names(lower)], xnames, cal, names(field)[1])
     sim <- rbind(sim, new)

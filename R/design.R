@@ -25,8 +25,11 @@
 #' resampled chains, and a bulk ESS counted as the smaller of the resampled
 #' chains' and the old bulk ESS times the weights' Kish share
 #' (\eqn{(\sum w)^2 / (N \sum w^2)}); the fit's `estimates$ess` are these
-#' counts. New runs that move the posterior little cost a few percent of a
-#' fit this way.
+#' counts. When that count is short of the rule's but at least a quarter
+#' of it, the resampled chains go on from their last draws with the old
+#' adapted proposals until the old and new draws meet the rule
+#' (resample-move; `settings$reweight$topUp` sweeps a chain); below a
+#' quarter the model is refitted. FIGURES
 #'
 #' **Refitted** otherwise (and with `reweight = FALSE`, `nMCMC` or `nBurn`
 #' given): from the chains' last states (a warm start) with a fresh
@@ -67,8 +70,9 @@
 #'   `TRUE`; `settings$reweight` (`NULL` when not tried) is a list: `used`,
 #'   `runs` (the old fit's), `draws` (weighed), `kish` (the weights' Kish
 #'   share), `rhat` and `ess` (the largest R-hat and smallest bulk ESS of
-#'   the resampled draws). A reweighted fit is continued by `update(fit,
-#'   nMCMC = )` from its resampled draws with the old adapted proposals.
+#'   the resampled draws), `topUp` (sweeps a chain added after them). A
+#'   reweighted fit is continued by `update(fit, nMCMC = )` from its
+#'   resampled draws with the old adapted proposals.
 #' @seealso [propose_runs()], [design_loop()]
 #' @export
 #' @examples

@@ -424,6 +424,20 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
   set.seed(8)
   expect_silent(pr <- propose_runs(fit, ndraws = 60, nfantasy = 30, ncandidates = 200))
   expect_gt(pr$gain, 0.1)
+  # a loop says it once, not at every step
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  set.seed(4)
+  msgs <- character()
+  withCallingHandlers(
+    design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
+                batch = 1, budget = 3, discrepancy = "none", hypers = noisy, nMCMC = 600,
+                nBurn = 200, nChains = 1, design = list(ndraws = 40, nfantasy = 20),
+                showProgress = FALSE),
+    message = function(m) {
+      msgs <<- c(msgs, conditionMessage(m))
+      invokeRestart("muffleMessage")
+    })
+  expect_equal(sum(grepl("limited by something", msgs)), 1)
 })
 
 test_that("propose_runs() refuses models it does not handle", {
