@@ -257,7 +257,8 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       problem = problem, batch = batch, init = init, rep = r, method = method, runs = nrow(sim),
       hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef,
-      reweighted = isTRUE(fit$settings$reweight$used)))
+      reweighted = isTRUE(fit$settings$reweight$used),
+      topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
     if (nrow(sim) >= init + added) return(rbind(do.call(rbind, rows), row))
