@@ -28,8 +28,12 @@ res <- do.call(rbind, lapply(files, function(f) {
   if (is.null(x$init)) x$init <- 10L
   if (is.null(x$thetaSd)) x$thetaSd <- NA_real_
   for (f in fresh_cols) if (is.null(x[[f]])) x[[f]] <- NA
+  # (how update(fit, sim =) drew the step: files before it could reweight
+  # refitted every step)
+  if (is.null(x$reweighted)) x$reweighted <- FALSE
+  if (is.null(x$topUp)) x$topUp <- NA_integer_
   x[c("problem", "batch", "init", "rep", "method", "runs", "hellinger", "sd", "thetaSd",
-      "covers", "rmse", "fitCpu", "designCpu", fresh_cols)]
+      "covers", "rmse", "fitCpu", "designCpu", fresh_cols, "reweighted", "topUp")]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
   # (run counts as integers, but a median between two as x.5)
@@ -150,8 +154,20 @@ for (st in unique(key)) {
                   q3(s$warmDraws / s$freshDraws, "%.2f"), ok("warm"), ok("fresh"),
                   q3(s$warmFresh, "%.3f")))
     }
-    cat(sprintf("\nAll pairs: warm / fresh CPU %s; warm cheaper in %d of %d; CPU s warm %s, fresh %s\n",
+    cat(sprintf("\nAll pairs: warm / fresh CPU %s; warm cheaper in %d of %d; CPU s warm %s, fresh %s; sum of warm over sum of fresh %.2f\n",
                 q3(wf$warmCpu / wf$freshCpu, "%.2f"), sum(wf$warmCpu < wf$freshCpu), nrow(wf),
-                q3(wf$warmCpu, "%.2f"), q3(wf$freshCpu, "%.2f")))
+                q3(wf$warmCpu, "%.2f"), q3(wf$freshCpu, "%.2f"), sum(wf$warmCpu) / sum(wf$freshCpu)))
+    # by how update(fit, sim =) drew the step
+    kind <- ifelse(!wf$reweighted, "refit", ifelse(is.na(wf$topUp) | wf$topUp == 0, "reweighted", "reweighted and continued"))
+    if (any(wf$reweighted)) {
+      cat("\n| step drawn by | pairs | warm / fresh CPU | warm CPU s | sweeps a chain added | Hellinger warm-fresh |\n|---|---|---|---|---|---|\n")
+      for (k in c("reweighted", "reweighted and continued", "refit")) {
+        s <- wf[kind == k, ]
+        if (!nrow(s)) next
+        cat(sprintf("| %s | %d | %s | %s | %s | %s |\n", k, nrow(s), q3(s$warmCpu / s$freshCpu, "%.2f"),
+                    q3(s$warmCpu, "%.3f"), if (k == "reweighted and continued") q3(s$topUp) else "-",
+                    q3(s$warmFresh, "%.3f")))
+      }
+    }
   }
 }

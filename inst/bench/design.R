@@ -58,6 +58,9 @@
 # and min bulk ESS over the parameters, whether the stop rule was met, for
 # both fits, and the Hellinger distance between their kappa posteriors
 # (columns warm*, fresh*, warmFresh; NA on the starting fit).
+# Every row says how update(fit, sim =) drew its fit: `reweighted` (the old
+# draws reweighted, see ?update_runs) and `topUp` (sweeps a chain the
+# reweighted draws were continued; NA when refitted).
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
              methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
