@@ -36,7 +36,10 @@ res <- do.call(rbind, lapply(files, function(f) {
       "covers", "rmse", "fitCpu", "designCpu", fresh_cols, "reweighted", "topUp")]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
-  # (run counts as integers, but a median between two as x.5)
+  # (run counts as integers, but a median between two as x.5; NA dropped:
+  # a reweighted step has no sweeps of its own)
+  v <- v[!is.na(v)]
+  if (!length(v)) return("-")
   s <- function(x) if (is.infinite(x)) paste0(">", budget) else if (fmt == "%.0f") format(x) else sprintf(fmt, x)
   sprintf("%s [%s, %s]", s(median(v)), s(quantile(v, 0.25, type = 1)), s(quantile(v, 0.75, type = 1)))
 }

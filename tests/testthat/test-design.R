@@ -175,6 +175,16 @@ test_that("update(fit, sim =) continues reweighted draws short of the rule", {
   expect_gte(min(fit2$estimates$ess, na.rm = TRUE), 400)
   expect_kappa_grid(fit2, sinus_loglik(fit2$data))
   expect_output(print(fit2), "then continued")
+  # chains with many sweeps since their last refit (a loop's reweighted
+  # steps add up): the rule's ceiling (maxMCMC, 50,000) counts from here
+  # (it was an error), and the checks come every 500 sweeps, not when half
+  # the chains' sweeps again have passed (25,650 sweeps here)
+  old <- fit
+  old$state$chains[[1]]$sampler$iter <- 49950L
+  fit3 <- update(old, sim = pb$sim[13, ])
+  expect_true(fit3$settings$converge$converged)
+  expect_gt(fit3$settings$reweight$topUp, 0)
+  expect_lte(fit3$settings$reweight$topUp, 5000)
 })
 
 test_that("update(fit, sim =) refits when the reweighted draws fall short", {
