@@ -232,16 +232,25 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
 }
 
 # The draws scored over: `phi` (rows, sampler's scale), base log-weights
-# `lw0` (0 for posterior draws) and kappa (scaled). "plugin": the MAP
+# `lw0` (0 for posterior draws, the log of its repeats for a repeated one)
+# and kappa (scaled). "plugin": the MAP
 # draw's hyperparameters with kappa on a grid (q = 1) or uniform, weighted
 # by likelihood times prior.
 design_particles <- function(fit, ndraws, method) {
   N <- nrow(fit$Phi)
   q <- fit$scale$q
   if (method == "joint") {
-    rows <- unique(round(seq(1, N, length.out = min(ndraws, N))))
-    phi <- sampler_draws(fit, rows)
-    return(list(phi = phi, lw0 = rep(0, nrow(phi)), kappa = phi[, seq_len(q), drop = FALSE]))
+    # evenly over the distinct draws, each weighted by its repeats: a
+    # reweighted fit's draws repeat (update_runs()), and picking among all
+    # draws would spend particles on copies. Without repeats, every draw
+    # is its own run (the particles are the evenly spaced draws).
+    same <- c(FALSE, rowSums(abs(diff(fit$Phi))) == 0 & diff(fit$chain) == 0)
+    run <- cumsum(!same)
+    G <- run[N]
+    starts <- which(!same)
+    pick <- unique(round(seq(1, G, length.out = min(ndraws, G))))
+    phi <- sampler_draws(fit, starts[pick])
+    return(list(phi = phi, lw0 = log(tabulate(run, G)[pick]), kappa = phi[, seq_len(q), drop = FALSE]))
   }
   phi0 <- sampler_draws(fit, which.max(fit$logPost))
   K <- if (q == 1L) matrix((seq_len(ndraws) - 0.5) / ndraws) else matrix(stats::runif(ndraws * q), ndraws, q)

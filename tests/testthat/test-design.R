@@ -256,6 +256,36 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
   expect_lt(abs(s1 / sg - 1), 0.1)
 })
 
+test_that("the look-ahead's particles are distinct draws weighted by their repeats", {
+  pb <- sinus_problem()
+  set.seed(3)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
+                   nChains = 2, showProgress = FALSE)
+  # the reference: runs of equal consecutive draws within a chain (an MCMC
+  # sweep that moved nothing repeats a draw)
+  runs <- rle(paste(fit$chain, apply(fit$Phi, 1, paste, collapse = " ")))$lengths
+  parts <- FBC:::design_particles(fit, 1000, "joint")
+  expect_equal(nrow(parts$phi), length(runs))
+  expect_equal(exp(parts$lw0), runs)
+  # fewer particles than draws: evenly spaced ones
+  expect_equal(nrow(FBC:::design_particles(fit, 50, "joint")$phi), 50)
+  # each draw three times in a row, as a reweighted fit's resampled draws
+  # repeat (update_runs()): the same particles, each of three times the weight
+  rep3 <- fit
+  rep3$Phi <- fit$Phi[rep(seq_len(nrow(fit$Phi)), each = 3), ]
+  rep3$chain <- rep(fit$chain, each = 3)
+  parts3 <- FBC:::design_particles(rep3, 1000, "joint")
+  expect_identical(parts3$phi, parts$phi)
+  expect_equal(parts3$lw0, parts$lw0 + log(3))
+  # a draw at the end of chain 1 repeated at the start of chain 2 is two
+  last <- max(which(fit$chain == 1))
+  rep1 <- fit
+  rep1$Phi[last + 1, ] <- fit$Phi[last, ]
+  expect_equal(nrow(FBC:::design_particles(rep1, 1000, "joint")$phi),
+               length(rle(paste(rep1$chain, apply(rep1$Phi, 1, paste, collapse = " ")))$lengths))
+  expect_equal(sum(exp(FBC:::design_particles(rep1, 1000, "joint")$lw0)), nrow(fit$Phi))
+})
+
 test_that("proposed runs lie in the design's ranges and away from the runs", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 1200)
