@@ -31,11 +31,13 @@
 #' (resample-move; `settings$reweight$topUp` sweeps a chain); below a
 #' quarter the model is refitted. On a design loop (the sinusoid of
 #' inst/bench/design.R, 5 to 35 runs in batches of 1, 10 replicates, 300
-#' steps) 201 steps were reweighted at 0.18 (quartiles 0.14-0.20) of a
-#' fresh fit's CPU time, 94 continued at 0.63 (0.48-1.38) and 5 refitted:
-#' the loop's fits took 0.35 of fresh fits' time in all, and their kappa
-#' posteriors were as close to fresh fits' (Hellinger distance 0.054,
-#' quartiles 0.048-0.063) as two fits are to each other (0.05).
+#' steps) 168 steps were reweighted at 0.18 (quartiles 0.14-0.21) of a
+#' fresh fit's CPU time, 124 continued at 0.60 (0.47-0.80) and 8 refitted:
+#' the loop's fits took 0.30 of fresh fits' time in all (0.71 with refits
+#' only), and their kappa posteriors were about as close to fresh fits'
+#' (Hellinger distance 0.054, quartiles 0.046-0.061) as refits are (0.048).
+#' Their claimed bulk ESS is as honest as a fresh fit's
+#' (inst/bench/design-reweight.R).
 #'
 #' **Refitted** otherwise (and with `reweight = FALSE`, `nMCMC` or `nBurn`
 #' given): from the chains' last states (a warm start) with a fresh
