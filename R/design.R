@@ -165,12 +165,15 @@ fbc_reweight_floor <- 0.25
 # log p_old the fit's logPost (log prior plus log-likelihood, the same
 # units), and log |dT/dphi| varies only through theta_k r_k^alpha_k (+
 # alpha_k log r_k; the other maps scale by constants). Each chain is then
-# resampled systematically in its draws' order by their weights, so it
-# keeps its length and its R-hat and bulk ESS see the repeated draws; the
-# bulk ESS is capped by the old one times the weights' Kish share
-# ((sum w)^2 / (N sum w^2)). Used when these meet the stop rule `rule`.
-# Returns list(fit (NULL when not used), info = list(used, runs (the old
-# fit's), draws, kish, rhat, ess)).
+# resampled systematically in its draws' order by their weights (each
+# chain an importance sample of its own, as each chain of the old fit is a
+# sample of the old posterior), so it keeps its length and its R-hat and
+# bulk ESS see the repeated draws; the bulk ESS is capped by the old one
+# times the weights' Kish share ((sum w)^2 / (N sum w^2)). Returns
+# list(fit, info = list(used, runs (the old fit's), draws, kish, rhat, ess,
+# topUp)): `fit` the resampled draws (info$used: they meet the stop rule
+# `rule`), or NULL when the capped ESS is below fbc_reweight_floor of the
+# rule's (no resampling: the caller refits).
 reweight_runs <- function(fit, model, rule) {
   t0 <- proc.time()[["elapsed"]]
   old <- fit$model
