@@ -112,7 +112,8 @@
 #'   `newdata`, 1 to 100 rows): shrink the prediction's integrated
 #'   variance there (see "A prediction target").
 #' @param ndraws Posterior draws the criterion integrates over (evenly
-#'   spaced over the retained ones).
+#'   spaced over the distinct retained ones, each weighted by its repeats:
+#'   the draws of a reweighted fit, [update_runs()], repeat).
 #' @param nfantasy Fantasised simulator values per candidate.
 #' @param method `"joint"` (the default) or `"plugin"` (see above).
 #' @param ncandidates Number of default candidates (default
