@@ -18,7 +18,8 @@
 #' weighed by the new posterior over the old one. The weight
 #' \eqn{p_{new}(T\phi \mid \textrm{all runs}) |dT/d\phi| / p_{old}(\phi \mid
 #' \textrm{old runs})} is exact up to a constant (the new model's prior and
-#' likelihood on all runs, one likelihood per draw, at most 2000 draws), so
+#' likelihood on all runs, one likelihood per draw: every draw, or of
+#' N >= 4000 draws every `N %/% 2000`-th), so
 #' the weighted draws are importance draws of the new posterior, not an
 #' approximation of it. Each chain is resampled in order by the weights,
 #' and the result is used when it meets the stop rule: R-hat of the
@@ -146,9 +147,10 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
 
 # ------------------------------------------------ reweighting draws ----
 
-# At most this many of the old fit's draws are reweighted (each chain
-# thinned evenly): the draws' autocorrelation leaves their effective
-# number nearly whole, and each costs one likelihood from scratch.
+# The old fit's N draws are reweighted every floor(N / this)-th (each
+# chain thinned evenly; all of them below twice this, 2000 to 4000 of them
+# from there): the draws' autocorrelation leaves their effective number nearly
+# whole, and each costs one likelihood from scratch.
 fbc_reweight_draws <- 2000L
 # Below this share of the stop rule's effective draws (the old bulk ESS
 # times the weights' Kish share) the reweighted draws are not continued
