@@ -30,7 +30,8 @@
 #'   start), see [update_runs()]. `nMCMC` and `converge` are then the new
 #'   run's, as in [calibrate()].
 #' @param reweight With `sim`: try the old draws reweighted first (see
-#'   [update_runs()]); `FALSE` always refits.
+#'   [update_runs()]); `FALSE` always refits. Given without `sim`, an
+#'   error (it would do nothing).
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return The `fbc` object with the chains extended: `Phi`, `chain`,
@@ -46,6 +47,12 @@
 update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim = NULL,
                        reweight = TRUE, ...) {
   check_dots_empty(..., fn = update.fbc, name = "update")
+  if (is.null(sim) && !missing(reweight)) {
+    cli::cli_abort(c(
+      "{.arg reweight} is for new simulator runs ({.arg sim}): continuing the chains draws no new posterior.",
+      i = "Add runs with {.code update(fit, sim = more_runs, reweight = {format_value(reweight)})}."
+    ))
+  }
   if (!is.null(sim)) {
     return(update_runs(object, sim, nMCMC = if (!missing(nMCMC)) nMCMC,
                        converge = if (!missing(converge)) converge, showProgress = showProgress,

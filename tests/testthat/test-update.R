@@ -105,6 +105,8 @@ test_that("update() refuses arguments it does not use", {
   # `field` cannot be changed by update(): refit with calibrate() (new runs: `sim =`)
   expect_snapshot(error = TRUE, update(fit, nMCMC = 100, field = ballField))
   expect_snapshot(error = TRUE, update(fit, nmcmc = 100))
+  # `reweight` is for new runs: without them it would be ignored
+  expect_snapshot(error = TRUE, update(fit, nMCMC = 100, reweight = FALSE))
 })
 
 test_that("update() refuses run lengths whose draws cannot be stored", {
