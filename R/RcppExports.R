@@ -61,12 +61,12 @@
     .Call(`_FBC_fbc_sample`, Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model)
 }
 
-.fbc_loglik_c <- function(Xf, yf, Xs, ys, phi, nugget, model) {
-    .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
-}
-
 .fbc_loglik_draws_c <- function(Xf, yf, Xs, ys, phis, nugget, model) {
     .Call(`_FBC_fbc_loglik_draws`, Xf, yf, Xs, ys, phis, nugget, model)
+}
+
+.fbc_loglik_c <- function(Xf, yf, Xs, ys, phi, nugget, model) {
+    .Call(`_FBC_fbc_loglik`, Xf, yf, Xs, ys, phi, nugget, model)
 }
 
 .fbc_block_estimate_c <- function(W, forget, walked = 0L) {

@@ -263,8 +263,7 @@ top_up <- function(fit, rule, showProgress) {
   rule$first <- NULL  # (calibrate()'s first check, counted from the warm-up's end)
   # the rule's ceiling counts from here: the chains carry the sweeps of
   # every fit since the last refit
-  done <- max(vapply(fit$state$chains, function(st) as.numeric(st$sampler$iter), numeric(1)))
-  rule$maxMCMC <- as.integer(min(.Machine$integer.max, done + rule$maxMCMC))
+  rule$maxMCMC <- as.integer(min(.Machine$integer.max, chain_sweeps(fit) + rule$maxMCMC))
   # update()'s first stretch (fbc_first_check sweeps), then checks every
   # as many: not as the retained sweeps grow by half, since the chains'
   # sweeps since the last refit can be many (a chain at 50,000 took 25,650

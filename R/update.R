@@ -66,7 +66,7 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
   s <- object$settings
   states <- object$state$chains
   if (!is.null(converge)) {
-    done <- max(vapply(states, function(st) as.numeric(st$sampler$iter), numeric(1)))
+    done <- chain_sweeps(object)
     check_update_ceiling(converge, done, nMCMC)
   }
   if (nMCMC %/% s$thinning < 1L) {
@@ -111,6 +111,12 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
   run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
              nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
              dat = object$data, spec = object$spec, moves = object$model$moves, whole = TRUE)
+}
+
+# The most sweeps any chain of `fit` has run (counted from its start in
+# calibrate(), or in the refit it comes from).
+chain_sweeps <- function(fit) {
+  max(vapply(fit$state$chains, function(st) as.numeric(st$sampler$iter), numeric(1)))
 }
 
 # Under a `converge` rule, update() runs `nMCMC` further sweeps first: the

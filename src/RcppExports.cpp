@@ -252,23 +252,6 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
-// fbc_loglik
-double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget, const Rcpp::List& model);
-RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
-    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
-    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
-    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
-    Rcpp::traits::input_parameter< const arma::vec& >::type phi(phiSEXP);
-    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
-    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget, model));
-    return rcpp_result_gen;
-END_RCPP
-}
 // fbc_loglik_draws
 arma::vec fbc_loglik_draws(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_loglik_draws(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
@@ -283,6 +266,23 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
     rcpp_result_gen = Rcpp::wrap(fbc_loglik_draws(Xf, yf, Xs, ys, phis, nugget, model));
+    return rcpp_result_gen;
+END_RCPP
+}
+// fbc_loglik
+double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::vec& phi, double nugget, const Rcpp::List& model);
+RcppExport SEXP _FBC_fbc_loglik(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phiSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type phi(phiSEXP);
+    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_loglik(Xf, yf, Xs, ys, phi, nugget, model));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -342,8 +342,8 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_log_prior_vec", (DL_FUNC) &_FBC_log_prior_vec, 4},
     {"_FBC_prior_codes", (DL_FUNC) &_FBC_prior_codes, 0},
     {"_FBC_fbc_sample", (DL_FUNC) &_FBC_fbc_sample, 13},
-    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {"_FBC_fbc_loglik_draws", (DL_FUNC) &_FBC_fbc_loglik_draws, 7},
+    {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
     {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},

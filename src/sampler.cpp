@@ -1201,15 +1201,6 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
                       interrupted);
 }
 
-// Log-likelihood at one parameter vector, computed from scratch.
-// [[Rcpp::export(.fbc_loglik_c)]]
-double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                  const arma::vec& ys, const arma::vec& phi, double nugget,
-                  const Rcpp::List& model) {
-  std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, model);
-  return post->init(phi) ? post->logLik() : R_NegInf;
-}
-
 // Log-likelihood log p(y | phi_s) at each row phi_s of `phis`, from
 // scratch on one posterior (its workspaces reused; -Inf where the
 // covariance is not positive definite); update(fit, sim = ) weighs the
@@ -1226,6 +1217,15 @@ arma::vec fbc_loglik_draws(const arma::mat& Xf, const arma::vec& yf, const arma:
     out[s] = post->init(phi) ? post->logLik() : R_NegInf;
   }
   return out;
+}
+
+// Log-likelihood at one parameter vector, computed from scratch
+// (fbc_loglik_draws() of one row).
+// [[Rcpp::export(.fbc_loglik_c)]]
+double fbc_loglik(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                  const arma::vec& ys, const arma::vec& phi, double nugget,
+                  const Rcpp::List& model) {
+  return fbc_loglik_draws(Xf, yf, Xs, ys, phi.t(), nugget, model)[0];
 }
 
 // The warm-up's estimate of a block's covariance (Block::pooled()) from the
