@@ -41,12 +41,25 @@ interrupt_at_call <- function(m) {
   }
 }
 
-# Polls `cond()` every 0.1 s until TRUE; fails the test after `timeout` s.
-wait_until <- function(cond, timeout = 60) {
+# Polls `cond()` every 0.1 s until TRUE; fails the test (naming the
+# condition) after `timeout` s, or at once when the background R session
+# `child` has ended without it (with the child's error output). The timeout
+# is generous: a loaded machine can take long to start a session and its
+# workers, and a passing run never waits for it.
+wait_until <- function(cond, child = NULL, timeout = 300) {
+  what <- paste(deparse(body(cond)), collapse = " ")
   t0 <- Sys.time()
   while (!isTRUE(tryCatch(suppressWarnings(cond()), error = function(e) FALSE))) {
-    if (as.numeric(Sys.time() - t0, units = "secs") > timeout) {
-      testthat::fail(sprintf("condition not met within %d s", timeout))
+    gone <- !is.null(child) && !child$is_alive()
+    if (gone || as.numeric(Sys.time() - t0, units = "secs") > timeout) {
+      why <- if (gone) {
+        err <- tryCatch(child$read_all_error(), error = function(e) "")
+        sprintf("the child session ended first (exit status %s): %s",
+                format(child$get_exit_status()), substr(err, 1, 500))
+      } else {
+        sprintf("not met within %d s", timeout)
+      }
+      testthat::fail(sprintf("wait_until(%s): %s", substr(what, 1, 200), why))
       return(FALSE)
     }
     Sys.sleep(0.1)

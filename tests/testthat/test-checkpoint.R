@@ -99,7 +99,7 @@ test_that("a session killed with SIGKILL mid-run resumes to the uninterrupted dr
   }, args = list(dir = dir, args = ck_args, seed = ck_seed, sampler = slow_sampler(0.03)))
   on.exit(child$kill(), add = TRUE)
   # kill the session while chain 1 is past burn-in
-  wait_until(function() ck_iter(dir, 1) >= 400)
+  wait_until(function() ck_iter(dir, 1) >= 400, child)
   child$kill()  # SIGKILL
   expect_false(child$is_alive())
   at <- ck_iter(dir, 1)
@@ -138,7 +138,7 @@ test_that("multisession: a worker killed mid-run loses nothing but time; the ses
   }, args = list(dir = dir, args = ck_args, seed = ck_seed, sampler = slow_sampler(0.05)))
   on.exit(child$kill(), add = TRUE)
   pidFile <- file.path(dir, "chain-2.pid")
-  wait_until(function() file.exists(pidFile) && ck_iter(dir, 2) >= 400)
+  wait_until(function() file.exists(pidFile) && ck_iter(dir, 2) >= 400, child)
   pid <- as.integer(readLines(pidFile)[1])
   tools::pskill(pid, tools::SIGKILL)
   child$wait(120000)
@@ -187,7 +187,7 @@ test_that("multisession: Ctrl-C returns the chains' draws and leaves the workers
   wait_until(function() {
     calls <- table(readLines(marker))
     length(calls) == 2 && all(calls >= 5)
-  })
+  }, child)
   # SIGINT to the session and its workers at once, as Ctrl-C in a terminal
   # does (the workers are in the session's process group)
   workers <- as.integer(unique(readLines(marker)))
@@ -250,11 +250,11 @@ test_that("multisession: a second Ctrl-C kills the workers and keeps the checkpo
   }, args = list(dir = dir, sampler = sampler))
   on.exit(child$kill(), add = TRUE)
   wait_until(function() ck_iter(dir, 1) >= 600 && ck_iter(dir, 2) >= 600 &&
-               all(file.exists(file.path(dir, c("chain-1.pid", "chain-2.pid")))))
+               all(file.exists(file.path(dir, c("chain-1.pid", "chain-2.pid")))), child)
   pids <- vapply(1:2, function(k) as.integer(readLines(file.path(dir, sprintf("chain-%d.pid", k)))[1]),
                  integer(1))
   child$interrupt()
-  wait_until(function() file.exists(file.path(dir, "STOP")))
+  wait_until(function() file.exists(file.path(dir, "STOP")), child)
   Sys.sleep(0.5)
   child$interrupt()
   child$wait(60000)
