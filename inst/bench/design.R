@@ -270,6 +270,10 @@ next_runs <- function(method, fit, n, lhsState) {
       f <- suppressWarnings(update(fit, sim = runs_at(C[i, , drop = FALSE])))
       hellinger(kappas(f), oracleRef)
     }, numeric(1))
+    # (per step: the distances the oracle saw for ours' pick, the
+    # plug-in's, and the best and median of the 25 uniform candidates)
+    oracleSeen <<- data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
+                              hMedianUniform = stats::median(h[1:25]), hOracle = min(h))
     return(C[which.min(h), , drop = FALSE])
   }
   switch(method,
@@ -308,9 +312,15 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
-    if (nrow(sim) >= init + added) return(rbind(do.call(rbind, rows), row))
+    if (nrow(sim) >= init + added) {
+      # (the last row has no design step: the oracle's columns NA)
+      if (length(rows)) for (nm in setdiff(names(rows[[1]]), names(row))) row[[nm]] <- NA_real_
+      return(rbind(do.call(rbind, rows), row))
+    }
+    oracleSeen <<- NULL
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState))
     row$designCpu <- tDesign
+    if (!is.null(oracleSeen)) row <- cbind(row, oracleSeen)
     rows[[length(rows) + 1]] <- row
     if (method %in% c("lhs", "random")) {
       if (method == "lhs") lhsState <- rbind(lhsState, U)
@@ -341,12 +351,18 @@ one_replicate <- function(r) {
   fit0 <- list()
   fit0$cpu <- cpu(fit0$fit <- fit_runs(runs_at(to_natural(start)), field))
   fit0$seed <- get(".Random.seed", envir = globalenv())
-  res <- do.call(rbind, lapply(methods, function(method) {
+  res <- lapply(methods, function(method) {
     out <- one_method(method, r, start, field, ref, tRef, fit0)
     cat(sprintf("%s b%d i%d rep %d %-6s Hellinger %s (fits %.1f s, design %.1f s, metrics %.1f s)\n",
                 problem, batch, init, r, method, paste(sprintf("%.2f", out$hellinger), collapse = " "),
                 sum(out$fitCpu), sum(out$designCpu, na.rm = TRUE), sum(out$metricCpu)))
     out
+  })
+  # (the oracle's rows have columns of their own: NA for the others)
+  all <- unique(unlist(lapply(res, names)))
+  res <- do.call(rbind, lapply(res, function(x) {
+    x[setdiff(all, names(x))] <- NA_real_
+    x[all]
   }))
   saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-i%d-r%02d%s.rds", problem, batch, init, r,
                                           if (nzchar(opts$tag)) paste0("-", opts$tag) else "")))
