@@ -66,8 +66,9 @@
 # stream is restored after it, so the picks and warm fits are those of a
 # run without it): CPU s, sweeps a chain, warm-ups, draws kept, max R-hat
 # and min bulk ESS over the parameters, whether the stop rule was met, for
-# both fits, and the Hellinger distance between their kappa posteriors
-# (columns warm*, fresh*, warmFresh; NA on the starting fit).
+# both fits, the Hellinger distance between their kappa posteriors and the
+# fresh fit's to the reference (columns warm*, fresh*, warmFresh,
+# freshHellinger; NA on the starting fit).
 # Every row says how update(fit, sim =) drew its fit: `reweighted` (the old
 # draws reweighted, see ?update_runs) and `topUp` (sweeps a chain the
 # reweighted draws were continued; NA when refitted).
@@ -222,13 +223,17 @@ fit_facts <- function(fit, tm, pre) {
 # the warm refit `fit` (tFit CPU s) against a fresh fit on its runs, under
 # its own seed, the caller's random stream left as it was
 compare_fresh <- function(fit, tFit, sim, field, seed) {
-  if (is.null(fit)) return(cbind(fit_facts(NULL, NA, "warm"), fit_facts(NULL, NA, "fresh"), warmFresh = NA_real_))
+  if (is.null(fit)) {
+    return(cbind(fit_facts(NULL, NA, "warm"), fit_facts(NULL, NA, "fresh"), warmFresh = NA_real_,
+                 freshHellinger = NA_real_))
+  }
   old <- get(".Random.seed", envir = globalenv())
   on.exit(assign(".Random.seed", old, envir = globalenv()))
   set.seed(seed)
   tFresh <- cpu(fresh <- fit_runs(sim, field))
   cbind(fit_facts(fit, tFit, "warm"), fit_facts(fresh, tFresh, "fresh"),
-        warmFresh = hellinger2(kappas(fit), kappas(fresh)))
+        warmFresh = hellinger2(kappas(fit), kappas(fresh)),
+        freshHellinger = hellinger(kappas(fresh), curRef))
 }
 # largest Hellinger distance over the calibration inputs' marginals
 hellinger <- function(K, ref) {
@@ -268,7 +273,7 @@ next_runs <- function(method, fit, n, lhsState) {
                as.matrix(suppressMessages(propose_runs(fit, n = 1, candidates = cand(), method = "plugin"))[cols]))
     h <- vapply(seq_len(nrow(C)), function(i) {
       f <- suppressWarnings(update(fit, sim = runs_at(C[i, , drop = FALSE])))
-      hellinger(kappas(f), oracleRef)
+      hellinger(kappas(f), curRef)
     }, numeric(1))
     # (per step: the distances the oracle saw for ours' pick, the
     # plug-in's, and the best and median of the 25 uniform candidates)
@@ -296,7 +301,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
   lhsState <- start
   fit <- fit0$fit
   tFit <- fit0$cpu
-  oracleRef <<- ref
+  curRef <<- ref  # (the oracle and compare_fresh() read it)
   fresh <- if (opts$fresh == "1") compare_fresh(NULL)
   repeat {
     K <- kappas(fit)
