@@ -56,7 +56,7 @@
 # closest to the reference (it knows the answer; next_runs()); it costs 27
 # updates a step.
 # Fits: calibrate() and update(fit, sim =) with the package defaults (4
-# chains, until converged) but discrepancy = "none".
+# chains, until converged) but discrepancy = "none" ("gp" for sinusbias).
 # Metrics per step (also the posterior sd of log thetaS, the largest over
 # the inputs: the spread of the emulator's length-scales): Hellinger distance of kappa's posterior to the
 # reference (kernel density of the draws against the exact density on the
@@ -135,8 +135,13 @@ pb <- switch(problem,
                    xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
   stop("problem must be sinus, sinusbias, two, kinetics or tuowu"))
 if (is.null(pb$discrepancy)) pb$discrepancy <- "none"
-if (!is.null(pb$bias)) pb$truth <- function(x) sin(10 * pb$u0 * x) + pb$bias(x)
-if (is.null(pb$truth)) pb$truth <- function(x) pb$eta(cbind(x, matrix(pb$u0, length(x), length(pb$u0), byrow = TRUE)))
+# the field's true process: eta at u0, plus the bias where there is one
+if (is.null(pb$truth)) {
+  pb$truth <- function(x) {
+    pb$eta(cbind(x, matrix(pb$u0, length(x), length(pb$u0), byrow = TRUE))) +
+      if (is.null(pb$bias)) 0 else pb$bias(x)
+  }
+}
 if (problem == "tuowu") {
   # theta* = argmin over theta of the L2 distance on [0, 2 pi] (Tuo and Wu: -0.1789)
   xs <- seq(0, 2 * pi, length.out = 2001)
