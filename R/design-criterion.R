@@ -78,15 +78,15 @@
 #' of the 60 replicates and later in 18; on kinetics they were even (the
 #' joint first in 13 of 30, the plug-in in 15). A kappa grid per
 #' hyperparameter draw in place of the draws (5 x 20 particles) came
-#' between the two (17, quartiles 16-19, on the sinusoid)
-#' and more hyperparameter draws (10 x 20) did worse, so it was not
-#' adopted. The joint criterion stays the default because it needs
-#' neither a MAP point nor a grid: its particles are the posterior draws,
-#' which concentrate where kappa's posterior is whatever the number of
-#' calibration inputs, whereas the plug-in spreads 100 uniform points over
-#' the calibration ranges when there are several (an argument, measured
-#' only up to two inputs). With one calibration input and well identified
-#' hyperparameters, `method = "plugin"` is as good or a run better.
+#' between the two (17, quartiles 16-19, on the sinusoid) and more
+#' hyperparameter draws (10 x 20) did worse, so it was not adopted. The
+#' joint criterion stays the default: its particles are the posterior
+#' draws, which concentrate where kappa's posterior is whatever the number
+#' of calibration inputs, whereas the plug-in spreads its 100 kappa points
+#' uniformly over the calibration ranges when there are several, so that
+#' few of them fall where a narrow posterior is (an argument: with two
+#' inputs the two were even in the median). With one calibration input,
+#' `method = "plugin"` is as good or a run better.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
