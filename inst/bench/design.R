@@ -251,7 +251,7 @@ fit_facts <- function(fit, tm, pre) {
 }
 # the warm refit `fit` (tFit CPU s) against a fresh fit on its runs, under
 # its own seed, the caller's random stream left as it was
-compare_fresh <- function(fit, tFit, sim, field, seed) {
+compare_fresh <- function(fit, tFit, sim, field, seed, ref) {
   if (is.null(fit)) {
     return(cbind(fit_facts(NULL, NA, "warm"), fit_facts(NULL, NA, "fresh"), warmFresh = NA_real_,
                  freshHellinger = NA_real_))
@@ -262,7 +262,7 @@ compare_fresh <- function(fit, tFit, sim, field, seed) {
   tFresh <- cpu(fresh <- fit_runs(sim, field))
   cbind(fit_facts(fit, tFit, "warm"), fit_facts(fresh, tFresh, "fresh"),
         warmFresh = hellinger2(kappas(fit), kappas(fresh)),
-        freshHellinger = hellinger(kappas(fresh), curRef))
+        freshHellinger = hellinger(kappas(fresh), ref))
 }
 # largest Hellinger distance over the calibration inputs' marginals
 hellinger <- function(K, ref) {
@@ -284,7 +284,8 @@ rmse <- function(fit) {
   p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
   sqrt(mean((p - truePred)^2))
 }
-next_runs <- function(method, fit, n, lhsState) {
+# (the oracle's rows: an attribute "seen", see below)
+next_runs <- function(method, fit, n, lhsState, ref) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
   if (grepl("^ours[0-9]+$", method)) {
     nd <- as.integer(sub("ours", "", method))
@@ -297,18 +298,16 @@ next_runs <- function(method, fit, n, lhsState) {
     # reference); the loop then refits with it afresh, so its recorded fit
     # is not the luckiest of 27
     stopifnot(n == 1)
-    C <- rbind(as.matrix(cand()[1:25, ]),
-               as.matrix(propose_runs(fit, n = 1, candidates = cand())[cols]),
-               as.matrix(suppressMessages(propose_runs(fit, n = 1, candidates = cand(), method = "plugin"))[cols]))
+    C <- rbind(as.matrix(cand()[1:25, ]), next_runs("ours", fit, 1), next_runs("plugin", fit, 1))
     h <- vapply(seq_len(nrow(C)), function(i) {
       f <- suppressWarnings(update(fit, sim = runs_at(C[i, , drop = FALSE])))
-      hellinger(kappas(f), curRef)
+      hellinger(kappas(f), ref)
     }, numeric(1))
     # (per step: the distances the oracle saw for ours' pick, the
     # plug-in's, and the best and median of the 25 uniform candidates)
-    oracleSeen <<- data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
-                              hMedianUniform = stats::median(h[1:25]), hOracle = min(h))
-    return(C[which.min(h), , drop = FALSE])
+    return(structure(C[which.min(h), , drop = FALSE],
+                     seen = data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
+                                       hMedianUniform = stats::median(h[1:25]), hOracle = min(h))))
   }
   switch(method,
     ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[cols]),
@@ -318,6 +317,16 @@ next_runs <- function(method, fit, n, lhsState) {
       A <- lhs::augmentLHS(lhsState, n)
       A[(nrow(A) - n + 1):nrow(A), , drop = FALSE]
     })
+}
+
+# rbind() of data frames whose columns differ (the oracle's rows have
+# columns of their own): a column a frame lacks is NA there
+rbind_fill <- function(xs) {
+  all <- unique(unlist(lapply(xs, names)))
+  do.call(rbind, lapply(xs, function(x) {
+    x[setdiff(all, names(x))] <- NA_real_
+    x[all]
+  }))
 }
 
 # fit0: the fit on the starting runs after set.seed(2000 + r), shared by
@@ -330,7 +339,6 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
   lhsState <- start
   fit <- fit0$fit
   tFit <- fit0$cpu
-  curRef <<- ref  # (the oracle and compare_fresh() read it)
   fresh <- if (opts$fresh == "1") compare_fresh(NULL)
   repeat {
     K <- kappas(fit)
@@ -346,15 +354,11 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
-    if (nrow(sim) >= init + added) {
-      # (the last row has no design step: the oracle's columns NA)
-      if (length(rows)) for (nm in setdiff(names(rows[[1]]), names(row))) row[[nm]] <- NA_real_
-      return(rbind(do.call(rbind, rows), row))
-    }
-    oracleSeen <<- NULL
-    tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState))
+    # (the last row has no design step: the oracle's columns NA)
+    if (nrow(sim) >= init + added) return(rbind_fill(c(rows, list(row))))
+    tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState, ref))
     row$designCpu <- tDesign
-    if (!is.null(oracleSeen)) row <- cbind(row, oracleSeen)
+    if (!is.null(attr(U, "seen"))) row <- cbind(row, attr(U, "seen"))
     rows[[length(rows) + 1]] <- row
     if (method %in% c("lhs", "random")) {
       if (method == "lhs") lhsState <- rbind(lhsState, U)
@@ -363,7 +367,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     new <- runs_at(U)
     sim <- rbind(sim, new)
     tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
-    if (opts$fresh == "1") fresh <- compare_fresh(fit, tFit, sim, field, 7000 + 100 * r + nrow(sim))
+    if (opts$fresh == "1") fresh <- compare_fresh(fit, tFit, sim, field, 7000 + 100 * r + nrow(sim), ref)
   }
 }
 
@@ -392,12 +396,7 @@ one_replicate <- function(r) {
                 sum(out$fitCpu), sum(out$designCpu, na.rm = TRUE), sum(out$metricCpu)))
     out
   })
-  # (the oracle's rows have columns of their own: NA for the others)
-  all <- unique(unlist(lapply(res, names)))
-  res <- do.call(rbind, lapply(res, function(x) {
-    x[setdiff(all, names(x))] <- NA_real_
-    x[all]
-  }))
+  res <- rbind_fill(res)  # (the oracle's rows have columns of their own)
   saveRDS(res, file.path(opts$out, sprintf("design-%s-b%d-i%d-r%02d%s.rds", problem, batch, init, r,
                                           if (nzchar(opts$tag)) paste0("-", opts$tag) else "")))
   res
