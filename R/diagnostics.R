@@ -144,6 +144,61 @@ stuck_chains <- function(x) {
   if (length(out)) do.call(rbind, out) else data.frame(var = character(), chain = integer(), draws = integer(), value = numeric())
 }
 
+# Chains in a local mode. When some R-hat is above fbc_rhat_max, a chain
+# whose median log posterior lies below the fbc_mode_quantile quantile of
+# the best chain's (the chain with the highest median) and at least
+# fbc_mode_gap units below its median sits in a region of lower posterior
+# density that it has not left: a second mode (of kappa, typically) holding
+# little of the posterior's mass (two modes of about the same shape differ in
+# mass by about exp(gap)), which running longer rarely leaves. Well-mixed
+# chains' medians sit within a fraction of the log posterior's spread of
+# each other, so neither condition fires on them; a chain still climbing
+# towards them (too short a warm-up) rises from its first half to its
+# second by more than half the gap, or is not low in its second half.
+# data.frame(chain, logPost
+# (its median), best (the best chain), bestLogPost, var (the parameter on
+# which it is farthest from the best chain, in the best chain's sds),
+# value and bestValue (the two chains' medians of var), draws).
+fbc_mode_quantile <- 0.1
+fbc_mode_gap <- 2
+local_mode_chains <- function(x) {
+  none <- data.frame(chain = integer(), logPost = numeric(), best = integer(), bestLogPost = numeric(),
+                     var = character(), value = numeric(), bestValue = numeric(), draws = integer())
+  ks <- sort(unique(x$chain))
+  if (length(ks) < 2L || is.null(x$logPost) || !any(x$estimates$rhat > fbc_rhat_max, na.rm = TRUE)) {
+    return(none)
+  }
+  lp <- split(x$logPost, factor(x$chain, levels = ks))
+  med <- vapply(lp, stats::median, numeric(1))
+  if (any(!is.finite(med))) return(none)
+  b <- which.max(med)
+  # (in the chain's second half too: a chain still climbing towards the
+  # others, short of its warm-up, is not in a mode)
+  half <- function(v, second) {
+    h <- seq_len(length(v) %/% 2)
+    stats::median(if (second) v[-h] else v[h])
+  }
+  early <- vapply(lp, half, numeric(1), second = FALSE)
+  late <- vapply(lp, half, numeric(1), second = TRUE)
+  q <- stats::quantile(lp[[b]], fbc_mode_quantile, names = FALSE)
+  low <- which(med < q & med < med[b] - fbc_mode_gap & late < q & late < med[b] - fbc_mode_gap &
+                 late - early < fbc_mode_gap / 2)
+  if (!length(low)) return(none)
+  best <- x$Phi[x$chain == ks[b], , drop = FALSE]
+  sdBest <- apply(best, 2, stats::sd)
+  medBest <- apply(best, 2, stats::median)
+  out <- lapply(low, function(k) {
+    own <- x$Phi[x$chain == ks[k], , drop = FALSE]
+    medOwn <- apply(own, 2, stats::median)
+    z <- abs(medOwn - medBest) / ifelse(sdBest > 0, sdBest, NA)
+    j <- if (all(is.na(z))) 1L else which.max(z)
+    data.frame(chain = ks[k], logPost = unname(med[k]), best = ks[b], bestLogPost = unname(med[b]),
+               var = colnames(x$Phi)[j], value = unname(medOwn[j]), bestValue = unname(medBest[j]),
+               draws = nrow(own))
+  })
+  do.call(rbind, out)
+}
+
 # The advice for a power-exponential smoothness at 2: a smooth family,
 # whose correlation matrices are better conditioned than exp(-theta d^2) with
 # a tiny nugget and which has no smoothness to sample.
@@ -167,7 +222,12 @@ smooth_kernel_hint <- function(cls) {
 #' the parameter's domain, where the posterior density is at least half its
 #' highest and three times a flat density over the prior's range), a chain that
 #' never moved a sampled parameter (all its draws equal: a stuck chain, whose
-#' R-hat and ESS would otherwise look like a fixed parameter's), calibration
+#' R-hat and ESS would otherwise look like a fixed parameter's), a chain in
+#' a local mode (with some R-hat above 1.01, a chain whose median log
+#' posterior lies below the 10% quantile of the best chain's and at least 2
+#' units below its median: a second mode that the chain did not leave, where
+#' running longer rarely helps; the R-hat message then says so instead of
+#' advising a longer run), calibration
 #' parameters with more than 1% of their draws beyond the range the
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
@@ -243,23 +303,41 @@ convergence_messages <- function(x) {
   rhat <- est$rhat
   ess <- est$ess
   bad <- which(rhat > fbc_rhat_max)
+  modes <- local_mode_chains(x)
   if (length(bad)) {
     msgs <- c(msgs, sprintf(
-      "R-hat above %.2f for %s (max %.3f): the chains disagree. Run longer with `update(fit, nMCMC = ...)`%s.",
+      "R-hat above %.2f for %s (max %.3f): the chains disagree. %s.",
       fbc_rhat_max, paste(rownames(est)[bad], collapse = ", "), max(rhat[bad]),
-      if (nChains < 4) " or use more chains (`nChains = 4`)" else ""
+      if (nrow(modes)) {
+        sprintf("Chain%s %s %s in a local mode (below): running longer rarely moves %s",
+                if (nrow(modes) > 1) "s" else "", paste(modes$chain, collapse = " and "),
+                if (nrow(modes) > 1) "are" else "is", if (nrow(modes) > 1) "them" else "it")
+      } else {
+        paste0("Run longer with `update(fit, nMCMC = ...)`",
+               if (nChains < 4) " or use more chains (`nChains = 4`)" else "")
+      }
     ))
   }
   low <- which(ess < fbc_ess_min)
   if (length(low)) {
     msgs <- c(msgs, sprintf(
-      "Bulk ESS below %d for %s (min %.0f): too few effective draws for stable intervals. Run longer with `update(fit, nMCMC = ...)`.",
-      fbc_ess_min, paste(rownames(est)[low], collapse = ", "), min(ess[low])
+      "Bulk ESS below %d for %s (min %.0f): too few effective draws for stable intervals. %s.",
+      fbc_ess_min, paste(rownames(est)[low], collapse = ", "), min(ess[low]),
+      if (nrow(modes)) "A chain in a local mode (below) is the cause, not the run's length" else
+        "Run longer with `update(fit, nMCMC = ...)`"
     ))
   }
   msgs <- c(msgs, shape_messages(x, rownames(est)[union(bad, low)]))
   if (nChains == 1L) {
     msgs <- c(msgs, "Only one chain: R-hat compares its two halves only. Use `nChains = 4` to check that independent chains agree.")
+  }
+  for (i in seq_len(nrow(modes))) {
+    md <- modes[i, ]
+    msgs <- c(msgs, sprintf(
+      "Chain %d sits in a local mode: its log posterior is lower than chain %d's (median %s against %s), with %s at %s (chain %d: %s), and it did not leave it in %d draws. Such a mode likely holds little of the posterior's mass (about %s of the other's if of the same shape), yet the summaries give it a chain's share. Rerun with another seed (`set.seed()`), or with more chains (`nChains = 8`) to see how often chains fall into it.",
+      md$chain, md$best, format(md$logPost, digits = 4), format(md$bestLogPost, digits = 4),
+      md$var, format(md$value, digits = 3), md$best, format(md$bestValue, digits = 3), md$draws,
+      format(exp(md$logPost - md$bestLogPost), digits = 2)))
   }
   stuck <- stuck_chains(x)
   for (k in unique(stuck$chain)) {

@@ -169,6 +169,60 @@ test_that("a chain that never moves a sampled parameter is reported, a fixed par
   expect_length(grep("^Chain [1-4] never moved .*sigma2E", convergence_messages(z)), 4)
 })
 
+test_that("a chain in a local mode is reported, and the advice is not to run longer", {
+  fit <- small_fit(nChains = 2)
+  set.seed(4)
+  Phi <- iid_draws(fit, 4, 500)
+  chain <- rep(1:4, each = 500)
+  sup <- param_support(fit)
+  k <- match("kappa1", colnames(Phi))
+  # chain 3 sits elsewhere in kappa1 (R-hat fails), its log posterior 6
+  # units below the others' (the log posterior's sd within a chain: 1.2)
+  Phi[chain == 3, k] <- Phi[chain == 3, k] + 0.25 * (sup[k, 2] - sup[k, 1])
+  lp <- stats::rnorm(2000, -40, 1.2)
+  lp[chain == 3] <- lp[chain == 3] - 6
+  local <- function(lp) {
+    x <- fit_with_draws(fit, Phi, chain, logPost = lp)
+    x$estimates <- estimate_table(Phi, chain)
+    x
+  }
+  x <- local(lp)
+  expect_gt(x$estimates["kappa1", "rhat"], 1.01)
+  m <- FBC:::local_mode_chains(x)
+  best <- which.max(tapply(lp, chain, median))
+  expect_equal(m$chain, 3)
+  expect_equal(m$best, unname(best))
+  expect_equal(m$var, "kappa1")
+  expect_equal(m$value, median(Phi[chain == 3, k]))
+  expect_equal(m$bestValue, median(Phi[chain == best, k]))
+  expect_equal(m$logPost, median(lp[chain == 3]))
+  expect_equal(m$draws, 500)
+  msg <- convergence_messages(x)
+  expect_length(grep("local mode", msg), 3)  # R-hat's, ESS's (if low) and its own
+  expect_length(grep("update\\(fit", msg), 0)
+  expect_snapshot(writeLines(strwrap(grep("^Chain 3 sits", msg, value = TRUE), 78)))
+  # the same draws with the chains' log posteriors alike: the R-hat message
+  # advises a longer run, and no chain is in a local mode
+  y <- local(stats::rnorm(2000, -40, 1.2))
+  expect_equal(nrow(FBC:::local_mode_chains(y)), 0)
+  expect_length(grep("R-hat above 1.01 for kappa1.*Run longer", convergence_messages(y)), 1)
+  # a lower chain 1.5 units down (within fbc_mode_gap): not a local mode
+  lp2 <- stats::rnorm(2000, -40, 1.2)
+  lp2[chain == 3] <- lp2[chain == 3] - 1.5
+  expect_equal(nrow(FBC:::local_mode_chains(local(lp2))), 0)
+  # a chain climbing from 12 units down to the others' level (still in its
+  # warm-up): its second half is not low, so not a mode; run longer
+  lp3 <- stats::rnorm(2000, -40, 1.2)
+  lp3[chain == 3] <- lp3[chain == 3] - seq(12, 0, length.out = 500)
+  z <- local(lp3)
+  expect_equal(nrow(FBC:::local_mode_chains(z)), 0)
+  expect_length(grep("Run longer", convergence_messages(z)), 2)
+  # a chain 6 units down while every R-hat is fine: nothing to explain
+  ok <- fit_with_draws(fit, iid_draws(fit, 4, 500), chain, logPost = lp)
+  ok$estimates <- estimate_table(ok$Phi, chain)
+  expect_equal(nrow(FBC:::local_mode_chains(ok)), 0)
+})
+
 test_that("a posterior pressing against its prior's bound is reported", {
   fit <- small_fit(nChains = 1, kappaDist = "uniform", kappaP1 = 7, kappaP2 = 12, kappaInit = 9)
   set.seed(3)
