@@ -338,6 +338,20 @@
 #'   `sigma2B`), which touch only the field block (none under
 #'   `discrepancy = "none"`);
 #' * a single-site move of `sigma2E`;
+#' * a jump of each \eqn{\kappa_l} whose prior is uniform or beta (the
+#'   default beta included; with either `sampler`), after the walks: an
+#'   independence proposal drawn uniformly over the prior's range, accepted
+#'   with the posterior ratio (exact Metropolis-Hastings, not adapted;
+#'   reported as `"kappa1 jump"`). A walk adapted within one mode of a
+#'   multimodal \eqn{\kappa} posterior rarely leaves it: on Tuo and Wu's
+#'   problem with 12-24 runs, 4 of 6 default fits without it ran to the
+#'   50,000-sweep ceiling with chains in different modes (10-14 CPU s, one
+#'   with three of four chains in the mode holding about a quarter of the
+#'   mass); with it all 6 converged in 0.3-0.8 CPU s. It costs about one
+#'   \eqn{\kappa} move a sweep, not measurable beside the simulator block's
+#'   moves at m = 40, 300 and 1000 (`inst/bench/RESULTS-design.md`). To
+#'   run without it, build the model with `fit = FALSE`, set
+#'   `model$moves$jump <- NULL` and fit it with `calibrate(model)`;
 #' * an exact draw of `muB` from its Gaussian full conditional (Gibbs; when
 #'   its prior is gaussian, else a random walk; none without a bias);
 #' * a move multiplying `sigma2S`, `sigma2B` and `sigma2E` (without a bias:
@@ -366,7 +380,7 @@
 #' move \eqn{e^s} times the spread \eqn{L} gives the parameter; `NA` for an
 #' exact draw or a fixed parameter). The sampler counts acceptance once, per
 #' move: `print()` reports each move by name (`kappa1`, `sim`, `bias`,
-#' `sigma2E`, `muB`, `scale`) with its acceptance over the retained sweeps
+#' `sigma2E`, `muB`, `kappa1 jump`, `scale`) with its acceptance over the retained sweeps
 #' of all chains, and `acceptance` gives each parameter its move's rate;
 #' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
 #' scales, `state$chains[[k]]$acceptance` the chain's rates by parameter and

@@ -318,7 +318,7 @@ fit_to_3 <- function(x) {
   s$nChains <- s$nChains %||% 1L
   if (is.null(s$moves)) {
     s$sampler <- s$sampler %||% "single"
-    s$moves <- sampler_moves(s$sampler, spec)
+    s$moves <- sampler_moves(s$sampler, spec, jump = FALSE)
     s$blockSim <- NULL
   }
   # - the moves' parameter names (before each move was reported by name)

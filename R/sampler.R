@@ -14,15 +14,17 @@
 # large simulator block on the dense algebra, where a move of the simulator
 # block costs a Cholesky factor of it and a kappa move an m x m x n
 # triangular solve: each moves once a sweep. `jump`: also a jump move of
-# each free kappa with a uniform prior (an independence proposal from its
-# prior, once a sweep after the walks: `jump`, 1-based in phi), the default
-# for a simulator function, whose multimodal kappa posteriors a walk
-# adapted within one mode rarely leaves (issue 29).
-sampler_moves <- function(sampler, spec, large = FALSE, jump = FALSE) {
+# each free kappa with a uniform or beta prior (an independence proposal
+# uniform over the prior's support, once a sweep after the walks: `jump`,
+# 1-based in phi), the default: a walk adapted within one mode of a
+# multimodal kappa posterior rarely leaves it (issue 29's simulator
+# functions; with an emulator, Tuo and Wu's problem at 18-24 runs, where
+# chains kept their modes for 25,000 draws: inst/bench/RESULTS-design.md).
+sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   if (jump) {
-    out <- sampler_moves(sampler, spec, large)
+    out <- sampler_moves(sampler, spec, large, jump = FALSE)
     fam <- names(prior_families)[match(spec$table$family, prior_families)]
-    out$jump <- which(spec$classes == "kappa" & fam == "uniform")
+    out$jump <- which(spec$classes == "kappa" & fam %in% c("uniform", "beta"))
     return(out)
   }
   if (sampler == "single") {

@@ -734,10 +734,10 @@ struct ScaleMove : Move {
   }
 };
 
-// Independence proposal of kappa_j from its uniform prior (issue 29: a
+// Independence proposal of kappa_j, uniform over its prior's support (a
 // mode-jumping move; the walk's adapted step stays within a mode). With
-// x* ~ U(lo, hi), the prior's support on the sampler's scale, the proposal
-// density is constant and cancels:
+// x* ~ U(lo, hi), the support of its uniform or beta prior on the
+// sampler's scale, the proposal density is constant and cancels:
 //   log r = log L(phi*) + log p(x*) - log L(phi) - log p(x).
 // Not adapted; one call of f (function simulator) or one kappa move's
 // algebra per step.
@@ -746,9 +746,12 @@ struct JumpMove : Move {
   double lo, hi, accBatch;  // support on the sampler's scale; acceptances this batch
   JumpMove(int j_, const Chain& ch) : j(j_), accBatch(0) {
     const Priors& pr = ch.pr;
-    if (pr.family[j] != PF_UNIFORM || pr.b[j] == 0)
-      Rcpp::stop("the jump move needs a uniform prior on %s", ch.param_name(j_).c_str());
-    const double u1 = (pr.p1[j] - pr.a[j]) / pr.b[j], u2 = (pr.p2[j] - pr.a[j]) / pr.b[j];
+    if ((pr.family[j] != PF_UNIFORM && pr.family[j] != PF_BETA) || pr.b[j] == 0)
+      Rcpp::stop("the jump move needs a uniform or beta prior on %s", ch.param_name(j_).c_str());
+    // (the prior's argument a + b x lies in [p1, p2], a beta's in [0, 1])
+    const bool beta = pr.family[j] == PF_BETA;
+    const double u1 = ((beta ? 0.0 : pr.p1[j]) - pr.a[j]) / pr.b[j],
+      u2 = ((beta ? 1.0 : pr.p2[j]) - pr.a[j]) / pr.b[j];
     lo = std::min(u1, u2); hi = std::max(u1, u2);
     idx = {j_};
     name = ch.param_name(j_) + " jump";

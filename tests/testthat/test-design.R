@@ -198,7 +198,7 @@ test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   fit2 <- update(fit, sim = pb$sim[7:40, ], converge = until_converged(ess = 1500))
   rw <- fit2$settings$reweight
   expect_false(rw$used)
-  expect_lt(rw$ess, 100)  # below a quarter of the rule's: no continuation
+  expect_lt(rw$ess, 1500 / 4)  # below a quarter of the rule's: no continuation
   expect_true(fit2$settings$warmStart)
   expect_true(fit2$settings$warmup >= 200)
   # (kappa's sd is 0.01 of its range: a grid finer than the default's)

@@ -373,3 +373,45 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
     expect_lt(err, 0.15, label = names(fit$Phi[1, ix[a], drop = FALSE]))
   }
 })
+
+test_that("kappa's jump move finds both modes of a bimodal posterior in their grid proportions", {
+  # Tuo and Wu's (2015) model, wrong for every kappa, on 20 random runs and
+  # 16 field data: with the simulator GP's parameters and sigma2E fixed (a
+  # default fit's last state on these data), kappa's posterior has a mode
+  # near -0.2 and one near 0.55 with about 28% of the mass (the grid of
+  # dense_loglik() times the Beta(1.1, 1.1) prior). Without the jump
+  # (no_jump()) the chain never left the lower mode (share 0, no crossing,
+  # seeds 4-8); with it the share was 0.277-0.292 with 630-680 crossings.
+  eta <- function(x, u) exp(x / 10) * sin(x) - sqrt(u^2 - u + 1) * (sin(u * x) + cos(u * x))
+  xf <- rep(seq(0.2, 2 * pi - 0.2, length.out = 8), 2)
+  set.seed(1001)
+  field <- data.frame(y = exp(xf / 10) * sin(xf) + stats::rnorm(16, 0, 0.2), x = xf)
+  set.seed(3)
+  x <- stats::runif(20, 0, 2 * pi)
+  u <- stats::runif(20, -1, 1)
+  sim <- data.frame(y = eta(x, u), x = x, u1 = u)
+  hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(3.28, 9.77), sigma2SDist = "fixed",
+                         sigma2SInit = 1.68, sigma2EDist = "fixed", sigma2EInit = 0.0473)
+  set.seed(4)
+  fit <- suppressWarnings(calibrate(sim, field, discrepancy = "none", hypers = hyp, nMCMC = 20000,
+                                    nBurn = 1000, thinning = 4, nChains = 1))
+  expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
+  d <- fit$data
+  phi <- fit$state$chains[[1]]$last
+  g <- seq(0, 1, length.out = 1001)
+  lp <- vapply(g, function(k) {
+    phi[1] <- k
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
+                 discrepancy = "none")
+  }, numeric(1)) + stats::dbeta(g, 1.1, 1.1, log = TRUE)
+  dens <- exp(lp - max(lp))
+  kappa <- fit$scale$xmin[2] + (fit$scale$xmax[2] - fit$scale$xmin[2]) * g
+  upper <- sum(dens[kappa > 0]) / sum(dens)
+  expect_gt(upper, 0.2)  # two modes, each with mass
+  expect_lt(upper, 0.4)
+  # the share of the draws in the upper mode: 5000 draws, about 650
+  # crossings between the modes (sd of the share about 0.01)
+  expect_lt(abs(mean(fit$Phi[, "kappa1"] > 0) - upper), 0.04)
+  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
+  expect_lt(ks, 0.06)
+})

@@ -16,6 +16,12 @@ skip_if_not_reference_blas <- function() {
 }
 # (with FBC 0.1.0's kernels and noise prior, as the fixtures were made)
 old_args <- c(list(nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2), defaults_010)
+# calibrate(ballSim, ballField, <old_args>, ...) as those versions ran it:
+# without kappa's jump move (no_jump(), helper-fit.R)
+old_run <- function(...) {
+  m <- no_jump(do.call(calibrate, c(list(ballSim, ballField, fit = FALSE), defaults_010)))
+  calibrate(m, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2, ...)
+}
 
 # The simulator algebra as formats 3 to 5 kept it beside the choice (the
 # retired sim_algebra_info()): name capitalised, the product design's dims.
@@ -178,8 +184,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(predict(fit, c(1, 2.5, 4), method = "MAP"),
                    readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map)
   set.seed(7)
-  now <- do.call(calibrate, c(list(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2,
-                                   nChains = 2), defaults_010))
+  now <- old_run()
   expect_identical(now$Phi, old$Phi)
   expect_identical(now$logPost, old$logPost)
   # the adapted state as it was (today's state adds the adaptive warm-up's
@@ -216,7 +221,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(unname(up$Phi[up$chain == 1, ][1:100, ]), unname(old$Phi[old$chain == 1, ]))
   # a current fit written as format 3 upgrades to the same fit
   set.seed(7)
-  now <- do.call(calibrate, c(list(ballSim, ballField), old_args))
+  now <- old_run()
   back <- FBC:::upgrade_fbc(as_format_3(now))
   # (settings$warmup, each chain's warm-up, is newer than format 3)
   expect_identical(back$settings, now$settings[setdiff(names(now$settings), "warmup")])
@@ -290,7 +295,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_false(file.exists(file.path(dir, "chain-2.rds")))
   set.seed(999)  # the checkpoint has the streams
   expect_message(
-    fit <- do.call(calibrate, c(list(ballSim, ballField, checkpoint = dir), old_args)),
+    fit <- old_run(checkpoint = dir),
     "iterations 150 and 0"
   )
   # chain 1 resumed after burn-in, where nothing adapts any more: its draws
@@ -308,7 +313,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   # version's adaptation rule (one rule for every move since issue 19): its
   # draws are those of this version's uninterrupted run with the same seed
   set.seed(7)
-  now <- do.call(calibrate, c(list(ballSim, ballField), old_args))
+  now <- old_run()
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)

@@ -27,12 +27,12 @@ test_that("each move is reported by name, and its counts add up over update()", 
   fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 2,
                    kernelS = "powexp", kernelB = "powexp")
   rep <- FBC:::move_report(fit)
-  expect_identical(rep$move, c("kappa1", "sim", "bias", "sigma2E", "muB", "scale"))
-  expect_identical(rep$kind, c("walk", "joint", "joint", "single", "gibbs", "scale"))
+  expect_identical(rep$move, c("kappa1", "sim", "bias", "sigma2E", "muB", "kappa1 jump", "scale"))
+  expect_identical(rep$kind, c("walk", "joint", "joint", "single", "gibbs", "jump", "scale"))
   expect_identical(rep$parameters[2], "thetaS1,thetaS2,alphaS1,alphaS2,sigma2S")
   # tries: repeats x retained sweeps x chains
   ms <- lapply(fit$state$chains, function(s) s$sampler$moves)
-  expect_identical(ms[[1]]$tries, c(3, 2, 2, 1, 1, 1) * 200)
+  expect_identical(ms[[1]]$tries, c(3, 2, 2, 1, 1, 1, 1) * 200)
   # a move's acceptance is the mean over chains of its parameters' acceptance
   # (equal tries per chain)
   expect_equal(rep$acceptance[rep$move == "sim"], mean(vapply(fit$state$chains,
@@ -40,7 +40,7 @@ test_that("each move is reported by name, and its counts add up over update()", 
   expect_equal(rep$acceptance[rep$move == "muB"], 1)
   more <- update(fit, nMCMC = 100)
   ms2 <- lapply(more$state$chains, function(s) s$sampler$moves)
-  expect_identical(ms2[[1]]$tries, c(3, 2, 2, 1, 1, 1) * 300)
+  expect_identical(ms2[[1]]$tries, c(3, 2, 2, 1, 1, 1, 1) * 300)
   expect_true(all(ms2[[1]]$accepted >= ms[[1]]$accepted))
 })
 
