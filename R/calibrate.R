@@ -380,8 +380,8 @@
 #' move \eqn{e^s} times the spread \eqn{L} gives the parameter; `NA` for an
 #' exact draw or a fixed parameter). The sampler counts acceptance once, per
 #' move: `print()` reports each move by name (`kappa1`, `sim`, `bias`,
-#' `sigma2E`, `muB`, `kappa1 jump`, `scale`) with its acceptance over the retained sweeps
-#' of all chains, and `acceptance` gives each parameter its move's rate;
+#' `sigma2E`, `muB`, `kappa1 jump`, `scale`) with its acceptance over the
+#' retained sweeps of all chains, and `acceptance` gives each parameter its move's rate;
 #' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
 #' scales, `state$chains[[k]]$acceptance` the chain's rates by parameter and
 #' `state$chains[[k]]$scaleAcceptance` its scale move's rate.

@@ -74,26 +74,27 @@
 #' }
 #' Both criteria need far fewer runs than a space-filling design (with two
 #' inputs nested LHS needed 89 runs in the median, 52 to over 100, on the 9
-#' replicates run that far). The hyperparameters' uncertainty did not make the joint
-#' criterion's picks better: the plug-in was as fast or a little faster on
-#' every problem measured. On the sinusoid it reached the distance first in
-#' 38 of the 60 replicates and later in 18; on kinetics they were even
-#' (the joint first in 13 of 30, the plug-in in 15); with two inputs the
-#' plug-in was first in 16 of 30 and the joint in 11; on Tuo and Wu's
-#' misspecified problem (distance 0.2, 30 replicates) both needed 22 runs
-#' in the median and the plug-in was first in 19, the joint in 8. A greedy oracle that knows every candidate's outcome needs only
-#' 1.15-1.26 times fewer runs than the plug-in, so the room left for any
-#' one-step criterion is small. A kappa grid per hyperparameter draw in
-#' place of the draws (5 x 20 particles) came between the two (17,
-#' quartiles 16-19, on the sinusoid) and more hyperparameter draws (10 x
-#' 20) did worse, so it was not adopted. The joint criterion stays the
-#' default for its honest gains: the plug-in's own expected gains ignore
-#' the hyperparameters' spread and overstated what its picks were worth
-#' under the joint posterior (0.34-0.88 against 0.15-0.42 on the
-#' sinusoid's first picks at 5 runs); and its 100 kappa points are spread uniformly over the
-#' calibration ranges when there are several, which was measured with two
-#' inputs only. With one or two calibration inputs and the fewest runs as
-#' the aim, `method = "plugin"` is as good or one to three runs better.
+#' replicates run that far). The hyperparameters' uncertainty did not make
+#' the joint criterion's picks better: the plug-in was as fast or a little
+#' faster on every problem measured. On the sinusoid it reached the distance
+#' first in 38 of the 60 replicates and later in 18; on kinetics they were
+#' even (the joint first in 13 of 30, the plug-in in 15); with two inputs
+#' the plug-in was first in 16 of 30 and the joint in 11; on Tuo and Wu's
+#' misspecified problem (distance 0.2, 30 replicates) both needed 22 runs in
+#' the median and the plug-in was first in 19, the joint in 8. A greedy
+#' oracle that knows every candidate's outcome needs only 1.15-1.26 times
+#' fewer runs than the plug-in, so the room left for any one-step criterion
+#' is small. A kappa grid per hyperparameter draw in place of the draws (5 x
+#' 20 particles) came between the two (17, quartiles 16-19, on the sinusoid)
+#' and more hyperparameter draws (10 x 20) did worse, so it was not adopted.
+#' The joint criterion stays the default for its honest gains: the plug-in's
+#' own expected gains ignore the hyperparameters' spread and overstated what
+#' its picks were worth under the joint posterior (0.34-0.88 against
+#' 0.15-0.42 on the sinusoid's first picks at 5 runs); and its 100 kappa
+#' points are spread uniformly over the calibration ranges when there are
+#' several, which was measured with two inputs only. With one or two
+#' calibration inputs and the fewest runs as the aim, `method = "plugin"` is
+#' as good or one to three runs better.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
