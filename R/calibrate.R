@@ -349,7 +349,12 @@
 #'   with three of four chains in the mode holding about a quarter of the
 #'   mass); with it all 6 converged in 0.3-0.8 CPU s. It costs about one
 #'   \eqn{\kappa} move a sweep, not measurable beside the simulator block's
-#'   moves at m = 40, 300 and 1000 (`inst/bench/RESULTS-design.md`). To
+#'   moves at m = 40, 300 and 1000 (fixed-length one-chain runs); default
+#'   runs to convergence on the sinusoid took 43 s without it and 50 s with
+#'   it at m = 300, and 22.5 and 23.0 s without against 47.1 and 25.7 s
+#'   with at m = 1000 (the stop rule's sweeps vary: one run without it took
+#'   217 s), so a unimodal fit may take one more check of the rule
+#'   (`inst/bench/RESULTS-design.md`). To
 #'   run without it, build the model with `fit = FALSE`, set
 #'   `model$moves$jump <- NULL` and fit it with `calibrate(model)`;
 #' * an exact draw of `muB` from its Gaussian full conditional (Gibbs; when
