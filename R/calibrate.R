@@ -351,9 +351,9 @@
 #'   \eqn{\kappa} move a sweep, not measurable beside the simulator block's
 #'   moves at m = 40, 300 and 1000 (fixed-length one-chain runs); default
 #'   runs to convergence on the sinusoid took 43 s without it and 50 s with
-#'   it at m = 300, and 22.5 and 23.0 s without against 47.1 and 25.7 s
-#'   with at m = 1000 (the stop rule's sweeps vary: one run without it took
-#'   217 s), so a unimodal fit may take one more check of the rule
+#'   it at m = 300, and 22.5, 23.0 and 217 s without against 47.1, 25.7
+#'   and 23.4 s with at m = 1000 (the stop rule's length varies from run to
+#'   run), so a unimodal fit may take one more check of the rule
 #'   (`inst/bench/RESULTS-design.md`). To
 #'   run without it, build the model with `fit = FALSE`, set
 #'   `model$moves$jump <- NULL` and fit it with `calibrate(model)`;
