@@ -338,11 +338,13 @@
 #'   `sigma2B`), which touch only the field block (none under
 #'   `discrepancy = "none"`);
 #' * a single-site move of `sigma2E`;
-#' * a jump of each \eqn{\kappa_l} whose prior is uniform or beta (the
-#'   default beta included; with either `sampler`), after the walks: an
-#'   independence proposal drawn uniformly over the prior's range, accepted
-#'   with the posterior ratio (exact Metropolis-Hastings, not adapted;
-#'   reported as `"kappa1 jump"`). A walk adapted within one mode of a
+#' * a jump of each \eqn{\kappa_l} with a proper prior (the default beta
+#'   included; with either `sampler`), after the walks: an independence
+#'   proposal drawn uniformly over the prior's range (a uniform's or beta's
+#'   support; an unbounded prior's central 99.9%, e.g. a gaussian's mean
+#'   \eqn{\pm} 3.29 sd, from outside which the jump is rejected, leaving the
+#'   tails to the walk), accepted with the posterior ratio (exact
+#'   Metropolis-Hastings, not adapted; reported as `"kappa1 jump"`). A walk adapted within one mode of a
 #'   multimodal \eqn{\kappa} posterior rarely leaves it: on Tuo and Wu's
 #'   problem with 12-24 runs, 4 of 6 default fits without it ran to the
 #'   50,000-sweep ceiling with chains in different modes (10-14 CPU s, one

@@ -14,17 +14,20 @@
 # large simulator block on the dense algebra, where a move of the simulator
 # block costs a Cholesky factor of it and a kappa move an m x m x n
 # triangular solve: each moves once a sweep. `jump`: also a jump move of
-# each free kappa with a uniform or beta prior (an independence proposal
-# uniform over the prior's support, once a sweep after the walks: `jump`,
-# 1-based in phi), the default: a walk adapted within one mode of a
-# multimodal kappa posterior rarely leaves it (issue 29's simulator
-# functions; with an emulator, Tuo and Wu's problem at 18-24 runs, where
-# chains kept their modes for 25,000 draws: inst/bench/RESULTS-design.md).
+# each free kappa with a proper prior (an independence proposal uniform
+# over jump_range(), once a sweep after the walks: `jump`, 1-based in phi,
+# and `jumpRange`, its interval on the sampler's scale, a row per jump),
+# the default: a walk adapted within one mode of a multimodal kappa
+# posterior rarely leaves it (issue 29's simulator functions; with an
+# emulator, Tuo and Wu's problem at 18-24 runs, where chains kept their
+# modes for 25,000 draws: inst/bench/RESULTS-design.md).
 sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   if (jump) {
     out <- sampler_moves(sampler, spec, large, jump = FALSE)
     fam <- names(prior_families)[match(spec$table$family, prior_families)]
-    out$jump <- which(spec$classes == "kappa" & fam %in% c("uniform", "beta"))
+    proper <- vapply(fam, function(f) prior_registry[[f]]$proper, logical(1), USE.NAMES = FALSE)
+    out$jump <- which(spec$classes == "kappa" & proper & spec$table$b != 0)
+    out$jumpRange <- jump_ranges(spec$table, out$jump)
     return(out)
   }
   if (sampler == "single") {
@@ -194,6 +197,10 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
     state$warmForget <- state$warmForget %||% as.numeric(nBurn$forget %||% 0)
     nBurn <- -1L
   }
+  if (length(moves$jump) && is.null(moves$jumpRange)) {
+    # a fit made before the ranges were stored with its moves
+    moves$jumpRange <- jump_ranges(spec$table, moves$jump)
+  }
   args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
                nIter, nBurn, thinning, fbc_nugget, progress)
   # the model only where it differs from the default one of these data, so
@@ -202,6 +209,26 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
   p <- ncol(dat$Xf)
   default <- compiled_model(p, ncol(dat$Xs) - p)
   do.call(sampler, c(args, if (!identical(model, default)) list(model = model)))
+}
+
+# The interval the jump move of each parameter `j` (1-based rows of the
+# prior table) proposes from, uniformly, on the sampler's scale x (the
+# prior's argument is a + b x): the prior's support where it is bounded
+# (uniform, beta: the whole posterior is within reach), else its central
+# 99.9% (a gaussian or logistic kappa: from a point outside it the jump is
+# rejected, which keeps the posterior invariant; the walk covers the tails).
+# A matrix, a row per parameter (lower, upper).
+jump_ranges <- function(table, j) {
+  out <- matrix(NA_real_, length(j), 2, dimnames = list(NULL, c("lower", "upper")))
+  for (r in seq_along(j)) {
+    i <- j[r]
+    fam <- names(prior_families)[match(table$family[i], prior_families)]
+    s <- family_support(fam, table$p1[i], table$p2[i])
+    q <- prior_quantile(c(0.0005, 0.9995), fam, table$p1[i], table$p2[i])
+    v <- ifelse(is.finite(s), s, q)
+    out[r, ] <- sort((v - table$a[i]) / table$b[i])
+  }
+  out
 }
 
 # The state a chain starts from: parameters `init` (sampler's scale), the

@@ -734,32 +734,30 @@ struct ScaleMove : Move {
   }
 };
 
-// Independence proposal of kappa_j, uniform over its prior's support (a
-// mode-jumping move; the walk's adapted step stays within a mode). With
-// x* ~ U(lo, hi), the support of its uniform or beta prior on the
-// sampler's scale, the proposal density is constant and cancels:
-//   log r = log L(phi*) + log p(x*) - log L(phi) - log p(x).
+// Independence proposal of kappa_j, uniform over [lo, hi] (R's
+// jump_ranges(): a bounded prior's support, else its central 99.9%, on the
+// sampler's scale; a mode-jumping move: the walk's adapted step stays
+// within a mode). With x* ~ U(lo, hi) the proposal density is constant on
+// the interval and cancels; from x outside it the reverse proposal has
+// density 0 and the move is rejected:
+//   log r = log L(phi*) + log p(x*) - log L(phi) - log p(x)   (x in [lo, hi]).
 // Not adapted; one call of f (function simulator) or one kappa move's
 // algebra per step.
 struct JumpMove : Move {
   int j;
-  double lo, hi, accBatch;  // support on the sampler's scale; acceptances this batch
-  JumpMove(int j_, const Chain& ch) : j(j_), accBatch(0) {
-    const Priors& pr = ch.pr;
-    if ((pr.family[j] != PF_UNIFORM && pr.family[j] != PF_BETA) || pr.b[j] == 0)
-      Rcpp::stop("the jump move needs a uniform or beta prior on %s", ch.param_name(j_).c_str());
-    // (the prior's argument a + b x lies in [p1, p2], a beta's in [0, 1])
-    const bool beta = pr.family[j] == PF_BETA;
-    const double u1 = ((beta ? 0.0 : pr.p1[j]) - pr.a[j]) / pr.b[j],
-      u2 = ((beta ? 1.0 : pr.p2[j]) - pr.a[j]) / pr.b[j];
-    lo = std::min(u1, u2); hi = std::max(u1, u2);
+  double lo, hi, accBatch;  // the interval on the sampler's scale; acceptances this batch
+  JumpMove(int j_, double lo_, double hi_, const Chain& ch) : j(j_), lo(lo_), hi(hi_), accBatch(0) {
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
+      Rcpp::stop("the jump move of %s needs a finite interval", ch.param_name(j_).c_str());
     idx = {j_};
     name = ch.param_name(j_) + " jump";
   }
   const char* kind() const override { return "jump"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
+    const double x = post.phi[j];
     const double xNew = lo + (hi - lo) * R::unif_rand();
+    if (x < lo || x > hi) return false;
     const double lpNew = ch.pr(j, xNew);
     if (!std::isfinite(lpNew)) return false;
     return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
@@ -913,9 +911,20 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       schedule.back()->name = ch.param_name(j);
     }
   }
-  // the jump moves (R's sampler_moves()$jump, 1-based), after the walks
-  if (moves.containsElementNamed("jump"))
-    for (int j : Rcpp::as<std::vector<int> >(moves["jump"])) schedule.emplace_back(new JumpMove(j - 1, ch));
+  // the jump moves (R's sampler_moves()$jump, 1-based, and $jumpRange, a
+  // row per jump), after the walks
+  if (moves.containsElementNamed("jump")) {
+    const std::vector<int> jump = Rcpp::as<std::vector<int> >(moves["jump"]);
+    if (!jump.empty()) {
+      if (!moves.containsElementNamed("jumpRange"))
+        Rcpp::stop("the jump moves need their intervals (moves$jumpRange)");
+      const Rcpp::NumericMatrix range = moves["jumpRange"];
+      if (range.nrow() != (int) jump.size() || range.ncol() != 2)
+        Rcpp::stop("moves$jumpRange must have a row per jump move and 2 columns");
+      for (size_t r = 0; r < jump.size(); ++r)
+        schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
+    }
+  }
   if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
     const Rcpp::List old = state["moves"];

@@ -374,14 +374,12 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
   }
 })
 
-test_that("kappa's jump move finds both modes of a bimodal posterior in their grid proportions", {
-  # Tuo and Wu's (2015) model, wrong for every kappa, on 20 random runs and
-  # 16 field data: with the simulator GP's parameters and sigma2E fixed (a
-  # default fit's last state on these data), kappa's posterior has a mode
-  # near -0.2 and one near 0.55 with about 28% of the mass (the grid of
-  # dense_loglik() times the Beta(1.1, 1.1) prior). Without the jump
-  # (no_jump()) the chain never left the lower mode (share 0, no crossing,
-  # seeds 4-8); with it the share was 0.277-0.292 with 630-680 crossings.
+# Tuo and Wu's (2015) model, wrong for every kappa, on 20 random runs and 16
+# field data, with the simulator GP's parameters and sigma2E fixed (a
+# default fit's last state on these data): kappa's posterior has a mode
+# near -0.2 and one near 0.55. A fit, one chain, 5000 draws (`...`:
+# kappa's prior).
+tuo_wu_fit <- function(seed, ...) {
   eta <- function(x, u) exp(x / 10) * sin(x) - sqrt(u^2 - u + 1) * (sin(u * x) + cos(u * x))
   xf <- rep(seq(0.2, 2 * pi - 0.2, length.out = 8), 2)
   set.seed(1001)
@@ -392,26 +390,62 @@ test_that("kappa's jump move finds both modes of a bimodal posterior in their gr
   sim <- data.frame(y = eta(x, u), x = x, u1 = u)
   hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(3.28, 9.77), sigma2SDist = "fixed",
                          sigma2SInit = 1.68, sigma2EDist = "fixed", sigma2EInit = 0.0473)
-  set.seed(4)
-  fit <- suppressWarnings(calibrate(sim, field, discrepancy = "none", hypers = hyp, nMCMC = 20000,
-                                    nBurn = 1000, thinning = 4, nChains = 1))
-  expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
+  set.seed(seed)
+  suppressWarnings(calibrate(sim, field, discrepancy = "none", hypers = hyp, nMCMC = 20000,
+                             nBurn = 1000, thinning = 4, nChains = 1, ...))
+}
+# kappa's grid posterior given the fit's fixed parameters: dense_loglik()
+# times the prior, exp(logPrior(kappa)), on the grid `kappa` (its units)
+tuo_wu_density <- function(fit, kappa, logPrior) {
   d <- fit$data
   phi <- fit$state$chains[[1]]$last
-  g <- seq(0, 1, length.out = 1001)
+  g <- (kappa - fit$scale$xmin[2]) / (fit$scale$xmax[2] - fit$scale$xmin[2])
   lp <- vapply(g, function(k) {
     phi[1] <- k
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
                  discrepancy = "none")
-  }, numeric(1)) + stats::dbeta(g, 1.1, 1.1, log = TRUE)
-  dens <- exp(lp - max(lp))
-  kappa <- fit$scale$xmin[2] + (fit$scale$xmax[2] - fit$scale$xmin[2]) * g
+  }, numeric(1)) + logPrior(kappa)
+  exp(lp - max(lp))
+}
+
+test_that("kappa's jump move finds both modes of a bimodal posterior in their grid proportions", {
+  # The default Beta(1.1, 1.1) prior on kappa's range (the runs' range of
+  # u): the upper mode has about 28% of the grid's mass. Without the jump
+  # (no_jump()) the chain never left the lower mode (share 0, no crossing,
+  # seeds 4-8); with it the share was 0.277-0.292 with 630-680 crossings.
+  fit <- tuo_wu_fit(4)
+  expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
+  lo <- fit$scale$xmin[2]
+  w <- fit$scale$xmax[2] - lo
+  kappa <- lo + w * seq(0, 1, length.out = 1001)
+  dens <- tuo_wu_density(fit, kappa, function(k) stats::dbeta((k - lo) / w, 1.1, 1.1, log = TRUE))
   upper <- sum(dens[kappa > 0]) / sum(dens)
   expect_gt(upper, 0.2)  # two modes, each with mass
   expect_lt(upper, 0.4)
   # the share of the draws in the upper mode: 5000 draws, about 650
   # crossings between the modes (sd of the share about 0.01)
   expect_lt(abs(mean(fit$Phi[, "kappa1"] > 0) - upper), 0.04)
+  ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
+  expect_lt(ks, 0.06)
+})
+
+test_that("with a gaussian prior kappa jumps over the prior's central 99.9%, and finds both modes", {
+  # kappa ~ N(0, 0.5^2), unbounded: the jump proposes uniformly over
+  # [-1.645, 1.645] (qnorm(0.0005) and qnorm(0.9995)); the grid over
+  # [-2.5, 2.5] puts 19% of the mass above 0.2 and 0.75% beyond +-1.
+  # Seeds 4-8 (this build): share 0.165-0.222 (about 300 crossings), KS
+  # 0.008-0.031. Without the jump the chain crossed twice or never (share
+  # 0.25, 0 and 0.41 on seeds 4-6).
+  fit <- tuo_wu_fit(4, kappaDist = "gaussian", kappaP1 = 0, kappaP2 = 0.5)
+  expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
+  rng <- fit$scale$xmin[2] + (fit$scale$xmax[2] - fit$scale$xmin[2]) * fit$model$moves$jumpRange
+  expect_equal(c(rng), stats::qnorm(c(0.0005, 0.9995), 0, 0.5))
+  kappa <- seq(-2.5, 2.5, length.out = 2001)
+  dens <- tuo_wu_density(fit, kappa, function(k) stats::dnorm(k, 0, 0.5, log = TRUE))
+  upper <- sum(dens[kappa > 0.2]) / sum(dens)
+  expect_gt(upper, 0.1)
+  expect_lt(upper, 0.3)
+  expect_lt(abs(mean(fit$Phi[, "kappa1"] > 0.2) - upper), 0.05)
   ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
   expect_lt(ks, 0.06)
 })

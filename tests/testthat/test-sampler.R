@@ -44,6 +44,69 @@ test_that("each move is reported by name, and its counts add up over update()", 
   expect_true(all(ms2[[1]]$accepted >= ms[[1]]$accepted))
 })
 
+test_that("kappa jumps over its prior's support, or its central 99.9% when unbounded", {
+  # a kappa with a proper prior jumps; the interval is on the sampler's
+  # scale x, where the prior's argument is a + b x
+  tab <- data.frame(family = unname(FBC:::prior_families[c("beta", "uniform", "gaussian", "logistic")]),
+                    p1 = c(1.1, 2, 9.8, 0), p2 = c(1.1, 5, 0.5, 2), a = c(0, 6, 4, 1), b = c(1, 3, 2, -2))
+  r <- FBC:::jump_ranges(tab, 1:4)
+  expect_equal(r[1, ], c(lower = 0, upper = 1))
+  expect_equal(r[2, ], c(lower = (2 - 6) / 3, upper = (5 - 6) / 3))
+  expect_equal(r[3, ], c(lower = (stats::qnorm(0.0005, 9.8, 0.5) - 4) / 2,
+                         upper = (stats::qnorm(0.9995, 9.8, 0.5) - 4) / 2))
+  # b < 0: the interval's ends swap
+  expect_equal(r[4, ], c(lower = (stats::qlogis(0.9995, 0, 2) - 1) / -2,
+                         upper = (stats::qlogis(0.0005, 0, 2) - 1) / -2))
+  # the schedule: a fixed kappa does not jump; the moves carry the intervals
+  sp <- FBC:::build_priors(list(dist = c("gaussian", "fixed"), init = c(0.5, 0.5), p1 = c(0.5, NA),
+                                p2 = c(0.2, NA)), set_hyperPriors(),
+                           list(xmin = rep(0, 3), xmax = rep(1, 3), p = 1, q = 2), 1, 2)
+  mv <- FBC:::sampler_moves("blocks", sp)
+  expect_identical(mv$jump, 1L)
+  expect_equal(mv$jumpRange, FBC:::jump_ranges(sp$table, 1L))
+  expect_null(FBC:::sampler_moves("blocks", sp, jump = FALSE)$jumpRange)
+})
+
+test_that("a jump from outside its interval is rejected, from inside it is made", {
+  # kappa starts at 7 (0.12 on the sampler's scale), its walk's step 1e-9
+  # and not adapted (nBurn = 0): only the jump can move it. With the
+  # interval [0.3, 0.7] (the posterior's mode, near 0.47, inside; the
+  # chain outside) the reverse proposal's density is 0 and every jump is
+  # rejected; with [0, 0.7] (the chain inside) the jump moves it (this
+  # build: acceptance 0.74, kappa 6.1-11.6).
+  set.seed(1)
+  m <- calibrate(ballSim, ballField, fit = FALSE, kappaInit = c(g = 7))
+  m$spec$logsd[1] <- log(1e-9)
+  runs <- lapply(list(c(0.3, 0.7), c(0, 0.7)), function(r) {
+    m$moves$jumpRange[1, ] <- r
+    set.seed(2)
+    fit <- suppressWarnings(calibrate(m, nMCMC = 200, nBurn = 0, nChains = 1))
+    list(kappa = fit$Phi[, "kappa1"], rep = FBC:::move_report(fit))
+  })
+  expect_equal(runs[[1]]$kappa, rep(7, 100), tolerance = 1e-6)
+  expect_identical(runs[[1]]$rep$acceptance[runs[[1]]$rep$move == "kappa1 jump"], 0)
+  expect_gt(runs[[2]]$rep$acceptance[runs[[2]]$rep$move == "kappa1 jump"], 0.2)
+  expect_gt(diff(range(runs[[2]]$kappa)), 2)
+})
+
+test_that("moves stored without the jumps' intervals (fits made before they were stored) get them", {
+  set.seed(1)
+  m <- calibrate(ballSim, ballField, fit = FALSE)
+  old <- m
+  old$moves$jumpRange <- NULL
+  set.seed(3)
+  a <- suppressWarnings(calibrate(m, nMCMC = 200, nBurn = 100, nChains = 1))
+  set.seed(3)
+  b <- suppressWarnings(calibrate(old, nMCMC = 200, nBurn = 100, nChains = 1))
+  expect_identical(a$Phi, b$Phi)
+  # the compiled sampler refuses jumps without them
+  sp <- m$spec
+  st <- FBC:::initial_state(sp$init, sp)
+  expect_error(FBC:::.fbc_sample(m$data$Xf, m$data$yf, m$data$Xs, m$data$ys, as.list(sp$table),
+                                 old$moves, st, 10L, 0L, 1L, 1e-6, NULL, model = sp$model),
+               "jumpRange")
+})
+
 test_that("proposalSD is the step each parameter's move makes, joint moves included", {
   set.seed(3)
   fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, thinning = 2, nChains = 1,
