@@ -37,6 +37,11 @@
 #'   sd and 90% interval width, the design step's and the fit's CPU
 #'   seconds, and `reweighted`: whether the step's posterior is the last
 #'   fit's draws reweighted, see [update_runs()]).
+#'
+#' A fit's warning that field inputs lie beyond the runs' range (a small
+#' starting design seldom reaches the edges of the field's inputs) is given
+#' once, at the end, and only when the last fit's runs still do not cover
+#' them.
 #' @seealso [propose_runs()], [update_runs()]
 #' @export
 #' @examples
@@ -65,8 +70,20 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   dots <- list(...)
   X <- maximin_lhs(n0, lower, upper)
   sim <- run_simulator(f, X, xnames, cal, names(field)[1])
+  # a fit's warning that the field inputs lie beyond the runs' range: kept
+  # (muffled) at each step, and given once at the end if the last fit's
+  # runs still do not cover them (a small starting design rarely does; the
+  # runs added may)
+  extrapolation <- NULL
+  keep_extrapolation <- function(expr) {
+    extrapolation <<- NULL
+    withCallingHandlers(expr, fbc_extrapolation = function(w) {
+      extrapolation <<- w
+      invokeRestart("muffleWarning")
+    })
+  }
   t0 <- proc.time()
-  fit <- calibrate(sim, field, showProgress = FALSE, ...)
+  fit <- keep_extrapolation(calibrate(sim, field, showProgress = FALSE, ...))
   history <- loop_row(fit, nrow(sim), 0, cpu_since(t0))
   limited <- FALSE
   while (nrow(sim) - n0 < budget && !loop_done(fit, width, cal)) {
@@ -84,13 +101,15 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     new <- run_simulator(f, pr[names(lower)], xnames, cal, names(field)[1])
     sim <- rbind(sim, new)
     t0 <- proc.time()
-    fit <- update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge, showProgress = FALSE)
+    fit <- keep_extrapolation(update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge,
+                                          showProgress = FALSE))
     history <- rbind(history, loop_row(fit, nrow(sim), tDesign, cpu_since(t0)))
     if (showProgress) {
       h <- history[nrow(history), ]
       cli::cli_inform("{nrow(sim)} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, {if (h$reweighted) 'last fit reweighted' else 'fit'} {round(h$fitTime, 1)} s).")
     }
   }
+  if (!is.null(extrapolation)) warning(extrapolation)
   list(fit = fit, sim = sim, history = history)
 }
 

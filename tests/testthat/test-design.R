@@ -514,3 +514,25 @@ test_that("design_loop() runs a function simulator through futures and adds runs
   expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
 })
+
+test_that("design_loop() warns once, at the end, when its runs do not cover the field's inputs", {
+  # runs in x <= 0.5 while the field's x reach 0.9 (sinus_problem()): every
+  # fit of the loop extrapolates; the loop says so once, after its last fit
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  pb <- sinus_problem()
+  set.seed(2)
+  ws <- list()
+  out <- withCallingHandlers(
+    design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 0.5, u = 1), n0 = 8,
+                batch = 1, budget = 2, discrepancy = "none", hypers = sinus_hypers(),
+                nMCMC = 400, nBurn = 100, nChains = 1, design = list(ndraws = 40, nfantasy = 20),
+                showProgress = FALSE),
+    warning = function(w) {
+      ws[[length(ws) + 1]] <<- w
+      invokeRestart("muffleWarning")
+    })
+  expect_equal(nrow(out$history), 3)
+  expect_length(ws, 1)
+  expect_s3_class(ws[[1]], "fbc_extrapolation")
+  expect_match(conditionMessage(ws[[1]]), "outside the range of the simulator design")
+})
