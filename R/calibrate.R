@@ -351,12 +351,14 @@
 #'   with three of four chains in the mode holding about a quarter of the
 #'   mass); with it all 6 converged in 0.3-0.8 CPU s. It costs about one
 #'   \eqn{\kappa} move a sweep, not measurable beside the simulator block's
-#'   moves at m = 40, 300 and 1000 (fixed-length one-chain runs); default
-#'   runs to convergence on the sinusoid took 43 s without it and 50 s with
-#'   it at m = 300, and 22.5, 23.0 and 217 s without against 47.1, 25.7
-#'   and 23.4 s with at m = 1000 (the stop rule's length varies from run to
-#'   run), so a unimodal fit may take one more check of the rule
-#'   (`inst/bench/RESULTS-design.md`). To
+#'   moves at m = 40, 300 and 1000 (fixed-length one-chain runs). Default
+#'   runs to convergence on a unimodal sinusoid, paired by seed
+#'   (`inst/bench/jump.R --part=default`): m = 40, 20 seeds, 12.9 CPU s in
+#'   all without it, 15.9 with (the runs with it a median 14% longer, 11
+#'   of 20 longer, 6 shorter); m = 300, 10 seeds, 627 against 589 s; m =
+#'   1000, 10 seeds, 942 against 370 s, where without it one run reached
+#'   the 50,000-sweep ceiling (535 s, kappa's R-hat 1.011) and one took
+#'   166 s (kappa the last to pass), both 29-34 s with it. To
 #'   run without it, build the model with `fit = FALSE`, set
 #'   `model$moves$jump <- NULL` and fit it with `calibrate(model)`;
 #' * an exact draw of `muB` from its Gaussian full conditional (Gibbs; when
