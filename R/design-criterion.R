@@ -90,11 +90,14 @@
 #' The joint criterion stays the default for its honest gains: the plug-in's
 #' own expected gains ignore the hyperparameters' spread and overstated what
 #' its picks were worth under the joint posterior (0.34-0.88 against
-#' 0.15-0.42 on the sinusoid's first picks at 5 runs); and its 100 kappa
-#' points are spread uniformly over the calibration ranges when there are
-#' several, which was measured with two inputs only. With one or two
-#' calibration inputs and the fewest runs as the aim, `method = "plugin"` is
-#' as good or one to three runs better.
+#' 0.15-0.42 on the sinusoid's first picks at 5 runs). With the issue's
+#' protocol (10 starting runs, batches of 5 and of 1, 30 replicates) the
+#' two were even in the median on the sinusoid (25 and 20 runs), kinetics
+#' (20 and 15), two inputs (40) and Tuo and Wu's problem (37.5 joint, 40
+#' plug-in); with three calibration inputs (batches of 5, 14 replicates)
+#' the plug-in needed 50 runs and the joint 57.5 (plug-in first in 10).
+#' With the fewest runs as the aim, `method = "plugin"` is as good or
+#' better on every problem measured.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -120,8 +123,11 @@
 #' (relative error about 10% per candidate with the defaults). On the
 #' sinusoid with 5-15 runs a pick costs 0.010-0.014 CPU s and a batch of 5
 #' about 0.06; in a design loop from 5 runs, one run at a time, a pick is
-#' a median 7% of the fit it follows (quartiles 6-9%; the fits take
-#' 0.1-3 CPU s). Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
+#' a median 7% of a warm refit on the new runs (quartiles 6-9%; the refits
+#' take 0.1-3 CPU s), but 23% of [update_runs()]'s reweighting of the old
+#' draws (about 0.09 s), which is what a loop step usually costs now; with
+#' batches of 5 from 10 runs, a batch costs 0.08-0.10 CPU s, 17-26% of the
+#' fit it follows. Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
 #' step.
 #'
 #' @section Scope:
