@@ -15,7 +15,7 @@
 # block costs a Cholesky factor of it and a kappa move an m x m x n
 # triangular solve: each moves once a sweep. `jump`: also a jump move of
 # each free kappa with a proper prior (an independence proposal uniform
-# over jump_range(), once a sweep after the walks: `jump`, 1-based in phi,
+# over jump_ranges(), once a sweep after the walks: `jump`, 1-based in phi,
 # and `jumpRange`, its interval on the sampler's scale, a row per jump),
 # the default: a walk adapted within one mode of a multimodal kappa
 # posterior rarely leaves it (issue 29's simulator functions; with an
