@@ -756,6 +756,8 @@ struct JumpMove : Move {
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const double x = post.phi[j];
+    // drawn before the check, so a chain inside the interval (always, for
+    // a bounded prior) uses the random stream it did before the check
     const double xNew = lo + (hi - lo) * R::unif_rand();
     if (x < lo || x > hi) return false;
     const double lpNew = ch.pr(j, xNew);

@@ -97,13 +97,8 @@ for (m in as.integer(arg("m", c(40, 300, 1000)))) {
       set.seed(s)
       t <- cpu(fit <- model_fit(model, jump, showProgress = FALSE))
       e <- fit$estimates
-      mv <- fit$state$chains[[1]]$sampler$moves
-      acc <- if (jump) {
-        a <- vapply(fit$state$chains, function(ch) {
-          mv <- ch$sampler$moves; j <- mv$kind == "jump"; c(mv$accepted[j], mv$tries[j])
-        }, numeric(2))
-        sprintf("%.3f", sum(a[1, ]) / sum(a[2, ]))
-      } else "-"
+      rep <- FBC:::move_report(fit)
+      acc <- if (jump) sprintf("%.3f", rep$acceptance[rep$kind == "jump"]) else "-"
       cv <- fit$settings$converge
       cat(sprintf("| %d | %d | %s | %.1f | %d | %d | %s | %s %.3f | %s %.0f | %s |\n", m, s, if (jump) "yes" else "no",
                   t, cv$sweeps, cv$checks, cv$converged, rownames(e)[which.max(e$rhat)], max(e$rhat),
