@@ -29,8 +29,13 @@
 #' counts. When that count is short of the rule's but at least a quarter
 #' of it, the resampled chains go on from their last draws with the old
 #' adapted proposals until the old and new draws meet the rule
-#' (resample-move; `settings$reweight$topUp` sweeps a chain); below a
-#' quarter the model is refitted. On a design loop (the sinusoid of
+#' (resample-move; `settings$reweight$topUp` sweeps a chain), for at most
+#' 3000 sweeps a chain (about a fresh fit's length): the proposals were
+#' adapted at the last refit, and as runs narrow the posterior they go
+#' stale (with three calibration inputs, continuations ran up to 50,800
+#' sweeps where a fresh fit took 3550). Short of the rule by then, or below
+#' a quarter of it, the model is refitted (from the continuation's last
+#' states when there was one). On a design loop (the sinusoid of
 #' inst/bench/design.R, 5 to 35 runs in batches of 1, 10 replicates, 300
 #' steps) 168 steps were reweighted at 0.18 (quartiles 0.14-0.21) of a
 #' fresh fit's CPU time, 124 continued at 0.60 (0.47-0.80) and 8 refitted:
@@ -76,7 +81,8 @@
 #'   only when `nMCMC` and `nBurn` are `NULL`), or always refit (`FALSE`).
 #' @return A new `fbc` object of the model on all runs (its draws are the
 #'   reweighted old draws or the refit's only). `settings$warmStart` is
-#'   `TRUE`; `settings$reweight` (`NULL` when not tried) is a list: `used`,
+#'   `TRUE`; `settings$reweight` (`NULL` when not tried) is a list: `used`
+#'   (`FALSE` when refitted after all),
 #'   `runs` (the old fit's), `draws` (weighed), `kish` (the weights' Kish
 #'   share), `rhat` and `ess` (the largest R-hat and smallest bulk ESS of
 #'   the resampled draws), `topUp` (sweeps a chain added after them). A
@@ -106,6 +112,7 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
       i = "Fit it again with {.fn calibrate} on all runs."
     ))
   }
+  t0 <- proc.time()[["elapsed"]]
   allSim <- bind_runs(args$sim, sim)
   rest <- args[setdiff(names(args), "sim")]
   # (the call is set afterwards: do.call() would evaluate a call given to it)
@@ -122,15 +129,25 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
                    NULL, 60)
   reweight <- check_flag(reweight, "reweight")
   tried <- NULL
+  from <- old
   if (reweight && is.null(nMCMC) && is.null(nBurn) && !is.null(run$converge)) {
     rw <- reweight_runs(fit, model, run$converge)
     if (rw$info$used) return(rw$fit)
-    if (!is.null(rw$fit)) return(top_up(rw$fit, run$converge, run$showProgress))
     tried <- rw$info
+    if (!is.null(rw$fit)) {
+      up <- top_up(rw$fit, run$converge, run$showProgress)
+      if (isTRUE(up$settings$converge$converged) || isTRUE(up$state$interrupted)) return(up)
+      # the continuation ran its fbc_topup_max sweeps short of the rule: a
+      # refit from its last states (draws of the new posterior), with fresh
+      # proposals and warm-up
+      tried <- up$settings$reweight
+      tried$used <- FALSE
+      states <- up$state$chains
+      from <- model
+    }
   }
   d <- length(model$spec$vars)
-  starts <- lapply(states, function(st) chain_start(warm_state(st$sampler, old, model), d, 0L))
-  t0 <- proc.time()[["elapsed"]]
+  starts <- lapply(states, function(st) chain_start(warm_state(st$sampler, from, model), d, 0L))
   assemble <- function(results, target) {
     results <- check_chain_results(results, max(target))
     settings <- list(nMCMC = max(target), nBurn = run$nBurn, thinning = run$thinning,
@@ -156,6 +173,16 @@ fbc_reweight_draws <- 2000L
 # times the weights' Kish share) the reweighted draws are not continued
 # (top_up()) but refitted.
 fbc_reweight_floor <- 0.25
+# The most sweeps a chain continues reweighted draws (top_up()) before
+# update_runs() refits instead: about a fresh default fit's length (warm-up
+# and sampling: 1650-3550 sweeps on the design benchmark's problems). The
+# continuation keeps the proposals adapted at the last refit, which may be
+# several reweighted steps back; as runs are added the posterior narrows and
+# they go stale. With three calibration inputs (inst/bench/design.R
+# --problem=three, 14 replicates) 13 of 420 continuations ran 20,000-50,800
+# sweeps (up to 165 CPU s; the parameters' block accepted 3% against a
+# fresh fit's 17%), where a fresh fit on the same runs took 6 CPU s.
+fbc_topup_max <- 3000L
 
 # update_runs()'s first try: the old fit's draws as draws of `model` (the
 # model on all runs). Each draw phi is carried to the new scaling, phi' =
@@ -255,15 +282,18 @@ reweight_log_weights <- function(fit, model, rows) {
 # The reweighted draws `fit` (reweight_runs()) short of the stop rule `rule`
 # continued as chains, from the last resampled draw with the old adapted
 # proposals, until the old and new draws meet it (update(fit, converge =
-# rule)): resample-move. settings$reweight$topUp counts the sweeps a chain
-# added, settings$converge says whether the rule was met.
+# rule)), for at most fbc_topup_max sweeps a chain: resample-move.
+# settings$reweight$topUp counts the sweeps a chain added,
+# settings$converge says whether the rule was met (update_runs() refits
+# when not).
 top_up <- function(fit, rule, showProgress) {
   info <- fit$settings$reweight
   before <- fit$settings$nMCMC
   rule$first <- NULL  # (calibrate()'s first check, counted from the warm-up's end)
   # the rule's ceiling counts from here: the chains carry the sweeps of
   # every fit since the last refit
-  rule$maxMCMC <- as.integer(min(.Machine$integer.max, chain_sweeps(fit) + rule$maxMCMC))
+  rule$maxMCMC <- as.integer(min(.Machine$integer.max,
+                                 chain_sweeps(fit) + min(rule$maxMCMC, fbc_topup_max)))
   # update()'s first stretch (fbc_first_check sweeps), then checks every
   # as many: not as the retained sweeps grow by half, since the chains'
   # sweeps since the last refit can be many (a chain at 50,000 took 25,650

@@ -187,6 +187,50 @@ test_that("update(fit, sim =) continues reweighted draws short of the rule", {
   expect_lte(fit3$settings$reweight$topUp, 5000)
 })
 
+test_that("update(fit, sim =) refits when the continuation's proposals are stale", {
+  # four runs more leave the reweighted draws 219 of the rule's 400
+  # effective draws, so the chains go on with the proposals adapted at the
+  # last fit (500 sweeps suffice here). Made stale (every step 400 times
+  # too long, as after several reweighted steps whose runs narrowed the
+  # posterior), the continuation stops at fbc_topup_max sweeps a chain and
+  # the model is refitted with fresh proposals (it ran to the rule's
+  # 50,000-sweep ceiling before: inst/bench/design.R --problem=three)
+  pb <- sinus_problem(m = 18)
+  set.seed(3)
+  fit <- suppressWarnings(calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", nChains = 2,
+                                    showProgress = FALSE))
+  stale <- fit
+  for (k in seq_along(stale$state$chains)) {
+    st <- stale$state$chains[[k]]$sampler
+    st$logsd[] <- 6
+    for (b in seq_along(st$blocks)) st$blocks[[b]]$logscale <- 6
+    stale$state$chains[[k]]$sampler <- st
+  }
+  set.seed(4)
+  ok <- update(fit, sim = pb$sim[13:16, ])
+  expect_true(ok$settings$reweight$used)
+  expect_gt(ok$settings$reweight$topUp, 0)
+  expect_lt(ok$settings$reweight$topUp, FBC:::fbc_topup_max)
+  set.seed(4)
+  re <- update(stale, sim = pb$sim[13:16, ])
+  rw <- re$settings$reweight
+  expect_false(rw$used)
+  expect_equal(rw$ess, ok$settings$reweight$ess)  # the same weights
+  expect_gte(rw$topUp, FBC:::fbc_topup_max)
+  expect_lt(rw$topUp, FBC:::fbc_topup_max + 1000)  # (the checks come every 500 sweeps)
+  expect_true(re$settings$converge$converged)
+  # a refit: its own adaptive warm-up (fresh proposals) in every chain
+  expect_length(re$settings$warmup, 2)
+  expect_true(all(re$settings$warmup >= 200))
+  expect_true(all(FBC:::move_report(re)$acceptance > 0.02))
+  # the same posterior as the continued fit's (kappa's mean within 4 Monte
+  # Carlo sds)
+  mc <- sqrt(var(ok$Phi[, 1]) / ok$estimates["kappa1", "ess"] +
+             var(re$Phi[, 1]) / re$estimates["kappa1", "ess"])
+  expect_lt(abs(mean(re$Phi[, 1]) - mean(ok$Phi[, 1])), 4 * mc)
+  expect_no_match(capture.output(print(re)), "reweighted")
+})
+
 test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   # from 6 runs to 40 kappa's posterior moves 10 sds: the old draws cannot
   # carry it
