@@ -292,8 +292,8 @@ top_up <- function(fit, rule, showProgress) {
   rule$first <- NULL  # (calibrate()'s first check, counted from the warm-up's end)
   # the rule's ceiling counts from here: the chains carry the sweeps of
   # every fit since the last refit
-  rule$maxMCMC <- as.integer(min(.Machine$integer.max,
-                                 chain_sweeps(fit) + min(rule$maxMCMC, fbc_topup_max)))
+  start <- chain_sweeps(fit)
+  ceiling <- as.integer(min(.Machine$integer.max, start + min(rule$maxMCMC, fbc_topup_max)))
   # update()'s first stretch (fbc_first_check sweeps), then checks every
   # as many: not as the retained sweeps grow by half, since the chains'
   # sweeps since the last refit can be many (a chain at 50,000 took 25,650
@@ -302,12 +302,40 @@ top_up <- function(fit, rule, showProgress) {
   # replicates: the loop's fits 0.51 of fresh fits' CPU against 0.35): the
   # fits it ends just meet the rule, so the next steps fall short again
   rule$every <- fbc_first_check
-  out <- update.fbc(fit, converge = rule, showProgress = showProgress)
+  # the first stretch, every chain fbc_first_check sweeps, then the rule's
+  # first check and the stretch's acceptance: stale proposals (a move
+  # accepting under a quarter of its adaptation's target) end the
+  # continuation there, and update_runs() refits
+  out <- update.fbc(fit, nMCMC = min(fbc_first_check, ceiling - start), showProgress = showProgress)
+  met <- meets_rule(out, rule)
+  out$settings$converge <- c(unclass(rule), list(converged = met, checks = 1L,
+                                                 sweeps = chain_sweeps(out)))
+  info$stale <- stale_moves(fit, out)
+  if (!met && !isTRUE(out$state$interrupted) && !length(info$stale) && chain_sweeps(out) < ceiling) {
+    rule$maxMCMC <- ceiling
+    out <- update.fbc(out, converge = rule, showProgress = showProgress)
+  }
   info$topUp <- as.integer(out$settings$nMCMC - before)
   info$used <- TRUE
   out$settings$converge$reweighted <- TRUE
   out$settings[c("reweight", "warmStart")] <- list(info, TRUE)
   out
+}
+
+# The adapted moves (walks, blocks, single sites, scale) whose acceptance over the sweeps
+# `after` ran beyond `before` (the same chains, continued), pooled over the
+# chains, is under a quarter of the adaptation's target (0.44; 0.234 for a
+# block of several parameters): their frozen steps no longer suit the
+# posterior. Their names.
+stale_moves <- function(before, after) {
+  mb <- pool_moves(lapply(before$state$chains, function(s) s$sampler$moves))
+  ma <- pool_moves(lapply(after$state$chains, function(s) s$sampler$moves))
+  tries <- ma$tries - mb$tries
+  rate <- (ma$accepted - mb$accepted) / tries
+  size <- lengths(strsplit(ma$params, ",", fixed = TRUE))
+  target <- ifelse(ma$kind == "joint" & size > 1L, 0.234, 0.44)
+  low <- ma$kind %in% c("walk", "joint", "single", "scale") & tries > 0 & rate < target / 4
+  ma$name[low]
 }
 
 # log |dT/dphi| of warm_phi() up to a constant, per row of phis (sampler

@@ -192,9 +192,10 @@ test_that("update(fit, sim =) refits when the continuation's proposals are stale
   # effective draws, so the chains go on with the proposals adapted at the
   # last fit (500 sweeps suffice here). Made stale (every step 400 times
   # too long, as after several reweighted steps whose runs narrowed the
-  # posterior), the continuation stops at fbc_topup_max sweeps a chain and
-  # the model is refitted with fresh proposals (it ran to the rule's
-  # 50,000-sweep ceiling before: inst/bench/design.R --problem=three)
+  # posterior), the continuation's first stretch accepts almost nothing and
+  # the model is refitted with fresh proposals (such continuations ran to
+  # the rule's 50,000-sweep ceiling before: inst/bench/design.R
+  # --problem=three)
   pb <- sinus_problem(m = 18)
   set.seed(3)
   fit <- suppressWarnings(calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", nChains = 2,
@@ -211,13 +212,14 @@ test_that("update(fit, sim =) refits when the continuation's proposals are stale
   expect_true(ok$settings$reweight$used)
   expect_gt(ok$settings$reweight$topUp, 0)
   expect_lt(ok$settings$reweight$topUp, FBC:::fbc_topup_max)
+  expect_length(ok$settings$reweight$stale, 0)
   set.seed(4)
   re <- update(stale, sim = pb$sim[13:16, ])
   rw <- re$settings$reweight
   expect_false(rw$used)
   expect_equal(rw$ess, ok$settings$reweight$ess)  # the same weights
-  expect_gte(rw$topUp, FBC:::fbc_topup_max)
-  expect_lt(rw$topUp, FBC:::fbc_topup_max + 1000)  # (the checks come every 500 sweeps)
+  expect_equal(rw$topUp, FBC:::fbc_first_check)
+  expect_true(all(c("kappa1", "sim") %in% rw$stale))
   expect_true(re$settings$converge$converged)
   # a refit: its own adaptive warm-up (fresh proposals) in every chain
   expect_length(re$settings$warmup, 2)
@@ -229,6 +231,33 @@ test_that("update(fit, sim =) refits when the continuation's proposals are stale
              var(re$Phi[, 1]) / re$estimates["kappa1", "ess"])
   expect_lt(abs(mean(re$Phi[, 1]) - mean(ok$Phi[, 1])), 4 * mc)
   expect_no_match(capture.output(print(re)), "reweighted")
+})
+
+test_that("stale_moves() names the adapted moves accepting under a quarter of their target", {
+  # the continuation's counts are after minus before; targets 0.44 (walks,
+  # single sites, the scale move, a one-parameter block) and 0.234 (a block
+  # of several): thresholds 0.11 and 0.0585; jumps and Gibbs moves are not
+  # adapted
+  moves <- function(acc, tries) {
+    list(name = c("kappa1", "sim", "one", "sigma2E", "scale", "kappa1 jump", "muB"),
+         kind = c("walk", "joint", "joint", "single", "scale", "jump", "gibbs"),
+         params = c("kappa1", "thetaS1,thetaS2,sigma2S", "thetaB1", "sigma2E",
+                    "sigma2S,sigma2E", "kappa1", "muB"),
+         accepted = acc, tries = tries)
+  }
+  fit_with <- function(...) list(state = list(chains = lapply(list(...), function(m) list(sampler = list(moves = m)))))
+  before <- fit_with(moves(rep(50, 7), rep(100, 7)), moves(rep(50, 7), rep(100, 7)))
+  # pooled over two chains, 200 tries each: rates 0.10, 0.06, 0.10, 0.12,
+  # 0.50, 0.01, 1
+  gained <- c(20, 12, 20, 24, 100, 2, 200)
+  after <- fit_with(moves(50 + gained / 2, rep(200, 7)), moves(50 + gained / 2, rep(200, 7)))
+  expect_identical(FBC:::stale_moves(before, after), c("kappa1", "one"))
+  # the block at 0.05 is under its 0.0585
+  gained[2] <- 10
+  after <- fit_with(moves(50 + gained / 2, rep(200, 7)), moves(50 + gained / 2, rep(200, 7)))
+  expect_identical(FBC:::stale_moves(before, after), c("kappa1", "sim", "one"))
+  # no tries in the stretch: not stale
+  expect_identical(FBC:::stale_moves(before, before), character())
 })
 
 test_that("update(fit, sim =) refits when the reweighted draws fall short", {
