@@ -30,11 +30,14 @@
 #' of it, the resampled chains go on from their last draws with the old
 #' adapted proposals until the old and new draws meet the rule
 #' (resample-move; `settings$reweight$topUp` sweeps a chain), for at most
-#' 3000 sweeps a chain (about a fresh fit's length): the proposals were
+#' about 3000 sweeps a chain (a fresh fit's length). The proposals were
 #' adapted at the last refit, and as runs narrow the posterior they go
-#' stale (with three calibration inputs, continuations ran up to 50,800
-#' sweeps where a fresh fit took 3550). Short of the rule by then, or below
-#' a quarter of it, the model is refitted (from the continuation's last
+#' stale: with three calibration inputs continuations ran up to 50,800
+#' sweeps where a fresh fit took 3550. So when a move accepts under a
+#' quarter of its adaptation's target in the continuation's first 500
+#' sweeps (`settings$reweight$stale` names them), or the rule is not met by
+#' the cap, or the reweighted draws hold under a quarter of the rule's
+#' effective draws, the model is refitted (from the continuation's last
 #' states when there was one). On a design loop (the sinusoid of
 #' inst/bench/design.R, 5 to 35 runs in batches of 1, 10 replicates, 300
 #' steps) 168 steps were reweighted at 0.18 (quartiles 0.14-0.21) of a
@@ -85,7 +88,8 @@
 #'   (`FALSE` when refitted after all),
 #'   `runs` (the old fit's), `draws` (weighed), `kish` (the weights' Kish
 #'   share), `rhat` and `ess` (the largest R-hat and smallest bulk ESS of
-#'   the resampled draws), `topUp` (sweeps a chain added after them). A
+#'   the resampled draws), `topUp` (sweeps a chain added after them), `stale`
+#'   (the moves found stale in the continuation, if any). A
 #'   reweighted fit is continued by `update(fit, nMCMC = )` from its
 #'   resampled draws with the old adapted proposals.
 #' @seealso [propose_runs()], [design_loop()]
