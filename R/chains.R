@@ -17,7 +17,7 @@
 # start is used).
 dispersed_inits <- function(nChains, dat, spec) {
   tab <- spec$table
-  fam <- names(prior_families)[match(tab$family, prior_families)]
+  fam <- prior_family_name(tab$family)
   d <- length(spec$init)
   one <- function() {
     x <- spec$init

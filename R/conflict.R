@@ -70,7 +70,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
   ps <- phi_spec(fit)
   vars <- phi_vars(fit$spec)
   tab <- ps$table
-  fam <- names(prior_families)[match(tab$family, prior_families)]
+  fam <- prior_family_name(tab$family)
   full <- sampler_draws(fit)
   phis <- full[, ps$cols, drop = FALSE]
   map <- full[which.max(fit$logPost), ]
@@ -149,7 +149,7 @@ suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
   tab <- fit$spec$table
   cls <- fit$spec$classes[js[1]]
   members <- which(fit$spec$classes == cls)
-  fams <- names(prior_families)[match(tab$family[members], prior_families)]
+  fams <- prior_family_name(tab$family[members])
   p1 <- tab$p1[members]
   p2 <- tab$p2[members]
   init <- fit$spec$priors[[cls]]$init
@@ -214,7 +214,7 @@ conflict_messages <- function(fit, cf = cached_conflicts(fit)) {
     rows <- cf[cf$class == cls, , drop = FALSE]
     one <- nrow(rows) == 1L
     j <- match(rows$var, fit$spec$vars)
-    dist <- names(prior_families)[match(tab$family[j], prior_families)]
+    dist <- prior_family_name(tab$family[j])
     priors <- unique(sprintf("%s(%s, %s)", dist, format_num(tab$p1[j]), format_num(tab$p2[j])))
     prob <- ifelse(rows$side == "lower", rows$cdf, 1 - rows$cdf)
     side <- if (length(unique(rows$side)) == 1L) paste(rows$side[1], "tail") else "tails"

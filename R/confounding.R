@@ -47,7 +47,7 @@ confounded_kappa <- function(x) {
   } else noiseCols[g]
   des <- kappa_design(x$scale)
   ps <- phi_spec(x)
-  fam <- names(prior_families)[match(ps$table$family, prior_families)]
+  fam <- prior_family_name(ps$table$family)
   out <- NULL
   for (j in seq_len(x$scale$q)) {
     col <- which(ps$classes == "kappa")[j]

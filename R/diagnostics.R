@@ -55,7 +55,7 @@ param_support <- function(x) {
   ps <- phi_spec(x)
   tab <- ps$table
   vars <- phi_vars(x$spec)
-  fam <- names(prior_families)[match(tab$family, prior_families)]
+  fam <- prior_family_name(tab$family)
   d <- nrow(tab)
   lo <- hi <- numeric(d)
   for (j in seq_len(d)) {

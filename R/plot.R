@@ -141,7 +141,7 @@ support_density <- function(draws, lo = -Inf, hi = Inf, n = 256L) {
 plot_density <- function(x, vars, labels, xlab) {
   sup <- param_support(x)
   rownames(sup) <- phi_vars(x$spec)
-  fam <- names(prior_families)[match(phi_spec(x)$table$family, prior_families)]
+  fam <- prior_family_name(phi_spec(x)$table$family)
   names(fam) <- rownames(sup)
   fixed <- vars[fam[vars] == "fixed"]
   improper <- vars[!fam[vars] %in% "fixed" & !vapply(fam[vars], function(f) prior_registry[[f]]$proper, logical(1))]

@@ -99,6 +99,9 @@ prior_registry <- list(
 # The codes by name, as the compiled core takes them.
 prior_families <- vapply(prior_registry, `[[`, integer(1), "code")
 
+# The family names of prior codes (a parameter table's `family` column).
+prior_family_name <- function(code) names(prior_families)[match(code, prior_families)]
+
 # The compiled core switches on the codes of the registry: they must agree
 # with its table (`compiled`), name for name.
 check_prior_codes <- function(compiled = .prior_codes()) {

@@ -24,7 +24,7 @@
 sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   if (jump) {
     out <- sampler_moves(sampler, spec, large, jump = FALSE)
-    fam <- names(prior_families)[match(spec$table$family, prior_families)]
+    fam <- prior_family_name(spec$table$family)
     proper <- vapply(fam, function(f) prior_registry[[f]]$proper, logical(1), USE.NAMES = FALSE)
     out$jump <- which(spec$classes == "kappa" & proper & spec$table$b != 0)
     out$jumpRange <- jump_ranges(spec$table, out$jump)
@@ -34,7 +34,7 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
     return(list(blocks = list(), repeats = integer(), scale = FALSE, gibbsMuB = FALSE,
                 params = spec$vars))
   }
-  fam <- names(prior_families)[match(spec$table$family, prior_families)]
+  fam <- prior_family_name(spec$table$family)
   free <- fam != "fixed"
   row <- match(spec$classes, model_classes$class)
   move <- model_classes$move[row]
@@ -222,7 +222,7 @@ jump_ranges <- function(table, j) {
   out <- matrix(NA_real_, length(j), 2, dimnames = list(NULL, c("lower", "upper")))
   for (r in seq_along(j)) {
     i <- j[r]
-    fam <- names(prior_families)[match(table$family[i], prior_families)]
+    fam <- prior_family_name(table$family[i])
     s <- family_support(fam, table$p1[i], table$p2[i])
     q <- prior_quantile(c(0.0005, 0.9995), fam, table$p1[i], table$p2[i])
     v <- ifelse(is.finite(s), s, q)

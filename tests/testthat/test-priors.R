@@ -209,3 +209,10 @@ test_that("printed priors show each family with its own parameters", {
   expect_identical(grep("thetaB", out, value = TRUE),
                    "  thetaB   [1] gamma(shape 1.1, rate 0.1), init 1; [2] fixed at 0.5")
 })
+
+test_that("prior_family_name() gives the registry's name of each code", {
+  codes <- FBC:::prior_families
+  expect_identical(FBC:::prior_family_name(unname(codes)), names(codes))
+  expect_identical(FBC:::prior_family_name(rev(unname(codes))), rev(names(codes)))
+  expect_identical(FBC:::prior_family_name(c(codes[["beta"]], -99L)), c("beta", NA))
+})
