@@ -54,6 +54,16 @@ print.fbc <- function(x, digits = 3, ...) {
     cat(sprintf("  draws: the fit on %d runs, reweighted by the new runs and resampled (%d draws weighed, Kish share %.2f; bulk ESS %.0f)%s\n",
                 rw$runs, rw$draws, rw$kish, rw$ess,
                 if (isTRUE(rw$topUp > 0)) sprintf(", then continued %d sweeps a chain", rw$topUp) else ""))
+  } else if (!is.null(rw)) {
+    why <- if (length(rw$stale)) {
+      sprintf("their continuation's proposals were stale (%s accepting under a quarter of the target)",
+              paste(rw$stale, collapse = ", "))
+    } else if (isTRUE(rw$topUp > 0)) {
+      sprintf("their continuation fell short of the rule in %d sweeps a chain", rw$topUp)
+    } else {
+      sprintf("they held %.0f of the rule's effective draws", rw$ess)
+    }
+    cat(sprintf("  draws: refitted; the fit on %d runs reweighted was tried, but %s\n", rw$runs, why))
   }
   print_moves(x)
   if (fn) {

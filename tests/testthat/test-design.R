@@ -230,7 +230,8 @@ test_that("update(fit, sim =) refits when the continuation's proposals are stale
   mc <- sqrt(var(ok$Phi[, 1]) / ok$estimates["kappa1", "ess"] +
              var(re$Phi[, 1]) / re$estimates["kappa1", "ess"])
   expect_lt(abs(mean(re$Phi[, 1]) - mean(ok$Phi[, 1])), 4 * mc)
-  expect_no_match(capture.output(print(re)), "reweighted")
+  expect_output(print(re), "refitted; the fit on 12 runs reweighted was tried, but their continuation's proposals were stale \\(kappa1")
+  expect_output(print(ok), "reweighted by the new runs and resampled")
 })
 
 test_that("stale_moves() names the adapted moves accepting under a quarter of their target", {
@@ -272,6 +273,7 @@ test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   rw <- fit2$settings$reweight
   expect_false(rw$used)
   expect_lt(rw$ess, 1500 / 4)  # below a quarter of the rule's: no continuation
+  expect_output(print(fit2), sprintf("refitted; the fit on 6 runs reweighted was tried, but they held %.0f of the rule's effective draws", rw$ess))
   expect_true(fit2$settings$warmStart)
   expect_true(fit2$settings$warmup >= 200)
   # (kappa's sd is 0.01 of its range: a grid finer than the default's)
