@@ -78,8 +78,9 @@
 # fresh fit's to the reference (columns warm*, fresh*, warmFresh,
 # freshHellinger; NA on the starting fit).
 # Every row says how update(fit, sim =) drew its fit: `reweighted` (the old
-# draws reweighted, see ?update_runs) and `topUp` (sweeps a chain the
-# reweighted draws were continued; NA when refitted).
+# draws reweighted, see ?update_runs), `topUp` (sweeps a chain the
+# reweighted draws were continued; NA when refitted) and `stale` (the moves
+# whose stale proposals ended a continuation, "+"-separated; "" if none).
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
              methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
@@ -359,7 +360,8 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef,
       reweighted = isTRUE(fit$settings$reweight$used),
-      topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_))
+      topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_,
+      stale = paste(fit$settings$reweight$stale, collapse = "+")))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
     # (the last row has no design step: the oracle's columns NA)
