@@ -141,9 +141,10 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
     if (!is.null(rw$fit)) {
       up <- top_up(rw$fit, run$converge, run$showProgress)
       if (isTRUE(up$settings$converge$converged) || isTRUE(up$state$interrupted)) return(up)
-      # the continuation ran its fbc_topup_max sweeps short of the rule: a
-      # refit from its last states (draws of the new posterior), with fresh
-      # proposals and warm-up
+      # the continuation did not meet the rule (its proposals stale after
+      # the first stretch, or fbc_topup_max sweeps run): a refit from its
+      # last states (draws of the new posterior), with fresh proposals and
+      # warm-up
       tried <- up$settings$reweight
       tried$used <- FALSE
       states <- up$state$chains
@@ -297,7 +298,7 @@ top_up <- function(fit, rule, showProgress) {
   # the rule's ceiling counts from here: the chains carry the sweeps of
   # every fit since the last refit
   start <- chain_sweeps(fit)
-  ceiling <- as.integer(min(.Machine$integer.max, start + min(rule$maxMCMC, fbc_topup_max)))
+  cap <- as.integer(min(.Machine$integer.max, start + min(rule$maxMCMC, fbc_topup_max)))
   # update()'s first stretch (fbc_first_check sweeps), then checks every
   # as many: not as the retained sweeps grow by half, since the chains'
   # sweeps since the last refit can be many (a chain at 50,000 took 25,650
@@ -310,13 +311,13 @@ top_up <- function(fit, rule, showProgress) {
   # first check and the stretch's acceptance: stale proposals (a move
   # accepting under a quarter of its adaptation's target) end the
   # continuation there, and update_runs() refits
-  out <- update.fbc(fit, nMCMC = min(fbc_first_check, ceiling - start), showProgress = showProgress)
+  out <- update.fbc(fit, nMCMC = min(fbc_first_check, cap - start), showProgress = showProgress)
   met <- meets_rule(out, rule)
   out$settings$converge <- c(unclass(rule), list(converged = met, checks = 1L,
                                                  sweeps = chain_sweeps(out)))
   info$stale <- stale_moves(fit, out)
-  if (!met && !isTRUE(out$state$interrupted) && !length(info$stale) && chain_sweeps(out) < ceiling) {
-    rule$maxMCMC <- ceiling
+  if (!met && !isTRUE(out$state$interrupted) && !length(info$stale) && chain_sweeps(out) < cap) {
+    rule$maxMCMC <- cap
     out <- update.fbc(out, converge = rule, showProgress = showProgress)
   }
   info$topUp <- as.integer(out$settings$nMCMC - before)
@@ -326,11 +327,11 @@ top_up <- function(fit, rule, showProgress) {
   out
 }
 
-# The adapted moves (walks, blocks, single sites, scale) whose acceptance over the sweeps
-# `after` ran beyond `before` (the same chains, continued), pooled over the
-# chains, is under a quarter of the adaptation's target (0.44; 0.234 for a
-# block of several parameters): their frozen steps no longer suit the
-# posterior. Their names.
+# The adapted moves (walks, blocks, single sites, scale) whose acceptance
+# over the sweeps `after` ran beyond `before` (the same chains, continued),
+# pooled over the chains, is under a quarter of the adaptation's target
+# (0.44; 0.234 for a block of several parameters): their frozen steps no
+# longer suit the posterior. Their names.
 stale_moves <- function(before, after) {
   mb <- pool_moves(lapply(before$state$chains, function(s) s$sampler$moves))
   ma <- pool_moves(lapply(after$state$chains, function(s) s$sampler$moves))
