@@ -57,10 +57,13 @@
 #' with the number of target points (at most 100; a few dozen are plenty
 #' for an integrated variance).
 #'
-#' `method = "plugin"` scores the same criterion with the hyperparameters
+#' `method = "plugin"` picks by the same criterion with the hyperparameters
 #' fixed at the MAP draw's (kappa on a grid for one calibration input, a
 #' uniform sample otherwise, weighted by its likelihood and prior): what
-#' KOH-IMSPE and EIVAR do. It ignores the hyperparameters' uncertainty.
+#' KOH-IMSPE and EIVAR do. It ignores the hyperparameters' uncertainty, so
+#' its own gains overstate what its picks are worth; the `gain` reported
+#' is the joint look-ahead's at its picks (in its order, each given the
+#' ones before), its own in attribute `pluginGain`.
 #'
 #' @section Joint or plug-in (measured):
 #' Runs to bring kappa's posterior within Hellinger distance 0.1 of the
@@ -169,7 +172,8 @@
 #'   named as in `sim`), `gain` (the point's expected reduction of
 #'   kappa's posterior variance, or of the prediction's integrated
 #'   variance, as a fraction of the current, given the points above it).
-#'   Attributes `variance` (current, scaled) and `time` (CPU seconds).
+#'   Attributes `variance` (current, scaled), `time` (CPU seconds) and,
+#'   with `method = "plugin"`, `pluginGain` (the plug-in's own gains).
 #' @seealso [update_runs()], [design_loop()]
 #' @export
 #' @examples
@@ -198,11 +202,21 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   }
   parts <- design_particles(fit, ndraws, method)
   crit <- look_ahead(parts, U, model, n, nfantasy, XT)
-  out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
+  picks <- U[crit$chosen, , drop = FALSE]
+  own <- crit$gain / crit$variance
+  if (method == "plugin") {
+    # the plug-in's picks, their gains by the joint look-ahead (in the
+    # plug-in's order, the points before conditioned on): its own ignore
+    # the hyperparameters' spread
+    crit <- look_ahead(design_particles(fit, ndraws, "joint"), picks, model, n, nfantasy, XT,
+                       order = seq_len(n))
+  }
+  out <- as.data.frame(unscale_inputs(picks, sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
   tm <- proc.time() - t0
   attr(out, "variance") <- crit$variance
+  if (method == "plugin") attr(out, "pluginGain") <- own
   attr(out, "time") <- sum(tm[c(1, 2)])
   if (out$gain[1] < 0.01) {
     what <- if (nrow(XT)) "the calibrated prediction's variance at the target points" else "kappa's posterior variance"
@@ -313,12 +327,13 @@ design_particles <- function(fit, ndraws, method) {
 # particles at the candidates U: n points chosen one at a time, each
 # maximising the expected reduction of kappa's (weighted) posterior
 # variance (or of the prediction's at the targets XT) with the pending
-# points' fantasised values conditioned on per draw. Its random numbers are
+# points' fantasised values conditioned on per draw (with `order`, the
+# candidates U[order, ] in that order: their gains). Its random numbers are
 # drawn here: the fantasies' draws by systematic resampling of the base
 # weights (uniforms (j - U) / nfantasy, one U), then per step a random
 # order of the nfantasy normal quantiles (common to every candidate).
 look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
-                       call = parent.frame()) {
+                       order = integer(), call = parent.frame()) {
   dat <- model$data
   size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
   if (size > 5e7) {
@@ -332,5 +347,6 @@ look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(mode
   Z <- matrix(0, nfantasy, n)
   for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
-                     isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model)
+                     isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model,
+                     as.integer(order))
 }

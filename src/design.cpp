@@ -492,16 +492,28 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // `plugin`), normalised w; fantasy j comes from draw src[j], the first s
 // with sum_{r <= s} w_r >= usrc[j] (usrc uniforms: the draws by w), with the
 // normal deviate Z(j, step) in each step; after a pick the base
-// log-weights gain its log-densities. Returns the picks (1-based), their gains, the current
-// variance and every candidate's gain per step (scores, Nc x n).
+// log-weights gain its log-densities. With `order` (1-based, n distinct
+// candidates) step k takes candidate order[k] instead of the best: the
+// gains of given points in a given order. Returns the picks (1-based),
+// their gains, the current variance and every candidate's gain per step
+// (scores, Nc x n).
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& kappa, const arma::vec& lw0, bool plugin,
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
-                             double nugget, const Rcpp::List& model) {
+                             double nugget, const Rcpp::List& model,
+                             const Rcpp::IntegerVector& order) {
   Model mod;
   const int n = Z.n_cols;
+  if (order.size() > 0) {
+    if (order.size() != n) Rcpp::stop("order must have %d candidates", n);
+    for (int k = 0; k < n; ++k) {
+      if (order[k] < 1 || order[k] > (int)U.n_rows) Rcpp::stop("order must index the candidates");
+      for (int i = 0; i < k; ++i)
+        if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
+    }
+  }
   DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod, n > 1);
   LookAhead la;
   la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
@@ -541,7 +553,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
     for (int c : la.P) gain[c] = R_NegInf;
     scores.col(step) = gain;
-    const int b = gain.index_max();
+    const int b = order.size() > 0 ? order[step] - 1 : (int)gain.index_max();
     chosen[step] = b + 1;
     best[step] = gain[b];
     for (int j = 0; j < la.J; ++j) {

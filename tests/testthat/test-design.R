@@ -443,6 +443,53 @@ test_that("the candidates' triangular solve does dtrsm's operations, zeros inclu
   }
 })
 
+test_that("look_ahead()'s order gives the gains of given points in that order", {
+  pb <- sinus_problem()
+  set.seed(4)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
+                   nChains = 1, showProgress = FALSE)
+  U <- matrix(stats::runif(60), 30, 2)
+  parts <- FBC:::design_particles(fit, 40, "joint")
+  set.seed(11)
+  greedy <- FBC:::look_ahead(parts, U, fit$model, 2, 25)
+  # the greedy's first pick, then another candidate: with the same random
+  # numbers step 1 is the greedy's, and step 2 that candidate's score given
+  # the first (the greedy's scores at step 2)
+  other <- setdiff(order(greedy$scores[, 2], decreasing = TRUE), greedy$chosen)[3]
+  set.seed(11)
+  fixed <- FBC:::look_ahead(parts, U, fit$model, 2, 25, order = c(greedy$chosen[1], other))
+  expect_identical(fixed$chosen, c(greedy$chosen[1], as.integer(other)))
+  expect_identical(fixed$gain[1], greedy$gain[1])
+  expect_identical(fixed$gain[2], greedy$scores[other, 2])
+  expect_lt(fixed$gain[2], greedy$gain[2])
+  expect_error(FBC:::look_ahead(parts, U, fit$model, 2, 25, order = c(1, 1)), "repeat")
+  expect_error(FBC:::look_ahead(parts, U, fit$model, 2, 25, order = c(1, 31)), "index")
+})
+
+test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gains at its picks", {
+  pb <- sinus_problem()
+  set.seed(4)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
+                   nChains = 2, showProgress = FALSE)
+  cand <- data.frame(x = stats::runif(60), u = stats::runif(60))
+  set.seed(12)
+  pr <- propose_runs(fit, n = 3, candidates = cand, method = "plugin", ndraws = 40, nfantasy = 30)
+  # the same steps by hand, the same random numbers: the plug-in's greedy
+  # picks, then the joint particles' gains at them in that order
+  sc <- fit$model$scale
+  U <- FBC:::scale_inputs(as.matrix(cand), sc, 1:2)
+  set.seed(12)
+  plug <- FBC:::look_ahead(FBC:::design_particles(fit, 40, "plugin"), U, fit$model, 3, 30)
+  joint <- FBC:::look_ahead(FBC:::design_particles(fit, 40, "joint"), U[plug$chosen, ], fit$model,
+                            3, 30, order = 1:3)
+  expect_equal(as.matrix(pr[c("x", "u")]), as.matrix(cand[plug$chosen, ]), ignore_attr = TRUE)
+  expect_identical(pr$gain, joint$gain / joint$variance)
+  expect_identical(attr(pr, "pluginGain"), plug$gain / plug$variance)
+  expect_identical(attr(pr, "variance"), joint$variance)
+  # the joint criterion's own picks carry no plug-in gains
+  expect_null(attr(propose_runs(fit, n = 1, candidates = cand, ndraws = 40), "pluginGain"))
+})
+
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
   pb <- sinus_problem()
   # with the bias GP (KOH) and without, joint and plug-in particles
