@@ -7,8 +7,12 @@
 #' Chooses `n` new simulator inputs (experimental and calibration columns)
 #' expected to shrink the posterior of the calibration parameters
 #' \eqn{\kappa} most (the default), or the uncertainty of calibrated
-#' predictions at inputs the user names (`target`), integrating over the
-#' joint posterior of \eqn{\kappa} and every hyperparameter.
+#' predictions at inputs the user names (`target`), and reports each one's
+#' expected gain integrated over the joint posterior of \eqn{\kappa} and
+#' every hyperparameter. The points are picked by the criterion with the
+#' hyperparameters at their MAP values (`method = "plugin"`, the default:
+#' measured as good as or better than picking by the joint criterion,
+#' `method = "joint"`; see "Joint or plug-in (measured)").
 #'
 #' @section Criterion:
 #' For each retained draw \eqn{\phi_s} (kappa and the hyperparameters) the
@@ -57,13 +61,21 @@
 #' with the number of target points (at most 100; a few dozen are plenty
 #' for an integrated variance).
 #'
-#' `method = "plugin"` picks by the same criterion with the hyperparameters
-#' fixed at the MAP draw's (kappa on a grid for one calibration input, a
-#' uniform sample otherwise, weighted by its likelihood and prior): what
-#' KOH-IMSPE and EIVAR do. It ignores the hyperparameters' uncertainty, so
-#' its own gains overstate what its picks are worth; the `gain` reported
-#' is the joint look-ahead's at its picks (in its order, each given the
-#' ones before), its own in attribute `pluginGain`.
+#' Which points are picked: by default (`method = "plugin"`) by the same
+#' criterion with the hyperparameters fixed at the MAP draw's (kappa on a
+#' grid for one calibration input, a uniform sample otherwise, weighted by
+#' its likelihood and prior), what KOH-IMSPE and EIVAR do; with
+#' `method = "joint"` by the joint criterion above. The plug-in ignores the
+#' hyperparameters' uncertainty, so its own gains overstate what its picks
+#' are worth: the `gain` reported is always the joint look-ahead's, at the
+#' plug-in's picks in its order (each given the ones before), and the
+#' plug-in's own gains are kept in attribute `pluginGain`. When that gain
+#' of the plug-in's first pick is under 1% of the current variance, the
+#' joint criterion picks instead if it finds a run worth 1% or more: the
+#' MAP hyperparameters, not the posterior, made the plug-in's runs
+#' worthless (seen with few runs and field inputs beyond them: a second
+#' pick worth 0.31% where the joint criterion's halved kappa's 90%
+#' interval). Attribute `method` says which criterion picked.
 #'
 #' @section Joint or plug-in (measured):
 #' Runs to bring kappa's posterior within Hellinger distance 0.1 of the
@@ -90,10 +102,10 @@
 #' is small. A kappa grid per hyperparameter draw in place of the draws (5 x
 #' 20 particles) came between the two (17, quartiles 16-19, on the sinusoid)
 #' and more hyperparameter draws (10 x 20) did worse, so it was not adopted.
-#' The joint criterion was kept as the default for its honest gains: the
-#' plug-in's own expected gains ignore the hyperparameters' spread and
-#' overstated what its picks were worth under the joint posterior (0.34-0.88 against
-#' 0.15-0.42 on the sinusoid's first picks at 5 runs). With the issue's
+#' The plug-in's own expected gains ignore the hyperparameters' spread and
+#' overstated what its picks were worth under the joint posterior
+#' (0.34-0.88 against 0.15-0.42 on the sinusoid's first picks at 5 runs),
+#' which is why the gains reported are the joint look-ahead's. With the issue's
 #' protocol (10 starting runs, batches of 5 and of 1, 30 replicates) the
 #' two were even in the median on the sinusoid (25 and 20 runs), kinetics
 #' (20 and 15), two inputs (40) and Tuo and Wu's problem (37.5 joint, 40
@@ -102,11 +114,12 @@
 #' joint in 9; sign test p 0.12), and rerun with this version's fits (22
 #' replicates) 55 and 57.5 (p 0.81). The one significant difference: two
 #' inputs, one run at a time from 10 runs, 33.5 against 35 runs (plug-in
-#' first in 21 of 30, p 0.04). With the fewest runs as the aim,
-#' `method = "plugin"` is as good or a little better on every problem
-#' measured, and it reports the joint look-ahead's honest gains at its
-#' picks; it is the candidate for the default (not yet switched: the
-#' vignette's loop and the figures above are the joint criterion's).
+#' first in 21 of 30, p 0.04). With the fewest runs as the aim, the
+#' plug-in's picks are as good or a little better on every problem
+#' measured, so they are the default; integrating over the hyperparameters
+#' pays in the gains reported, not in the picks. (The figures above are
+#' each criterion's own; `method = "joint"` keeps the joint criterion's
+#' picks.)
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -136,8 +149,12 @@
 #' take 0.1-3 CPU s), but 23% of [update_runs()]'s reweighting of the old
 #' draws (about 0.09 s), which is what a loop step usually costs now; with
 #' batches of 5 from 10 runs, a batch costs 0.08-0.10 CPU s, 17-26% of the
-#' fit it follows. Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
-#' step.
+#' fit it follows. (These are the joint criterion's costs; the default
+#' picks by the plug-in and then scores its `n` picks by the joint
+#' look-ahead, a little more: a batch of 5 costs 0.07-0.08 CPU s against
+#' 0.06-0.07 on the sinusoid with 10 runs, 0.25-0.30 against 0.23-0.24 with
+#' three calibration inputs and 50 runs.) Give fewer `nfantasy` or `ndraws`
+#' for a cheaper, noisier step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
@@ -164,7 +181,10 @@
 #'   spaced over the distinct retained ones, each weighted by its repeats:
 #'   the draws of a reweighted fit, [update_runs()], repeat).
 #' @param nfantasy Fantasised simulator values per candidate.
-#' @param method `"joint"` (the default) or `"plugin"` (see above).
+#' @param method Which criterion picks the points: `"plugin"` (the
+#'   default: the hyperparameters at their MAP values) or `"joint"`
+#'   (integrated over the draws); the gains reported are the joint
+#'   look-ahead's either way (see "Criterion").
 #' @param ncandidates Number of default candidates (default
 #'   `100 * (p + q)`, at most 1000).
 #' @param tol Candidates closer than `tol` (scaled units) to an existing
@@ -173,8 +193,10 @@
 #'   named as in `sim`), `gain` (the point's expected reduction of
 #'   kappa's posterior variance, or of the prediction's integrated
 #'   variance, as a fraction of the current, given the points above it).
-#'   Attributes `variance` (current, scaled), `time` (CPU seconds) and,
-#'   with `method = "plugin"`, `pluginGain` (the plug-in's own gains).
+#'   Attributes `variance` (current, scaled), `time` (CPU seconds),
+#'   `method` (the criterion that picked: `"joint"` where the plug-in's
+#'   picks were worth nothing, see "Criterion") and, where the plug-in
+#'   picked, `pluginGain` (its own gains).
 #' @seealso [update_runs()], [design_loop()]
 #' @export
 #' @examples
@@ -184,11 +206,11 @@
 #' # runs for calibrated predictions at x = 2.5
 #' propose_runs(fit, n = 2, target = c(2.5), ndraws = 50, ncandidates = 100)
 propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws = 100,
-                         nfantasy = 50, method = c("joint", "plugin"), ncandidates = NULL,
+                         nfantasy = 50, method = c("plugin", "joint"), ncandidates = NULL,
                          tol = 1e-3) {
   t0 <- proc.time()
   fit <- check_fbc(fit, "fit")
-  method <- match_choice(method, c("joint", "plugin"), "method")
+  method <- match_choice(method, c("plugin", "joint"), "method")
   n <- check_count(n, "n", min = 1)
   ndraws <- check_count(ndraws, "ndraws", min = 2)
   nfantasy <- check_count(nfantasy, "nfantasy", min = 1)
@@ -201,25 +223,39 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
-  parts <- design_particles(fit, ndraws, method)
-  crit <- look_ahead(parts, U, model, n, nfantasy, XT)
-  picks <- U[crit$chosen, , drop = FALSE]
-  own <- crit$gain / crit$variance
+  crit <- look_ahead(design_particles(fit, ndraws, method), U, model, n, nfantasy, XT)
+  own <- NULL
   if (method == "plugin") {
     # the plug-in's picks, their gains by the joint look-ahead (in the
     # plug-in's order, the points before conditioned on): its own ignore
     # the hyperparameters' spread
-    crit <- look_ahead(design_particles(fit, ndraws, "joint"), picks, model, n, nfantasy, XT,
+    own <- crit$gain / crit$variance
+    joint <- design_particles(fit, ndraws, "joint")
+    plug <- crit
+    crit <- look_ahead(joint, U[plug$chosen, , drop = FALSE], model, n, nfantasy, XT,
                        order = seq_len(n))
+    crit$chosen <- plug$chosen
+    if (crit$gain[1] / crit$variance < design_limited) {
+      # worth nothing under the joint posterior: the MAP hyperparameters may
+      # be what is wrong (few runs, field inputs beyond them), so the joint
+      # criterion picks when it finds a run that is worth something
+      alt <- look_ahead(joint, U, model, n, nfantasy, XT)
+      if (alt$gain[1] / alt$variance >= design_limited) {
+        crit <- alt
+        method <- "joint"
+        own <- NULL
+      }
+    }
   }
-  out <- as.data.frame(unscale_inputs(picks, sc, seq_len(d)))
+  out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
   tm <- proc.time() - t0
   attr(out, "variance") <- crit$variance
-  if (method == "plugin") attr(out, "pluginGain") <- own
+  attr(out, "method") <- method
+  attr(out, "pluginGain") <- own
   attr(out, "time") <- sum(tm[c(1, 2)])
-  if (out$gain[1] < 0.01) {
+  if (out$gain[1] < design_limited) {
     what <- if (nrow(XT)) "the calibrated prediction's variance at the target points" else "kappa's posterior variance"
     cli::cli_inform(c(
       "!" = "The best new run is expected to shrink {what} by {format(100 * out$gain[1], digits = 2)}% only: it is limited by something new runs cannot change.",
@@ -228,6 +264,11 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   }
   out
 }
+
+# Below this expected gain (a fraction of the current variance) a run is
+# worth nothing: propose_runs() says the posterior is limited by something
+# runs cannot change, and the plug-in's picks give way to the joint's.
+design_limited <- 0.01
 
 # The criterion's target on the scaled experimental inputs: no rows for
 # kappa's variance, else the rows of `target` (experimental inputs where

@@ -50,8 +50,12 @@
 # integrated out on a log grid. Per replicate (its field noise). It
 # replaces the earlier 150-run fit (9-30 CPU s a replicate, and a second
 # Monte Carlo error in the distance); the two agree (see RESULTS-design.md).
-# Methods: ours (propose_runs, joint), plug-in (the same criterion at the
-# MAP hyperparameters, kappa weighted on a grid: KOH-IMSPE/EIVAR's way),
+# Methods: ours (propose_runs(method = "joint"): picked by the joint
+# criterion, the "ours" of every figure in RESULTS-design.md), plug-in
+# (propose_runs(method = "plugin"), the package's default since stop 44:
+# the same criterion at the MAP hyperparameters, kappa weighted on a grid,
+# KOH-IMSPE/EIVAR's way; it gives way to the joint criterion where the
+# joint look-ahead finds its picks worth nothing, column `picked`),
 # lhs::augmentLHS (nested maximin augmentation), random; ours and the
 # plug-in choose among 100 d uniform candidates per step. "oracle" (not in
 # the default methods): a greedy bound, batches of 1 only: of 25 uniform
@@ -298,7 +302,7 @@ next_runs <- function(method, fit, n, lhsState, ref) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
   if (grepl("^ours[0-9]+$", method)) {
     nd <- as.integer(sub("ours", "", method))
-    return(as.matrix(propose_runs(fit, n = n, candidates = cand(), ndraws = nd)[cols]))
+    return(as.matrix(propose_runs(fit, n = n, candidates = cand(), ndraws = nd, method = "joint")[cols]))
   }
   if (method == "oracle") {
     # a greedy oracle (batches of 1): of 25 uniform candidates, ours' pick
@@ -318,9 +322,12 @@ next_runs <- function(method, fit, n, lhsState, ref) {
                      seen = data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
                                        hMedianUniform = stats::median(h[1:25]), hOracle = min(h))))
   }
+  # (which criterion picked: the plug-in's picks give way to the joint's
+  # where they are worth nothing under the joint posterior, ?propose_runs)
+  picked <- function(pr) structure(as.matrix(pr[cols]), picked = attr(pr, "method"))
   switch(method,
-    ours = as.matrix(propose_runs(fit, n = n, candidates = cand())[cols]),
-    plugin = as.matrix(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))[cols]),
+    ours = picked(propose_runs(fit, n = n, candidates = cand(), method = "joint")),
+    plugin = picked(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))),
     random = matrix(runif(d * n), n, d),
     lhs = {
       A <- lhs::augmentLHS(lhsState, n)
@@ -368,6 +375,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     if (nrow(sim) >= init + added) return(rbind_fill(c(rows, list(row))))
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState, ref))
     row$designCpu <- tDesign
+    row$picked <- if (is.null(attr(U, "picked"))) NA_character_ else attr(U, "picked")
     if (!is.null(attr(U, "seen"))) row <- cbind(row, attr(U, "seen"))
     rows[[length(rows) + 1]] <- row
     if (method %in% c("lhs", "random")) {

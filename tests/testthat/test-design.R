@@ -486,8 +486,14 @@ test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gain
   expect_identical(pr$gain, joint$gain / joint$variance)
   expect_identical(attr(pr, "pluginGain"), plug$gain / plug$variance)
   expect_identical(attr(pr, "variance"), joint$variance)
+  # the plug-in is the default
+  set.seed(12)
+  def <- propose_runs(fit, n = 3, candidates = cand, ndraws = 40, nfantasy = 30)
+  attr(def, "time") <- attr(pr, "time")  # CPU time, measured
+  expect_identical(def, pr)
   # the joint criterion's own picks carry no plug-in gains
-  expect_null(attr(propose_runs(fit, n = 1, candidates = cand, ndraws = 40), "pluginGain"))
+  expect_null(attr(propose_runs(fit, n = 1, candidates = cand, ndraws = 40, method = "joint"),
+                   "pluginGain"))
 })
 
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
