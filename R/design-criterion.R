@@ -55,8 +55,9 @@
 #' integrated variance). Runs then go near the target inputs at likely
 #' values of \eqn{\kappa}, and where they also narrow \eqn{\kappa}
 #' (tested: a batch of 5 for a target at \eqn{x = 0.15} on the sinusoid
-#' put 4 runs within 0.05 of it, one for \eqn{x = 0.85} 3 within 0.08 of
-#' it, while for kappa they spread over \eqn{x} = 0.39-0.90). The part of the variance runs cannot reduce (the bias's, and
+#' put 4 runs within 0.04 of it, one for \eqn{x = 0.85} 3 within 0.05 of
+#' it, while for kappa they spread over \eqn{x} = 0.28-0.90). The part of
+#' the variance runs cannot reduce (the bias's, and
 #' \eqn{\kappa}'s where the field data leave it wide) stays. The cost grows
 #' with the number of target points (at most 100; a few dozen are plenty
 #' for an integrated variance).
@@ -223,37 +224,15 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
-  crit <- look_ahead(design_particles(fit, ndraws, method), U, model, n, nfantasy, XT)
-  own <- NULL
-  if (method == "plugin") {
-    # the plug-in's picks, their gains by the joint look-ahead (in the
-    # plug-in's order, the points before conditioned on): its own ignore
-    # the hyperparameters' spread
-    own <- crit$gain / crit$variance
-    joint <- design_particles(fit, ndraws, "joint")
-    plug <- crit
-    crit <- look_ahead(joint, U[plug$chosen, , drop = FALSE], model, n, nfantasy, XT,
-                       order = seq_len(n))
-    crit$chosen <- plug$chosen
-    if (crit$gain[1] / crit$variance < design_limited) {
-      # worth nothing under the joint posterior: the MAP hyperparameters may
-      # be what is wrong (few runs, field inputs beyond them), so the joint
-      # criterion picks when it finds a run that is worth something
-      alt <- look_ahead(joint, U, model, n, nfantasy, XT)
-      if (alt$gain[1] / alt$variance >= design_limited) {
-        crit <- alt
-        method <- "joint"
-        own <- NULL
-      }
-    }
-  }
+  plug <- if (method == "plugin") design_particles(fit, ndraws, "plugin")
+  crit <- pick_runs(plug, design_particles(fit, ndraws, "joint"), U, model, n, nfantasy, XT)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
   tm <- proc.time() - t0
   attr(out, "variance") <- crit$variance
-  attr(out, "method") <- method
-  attr(out, "pluginGain") <- own
+  attr(out, "method") <- crit$method
+  attr(out, "pluginGain") <- crit$own
   attr(out, "time") <- sum(tm[c(1, 2)])
   if (out$gain[1] < design_limited) {
     what <- if (nrow(XT)) "the calibrated prediction's variance at the target points" else "kappa's posterior variance"
@@ -269,6 +248,29 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
 # worth nothing: propose_runs() says the posterior is limited by something
 # runs cannot change, and the plug-in's picks give way to the joint's.
 design_limited <- 0.01
+
+# n points of the candidates U picked by the plug-in's particles `plug`
+# (NULL: by the joint particles `joint`), with the joint look-ahead's gains
+# (at the plug-in's picks in its order, the points before conditioned on:
+# the plug-in's own, `own`, ignore the hyperparameters' spread). Plug-in
+# picks worth nothing under the joint posterior (first gain below
+# design_limited) give way to the joint criterion's when it finds one worth
+# more: the plug-in's hyperparameters, not the posterior, made them
+# worthless. `method` says which picked.
+pick_runs <- function(plug, joint, U, model, n, nfantasy, XT) {
+  if (is.null(plug)) {
+    return(c(look_ahead(joint, U, model, n, nfantasy, XT), method = "joint"))
+  }
+  mine <- look_ahead(plug, U, model, n, nfantasy, XT)
+  crit <- look_ahead(joint, U[mine$chosen, , drop = FALSE], model, n, nfantasy, XT,
+                     order = seq_len(n))
+  crit$chosen <- mine$chosen
+  if (crit$gain[1] / crit$variance < design_limited) {
+    alt <- look_ahead(joint, U, model, n, nfantasy, XT)
+    if (alt$gain[1] / alt$variance >= design_limited) return(c(alt, method = "joint"))
+  }
+  c(crit, method = "plugin", list(own = mine$gain / mine$variance))
+}
 
 # The criterion's target on the scaled experimental inputs: no rows for
 # kappa's variance, else the rows of `target` (experimental inputs where
