@@ -239,8 +239,11 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
+  joint <- design_particles(fit, ndraws, "joint")
+  # (before any work: the joint look-ahead over every candidate may be needed)
+  check_look_ahead_size(nrow(joint$phi), model, U, XT)
   plug <- if (method == "plugin") design_particles(fit, ndraws, "plugin")
-  crit <- pick_runs(plug, design_particles(fit, ndraws, "joint"), U, model, n, nfantasy, XT)
+  crit <- pick_runs(plug, joint, U, model, n, nfantasy, XT)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
   out$gain <- crit$gain / crit$variance
@@ -354,8 +357,8 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
 # `lw0` (0 for posterior draws, the log of its repeats for a repeated one)
 # and kappa (scaled). "plugin": the MAP
 # draw's hyperparameters with kappa on a grid (q = 1) or uniform, weighted
-# by likelihood times prior.
-design_particles <- function(fit, ndraws, method) {
+# by likelihood times prior (those of no weight left out unless !prune).
+design_particles <- function(fit, ndraws, method, prune = TRUE) {
   N <- nrow(fit$Phi)
   q <- fit$scale$q
   if (method == "joint") {
@@ -379,7 +382,35 @@ design_particles <- function(fit, ndraws, method) {
   lp <- vapply(seq_len(ndraws), function(s) {
     sum(vapply(seq_len(q), function(j) log_prior_row(tab, j, K[s, j]), numeric(1)))
   }, numeric(1))
+  if (prune && ndraws > 1L) {
+    # a kappa whose weight (likelihood x prior) is under 1e-10 of the
+    # largest adds nothing to the criterion but its cost: left out (the
+    # likelihoods from one factor per particle, a few % of the look-ahead;
+    # at 20 runs of the sinusoid 38 of 100 kept)
+    d <- fit$model$data
+    ll <- .design_systems(d$Xf, d$yf, d$Xs, d$ys, phi, matrix(0, 0, ncol(d$Xs)),
+                          matrix(0, 0, ncol(d$Xf)), fbc_nugget, fit$spec$model)$ll
+    lw <- lp + ll
+    keep <- if (any(is.finite(lw))) is.finite(lw) & lw >= max(lw[is.finite(lw)]) - log(1e10) else TRUE
+    phi <- phi[keep, , drop = FALSE]
+    K <- K[keep, , drop = FALSE]
+    lp <- lp[keep]
+  }
   list(phi = phi, lw0 = lp, kappa = K, plugin = TRUE)
+}
+
+# The look-ahead's memory, draws x (m + n + T) x candidates numbers:
+# refused beyond 5e7 (400 MB).
+check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
+  dat <- model$data
+  size <- ndraws * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
+  if (size > 5e7) {
+    rows <- if (nrow(XT)) "runs, field rows and targets" else "runs and field rows"
+    cli::cli_abort(c(
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({ndraws} draws x {nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)} {rows} x {nrow(U)} candidates).",
+      i = "Give fewer {.arg ndraws} or candidates."
+    ), call = call)
+  }
 }
 
 # The greedy look-ahead (src/design.cpp, design_look_ahead()) over the
@@ -394,14 +425,7 @@ design_particles <- function(fit, ndraws, method) {
 look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
                        order = integer(), call = parent.frame()) {
   dat <- model$data
-  size <- nrow(parts$phi) * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
-  if (size > 5e7) {
-    rows <- if (nrow(XT)) "runs, field rows and targets" else "runs and field rows"
-    cli::cli_abort(c(
-      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({nrow(parts$phi)} draws x {nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)} {rows} x {nrow(U)} candidates).",
-      i = "Give fewer {.arg ndraws} or candidates."
-    ), call = call)
-  }
+  check_look_ahead_size(nrow(parts$phi), model, U, XT, call)
   usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic: the draws evenly
   Z <- matrix(0, nfantasy, n)
   for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
