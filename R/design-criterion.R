@@ -392,6 +392,7 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
                           matrix(0, 0, ncol(d$Xf)), fbc_nugget, fit$spec$model)$ll
     lw <- lp + ll
     keep <- if (any(is.finite(lw))) is.finite(lw) & lw >= max(lw[is.finite(lw)]) - log(1e10) else TRUE
+    keep[order(lw, decreasing = TRUE)[1:2]] <- TRUE  # (a variance needs two)
     phi <- phi[keep, , drop = FALSE]
     K <- K[keep, , drop = FALSE]
     lp <- lp[keep]
