@@ -132,6 +132,10 @@
 #' 20 runs against 20, kinetics 15 against 15, two calibration inputs 32
 #' against 35 (first in 19 replicates, later in 7, p 0.03); to distance
 #' 0.05 kinetics 18.5 where the plug-in alone needed 22 and the joint 18.
+#' In batches of 5: sinusoid 25 and kinetics 20 runs, as both criteria;
+#' three calibration inputs 55 against the joint's 57.5 (22 replicates);
+#' two inputs 40, where the plug-in without the rule needed 35 (first in
+#' 10, later in 7, p 0.63) and the joint 40.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -164,13 +168,13 @@
 #' batches of 5 from 10 runs, a batch costs 0.08-0.10 CPU s, 17-26% of the
 #' fit it follows. (These are the joint criterion's costs. The default
 #' picks by the plug-in, scores its `n` picks by the joint look-ahead, and
-#' where they are worth under 1% runs the joint criterion too: a step of a
-#' loop one run at a time from 10 to 50 runs costs a median 0.054-0.087 CPU
-#' s against the joint criterion's 0.032-0.049 (sinusoid, two inputs,
-#' kinetics); a batch of 5 without the fallback 0.07-0.08 against
-#' 0.06-0.07 on the sinusoid with 10 runs, 0.25-0.30 against 0.23-0.24
-#' with three calibration inputs and 50 runs.) Give fewer `nfantasy` or
-#' `ndraws` for a cheaper, noisier step.
+#' where they are worth under 1% runs the joint criterion too; the
+#' plug-in's kappa values of no weight, likelihood times prior under 1e-10
+#' of the largest, are left out first, which changes nothing but the cost:
+#' a step of a loop one run at a time from 10 to 50 runs costs a median
+#' 0.042 CPU s on the sinusoid and 0.056 with two inputs, against the joint
+#' criterion's 0.032 and 0.049.) Give fewer `nfantasy` or `ndraws` for a
+#' cheaper, noisier step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
