@@ -70,19 +70,16 @@
 #' hyperparameters' uncertainty, so its own gains overstate what its picks
 #' are worth: the `gain` reported is always the joint look-ahead's, at the
 #' plug-in's picks in its order (each given the ones before), and the
-#' plug-in's own gains are kept in attribute `pluginGain`. When that gain
-#' of the plug-in's first pick is under 1% of the current variance, the
-#' joint criterion picks instead if its best run is worth 1% or more
-#' (attribute `method` says which criterion picked). This happens late in
-#' a loop, when kappa's posterior is near what the field data allow and
-#' every run is worth little (measured: in 26-38% of the steps of loops
-#' from 10 to 50 runs, 2-10% of those before 15 runs; the joint's best of
-#' many noisy estimates is then often just over 1%), and where the MAP
-#' hyperparameters mislead the plug-in (a loop on the sinusoid with runs
-#' in \eqn{x \le 0.5}: the plug-in's kappa grid had 3 points of weight,
-#' its pick was worth 0.3%, the joint criterion's halved kappa's 90%
-#' interval). It also keeps the "limited" message below honest: it is said
-#' only when neither criterion finds a run worth 1%.
+#' plug-in's own gains are kept in attribute `pluginGain`. Where the two
+#' disagree about the plug-in's first pick, the plug-in expecting it to be
+#' worth 1% of the current variance or more and the joint look-ahead less,
+#' the joint criterion picks instead if its best run is worth 1% or more
+#' (attribute `method` says which criterion picked): the MAP
+#' hyperparameters misled the plug-in (a loop on the sinusoid with runs in
+#' \eqn{x \le 0.5}: the plug-in's kappa grid had 3 points of weight, its
+#' pick was worth 0.3%, the joint criterion's halved kappa's 90%
+#' interval). Where both find it worth under 1%, the "limited" message
+#' below is said.
 #'
 #' @section Joint or plug-in (measured):
 #' Runs to bring kappa's posterior within Hellinger distance 0.1 of the
@@ -144,8 +141,9 @@
 #' the field data are few and noisy, kappa's posterior stays wide however
 #' many runs are made. `propose_runs()` says so when the best point's
 #' expected gain is below 1% of the current variance (of kappa, or of the
-#' prediction at the targets), in a message (by default: when neither the
-#' plug-in's first pick nor the joint criterion's best is worth 1%).
+#' prediction at the targets), in a message (by default: when the plug-in
+#' and the joint look-ahead both find the plug-in's first pick worth under
+#' 1%, or the joint criterion's best is).
 #'
 #' @section Defaults and cost:
 #' The look-ahead costs draws x candidates x fantasies per point of a
@@ -274,11 +272,11 @@ design_limited <- 0.01
 # n points of the candidates U picked by the plug-in's particles `plug`
 # (NULL: by the joint particles `joint`), with the joint look-ahead's gains
 # (at the plug-in's picks in its order, the points before conditioned on:
-# the plug-in's own, `own`, ignore the hyperparameters' spread). Plug-in
-# picks worth nothing under the joint posterior (first gain below
-# design_limited) give way to the joint criterion's when it finds one worth
-# more: the plug-in's hyperparameters, not the posterior, made them
-# worthless. `method` says which picked.
+# the plug-in's own, `own`, ignore the hyperparameters' spread). Where the
+# plug-in expects its first pick to be worth design_limited or more and the
+# joint look-ahead less, its picks give way to the joint criterion's if
+# that finds one worth more: the plug-in's hyperparameters, not the
+# posterior, misled it. `method` says which picked.
 pick_runs <- function(plug, joint, U, model, n, nfantasy, XT) {
   if (is.null(plug)) {
     return(c(look_ahead(joint, U, model, n, nfantasy, XT), method = "joint"))
@@ -287,11 +285,12 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT) {
   crit <- look_ahead(joint, U[mine$chosen, , drop = FALSE], model, n, nfantasy, XT,
                      order = seq_len(n))
   crit$chosen <- mine$chosen
-  if (crit$gain[1] / crit$variance < design_limited) {
+  own <- mine$gain / mine$variance
+  if (crit$gain[1] / crit$variance < design_limited && own[1] >= design_limited) {
     alt <- look_ahead(joint, U, model, n, nfantasy, XT)
     if (alt$gain[1] / alt$variance >= design_limited) return(c(alt, method = "joint"))
   }
-  c(crit, method = "plugin", list(own = mine$gain / mine$variance))
+  c(crit, method = "plugin", list(own = own))
 }
 
 # The criterion's target on the scaled experimental inputs: no rows for

@@ -549,6 +549,9 @@ test_that("plug-in picks worth nothing under the joint posterior give way to the
   honest <- FBC:::look_ahead(joint, U[mine$chosen, ], fit$model, 2, 30, order = 1:2)
   alt <- FBC:::look_ahead(joint, U, fit$model, 2, 30)
   expect_true(all(U[mine$chosen, 2] < 0.2))
+  # the two disagree: the plug-in expects its first pick to be worth more
+  # than 1%, the joint look-ahead less
+  expect_gt(mine$gain[1] / mine$variance, 0.01)
   expect_lt(honest$gain[1] / honest$variance, 0.01)
   expect_gt(alt$gain[1] / alt$variance, 0.1)
   expect_identical(pk$method, "joint")
