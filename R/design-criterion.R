@@ -123,16 +123,13 @@
 #' measured, so they are the default; integrating over the hyperparameters
 #' pays in the gains reported, not in the picks. (The figures above are
 #' each criterion's own; `method = "joint"` keeps the joint criterion's
-#' picks.) The default as it is (the plug-in giving way to the joint
-#' criterion where its picks are worth under 1%; 10 starting runs, one run
-#' at a time, 30 paired replicates against the joint criterion): sinusoid
-#' 20 runs against 20, kinetics 15 against 15, two calibration inputs 32
-#' against 35 (first in 19 replicates, later in 7, p 0.03); to distance
-#' 0.05 kinetics 18.5 where the plug-in alone needed 22 and the joint 18.
-#' In batches of 5: sinusoid 25 and kinetics 20 runs, as both criteria;
-#' three calibration inputs 55 against the joint's 57.5 (22 replicates);
-#' two inputs 40, where the plug-in without the rule needed 35 (first in
-#' 10, later in 7, p 0.63) and the joint 40.
+#' picks.) The default as it is (the plug-in, the joint criterion picking
+#' where the two disagree; 10 starting runs, one run at a time, 30 paired
+#' replicates against the joint criterion): sinusoid 20 runs against 20,
+#' kinetics 15 against 15, two calibration inputs 32 against 35 (first in
+#' 19, later in 7, p 0.03); to distance 0.05: 25 against 26.5, 19 against
+#' 18, 46.5 against 49.5 (p 0.01). In batches of 5 on the sinusoid
+#' 25 runs, as both criteria.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -166,13 +163,14 @@
 #' batches of 5 from 10 runs, a batch costs 0.08-0.10 CPU s, 17-26% of the
 #' fit it follows. (These are the joint criterion's costs. The default
 #' picks by the plug-in, scores its `n` picks by the joint look-ahead, and
-#' where they are worth under 1% runs the joint criterion too; the
-#' plug-in's kappa values of no weight, likelihood times prior under 1e-10
-#' of the largest, are left out first, which changes nothing but the cost:
-#' a step of a loop one run at a time from 10 to 50 runs costs a median
-#' 0.042 CPU s on the sinusoid and 0.056 with two inputs, against the joint
-#' criterion's 0.032 and 0.049.) Give fewer `nfantasy` or `ndraws` for a
-#' cheaper, noisier step.
+#' where the two disagree runs the joint criterion too (1-25% of the steps
+#' measured); the plug-in's kappa values of no weight, likelihood times
+#' prior under 1e-10 of the largest, are left out first, which changes
+#' nothing but the cost. A step of a loop one run at a time from 10 to 50
+#' runs costs a median 0.027 CPU s on the sinusoid, 0.040 on kinetics and
+#' 0.052 with two inputs, against the joint criterion's 0.032, 0.041 and
+#' 0.049; a batch of 5 on the sinusoid 0.050 against 0.081.) Give fewer
+#' `nfantasy` or `ndraws` for a cheaper, noisier step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
