@@ -210,9 +210,10 @@
 #'   kappa's posterior variance, or of the prediction's integrated
 #'   variance, as a fraction of the current, given the points above it).
 #'   Attributes `variance` (current, scaled), `time` (CPU seconds),
-#'   `method` (the criterion that picked: `"joint"` where the plug-in's
-#'   picks were worth nothing, see "Criterion") and, where the plug-in
-#'   picked, `pluginGain` (its own gains).
+#'   `method` (the criterion that picked: `"joint"` also where the plug-in
+#'   and the joint look-ahead disagreed about the plug-in's pick, see
+#'   "Criterion") and, where the plug-in picked, `pluginGain` (its own
+#'   gains).
 #' @seealso [update_runs()], [design_loop()]
 #' @export
 #' @examples
@@ -264,7 +265,8 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
 
 # Below this expected gain (a fraction of the current variance) a run is
 # worth nothing: propose_runs() says the posterior is limited by something
-# runs cannot change, and the plug-in's picks give way to the joint's.
+# runs cannot change, and where the plug-in values its pick above it and
+# the joint look-ahead below, the joint criterion picks (pick_runs()).
 design_limited <- 0.01
 
 # n points of the candidates U picked by the plug-in's particles `plug`

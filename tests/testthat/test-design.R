@@ -525,7 +525,7 @@ test_that("the plug-in's kappa values of no weight are left out, the criterion u
   expect_equal(a$scores, b$scores, tolerance = 1e-8)
 })
 
-test_that("plug-in picks worth nothing under the joint posterior give way to the joint criterion's", {
+test_that("where the plug-in and the joint look-ahead disagree about its pick, the joint criterion picks", {
   pb <- sinus_problem()
   set.seed(4)
   fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
