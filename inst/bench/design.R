@@ -54,8 +54,8 @@
 # criterion, the "ours" of every figure in RESULTS-design.md), plug-in
 # (propose_runs(method = "plugin"), the package's default since stop 44:
 # the same criterion at the MAP hyperparameters, kappa weighted on a grid,
-# KOH-IMSPE/EIVAR's way; it gives way to the joint criterion where the
-# joint look-ahead finds its picks worth nothing, column `picked`),
+# KOH-IMSPE/EIVAR's way; the joint criterion picks where the two disagree
+# about its first pick's worth, column `picked`),
 # lhs::augmentLHS (nested maximin augmentation), random; ours and the
 # plug-in choose among 100 d uniform candidates per step. "oracle" (not in
 # the default methods): a greedy bound, batches of 1 only: of 25 uniform
@@ -322,8 +322,8 @@ next_runs <- function(method, fit, n, lhsState, ref) {
                      seen = data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
                                        hMedianUniform = stats::median(h[1:25]), hOracle = min(h))))
   }
-  # (which criterion picked: the plug-in's picks give way to the joint's
-  # where they are worth nothing under the joint posterior, ?propose_runs)
+  # (which criterion picked: the joint's where it and the plug-in disagree
+  # about the plug-in's first pick, ?propose_runs)
   picked <- function(pr) structure(as.matrix(pr[cols]), picked = attr(pr, "method"))
   switch(method,
     ours = picked(propose_runs(fit, n = n, candidates = cand(), method = "joint")),
