@@ -358,9 +358,10 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
 
 # The draws scored over: `phi` (rows, sampler's scale), base log-weights
 # `lw0` (0 for posterior draws, the log of its repeats for a repeated one)
-# and kappa (scaled). "plugin": the MAP
-# draw's hyperparameters with kappa on a grid (q = 1) or uniform, weighted
-# by likelihood times prior (those of no weight left out unless !prune).
+# and kappa (scaled). "plugin": the MAP draw's hyperparameters with kappa
+# on a grid (q = 1) or uniform, weighted by likelihood times prior; those
+# of no weight (under 1e-10 of the largest) are left out by the look-ahead
+# (`prune`, a log ratio; 0 with !prune).
 design_particles <- function(fit, ndraws, method, prune = TRUE) {
   N <- nrow(fit$Phi)
   q <- fit$scale$q
@@ -382,25 +383,12 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
   phi <- phi0[rep(1, ndraws), , drop = FALSE]
   phi[, seq_len(q)] <- K
   tab <- fit$spec$table
-  lp <- vapply(seq_len(ndraws), function(s) {
-    sum(vapply(seq_len(q), function(j) log_prior_row(tab, j, K[s, j]), numeric(1)))
-  }, numeric(1))
-  if (prune && ndraws > 1L) {
-    # a kappa whose weight (likelihood x prior) is under 1e-10 of the
-    # largest adds nothing to the criterion but its cost: left out (the
-    # likelihoods from one factor per particle, a few % of the look-ahead;
-    # at 20 runs of the sinusoid 38 of 100 kept)
-    d <- fit$model$data
-    ll <- .design_systems(d$Xf, d$yf, d$Xs, d$ys, phi, matrix(0, 0, ncol(d$Xs)),
-                          matrix(0, 0, ncol(d$Xf)), fbc_nugget, fit$spec$model)$ll
-    lw <- lp + ll
-    keep <- if (any(is.finite(lw))) is.finite(lw) & lw >= max(lw[is.finite(lw)]) - log(1e10) else TRUE
-    keep[order(lw, decreasing = TRUE)[1:2]] <- TRUE  # (a variance needs two)
-    phi <- phi[keep, , drop = FALSE]
-    K <- K[keep, , drop = FALSE]
-    lp <- lp[keep]
-  }
-  list(phi = phi, lw0 = lp, kappa = K, plugin = TRUE)
+  lp <- 0
+  for (j in seq_len(q)) lp <- lp + log_prior_row(tab, j, K[, j])
+  # a kappa whose weight is under 1e-10 of the largest adds nothing to the
+  # criterion but its cost (at 20 runs of the sinusoid 62 of 100)
+  list(phi = phi, lw0 = rep_len(lp, ndraws), kappa = K, plugin = TRUE,
+       prune = if (prune) log(1e10) else 0)
 }
 
 # The look-ahead's memory, draws x (m + n + T) x candidates numbers:
@@ -435,5 +423,5 @@ look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(mode
   for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
                      isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model,
-                     as.integer(order))
+                     as.integer(order), parts$prune %||% 0)
 }

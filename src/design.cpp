@@ -92,44 +92,6 @@ void solve_lower_cols(const arma::mat& L, arma::mat& B) {
   for (; j < nc; ++j) solve_lower_col(L, B.colptr(j), 0);
 }
 
-// One draw's workspace: Z = (Xs; Xf, kappa) (N x (p + q)), C (N x N), the
-// bias correlation Rb (n x n) and the residual r (N); for targets Tk =
-// (XT, kappa) (T x (p + q)), KT (N x T), RbT (n x T) and RTU (T x Nc).
-struct SystemWork {
-  arma::mat Z, C, Rb, Tk, KT, RbT, RTU;
-  arma::vec r;
-};
-
-// One draw's target part (L, r the factor and residual of design_system()):
-//   KT = L^-1 Cov(y, zeta(XT)), Cov(y, zeta) = [s2S Rs(Xs, Tk); s2S Rs(Xk, Tk) + s2B Rb(Xf, XT)],
-//   mT = muB + KT' r,  VT = s2S + s2B - diag(KT'KT)   (predict()'s type "mean"),
-//   CTU = s2S Rs(Tk, U) - KT' A   (A = L^-1 Cov(y, eta(U))).
-void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xf,
-                    const arma::mat& XT, const arma::mat& U, const arma::mat& A,
-                    SystemWork& w, DesignSystems& out, arma::uword s) {
-  const arma::vec& phi = post.phi;
-  const int m = post.m, N = m + post.n, p = post.p, q = post.q;
-  const double s2S = phi[post.iSigma2S];
-  const double* thS = phi.memptr() + post.iThetaS;
-  const double* alS = phi.memptr() + post.iAlphaS;
-  for (int k = 0; k < q; ++k) w.Tk.col(p + k).fill(phi[post.iKappa + k]);
-  kernel_corr(mod.kernS, w.Z, w.Tk, p + q, thS, alS, w.KT, false);
-  w.KT *= s2S;
-  double s2B = 0.0;
-  if (post.bias) {
-    s2B = phi[post.iSigma2B];
-    kernel_corr(mod.kernB, Xf, XT, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
-                w.RbT, false);
-    w.KT.rows(m, N - 1) += s2B * w.RbT;
-  }
-  solve_lower(w.C, w.KT);
-  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
-  out.mT.col(s) = muB + w.KT.t() * w.r;
-  out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.KT), 0).t();
-  kernel_corr(mod.kernS, w.Tk, U, p + q, thS, alS, w.RTU, false);
-  out.CTU.slice(s) = s2S * w.RTU - w.KT.t() * A;
-}
-
 // The candidates' conditional means and variances from A (N x Nc) and the
 // residual r: mu_c = sum_i A_ic r_i, v_c = v0 - sum_i A_ic^2 (sums in i's
 // order; four columns at a time for independent chains).
@@ -159,46 +121,167 @@ void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* m
   }
 }
 
-// One draw's system. With Xk = (Xf, kappa) and prior mean mu0 = (0, muB):
+static const double LOG_2PI = 1.837877066409345483560659472811;
+
+// The simulator rows' part of a draw's system, which depends on the
+// simulator's hyperparameters (s2S, thetaS, alphaS) only and so is shared by
+// draws that have the same (the plug-in's particles differ in kappa alone):
+//   L1 = chol(s2S (Rs(Xs, Xs) + nugget I)),  r1 = L1^-1 ys,
+//   A1 = L1^-1 s2S Rs(Xs, U),  mu1 = A1' r1,  naa1 = -diag(A1' A1),
+//   ld1 = sum log diag L1,  rr1 = r1' r1;  key: the hyperparameters they are for.
+struct SimBlock {
+  arma::mat L, A;
+  arma::vec r, mu, naa, key;
+  double ld = 0.0, rr = 0.0;
+};
+
+// One draw's workspace: Xk = (Xf, kappa) (n x (p + q)), W = L1^-1 s2S
+// Rs(Xs, Xk) (m x n), the field block S (n x n), the bias correlation Rb
+// (n x n), A2 (n x Nc), the residual r2 (n), the moments' field parts; for
+// targets Tk = (XT, kappa) (T x (p + q)), K1 (m x T), K2 (n x T), RbT (n x
+// T) and RTU (T x Nc).
+struct SystemWork {
+  arma::mat Xk, W, S, Rb, A2, Tk, K1, K2, RbT, RTU;
+  arma::vec r2, mu2, v2;
+};
+
+// The shared block for the current draw's simulator hyperparameters
+// (recomputed only when they differ from the last draw's). False if the
+// simulator block is not positive definite.
+bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
+               const arma::vec& ys, const arma::mat& U, double nugget, SimBlock& sb) {
+  const arma::vec& phi = post.phi;
+  const int m = post.m, d = post.p + post.q;
+  arma::vec key(2 * d + 1);
+  key[0] = phi[post.iSigma2S];
+  for (int k = 0; k < d; ++k) {
+    key[1 + k] = phi[post.iThetaS + k];
+    key[1 + d + k] = phi[post.iAlphaS + k];
+  }
+  if (sb.key.n_elem == key.n_elem && arma::all(sb.key == key)) return true;
+  sb.key.reset();
+  const double s2S = key[0];
+  const double* thS = phi.memptr() + post.iThetaS;
+  const double* alS = phi.memptr() + post.iAlphaS;
+  sb.L.set_size(m, m);
+  kernel_corr(mod.kernS, Xs, Xs, d, thS, alS, sb.L, true);
+  sb.L *= s2S;
+  for (int i = 0; i < m; ++i) sb.L(i, i) *= 1.0 + nugget;
+  if (!chol_lower(sb.L)) return false;
+  sb.r = ys;
+  solve_lower(sb.L, sb.r);
+  sb.rr = arma::dot(sb.r, sb.r);
+  sb.ld = 0.0;
+  for (int i = 0; i < m; ++i) sb.ld += std::log(sb.L(i, i));
+  sb.A.set_size(m, U.n_rows);
+  kernel_corr(mod.kernS, Xs, U, d, thS, alS, sb.A, false);
+  sb.A *= s2S;
+  solve_lower_cols(sb.L, sb.A);
+  sb.mu.set_size(U.n_rows);
+  sb.naa.set_size(U.n_rows);
+  design_moments(sb.A, sb.r, 0.0, sb.mu.memptr(), sb.naa.memptr());
+  sb.key = key;
+  return true;
+}
+
+// One draw's target part (sb, W, S = L2, r2, A2 from design_system()):
+//   K1 = L1^-1 s2S Rs(Xs, Tk),  K2 = L2^-1 (s2S Rs(Xk, Tk) + s2B Rb(Xf, XT) - W' K1),
+//   mT = muB + K1' r1 + K2' r2,  VT = s2S + s2B - diag(K1'K1 + K2'K2)   (predict()'s type "mean"),
+//   CTU = s2S Rs(Tk, U) - K1' A1 - K2' A2.
+void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs,
+                    const arma::mat& Xf, const arma::mat& XT, const arma::mat& U,
+                    const SimBlock& sb, SystemWork& w, DesignSystems& out, arma::uword s) {
+  const arma::vec& phi = post.phi;
+  const int p = post.p, q = post.q;
+  const double s2S = phi[post.iSigma2S];
+  const double* thS = phi.memptr() + post.iThetaS;
+  const double* alS = phi.memptr() + post.iAlphaS;
+  for (int k = 0; k < q; ++k) w.Tk.col(p + k).fill(phi[post.iKappa + k]);
+  kernel_corr(mod.kernS, Xs, w.Tk, p + q, thS, alS, w.K1, false);
+  w.K1 *= s2S;
+  solve_lower(sb.L, w.K1);
+  kernel_corr(mod.kernS, w.Xk, w.Tk, p + q, thS, alS, w.K2, false);
+  w.K2 *= s2S;
+  double s2B = 0.0;
+  if (post.bias) {
+    s2B = phi[post.iSigma2B];
+    kernel_corr(mod.kernB, Xf, XT, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
+                w.RbT, false);
+    w.K2 += s2B * w.RbT;
+  }
+  w.K2 -= w.W.t() * w.K1;
+  solve_lower(w.S, w.K2);
+  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
+  out.mT.col(s) = muB + w.K1.t() * sb.r + w.K2.t() * w.r2;
+  out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.K1), 0).t() -
+                  arma::sum(arma::square(w.K2), 0).t();
+  kernel_corr(mod.kernS, w.Tk, U, p + q, thS, alS, w.RTU, false);
+  out.CTU.slice(s) = s2S * w.RTU - w.K1.t() * sb.A - w.K2.t() * w.A2;
+}
+
+// One draw's system, the simulator rows' block sb (sim_block()) and the
+// field rows' Schur complement. With Xk = (Xf, kappa) and prior mean
+// mu0 = (0, muB) the joint covariance of y = (ys, yf) is
 //   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
-//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E I        ]
-//   L = chol(C), r = L^-1 (y - mu0), A = L^-1 s2S Rs(Z, U),
-//   mu = A' r, v = s2S (1 + nugget) - diag(A'A).
+//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E I        ],
+// L = chol(C) = [L1 0; W' L2] with W = L1^-1 s2S Rs(Xs, Xk),
+//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E I - W'W),  r2 = L2^-1 (yf - muB - W' r1),
+//   A = L^-1 s2S Rs(Z, U) = [A1; A2],  A2 = L2^-1 (s2S Rs(Xk, U) - W' A1),
+//   mu = A' r = mu1 + A2' r2,  v = s2S (1 + nugget) - diag(A1'A1) - diag(A2'A2),
+//   ll = log N(y; mu0, C) = -(N log 2 pi + 2 (ld1 + sum log diag L2) + r1'r1 + r2'r2) / 2.
 // False if C is not positive definite.
 bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
-                   const arma::vec& yf, const arma::vec& ys, const arma::mat& U,
-                   const arma::mat& XT, double nugget, SystemWork& w, DesignSystems& out,
-                   arma::uword s) {
+                   const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys,
+                   const arma::mat& U, const arma::mat& XT, double nugget, SimBlock& sb,
+                   SystemWork& w, DesignSystems& out, arma::uword s) {
+  if (!sim_block(post, mod, Xs, ys, U, nugget, sb)) return false;
   const arma::vec& phi = post.phi;
   const int m = post.m, n = post.n, p = post.p, q = post.q, N = m + n;
   const double s2S = phi[post.iSigma2S];
-  for (int k = 0; k < q; ++k)
-    for (int i = 0; i < n; ++i) w.Z(m + i, p + k) = phi[post.iKappa + k];
+  for (int k = 0; k < q; ++k) w.Xk.col(p + k).fill(phi[post.iKappa + k]);
   const double* thS = phi.memptr() + post.iThetaS;
   const double* alS = phi.memptr() + post.iAlphaS;
-  kernel_corr(mod.kernS, w.Z, w.Z, p + q, thS, alS, w.C, true);
-  w.C *= s2S;
-  for (int i = 0; i < m; ++i) w.C(i, i) *= 1.0 + nugget;
-  for (int i = 0; i < m; ++i) w.r[i] = ys[i];
-  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
-  for (int i = 0; i < n; ++i) w.r[m + i] = yf[i] - muB;
+  kernel_corr(mod.kernS, Xs, w.Xk, p + q, thS, alS, w.W, false);
+  w.W *= s2S;
+  solve_lower_cols(sb.L, w.W);
+  kernel_corr(mod.kernS, w.Xk, w.Xk, p + q, thS, alS, w.S, true);
+  w.S *= s2S;
   if (post.bias) {
     kernel_corr(mod.kernB, Xf, Xf, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
                 w.Rb, true);
     const double s2B = phi[post.iSigma2B];
     for (int j = 0; j < n; ++j)
-      for (int i = j; i < n; ++i) w.C(m + i, m + j) += s2B * w.Rb(i, j);
+      for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
   }
-  for (int i = 0; i < n; ++i) w.C(m + i, m + i) += phi[post.iSigma2E];
-  if (!chol_lower(w.C)) return false;
-  solve_lower(w.C, w.r);
-  arma::mat A(out.A.slice_memptr(out.A.n_slices > 1 ? s : 0), N, U.n_rows, false, true);
-  kernel_corr(mod.kernS, w.Z, U, p + q, thS, alS, A, false);
-  A *= s2S;
-  solve_lower_cols(w.C, A);
-  design_moments(A, w.r, s2S * (1.0 + nugget), out.mu.colptr(s), out.v.colptr(s));
-  if (out.T > 0) design_targets(post, mod, Xf, XT, U, A, w, out, s);
-  out.ll[s] = post.logLik();
+  for (int i = 0; i < n; ++i) w.S(i, i) += phi[post.iSigma2E];
+  syrk_lower(w.W, -1.0, 1.0, w.S);
+  if (!chol_lower(w.S)) return false;
+  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
+  w.r2 = yf - muB - w.W.t() * sb.r;
+  solve_lower(w.S, w.r2);
+  double ld2 = 0.0;
+  for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
+  out.ll[s] = -0.5 * (N * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2));
+  const int Nc = U.n_rows;
+  if (Nc > 0) {
+    kernel_corr(mod.kernS, w.Xk, U, p + q, thS, alS, w.A2, false);
+    w.A2 *= s2S;
+    w.A2 -= w.W.t() * sb.A;
+    solve_lower_cols(w.S, w.A2);
+    design_moments(w.A2, w.r2, 0.0, w.mu2.memptr(), w.v2.memptr());
+    const double v0 = s2S * (1.0 + nugget);
+    double* mu = out.mu.colptr(s);
+    double* v = out.v.colptr(s);
+    for (int c = 0; c < Nc; ++c) {
+      mu[c] = sb.mu[c] + w.mu2[c];
+      v[c] = v0 + sb.naa[c] + w.v2[c];
+    }
+    if (out.A.n_slices > 1) {
+      out.A.slice(s).rows(0, m - 1) = sb.A;
+      out.A.slice(s).rows(m, N - 1) = w.A2;
+    }
+  }
+  if (out.T > 0) design_targets(post, mod, Xs, Xf, XT, U, sb, w, out, s);
   out.s2S[s] = s2S;
   std::copy(thS, thS + p + q, out.thS.colptr(s));
   std::copy(alS, alS + p + q, out.alS.colptr(s));
@@ -206,9 +289,10 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
 }
 
 // Every draw's system (rows of phis) at the candidates U (and the target
-// points XT, T x p, none for kappa's criterion), through prediction's
-// per-draw loop on the dense algebra; keepA: every draw's A (a batch's
-// pending points need them).
+// points XT, T x p, none for kappa's criterion) on the dense algebra, the
+// simulator rows' block shared by consecutive draws with the same simulator
+// hyperparameters; keepA: every draw's A (a batch's pending points need
+// them).
 DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& XT, double nugget, const Rcpp::List& model,
@@ -224,6 +308,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
     Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
+  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   const int m = Xs.n_rows, n = Xf.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
   const int T = XT.n_rows;
   DesignSystems out;
@@ -235,26 +320,33 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   out.alS.set_size(p + q, S);
   out.ll.set_size(S);
   out.s2S.set_size(S);
+  SimBlock sb;
   SystemWork w;
-  w.Z.set_size(N, p + q);
-  w.Z.rows(0, m - 1) = Xs;
-  w.Z.submat(m, 0, N - 1, p - 1) = Xf;
-  w.C.set_size(N, N);
+  w.Xk.set_size(n, p + q);
+  w.Xk.cols(0, p - 1) = Xf;
+  w.W.set_size(m, n);
+  w.S.set_size(n, n);
   w.Rb.set_size(n, n);
-  w.r.set_size(N);
+  w.A2.set_size(n, Nc);
+  w.mu2.set_size(Nc);
+  w.v2.set_size(Nc);
   if (T > 0) {
     out.mT.set_size(T, S);
     out.VT.set_size(T, S);
     out.CTU.set_size(T, Nc, S);
     w.Tk.set_size(T, p + q);
     w.Tk.cols(0, p - 1) = XT;
-    w.KT.set_size(N, T);
+    w.K1.set_size(m, T);
+    w.K2.set_size(n, T);
     w.RbT.set_size(n, T);
     w.RTU.set_size(T, Nc);
   }
-  for_each_draw(post, phis, [&](arma::uword s) {
-    return design_system(post, mod, Xf, yf, ys, U, XT, nugget, w, out, s);
-  });
+  for (int s = 0; s < S; ++s) {
+    post.phi = phis.row(s).t();
+    if (!design_system(post, mod, Xf, yf, Xs, ys, U, XT, nugget, sb, w, out, s))
+      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
+    if (s % 100 == 99) Rcpp::checkUserInterrupt();
+  }
   out.muT = out.mu.t();
   return out;
 }
@@ -494,16 +586,19 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // normal deviate Z(j, step) in each step; after a pick the base
 // log-weights gain its log-densities. With `order` (1-based, n distinct
 // candidates) step k takes candidate order[k] instead of the best: the
-// gains of given points in a given order. Returns the picks (1-based),
-// their gains, the current variance and every candidate's gain per step
-// (scores, Nc x n).
+// gains of given points in a given order. With `plugin` and prune > 0 the
+// draws whose weight lw0 + ll is under exp(-prune) of the largest are left
+// out first (the two largest always kept): they add nothing but their cost.
+// Returns the picks (1-based), their gains, the current variance, every
+// candidate's gain per step (scores, Nc x n) and the draws scored (kept,
+// 1-based).
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& kappa, const arma::vec& lw0, bool plugin,
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
-                             const Rcpp::IntegerVector& order) {
+                             const Rcpp::IntegerVector& order, double prune) {
   Model mod;
   const int n = Z.n_cols;
   if (order.size() > 0) {
@@ -514,15 +609,31 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
         if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
     }
   }
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod, n > 1);
-  LookAhead la;
-  la.S = phis.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
-  if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
   if (kappa.n_rows != phis.n_rows || kappa.n_cols > 16 || lw0.n_elem != phis.n_rows)
     Rcpp::stop("kappa and lw0 must have a row per draw (at most 16 calibration inputs)");
-  la.kap = kappa;
-  la.ksq = arma::sum(arma::square(kappa), 1);
-  const arma::vec lw = plugin ? arma::vec(lw0 + sys.ll) : lw0;
+  if (phis.n_rows < 1) Rcpp::stop("phis must have a draw");
+  arma::uvec kept = arma::regspace<arma::uvec>(0, phis.n_rows - 1);
+  if (plugin && prune > 0 && phis.n_rows > 2) {
+    // the likelihoods alone first (no candidates, no targets)
+    const arma::vec lw = lw0 + design_systems(Xf, yf, Xs, ys, phis, arma::mat(0, U.n_cols),
+                                              arma::mat(0, Xf.n_cols), nugget, model, mod,
+                                              false).ll;
+    const arma::uvec top = arma::stable_sort_index(lw, "descend");
+    const double lo = lw[top[0]] - prune;
+    std::vector<arma::uword> keep;
+    for (arma::uword s = 0; s < lw.n_elem; ++s)
+      if (lw[s] >= lo || s == top[0] || s == top[1]) keep.push_back(s);
+    kept = arma::uvec(keep);
+  }
+  const arma::mat ph = phis.rows(kept), kap = kappa.rows(kept);
+  const arma::vec lwk = lw0.elem(kept);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, mod, n > 1);
+  LookAhead la;
+  la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
+  if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
+  la.kap = kap;
+  la.ksq = arma::sum(arma::square(kap), 1);
+  const arma::vec lw = plugin ? arma::vec(lwk + sys.ll) : lwk;
   const arma::vec cw = arma::cumsum(arma::exp(lw - lw.max()));
   std::vector<int> s0(la.J);
   for (int j = 0; j < la.J; ++j) {
@@ -568,5 +679,6 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     Rcpp::checkUserInterrupt();
   }
   return Rcpp::List::create(Rcpp::Named("chosen") = chosen, Rcpp::Named("gain") = Rcpp::NumericVector(best.begin(), best.end()),
-                            Rcpp::Named("variance") = variance, Rcpp::Named("scores") = scores);
+                            Rcpp::Named("variance") = variance, Rcpp::Named("scores") = scores,
+                            Rcpp::Named("kept") = Rcpp::IntegerVector(kept.begin(), kept.end()) + 1);
 }

@@ -504,21 +504,26 @@ test_that("the plug-in's kappa values of no weight are left out, the criterion u
   fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
                    nChains = 2, showProgress = FALSE)
   all <- FBC:::design_particles(fit, 100, "plugin", prune = FALSE)
-  kept <- FBC:::design_particles(fit, 100, "plugin")
+  pruned <- FBC:::design_particles(fit, 100, "plugin")
+  expect_identical(pruned$phi, all$phi)
   # the weights (likelihood x prior at the MAP hyperparameters) of the
-  # full grid: the kept ones are those within 1e10 of the largest
+  # full grid, the likelihood from the plain-R dense one (helper-dense.R):
+  # the look-ahead scores those within 1e10 of the largest
   d <- fit$model$data
-  ll <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, all$phi, matrix(0, 0, 2), matrix(0, 0, 1),
-                              FBC:::fbc_nugget, fit$spec$model)$ll
+  ll <- apply(all$phi, 1, function(phi) {
+    dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
+                 discrepancy = "none")
+  })
   lw <- all$lw0 + ll
-  expect_equal(kept$kappa[, 1], all$kappa[lw >= max(lw) - log(1e10), 1])
-  expect_lt(nrow(kept$phi), 60)  # measured: 38 of 100 at 20 runs
-  # the same picks and gains (the left-out weights are < 1e-8 in all)
   U <- matrix(stats::runif(200), 100, 2)
   set.seed(3)
   a <- FBC:::look_ahead(all, U, fit$model, 3, 30)
   set.seed(3)
-  b <- FBC:::look_ahead(kept, U, fit$model, 3, 30)
+  b <- FBC:::look_ahead(pruned, U, fit$model, 3, 30)
+  expect_identical(a$kept, 1:100)
+  expect_identical(b$kept, which(lw >= max(lw) - log(1e10)))
+  expect_lt(length(b$kept), 60)  # measured: 38 of 100 at 20 runs
+  # the same picks and gains (the left-out weights are < 1e-8 in all)
   expect_identical(a$chosen, b$chosen)
   expect_equal(a$gain, b$gain, tolerance = 1e-8)
   expect_equal(a$variance, b$variance, tolerance = 1e-8)
@@ -601,6 +606,18 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
       expect_equal(cpp$variance, ref$variance, tolerance = 1e-8)
       expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
       expect_gt(max(cpp$scores[, 1]), 0)
+      # each draw's system (the C++ one by blocks, the simulator rows'
+      # shared by the plug-in's particles): the log-likelihood (with its
+      # constant), the candidates' means and variances
+      d <- fit$data
+      ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, XT, fbc_nugget,
+                                  fit$spec$model)
+      N <- nrow(d$Xs) + nrow(d$Xf)
+      expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
+      expect_equal(ds$mu, vapply(sys, `[[`, numeric(30), "mu"), tolerance = 1e-8)
+      expect_equal(ds$v, vapply(sys, `[[`, numeric(30), "v"), tolerance = 1e-8)
+      expect_equal(ds$mT, vapply(sys, `[[`, numeric(2), "mT"), tolerance = 1e-8)
+      expect_equal(ds$VT, vapply(sys, `[[`, numeric(2), "VT"), tolerance = 1e-8)
     }
     # each draw's target mean and variance are predict(type = "mean")'s
     # (its compiled per-draw conditional, src/predict.cpp)
