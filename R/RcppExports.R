@@ -9,6 +9,10 @@
     .Call(`_FBC_design_solve_lower_r`, L, B)
 }
 
+.design_exp <- function(x, mx) {
+    .Call(`_FBC_design_exp_r`, x, mx)
+}
+
 .design_systems <- function(Xf, yf, Xs, ys, phis, U, XT, nugget, model) {
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }

@@ -34,6 +34,18 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// design_exp_r
+arma::vec design_exp_r(const arma::vec& x, double mx);
+RcppExport SEXP _FBC_design_exp_r(SEXP xSEXP, SEXP mxSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::vec& >::type x(xSEXP);
+    Rcpp::traits::input_parameter< double >::type mx(mxSEXP);
+    rcpp_result_gen = Rcpp::wrap(design_exp_r(x, mx));
+    return rcpp_result_gen;
+END_RCPP
+}
 // design_systems_r
 Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& XT, double nugget, const Rcpp::List& model);
 RcppExport SEXP _FBC_design_systems_r(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
@@ -331,6 +343,7 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
     {"_FBC_design_solve_lower_r", (DL_FUNC) &_FBC_design_solve_lower_r, 2},
+    {"_FBC_design_exp_r", (DL_FUNC) &_FBC_design_exp_r, 2},
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
     {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 16},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},

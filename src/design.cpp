@@ -135,13 +135,53 @@ struct SimBlock {
   double ld = 0.0, rr = 0.0;
 };
 
+// B <- B - Wt A (Wt n x m, A m x nc, B n x nc), each entry's terms
+// subtracted in k's order: the updates the field rows of L X = B receive
+// from the simulator rows' solved values A (L = [L1 0; Wt L2]), as
+// solve_lower_col() makes them (a zero A(k, j) subtracts zeros: the same
+// numbers); four columns at a time, two rows per vector operation.
+void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
+  const arma::uword n = Wt.n_rows, m = Wt.n_cols, nc = B.n_cols;
+  arma::uword j = 0;
+#ifdef FBC_V2D
+  for (; j + 4 <= nc; j += 4) {
+    double* b[4] = {B.colptr(j), B.colptr(j + 1), B.colptr(j + 2), B.colptr(j + 3)};
+    const double* a[4] = {A.colptr(j), A.colptr(j + 1), A.colptr(j + 2), A.colptr(j + 3)};
+    for (arma::uword k = 0; k < m; ++k) {
+      const double* l = Wt.colptr(k);
+      const double x[4] = {a[0][k], a[1][k], a[2][k], a[3][k]};
+      const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
+      arma::uword i = 0;
+      for (; i + 2 <= n; i += 2) {
+        const v2d li = load2(l + i);
+        store2(b[0] + i, load2(b[0] + i) - x0 * li);
+        store2(b[1] + i, load2(b[1] + i) - x1 * li);
+        store2(b[2] + i, load2(b[2] + i) - x2 * li);
+        store2(b[3] + i, load2(b[3] + i) - x3 * li);
+      }
+      for (; i < n; ++i)
+        for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
+    }
+  }
+#endif
+  for (; j < nc; ++j) {
+    double* b = B.colptr(j);
+    const double* a = A.colptr(j);
+    for (arma::uword k = 0; k < m; ++k) {
+      const double* l = Wt.colptr(k);
+      const double x = a[k];
+      for (arma::uword i = 0; i < n; ++i) b[i] -= x * l[i];
+    }
+  }
+}
+
 // One draw's workspace: Xk = (Xf, kappa) (n x (p + q)), W = L1^-1 s2S
-// Rs(Xs, Xk) (m x n), the field block S (n x n), the bias correlation Rb
+// Rs(Xs, Xk) (m x n) and its transpose Wt, the field block S (n x n), the bias correlation Rb
 // (n x n), A2 (n x Nc), the residual r2 (n), the moments' field parts; for
 // targets Tk = (XT, kappa) (T x (p + q)), K1 (m x T), K2 (n x T), RbT (n x
 // T) and RTU (T x Nc).
 struct SystemWork {
-  arma::mat Xk, W, S, Rb, A2, Tk, K1, K2, RbT, RTU;
+  arma::mat Xk, W, Wt, S, Rb, A2, Tk, K1, K2, RbT, RTU;
   arma::vec r2, mu2, v2;
 };
 
@@ -255,6 +295,7 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
   }
   for (int i = 0; i < n; ++i) w.S(i, i) += phi[post.iSigma2E];
   syrk_lower(w.W, -1.0, 1.0, w.S);
+  w.Wt = w.W.t();
   if (!chol_lower(w.S)) return false;
   const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
   w.r2 = yf - muB - w.W.t() * sb.r;
@@ -266,7 +307,7 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
   if (Nc > 0) {
     kernel_corr(mod.kernS, w.Xk, U, p + q, thS, alS, w.A2, false);
     w.A2 *= s2S;
-    w.A2 -= w.W.t() * sb.A;
+    sub_cols(w.Wt, sb.A, w.A2);
     solve_lower_cols(w.S, w.A2);
     design_moments(w.A2, w.r2, 0.0, w.mu2.memptr(), w.v2.memptr());
     const double v0 = s2S * (1.0 + nugget);
@@ -325,6 +366,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   w.Xk.set_size(n, p + q);
   w.Xk.cols(0, p - 1) = Xf;
   w.W.set_size(m, n);
+  w.Wt.set_size(n, m);
   w.S.set_size(n, n);
   w.Rb.set_size(n, n);
   w.A2.set_size(n, Nc);
@@ -351,6 +393,67 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   return out;
 }
 
+// 2^(j / 64), j = 0 .. 63 (exp_weights()'s table)
+struct Exp2Table {
+  double v[64];
+  Exp2Table() { for (int j = 0; j < 64; ++j) v[j] = std::exp2(j / 64.0); }
+};
+
+// w_s = exp(L_s - mx) for s < S (L_s <= mx): two at a time where the
+// compiler has vector types, by x = (64 n + j) ln 2 / 64 + r (k = 64 n + j
+// the integer nearest 64 x / ln 2, ln 2 / 64 in two parts so r is exact to
+// rounding, |r| <= ln 2 / 128), exp(x) = 2^n 2^(j/64) exp(r), exp(r) by its
+// Taylor polynomial of degree 5 (truncation under 4e-17), 2^n from the
+// exponent's bits; 0 for x < -708 (a weight under 1e-307 of the largest).
+// Within 2 units in the last place of std::exp (its test) at half its
+// cost: the look-ahead's scoring was two thirds libm's exp.
+void exp_weights(const double* L, double mx, int S, double* w) {
+  int s = 0;
+#ifdef FBC_V2D
+  typedef long long v2i __attribute__((vector_size(16)));
+  static const Exp2Table tab;
+  const v2d magic = {6755399441055744.0, 6755399441055744.0};  // 1.5 2^52
+  const v2d k64 = {92.332482616893656, 92.332482616893656};    // 64 / ln 2
+  const v2d c1 = {0.010830424696223417, 0.010830424696223417};  // ln 2 / 64 in two parts
+  const v2d c2 = {2.572804622327669e-14, 2.572804622327669e-14};
+  const v2d lo = {-708.0, -708.0}, vmx = {mx, mx};
+  const v2d one = {1.0, 1.0}, h = {0.5, 0.5}, c3 = {1.0 / 6, 1.0 / 6}, c4 = {1.0 / 24, 1.0 / 24},
+            c5 = {1.0 / 120, 1.0 / 120};
+  v2i mbits, bias = {1023, 1023}, m63 = {63, 63};
+  std::memcpy(&mbits, &magic, sizeof mbits);
+  for (; s + 2 <= S; s += 2) {
+    const v2d x0 = load2(L + s) - vmx;
+    const v2i under = x0 < lo;
+    v2i xb, lb;
+    std::memcpy(&xb, &x0, sizeof xb);
+    std::memcpy(&lb, &lo, sizeof lb);
+    xb = (xb & ~under) | (lb & under);  // max(x0, -708)
+    v2d x;
+    std::memcpy(&x, &xb, sizeof x);
+    const v2d t = x * k64 + magic;
+    const v2d k = t - magic;
+    const v2d r = (x - k * c1) - k * c2;
+    const v2d r2 = r * r;
+    const v2d p = (one + r) + r2 * ((h + r * c3) + r2 * (c4 + r * c5));
+    v2i kb;
+    std::memcpy(&kb, &t, sizeof kb);
+    kb -= mbits;
+    const v2i j = kb & m63;
+    const v2i eb = ((kb >> 6) + bias) << 52;
+    v2d scale;
+    std::memcpy(&scale, &eb, sizeof scale);
+    const v2d tj = {tab.v[j[0]], tab.v[j[1]]};
+    v2d e = p * tj * scale;
+    v2i bits;
+    std::memcpy(&bits, &e, sizeof bits);
+    bits &= ~under;
+    std::memcpy(&e, &bits, sizeof e);
+    store2(w + s, e);
+  }
+#endif
+  for (; s < S; ++s) w[s] = std::exp(L[s] - mx);
+}
+
 // The greedy look-ahead's state: S draws, Nc candidates, J fantasies.
 // kap (S x q) kappa, ksq (S) |kappa_s|^2, base (S x J) the draws'
 // log-weights given the pending points' fantasies, YP (J x k) those values,
@@ -370,32 +473,26 @@ struct LookAhead {
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
 // sum_k (sum_s w_s k_sk)^2.
-double weighted_var(const LookAhead& la, const double* L, double mx) {
+double weighted_var(LookAhead& la, const double* L, double mx) {
   const int q = la.kap.n_cols;
   const double* ksq = la.ksq.memptr();
+  double* w = la.wbuf.memptr();
+  exp_weights(L, mx, la.S, w);
   double sw = 0.0, s2 = 0.0, mk[16] = {0.0};
   if (q == 1) {
     const double* k0 = la.kap.memptr();
     for (int s = 0; s < la.S; ++s) {
-      const double e = std::exp(L[s] - mx);
-      sw += e; s2 += e * ksq[s]; mk[0] += e * k0[s];
+      sw += w[s]; s2 += w[s] * ksq[s]; mk[0] += w[s] * k0[s];
     }
   } else {
     for (int s = 0; s < la.S; ++s) {
-      const double e = std::exp(L[s] - mx);
-      sw += e; s2 += e * ksq[s];
-      for (int k = 0; k < q; ++k) mk[k] += e * la.kap(s, k);
+      sw += w[s]; s2 += w[s] * ksq[s];
+      for (int k = 0; k < q; ++k) mk[k] += w[s] * la.kap(s, k);
     }
   }
   double out = s2 / sw;
   for (int k = 0; k < q; ++k) out -= (mk[k] / sw) * (mk[k] / sw);
   return out;
-}
-
-double weighted_var(const LookAhead& la, const double* L) {
-  double mx = R_NegInf;
-  for (int s = 0; s < la.S; ++s) mx = std::max(mx, L[s]);
-  return weighted_var(la, L, mx);
 }
 
 // The calibrated prediction's variance averaged over the T targets under
@@ -408,8 +505,9 @@ double target_var(LookAhead& la, const double* L, double mx, int j, int c, doubl
                   const double* mu) {
   const int S = la.S;
   double* w = la.wbuf.memptr();
+  exp_weights(L, mx, S, w);
   double sw = 0.0;
-  for (int s = 0; s < S; ++s) { w[s] = std::exp(L[s] - mx); sw += w[s]; }
+  for (int s = 0; s < S; ++s) sw += w[s];
   double out = 0.0;
   for (int t = 0; t < la.T; ++t) {
     const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
@@ -560,6 +658,14 @@ arma::mat design_solve_lower_r(const arma::mat& L, const arma::mat& B) {
   arma::mat X = B;
   solve_lower_cols(L, X);
   return X;
+}
+
+// exp_weights() (exp(x - mx) per entry), for the tests (against R's exp).
+// [[Rcpp::export(.design_exp)]]
+arma::vec design_exp_r(const arma::vec& x, double mx) {
+  arma::vec w(x.n_elem);
+  exp_weights(x.memptr(), mx, x.n_elem, w.memptr());
+  return w;
 }
 
 // The draws' conditionals at candidates (scaled): mean and variance of the

@@ -443,6 +443,21 @@ test_that("the candidates' triangular solve does dtrsm's operations, zeros inclu
   }
 })
 
+test_that("the look-ahead's weights exp(L - max) are exp()'s to a few units in the last place", {
+  # reference: R's exp (libm); below -708 a weight is 0 (under 1e-307 of
+  # the largest), and an odd length takes the scalar tail
+  x <- c(0, -1e-300, -1e-12, -0.0054, -0.3, -0.5, -1, -2.5, -37.5, -100, -700,
+         -seq(0, 707.99, length.out = 100001))
+  for (mx in c(0, 3.25, -40)) {
+    L <- x + mx
+    e <- exp(L - mx)
+    w <- drop(FBC:::.design_exp(L, mx))
+    expect_lte(max(abs(w - e) / e), 3 * .Machine$double.eps)  # measured: 4.3e-16 (1.96 eps)
+  }
+  expect_identical(drop(FBC:::.design_exp(c(0, -708.5, -745, -Inf, -1), 0))[1:4], c(1, 0, 0, 0))
+  expect_identical(drop(FBC:::.design_exp(-1, 0)), exp(-1))
+})
+
 test_that("look_ahead()'s order gives the gains of given points in that order", {
   pb <- sinus_problem()
   set.seed(4)
