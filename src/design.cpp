@@ -18,12 +18,15 @@
 // data, so a fantasised run both reweights the draws and moves each draw's
 // predictive mean and variance (target_var()).
 //
-// The per-draw loop is prediction's (for_each_draw(), fbc.h: the posterior
-// set to each draw from scratch on the dense algebra, which checks that the
-// covariance is positive definite and gives the exact log-likelihood); the
+// Per draw, one dense factor of the joint covariance of y, built by blocks
+// (design_system()): the simulator rows' block depends on the simulator's
+// hyperparameters only, so draws that share them (the plug-in's particles,
+// which differ in kappa alone) share it, and each draw adds its field rows'
+// Schur complement, which gives the exact log-likelihood too. The
 // conditional at candidates with any calibration input t (not the draw's
-// kappa, as Posterior::condition() has it) and their cross-covariances come
-// from one dense factor of the joint covariance of y per draw.
+// kappa, as Posterior::condition() has it) and their cross-covariances
+// come from that factor; the posterior object supplies the parameters'
+// layout only.
 #include "fbc.h"
 
 namespace {
@@ -137,9 +140,10 @@ struct SimBlock {
 
 // B <- B - Wt A (Wt n x m, A m x nc, B n x nc), each entry's terms
 // subtracted in k's order: the updates the field rows of L X = B receive
-// from the simulator rows' solved values A (L = [L1 0; Wt L2]), as
-// solve_lower_col() makes them (a zero A(k, j) subtracts zeros: the same
-// numbers); four columns at a time, two rows per vector operation.
+// from the simulator rows' solved values A (L = [L1 0; Wt L2]), in
+// solve_lower_col()'s order (where it skips a zero A(k, j) this subtracts
+// zeros: the same numbers); four columns at a time, two rows per vector
+// operation.
 void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
   const arma::uword n = Wt.n_rows, m = Wt.n_cols, nc = B.n_cols;
   arma::uword j = 0;
@@ -176,10 +180,11 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
 }
 
 // One draw's workspace: Xk = (Xf, kappa) (n x (p + q)), W = L1^-1 s2S
-// Rs(Xs, Xk) (m x n) and its transpose Wt, the field block S (n x n), the bias correlation Rb
-// (n x n), A2 (n x Nc), the residual r2 (n), the moments' field parts; for
-// targets Tk = (XT, kappa) (T x (p + q)), K1 (m x T), K2 (n x T), RbT (n x
-// T) and RTU (T x Nc).
+// Rs(Xs, Xk) (m x n) and its transpose Wt, the field block S (n x n; its
+// factor L2 after design_system()), the bias correlation Rb (n x n), A2
+// (n x Nc), the residual r2 (n), the moments' field parts mu2, v2; for
+// targets Tk = (XT, kappa) (T x (p + q)), K1 (m x T), K2 (n x T), RbT
+// (n x T) and RTU (T x Nc).
 struct SystemWork {
   arma::mat Xk, W, Wt, S, Rb, A2, Tk, K1, K2, RbT, RTU;
   arma::vec r2, mu2, v2;
