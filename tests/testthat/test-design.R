@@ -692,6 +692,10 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
   expect_message(pr <- propose_runs(fit, ndraws = 60, nfantasy = 30, ncandidates = 200),
                  "limited by something new runs cannot change")
   expect_lt(pr$gain, 0.01)
+  expect_snapshot({
+    message(FBC:::design_limited_message(0.0023, target = FALSE))
+    message(FBC:::design_limited_message(0.0023, target = TRUE))
+  })
   # with the field's noise known (sd 0.14), a run can halve kappa's variance: no message
   fit <- sinus_fit(pb, nMCMC = 1200)
   set.seed(8)
