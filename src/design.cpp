@@ -32,7 +32,8 @@
 namespace {
 
 // The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
-// Cov_s(y, eta(U)) (N x Nc, slice s; kept for every draw only when a batch
+// Cov_s(y, eta(U)) (N x Nc, N = m + G: the runs and the field's distinct
+// inputs, field_groups(); slice s; kept for every draw only when a batch
 // needs them, else one slice reused), the means mu and variances v (Nc x S),
 // the log-likelihoods ll, the simulator variances s2S and the kernel's
 // parameters per draw (thS, alS: (p + q) x S). With T target points: the
@@ -179,6 +180,45 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
   }
 }
 
+// The field rows grouped by input: rows at the same experimental input
+// (replicates) share eta(x, kappa) and the bias, so the data enter the
+// conditionals only through each group's mean, measured with variance
+// s2E / r_g (r_g rows), and the likelihood factorises as
+//   log N(yf, ys) = log N(ybar, ys) - (SS / s2E + (n - G) log(2 pi s2E) + sum_g log r_g) / 2
+// with SS the rows' squared deviations from their group's mean. X: the G
+// distinct inputs in order of appearance, ybar their means, invr 1 / r_g.
+struct FieldGroups {
+  arma::mat X;
+  arma::vec ybar, invr;
+  double ss = 0.0, logr = 0.0;
+  int n = 0;
+};
+
+FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf) {
+  const arma::uword n = Xf.n_rows;
+  std::vector<arma::uword> first;  // each group's first row
+  std::vector<int> of(n);
+  for (arma::uword i = 0; i < n; ++i) {
+    int g = -1;
+    for (size_t h = 0; h < first.size() && g < 0; ++h)
+      if (arma::all(Xf.row(first[h]) == Xf.row(i))) g = (int)h;
+    if (g < 0) { g = first.size(); first.push_back(i); }
+    of[i] = g;
+  }
+  const arma::uword G = first.size();
+  FieldGroups f;
+  f.n = n;
+  f.X = Xf.rows(arma::uvec(first));
+  f.ybar.zeros(G);
+  arma::vec r(G, arma::fill::zeros);
+  for (arma::uword i = 0; i < n; ++i) { f.ybar[of[i]] += yf[i]; r[of[i]] += 1.0; }
+  f.ybar /= r;
+  for (arma::uword i = 0; i < n; ++i) f.ss += (yf[i] - f.ybar[of[i]]) * (yf[i] - f.ybar[of[i]]);
+  f.invr = 1.0 / r;
+  f.logr = arma::accu(arma::log(r));
+  return f;
+}
+
 // One draw's workspace: Xk = (Xf, kappa) (n x (p + q)), W = L1^-1 s2S
 // Rs(Xs, Xk) (m x n) and its transpose Wt, the field block S (n x n; its
 // factor L2 after design_system()), the bias correlation Rb (n x n), A2
@@ -265,24 +305,27 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
 }
 
 // One draw's system, the simulator rows' block sb (sim_block()) and the
-// field rows' Schur complement. With Xk = (Xf, kappa) and prior mean
-// mu0 = (0, muB) the joint covariance of y = (ys, yf) is
+// field groups' Schur complement (fg, field_groups(): Xf below is fg.X, yf
+// the groups' means, R = diag(1 / r_g)). With Xk = (Xf, kappa) and prior
+// mean mu0 = (0, muB) the joint covariance of y = (ys, yf) is
 //   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
-//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E I        ],
+//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E R        ],
 // L = chol(C) = [L1 0; W' L2] with W = L1^-1 s2S Rs(Xs, Xk),
-//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E I - W'W),  r2 = L2^-1 (yf - muB - W' r1),
+//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E R - W'W),  r2 = L2^-1 (yf - muB - W' r1),
 //   A = L^-1 s2S Rs(Z, U) = [A1; A2],  A2 = L2^-1 (s2S Rs(Xk, U) - W' A1),
 //   mu = A' r = mu1 + A2' r2,  v = s2S (1 + nugget) - diag(A1'A1) - diag(A2'A2),
-//   ll = log N(y; mu0, C) = -(N log 2 pi + 2 (ld1 + sum log diag L2) + r1'r1 + r2'r2) / 2.
+//   ll = log N(ys, every field row) = -((m + n) log 2 pi + 2 (ld1 + sum log diag L2)
+//        + r1'r1 + r2'r2 + SS / s2E + (n - G) log s2E + sum_g log r_g) / 2.
 // False if C is not positive definite.
-bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
-                   const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys,
+bool design_system(const Posterior& post, const Model& mod, const FieldGroups& fg,
+                   const arma::mat& Xs, const arma::vec& ys,
                    const arma::mat& U, const arma::mat& XT, double nugget, SimBlock& sb,
                    SystemWork& w, DesignSystems& out, arma::uword s) {
   if (!sim_block(post, mod, Xs, ys, U, nugget, sb)) return false;
   const arma::vec& phi = post.phi;
-  const int m = post.m, n = post.n, p = post.p, q = post.q, N = m + n;
-  const double s2S = phi[post.iSigma2S];
+  const arma::mat& Xf = fg.X;
+  const int m = post.m, n = Xf.n_rows, p = post.p, q = post.q, N = m + n;
+  const double s2S = phi[post.iSigma2S], s2E = phi[post.iSigma2E];
   for (int k = 0; k < q; ++k) w.Xk.col(p + k).fill(phi[post.iKappa + k]);
   const double* thS = phi.memptr() + post.iThetaS;
   const double* alS = phi.memptr() + post.iAlphaS;
@@ -298,16 +341,17 @@ bool design_system(const Posterior& post, const Model& mod, const arma::mat& Xf,
     for (int j = 0; j < n; ++j)
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
   }
-  for (int i = 0; i < n; ++i) w.S(i, i) += phi[post.iSigma2E];
+  for (int i = 0; i < n; ++i) w.S(i, i) += s2E * fg.invr[i];
   syrk_lower(w.W, -1.0, 1.0, w.S);
   w.Wt = w.W.t();
   if (!chol_lower(w.S)) return false;
   const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
-  w.r2 = yf - muB - w.W.t() * sb.r;
+  w.r2 = fg.ybar - muB - w.W.t() * sb.r;
   solve_lower(w.S, w.r2);
   double ld2 = 0.0;
   for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
-  out.ll[s] = -0.5 * (N * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2));
+  out.ll[s] = -0.5 * ((m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2) +
+                      fg.ss / s2E + (fg.n - n) * std::log(s2E) + fg.logr);
   const int Nc = U.n_rows;
   if (Nc > 0) {
     kernel_corr(mod.kernS, w.Xk, U, p + q, thS, alS, w.A2, false);
@@ -355,7 +399,8 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  const int m = Xs.n_rows, n = Xf.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
+  const FieldGroups fg = field_groups(Xf, yf);
+  const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
   const int T = XT.n_rows;
   DesignSystems out;
   out.T = T;
@@ -369,7 +414,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   SimBlock sb;
   SystemWork w;
   w.Xk.set_size(n, p + q);
-  w.Xk.cols(0, p - 1) = Xf;
+  w.Xk.cols(0, p - 1) = fg.X;
   w.W.set_size(m, n);
   w.Wt.set_size(n, m);
   w.S.set_size(n, n);
@@ -390,7 +435,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   }
   for (int s = 0; s < S; ++s) {
     post.phi = phis.row(s).t();
-    if (!design_system(post, mod, Xf, yf, Xs, ys, U, XT, nugget, sb, w, out, s))
+    if (!design_system(post, mod, fg, Xs, ys, U, XT, nugget, sb, w, out, s))
       Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
     if (s % 100 == 99) Rcpp::checkUserInterrupt();
   }

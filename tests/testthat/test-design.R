@@ -622,7 +622,8 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
       expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
       expect_gt(max(cpp$scores[, 1]), 0)
       # each draw's system (the C++ one by blocks, the simulator rows'
-      # shared by the plug-in's particles): the log-likelihood (with its
+      # shared by the plug-in's particles, the field's 10 rows reduced to
+      # their 5 inputs' means): the log-likelihood of every row (with its
       # constant), the candidates' means and variances
       d <- fit$data
       ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, XT, fbc_nugget,
