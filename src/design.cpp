@@ -125,6 +125,48 @@ void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* m
   }
 }
 
+// Small dense systems without BLAS and LAPACK calls, whose per-call cost
+// dominated at the look-ahead's sizes (a field block of 5-30 distinct
+// inputs, 10-50 runs, batches of up to a few points): up to small_n rows,
+// plain loops; above it LAPACK.
+const arma::uword small_n = 64;
+
+// In-place lower Cholesky factor of the symmetric A (its lower triangle
+// read): L(j,j) = sqrt(A(j,j) - sum_k<j L(j,k)^2), L(i,j) = (A(i,j) -
+// sum_k<j L(i,k) L(j,k)) / L(j,j). False if A is not positive definite.
+bool chol_small(arma::mat& A) {
+  const arma::uword n = A.n_rows;
+  if (n > small_n) return chol_lower(A);
+  for (arma::uword j = 0; j < n; ++j) {
+    double d = A(j, j);
+    for (arma::uword k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
+    if (!(d > 0.0)) return false;
+    const double ljj = std::sqrt(d);
+    A(j, j) = ljj;
+    for (arma::uword i = j + 1; i < n; ++i) {
+      double x = A(i, j);
+      for (arma::uword k = 0; k < j; ++k) x -= A(i, k) * A(j, k);
+      A(i, j) = x / ljj;
+    }
+  }
+  return true;
+}
+
+// C <- C - W'W on the lower triangle (W m x n): dsyrk's result.
+void syrk_small(const arma::mat& W, arma::mat& C) {
+  const arma::uword n = W.n_cols, m = W.n_rows;
+  if (n > small_n) { syrk_lower(W, -1.0, 1.0, C); return; }
+  for (arma::uword j = 0; j < n; ++j) {
+    const double* wj = W.colptr(j);
+    for (arma::uword i = j; i < n; ++i) {
+      const double* wi = W.colptr(i);
+      double s = 0.0;
+      for (arma::uword r = 0; r < m; ++r) s += wi[r] * wj[r];
+      C(i, j) -= s;
+    }
+  }
+}
+
 static const double LOG_2PI = 1.837877066409345483560659472811;
 
 // The simulator rows' part of a draw's system, which depends on the
@@ -252,9 +294,9 @@ bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
   kernel_corr(mod.kernS, Xs, Xs, d, thS, alS, sb.L, true);
   sb.L *= s2S;
   for (int i = 0; i < m; ++i) sb.L(i, i) *= 1.0 + nugget;
-  if (!chol_lower(sb.L)) return false;
+  if (!chol_small(sb.L)) return false;
   sb.r = ys;
-  solve_lower(sb.L, sb.r);
+  solve_lower_col(sb.L, sb.r.memptr(), 0);
   sb.rr = arma::dot(sb.r, sb.r);
   sb.ld = 0.0;
   for (int i = 0; i < m; ++i) sb.ld += std::log(sb.L(i, i));
@@ -342,12 +384,12 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
   }
   for (int i = 0; i < n; ++i) w.S(i, i) += s2E * fg.invr[i];
-  syrk_lower(w.W, -1.0, 1.0, w.S);
+  syrk_small(w.W, w.S);
   w.Wt = w.W.t();
-  if (!chol_lower(w.S)) return false;
+  if (!chol_small(w.S)) return false;
   const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
   w.r2 = fg.ybar - muB - w.W.t() * sb.r;
-  solve_lower(w.S, w.r2);
+  solve_lower_col(w.S, w.r2.memptr(), 0);
   double ld2 = 0.0;
   for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
   out.ll[s] = -0.5 * ((m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2) +
@@ -523,25 +565,31 @@ struct LookAhead {
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
 // sum_k (sum_s w_s k_sk)^2.
+// Sums s of a_s b_s (b null: of a_s), two lanes at a time where the
+// compiler has vector types.
+double dot_sum(const double* a, const double* b, int S) {
+  int s = 0;
+  double out = 0.0;
+#ifdef FBC_V2D
+  v2d acc = {0.0, 0.0};
+  if (b) for (; s + 2 <= S; s += 2) acc += load2(a + s) * load2(b + s);
+  else for (; s + 2 <= S; s += 2) acc += load2(a + s);
+  out = acc[0] + acc[1];
+#endif
+  for (; s < S; ++s) out += b ? a[s] * b[s] : a[s];
+  return out;
+}
+
 double weighted_var(LookAhead& la, const double* L, double mx) {
-  const int q = la.kap.n_cols;
-  const double* ksq = la.ksq.memptr();
+  const int q = la.kap.n_cols, S = la.S;
   double* w = la.wbuf.memptr();
-  exp_weights(L, mx, la.S, w);
-  double sw = 0.0, s2 = 0.0, mk[16] = {0.0};
-  if (q == 1) {
-    const double* k0 = la.kap.memptr();
-    for (int s = 0; s < la.S; ++s) {
-      sw += w[s]; s2 += w[s] * ksq[s]; mk[0] += w[s] * k0[s];
-    }
-  } else {
-    for (int s = 0; s < la.S; ++s) {
-      sw += w[s]; s2 += w[s] * ksq[s];
-      for (int k = 0; k < q; ++k) mk[k] += w[s] * la.kap(s, k);
-    }
+  exp_weights(L, mx, S, w);
+  const double sw = dot_sum(w, nullptr, S);
+  double out = dot_sum(w, la.ksq.memptr(), S) / sw;
+  for (int k = 0; k < q; ++k) {
+    const double mk = dot_sum(w, la.kap.colptr(k), S) / sw;
+    out -= mk * mk;
   }
-  double out = s2 / sw;
-  for (int k = 0; k < q; ++k) out -= (mk[k] / sw) * (mk[k] / sw);
   return out;
 }
 
@@ -624,7 +672,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
   const int k = la.P.size(), q = U.n_cols;
   const arma::uvec Pu = arma::conv_to<arma::uvec>::from(la.P);
   const arma::mat UP = U.rows(Pu);
-  arma::mat SPP(k, k), ScP(la.Nc, k), B, D;
+  arma::mat SPP(k, k), ScP(la.Nc, k), B, D, Sinv;
   for (int s = 0; s < la.S; ++s) {
     const double s2S = sys.s2S[s];
     arma::vec cv = sys.v.col(s);
@@ -636,16 +684,48 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       SPP.diag() *= 1.0 + nugget;
       SPP -= AP.t() * AP;
       kernel_corr(mod.kernS, U, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), ScP, false);
-      ScP = s2S * ScP - As.t() * AP;
+      // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
+      // batch's look-ahead)
+      const int N = As.n_rows;
+      for (int i = 0; i < k; ++i)
+        for (int c = 0; c < la.Nc; ++c)
+          ScP(c, i) = s2S * ScP(c, i) - dot_sum(As.colptr(c), AP.colptr(i), N);
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
-      B = arma::solve(SPP, ScP.t()).t();
+      // B = ScP SPP^-1 (SPP k x k): BLAS's Nc triangular solves were a
+      // twentieth of a batch's look-ahead
+      Sinv = SPP;
+      if (chol_small(Sinv)) {
+        // B' = SPP^-1 ScP' = L^-T L^-1 ScP', column c: two k x k triangular solves
+        B.set_size(la.Nc, k);
+        std::vector<double> y(k);
+        for (int c = 0; c < la.Nc; ++c) {
+          for (int i = 0; i < k; ++i) {
+            double x = ScP(c, i);
+            for (int r = 0; r < i; ++r) x -= Sinv(i, r) * y[r];
+            y[i] = x / Sinv(i, i);
+          }
+          for (int i = k - 1; i >= 0; --i) {
+            double x = y[i];
+            for (int r = i + 1; r < k; ++r) x -= Sinv(r, i) * y[r];
+            y[i] = x / Sinv(i, i);
+          }
+          for (int i = 0; i < k; ++i) B(c, i) = y[i];
+        }
+      } else {
+        B = arma::solve(SPP, ScP.t()).t();
+      }
       cv -= arma::sum(B % ScP, 1);
       arma::vec muP(k);
       for (int i = 0; i < k; ++i) muP[i] = sys.mu(la.P[i], s);
-      D = B * (la.YP.t() - arma::repmat(muP, 1, la.J));  // Nc x J
-      for (int j = 0; j < la.J; ++j)
-        for (int c = 0; c < la.Nc; ++c)
-          la.M[s + (size_t)la.S * (c + (size_t)la.Nc * j)] = sys.mu(c, s) + D(c, j);
+      D = la.YP.t() - arma::repmat(muP, 1, la.J);  // k x J
+      for (int j = 0; j < la.J; ++j) {
+        const double* dy = D.colptr(j);
+        for (int c = 0; c < la.Nc; ++c) {
+          double bd = 0.0;
+          for (int i = 0; i < k; ++i) bd += B(c, i) * dy[i];
+          la.M[s + (size_t)la.S * (c + (size_t)la.Nc * j)] = sys.mu(c, s) + bd;
+        }
+      }
     }
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
     for (int c = 0; c < la.Nc; ++c) {
