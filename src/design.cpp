@@ -60,6 +60,25 @@ void solve_lower_col(const arma::mat& L, double* b, arma::uword k0) {
   }
 }
 
+// b_c[i] -= x_c l[i] for the four columns c and rows i0 <= i < n, two rows
+// per vector operation (the same numbers as one at a time).
+inline void axpy4(double* const b[4], const double x[4], const double* l, arma::uword i0,
+                  arma::uword n) {
+  arma::uword i = i0;
+#ifdef FBC_V2D
+  const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
+  for (; i + 2 <= n; i += 2) {
+    const v2d li = load2(l + i);
+    store2(b[0] + i, load2(b[0] + i) - x0 * li);
+    store2(b[1] + i, load2(b[1] + i) - x1 * li);
+    store2(b[2] + i, load2(b[2] + i) - x2 * li);
+    store2(b[3] + i, load2(b[3] + i) - x3 * li);
+  }
+#endif
+  for (; i < n; ++i)
+    for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
+}
+
 // Solves L X = B in place (L lower triangular N x N, B N x nc) with each
 // entry's operations those of solve_lower_col() (reference dtrsm's), so
 // the same numbers as solve_lower() with the reference BLAS; four columns
@@ -78,17 +97,7 @@ void solve_lower_cols(const arma::mat& L, arma::mat& B) {
       const double* l = L.colptr(k);
       double x[4];
       for (int c = 0; c < 4; ++c) x[c] = (b[c][k] /= l[k]);
-      const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
-      arma::uword i = k + 1;
-      for (; i + 2 <= N; i += 2) {
-        const v2d li = load2(l + i);
-        store2(b[0] + i, load2(b[0] + i) - x0 * li);
-        store2(b[1] + i, load2(b[1] + i) - x1 * li);
-        store2(b[2] + i, load2(b[2] + i) - x2 * li);
-        store2(b[3] + i, load2(b[3] + i) - x3 * li);
-      }
-      for (; i < N; ++i)
-        for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
+      axpy4(b, x, l, k + 1, N);
     }
     if (k < N) for (int c = 0; c < 4; ++c) solve_lower_col(L, b[c], k);
   }
@@ -197,17 +206,7 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
     for (arma::uword k = 0; k < m; ++k) {
       const double* l = Wt.colptr(k);
       const double x[4] = {a[0][k], a[1][k], a[2][k], a[3][k]};
-      const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
-      arma::uword i = 0;
-      for (; i + 2 <= n; i += 2) {
-        const v2d li = load2(l + i);
-        store2(b[0] + i, load2(b[0] + i) - x0 * li);
-        store2(b[1] + i, load2(b[1] + i) - x1 * li);
-        store2(b[2] + i, load2(b[2] + i) - x2 * li);
-        store2(b[3] + i, load2(b[3] + i) - x3 * li);
-      }
-      for (; i < n; ++i)
-        for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
+      axpy4(b, x, l, 0, n);
     }
   }
 #endif
