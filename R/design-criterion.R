@@ -154,28 +154,28 @@
 #' and with 50 draws to 17%. The fantasies' draws are chosen by systematic
 #' resampling and their normal deviates are stratified, and all candidates
 #' share them, so the picks are steadier than the gains themselves
-#' (relative error about 10% per candidate with the defaults). On the
-#' sinusoid with 5-15 runs a pick costs 0.010-0.014 CPU s and a batch of 5
-#' about 0.06; in a design loop from 5 runs, one run at a time, a pick is
-#' a median 7% of a warm refit on the new runs (quartiles 6-9%; the refits
-#' take 0.1-3 CPU s), but 23% of [update_runs()]'s reweighting of the old
-#' draws (about 0.09 s), which is what a loop step usually costs now; with
-#' batches of 5 from 10 runs, a batch costs 0.08-0.10 CPU s, 17-26% of the
-#' fit it follows. (These are the joint criterion's costs. The default
-#' picks by the plug-in, scores its `n` picks by the joint look-ahead, and
-#' where the two disagree runs the joint criterion too (1-25% of the steps
-#' measured); the plug-in's kappa values of no weight, likelihood times
-#' prior under 1e-10 of the largest, are left out first, which changes
-#' nothing but the cost. A step of a loop one run at a time from 10 to 50
-#' runs costs a median 0.027 CPU s on the sinusoid, 0.040 on kinetics and
-#' 0.052 with two inputs, against the joint criterion's 0.032, 0.041 and
-#' 0.049; a batch of 5 on the sinusoid 0.050 against 0.081.) Give fewer
+#' (relative error about 10% per candidate with the defaults). The
+#' default picks by the plug-in, scores its `n` picks by the joint
+#' look-ahead, and where the two disagree runs the joint criterion too
+#' (0-31% of the steps measured). The plug-in's kappa values of no weight
+#' (likelihood times prior under 1e-10 of the largest) are left out, its
+#' particles, which share the hyperparameters, share the factor of the
+#' simulator runs' block, and field replicates enter through their inputs'
+#' means, which change the gains at the level of rounding only (the
+#' benchmark's picks identical). In design loops from 10 to 50
+#' runs (`inst/bench/design.R`, 30 replicates, reference BLAS) a step one
+#' run at a time costs a median 0.008 CPU s on the sinusoid, 0.009 on
+#' kinetics and 0.018 with two calibration inputs, 0.06-0.09 of the
+#' [update_runs()] fit it follows (mostly the old draws reweighted); a
+#' batch of 5 costs 0.020-0.022 on the sinusoid and kinetics (0.04-0.06 of
+#' its fit) and 0.083 with two inputs (0.13). Give fewer
 #' `nfantasy` or `ndraws` for a cheaper, noisier step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
-#' the \eqn{(m + n)} covariance (exact, whatever algebra the fit ran;
-#' refused beyond 3000). One output, one noise group, no categorical
+#' the covariance of the \eqn{m} runs and the field's distinct inputs
+#' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
+#' rows). One output, one noise group, no categorical
 #' inputs, and the `"gp"` or `"none"` discrepancy: other models are refused.
 #' The look-ahead holds draws x (m + n) x candidates numbers; beyond
 #' 5e7 (400 MB) it is refused, naming the sizes (give fewer `ndraws` or
