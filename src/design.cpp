@@ -141,27 +141,14 @@ void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* m
 const arma::uword small_n = 64;
 
 // In-place lower Cholesky factor of the symmetric A (its lower triangle
-// read): L(j,j) = sqrt(A(j,j) - sum_k<j L(j,k)^2), L(i,j) = (A(i,j) -
-// sum_k<j L(i,k) L(j,k)) / L(j,j). False if A is not positive definite.
+// read; small_chol() up to small_n rows, LAPACK above). False if A is not
+// positive definite.
 bool chol_small(arma::mat& A) {
-  const arma::uword n = A.n_rows;
-  if (n > small_n) return chol_lower(A);
-  for (arma::uword j = 0; j < n; ++j) {
-    double d = A(j, j);
-    for (arma::uword k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
-    if (!(d > 0.0)) return false;
-    const double ljj = std::sqrt(d);
-    A(j, j) = ljj;
-    for (arma::uword i = j + 1; i < n; ++i) {
-      double x = A(i, j);
-      for (arma::uword k = 0; k < j; ++k) x -= A(i, k) * A(j, k);
-      A(i, j) = x / ljj;
-    }
-  }
-  return true;
+  const int n = A.n_rows;
+  return (arma::uword)n > small_n ? chol_lower(A) : small_chol(A.memptr(), n, n, n);
 }
 
-// C <- C - W'W on the lower triangle (W m x n): dsyrk's result.
+// C <- C - W'W on the lower triangle (W m x n; BLAS dsyrk above small_n).
 void syrk_small(const arma::mat& W, arma::mat& C) {
   const arma::uword n = W.n_cols, m = W.n_rows;
   if (n > small_n) { syrk_lower(W, -1.0, 1.0, C); return; }
@@ -175,8 +162,6 @@ void syrk_small(const arma::mat& W, arma::mat& C) {
     }
   }
 }
-
-static const double LOG_2PI = 1.837877066409345483560659472811;
 
 // The simulator rows' part of a draw's system, which depends on the
 // simulator's hyperparameters (s2S, thetaS, alphaS) only and so is shared by
@@ -703,11 +688,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
             for (int r = 0; r < i; ++r) x -= Sinv(i, r) * y[r];
             y[i] = x / Sinv(i, i);
           }
-          for (int i = k - 1; i >= 0; --i) {
-            double x = y[i];
-            for (int r = i + 1; r < k; ++r) x -= Sinv(r, i) * y[r];
-            y[i] = x / Sinv(i, i);
-          }
+          small_back(Sinv.memptr(), k, k, y.data());
           for (int i = 0; i < k; ++i) B(c, i) = y[i];
         }
       } else {

@@ -238,6 +238,8 @@ void solve_lower(const arma::mat& L, arma::vec& x);
 void solve_lower(const arma::mat& L, arma::mat& X);
 // C <- beta C + alpha A' A (lower triangle, BLAS dsyrk).
 void syrk_lower(const arma::mat& A, double alpha, double beta, arma::mat& C);
+// log(2 pi), for Gaussian log-densities.
+const double LOG_2PI = 1.837877066409345483560659472811;
 
 // Two buffers for one cached quantity: the current one and a scratch one a
 // proposal is written into; accepting a proposal flips them (no copy).
@@ -727,5 +729,53 @@ typedef double v2d __attribute__((vector_size(16)));
 static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
 static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
 #endif
+
+// Small matrices without LAPACK calls (the Vecchia algebra's conditionals,
+// vecchia.cpp; the design look-ahead's systems, design.cpp), inline for
+// their hot loops.
+
+// In-place lower Cholesky of the leading s x s block of A (leading dimension
+// lda), carried on over rows s .. rows - 1 (A[r, j] -> (A[r, j] - sum_l<j
+// A[r, l] L[j, l]) / L[j, j]: a row b there becomes L^-1 b); false when not
+// positive definite. Small matrices: no LAPACK call. Left-looking by
+// columns: column j less L[j, l] times column l for l = 0 .. j - 1 (each
+// entry subtracts its products in the order of l, as the dot-product form
+// does; the columns are contiguous and their entries independent).
+inline bool small_chol(double* A, int s, int lda, int rows) {
+  for (int j = 0; j < s; ++j) {
+    double* cj = A + (size_t) j * lda;
+    for (int l = 0; l < j; ++l) {
+      const double* cl = A + (size_t) l * lda;
+      const double ljl = cl[j];
+      int i = j;
+#ifdef FBC_V2D
+      const v2d lv = {ljl, ljl};
+      for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) - load2(cl + i) * lv);
+#endif
+      for (; i < rows; ++i) cj[i] -= cl[i] * ljl;
+    }
+    double d = cj[j];
+    if (!(d > 0)) return false;
+    d = std::sqrt(d);
+    cj[j] = d;
+    int i = j + 1;
+#ifdef FBC_V2D
+    const v2d dv = {d, d};
+    for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) / dv);
+#endif
+    for (; i < rows; ++i) cj[i] = cj[i] / d;
+  }
+  return true;
+}
+
+// Solves L' x = b in place (L lower, leading s x s block of A): the
+// coefficients of a Vecchia conditional from its factor's last row.
+inline void small_back(const double* A, int s, int lda, double* x) {
+  for (int i = s - 1; i >= 0; --i) {
+    double v = x[i];
+    for (int l = i + 1; l < s; ++l) v -= A[(size_t) i * lda + l] * x[l];
+    x[i] = v / A[(size_t) i * lda + i];
+  }
+}
 
 #endif

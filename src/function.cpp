@@ -11,8 +11,6 @@
 // rows (replicates share their bias).
 #include "fbc.h"
 
-static const double LOG_2PI = 1.837877066409345483560659472811;
-
 // What a move of a class touches, by the class's name: kappa calls f, the
 // bias GP's correlation moves S, the variances S's factor; a class not named
 // here (muB) moves only the residual.

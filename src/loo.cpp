@@ -10,8 +10,6 @@
 //   log p(y_G | rest) = -0.5 (|G| log 2 pi - log|P| + a_G' P^-1 a_G).
 #include "fbc.h"
 
-static const double LOG_2PI = 1.837877066409345483560659472811;
-
 void SchurPosterior::fieldLoo(const std::vector<std::vector<int> >& groups,
                               arma::vec& logdens) const {
   const arma::mat& LS = LS_.cur();

@@ -14,8 +14,6 @@
 // involves the experimental inputs only.
 #include "fbc.h"
 
-static const double LOG_2PI = 1.837877066409345483560659472811;
-
 // The log-likelihood from its pieces (the formula above), for every move.
 static double koh_loglik(int n, int m, double s2S, double ldDs, double ldS, double zz,
                          double vv) {

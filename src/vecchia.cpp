@@ -28,50 +28,6 @@
 #include <algorithm>
 #include <numeric>
 
-// In-place lower Cholesky of the leading s x s block of A (leading dimension
-// lda), carried on over rows s .. rows - 1 (A[r, j] -> (A[r, j] - sum_l<j
-// A[r, l] L[j, l]) / L[j, j]: a row b there becomes L^-1 b); false when not
-// positive definite. Small matrices: no LAPACK call. Left-looking by
-// columns: column j less L[j, l] times column l for l = 0 .. j - 1 (each
-// entry subtracts its products in the order of l, as the dot-product form
-// does; the columns are contiguous and their entries independent).
-static bool small_chol(double* A, int s, int lda, int rows) {
-  for (int j = 0; j < s; ++j) {
-    double* cj = A + (size_t) j * lda;
-    for (int l = 0; l < j; ++l) {
-      const double* cl = A + (size_t) l * lda;
-      const double ljl = cl[j];
-      int i = j;
-#ifdef FBC_V2D
-      const v2d lv = {ljl, ljl};
-      for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) - load2(cl + i) * lv);
-#endif
-      for (; i < rows; ++i) cj[i] -= cl[i] * ljl;
-    }
-    double d = cj[j];
-    if (!(d > 0)) return false;
-    d = std::sqrt(d);
-    cj[j] = d;
-    int i = j + 1;
-#ifdef FBC_V2D
-    const v2d dv = {d, d};
-    for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) / dv);
-#endif
-    for (; i < rows; ++i) cj[i] = cj[i] / d;
-  }
-  return true;
-}
-
-// Solves L' x = b in place (L lower, leading s x s block of A): the
-// coefficients of a conditional from its factor's last row.
-static void small_back(const double* A, int s, int lda, double* x) {
-  for (int i = s - 1; i >= 0; --i) {
-    double v = x[i];
-    for (int l = i + 1; l < s; ++l) v -= A[(size_t) i * lda + l] * x[l];
-    x[i] = v / A[(size_t) i * lda + i];
-  }
-}
-
 // Squared scaled distance between row a of X and the point y (first K
 // columns).
 static inline double scaled_d2(const arma::mat& X, arma::uword a, const double* y,
