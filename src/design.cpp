@@ -533,16 +533,18 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // The greedy look-ahead's state: S draws, Nc candidates, J fantasies.
 // kap (S x q) kappa, ksq (S) |kappa_s|^2, base (S x J) the draws'
 // log-weights given the pending points' fantasies, YP (J x k) those values,
-// P the pending candidates; per step the conditional means given them M
-// (s fastest: M[s + S (c + Nc j)], with pending points), the standard
-// deviations sd, their inverses and logs (S x Nc). With T targets, given
+// P the pending candidates; per step, with pending points, the terms of
+// the conditional means given them (cond_means()), s fastest: B's
+// Bk[s + S (c + Nc i)] and the fantasies' deviations Dk[s + S (i + k j)];
+// the standard deviations sd, their inverses and logs (S x Nc), mbuf a
+// draw's means. With T targets, given
 // the pending points: the targets' means MT[s + S (t + T j)], variances
 // VTP (S x T) and covariances with the candidates CP[s + S (t + T c)].
 struct LookAhead {
   int S, Nc, J, T = 0;
   arma::mat kap, base, YP, sd, isd, lsd, VTP;
   arma::vec ksq, Lbuf, wbuf;
-  std::vector<double> M, MT, CP;
+  std::vector<double> MT, CP, Bk, Dk, mbuf;
   std::vector<int> P;
 };
 
@@ -564,14 +566,61 @@ double dot_sum(const double* a, const double* b, int S) {
   return out;
 }
 
+// The sums for q <= 2 calibration inputs in one pass over w: sum w,
+// sum w |k|^2, sum w k_1 (and sum w k_2), each as dot_sum() would sum it
+// (the same numbers), in registers.
+void weight_sums(const double* w, const double* ksq, const double* k1, const double* k2, int S,
+                 double* sum) {
+  int s = 0;
+#ifdef FBC_V2D
+  v2d a0 = {0.0, 0.0}, a1 = a0, a2 = a0, a3 = a0;
+  if (k2) {
+    for (; s + 2 <= S; s += 2) {
+      const v2d ws = load2(w + s);
+      a0 += ws;
+      a1 += ws * load2(ksq + s);
+      a2 += ws * load2(k1 + s);
+      a3 += ws * load2(k2 + s);
+    }
+  } else {
+    for (; s + 2 <= S; s += 2) {
+      const v2d ws = load2(w + s);
+      a0 += ws;
+      a1 += ws * load2(ksq + s);
+      a2 += ws * load2(k1 + s);
+    }
+  }
+  sum[0] = a0[0] + a0[1];
+  sum[1] = a1[0] + a1[1];
+  sum[2] = a2[0] + a2[1];
+  sum[3] = a3[0] + a3[1];
+#else
+  sum[0] = sum[1] = sum[2] = sum[3] = 0.0;
+#endif
+  for (; s < S; ++s) {
+    sum[0] += w[s];
+    sum[1] += w[s] * ksq[s];
+    sum[2] += w[s] * k1[s];
+    if (k2) sum[3] += w[s] * k2[s];
+  }
+}
+
 double weighted_var(LookAhead& la, const double* L, double mx) {
   const int q = la.kap.n_cols, S = la.S;
   double* w = la.wbuf.memptr();
   exp_weights(L, mx, S, w);
-  const double sw = dot_sum(w, nullptr, S);
-  double out = dot_sum(w, la.ksq.memptr(), S) / sw;
+  double sum[18];  // q <= 16
+  if (q <= 2) {
+    weight_sums(w, la.ksq.memptr(), la.kap.colptr(0), q == 2 ? la.kap.colptr(1) : nullptr, S, sum);
+  } else {
+    sum[0] = dot_sum(w, nullptr, S);
+    sum[1] = dot_sum(w, la.ksq.memptr(), S);
+    for (int k = 0; k < q; ++k) sum[2 + k] = dot_sum(w, la.kap.colptr(k), S);
+  }
+  const double sw = sum[0];
+  double out = sum[1] / sw;
   for (int k = 0; k < q; ++k) {
-    const double mk = dot_sum(w, la.kap.colptr(k), S) / sw;
+    const double mk = sum[2 + k] / sw;
     out -= mk * mk;
   }
   return out;
@@ -624,7 +673,8 @@ double crit_var(LookAhead& la, const double* L, double mx, int j, int c, double 
 //   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
 //   ScP = s2S Rs(U, U_P) - A'A_P (a pending candidate's rows: SPP),
 //   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
-// cv floored at 1e-12 s2S. Without pending points M is mu (not stored).
+// cv floored at 1e-12 s2S; B and D = YP' - mu_P are kept (Bk, Dk) and M
+// formed where it is used (cond_means()). Without pending points M is mu.
 // With targets (CT = CTU_s, CTP its pending columns):
 //   BT = CTP SPP^-1,  VTP = VT - diag(BT CTP'),  MT(:, j) = mT + BT (YP(j, :)' - mu_P),
 //   CP = CT - BT ScP'  (without pending points VTP = VT, MT = mT, CP = CT).
@@ -656,7 +706,10 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
   const int k = la.P.size(), q = U.n_cols;
   const arma::uvec Pu = arma::conv_to<arma::uvec>::from(la.P);
   const arma::mat UP = U.rows(Pu);
-  arma::mat SPP(k, k), ScP(la.Nc, k), B, D, Sinv;
+  const int S = la.S, Nc = la.Nc;
+  arma::mat SPP(k, k), ScP(la.Nc, k), B, Sinv;
+  la.Bk.resize((size_t)S * Nc * k);
+  la.Dk.resize((size_t)S * k * la.J);
   for (int s = 0; s < la.S; ++s) {
     const double s2S = sys.s2S[s];
     arma::vec cv = sys.v.col(s);
@@ -695,16 +748,13 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
         B = arma::solve(SPP, ScP.t()).t();
       }
       cv -= arma::sum(B % ScP, 1);
-      arma::vec muP(k);
-      for (int i = 0; i < k; ++i) muP[i] = sys.mu(la.P[i], s);
-      D = la.YP.t() - arma::repmat(muP, 1, la.J);  // k x J
-      for (int j = 0; j < la.J; ++j) {
-        const double* dy = D.colptr(j);
-        for (int c = 0; c < la.Nc; ++c) {
-          double bd = 0.0;
-          for (int i = 0; i < k; ++i) bd += B(c, i) * dy[i];
-          la.M[s + (size_t)la.S * (c + (size_t)la.Nc * j)] = sys.mu(c, s) + bd;
-        }
+      // B and D = YP' - mu_P kept with the draws innermost, for
+      // cond_means()
+      for (int i = 0; i < k; ++i) {
+        double* bs = la.Bk.data() + s + (size_t)S * Nc * i;
+        for (int c = 0; c < Nc; ++c) bs[(size_t)S * c] = B(c, i);
+        const double muP = sys.mu(la.P[i], s);
+        for (int j = 0; j < la.J; ++j) la.Dk[s + (size_t)S * (i + (size_t)k * j)] = la.YP(j, i) - muP;
       }
     }
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
@@ -716,9 +766,33 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
   }
 }
 
-// The draws' conditional means at candidate c in fantasy j (S values).
-inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, int c, int j) {
-  return la.P.empty() ? sys.muT.colptr(c) : la.M.data() + (size_t)la.S * (c + (size_t)la.Nc * j);
+// The draws' conditional means at candidate c in fantasy j (S values):
+// mu(c, s) without pending points, else
+//   M_s(c, j) = mu(c, s) + sum_i B_s(c, i) D_s(i, j)
+// computed here into `buf` (the draws innermost). Stored for every
+// candidate and fantasy (S x Nc x J, 4 MB with 35 draws), M's writes
+// were most of a batch's look-ahead.
+inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, int c, int j,
+                                double* buf) {
+  if (la.P.empty()) return sys.muT.colptr(c);
+  const int S = la.S, k = la.P.size();
+  std::fill(buf, buf + S, 0.0);
+  for (int i = 0; i < k; ++i) {
+    const double* b = la.Bk.data() + (size_t)S * (c + (size_t)la.Nc * i);
+    const double* dy = la.Dk.data() + (size_t)S * (i + (size_t)k * j);
+    int s = 0;
+#ifdef FBC_V2D
+    for (; s + 2 <= S; s += 2) store2(buf + s, load2(buf + s) + load2(b + s) * load2(dy + s));
+#endif
+    for (; s < S; ++s) buf[s] += b[s] * dy[s];
+  }
+  const double* mu = sys.muT.colptr(c);
+  int s = 0;
+#ifdef FBC_V2D
+  for (; s + 2 <= S; s += 2) store2(buf + s, load2(buf + s) + load2(mu + s));
+#endif
+  for (; s < S; ++s) buf[s] += mu[s];
+  return buf;
 }
 
 // Each candidate's gain given the pending points: fantasy j of candidate c
@@ -739,7 +813,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
   for (int c = 0; c < la.Nc; ++c) {
     double after = 0.0;
     for (int j = 0; j < la.J; ++j) {
-      const double* mu = cond_means(sys, la, c, j);
+      const double* mu = cond_means(sys, la, c, j, la.mbuf.data());
       const double* isd = la.isd.colptr(c);
       const double* lsd = la.lsd.colptr(c);
       const int r = src[j];
@@ -747,7 +821,19 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
       Y(c, j) = y;
       const double* b = la.base.colptr(j);
       double mx = R_NegInf;
-      for (int s = 0; s < la.S; ++s) {
+      int s = 0;
+#ifdef FBC_V2D
+      const v2d yv = {y, y}, hv = {0.5, 0.5};
+      v2d mv = {R_NegInf, R_NegInf};
+      for (; s + 2 <= la.S; s += 2) {
+        const v2d e = (yv - load2(mu + s)) * load2(isd + s);
+        const v2d l = load2(b + s) - hv * e * e - load2(lsd + s);
+        store2(L + s, l);
+        mv = mv < l ? l : mv;  // std::max() lane by lane
+      }
+      mx = std::max(mv[0], mv[1]);
+#endif
+      for (; s < la.S; ++s) {
         const double e = (y - mu[s]) * isd[s];
         L[s] = b[s] - 0.5 * e * e - lsd[s];
         mx = std::max(mx, L[s]);
@@ -863,7 +949,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   la.isd.set_size(la.S, la.Nc);
   la.lsd.set_size(la.S, la.Nc);
   la.Lbuf.set_size(la.S);
-  if (n > 1) la.M.resize((size_t)la.S * la.Nc * la.J);  // pending points' means
+  la.mbuf.resize(la.S);  // cond_means()'s
   la.wbuf.set_size(la.S);
   if (la.T > 0) {
     la.VTP.set_size(la.S, la.T);
@@ -884,7 +970,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     chosen[step] = b + 1;
     best[step] = gain[b];
     for (int j = 0; j < la.J; ++j) {
-      const double* mu = cond_means(sys, la, b, j);
+      const double* mu = cond_means(sys, la, b, j, la.mbuf.data());
       for (int s = 0; s < la.S; ++s) {
         const double e = (Y(b, j) - mu[s]) * la.isd(s, b);
         la.base(s, j) += -0.5 * e * e - la.lsd(s, b);
