@@ -407,15 +407,17 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
        prune = if (prune) log(1e10) else 0)
 }
 
-# The look-ahead's memory, draws x (m + n + T) x candidates numbers:
+# The look-ahead's memory, draws x (m + G + T) x candidates numbers (G
+# the field's distinct inputs: replicates enter through their means):
 # refused beyond 5e7 (400 MB).
 check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   dat <- model$data
-  size <- ndraws * (nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)) * nrow(U)
+  rows <- nrow(dat$Xs) + sum(!duplicated(dat$Xf)) + nrow(XT)
+  size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
-    rows <- if (nrow(XT)) "runs, field rows and targets" else "runs and field rows"
+    what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"
     cli::cli_abort(c(
-      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({ndraws} draws x {nrow(dat$Xs) + nrow(dat$Xf) + nrow(XT)} {rows} x {nrow(U)} candidates).",
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({ndraws} draws x {rows} {what} x {nrow(U)} candidates).",
       i = "Give fewer {.arg ndraws} or candidates."
     ), call = call)
   }

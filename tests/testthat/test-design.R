@@ -379,10 +379,18 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   # the existing runs as candidates are left out
   cand <- rbind(pb$sim[, c("x", "u")], data.frame(x = c(0.3, 0.6), u = c(0.6, 0.65)))
   pr2 <- propose_runs(fit, n = 2, candidates = cand, ndraws = 60, nfantasy = 30)
-  expect_equal(sort(pr2$x), c(0.3, 0.6))  # a look-ahead over 5e7 numbers (60 draws x 22 rows x 40,000 candidates)
-  # is refused, naming the sizes
-  big <- data.frame(x = stats::runif(40000), u = stats::runif(40000))
+  expect_equal(sort(pr2$x), c(0.3, 0.6))
+  # a look-ahead over 5e7 numbers is refused, naming the sizes: 60 draws x
+  # 17 rows (12 runs and the field's 5 inputs; its 10 rows are replicates,
+  # which enter through their means) x 50,000 candidates; 40,000 pass
+  expect_equal(nrow(fit$data$Xs), 12)
+  expect_equal(sum(!duplicated(fit$data$Xf)), 5)
+  set.seed(7)  # (the candidates within 1e-3 of a run are left out first)
+  big <- data.frame(x = stats::runif(50000), u = stats::runif(50000))
   expect_snapshot(error = TRUE, propose_runs(fit, candidates = big, ndraws = 60))
+  ok <- data.frame(x = stats::runif(40000), u = stats::runif(40000))
+  expect_silent(asNamespace("FBC")$check_look_ahead_size(60, fit$model,
+                                                          as.matrix(ok), matrix(0, 0, 1)))
 })
 
 test_that("a batch conditions on its pending points; single picks repeat", {
