@@ -165,10 +165,10 @@
 #' benchmark's picks identical). In design loops from 10 to 50
 #' runs (`inst/bench/design.R`, 30 replicates, reference BLAS) a step one
 #' run at a time costs a median 0.008 CPU s on the sinusoid, 0.009 on
-#' kinetics and 0.018 with two calibration inputs, 0.06-0.09 of the
+#' kinetics and 0.017 with two calibration inputs, 0.06-0.08 of the
 #' [update_runs()] fit it follows (mostly the old draws reweighted); a
-#' batch of 5 costs 0.020-0.022 on the sinusoid and kinetics (0.04-0.06 of
-#' its fit) and 0.083 with two inputs (0.13). Give fewer
+#' batch of 5 costs 0.017-0.020 on the sinusoid and kinetics and 0.052
+#' with two inputs (0.035-0.082 of its fit). Give fewer
 #' `nfantasy` or `ndraws` for a cheaper, noisier step.
 #'
 #' @section Scope:
@@ -177,9 +177,9 @@
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
 #' rows). One output, one noise group, no categorical
 #' inputs, and the `"gp"` or `"none"` discrepancy: other models are refused.
-#' The look-ahead holds draws x (m + n) x candidates numbers; beyond
-#' 5e7 (400 MB) it is refused, naming the sizes (give fewer `ndraws` or
-#' candidates).
+#' The look-ahead holds draws x (m + the field's distinct inputs) x
+#' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
+#' (give fewer `ndraws` or candidates).
 #'
 #' @param fit An `fbc` object.
 #' @param n Number of points (a batch, chosen greedily with the pending
