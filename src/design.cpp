@@ -824,14 +824,15 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
       int s = 0;
 #ifdef FBC_V2D
       const v2d yv = {y, y}, hv = {0.5, 0.5};
-      v2d mv = {R_NegInf, R_NegInf};
+      double mx1 = R_NegInf;
       for (; s + 2 <= la.S; s += 2) {
         const v2d e = (yv - load2(mu + s)) * load2(isd + s);
         const v2d l = load2(b + s) - hv * e * e - load2(lsd + s);
         store2(L + s, l);
-        mv = mv < l ? l : mv;  // std::max() lane by lane
+        mx = std::max(mx, l[0]);
+        mx1 = std::max(mx1, l[1]);
       }
-      mx = std::max(mv[0], mv[1]);
+      mx = std::max(mx, mx1);
 #endif
       for (; s < la.S; ++s) {
         const double e = (y - mu[s]) * isd[s];
