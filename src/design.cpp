@@ -539,12 +539,13 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // the standard deviations sd, their inverses and logs (S x Nc), mbuf a
 // draw's means. With T targets, given
 // the pending points: the targets' means MT[s + S (t + T j)], variances
-// VTP (S x T) and covariances with the candidates CP[s + S (t + T c)].
+// VTP (S x T) and covariances with the candidates CP[s + S (t + T c)];
+// tb, tv (S x T) target_terms() of the candidate scored.
 struct LookAhead {
   int S, Nc, J, T = 0;
   arma::mat kap, base, YP, sd, isd, lsd, VTP;
   arma::vec ksq, Lbuf, wbuf;
-  std::vector<double> MT, CP, Bk, Dk, mbuf;
+  std::vector<double> MT, CP, Bk, Dk, mbuf, tb, tv;
   std::vector<int> P;
 };
 
@@ -647,19 +648,36 @@ double target_var(LookAhead& la, const double* L, double mx, int j, int c, doubl
     if (c < 0) {
       for (int s = 0; s < S; ++s) { a1 += w[s] * (vt[s] + mt[s] * mt[s]); a2 += w[s] * mt[s]; }
     } else {
-      const double* cp = la.CP.data() + (size_t)S * (t + (size_t)la.T * c);
-      const double* isd = la.isd.colptr(c);
+      // b and v for candidate c (target_terms(), the same in every fantasy)
+      const double* b = la.tb.data() + (size_t)S * t;
+      const double* v = la.tv.data() + (size_t)S * t;
       for (int s = 0; s < S; ++s) {
-        const double b = cp[s] * isd[s] * isd[s];
-        const double ms = mt[s] + b * (y - mu[s]);
-        const double vs = std::max(vt[s] - b * cp[s], 0.0);
-        a1 += w[s] * (vs + ms * ms);
+        const double ms = mt[s] + b[s] * (y - mu[s]);
+        a1 += w[s] * (v[s] + ms * ms);
         a2 += w[s] * ms;
       }
     }
     out += a1 / sw - (a2 / sw) * (a2 / sw);
   }
   return out / la.T;
+}
+
+// target_var()'s terms of candidate c, which no fantasy changes (computed
+// once for its J fantasies): b_st = CP_stc / cv_sc, v_st = max(VTP_st -
+// b_st CP_stc, 0), in la.tb and la.tv (s fastest).
+void target_terms(LookAhead& la, int c) {
+  const int S = la.S;
+  const double* isd = la.isd.colptr(c);
+  for (int t = 0; t < la.T; ++t) {
+    const double* cp = la.CP.data() + (size_t)S * (t + (size_t)la.T * c);
+    const double* vt = la.VTP.colptr(t);
+    double* b = la.tb.data() + (size_t)S * t;
+    double* v = la.tv.data() + (size_t)S * t;
+    for (int s = 0; s < S; ++s) {
+      b[s] = cp[s] * isd[s] * isd[s];
+      v[s] = std::max(vt[s] - b[s] * cp[s], 0.0);
+    }
+  }
 }
 
 // The criterion's variance: kappa's (weighted_var()) or the targets'.
@@ -812,6 +830,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
   double* L = la.Lbuf.memptr();
   for (int c = 0; c < la.Nc; ++c) {
     double after = 0.0;
+    if (la.T > 0) target_terms(la, c);
     for (int j = 0; j < la.J; ++j) {
       const double* mu = cond_means(sys, la, c, j, la.mbuf.data());
       const double* isd = la.isd.colptr(c);
@@ -956,6 +975,8 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     la.VTP.set_size(la.S, la.T);
     la.MT.resize((size_t)la.S * la.T * la.J);
     la.CP.resize((size_t)la.S * la.T * la.Nc);
+    la.tb.resize((size_t)la.S * la.T);  // target_terms()'s
+    la.tv.resize((size_t)la.S * la.T);
   }
   double variance = 0.0;
   arma::vec gain(la.Nc), best(n);
