@@ -222,19 +222,12 @@ struct FieldGroups {
 
 FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf) {
   const arma::uword n = Xf.n_rows;
-  std::vector<arma::uword> first;  // each group's first row
-  std::vector<int> of(n);
-  for (arma::uword i = 0; i < n; ++i) {
-    int g = -1;
-    for (size_t h = 0; h < first.size() && g < 0; ++h)
-      if (arma::all(Xf.row(first[h]) == Xf.row(i))) g = (int)h;
-    if (g < 0) { g = first.size(); first.push_back(i); }
-    of[i] = g;
-  }
+  std::vector<int> of;
+  const std::vector<int> first = group_rows(Xf, std::vector<int>(), of);
   const arma::uword G = first.size();
   FieldGroups f;
   f.n = n;
-  f.X = Xf.rows(arma::uvec(first));
+  f.X = Xf.rows(arma::conv_to<arma::uvec>::from(first));
   f.ybar.zeros(G);
   arma::vec r(G, arma::fill::zeros);
   for (arma::uword i = 0; i < n; ++i) { f.ybar[of[i]] += yf[i]; r[of[i]] += 1.0; }
@@ -549,9 +542,6 @@ struct LookAhead {
   std::vector<int> P;
 };
 
-// Sum over kappa's columns of its variance under the weights
-// w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
-// sum_k (sum_s w_s k_sk)^2.
 // Sums s of a_s b_s (b null: of a_s), two lanes at a time where the
 // compiler has vector types.
 double dot_sum(const double* a, const double* b, int S) {
@@ -606,6 +596,9 @@ void weight_sums(const double* w, const double* ksq, const double* k1, const dou
   }
 }
 
+// Sum over kappa's columns of its variance under the weights
+// w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
+// sum_k (sum_s w_s k_sk)^2.
 double weighted_var(LookAhead& la, const double* L, double mx) {
   const int q = la.kap.n_cols, S = la.S;
   double* w = la.wbuf.memptr();

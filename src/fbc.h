@@ -240,6 +240,12 @@ void solve_lower(const arma::mat& L, arma::mat& X);
 void syrk_lower(const arma::mat& A, double alpha, double beta, arma::mat& C);
 // log(2 pi), for Gaussian log-densities.
 const double LOG_2PI = 1.837877066409345483560659472811;
+// The rows of X grouped by value (and by key[i] too when key is not empty):
+// grp[i] is row i's group, the groups numbered in order of first
+// appearance; returns each group's first row. The field's distinct inputs
+// (replicates share eta, the bias and their correlations).
+std::vector<int> group_rows(const arma::mat& X, const std::vector<int>& key,
+                            std::vector<int>& grp);
 
 // Two buffers for one cached quantity: the current one and a scratch one a
 // proposal is written into; accepting a proposal flips them (no copy).

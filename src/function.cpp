@@ -32,15 +32,7 @@ public:
     noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
     if ((int) noise_.size() != n) Rcpp::stop("the noise groups must give one group per field row");
     // distinct field rows (as SchurPosterior's)
-    grp_.resize(n);
-    std::vector<int> first;
-    for (int i = 0; i < n; ++i) {
-      int g = -1;
-      for (size_t u = 0; u < first.size() && g < 0; ++u)
-        if (arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
-      if (g < 0) { g = first.size(); first.push_back(i); }
-      grp_[i] = g;
-    }
+    const std::vector<int> first = group_rows(Xf, std::vector<int>(), grp_);
     nu_ = first.size();
     Xu_.set_size(nu_, p);
     for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);

@@ -232,6 +232,22 @@ void fill_layout(Layout& lay) {
     }
 }
 
+std::vector<int> group_rows(const arma::mat& X, const std::vector<int>& key,
+                            std::vector<int>& grp) {
+  const int n = X.n_rows;
+  grp.resize(n);
+  std::vector<int> first;
+  for (int i = 0; i < n; ++i) {
+    int g = -1;
+    for (size_t u = 0; u < first.size() && g < 0; ++u)
+      if ((key.empty() || key[i] == key[first[u]]) && arma::all(X.row(i) == X.row(first[u])))
+        g = u;
+    if (g < 0) { g = first.size(); first.push_back(i); }
+    grp[i] = g;
+  }
+  return first;
+}
+
 std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
                                           const arma::mat& Xs, const arma::vec& ys,
                                           double nugget, const Model& model) {
@@ -278,15 +294,7 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
   // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
   // (row i of Xf is row grp_[i] of Xu_).
-  grp_.resize(n);
-  std::vector<int> first;
-  for (int i = 0; i < n; ++i) {
-    int g = -1;
-    for (size_t u = 0; u < first.size() && g < 0; ++u)
-      if (src[i] == src[first[u]] && arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
-    if (g < 0) { g = first.size(); first.push_back(i); }
-    grp_[i] = g;
-  }
+  const std::vector<int> first = group_rows(Xf, src, grp_);
   nu_ = first.size();
   Xu_.set_size(nu_, p);
   srcU_.resize(nu_);
