@@ -739,20 +739,20 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
         for (int c = 0; c < la.Nc; ++c)
           ScP(c, i) = s2S * ScP(c, i) - dot_sum(As.colptr(c), AP.colptr(i), N);
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
-      // B = ScP SPP^-1 (SPP k x k): BLAS's Nc triangular solves were a
-      // twentieth of a batch's look-ahead
-      Sinv = SPP;
-      if (chol_small(Sinv)) {
-        // B' = SPP^-1 ScP' = L^-T L^-1 ScP', column c: two k x k triangular solves
+      // B = ScP SPP^-1 (SPP k x k; BLAS's Nc triangular solves were a
+      // twentieth of a batch's look-ahead): B' = L^-T L^-1 ScP'.
+      // small_chol() factors SPP and carries on over the candidates' rows
+      // below it, each becoming L^-1 ScP(c, :)'; small_back() then solves L'.
+      const int ld = k + Nc;
+      Sinv.set_size(ld, k);
+      Sinv.rows(0, k - 1) = SPP;
+      Sinv.rows(k, ld - 1) = ScP;
+      if (small_chol(Sinv.memptr(), k, ld, ld)) {
         B.set_size(la.Nc, k);
         std::vector<double> y(k);
         for (int c = 0; c < la.Nc; ++c) {
-          for (int i = 0; i < k; ++i) {
-            double x = ScP(c, i);
-            for (int r = 0; r < i; ++r) x -= Sinv(i, r) * y[r];
-            y[i] = x / Sinv(i, i);
-          }
-          small_back(Sinv.memptr(), k, k, y.data());
+          for (int i = 0; i < k; ++i) y[i] = Sinv(k + c, i);
+          small_back(Sinv.memptr(), k, ld, y.data());
           for (int i = 0; i < k; ++i) B(c, i) = y[i];
         }
       } else {
