@@ -16,15 +16,28 @@ ck_reference <- local({
 })
 
 # A sampler that sleeps `pause` seconds before each piece (a call) and, when
-# `marker` is given, writes the process id there: a run that is long in
-# wall time but cheap in CPU, to be killed mid-way. Installed with
-# options(FBC.sampler = ...); run_chains() hands it to the workers.
+# `marker` (a directory) is given, adds a line to the file there named by
+# its process id: a run that is long in wall time but cheap in CPU, to be
+# killed mid-way. Installed with options(FBC.sampler = ...); run_chains()
+# hands it to the workers. One file per process: two workers appending to
+# one file interleave their writes (cat() writes a line in pieces; seen
+# here as lines "2412424125"), which made a third "process" appear.
 slow_sampler <- function(pause, marker = NULL) {
+  force(pause)
+  force(marker)
   function(...) {
-    if (!is.null(marker)) cat(Sys.getpid(), "\n", file = marker, append = TRUE)
+    if (!is.null(marker)) cat("piece\n", file = file.path(marker, Sys.getpid()), append = TRUE)
     if (pause > 0) Sys.sleep(pause)
     FBC:::.fbc_sample(...)
   }
+}
+
+# The calls of slow_sampler() so far, by process id (names), from its
+# `marker` directory.
+sampler_calls <- function(marker) {
+  files <- list.files(marker)
+  calls <- vapply(file.path(marker, files), function(f) length(readLines(f, warn = FALSE)), integer(1))
+  stats::setNames(calls, files)
 }
 
 # A sampler that imitates a Ctrl-C caught by the compiled sampler at the end
@@ -42,11 +55,12 @@ interrupt_at_call <- function(m) {
 }
 
 # Polls `cond()` every 0.1 s until TRUE; fails the test (naming the
-# condition) after `timeout` s, or at once when the background R session
-# `child` has ended without it (with the child's error output). The timeout
-# is generous: a loaded machine can take long to start a session and its
-# workers, and a passing run never waits for it.
-wait_until <- function(cond, child = NULL, timeout = 300) {
+# condition, and with what `state()` returns, when given) after `timeout` s,
+# or at once when the background R session `child` has ended without it
+# (with the child's error output). The timeout is generous: a loaded
+# machine can take long to start a session and its workers, and a passing
+# run never waits for it.
+wait_until <- function(cond, child = NULL, timeout = 300, state = NULL) {
   what <- paste(deparse(body(cond)), collapse = " ")
   t0 <- Sys.time()
   while (!isTRUE(tryCatch(suppressWarnings(cond()), error = function(e) FALSE))) {
@@ -57,7 +71,10 @@ wait_until <- function(cond, child = NULL, timeout = 300) {
         sprintf("the child session ended first (exit status %s): %s",
                 format(child$get_exit_status()), substr(err, 1, 500))
       } else {
-        sprintf("not met within %d s", timeout)
+        sprintf("not met within %s s", format(timeout))
+      }
+      if (!is.null(state)) {
+        why <- paste0(why, "; ", tryCatch(state(), error = function(e) conditionMessage(e)))
       }
       testthat::fail(sprintf("wait_until(%s): %s", substr(what, 1, 200), why))
       return(FALSE)

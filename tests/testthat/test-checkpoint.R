@@ -162,7 +162,8 @@ test_that("multisession: Ctrl-C returns the chains' draws and leaves the workers
   skip_on_cran()
   skip_if_not_installed("callr")
   marker <- tempfile("started-")
-  on.exit(unlink(marker), add = TRUE)
+  dir.create(marker)
+  on.exit(unlink(marker, recursive = TRUE), add = TRUE)
   child <- callr::r_bg(function(sampler) {
     library(FBC)
     future::plan(future::multisession, workers = 2)
@@ -185,12 +186,15 @@ test_that("multisession: Ctrl-C returns the chains' draws and leaves the workers
   on.exit(child$kill(), add = TRUE)
   # both workers have run some pieces past burn-in
   wait_until(function() {
-    calls <- table(readLines(marker))
+    calls <- sampler_calls(marker)
     length(calls) == 2 && all(calls >= 5)
-  }, child)
+  }, child, state = function() {
+    calls <- sampler_calls(marker)
+    sprintf("calls by process: %s", paste(names(calls), calls, sep = ": ", collapse = ", "))
+  })
   # SIGINT to the session and its workers at once, as Ctrl-C in a terminal
   # does (the workers are in the session's process group)
-  workers <- as.integer(unique(readLines(marker)))
+  workers <- as.integer(names(sampler_calls(marker)))
   tools::pskill(c(child$get_pid(), workers), tools::SIGINT)
   child$wait(120000)
   res <- child$get_result()
