@@ -175,8 +175,10 @@
 #' The conditional is computed per draw with a dense Cholesky factor of
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
-#' rows). One output, one noise group, no categorical
-#' inputs, and the `"gp"` or `"none"` discrepancy: other models are refused.
+#' rows). One output, no categorical inputs, and the `"gp"` or `"none"`
+#' discrepancy with one bias (several field data sets, `source`, each with
+#' its own noise variance, are handled; `sourceBias = "own"` is not):
+#' other models are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -336,7 +338,6 @@ check_design_model <- function(model, call = parent.frame()) {
   why <- c(
     if (!is.null(model$simulator)) "a simulator function (it has no runs to add to)",
     if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
-    if (d$noise > 1L) "several noise groups",
     if (d$sources > 0L) "a bias per data set",
     if (nzchar(discrepancy_info(model$discrepancy, "design"))) discrepancy_info(model$discrepancy, "design"),
     if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
@@ -412,7 +413,8 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
 # refused beyond 5e7 (400 MB).
 check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   dat <- model$data
-  rows <- nrow(dat$Xs) + sum(!duplicated(dat$Xf)) + nrow(XT)
+  # (the field's rows at one input in one noise group are one row there)
+  rows <- nrow(dat$Xs) + sum(!duplicated(cbind(dat$Xf, model$spec$model$noise))) + nrow(XT)
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"

@@ -15,7 +15,9 @@
 #' @param f The simulator: `f(x, kappa)` with `x` a data frame of the
 #'   field's input columns (one row per point) and `kappa` a named numeric
 #'   vector of the calibration inputs, returning one response per row.
-#' @param field The field data (response first, as in [calibrate()]).
+#' @param field The field data (response first, as in [calibrate()]; with
+#'   several data sets, `source =` among `...` names their column, which is
+#'   not an input).
 #' @param lower,upper Named numeric vectors: the ranges of the experimental
 #'   inputs (named as in `field`) and of the calibration inputs (their
 #'   names are the calibration inputs').
@@ -61,13 +63,15 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     cli::cli_abort("{.arg f} must be a function {.code f(x, kappa)}, not {.obj_type_friendly {f}}.")
   }
   showProgress <- default_progress(showProgress)
-  xnames <- names(field)[-1]
+  dots <- list(...)
+  # the field's inputs: its columns but the response and the data sets'
+  # (`source`, passed on to calibrate())
+  xnames <- setdiff(names(field)[-1], if (is.character(dots$source)) dots$source)
   check_loop_ranges(lower, upper, xnames)
   cal <- setdiff(names(lower), xnames)
   n0 <- check_count(n0, "n0", min = 3)
   batch <- check_count(batch, "batch", min = 1)
   budget <- check_count(budget, "budget", min = 0)
-  dots <- list(...)
   X <- maximin_lhs(n0, lower, upper)
   sim <- run_simulator(f, X, xnames, cal, names(field)[1])
   # a fit's warning that the field inputs lie beyond the runs' range: kept

@@ -206,33 +206,48 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
   }
 }
 
-// The field rows grouped by input: rows at the same experimental input
-// (replicates) share eta(x, kappa) and the bias, so the data enter the
-// conditionals only through each group's mean, measured with variance
-// s2E / r_g (r_g rows), and the likelihood factorises as
-//   log N(yf, ys) = log N(ybar, ys) - (SS / s2E + (n - G) log(2 pi s2E) + sum_g log r_g) / 2
-// with SS the rows' squared deviations from their group's mean. X: the G
-// distinct inputs in order of appearance, ybar their means, invr 1 / r_g.
+// The field rows grouped by input and measurement-error group: rows at the
+// same experimental input (replicates) share eta(x, kappa) and the bias,
+// and those of one noise group k (a data set) also their variance s2E_k, so
+// the data enter the conditionals only through each group's mean, measured
+// with variance s2E_k(g) / r_g (r_g rows), and the likelihood factorises as
+//   log N(yf, ys) = log N(ybar, ys)
+//                   - (sum_k [SS_k / s2E_k + (n_k - G_k) log s2E_k] + (n - G) log 2 pi + sum_g log r_g) / 2
+// with SS_k the squared deviations of group k's rows from their group's
+// mean, n_k its rows and G_k its groups. X: the G groups' inputs in order of
+// appearance, noise their noise groups (0-based), ybar their means, invr
+// 1 / r_g; ss and extra (n_k - G_k) per noise group.
 struct FieldGroups {
   arma::mat X;
-  arma::vec ybar, invr;
-  double ss = 0.0, logr = 0.0;
+  arma::vec ybar, invr, ss, extra;
+  std::vector<int> noise;
+  double logr = 0.0;
   int n = 0;
 };
 
-FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf) {
+FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf, const std::vector<int>& noise) {
   const arma::uword n = Xf.n_rows;
   std::vector<int> of;
-  const std::vector<int> first = group_rows(Xf, std::vector<int>(), of);
+  const std::vector<int> first = group_rows(Xf, noise, of);
   const arma::uword G = first.size();
+  const int K = noise.empty() ? 1 : *std::max_element(noise.begin(), noise.end()) + 1;
   FieldGroups f;
   f.n = n;
   f.X = Xf.rows(arma::conv_to<arma::uvec>::from(first));
+  f.noise.resize(G);
+  for (arma::uword g = 0; g < G; ++g) f.noise[g] = noise.empty() ? 0 : noise[first[g]];
   f.ybar.zeros(G);
   arma::vec r(G, arma::fill::zeros);
   for (arma::uword i = 0; i < n; ++i) { f.ybar[of[i]] += yf[i]; r[of[i]] += 1.0; }
   f.ybar /= r;
-  for (arma::uword i = 0; i < n; ++i) f.ss += (yf[i] - f.ybar[of[i]]) * (yf[i] - f.ybar[of[i]]);
+  f.ss.zeros(K);
+  f.extra.zeros(K);
+  for (arma::uword i = 0; i < n; ++i) {
+    const int k = f.noise[of[i]];
+    f.ss[k] += (yf[i] - f.ybar[of[i]]) * (yf[i] - f.ybar[of[i]]);
+    f.extra[k] += 1.0;
+  }
+  for (arma::uword g = 0; g < G; ++g) f.extra[f.noise[g]] -= 1.0;
   f.invr = 1.0 / r;
   f.logr = arma::accu(arma::log(r));
   return f;
@@ -330,11 +345,12 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
 //   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
 //       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E R        ],
 // L = chol(C) = [L1 0; W' L2] with W = L1^-1 s2S Rs(Xs, Xk),
-//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E R - W'W),  r2 = L2^-1 (yf - muB - W' r1),
+//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E R - W'W),  r2 = L2^-1 (yf - muB - W' r1)
+//   (s2E R: diag(s2E_k(g) / r_g), group g's noise variance over its rows),
 //   A = L^-1 s2S Rs(Z, U) = [A1; A2],  A2 = L2^-1 (s2S Rs(Xk, U) - W' A1),
 //   mu = A' r = mu1 + A2' r2,  v = s2S (1 + nugget) - diag(A1'A1) - diag(A2'A2),
 //   ll = log N(ys, every field row) = -((m + n) log 2 pi + 2 (ld1 + sum log diag L2)
-//        + r1'r1 + r2'r2 + SS / s2E + (n - G) log s2E + sum_g log r_g) / 2.
+//        + r1'r1 + r2'r2 + sum_k [SS_k / s2E_k + (n_k - G_k) log s2E_k] + sum_g log r_g) / 2.
 // False if C is not positive definite.
 bool design_system(const Posterior& post, const Model& mod, const FieldGroups& fg,
                    const arma::mat& Xs, const arma::vec& ys,
@@ -344,7 +360,8 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   const arma::vec& phi = post.phi;
   const arma::mat& Xf = fg.X;
   const int m = post.m, n = Xf.n_rows, p = post.p, q = post.q, N = m + n;
-  const double s2S = phi[post.iSigma2S], s2E = phi[post.iSigma2E];
+  const double s2S = phi[post.iSigma2S];
+  const double* s2E = phi.memptr() + post.iSigma2E;  // one per noise group
   for (int k = 0; k < q; ++k) w.Xk.col(p + k).fill(phi[post.iKappa + k]);
   const double* thS = phi.memptr() + post.iThetaS;
   const double* alS = phi.memptr() + post.iAlphaS;
@@ -360,7 +377,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
     for (int j = 0; j < n; ++j)
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
   }
-  for (int i = 0; i < n; ++i) w.S(i, i) += s2E * fg.invr[i];
+  for (int i = 0; i < n; ++i) w.S(i, i) += s2E[fg.noise[i]] * fg.invr[i];
   syrk_small(w.W, w.S);
   w.Wt = w.W.t();
   if (!chol_small(w.S)) return false;
@@ -369,8 +386,13 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   solve_lower_col(w.S, w.r2.memptr(), 0);
   double ld2 = 0.0;
   for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
-  out.ll[s] = -0.5 * ((m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2) +
-                      fg.ss / s2E + (fg.n - n) * std::log(s2E) + fg.logr);
+  double quad = (m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2);
+  // the replicates' deviations from their groups' means, per noise group
+  for (arma::uword k = 0; k < fg.ss.n_elem; ++k) {
+    quad += fg.ss[k] / s2E[k];
+    quad += fg.extra[k] * std::log(s2E[k]);
+  }
+  out.ll[s] = -0.5 * (quad + fg.logr);
   const int Nc = U.n_rows;
   if (Nc > 0) {
     kernel_corr(mod.kernS, w.Xk, U, p + q, thS, alS, w.A2, false);
@@ -413,12 +435,15 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (post.sgasp || post.layout.length_of("sigma2E") != 1)
-    Rcpp::stop("the look-ahead handles the gp or none discrepancy with one noise group");
+  if (post.sgasp || !mod.source.empty())
+    Rcpp::stop("the look-ahead handles the gp or none discrepancy with one bias");
+  const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
+  if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
+    Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  const FieldGroups fg = field_groups(Xf, yf);
+  const FieldGroups fg = field_groups(Xf, yf, mod.noise);
   const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
   const int T = XT.n_rows;
   DesignSystems out;

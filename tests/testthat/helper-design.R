@@ -19,7 +19,7 @@ draw_system <- function(phi, model, U, XT = NULL) {
   d <- model$dims
   p <- d$p
   q <- d$q
-  ix <- FBC:::param_indices(p, q, model$discrepancy)
+  ix <- FBC:::param_indices(p, q, model$discrepancy, noise = d$noise)
   kS <- FBC:::kernel_codes[[model$kernelS]]
   thS <- phi[ix$thetaS]
   alS <- phi[ix$alphaS]
@@ -36,7 +36,8 @@ draw_system <- function(phi, model, U, XT = NULL) {
       FBC:::.corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], FBC:::kernel_codes[[model$kernelB]])
     mu0[fld] <- phi[ix$muB]
   }
-  C[cbind(fld, fld)] <- C[cbind(fld, fld)] + phi[ix$sigma2E]
+  # each field row's noise variance: its data set's (noise group's)
+  C[cbind(fld, fld)] <- C[cbind(fld, fld)] + phi[ix$sigma2E][if (is.null(model$spec$model$noise)) 1L else model$spec$model$noise]
   R <- chol(C)
   r <- backsolve(R, c(dat$ys, dat$yf) - mu0, transpose = TRUE)
   A <- backsolve(R, s2S * corr(Z, U), transpose = TRUE)

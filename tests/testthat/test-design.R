@@ -656,6 +656,63 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
   }
 })
 
+test_that("field data sets with noise variances of their own: the look-ahead is the dense plain-R one", {
+  pb <- sinus_problem()
+  # the sinusoid's 5 field inputs measured by two data sets, b 3x noisier
+  # than a, and one more row of each: b's at 0.1 (a replicate within b and
+  # an input a has too, a group of its own: a different noise) and a's at
+  # 0.3 (a replicate within a)
+  set.seed(2)
+  xf <- c(rep(seq(0.1, 0.9, length.out = 5), 2), 0.1, 0.3)
+  lab <- c(rep("a", 5), rep("b", 5), "b", "a")
+  field <- data.frame(y = sin(10 * pi / 5 * xf) + stats::rnorm(12, 0, ifelse(lab == "a", 0.1, 0.3)),
+                      x = xf, lab = lab)
+  for (disc in c("none", "gp")) {
+    set.seed(4)
+    fit <- calibrate(pb$sim, field, source = "lab", discrepancy = disc, nMCMC = 600,
+                     nBurn = 200, nChains = 1, showProgress = FALSE)
+    expect_equal(fit$model$dims$noise, 2L)
+    U <- matrix(stats::runif(60), 30, 2)
+    for (method in c("joint", "plugin")) {
+      parts <- FBC:::design_particles(fit, 40, method)
+      # each draw's system against the dense Gaussian on every row, each
+      # row's noise variance its data set's (helper-design.R)
+      sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U))
+      d <- fit$data
+      ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, matrix(0, 0, 1),
+                                  fbc_nugget, fit$spec$model)
+      N <- nrow(d$Xs) + nrow(d$Xf)
+      expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
+      expect_equal(ds$mu, vapply(sys, `[[`, numeric(30), "mu"), tolerance = 1e-8)
+      expect_equal(ds$v, vapply(sys, `[[`, numeric(30), "v"), tolerance = 1e-8)
+      # (the data sets' noise variances differ in every draw: using one for
+      # the other would show above)
+      ie <- FBC:::param_indices(1, 1, disc, noise = 2L)$sigma2E
+      expect_gt(min(abs(parts$phi[, ie[1]] - parts$phi[, ie[2]])), 0)
+      set.seed(11)
+      cpp <- FBC:::look_ahead(parts, U, fit$model, 3, 25)
+      set.seed(11)
+      ref <- look_ahead_r(sys, parts, U, fit$model, 3, 25)
+      expect_identical(cpp$chosen, as.integer(ref$chosen))
+      expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+      expect_gt(max(cpp$scores[, 1]), 0)
+    }
+    set.seed(5)
+    pr <- propose_runs(fit, n = 2, ndraws = 40, nfantasy = 20, ncandidates = 100)
+    expect_named(pr, c("x", "u", "gain"))
+    expect_equal(nrow(pr), 2)
+  }
+  # design_loop(): the data sets' column is not an input of the simulator
+  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
+  set.seed(3)
+  out <- design_loop(f, field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
+                     batch = 2, budget = 2, discrepancy = "none", source = "lab", nMCMC = 400,
+                     nBurn = 200, nChains = 1, design = list(ndraws = 40, nfantasy = 20))
+  expect_equal(out$history$runs, c(8, 10))
+  expect_named(out$sim, c("y", "x", "u"))
+  expect_equal(out$fit$model$dims$noise, 2L)
+})
+
 test_that("a prediction target draws the runs to its inputs", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 1200)
