@@ -176,9 +176,11 @@
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
 #' rows). One output, no categorical inputs, and the `"gp"` or `"none"`
-#' discrepancy with one bias (several field data sets, `source`, each with
-#' its own noise variance, are handled; `sourceBias = "own"` is not):
-#' other models are refused.
+#' discrepancy: other models are refused. Several field data sets
+#' (`source`), each with its own noise variance, are handled, with one
+#' bias or a bias each (`sourceBias = "own"`; then for kappa only: a
+#' prediction target is refused, as its bias would be that of no data
+#' set).
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -238,6 +240,12 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   sc <- model$scale
   d <- sc$p + sc$q
   XT <- design_target(target, sc)
+  if (nrow(XT) && model$dims$sources > 0L) {
+    cli::cli_abort(c(
+      "{.arg target} needs the calibrated prediction of one bias: this fit has a bias per field data set ({.code sourceBias = \"own\"}).",
+      i = "Choose runs for kappa ({.code target = \"kappa\"}, the default), or fit with one bias."
+    ))
+  }
   U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * d), model$data$Xs, tol)
   if (nrow(U) < n) {
     cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
@@ -338,7 +346,6 @@ check_design_model <- function(model, call = parent.frame()) {
   why <- c(
     if (!is.null(model$simulator)) "a simulator function (it has no runs to add to)",
     if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
-    if (d$sources > 0L) "a bias per data set",
     if (nzchar(discrepancy_info(model$discrepancy, "design"))) discrepancy_info(model$discrepancy, "design"),
     if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
   )
@@ -413,8 +420,10 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
 # refused beyond 5e7 (400 MB).
 check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   dat <- model$data
-  # (the field's rows at one input in one noise group are one row there)
-  rows <- nrow(dat$Xs) + sum(!duplicated(cbind(dat$Xf, model$spec$model$noise))) + nrow(XT)
+  # (the field's rows at one input in one noise group and data set are one
+  # row there)
+  mm <- model$spec$model
+  rows <- nrow(dat$Xs) + sum(!duplicated(cbind(dat$Xf, mm$noise, mm$source))) + nrow(XT)
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"

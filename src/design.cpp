@@ -214,28 +214,41 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
 //   log N(yf, ys) = log N(ybar, ys)
 //                   - (sum_k [SS_k / s2E_k + (n_k - G_k) log s2E_k] + (n - G) log 2 pi + sum_g log r_g) / 2
 // with SS_k the squared deviations of group k's rows from their group's
-// mean, n_k its rows and G_k its groups. X: the G groups' inputs in order of
-// appearance, noise their noise groups (0-based), ybar their means, invr
-// 1 / r_g; ss and extra (n_k - G_k) per noise group.
+// mean, n_k its rows and G_k its groups. With a bias per data set
+// (`source`) the rows of one data set share its bias, so a group is also
+// within one data set. X: the G groups' inputs in order of appearance,
+// noise their noise groups and src their data sets (0-based; src empty
+// without), ybar their means, invr 1 / r_g; ss and extra (n_k - G_k) per
+// noise group.
 struct FieldGroups {
   arma::mat X;
   arma::vec ybar, invr, ss, extra;
-  std::vector<int> noise;
+  std::vector<int> noise, src;
   double logr = 0.0;
   int n = 0;
 };
 
-FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf, const std::vector<int>& noise) {
+FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf, const std::vector<int>& noise,
+                         const std::vector<int>& source) {
   const arma::uword n = Xf.n_rows;
-  std::vector<int> of;
-  const std::vector<int> first = group_rows(Xf, noise, of);
-  const arma::uword G = first.size();
   const int K = noise.empty() ? 1 : *std::max_element(noise.begin(), noise.end()) + 1;
+  std::vector<int> key = noise;  // (noise group, data set) as one number
+  if (!source.empty()) {
+    key.resize(n);
+    for (arma::uword i = 0; i < n; ++i) key[i] = source[i] * K + (noise.empty() ? 0 : noise[i]);
+  }
+  std::vector<int> of;
+  const std::vector<int> first = group_rows(Xf, key, of);
+  const arma::uword G = first.size();
   FieldGroups f;
   f.n = n;
   f.X = Xf.rows(arma::conv_to<arma::uvec>::from(first));
   f.noise.resize(G);
   for (arma::uword g = 0; g < G; ++g) f.noise[g] = noise.empty() ? 0 : noise[first[g]];
+  if (!source.empty()) {
+    f.src.resize(G);
+    for (arma::uword g = 0; g < G; ++g) f.src[g] = source[first[g]];
+  }
   f.ybar.zeros(G);
   arma::vec r(G, arma::fill::zeros);
   for (arma::uword i = 0; i < n; ++i) { f.ybar[of[i]] += yf[i]; r[of[i]] += 1.0; }
@@ -346,7 +359,8 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
 //       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E R        ],
 // L = chol(C) = [L1 0; W' L2] with W = L1^-1 s2S Rs(Xs, Xk),
 //   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E R - W'W),  r2 = L2^-1 (yf - muB - W' r1)
-//   (s2E R: diag(s2E_k(g) / r_g), group g's noise variance over its rows),
+//   (s2E R: diag(s2E_k(g) / r_g), group g's noise variance over its rows;
+//   with a bias per data set Rb(g, h) carries the factor D[src_g, src_h]),
 //   A = L^-1 s2S Rs(Z, U) = [A1; A2],  A2 = L2^-1 (s2S Rs(Xk, U) - W' A1),
 //   mu = A' r = mu1 + A2' r2,  v = s2S (1 + nugget) - diag(A1'A1) - diag(A2'A2),
 //   ll = log N(ys, every field row) = -((m + n) log 2 pi + 2 (ld1 + sum log diag L2)
@@ -373,6 +387,9 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   if (post.bias) {
     kernel_corr(mod.kernB, Xf, Xf, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
                 w.Rb, true);
+    // a bias per data set: times the data sets' correlation D[src_g, src_h]
+    if (!fg.src.empty())
+      source_scale(mod.sourceL, phi.memptr() + post.iRhoD, fg.src.data(), fg.src.data(), w.Rb, true);
     const double s2B = phi[post.iSigma2B];
     for (int j = 0; j < n; ++j)
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
@@ -435,15 +452,18 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (post.sgasp || !mod.source.empty())
-    Rcpp::stop("the look-ahead handles the gp or none discrepancy with one bias");
+  if (post.sgasp) Rcpp::stop("the look-ahead handles the gp or none discrepancy");
+  if (!mod.source.empty() && XT.n_rows > 0)
+    Rcpp::stop("a prediction target needs one bias, not one per data set");
+  if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
+    Rcpp::stop("the data sets must give one per field row");
   const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
   if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
     Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  const FieldGroups fg = field_groups(Xf, yf, mod.noise);
+  const FieldGroups fg = field_groups(Xf, yf, mod.noise, mod.source);
   const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
   const int T = XT.n_rows;
   DesignSystems out;

@@ -19,7 +19,7 @@ draw_system <- function(phi, model, U, XT = NULL) {
   d <- model$dims
   p <- d$p
   q <- d$q
-  ix <- FBC:::param_indices(p, q, model$discrepancy, noise = d$noise)
+  ix <- FBC:::param_indices(p, q, model$discrepancy, noise = d$noise, sources = d$sources)
   kS <- FBC:::kernel_codes[[model$kernelS]]
   thS <- phi[ix$thetaS]
   alS <- phi[ix$alphaS]
@@ -32,8 +32,15 @@ draw_system <- function(phi, model, U, XT = NULL) {
   C[cbind(sim, sim)] <- C[cbind(sim, sim)] * (1 + FBC:::fbc_nugget)
   mu0 <- rep(0, d$m + d$n)
   if (model$discrepancy != "none") {
-    C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] *
-      FBC:::.corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], FBC:::kernel_codes[[model$kernelB]])
+    Rb <- FBC:::.corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], FBC:::kernel_codes[[model$kernelB]])
+    # a bias per data set: the biases of data sets a and b correlated by
+    # D[a, b] (their level correlation from rhoD)
+    src <- model$spec$model$source
+    if (!is.null(src)) {
+      D <- FBC:::.level_corr(model$spec$model$sourceLevels, phi[ix$rhoD])[[1]]
+      Rb <- Rb * D[src, src]
+    }
+    C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] * Rb
     mu0[fld] <- phi[ix$muB]
   }
   # each field row's noise variance: its data set's (noise group's)

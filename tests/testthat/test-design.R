@@ -667,11 +667,14 @@ test_that("field data sets with noise variances of their own: the look-ahead is 
   lab <- c(rep("a", 5), rep("b", 5), "b", "a")
   field <- data.frame(y = sin(10 * pi / 5 * xf) + stats::rnorm(12, 0, ifelse(lab == "a", 0.1, 0.3)),
                       x = xf, lab = lab)
-  for (disc in c("none", "gp")) {
+  # no bias, one bias, a bias per data set (correlated by rhoD)
+  for (model in list(c("none", "shared"), c("gp", "shared"), c("gp", "own"))) {
+    disc <- model[1]
     set.seed(4)
-    fit <- calibrate(pb$sim, field, source = "lab", discrepancy = disc, nMCMC = 600,
-                     nBurn = 200, nChains = 1, showProgress = FALSE)
+    fit <- calibrate(pb$sim, field, source = "lab", sourceBias = model[2], discrepancy = disc,
+                     nMCMC = 600, nBurn = 200, nChains = 1, showProgress = FALSE)
     expect_equal(fit$model$dims$noise, 2L)
+    expect_equal(fit$model$dims$sources, if (model[2] == "own") 1L else 0L)
     U <- matrix(stats::runif(60), 30, 2)
     for (method in c("joint", "plugin")) {
       parts <- FBC:::design_particles(fit, 40, method)
@@ -687,8 +690,13 @@ test_that("field data sets with noise variances of their own: the look-ahead is 
       expect_equal(ds$v, vapply(sys, `[[`, numeric(30), "v"), tolerance = 1e-8)
       # (the data sets' noise variances differ in every draw: using one for
       # the other would show above)
-      ie <- FBC:::param_indices(1, 1, disc, noise = 2L)$sigma2E
-      expect_gt(min(abs(parts$phi[, ie[1]] - parts$phi[, ie[2]])), 0)
+      ix <- FBC:::param_indices(1, 1, disc, noise = 2L, sources = fit$model$dims$sources)
+      expect_gt(min(abs(parts$phi[, ix$sigma2E[1]] - parts$phi[, ix$sigma2E[2]])), 0)
+      # (and the data sets' biases are neither one bias nor independent)
+      if (model[2] == "own") {
+        expect_gt(mean(abs(parts$phi[, ix$rhoD])), 0.1)
+        expect_lt(mean(abs(parts$phi[, ix$rhoD])), 0.9)
+      }
       set.seed(11)
       cpp <- FBC:::look_ahead(parts, U, fit$model, 3, 25)
       set.seed(11)
@@ -702,6 +710,9 @@ test_that("field data sets with noise variances of their own: the look-ahead is 
     expect_named(pr, c("x", "u", "gain"))
     expect_equal(nrow(pr), 2)
   }
+  # with a bias per data set, a prediction target's bias would be none of
+  # theirs
+  expect_snapshot(error = TRUE, propose_runs(fit, target = data.frame(x = 0.5)))
   # design_loop(): the data sets' column is not an input of the simulator
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
   set.seed(3)
