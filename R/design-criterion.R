@@ -175,12 +175,12 @@
 #' The conditional is computed per draw with a dense Cholesky factor of
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
-#' rows). One output, no categorical inputs, and the `"gp"` or `"none"`
-#' discrepancy: other models are refused. Several field data sets
-#' (`source`), each with its own noise variance, are handled, with one
-#' bias or a bias each (`sourceBias = "own"`; then for kappa only: a
-#' prediction target is refused, as its bias would be that of no data
-#' set).
+#' rows). Every discrepancy model (`"gp"`, `"sgasp"`: its bias on the
+#' field's distinct inputs as the fit has it, `"none"`) and several field
+#' data sets (`source`), each with its own noise variance, with one bias
+#' or a bias each (`sourceBias = "own"`; then for kappa only: a prediction
+#' target is refused, as its bias would be that of no data set). One
+#' output and no categorical inputs: other models are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -343,16 +343,20 @@ design_target <- function(target, sc, call = parent.frame()) {
 # The models the look-ahead handles (the dense conditional of one output).
 check_design_model <- function(model, call = parent.frame()) {
   d <- model$dims
+  if (!is.null(model$simulator)) {
+    cli::cli_abort(c(
+      "This fit calibrates a simulator function, which has no runs to add to: {.fn propose_runs} chooses simulator runs.",
+      i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
+    ), call = call)
+  }
   why <- c(
-    if (!is.null(model$simulator)) "a simulator function (it has no runs to add to)",
     if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
-    if (nzchar(discrepancy_info(model$discrepancy, "design"))) discrepancy_info(model$discrepancy, "design"),
     if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
   )
   if (length(why)) {
     cli::cli_abort(c(
       "{.fn propose_runs} does not handle {why[1]} yet.",
-      i = "It handles one output with the {.val gp} or {.val none} discrepancy."
+      i = "It handles simulator runs of one output without categorical inputs, with any discrepancy model and field data sets."
     ), call = call)
   }
 }

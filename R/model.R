@@ -87,14 +87,13 @@ class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes
 #   label    print()'s name of the model
 #   classes  the classes of the bias GP it has (space separated); a class
 #            named by no model is in every model
-#   design   why propose_runs() does not handle it ("": it does)
 discrepancy_models <- rows_table(
   list(name = "gp", code = 0L, label = "Kennedy-O'Hagan",
-       classes = "thetaB alphaB rhoB rhoD sigma2B muB", design = ""),
+       classes = "thetaB alphaB rhoB rhoD sigma2B muB"),
   list(name = "sgasp", code = 2L, label = "S-GaSP discrepancy, Gu and Wang 2018",
-       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ", design = "the S-GaSP discrepancy"),
+       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ"),
   list(name = "none", code = 1L, label = "no discrepancy: y_f = eta(x, kappa) + eps",
-       classes = "", design = "")
+       classes = "")
 )
 discrepancy_codes <- stats::setNames(discrepancy_models$code, discrepancy_models$name)
 

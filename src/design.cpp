@@ -223,7 +223,7 @@ void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
 struct FieldGroups {
   arma::mat X;
   arma::vec ybar, invr, ss, extra;
-  std::vector<int> noise, src;
+  std::vector<int> noise, src, first;  // first: each group's first row
   double logr = 0.0;
   int n = 0;
 };
@@ -242,6 +242,7 @@ FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf, const std::ve
   const arma::uword G = first.size();
   FieldGroups f;
   f.n = n;
+  f.first = first;
   f.X = Xf.rows(arma::conv_to<arma::uvec>::from(first));
   f.noise.resize(G);
   for (arma::uword g = 0; g < G; ++g) f.noise[g] = noise.empty() ? 0 : noise[first[g]];
@@ -276,6 +277,65 @@ struct SystemWork {
   arma::mat Xk, W, Wt, S, Rb, A2, Tk, K1, K2, RbT, RTU;
   arma::vec r2, mu2, v2;
 };
+
+// The S-GaSP bias (Gu and Wang 2018) is the bias GP scaled on the sampler's
+// distinct field inputs XU (distinct within a data set with a bias per
+// data set), its discretization points: Rz = R - R (R + c I)^-1 R on them,
+// c = nu / lambdaZ (Posterior::biasModel()), and at new inputs
+// Posterior::biasModelCross(). The look-ahead's field groups (split further
+// by noise group) take their rows of it: group g is XU's row uOf[g]. RU, B,
+// Wz: workspaces; KT (nu x T), rT (T): the cross-correlation and variance
+// at the targets.
+struct SgaspBias {
+  bool on = false;
+  arma::mat XU, RU, B, Wz, KT;
+  arma::vec rT;
+  std::vector<int> srcU, uOf;
+};
+
+SgaspBias sgasp_bias(const Posterior& post, const Model& mod, const arma::mat& Xf,
+                     const FieldGroups& fg) {
+  SgaspBias z;
+  z.on = post.sgasp && post.bias;
+  if (!z.on) return z;
+  std::vector<int> of;
+  const std::vector<int> first = group_rows(Xf, mod.source, of);
+  z.XU = Xf.rows(arma::conv_to<arma::uvec>::from(first));
+  if (!mod.source.empty())
+    for (int i : first) z.srcU.push_back(mod.source[i]);
+  for (int i : fg.first) z.uOf.push_back(of[i]);
+  z.RU.set_size(first.size(), first.size());
+  return z;
+}
+
+// The bias correlation of the field groups (lower triangle of Rb): the bias
+// GP's kernel, times the data sets' correlation D[src_g, src_h] with a bias
+// per data set, and for the S-GaSP scaled on XU (sgasp_bias()). False if
+// the S-GaSP's matrix is not positive definite.
+bool field_bias_corr(const Posterior& post, const Model& mod, const FieldGroups& fg,
+                     SgaspBias& z, arma::mat& Rb) {
+  const arma::vec& phi = post.phi;
+  const double* thB = phi.memptr() + post.iThetaB;
+  const double* alB = phi.memptr() + post.iAlphaB;
+  const int p = post.p;
+  if (!z.on) {
+    kernel_corr(mod.kernB, fg.X, fg.X, p, thB, alB, Rb, true);
+    if (!fg.src.empty())
+      source_scale(mod.sourceL, phi.memptr() + post.iRhoD, fg.src.data(), fg.src.data(), Rb, true);
+    return true;
+  }
+  kernel_corr(mod.kernB, z.XU, z.XU, p, thB, alB, z.RU, true);
+  if (!z.srcU.empty())
+    source_scale(mod.sourceL, phi.memptr() + post.iRhoD, z.srcU.data(), z.srcU.data(), z.RU, true);
+  if (!post.biasModel(z.RU, z.B, z.Wz)) return false;
+  const int n = fg.X.n_rows;
+  for (int j = 0; j < n; ++j)
+    for (int i = j; i < n; ++i) {
+      const int a = z.uOf[i], b = z.uOf[j];
+      Rb(i, j) = a >= b ? z.RU(a, b) : z.RU(b, a);
+    }
+  return true;
+}
 
 // The shared block for the current draw's simulator hyperparameters
 // (recomputed only when they differ from the last draw's). False if the
@@ -319,10 +379,13 @@ bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
 // One draw's target part (sb, W, S = L2, r2, A2 from design_system()):
 //   K1 = L1^-1 s2S Rs(Xs, Tk),  K2 = L2^-1 (s2S Rs(Xk, Tk) + s2B Rb(Xf, XT) - W' K1),
 //   mT = muB + K1' r1 + K2' r2,  VT = s2S + s2B - diag(K1'K1 + K2'K2)   (predict()'s type "mean"),
-//   CTU = s2S Rs(Tk, U) - K1' A1 - K2' A2.
+//   CTU = s2S Rs(Tk, U) - K1' A1 - K2' A2;
+// for the S-GaSP Rb(Xf, XT) is its cross-correlation and the s2B of VT s2B rz(XT)
+// (sgasp_bias()).
 void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs,
                     const arma::mat& Xf, const arma::mat& XT, const arma::mat& U,
-                    const SimBlock& sb, SystemWork& w, DesignSystems& out, arma::uword s) {
+                    const SimBlock& sb, SgaspBias& z, SystemWork& w, DesignSystems& out,
+                    arma::uword s) {
   const arma::vec& phi = post.phi;
   const int p = post.p, q = post.q;
   const double s2S = phi[post.iSigma2S];
@@ -337,16 +400,34 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
   double s2B = 0.0;
   if (post.bias) {
     s2B = phi[post.iSigma2B];
-    kernel_corr(mod.kernB, Xf, XT, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
-                w.RbT, false);
+    const double* thB = phi.memptr() + post.iThetaB;
+    const double* alB = phi.memptr() + post.iAlphaB;
+    if (!z.on) {
+      kernel_corr(mod.kernB, Xf, XT, p, thB, alB, w.RbT, false);
+    } else {
+      z.KT.set_size(z.XU.n_rows, XT.n_rows);  // (biasModelCross() writes over it)
+      kernel_corr(mod.kernB, z.XU, XT, p, thB, alB, z.KT, false);
+      post.biasModelCross([&]() {
+        arma::mat R(z.XU.n_rows, z.XU.n_rows);
+        kernel_corr(mod.kernB, z.XU, z.XU, p, thB, alB, R, false);
+        return R;
+      }, z.KT, z.rT);
+      for (arma::uword t = 0; t < XT.n_rows; ++t)
+        for (arma::uword g = 0; g < Xf.n_rows; ++g) w.RbT(g, t) = z.KT(z.uOf[g], t);
+    }
     w.K2 += s2B * w.RbT;
   }
   w.K2 -= w.W.t() * w.K1;
   solve_lower(w.S, w.K2);
   const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
   out.mT.col(s) = muB + w.K1.t() * sb.r + w.K2.t() * w.r2;
-  out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.K1), 0).t() -
-                  arma::sum(arma::square(w.K2), 0).t();
+  if (!z.on) {
+    out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.K1), 0).t() -
+                    arma::sum(arma::square(w.K2), 0).t();
+  } else {
+    out.VT.col(s) = (s2S + s2B * z.rT) - arma::sum(arma::square(w.K1), 0).t() -
+                    arma::sum(arma::square(w.K2), 0).t();
+  }
   kernel_corr(mod.kernS, w.Tk, U, p + q, thS, alS, w.RTU, false);
   out.CTU.slice(s) = s2S * w.RTU - w.K1.t() * sb.A - w.K2.t() * w.A2;
 }
@@ -369,7 +450,7 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
 bool design_system(const Posterior& post, const Model& mod, const FieldGroups& fg,
                    const arma::mat& Xs, const arma::vec& ys,
                    const arma::mat& U, const arma::mat& XT, double nugget, SimBlock& sb,
-                   SystemWork& w, DesignSystems& out, arma::uword s) {
+                   SgaspBias& z, SystemWork& w, DesignSystems& out, arma::uword s) {
   if (!sim_block(post, mod, Xs, ys, U, nugget, sb)) return false;
   const arma::vec& phi = post.phi;
   const arma::mat& Xf = fg.X;
@@ -385,11 +466,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   kernel_corr(mod.kernS, w.Xk, w.Xk, p + q, thS, alS, w.S, true);
   w.S *= s2S;
   if (post.bias) {
-    kernel_corr(mod.kernB, Xf, Xf, p, phi.memptr() + post.iThetaB, phi.memptr() + post.iAlphaB,
-                w.Rb, true);
-    // a bias per data set: times the data sets' correlation D[src_g, src_h]
-    if (!fg.src.empty())
-      source_scale(mod.sourceL, phi.memptr() + post.iRhoD, fg.src.data(), fg.src.data(), w.Rb, true);
+    if (!field_bias_corr(post, mod, fg, z, w.Rb)) return false;
     const double s2B = phi[post.iSigma2B];
     for (int j = 0; j < n; ++j)
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
@@ -429,7 +506,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
       out.A.slice(s).rows(m, N - 1) = w.A2;
     }
   }
-  if (out.T > 0) design_targets(post, mod, Xs, Xf, XT, U, sb, w, out, s);
+  if (out.T > 0) design_targets(post, mod, Xs, Xf, XT, U, sb, z, w, out, s);
   out.s2S[s] = s2S;
   std::copy(thS, thS + p + q, out.thS.colptr(s));
   std::copy(alS, alS + p + q, out.alS.colptr(s));
@@ -452,7 +529,6 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (post.sgasp) Rcpp::stop("the look-ahead handles the gp or none discrepancy");
   if (!mod.source.empty() && XT.n_rows > 0)
     Rcpp::stop("a prediction target needs one bias, not one per data set");
   if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
@@ -476,6 +552,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   out.ll.set_size(S);
   out.s2S.set_size(S);
   SimBlock sb;
+  SgaspBias z = sgasp_bias(post, mod, Xf, fg);
   SystemWork w;
   w.Xk.set_size(n, p + q);
   w.Xk.cols(0, p - 1) = fg.X;
@@ -499,7 +576,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   }
   for (int s = 0; s < S; ++s) {
     post.phi = phis.row(s).t();
-    if (!design_system(post, mod, fg, Xs, ys, U, XT, nugget, sb, w, out, s))
+    if (!design_system(post, mod, fg, Xs, ys, U, XT, nugget, sb, z, w, out, s))
       Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
     if (s % 100 == 99) Rcpp::checkUserInterrupt();
   }

@@ -364,13 +364,15 @@ public:
   virtual bool canPreview() const { return false; }
   virtual double currentZz() const { return NA_REAL; }
 
-protected:
-  void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
   // The discrepancy model's bias correlation on the distinct field inputs
   // from the bias GP's R, and its cross-correlation and variance at new
-  // inputs (model.cpp; Ruu() gives R on the distinct inputs if needed).
+  // inputs (model.cpp; Ruu() gives R on the distinct inputs if needed; the
+  // look-ahead, design.cpp, calls them too).
   bool biasModel(arma::mat& R, arma::mat& B, arma::mat& W) const;
   void biasModelCross(const std::function<arma::mat()>& Ruu, arma::mat& K, arma::vec& r) const;
+
+protected:
+  void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 

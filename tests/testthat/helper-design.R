@@ -31,8 +31,11 @@ draw_system <- function(phi, model, U, XT = NULL) {
   fld <- d$m + seq_len(d$n)
   C[cbind(sim, sim)] <- C[cbind(sim, sim)] * (1 + FBC:::fbc_nugget)
   mu0 <- rep(0, d$m + d$n)
-  if (model$discrepancy != "none") {
-    Rb <- FBC:::.corr_matrix(dat$Xf, dat$Xf, phi[ix$thetaB], phi[ix$alphaB], FBC:::kernel_codes[[model$kernelB]])
+  bias <- model$discrepancy != "none"
+  if (bias) {
+    kB <- FBC:::kernel_codes[[model$kernelB]]
+    corrB <- function(X, Y) FBC:::.corr_matrix(X, Y, phi[ix$thetaB], phi[ix$alphaB], kB)
+    Rb <- corrB(dat$Xf, dat$Xf)
     # a bias per data set: the biases of data sets a and b correlated by
     # D[a, b] (their level correlation from rhoD)
     src <- model$spec$model$source
@@ -40,8 +43,17 @@ draw_system <- function(phi, model, U, XT = NULL) {
       D <- FBC:::.level_corr(model$spec$model$sourceLevels, phi[ix$rhoD])[[1]]
       Rb <- Rb * D[src, src]
     }
+    if (model$discrepancy == "sgasp") {
+      # the S-GaSP (Gu and Wang 2018): the bias GP discretized on the
+      # field's nu distinct inputs Xu, Kz(x, x') = R(x, x') - R(x, Xu) (R(Xu,
+      # Xu) + nu / lambdaZ I)^-1 R(Xu, x') (one bias: Xu the distinct x)
+      Xu <- unique(dat$Xf)
+      M <- solve(corrB(Xu, Xu) + nrow(Xu) / phi[ix$lambdaZ] * diag(nrow(Xu)))
+      sgasp <- function(X, Y) corrB(X, Y) - corrB(X, Xu) %*% M %*% corrB(Xu, Y)
+      Rb <- sgasp(dat$Xf, dat$Xf)
+    }
     C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] * Rb
-    mu0[fld] <- phi[ix$muB]
+    if (length(ix$muB)) mu0[fld] <- phi[ix$muB]
   }
   # each field row's noise variance: its data set's (noise group's)
   C[cbind(fld, fld)] <- C[cbind(fld, fld)] + phi[ix$sigma2E][if (is.null(model$spec$model$noise)) 1L else model$spec$model$noise]
@@ -53,15 +65,20 @@ draw_system <- function(phi, model, U, XT = NULL) {
   if (length(XT)) {
     Tk <- cbind(XT, matrix(phi[ix$kappa], nrow(XT), q, byrow = TRUE))
     KT <- s2S * corr(Z, Tk)
-    s2B <- 0
-    if (model$discrepancy != "none") {
+    vB <- 0
+    if (bias) {
       s2B <- phi[ix$sigma2B]
-      KT[fld, ] <- KT[fld, ] + s2B * FBC:::.corr_matrix(dat$Xf, XT, phi[ix$thetaB], phi[ix$alphaB],
-                                                        FBC:::kernel_codes[[model$kernelB]])
+      if (model$discrepancy == "sgasp") {
+        KT[fld, ] <- KT[fld, ] + s2B * sgasp(dat$Xf, XT)
+        vB <- s2B * diag(sgasp(XT, XT))
+      } else {
+        KT[fld, ] <- KT[fld, ] + s2B * corrB(dat$Xf, XT)
+        vB <- s2B
+      }
     }
     KT <- backsolve(R, KT, transpose = TRUE)
     out$mT <- mu0[d$m + 1] + drop(crossprod(KT, r))
-    out$VT <- s2S + s2B - colSums(KT^2)
+    out$VT <- s2S + vB - colSums(KT^2)
     out$CTU <- s2S * corr(Tk, U) - crossprod(KT, A)
   }
   out

@@ -597,8 +597,9 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
 
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
   pb <- sinus_problem()
-  # with the bias GP (KOH) and without, joint and plug-in particles
-  for (disc in c("none", "gp")) {
+  # with the bias GP (KOH), the S-GaSP and without, joint and plug-in
+  # particles
+  for (disc in c("none", "gp", "sgasp")) {
     set.seed(4)
     fit <- calibrate(pb$sim, pb$field, discrepancy = disc, nMCMC = 600, nBurn = 200,
                      nChains = 1, showProgress = FALSE)
@@ -796,9 +797,12 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
 
 test_that("propose_runs() refuses models it does not handle", {
   pb <- sinus_problem()
+  # a categorical input (in the runs and the field)
+  sim <- data.frame(pb$sim[c("y", "x")], type = rep(c("a", "b"), 6), u = pb$sim$u)
+  field <- cbind(pb$field, type = rep(c("a", "b"), 5))
   set.seed(1)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "sgasp", nMCMC = 300, nBurn = 100,
-                   nChains = 1, showProgress = FALSE)
+  fit <- calibrate(sim, field, discrepancy = "none", nMCMC = 200, nBurn = 100, nChains = 1,
+                   showProgress = FALSE)
   expect_snapshot(error = TRUE, propose_runs(fit))
   # a simulator function has no runs to add to (R/simulator_function.R)
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
