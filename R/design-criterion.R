@@ -174,8 +174,8 @@
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
-#' (exact, whatever algebra the fit ran; refused beyond 3000 runs and field
-#' rows). Every discrepancy model (`"gp"`, `"sgasp"`: its bias on the
+#' (exact, whatever algebra the fit ran; refused beyond 3000 runs and
+#' distinct field inputs). Every discrepancy model (`"gp"`, `"sgasp"`: its bias on the
 #' field's distinct inputs as the fit has it, `"none"`) and several field
 #' data sets (`source`), each with its own noise variance, with one bias
 #' or a bias each (`sourceBias = "own"`; then for kappa only: a prediction
@@ -340,6 +340,14 @@ design_target <- function(target, sc, call = parent.frame()) {
   scale_inputs(X, sc, seq_len(sc$p))
 }
 
+# The field's rows in the look-ahead's system: its groups of rows at one
+# input in one noise group and data set (replicates enter through their
+# mean; src/design.cpp, field_groups()).
+design_field_rows <- function(model) {
+  mm <- model$spec$model
+  sum(!duplicated(cbind(model$data$Xf, mm$noise, mm$source)))
+}
+
 # The models the look-ahead handles (the dense conditional of one output).
 check_design_model <- function(model, call = parent.frame()) {
   d <- model$dims
@@ -349,14 +357,17 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
-  why <- c(
-    if (d$levels > 0L || isTRUE(d$outputs > 1L)) "categorical inputs or several outputs",
-    if (d$m + d$n > 3000) "more than 3000 runs and field rows (a dense factor per draw)"
-  )
-  if (length(why)) {
+  if (d$levels > 0L || isTRUE(d$outputs > 1L)) {
     cli::cli_abort(c(
-      "{.fn propose_runs} does not handle {why[1]} yet.",
+      "{.fn propose_runs} does not handle categorical inputs or several outputs yet.",
       i = "It handles simulator runs of one output without categorical inputs, with any discrepancy model and field data sets."
+    ), call = call)
+  }
+  N <- d$m + design_field_rows(model)
+  if (N > 3000) {
+    cli::cli_abort(c(
+      "{.fn propose_runs} handles up to 3000 runs and distinct field inputs; this fit has {d$m} and {N - d$m}.",
+      i = "It factors their dense covariance for every draw it scores (exact, whatever algebra the fit ran), which is too slow beyond that."
     ), call = call)
   }
 }
@@ -424,10 +435,7 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
 # refused beyond 5e7 (400 MB).
 check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   dat <- model$data
-  # (the field's rows at one input in one noise group and data set are one
-  # row there)
-  mm <- model$spec$model
-  rows <- nrow(dat$Xs) + sum(!duplicated(cbind(dat$Xf, mm$noise, mm$source))) + nrow(XT)
+  rows <- nrow(dat$Xs) + design_field_rows(model) + nrow(XT)
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"

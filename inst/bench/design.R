@@ -16,7 +16,7 @@
 # old positional form `design.R reps batch added problem first` still
 # works.)
 #
-# Problems, all but "sinusbias" with discrepancy "none" (where new runs can
+# Problems, all but "sinusbias" and "sinussgasp" with discrepancy "none" (where new runs can
 # matter: with a KOH bias the confounding sets kappa's width, see
 # ?propose_runs):
 # - "sinus": eta(x, u) = sin(10 u x) on [0, 1]^2 (Koermer et al. 2024,
@@ -42,6 +42,8 @@
 #   in the field, fitted with discrepancy = "gp" (the KOH model); its
 #   reference is a fit on 150 maximin runs (6000 sweeps more a chain), not
 #   an exact grid.
+# - "sinussgasp": the same field, fitted with discrepancy = "sgasp" (the
+#   S-GaSP of Gu and Wang 2018); its reference likewise.
 # Reference: kappa's exact posterior given the true simulator (no emulator:
 # the limit of infinitely many runs), on a grid, with the fits' priors:
 # kappa Beta(1.1, 1.1) on the calibration range, the noise sd half-Cauchy
@@ -145,7 +147,12 @@ pb <- switch(problem,
                    bias = function(x) 1 - x / 3 - 2 * x^2 / 3, discrepancy = "gp",
                    lower = c(0, 0), upper = c(1, 1), sd = 0.1, ngrid = 1000,
                    xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
-  stop("problem must be sinus, sinusbias, two, three, kinetics or tuowu"))
+  # the same, fitted with the S-GaSP discrepancy (Gu and Wang 2018)
+  sinussgasp = list(eta = function(X) sin(10 * X[, 2] * X[, 1]), u0 = pi / 5,
+                    bias = function(x) 1 - x / 3 - 2 * x^2 / 3, discrepancy = "sgasp",
+                    lower = c(0, 0), upper = c(1, 1), sd = 0.1, ngrid = 1000,
+                    xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
+  stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics or tuowu"))
 if (is.null(pb$discrepancy)) pb$discrepancy <- "none"
 # the field's true process: eta at u0, plus the bias where there is one
 if (is.null(pb$truth)) {

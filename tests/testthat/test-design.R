@@ -814,6 +814,19 @@ test_that("propose_runs() refuses models it does not handle", {
   expect_snapshot(error = TRUE, update(ffit, sim = pb$sim))
 })
 
+test_that("propose_runs() refuses beyond 3000 runs and distinct field inputs", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 300)
+  model <- fit$model
+  # the field's 10 rows are 5 inputs x 2 replicates: 5 rows of the
+  # look-ahead's system (the runs' count set by hand: no 3000-run fit)
+  expect_equal(FBC:::design_field_rows(model), 5)
+  model$dims$m <- 2995L
+  expect_silent(FBC:::check_design_model(model))
+  model$dims$m <- 2996L
+  expect_snapshot(error = TRUE, FBC:::check_design_model(model))
+})
+
 test_that("design_loop() runs a function simulator through futures and adds runs", {
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
   pb <- sinus_problem()
