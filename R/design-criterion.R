@@ -179,8 +179,9 @@
 #' field's distinct inputs as the fit has it, `"none"`) and several field
 #' data sets (`source`), each with its own noise variance, with one bias
 #' or a bias each (`sourceBias = "own"`; then for kappa only: a prediction
-#' target is refused, as its bias would be that of no data set). One
-#' output and no categorical inputs: other models are refused.
+#' target is refused, as its bias would be that of no data set), and
+#' categorical inputs (their level correlations as the fit has them; a
+#' candidate or target gives its level). Several outputs are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -189,9 +190,11 @@
 #' @param n Number of points (a batch, chosen greedily with the pending
 #'   ones conditioned on).
 #' @param candidates Candidate inputs (data frame or matrix with the
-#'   experimental and calibration columns of `sim`, named), in any ranges
-#'   the user wants; `NULL` (default): `ncandidates` uniform points in the
-#'   ranges of the simulator design.
+#'   experimental and calibration columns of `sim`, named; a categorical
+#'   input a column of its levels, in a data frame), in any ranges the user
+#'   wants; `NULL` (default): `ncandidates` uniform points in the ranges of
+#'   the simulator design, each categorical input at a level drawn at
+#'   random.
 #' @param target `"kappa"` (the default: shrink kappa's posterior) or
 #'   experimental inputs where calibrated predictions are wanted (a data
 #'   frame or matrix with the field's input columns, as [predict()]'s
@@ -210,7 +213,7 @@
 #' @param tol Candidates closer than `tol` (scaled units) to an existing
 #'   run are left out.
 #' @return A data frame of `n` rows: the inputs (natural units, columns
-#'   named as in `sim`), `gain` (the point's expected reduction of
+#'   named as in `sim`; a categorical input a factor of its levels), `gain` (the point's expected reduction of
 #'   kappa's posterior variance, or of the prediction's integrated
 #'   variance, as a fraction of the current, given the points above it).
 #'   Attributes `variance` (current, scaled), `time` (CPU seconds),
@@ -257,6 +260,7 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   crit <- pick_runs(plug, joint, U, model, n, nfantasy, XT)
   out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
+  out <- indicators_to_levels(out, sc)
   out$gain <- crit$gain / crit$variance
   tm <- proc.time() - t0
   attr(out, "variance") <- crit$variance
@@ -330,6 +334,7 @@ design_target <- function(target, sc, call = parent.frame()) {
       i = "Such as {.code target = data.frame({sc$names$inputs[1]} = 0.5)}."
     ), call = call)
   }
+  if (length(sc$factors) && is.data.frame(target)) target <- levels_to_indicators(target, sc, "target", call)
   X <- tryCatch(check_newdata(target, sc), error = function(e) {
     cli::cli_abort("{.arg target} must be {.val kappa} or experimental inputs as {.fn predict}'s {.arg newdata}.",
                    parent = e, call = call)
@@ -338,6 +343,45 @@ design_target <- function(target, sc, call = parent.frame()) {
     cli::cli_abort("{.arg target} must have 1 to 100 points (the look-ahead's cost grows with their number), not {nrow(X)}.", call = call)
   }
   scale_inputs(X, sc, seq_len(sc$p))
+}
+
+# The indicator columns (native units, a matrix) of level codes `a`
+# (1-based) of categorical input `f` (scale$factors): one column [a = 2]
+# for two levels, one per level from three (indicator_names()).
+level_indicators <- function(a, f) {
+  if (length(f$columns) == 1L) return(matrix(as.numeric(a == 2L), ncol = 1L))
+  outer(a, seq_along(f$levels), "==") + 0
+}
+
+# A data frame's categorical inputs (columns named as in `sim`, levels as
+# its) replaced by their indicator columns; `arg` names it in errors.
+levels_to_indicators <- function(X, sc, arg, call = parent.frame()) {
+  if (!is.data.frame(X)) {
+    cli::cli_abort("{.arg {arg}} must be a data frame with the categorical {cli::qty(length(sc$factors))}input{?s} {.val {names(sc$factors)}} as columns.", call = call)
+  }
+  for (f in sc$factors) {
+    if (!f$name %in% names(X)) {
+      cli::cli_abort("{.arg {arg}} has no column {.val {f$name}}, a categorical input of the calibration (levels {.val {f$levels}}).", call = call)
+    }
+    check_levels(X[[f$name]], f$levels, f$name, arg, call = call)
+    X <- replace_by_indicators(X, f$name, f$levels, f$columns)
+  }
+  attr(X, "fbc_codes") <- NULL
+  X
+}
+
+# propose_runs()'s points with each categorical input's indicator columns
+# back to one column of its levels (a factor, where its first indicator
+# was).
+indicators_to_levels <- function(out, sc) {
+  for (f in sc$factors) {
+    j <- match(f$columns, names(out))
+    lev <- factor(f$levels[indicator_codes(as.matrix(out[j]))], levels = f$levels)
+    out[[j[1]]] <- lev
+    names(out)[j[1]] <- f$name
+    if (length(j) > 1L) out <- out[-j[-1]]
+  }
+  out
 }
 
 # The field's rows in the look-ahead's system: its groups of rows at one
@@ -357,10 +401,10 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
-  if (d$levels > 0L || isTRUE(d$outputs > 1L)) {
+  if (!is.null(model$scale$output) || isTRUE(d$outputs > 1L)) {
     cli::cli_abort(c(
-      "{.fn propose_runs} does not handle categorical inputs or several outputs yet.",
-      i = "It handles simulator runs of one output without categorical inputs, with any discrepancy model and field data sets."
+      "{.fn propose_runs} does not handle several outputs yet.",
+      i = "It handles simulator runs of one output, with categorical inputs, any discrepancy model and field data sets."
     ), call = call)
   }
   N <- d$m + design_field_rows(model)
@@ -373,13 +417,23 @@ check_design_model <- function(model, call = parent.frame()) {
 }
 
 # The candidates on the scaled inputs (rows), those within `tol` of an
-# existing run left out.
+# existing run left out. A categorical input is given by its levels (a
+# column of `candidates` named as in `sim`) and held as its indicator
+# columns.
 design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.frame()) {
   d <- sc$p + sc$q
+  nm <- c(sc$names$inputs, sc$names$calibration)
   if (is.null(candidates)) {
     U <- matrix(stats::runif(ncand * d), ncand, d)
+    # a categorical input: a level drawn for each candidate, as its
+    # indicator columns
+    for (f in sc$factors) {
+      j <- match(f$columns, nm)
+      U[, j] <- scale_inputs(level_indicators(sample.int(length(f$levels), ncand, replace = TRUE), f),
+                             sc, j)
+    }
   } else {
-    nm <- c(sc$names$inputs, sc$names$calibration)
+    if (length(sc$factors)) candidates <- levels_to_indicators(candidates, sc, "candidates", call)
     X <- as.matrix(if (is.data.frame(candidates)) candidates[intersect(nm, names(candidates))] else candidates)
     if (!is.null(colnames(X)) && all(nm %in% colnames(X))) X <- X[, nm, drop = FALSE]
     if (!is.numeric(X) || ncol(X) != d || anyNA(X)) {

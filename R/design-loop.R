@@ -18,9 +18,11 @@
 #' @param field The field data (response first, as in [calibrate()]; with
 #'   several data sets, `source =` among `...` names their column, which is
 #'   not an input).
-#' @param lower,upper Named numeric vectors: the ranges of the experimental
-#'   inputs (named as in `field`) and of the calibration inputs (their
-#'   names are the calibration inputs').
+#' @param lower,upper Named numeric vectors: the ranges of the numeric
+#'   experimental inputs (named as in `field`) and of the calibration inputs
+#'   (their names are the calibration inputs'). A categorical input (a
+#'   factor or character column of `field`) is run at the field's levels
+#'   (a factor's levels), spread evenly over the starting design.
 #' @param n0 Runs of the initial design.
 #' @param batch Runs per step.
 #' @param budget Runs to add at most.
@@ -65,14 +67,17 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   showProgress <- default_progress(showProgress)
   dots <- list(...)
   # the field's inputs: its columns but the response and the data sets'
-  # (`source`, passed on to calibrate())
+  # (`source`, passed on to calibrate()); the categorical ones run at the
+  # field's levels, the numeric ones in `lower`, `upper`
   xnames <- setdiff(names(field)[-1], if (is.character(dots$source)) dots$source)
-  check_loop_ranges(lower, upper, xnames)
+  categorical <- xnames[vapply(field[xnames], is_categorical, logical(1))]
+  levs <- lapply(field[categorical], function(v) if (is.factor(v)) levels(v) else sort(unique(v)))
+  check_loop_ranges(lower, upper, setdiff(xnames, categorical))
   cal <- setdiff(names(lower), xnames)
   n0 <- check_count(n0, "n0", min = 3)
   batch <- check_count(batch, "batch", min = 1)
   budget <- check_count(budget, "budget", min = 0)
-  X <- maximin_lhs(n0, lower, upper)
+  X <- with_levels(maximin_lhs(n0, lower, upper), levs)
   sim <- run_simulator(f, X, xnames, cal, names(field)[1])
   # a fit's warning that the field inputs lie beyond the runs' range: kept
   # (muffled) at each step, and given once at the end if the last fit's
@@ -95,14 +100,14 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     # propose_runs()'s "limited" message once a loop, not at every step
     pr <- withCallingHandlers(
       do.call(propose_runs, c(list(fit, n = min(batch, budget - (nrow(sim) - n0)),
-                                   candidates = maximin_lhs(100 * length(lower), lower, upper, tries = 1)),
+                                   candidates = with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs)),
                               design)),
       fbc_design_limited = function(m) {
         if (limited) invokeRestart("muffleMessage")
         limited <<- TRUE
       })
     tDesign <- cpu_since(t0)
-    new <- run_simulator(f, pr[names(lower)], xnames, cal, names(field)[1])
+    new <- run_simulator(f, pr[c(xnames, cal)], xnames, cal, names(field)[1])
     sim <- rbind(sim, new)
     t0 <- proc.time()
     fit <- keep_extrapolation(update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge,
@@ -154,6 +159,13 @@ maximin_lhs <- function(n, lower, upper, tries = 20) {
   as.data.frame(X)
 }
 
+# X with a column per categorical input (`levs`: each one's levels, named),
+# its levels spread evenly over the rows in a random order.
+with_levels <- function(X, levs) {
+  for (nm in names(levs)) X[[nm]] <- sample(rep_len(levs[[nm]], nrow(X)))
+  X
+}
+
 # The simulator at each row of X, one future per run; a data frame in the
 # form of calibrate()'s sim (response, experimental, calibration inputs).
 run_simulator <- function(f, X, xnames, cal, yname) {
@@ -172,6 +184,8 @@ run_simulator <- function(f, X, xnames, cal, yname) {
   }, numeric(1))
   out <- data.frame(y, X[c(xnames, cal)])
   names(out)[1] <- yname
+  # (a categorical input's levels as text, as the starting design has them)
+  out[] <- lapply(out, function(v) if (is.factor(v)) as.character(v) else v)
   rownames(out) <- NULL
   out
 }

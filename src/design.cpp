@@ -36,12 +36,13 @@ namespace {
 // inputs, field_groups(); slice s; kept for every draw only when a batch
 // needs them, else one slice reused), the means mu and variances v (Nc x S),
 // the log-likelihoods ll, the simulator variances s2S and the kernel's
-// parameters per draw (thS, alS: (p + q) x S). With T target points: the
+// parameters per draw (thS, alS: (p + q) x S; rhoS: the levels' partial
+// correlations, level_count() x S). With T target points: the
 // predictive means mT and variances VT of zeta(XT) (T x S) and their
 // covariances with the candidates' values CTU (T x Nc x S), given the data.
 struct DesignSystems {
   arma::cube A, CTU;
-  arma::mat mu, muT, v, thS, alS, mT, VT;  // muT = mu' (S x Nc)
+  arma::mat mu, muT, v, thS, alS, rhoS, mT, VT;  // muT = mu' (S x Nc)
   arma::vec ll, s2S;
   int T = 0;
 };
@@ -161,6 +162,26 @@ void syrk_small(const arma::mat& W, arma::mat& C) {
       C(i, j) -= s;
     }
   }
+}
+
+// The simulator GP's correlation Rs(X, Y) at the draw's thetaS and alphaS,
+// times the categorical inputs' level correlations C_f[a_f(x), a_f(y)]
+// (rhoS; their indicator columns have thetaS 0, src/levels.cpp); lower:
+// the lower triangle only.
+void sim_corr(const Posterior& post, const Model& mod, const arma::mat& X, const arma::mat& Y,
+              arma::mat& out, bool lower) {
+  const double* phi = post.phi.memptr();
+  kernel_corr(mod.kernS, X, Y, post.p + post.q, phi + post.iThetaS, phi + post.iAlphaS, out, lower);
+  level_scale(mod.levels, phi + post.iRhoS, X, Y, out, lower);
+}
+
+// The bias GP's correlation Rb(X, Y) over the experimental inputs, times
+// the levels' correlations (rhoB).
+void bias_corr(const Posterior& post, const Model& mod, const arma::mat& X, const arma::mat& Y,
+               arma::mat& out, bool lower) {
+  const double* phi = post.phi.memptr();
+  kernel_corr(mod.kernB, X, Y, post.p, phi + post.iThetaB, phi + post.iAlphaB, out, lower);
+  level_scale(mod.levels, phi + post.iRhoB, X, Y, out, lower);
 }
 
 // The simulator rows' part of a draw's system, which depends on the
@@ -315,16 +336,13 @@ SgaspBias sgasp_bias(const Posterior& post, const Model& mod, const arma::mat& X
 bool field_bias_corr(const Posterior& post, const Model& mod, const FieldGroups& fg,
                      SgaspBias& z, arma::mat& Rb) {
   const arma::vec& phi = post.phi;
-  const double* thB = phi.memptr() + post.iThetaB;
-  const double* alB = phi.memptr() + post.iAlphaB;
-  const int p = post.p;
   if (!z.on) {
-    kernel_corr(mod.kernB, fg.X, fg.X, p, thB, alB, Rb, true);
+    bias_corr(post, mod, fg.X, fg.X, Rb, true);
     if (!fg.src.empty())
       source_scale(mod.sourceL, phi.memptr() + post.iRhoD, fg.src.data(), fg.src.data(), Rb, true);
     return true;
   }
-  kernel_corr(mod.kernB, z.XU, z.XU, p, thB, alB, z.RU, true);
+  bias_corr(post, mod, z.XU, z.XU, z.RU, true);
   if (!z.srcU.empty())
     source_scale(mod.sourceL, phi.memptr() + post.iRhoD, z.srcU.data(), z.srcU.data(), z.RU, true);
   if (!post.biasModel(z.RU, z.B, z.Wz)) return false;
@@ -343,20 +361,19 @@ bool field_bias_corr(const Posterior& post, const Model& mod, const FieldGroups&
 bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
                const arma::vec& ys, const arma::mat& U, double nugget, SimBlock& sb) {
   const arma::vec& phi = post.phi;
-  const int m = post.m, d = post.p + post.q;
-  arma::vec key(2 * d + 1);
+  const int m = post.m, d = post.p + post.q, nl = level_count(mod.levels);
+  arma::vec key(2 * d + 1 + nl);
   key[0] = phi[post.iSigma2S];
   for (int k = 0; k < d; ++k) {
     key[1 + k] = phi[post.iThetaS + k];
     key[1 + d + k] = phi[post.iAlphaS + k];
   }
+  for (int k = 0; k < nl; ++k) key[1 + 2 * d + k] = phi[post.iRhoS + k];
   if (sb.key.n_elem == key.n_elem && arma::all(sb.key == key)) return true;
   sb.key.reset();
   const double s2S = key[0];
-  const double* thS = phi.memptr() + post.iThetaS;
-  const double* alS = phi.memptr() + post.iAlphaS;
   sb.L.set_size(m, m);
-  kernel_corr(mod.kernS, Xs, Xs, d, thS, alS, sb.L, true);
+  sim_corr(post, mod, Xs, Xs, sb.L, true);
   sb.L *= s2S;
   for (int i = 0; i < m; ++i) sb.L(i, i) *= 1.0 + nugget;
   if (!chol_small(sb.L)) return false;
@@ -366,7 +383,7 @@ bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
   sb.ld = 0.0;
   for (int i = 0; i < m; ++i) sb.ld += std::log(sb.L(i, i));
   sb.A.set_size(m, U.n_rows);
-  kernel_corr(mod.kernS, Xs, U, d, thS, alS, sb.A, false);
+  sim_corr(post, mod, Xs, U, sb.A, false);
   sb.A *= s2S;
   solve_lower_cols(sb.L, sb.A);
   sb.mu.set_size(U.n_rows);
@@ -389,27 +406,23 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
   const arma::vec& phi = post.phi;
   const int p = post.p, q = post.q;
   const double s2S = phi[post.iSigma2S];
-  const double* thS = phi.memptr() + post.iThetaS;
-  const double* alS = phi.memptr() + post.iAlphaS;
   for (int k = 0; k < q; ++k) w.Tk.col(p + k).fill(phi[post.iKappa + k]);
-  kernel_corr(mod.kernS, Xs, w.Tk, p + q, thS, alS, w.K1, false);
+  sim_corr(post, mod, Xs, w.Tk, w.K1, false);
   w.K1 *= s2S;
   solve_lower(sb.L, w.K1);
-  kernel_corr(mod.kernS, w.Xk, w.Tk, p + q, thS, alS, w.K2, false);
+  sim_corr(post, mod, w.Xk, w.Tk, w.K2, false);
   w.K2 *= s2S;
   double s2B = 0.0;
   if (post.bias) {
     s2B = phi[post.iSigma2B];
-    const double* thB = phi.memptr() + post.iThetaB;
-    const double* alB = phi.memptr() + post.iAlphaB;
     if (!z.on) {
-      kernel_corr(mod.kernB, Xf, XT, p, thB, alB, w.RbT, false);
+      bias_corr(post, mod, Xf, XT, w.RbT, false);
     } else {
       z.KT.set_size(z.XU.n_rows, XT.n_rows);  // (biasModelCross() writes over it)
-      kernel_corr(mod.kernB, z.XU, XT, p, thB, alB, z.KT, false);
+      bias_corr(post, mod, z.XU, XT, z.KT, false);
       post.biasModelCross([&]() {
         arma::mat R(z.XU.n_rows, z.XU.n_rows);
-        kernel_corr(mod.kernB, z.XU, z.XU, p, thB, alB, R, false);
+        bias_corr(post, mod, z.XU, z.XU, R, false);
         return R;
       }, z.KT, z.rT);
       for (arma::uword t = 0; t < XT.n_rows; ++t)
@@ -428,7 +441,7 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
     out.VT.col(s) = (s2S + s2B * z.rT) - arma::sum(arma::square(w.K1), 0).t() -
                     arma::sum(arma::square(w.K2), 0).t();
   }
-  kernel_corr(mod.kernS, w.Tk, U, p + q, thS, alS, w.RTU, false);
+  sim_corr(post, mod, w.Tk, U, w.RTU, false);
   out.CTU.slice(s) = s2S * w.RTU - w.K1.t() * sb.A - w.K2.t() * w.A2;
 }
 
@@ -460,10 +473,10 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   for (int k = 0; k < q; ++k) w.Xk.col(p + k).fill(phi[post.iKappa + k]);
   const double* thS = phi.memptr() + post.iThetaS;
   const double* alS = phi.memptr() + post.iAlphaS;
-  kernel_corr(mod.kernS, Xs, w.Xk, p + q, thS, alS, w.W, false);
+  sim_corr(post, mod, Xs, w.Xk, w.W, false);
   w.W *= s2S;
   solve_lower_cols(sb.L, w.W);
-  kernel_corr(mod.kernS, w.Xk, w.Xk, p + q, thS, alS, w.S, true);
+  sim_corr(post, mod, w.Xk, w.Xk, w.S, true);
   w.S *= s2S;
   if (post.bias) {
     if (!field_bias_corr(post, mod, fg, z, w.Rb)) return false;
@@ -489,7 +502,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   out.ll[s] = -0.5 * (quad + fg.logr);
   const int Nc = U.n_rows;
   if (Nc > 0) {
-    kernel_corr(mod.kernS, w.Xk, U, p + q, thS, alS, w.A2, false);
+    sim_corr(post, mod, w.Xk, U, w.A2, false);
     w.A2 *= s2S;
     sub_cols(w.Wt, sb.A, w.A2);
     solve_lower_cols(w.S, w.A2);
@@ -510,6 +523,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   out.s2S[s] = s2S;
   std::copy(thS, thS + p + q, out.thS.colptr(s));
   std::copy(alS, alS + p + q, out.alS.colptr(s));
+  std::copy(phi.memptr() + post.iRhoS, phi.memptr() + post.iRhoS + out.rhoS.n_rows, out.rhoS.colptr(s));
   return true;
 }
 
@@ -524,8 +538,8 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
                              Model& mod, bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
   mod = read_model(model, p, q);
-  if (!mod.emulator || mod.nOutputs() > 1 || !mod.levels.empty())
-    Rcpp::stop("the look-ahead handles one output of simulator runs without categorical inputs");
+  if (!mod.emulator || mod.nOutputs() > 1)
+    Rcpp::stop("the look-ahead handles one output of simulator runs");
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
@@ -549,6 +563,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   out.v.set_size(Nc, S);
   out.thS.set_size(p + q, S);
   out.alS.set_size(p + q, S);
+  out.rhoS.set_size(level_count(mod.levels), S);
   out.ll.set_size(S);
   out.s2S.set_size(S);
   SimBlock sb;
@@ -850,10 +865,12 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       const arma::mat& As = sys.A.slice(s);
       const arma::mat AP = As.cols(Pu);
       kernel_corr(mod.kernS, UP, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), SPP, false);
+      level_scale(mod.levels, sys.rhoS.colptr(s), UP, UP, SPP, false);
       SPP *= s2S;
       SPP.diag() *= 1.0 + nugget;
       SPP -= AP.t() * AP;
       kernel_corr(mod.kernS, U, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), ScP, false);
+      level_scale(mod.levels, sys.rhoS.colptr(s), U, UP, ScP, false);
       // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
       // batch's look-ahead)
       const int N = As.n_rows;

@@ -19,12 +19,28 @@ draw_system <- function(phi, model, U, XT = NULL) {
   d <- model$dims
   p <- d$p
   q <- d$q
-  ix <- FBC:::param_indices(p, q, model$discrepancy, noise = d$noise, sources = d$sources)
+  ix <- FBC:::param_indices(p, q, model$discrepancy, noise = d$noise, levels = d$levels,
+                            sources = d$sources)
   kS <- FBC:::kernel_codes[[model$kernelS]]
   thS <- phi[ix$thetaS]
   alS <- phi[ix$alphaS]
   s2S <- phi[ix$sigma2S]
-  corr <- function(X, Y) FBC:::.corr_matrix(X, Y, thS, alS, kS)
+  # categorical inputs: the kernel times each one's level correlation
+  # C[a(x), a(y)], the levels read off the indicator columns
+  fac <- model$scale$factors
+  nm <- c(model$scale$names$inputs, model$scale$names$calibration)
+  levels_corr <- function(X, Y, z) {
+    if (!length(fac)) return(1)
+    Cs <- FBC:::.level_corr(vapply(fac, function(f) length(f$levels), 1L), z)
+    out <- 1
+    for (i in seq_along(fac)) {
+      j <- match(fac[[i]]$columns, nm)
+      out <- out * Cs[[i]][FBC:::indicator_codes(X[, j, drop = FALSE]),
+                           FBC:::indicator_codes(Y[, j, drop = FALSE])]
+    }
+    out
+  }
+  corr <- function(X, Y) FBC:::.corr_matrix(X, Y, thS, alS, kS) * levels_corr(X, Y, phi[ix$rhoS])
   Z <- rbind(dat$Xs, cbind(dat$Xf, matrix(phi[ix$kappa], d$n, q, byrow = TRUE)))
   C <- s2S * corr(Z, Z)
   sim <- seq_len(d$m)
@@ -34,7 +50,9 @@ draw_system <- function(phi, model, U, XT = NULL) {
   bias <- model$discrepancy != "none"
   if (bias) {
     kB <- FBC:::kernel_codes[[model$kernelB]]
-    corrB <- function(X, Y) FBC:::.corr_matrix(X, Y, phi[ix$thetaB], phi[ix$alphaB], kB)
+    corrB <- function(X, Y) {
+      FBC:::.corr_matrix(X, Y, phi[ix$thetaB], phi[ix$alphaB], kB) * levels_corr(X, Y, phi[ix$rhoB])
+    }
     Rb <- corrB(dat$Xf, dat$Xf)
     # a bias per data set: the biases of data sets a and b correlated by
     # D[a, b] (their level correlation from rhoD)

@@ -725,6 +725,88 @@ test_that("field data sets with noise variances of their own: the look-ahead is 
   expect_equal(out$fit$model$dims$noise, 2L)
 })
 
+test_that("a categorical input: the look-ahead is the dense plain-R one, and runs come with levels", {
+  # the sinusoid with a categorical input `type` (levels a, b, c; c shifts
+  # the response) in the runs and the field (b not measured)
+  set.seed(6)
+  m <- 18
+  u <- (sample(m) - stats::runif(m)) / m
+  x <- (sample(m) - stats::runif(m)) / m
+  type <- rep(c("a", "b", "c"), 6)
+  eta <- function(x, u, type) sin(10 * u * x) + 0.5 * (type == "c") * x
+  sim <- data.frame(y = eta(x, u, type), x = x, type = type, u = u)
+  xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
+  tf <- rep(c("a", "c"), each = 5)
+  field <- data.frame(y = eta(xf, pi / 5, tf) + stats::rnorm(10, 0, 0.1), x = xf, type = tf)
+  for (disc in c("none", "gp")) {
+    set.seed(4)
+    fit <- suppressWarnings(calibrate(sim, field, discrepancy = disc, nMCMC = 600, nBurn = 200,
+                                      nChains = 1, showProgress = FALSE))
+    expect_equal(fit$model$dims$levels, 3L)  # 3 levels: 3 partial correlations
+    nm <- c(fit$scale$names$inputs, fit$scale$names$calibration)
+    # candidates with every level (indicator columns, scaled units)
+    set.seed(8)
+    U <- FBC:::design_candidates(NULL, fit$scale, 30, fit$data$Xs, 1e-3)
+    expect_setequal(FBC:::indicator_codes(U[, match(fit$scale$factors$type$columns, nm)]), 1:3)
+    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), type = c("b", "c")), fit$scale)
+    for (method in c("joint", "plugin")) {
+      parts <- FBC:::design_particles(fit, 40, method)
+      sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U, XT))
+      d <- fit$data
+      ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, XT, fbc_nugget,
+                                  fit$spec$model)
+      N <- nrow(d$Xs) + nrow(d$Xf)
+      expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
+      expect_equal(ds$mu, vapply(sys, `[[`, numeric(nrow(U)), "mu"), tolerance = 1e-8)
+      expect_equal(ds$v, vapply(sys, `[[`, numeric(nrow(U)), "v"), tolerance = 1e-8)
+      expect_equal(ds$mT, vapply(sys, `[[`, numeric(2), "mT"), tolerance = 1e-8)
+      expect_equal(ds$VT, vapply(sys, `[[`, numeric(2), "VT"), tolerance = 1e-8)
+      # a batch of 3 (the pending points' kernel has the levels too)
+      set.seed(11)
+      cpp <- FBC:::look_ahead(parts, U, fit$model, 3, 25)
+      set.seed(11)
+      ref <- look_ahead_r(lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U)),
+                          parts, U, fit$model, 3, 25)
+      expect_identical(cpp$chosen, as.integer(ref$chosen))
+      expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+    }
+    # (the levels are correlated, not one and not independent)
+    ix <- FBC:::param_indices(4, 1, disc, levels = 3L)
+    expect_gt(mean(abs(parts$phi[, ix$rhoS])), 0.05)
+  }
+  # propose_runs(): the categorical input as a column of its levels; given
+  # candidates by level (an unknown level refused), a target by level
+  set.seed(5)
+  pr <- propose_runs(fit, n = 2, ndraws = 40, nfantasy = 20, ncandidates = 100)
+  expect_named(pr, c("x", "type", "u", "gain"))
+  expect_s3_class(pr$type, "factor")
+  expect_identical(levels(pr$type), c("a", "b", "c"))
+  cand <- data.frame(x = c(0.3, 0.5, 0.5), type = c("b", "b", "c"), u = c(0.6, 0.6, 0.6))
+  set.seed(5)
+  pr2 <- propose_runs(fit, n = 3, candidates = cand, ndraws = 40, nfantasy = 20)
+  expect_equal(sort(paste(pr2$x, pr2$type)), c("0.3 b", "0.5 b", "0.5 c"))
+  expect_snapshot(error = TRUE, propose_runs(fit, candidates = transform(cand, type = "d")))
+  set.seed(5)
+  pr3 <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, type = "b"), ndraws = 40,
+                      nfantasy = 20, ncandidates = 100)
+  expect_true(pr3$type %in% c("a", "b", "c"))
+  # the new runs go back in with update(): the fit has them
+  new <- data.frame(y = eta(pr$x, pr$u, as.character(pr$type)), x = pr$x, type = as.character(pr$type), u = pr$u)
+  fit2 <- suppressWarnings(update(fit, sim = new, nMCMC = 300))
+  expect_equal(fit2$model$dims$m, m + 2)
+  # design_loop(): a categorical input of the field runs at its levels
+  f <- function(x, kappa) eta(x$x, kappa[["u"]], x$type)
+  set.seed(3)
+  out <- design_loop(f, field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
+                     batch = 2, budget = 2, discrepancy = "none", nMCMC = 400, nBurn = 200,
+                     nChains = 1, design = list(ndraws = 40, nfantasy = 20))
+  expect_equal(out$history$runs, c(8, 10))
+  expect_named(out$sim, c("y", "x", "type", "u"))
+  expect_equal(sort(out$sim$type[1:8]), rep(c("a", "c"), each = 4))
+  expect_true(all(out$sim$type %in% c("a", "c")))
+  expect_equal(out$sim$y, eta(out$sim$x, out$sim$u, out$sim$type))
+})
+
 test_that("a prediction target draws the runs to its inputs", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 1200)
@@ -797,12 +879,11 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
 
 test_that("propose_runs() refuses models it does not handle", {
   pb <- sinus_problem()
-  # a categorical input (in the runs and the field)
-  sim <- data.frame(pb$sim[c("y", "x")], type = rep(c("a", "b"), 6), u = pb$sim$u)
-  field <- cbind(pb$field, type = rep(c("a", "b"), 5))
+  # several outputs (helper-outputs.R), in long format
+  po <- two_outputs(m = 16)
   set.seed(1)
-  fit <- calibrate(sim, field, discrepancy = "none", nMCMC = 200, nBurn = 100, nChains = 1,
-                   showProgress = FALSE)
+  fit <- calibrate(po$sim, po$field, output = "out", discrepancy = "none", nMCMC = 200,
+                   nBurn = 100, nChains = 1, showProgress = FALSE)
   expect_snapshot(error = TRUE, propose_runs(fit))
   # a simulator function has no runs to add to (R/simulator_function.R)
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
