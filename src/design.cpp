@@ -185,7 +185,7 @@ void bias_corr(const Posterior& post, const Model& mod, const arma::mat& X, cons
 }
 
 // The simulator rows' part of a draw's system, which depends on the
-// simulator's hyperparameters (s2S, thetaS, alphaS) only and so is shared by
+// simulator's hyperparameters (s2S, thetaS, alphaS, rhoS) only and so is shared by
 // draws that have the same (the plug-in's particles differ in kappa alone):
 //   L1 = chol(s2S (Rs(Xs, Xs) + nugget I)),  r1 = L1^-1 ys,
 //   A1 = L1^-1 s2S Rs(Xs, U),  mu1 = A1' r1,  naa1 = -diag(A1' A1),
