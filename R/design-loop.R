@@ -66,6 +66,12 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   }
   showProgress <- default_progress(showProgress)
   dots <- list(...)
+  if (!is.null(dots$output)) {
+    cli::cli_abort(c(
+      "{.fn design_loop} does not handle several outputs ({.arg output}) yet: {.fn propose_runs} does not.",
+      i = "It handles one output, with categorical inputs, any discrepancy model and field data sets."
+    ))
+  }
   # the field's inputs: its columns but the response and the data sets'
   # (`source`, passed on to calibrate()); the categorical ones run at the
   # field's levels, the numeric ones in `lower`, `upper`

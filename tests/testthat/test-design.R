@@ -925,6 +925,8 @@ test_that("design_loop() runs a function simulator through futures and adds runs
   expect_equal(out$sim$y, sin(10 * out$sim$u * out$sim$x))
   expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
+  expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
+                                            output = "out"))
 })
 
 test_that("design_loop() warns once, at the end, when its runs do not cover the field's inputs", {
