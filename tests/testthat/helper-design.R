@@ -53,22 +53,23 @@ draw_system <- function(phi, model, U, XT = NULL) {
     corrB <- function(X, Y) {
       FBC:::.corr_matrix(X, Y, phi[ix$thetaB], phi[ix$alphaB], kB) * levels_corr(X, Y, phi[ix$rhoB])
     }
-    Rb <- corrB(dat$Xf, dat$Xf)
     # a bias per data set: the biases of data sets a and b correlated by
-    # D[a, b] (their level correlation from rhoD)
+    # D[a, b] (their level correlation from rhoD); sx, sy the rows' data
+    # sets (NULL: one bias)
     src <- model$spec$model$source
-    if (!is.null(src)) {
-      D <- FBC:::.level_corr(model$spec$model$sourceLevels, phi[ix$rhoD])[[1]]
-      Rb <- Rb * D[src, src]
-    }
+    D <- if (!is.null(src)) FBC:::.level_corr(model$spec$model$sourceLevels, phi[ix$rhoD])[[1]]
+    corrD <- function(X, sx, Y, sy) if (is.null(sx)) corrB(X, Y) else corrB(X, Y) * D[sx, sy]
+    Rb <- corrD(dat$Xf, src, dat$Xf, src)
     if (model$discrepancy == "sgasp") {
       # the S-GaSP (Gu and Wang 2018): the bias GP discretized on the
-      # field's nu distinct inputs Xu, Kz(x, x') = R(x, x') - R(x, Xu) (R(Xu,
-      # Xu) + nu / lambdaZ I)^-1 R(Xu, x') (one bias: Xu the distinct x)
-      Xu <- unique(dat$Xf)
-      M <- solve(corrB(Xu, Xu) + nrow(Xu) / phi[ix$lambdaZ] * diag(nrow(Xu)))
-      sgasp <- function(X, Y) corrB(X, Y) - corrB(X, Xu) %*% M %*% corrB(Xu, Y)
-      Rb <- sgasp(dat$Xf, dat$Xf)
+      # field's nu distinct inputs Xu (within a data set with a bias each),
+      # Kz(x, x') = R(x, x') - R(x, Xu) (R(Xu, Xu) + nu / lambdaZ I)^-1 R(Xu, x')
+      first <- !duplicated(cbind(dat$Xf, src))
+      Xu <- dat$Xf[first, , drop = FALSE]
+      su <- src[first]
+      M <- solve(corrD(Xu, su, Xu, su) + nrow(Xu) / phi[ix$lambdaZ] * diag(nrow(Xu)))
+      sgasp <- function(X, sx, Y, sy) corrD(X, sx, Y, sy) - corrD(X, sx, Xu, su) %*% M %*% corrD(Xu, su, Y, sy)
+      Rb <- sgasp(dat$Xf, src, dat$Xf, src)
     }
     C[fld, fld] <- C[fld, fld] + phi[ix$sigma2B] * Rb
     if (length(ix$muB)) mu0[fld] <- phi[ix$muB]
@@ -87,8 +88,8 @@ draw_system <- function(phi, model, U, XT = NULL) {
     if (bias) {
       s2B <- phi[ix$sigma2B]
       if (model$discrepancy == "sgasp") {
-        KT[fld, ] <- KT[fld, ] + s2B * sgasp(dat$Xf, XT)
-        vB <- s2B * diag(sgasp(XT, XT))
+        KT[fld, ] <- KT[fld, ] + s2B * sgasp(dat$Xf, NULL, XT, NULL)
+        vB <- s2B * diag(sgasp(XT, NULL, XT, NULL))
       } else {
         KT[fld, ] <- KT[fld, ] + s2B * corrB(dat$Xf, XT)
         vB <- s2B
