@@ -175,13 +175,14 @@
 #' The conditional is computed per draw with a dense Cholesky factor of
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and
-#' distinct field inputs). Every discrepancy model (`"gp"`, `"sgasp"`: its bias on the
-#' field's distinct inputs as the fit has it, `"none"`) and several field
-#' data sets (`source`), each with its own noise variance, with one bias
-#' or a bias each (`sourceBias = "own"`; then for kappa only: a prediction
-#' target is refused, as its bias would be that of no data set), and
-#' categorical inputs (their level correlations as the fit has them; a
-#' candidate or target gives its level). Several outputs are refused.
+#' distinct field inputs). It handles every discrepancy model (`"gp"`,
+#' `"sgasp"`: its bias on the field's distinct inputs as the fit has it,
+#' `"none"`); several field data sets (`source`), each with its own noise
+#' variance, with one bias or a bias each (`sourceBias = "own"`; then for
+#' kappa only: a prediction target is refused, as its bias would be that
+#' of no data set); and categorical inputs (their level correlations as
+#' the fit has them; a candidate or target gives its level). Several
+#' outputs are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -213,9 +214,10 @@
 #' @param tol Candidates closer than `tol` (scaled units) to an existing
 #'   run are left out.
 #' @return A data frame of `n` rows: the inputs (natural units, columns
-#'   named as in `sim`; a categorical input a factor of its levels), `gain` (the point's expected reduction of
-#'   kappa's posterior variance, or of the prediction's integrated
-#'   variance, as a fraction of the current, given the points above it).
+#'   named as in `sim`; a categorical input a factor of its levels), `gain`
+#'   (the point's expected reduction of kappa's posterior variance, or of
+#'   the prediction's integrated variance, as a fraction of the current,
+#'   given the points above it).
 #'   Attributes `variance` (current, scaled), `time` (CPU seconds),
 #'   `method` (the criterion that picked: `"joint"` also where the plug-in
 #'   and the joint look-ahead disagreed about the plug-in's pick, see
