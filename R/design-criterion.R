@@ -347,45 +347,6 @@ design_target <- function(target, sc, call = parent.frame()) {
   scale_inputs(X, sc, seq_len(sc$p))
 }
 
-# The indicator columns (native units, a matrix) of level codes `a`
-# (1-based) of categorical input `f` (scale$factors): one column [a = 2]
-# for two levels, one per level from three (indicator_names()).
-level_indicators <- function(a, f) {
-  if (length(f$columns) == 1L) return(matrix(as.numeric(a == 2L), ncol = 1L))
-  outer(a, seq_along(f$levels), "==") + 0
-}
-
-# A data frame's categorical inputs (columns named as in `sim`, levels as
-# its) replaced by their indicator columns; `arg` names it in errors.
-levels_to_indicators <- function(X, sc, arg, call = parent.frame()) {
-  if (!is.data.frame(X)) {
-    cli::cli_abort("{.arg {arg}} must be a data frame with the categorical {cli::qty(length(sc$factors))}input{?s} {.val {names(sc$factors)}} as columns.", call = call)
-  }
-  for (f in sc$factors) {
-    if (!f$name %in% names(X)) {
-      cli::cli_abort("{.arg {arg}} has no column {.val {f$name}}, a categorical input of the calibration (levels {.val {f$levels}}).", call = call)
-    }
-    check_levels(X[[f$name]], f$levels, f$name, arg, call = call)
-    X <- replace_by_indicators(X, f$name, f$levels, f$columns)
-  }
-  attr(X, "fbc_codes") <- NULL
-  X
-}
-
-# propose_runs()'s points with each categorical input's indicator columns
-# back to one column of its levels (a factor, where its first indicator
-# was).
-indicators_to_levels <- function(out, sc) {
-  for (f in sc$factors) {
-    j <- match(f$columns, names(out))
-    lev <- factor(f$levels[indicator_codes(as.matrix(out[j]))], levels = f$levels)
-    out[[j[1]]] <- lev
-    names(out)[j[1]] <- f$name
-    if (length(j) > 1L) out <- out[-j[-1]]
-  }
-  out
-}
-
 # The field's rows in the look-ahead's system: its groups of rows at one
 # input in one noise group and data set (replicates enter through their
 # mean; src/design.cpp, field_groups()).
@@ -431,8 +392,8 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
     # indicator columns
     for (f in sc$factors) {
       j <- match(f$columns, nm)
-      U[, j] <- scale_inputs(level_indicators(sample.int(length(f$levels), ncand, replace = TRUE), f),
-                             sc, j)
+      a <- sample.int(length(f$levels), ncand, replace = TRUE)
+      U[, j] <- scale_inputs(indicator_matrix(f$levels[a], f$columns), sc, j)
     }
   } else {
     if (length(sc$factors)) candidates <- levels_to_indicators(candidates, sc, "candidates", call)

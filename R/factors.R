@@ -234,14 +234,20 @@ check_levels <- function(x, levs, nm, arg, call = parent.frame()) {
   invisible(TRUE)
 }
 
+# The indicator columns `cols` (indicator_names()' layout, a matrix) of the
+# levels x (character).
+indicator_matrix <- function(x, cols) {
+  ind <- vapply(sub("^.*\\[(.*)\\]$", "\\1", cols), function(l) as.numeric(x == l),
+                numeric(length(x)))
+  matrix(ind, nrow = length(x), dimnames = list(NULL, cols))
+}
+
 # The data frame d with column nm (categorical, levels levs) replaced, in
 # place, by its indicator columns `cols`; the codes are kept in an
 # attribute for the output's per-row level.
 replace_by_indicators <- function(d, nm, levs, cols) {
   x <- as.character(d[[nm]])
-  ind <- vapply(sub("^.*\\[(.*)\\]$", "\\1", cols), function(l) as.numeric(x == l),
-                numeric(length(x)))
-  ind <- matrix(ind, nrow = length(x), dimnames = list(NULL, cols))
+  ind <- indicator_matrix(x, cols)
   j <- match(nm, names(d))
   codes <- attr(d, "fbc_codes") %||% list()
   codes[[nm]] <- x
@@ -251,25 +257,50 @@ replace_by_indicators <- function(d, nm, levs, cols) {
   out
 }
 
+# A data frame's categorical inputs (columns named as in `sim`, levels as
+# its) replaced by their indicator columns; `arg` names it in errors.
+levels_to_indicators <- function(X, sc, arg, call = parent.frame()) {
+  if (!is.data.frame(X)) {
+    cli::cli_abort("{.arg {arg}} must be a data frame with the categorical {cli::qty(length(sc$factors))}input{?s} {.val {names(sc$factors)}} as columns.", call = call)
+  }
+  for (f in sc$factors) {
+    if (!f$name %in% names(X)) {
+      cli::cli_abort("{.arg {arg}} has no column {.val {f$name}}, a categorical input of the calibration (levels {.val {f$levels}}).", call = call)
+    }
+    check_levels(X[[f$name]], f$levels, f$name, arg, call = call)
+    X <- replace_by_indicators(X, f$name, f$levels, f$columns)
+  }
+  attr(X, "fbc_codes") <- NULL
+  X
+}
+
+# propose_runs()'s points with each categorical input's indicator columns
+# back to one column of its levels (a factor, where its first indicator
+# was).
+indicators_to_levels <- function(out, sc) {
+  for (f in sc$factors) {
+    j <- match(f$columns, names(out))
+    lev <- factor(f$levels[indicator_codes(as.matrix(out[j]))], levels = f$levels)
+    out[[j[1]]] <- lev
+    names(out)[j[1]] <- f$name
+    if (length(j) > 1L) out <- out[-j[-1]]
+  }
+  out
+}
+
 # newdata for predict(): its categorical columns replaced by the fit's
 # indicator columns (unknown levels refused), and the measurement-error
 # group of each row (needed for type = "field" with several groups).
 read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
   fac <- scale$factors
   if (!length(fac) && is.null(scale$source)) return(list(newdata = newdata, noise = integer()))
-  if (!is.data.frame(newdata)) {
-    cli::cli_abort("{.arg newdata} must be a data frame with the categorical {cli::qty(length(fac))}input{?s} {.val {names(fac)}} as columns.", call = call)
+  # (the output's codes read before its column becomes indicators; a matrix,
+  # a missing column or an unknown level is refused by levels_to_indicators())
+  outF <- if (!is.null(scale$output)) fac[[scale$output$name]]
+  outCodes <- if (!is.null(outF) && outF$name %in% names(newdata)) {
+    match(as.character(newdata[[outF$name]]), outF$levels)
   }
-  outCodes <- NULL
-  for (f in fac) {
-    if (!f$name %in% names(newdata)) {
-      cli::cli_abort("{.arg newdata} has no column {.val {f$name}}, a categorical input of the calibration (levels {.val {f$levels}}).", call = call)
-    }
-    check_levels(newdata[[f$name]], f$levels, f$name, "newdata", call = call)
-    if (identical(f$name, scale$output$name)) outCodes <- match(as.character(newdata[[f$name]]), f$levels)
-    newdata <- replace_by_indicators(newdata, f$name, f$levels, f$columns)
-  }
-  attr(newdata, "fbc_codes") <- NULL
+  newdata <- levels_to_indicators(newdata, scale, "newdata", call)
   srcCodes <- NULL
   if (!is.null(scale$source)) {
     s <- scale$source
