@@ -164,24 +164,34 @@ void syrk_small(const arma::mat& W, arma::mat& C) {
   }
 }
 
-// The simulator GP's correlation Rs(X, Y) at the draw's thetaS and alphaS,
-// times the categorical inputs' level correlations C_f[a_f(x), a_f(y)]
-// (rhoS; their indicator columns have thetaS 0, src/levels.cpp); lower:
-// the lower triangle only.
+// The simulator GP's correlation Rs(X, Y) (d input columns) at thetaS th
+// and alphaS al, times the categorical inputs' level correlations
+// C_f[a_f(x), a_f(y)] (from rhoS rho; their indicator columns have thetaS
+// 0, src/levels.cpp); lower: the lower triangle only.
+void sim_corr(const Model& mod, int d, const double* th, const double* al, const double* rho,
+              const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower) {
+  kernel_corr(mod.kernS, X, Y, d, th, al, out, lower);
+  level_scale(mod.levels, rho, X, Y, out, lower);
+}
+
+// The same at the current draw post.phi.
 void sim_corr(const Posterior& post, const Model& mod, const arma::mat& X, const arma::mat& Y,
               arma::mat& out, bool lower) {
   const double* phi = post.phi.memptr();
-  kernel_corr(mod.kernS, X, Y, post.p + post.q, phi + post.iThetaS, phi + post.iAlphaS, out, lower);
-  level_scale(mod.levels, phi + post.iRhoS, X, Y, out, lower);
+  sim_corr(mod, post.p + post.q, phi + post.iThetaS, phi + post.iAlphaS, phi + post.iRhoS, X, Y,
+           out, lower);
 }
 
-// The bias GP's correlation Rb(X, Y) over the experimental inputs, times
-// the levels' correlations (rhoB).
-void bias_corr(const Posterior& post, const Model& mod, const arma::mat& X, const arma::mat& Y,
-               arma::mat& out, bool lower) {
+// The bias GP's correlation Rb(X, Y) over the experimental inputs at the
+// current draw, times the levels' correlations (rhoB) and, with a bias per
+// data set (srcX, srcY the rows' data sets; null without), the data sets'
+// D[srcX_i, srcY_j] (rhoD), as SchurPosterior::biasLevels() has them.
+void bias_corr(const Posterior& post, const Model& mod, const arma::mat& X, const int* srcX,
+               const arma::mat& Y, const int* srcY, arma::mat& out, bool lower) {
   const double* phi = post.phi.memptr();
   kernel_corr(mod.kernB, X, Y, post.p, phi + post.iThetaB, phi + post.iAlphaB, out, lower);
   level_scale(mod.levels, phi + post.iRhoB, X, Y, out, lower);
+  if (srcX) source_scale(mod.sourceL, phi + post.iRhoD, srcX, srcY, out, lower);
 }
 
 // The simulator rows' part of a draw's system, which depends on the
@@ -335,16 +345,13 @@ SgaspBias sgasp_bias(const Posterior& post, const Model& mod, const arma::mat& X
 // the S-GaSP's matrix is not positive definite.
 bool field_bias_corr(const Posterior& post, const Model& mod, const FieldGroups& fg,
                      SgaspBias& z, arma::mat& Rb) {
-  const arma::vec& phi = post.phi;
   if (!z.on) {
-    bias_corr(post, mod, fg.X, fg.X, Rb, true);
-    if (!fg.src.empty())
-      source_scale(mod.sourceL, phi.memptr() + post.iRhoD, fg.src.data(), fg.src.data(), Rb, true);
+    const int* src = fg.src.empty() ? nullptr : fg.src.data();
+    bias_corr(post, mod, fg.X, src, fg.X, src, Rb, true);
     return true;
   }
-  bias_corr(post, mod, z.XU, z.XU, z.RU, true);
-  if (!z.srcU.empty())
-    source_scale(mod.sourceL, phi.memptr() + post.iRhoD, z.srcU.data(), z.srcU.data(), z.RU, true);
+  const int* src = z.srcU.empty() ? nullptr : z.srcU.data();
+  bias_corr(post, mod, z.XU, src, z.XU, src, z.RU, true);
   if (!post.biasModel(z.RU, z.B, z.Wz)) return false;
   const int n = fg.X.n_rows;
   for (int j = 0; j < n; ++j)
@@ -416,13 +423,13 @@ void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs
   if (post.bias) {
     s2B = phi[post.iSigma2B];
     if (!z.on) {
-      bias_corr(post, mod, Xf, XT, w.RbT, false);
+      bias_corr(post, mod, Xf, nullptr, XT, nullptr, w.RbT, false);
     } else {
       z.KT.set_size(z.XU.n_rows, XT.n_rows);  // (biasModelCross() writes over it)
-      bias_corr(post, mod, z.XU, XT, z.KT, false);
+      bias_corr(post, mod, z.XU, nullptr, XT, nullptr, z.KT, false);
       post.biasModelCross([&]() {
         arma::mat R(z.XU.n_rows, z.XU.n_rows);
-        bias_corr(post, mod, z.XU, z.XU, R, false);
+        bias_corr(post, mod, z.XU, nullptr, z.XU, nullptr, R, false);
         return R;
       }, z.KT, z.rT);
       for (arma::uword t = 0; t < XT.n_rows; ++t)
@@ -864,13 +871,11 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
     if (k > 0) {
       const arma::mat& As = sys.A.slice(s);
       const arma::mat AP = As.cols(Pu);
-      kernel_corr(mod.kernS, UP, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), SPP, false);
-      level_scale(mod.levels, sys.rhoS.colptr(s), UP, UP, SPP, false);
+      sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), UP, UP, SPP, false);
       SPP *= s2S;
       SPP.diag() *= 1.0 + nugget;
       SPP -= AP.t() * AP;
-      kernel_corr(mod.kernS, U, UP, q, sys.thS.colptr(s), sys.alS.colptr(s), ScP, false);
-      level_scale(mod.levels, sys.rhoS.colptr(s), U, UP, ScP, false);
+      sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), U, UP, ScP, false);
       // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
       // batch's look-ahead)
       const int N = As.n_rows;
