@@ -181,10 +181,19 @@
 #' variance, with one bias or a bias each (`sourceBias = "own"`; then for
 #' kappa only: a prediction target is refused, as its bias would be that
 #' of no data set); and categorical inputs (their level correlations as
-#' the fit has them; a candidate or target gives its level). Several
-#' outputs are refused.
+#' the fit has them; a candidate or target gives its level).
+#'
+#' Several outputs (`output =`, one simulator GP over the inputs and the
+#' output, `outputs = "shared"`, the default): a run of the simulator
+#' gives every output, so a candidate is a run (its inputs without the
+#' output column) and its \eqn{K} values are fantasised jointly: per draw
+#' they are \eqn{K}-variate Gaussian given the data and the pending runs
+#' (correlated through the outputs' level correlation), and the draws are
+#' reweighted by that density. A prediction target names its output (the
+#' output column in `target`). Independent outputs
+#' (`outputs = "independent"`) are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
-#' candidates numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
+#' candidates (x outputs) numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
 #'
 #' @param fit An `fbc` object.
@@ -195,7 +204,7 @@
 #'   input a column of its levels, in a data frame), in any ranges the user
 #'   wants; `NULL` (default): `ncandidates` uniform points in the ranges of
 #'   the simulator design, each categorical input at a level drawn at
-#'   random.
+#'   random. With several outputs, runs: no output column.
 #' @param target `"kappa"` (the default: shrink kappa's posterior) or
 #'   experimental inputs where calibrated predictions are wanted (a data
 #'   frame or matrix with the field's input columns, as [predict()]'s
@@ -210,11 +219,13 @@
 #'   (integrated over the draws); the gains reported are the joint
 #'   look-ahead's either way (see "Criterion").
 #' @param ncandidates Number of default candidates (default
-#'   `100 * (p + q)`, at most 1000).
+#'   `100 * (p + q)`, at most 1000; \eqn{p} counts a categorical input's
+#'   indicator columns, not an output's).
 #' @param tol Candidates closer than `tol` (scaled units) to an existing
 #'   run are left out.
 #' @return A data frame of `n` rows: the inputs (natural units, columns
-#'   named as in `sim`; a categorical input a factor of its levels), `gain`
+#'   named as in `sim`; a categorical input a factor of its levels; with
+#'   several outputs a run's inputs, each run to give every output), `gain`
 #'   (the point's expected reduction of kappa's posterior variance, or of
 #'   the prediction's integrated variance, as a fraction of the current,
 #'   given the points above it).
@@ -244,6 +255,8 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
   check_design_model(model)
   sc <- model$scale
   d <- sc$p + sc$q
+  out1 <- design_output(sc)
+  K <- if (is.null(out1)) 1L else length(out1$levels)
   XT <- design_target(target, sc)
   if (nrow(XT) && model$dims$sources > 0L) {
     cli::cli_abort(c(
@@ -251,17 +264,24 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
       i = "Choose runs for kappa ({.code target = \"kappa\"}, the default), or fit with one bias."
     ))
   }
-  U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * d), model$data$Xs, tol)
-  if (nrow(U) < n) {
-    cli::cli_abort("Only {nrow(U)} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
+  U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * (d - length(out1$j))),
+                         model$data$Xs, tol)
+  if (nrow(U) < n * K) {
+    cli::cli_abort("Only {nrow(U) / K} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
   joint <- design_particles(fit, ndraws, "joint")
   # (before any work: the joint look-ahead over every candidate may be needed)
   check_look_ahead_size(nrow(joint$phi), model, U, XT)
   plug <- if (method == "plugin") design_particles(fit, ndraws, "plugin")
-  crit <- pick_runs(plug, joint, U, model, n, nfantasy, XT)
-  out <- as.data.frame(unscale_inputs(U[crit$chosen, , drop = FALSE], sc, seq_len(d)))
+  crit <- pick_runs(plug, joint, U, model, n, nfantasy, XT, K)
+  out <- as.data.frame(unscale_inputs(U[(crit$chosen - 1L) * K + 1L, , drop = FALSE],
+                                      sc, seq_len(d)))
   names(out) <- c(sc$names$inputs, sc$names$calibration)
+  if (K > 1L) {
+    # a run gives every output: no output column
+    out <- out[-out1$j]
+    sc$factors[[out1$name]] <- NULL
+  }
   out <- indicators_to_levels(out, sc)
   out$gain <- crit$gain / crit$variance
   tm <- proc.time() - t0
@@ -309,20 +329,33 @@ design_limited <- 0.01
 # joint look-ahead less, its picks give way to the joint criterion's if
 # that finds one worth more: the plug-in's hyperparameters, not the
 # posterior, misled it. `method` says which picked.
-pick_runs <- function(plug, joint, U, model, n, nfantasy, XT) {
+pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L) {
   if (is.null(plug)) {
-    return(c(look_ahead(joint, U, model, n, nfantasy, XT), method = "joint"))
+    return(c(look_ahead(joint, U, model, n, nfantasy, XT, K = K), method = "joint"))
   }
-  mine <- look_ahead(plug, U, model, n, nfantasy, XT)
-  crit <- look_ahead(joint, U[mine$chosen, , drop = FALSE], model, n, nfantasy, XT,
-                     order = seq_len(n))
+  mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K)
+  crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
+                     order = seq_len(n), K = K)
   crit$chosen <- mine$chosen
   own <- mine$gain / mine$variance
   if (crit$gain[1] / crit$variance < design_limited && own[1] >= design_limited) {
-    alt <- look_ahead(joint, U, model, n, nfantasy, XT)
+    alt <- look_ahead(joint, U, model, n, nfantasy, XT, K = K)
     if (alt$gain[1] / alt$variance >= design_limited) return(c(alt, method = "joint"))
   }
   c(crit, method = "plugin", list(own = own))
+}
+
+# The rows of runs `runs` (in order) among candidates of K rows a run.
+run_rows <- function(runs, K) as.vector(t(outer((runs - 1L) * K, seq_len(K), "+")))
+
+# Several outputs (shared: the output a categorical input of the one
+# simulator GP): a run gives every output, so the look-ahead's candidates
+# are runs of K rows. The output's factor (name, levels, columns) and `j`,
+# its columns' places among the inputs; NULL with one output.
+design_output <- function(sc) {
+  out <- sc$output
+  if (is.null(out)) return(NULL)
+  c(out, list(j = match(out$columns, c(sc$names$inputs, sc$names$calibration))))
 }
 
 # The criterion's target on the scaled experimental inputs: no rows for
@@ -364,10 +397,10 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
-  if (!is.null(model$scale$output) || isTRUE(d$outputs > 1L)) {
+  if (isTRUE(d$outputs > 1L)) {
     cli::cli_abort(c(
-      "{.fn propose_runs} does not handle several outputs yet.",
-      i = "It handles simulator runs of one output, with categorical inputs, any discrepancy model and field data sets."
+      "{.fn propose_runs} does not handle independent outputs ({.code outputs = \"independent\"}) yet.",
+      i = "It handles several outputs modelled by one simulator GP ({.code outputs = \"shared\"}, the default), categorical inputs, any discrepancy model and field data sets."
     ), call = call)
   }
   N <- d$m + design_field_rows(model)
@@ -386,16 +419,28 @@ check_design_model <- function(model, call = parent.frame()) {
 design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.frame()) {
   d <- sc$p + sc$q
   nm <- c(sc$names$inputs, sc$names$calibration)
+  out <- design_output(sc)
   if (is.null(candidates)) {
     U <- matrix(stats::runif(ncand * d), ncand, d)
     # a categorical input: a level drawn for each candidate, as its
-    # indicator columns
+    # indicator columns (the output's set by runs_by_output())
     for (f in sc$factors) {
+      if (identical(f$name, out$name)) next
       j <- match(f$columns, nm)
       a <- sample.int(length(f$levels), ncand, replace = TRUE)
       U[, j] <- scale_inputs(indicator_matrix(f$levels[a], f$columns), sc, j)
     }
   } else {
+    if (!is.null(out)) {
+      if (is.data.frame(candidates) && out$name %in% names(candidates)) {
+        cli::cli_abort(c(
+          "{.arg candidates} are runs, and a run gives every output: drop its column {.val {out$name}}.",
+          i = "Each candidate is scored with its values for all outputs ({.val {out$levels}})."
+        ), call = call)
+      }
+      candidates <- as.data.frame(candidates)
+      candidates[[out$name]] <- out$levels[1]  # (a placeholder: runs_by_output())
+    }
     if (length(sc$factors)) candidates <- levels_to_indicators(candidates, sc, "candidates", call)
     X <- as.matrix(if (is.data.frame(candidates)) candidates[intersect(nm, names(candidates))] else candidates)
     if (!is.null(colnames(X)) && all(nm %in% colnames(X))) X <- X[, nm, drop = FALSE]
@@ -405,11 +450,23 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, call = parent.fram
     U <- scale_inputs(X, sc, seq_len(d))
   }
   # distances to every run, a column of runs at a time (the per-candidate
-  # apply() was an eighth of a design step)
+  # apply() was an eighth of a design step); with several outputs over
+  # the inputs but the output's
   D2 <- matrix(0, nrow(U), nrow(Xs))
-  for (k in seq_len(d)) D2 <- D2 + outer(U[, k], Xs[, k], "-")^2
+  for (k in setdiff(seq_len(d), out$j)) D2 <- D2 + outer(U[, k], Xs[, k], "-")^2
   near <- rowSums(sqrt(D2) < tol) > 0
-  U[!near, , drop = FALSE]
+  U <- U[!near, , drop = FALSE]
+  if (is.null(out)) U else runs_by_output(U, sc, out)
+}
+
+# Each candidate run (a row of U) as its K rows, one per output (the
+# output's indicator columns at each level in turn): the look-ahead's
+# candidates with several outputs.
+runs_by_output <- function(U, sc, out) {
+  K <- length(out$levels)
+  V <- U[rep(seq_len(nrow(U)), each = K), , drop = FALSE]
+  V[, out$j] <- scale_inputs(indicator_matrix(rep(out$levels, nrow(U)), out$columns), sc, out$j)
+  V
 }
 
 # The draws scored over: `phi` (rows, sampler's scale), base log-weights
@@ -473,13 +530,13 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
 # weights (uniforms (j - U) / nfantasy, one U), then per step a random
 # order of the nfantasy normal quantiles (common to every candidate).
 look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
-                       order = integer(), call = parent.frame()) {
+                       order = integer(), K = 1L, call = parent.frame()) {
   dat <- model$data
   check_look_ahead_size(nrow(parts$phi), model, U, XT, call)
   usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic: the draws evenly
-  Z <- matrix(0, nfantasy, n)
-  for (k in seq_len(n)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
+  Z <- matrix(0, nfantasy, n * K)
+  for (k in seq_len(n * K)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
                      isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model,
-                     as.integer(order), parts$prune %||% 0)
+                     as.integer(order), parts$prune %||% 0, as.integer(K))
 }

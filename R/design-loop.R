@@ -15,6 +15,10 @@
 #' @param f The simulator: `f(x, kappa)` with `x` a data frame of the
 #'   field's input columns (one row per point) and `kappa` a named numeric
 #'   vector of the calibration inputs, returning one response per row.
+#'   With several outputs (`output = "<column>"` among `...`, the field in
+#'   long format as for [calibrate()]) a run gives every output: `x` holds
+#'   the run's inputs once per output, its output column a factor, and `f`
+#'   returns each row's output (one call per run).
 #' @param field The field data (response first, as in [calibrate()]; with
 #'   several data sets, `source =` among `...` names their column, which is
 #'   not an input).
@@ -66,25 +70,23 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   }
   showProgress <- default_progress(showProgress)
   dots <- list(...)
-  if (!is.null(dots$output)) {
-    cli::cli_abort(c(
-      "{.fn design_loop} does not handle several outputs ({.arg output}) yet: {.fn propose_runs} does not.",
-      i = "It handles one output, with categorical inputs, any discrepancy model and field data sets."
-    ))
-  }
   # the field's inputs: its columns but the response and the data sets'
   # (`source`, passed on to calibrate()); the categorical ones run at the
   # field's levels, the numeric ones in `lower`, `upper`
   xnames <- setdiff(names(field)[-1], if (is.character(dots$source)) dots$source)
   categorical <- xnames[vapply(field[xnames], is_categorical, logical(1))]
   levs <- lapply(field[categorical], function(v) if (is.factor(v)) levels(v) else sort(unique(v)))
+  # several outputs: each run gives every output (one call of f on its rows)
+  output <- loop_output(dots, field, levs)
+  levs[output$name] <- NULL
   check_loop_ranges(lower, upper, setdiff(xnames, categorical))
   cal <- setdiff(names(lower), xnames)
   n0 <- check_count(n0, "n0", min = 3)
   batch <- check_count(batch, "batch", min = 1)
   budget <- check_count(budget, "budget", min = 0)
   X <- with_levels(maximin_lhs(n0, lower, upper), levs)
-  sim <- run_simulator(f, X, xnames, cal, names(field)[1])
+  sim <- run_simulator(f, X, xnames, cal, names(field)[1], output)
+  runs <- n0
   # a fit's warning that the field inputs lie beyond the runs' range: kept
   # (muffled) at each step, and given once at the end if the last fit's
   # runs still do not cover them (a small starting design rarely does; the
@@ -99,13 +101,13 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   }
   t0 <- proc.time()
   fit <- keep_extrapolation(calibrate(sim, field, showProgress = FALSE, ...))
-  history <- loop_row(fit, nrow(sim), 0, cpu_since(t0))
+  history <- loop_row(fit, runs, 0, cpu_since(t0))
   limited <- FALSE
-  while (nrow(sim) - n0 < budget && !loop_done(fit, width, cal)) {
+  while (runs - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
     # propose_runs()'s "limited" message once a loop, not at every step
     pr <- withCallingHandlers(
-      do.call(propose_runs, c(list(fit, n = min(batch, budget - (nrow(sim) - n0)),
+      do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)),
                                    candidates = with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs)),
                               design)),
       fbc_design_limited = function(m) {
@@ -113,15 +115,17 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
         limited <<- TRUE
       })
     tDesign <- cpu_since(t0)
-    new <- run_simulator(f, pr[c(xnames, cal)], xnames, cal, names(field)[1])
+    new <- run_simulator(f, pr[c(setdiff(xnames, output$name), cal)], xnames, cal,
+                         names(field)[1], output)
     sim <- rbind(sim, new)
+    runs <- runs + nrow(pr)
     t0 <- proc.time()
     fit <- keep_extrapolation(update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge,
                                           showProgress = FALSE))
-    history <- rbind(history, loop_row(fit, nrow(sim), tDesign, cpu_since(t0)))
+    history <- rbind(history, loop_row(fit, runs, tDesign, cpu_since(t0)))
     if (showProgress) {
       h <- history[nrow(history), ]
-      cli::cli_inform("{nrow(sim)} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, {if (h$reweighted) 'last fit reweighted' else 'fit'} {round(h$fitTime, 1)} s).")
+      cli::cli_inform("{runs} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, {if (h$reweighted) 'last fit reweighted' else 'fit'} {round(h$fitTime, 1)} s).")
     }
   }
   if (!is.null(extrapolation)) warning(extrapolation)
@@ -172,22 +176,53 @@ with_levels <- function(X, levs) {
   X
 }
 
+# design_loop()'s several outputs: `output` (among its `...`, as for
+# calibrate()) names the field's column saying each row's output; its
+# name and levels (those of `levs`, the field's categorical inputs'), or
+# NULL. Independent outputs are refused here, before any run (propose_runs()
+# does not handle them).
+loop_output <- function(dots, field, levs, call = parent.frame()) {
+  nm <- dots$output
+  if (is.null(nm)) return(NULL)
+  if (!is.character(nm) || length(nm) != 1L || !nm %in% names(levs)) {
+    cli::cli_abort("{.arg output} must name a categorical column of {.arg field} (the output of each row), not {.val {nm}}.",
+                   call = call)
+  }
+  if (identical(dots$outputs, "independent")) {
+    cli::cli_abort(c(
+      "{.fn design_loop} does not handle independent outputs ({.code outputs = \"independent\"}) yet: {.fn propose_runs} does not.",
+      i = "It handles several outputs modelled by one simulator GP ({.code outputs = \"shared\"}, the default)."
+    ), call = call)
+  }
+  list(name = nm, levels = levs[[nm]])
+}
+
 # The simulator at each row of X, one future per run; a data frame in the
 # form of calibrate()'s sim (response, experimental, calibration inputs).
-run_simulator <- function(f, X, xnames, cal, yname) {
-  futures <- lapply(seq_len(nrow(X)), function(i) {
-    x <- X[i, xnames, drop = FALSE]
-    kappa <- unlist(X[i, cal, drop = FALSE])
+# With several outputs (`output`, loop_output()) a run is one call of f on
+# K rows, the run's inputs at each output in turn (the output column in x,
+# as calibrate() gives a simulator function), returning K numbers.
+run_simulator <- function(f, X, xnames, cal, yname, output = NULL) {
+  K <- if (is.null(output)) 1L else length(output$levels)
+  if (K > 1L) {
+    X <- X[rep(seq_len(nrow(X)), each = K), , drop = FALSE]
+    X[[output$name]] <- factor(rep(output$levels, length.out = nrow(X)), levels = output$levels)
+  }
+  futures <- lapply(seq_len(nrow(X) / K), function(i) {
+    rows <- (i - 1L) * K + seq_len(K)
+    x <- X[rows, xnames, drop = FALSE]
+    kappa <- unlist(X[rows[1], cal, drop = FALSE])
     future::future(f(x, kappa), seed = TRUE, globals = list(f = f, x = x, kappa = kappa),
                    label = sprintf("FBC simulator run %d", i))
   })
-  y <- vapply(futures, function(ft) {
+  y <- unlist(lapply(futures, function(ft) {
     v <- future::value(ft)
-    if (!is.numeric(v) || length(v) != 1L || !is.finite(v)) {
-      cli::cli_abort("{.arg f} must return one finite number for one row of {.arg x}; it returned {.obj_type_friendly {v}}.")
+    if (!is.numeric(v) || length(v) != K || !all(is.finite(v))) {
+      what <- if (K > 1L) "{K} finite numbers for a run's {K} rows of {.arg x} (one per output)" else "one finite number for one row of {.arg x}"
+      cli::cli_abort(paste0("{.arg f} must return ", what, "; it returned {.obj_type_friendly {v}}."))
     }
     v
-  }, numeric(1))
+  }))
   out <- data.frame(y, X[c(xnames, cal)])
   names(out)[1] <- yname
   # (a categorical input's levels as text, as the starting design has them)

@@ -546,7 +546,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
   mod = read_model(model, p, q);
   if (!mod.emulator || mod.nOutputs() > 1)
-    Rcpp::stop("the look-ahead handles one output of simulator runs");
+    Rcpp::stop("the look-ahead handles simulator runs with one simulator GP (not independent outputs)");
   mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
@@ -678,11 +678,19 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // the pending points: the targets' means MT[s + S (t + T j)], variances
 // VTP (S x T) and covariances with the candidates CP[s + S (t + T c)];
 // tb, tv (S x T) target_terms() of the candidate scored.
+//
+// With several outputs (K > 1) a run gives K values, the candidates' rows
+// r K .. r K + K - 1 (Nr = Nc / K runs, the same inputs but the output):
+// per run r and draw s the lower Cholesky factor of the K values'
+// covariance given the data and the pending points, LK[(r S + s) K^2 ..]
+// (column-major), and its sum log diag ldK[r S + s]; eK (S x K) a
+// fantasy's standardised residuals L_s^-1 (y - M_s); with targets gK
+// (S x T x K) and vK (S x T), run_target_terms() of the run scored.
 struct LookAhead {
-  int S, Nc, J, T = 0;
+  int S, Nc, J, T = 0, K = 1, Nr = 0;
   arma::mat kap, base, YP, sd, isd, lsd, VTP;
   arma::vec ksq, Lbuf, wbuf;
-  std::vector<double> MT, CP, Bk, Dk, mbuf, tb, tv;
+  std::vector<double> MT, CP, Bk, Dk, mbuf, tb, tv, LK, ldK, eK, gK, vK;
   std::vector<int> P;
 };
 
@@ -856,6 +864,57 @@ void pending_targets(const DesignSystems& sys, const arma::mat& SPP, const arma:
   }
 }
 
+// In-place lower Cholesky factor of the K x K symmetric a (column-major,
+// lower triangle read) with each pivot floored at fl (as a single value's
+// variance is: cv >= 1e-12 s2S); returns sum log diag.
+double chol_floor(double* a, int K, double fl) {
+  double ld = 0.0;
+  for (int j = 0; j < K; ++j) {
+    double d = a[j + K * j];
+    for (int l = 0; l < j; ++l) d -= a[j + K * l] * a[j + K * l];
+    const double ljj = std::sqrt(std::max(d, fl));
+    a[j + K * j] = ljj;
+    ld += std::log(ljj);
+    for (int i = j + 1; i < K; ++i) {
+      double x = a[i + K * j];
+      for (int l = 0; l < j; ++l) x -= a[i + K * l] * a[j + K * l];
+      a[i + K * j] = x / ljj;
+    }
+  }
+  return ld;
+}
+
+// Draw s's covariance of each run's K values given the data and the
+// pending points (B, ScP from pending_conditionals(); k pending points),
+// rows a, b of one run:
+//   Sigma_ab = s2S (Rs(U_a, U_b) + nugget [a = b]) - A_a'A_b - B_a ScP_b'
+// and its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in
+// the output alone (checked in design_look_ahead()), so Rs among them is
+// the first run's.
+void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& mod,
+                     double nugget, const arma::mat& B, const arma::mat& ScP, int k, int s,
+                     LookAhead& la) {
+  const int K = la.K, S = la.S, q = U.n_cols;
+  const double s2S = sys.s2S[s];
+  const arma::mat& As = sys.A.slice(s);
+  const int N = As.n_rows;
+  arma::mat R0(K, K);
+  sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s),
+           U.rows(0, K - 1), U.rows(0, K - 1), R0, false);
+  for (int r = 0; r < la.Nr; ++r) {
+    double* L = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
+    for (int l = 0; l < K; ++l)
+      for (int i = l; i < K; ++i) {
+        const int a = r * K + i, b = r * K + l;
+        double x = s2S * R0(i, l) * (i == l ? 1.0 + nugget : 1.0) -
+                   dot_sum(As.colptr(a), As.colptr(b), N);
+        for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
+        L[i + K * l] = x;
+      }
+    la.ldK[(size_t)r * S + s] = chol_floor(L, K, 1e-12 * s2S);
+  }
+}
+
 void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Model& mod,
                           double nugget, LookAhead& la) {
   const int k = la.P.size(), q = U.n_cols;
@@ -913,6 +972,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       }
     }
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
+    if (la.K > 1) run_covariances(sys, U, mod, nugget, B, ScP, k, s, la);
     for (int c = 0; c < la.Nc; ++c) {
       la.sd(s, c) = std::sqrt(std::max(cv[c], 1e-12 * s2S));
       la.isd(s, c) = 1.0 / la.sd(s, c);
@@ -1001,6 +1061,123 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
   }
 }
 
+// Run r's K rows' conditional means in fantasy j (cond_means(), S each,
+// into la.mbuf's K slices): mus[i] for row r K + i.
+void run_means(const DesignSystems& sys, LookAhead& la, int r, int j, const double** mus) {
+  for (int i = 0; i < la.K; ++i)
+    mus[i] = cond_means(sys, la, r * la.K + i, j, la.mbuf.data() + (size_t)la.S * i);
+}
+
+// Adds to L (S) the log-density of run r's values y (K) under each draw,
+// the normal's constant left out:
+//   L_s += -|e_s|^2 / 2 - sum log diag LK_rs,  e_s = LK_rs^-1 (y - M_s)
+// (mus from run_means()); e_s kept in la.eK (S x K) for the targets.
+void run_log_density(LookAhead& la, int r, const double* const* mus, const double* y, double* L) {
+  const int K = la.K, S = la.S;
+  double e[16];  // K <= 16 (design_look_ahead())
+  for (int s = 0; s < S; ++s) {
+    const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
+    double ss = 0.0;
+    for (int i = 0; i < K; ++i) {
+      double x = y[i] - mus[i][s];
+      for (int l = 0; l < i; ++l) x -= Ls[i + K * l] * e[l];
+      e[i] = x / Ls[i + K * i];
+      ss += e[i] * e[i];
+      la.eK[s + (size_t)S * i] = e[i];
+    }
+    L[s] += -0.5 * ss - la.ldK[(size_t)r * S + s];
+  }
+}
+
+// target_var()'s terms of run r (K values), which no fantasy changes: per
+// draw and target g_st = LK_rs^-1 CP_st(r) (CP_st(r) the target's
+// covariances with the run's K values) and v_st = max(VTP_st - |g_st|^2, 0),
+// in la.gK (S x T x K) and la.vK (S x T).
+void run_target_terms(LookAhead& la, int r) {
+  const int K = la.K, S = la.S, T = la.T;
+  for (int t = 0; t < T; ++t)
+    for (int s = 0; s < S; ++s) {
+      const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
+      double g[16], gg = 0.0;
+      for (int i = 0; i < K; ++i) {
+        double x = la.CP[s + (size_t)S * (t + (size_t)T * (r * K + i))];
+        for (int l = 0; l < i; ++l) x -= Ls[i + K * l] * g[l];
+        g[i] = x / Ls[i + K * i];
+        gg += g[i] * g[i];
+        la.gK[s + (size_t)S * (t + (size_t)T * i)] = g[i];
+      }
+      la.vK[s + (size_t)S * t] = std::max(la.VTP(s, t) - gg, 0.0);
+    }
+}
+
+// The calibrated prediction's variance averaged over the targets after a
+// run of K values (target_var() for runs): with e_s = la.eK (the run's
+// standardised residuals, run_log_density()) and g, v of run_target_terms(),
+// per draw m_st = MT_stj + g_st'e_s, v_st as given;
+//   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
+double run_target_var(LookAhead& la, const double* L, double mx, int j) {
+  const int S = la.S, K = la.K;
+  double* w = la.wbuf.memptr();
+  exp_weights(L, mx, S, w);
+  double sw = 0.0;
+  for (int s = 0; s < S; ++s) sw += w[s];
+  double out = 0.0;
+  for (int t = 0; t < la.T; ++t) {
+    const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
+    const double* v = la.vK.data() + (size_t)S * t;
+    double a1 = 0.0, a2 = 0.0;
+    for (int s = 0; s < S; ++s) {
+      double ms = mt[s];
+      for (int i = 0; i < K; ++i)
+        ms += la.gK[s + (size_t)S * (t + (size_t)la.T * i)] * la.eK[s + (size_t)S * i];
+      a1 += w[s] * (v[s] + ms * ms);
+      a2 += w[s] * ms;
+    }
+    out += a1 / sw - (a2 / sw) * (a2 / sw);
+  }
+  return out / la.T;
+}
+
+// score_candidates() for runs of K values (K > 1): fantasy j of run r is
+// y = M_src[j](r, j) + LK_r,src[j] z_j (z_j: Z's K deviates of row j, common
+// to every run), the draws reweighted by its K-variate normal density
+// (run_log_density()); gain(r) as there, over the Nr runs; Y (Nc x J) the
+// fantasised values by row.
+void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const arma::mat& Z,
+                int col, arma::vec& gain, arma::mat& Y) {
+  const int K = la.K, S = la.S, J = la.J;
+  double before = 0.0;
+  for (int j = 0; j < J; ++j) {
+    const double* b = la.base.colptr(j);
+    before += crit_var(la, b, *std::max_element(b, b + S), j, -1, 0.0, nullptr);
+  }
+  before /= J;
+  double* L = la.Lbuf.memptr();
+  const double* mus[16];
+  double y[16];
+  for (int r = 0; r < la.Nr; ++r) {
+    if (la.T > 0) run_target_terms(la, r);
+    double after = 0.0;
+    for (int j = 0; j < J; ++j) {
+      run_means(sys, la, r, j, mus);
+      const int sr = src[j];
+      const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + sr);
+      for (int i = 0; i < K; ++i) {
+        double x = mus[i][sr];
+        for (int l = 0; l <= i; ++l) x += Ls[i + K * l] * Z(j, col + l);
+        y[i] = x;
+        Y(r * K + i, j) = x;
+      }
+      const double* b = la.base.colptr(j);
+      std::copy(b, b + S, L);
+      run_log_density(la, r, mus, y, L);
+      const double mx = *std::max_element(L, L + S);
+      after += la.T > 0 ? run_target_var(la, L, mx, j) : weighted_var(la, L, mx);
+    }
+    gain[r] = before - after / J;
+  }
+}
+
 }  // namespace
 
 // solve_lower_cols() (L lower triangular, B N x nc) on a copy of B, for the
@@ -1048,6 +1225,10 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // gains of given points in a given order. With `plugin` and prune > 0 the
 // draws whose weight lw0 + ll is under exp(-prune) of the largest are left
 // out first (the two largest always kept): they add nothing but their cost.
+// With `outputs` K > 1 the candidates are runs of K rows each (U's rows
+// r K .. r K + K - 1, alike but for the output's columns), a pick a run,
+// scored with its K values fantasised jointly (score_runs(); step k's
+// deviates Z's columns k K .. k K + K - 1) and pending as K points.
 // Returns the picks (1-based), their gains, the current variance, every
 // candidate's gain per step (scores, Nc x n) and the draws scored (kept,
 // 1-based).
@@ -1057,13 +1238,21 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::mat& kappa, const arma::vec& lw0, bool plugin,
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
-                             const Rcpp::IntegerVector& order, double prune) {
+                             const Rcpp::IntegerVector& order, double prune, int outputs) {
   Model mod;
-  const int n = Z.n_cols;
+  const int K = outputs;
+  if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
+    Rcpp::stop("outputs must be 1 to 16, dividing U's rows and Z's columns");
+  const int n = Z.n_cols / K, Nr = U.n_rows / K;
+  // a run's rows differ as the first run's do (run_covariances())
+  for (int r = 1; r < Nr && K > 1; ++r)
+    for (int i = 1; i < K; ++i)
+      if (arma::any(arma::abs((U.row(r * K + i) - U.row(r * K)) - (U.row(i) - U.row(0))) > 1e-12))
+        Rcpp::stop("a run's rows must differ in the output alone");
   if (order.size() > 0) {
     if (order.size() != n) Rcpp::stop("order must have %d candidates", n);
     for (int k = 0; k < n; ++k) {
-      if (order[k] < 1 || order[k] > (int)U.n_rows) Rcpp::stop("order must index the candidates");
+      if (order[k] < 1 || order[k] > Nr) Rcpp::stop("order must index the candidates");
       for (int i = 0; i < k; ++i)
         if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
     }
@@ -1086,9 +1275,9 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   }
   const arma::mat ph = phis.rows(kept), kap = kappa.rows(kept);
   const arma::vec lwk = lw0.elem(kept);
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, mod, n > 1);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, mod, n > 1 || K > 1);
   LookAhead la;
-  la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T;
+  la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T; la.K = K; la.Nr = Nr;
   if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
   la.kap = kap;
   la.ksq = arma::sum(arma::square(kap), 1);
@@ -1106,7 +1295,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   la.isd.set_size(la.S, la.Nc);
   la.lsd.set_size(la.S, la.Nc);
   la.Lbuf.set_size(la.S);
-  la.mbuf.resize(la.S);  // cond_means()'s
+  la.mbuf.resize((size_t)la.S * K);  // cond_means()'s (run_means()': K of them)
   la.wbuf.set_size(la.S);
   if (la.T > 0) {
     la.VTP.set_size(la.S, la.T);
@@ -1115,28 +1304,48 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     la.tb.resize((size_t)la.S * la.T);  // target_terms()'s
     la.tv.resize((size_t)la.S * la.T);
   }
+  if (K > 1) {
+    la.LK.resize((size_t)K * K * la.S * Nr);
+    la.ldK.resize((size_t)la.S * Nr);
+    la.eK.resize((size_t)la.S * K);
+    if (la.T > 0) {
+      la.gK.resize((size_t)la.S * la.T * K);
+      la.vK.resize((size_t)la.S * la.T);
+    }
+  }
   double variance = 0.0;
-  arma::vec gain(la.Nc), best(n);
-  arma::mat Y(la.Nc, la.J), scores(la.Nc, n);
+  arma::vec gain(Nr), best(n);
+  arma::mat Y(la.Nc, la.J), scores(Nr, n);
   Rcpp::IntegerVector chosen(n);
+  const double* mus[16];
   for (int step = 0; step < n; ++step) {
     pending_conditionals(sys, U, mod, nugget, la);
     if (step == 0) variance = crit_var(la, lw.memptr(), lw.max(), 0, -1, 0.0, nullptr);
-    score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
-    for (int c : la.P) gain[c] = R_NegInf;
+    if (K == 1) score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
+    else score_runs(sys, la, s0.data(), Z, step * K, gain, Y);
+    for (int c : la.P) gain[c / K] = R_NegInf;
     scores.col(step) = gain;
     const int b = order.size() > 0 ? order[step] - 1 : (int)gain.index_max();
     chosen[step] = b + 1;
     best[step] = gain[b];
     for (int j = 0; j < la.J; ++j) {
+      if (K > 1) {
+        run_means(sys, la, b, j, mus);
+        double y[16];
+        for (int i = 0; i < K; ++i) y[i] = Y(b * K + i, j);
+        run_log_density(la, b, mus, y, la.base.colptr(j));
+        continue;
+      }
       const double* mu = cond_means(sys, la, b, j, la.mbuf.data());
       for (int s = 0; s < la.S; ++s) {
         const double e = (Y(b, j) - mu[s]) * la.isd(s, b);
         la.base(s, j) += -0.5 * e * e - la.lsd(s, b);
       }
     }
-    la.P.push_back(b);
-    la.YP.insert_cols(step, Y.row(b).t());
+    for (int i = 0; i < K; ++i) {
+      la.P.push_back(b * K + i);
+      la.YP.insert_cols(la.YP.n_cols, Y.row(b * K + i).t());
+    }
     Rcpp::checkUserInterrupt();
   }
   return Rcpp::List::create(Rcpp::Named("chosen") = chosen, Rcpp::Named("gain") = Rcpp::NumericVector(best.begin(), best.end()),

@@ -247,3 +247,108 @@ score_candidates <- function(cond, src, z, base, kap) {
   }
   list(gain = before - after, Y = Y, logd = logd)
 }
+
+# look_ahead_r() for runs of K values (several outputs: a run gives every
+# output): the candidates U are runs of K rows (rows (r - 1) K + 1:K), a
+# run's K values fantasised jointly from their joint Gaussian given the
+# data and the pending runs' values, the draws reweighted by its K-variate
+# density (with targets the prediction's means and variances moved by the
+# run's K values); step k's deviates are the columns (k - 1) K + 1:K of
+# the normal quantiles, drawn as look_ahead() draws them.
+look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
+  S <- length(sys)
+  Nr <- nrow(U) / K
+  J <- nfantasy
+  lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
+  kap <- parts$kappa
+  w0 <- exp(lw0 - max(lw0))
+  targets <- !is.null(sys[[1]]$mT)
+  cond0 <- pending_conditionals(sys, U, integer(), matrix(0, J, 0))
+  variance <- if (targets) target_var(w0 / sum(w0), cond0$MT[, , 1], cond0$VTP) else
+    weighted_var(kap, matrix(w0 / sum(w0)))
+  cw <- cumsum(w0)
+  usrc <- (seq_len(J) - stats::runif(1)) / J
+  src <- vapply(usrc, function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
+  zs <- vapply(seq_len(n * K), function(k) stats::qnorm((sample.int(J) - 0.5) / J), numeric(J))
+  zs <- matrix(zs, J)
+  norm_w <- function(L) {
+    w <- exp(L - max(L))
+    w / sum(w)
+  }
+  scores <- matrix(0, Nr, n)
+  chosen <- integer()
+  P <- integer()
+  gain <- numeric()
+  YP <- matrix(0, J, 0)
+  base <- matrix(lw0, S, J)
+  for (step in seq_len(n)) {
+    cond <- pending_conditionals(sys, U, P, YP)
+    # per draw the covariance of every candidate row's value given the
+    # data and the pending points (a run's block is what is needed)
+    Cov <- lapply(seq_len(S), function(s) {
+      y <- sys[[s]]
+      C <- y$s2S * y$corr(U, U)
+      diag(C) <- diag(C) * (1 + FBC:::fbc_nugget)
+      C <- C - crossprod(y$A)
+      if (length(P)) {
+        AP <- y$A[, P, drop = FALSE]
+        SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
+        diag(SPP) <- diag(SPP) * (1 + FBC:::fbc_nugget)
+        SPP <- SPP - crossprod(AP)
+        ScP <- y$s2S * y$corr(U, U[P, , drop = FALSE]) - crossprod(y$A, AP)
+        C <- C - ScP %*% solve(SPP, t(ScP))
+      }
+      C
+    })
+    M <- array(cond$M, c(S, nrow(U), J))
+    before <- mean(vapply(seq_len(J), function(j) {
+      b <- norm_w(base[, j])
+      if (targets) target_var(b, cond$MT[, , j], cond$VTP) else weighted_var(kap, matrix(b))
+    }, numeric(1)))
+    # the log-density of run r's values y under each draw, in fantasy j,
+    # and (targets) each draw's moved means and variances
+    dens <- function(r, j, y) {
+      idx <- (r - 1L) * K + seq_len(K)
+      vapply(seq_len(S), function(s) {
+        Sig <- Cov[[s]][idx, idx]
+        L <- t(chol(Sig))
+        e <- forwardsolve(L, y - M[s, idx, j])
+        -0.5 * sum(e^2) - sum(log(diag(L)))
+      }, numeric(1))
+    }
+    fantasy <- function(r, j) {
+      idx <- (r - 1L) * K + seq_len(K)
+      s <- src[j]
+      M[s, idx, j] + drop(t(chol(Cov[[s]][idx, idx])) %*% zs[j, (step - 1L) * K + seq_len(K)])
+    }
+    g <- vapply(seq_len(Nr), function(r) {
+      if (r %in% chosen) return(-Inf)
+      idx <- (r - 1L) * K + seq_len(K)
+      after <- mean(vapply(seq_len(J), function(j) {
+        y <- fantasy(r, j)
+        w <- norm_w(base[, j] + dens(r, j, y))
+        if (!targets) return(weighted_var(kap, matrix(w)))
+        nT <- cond$nT
+        mt <- matrix(0, S, nT)
+        vt <- matrix(0, S, nT)
+        for (s in seq_len(S)) {
+          Sig <- Cov[[s]][idx, idx]
+          CPs <- matrix(cond$CP[s, , idx], nT)
+          mt[s, ] <- cond$MT[s, , j] + CPs %*% solve(Sig, y - M[s, idx, j])
+          vt[s, ] <- pmax(cond$VTP[s, ] - rowSums((CPs %*% solve(Sig)) * CPs), 0)
+        }
+        target_var(w, mt, vt)
+      }, numeric(1)))
+      before - after
+    }, numeric(1))
+    scores[, step] <- g
+    best <- which.max(g)
+    chosen <- c(chosen, best)
+    gain <- c(gain, g[best])
+    Yb <- t(vapply(seq_len(J), function(j) fantasy(best, j), numeric(K)))
+    for (j in seq_len(J)) base[, j] <- base[, j] + dens(best, j, Yb[j, ])
+    P <- c(P, (best - 1L) * K + seq_len(K))
+    YP <- cbind(YP, matrix(Yb, J))
+  }
+  list(chosen = chosen, gain = gain, variance = variance, scores = scores)
+}

@@ -885,11 +885,12 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
 
 test_that("propose_runs() refuses models it does not handle", {
   pb <- sinus_problem()
-  # several outputs (helper-outputs.R), in long format
+  # independent outputs (helper-outputs.R), in long format
   po <- two_outputs(m = 16)
   set.seed(1)
-  fit <- calibrate(po$sim, po$field, output = "out", discrepancy = "none", nMCMC = 200,
-                   nBurn = 100, nChains = 1, showProgress = FALSE)
+  fit <- calibrate(po$sim, po$field, output = "out", outputs = "independent",
+                   discrepancy = "none", nMCMC = 200, nBurn = 100, nChains = 1,
+                   showProgress = FALSE)
   expect_snapshot(error = TRUE, propose_runs(fit))
   # a simulator function has no runs to add to (R/simulator_function.R)
   f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
@@ -933,6 +934,104 @@ test_that("design_loop() runs a function simulator through futures and adds runs
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
                                             output = "out"))
+})
+
+test_that("runs of several outputs: the C++ look-ahead equals the plain-R one", {
+  # two outputs sharing the rate t (helper-outputs.R), one simulator GP
+  # (outputs = "shared"): a run gives both, so the look-ahead scores runs
+  # of 2 rows, their 2 values fantasised jointly (look_ahead_runs_r())
+  po <- two_outputs(m = 16)
+  for (disc in c("none", "gp")) {
+    set.seed(1)
+    fit <- calibrate(po$sim, po$field, output = "out", discrepancy = disc, nMCMC = 600,
+                     nBurn = 200, nChains = 1, showProgress = FALSE)
+    set.seed(8)
+    U <- FBC:::design_candidates(NULL, fit$scale, 10, fit$data$Xs, 1e-3)
+    # 10 runs of 2 rows, alike but for the output's indicator column
+    expect_equal(nrow(U), 20)
+    j <- match(fit$scale$output$columns, c(fit$scale$names$inputs, fit$scale$names$calibration))
+    expect_equal(FBC:::indicator_codes(U[, j, drop = FALSE]), rep(1:2, 10))
+    expect_equal(U[c(TRUE, FALSE), -j], U[c(FALSE, TRUE), -j])
+    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), out = c("conc", "rate")), fit$scale)
+    for (method in c("joint", "plugin")) {
+      parts <- FBC:::design_particles(fit, 30, method)
+      for (tg in list(NULL, XT)) {
+        set.seed(11)
+        cpp <- if (is.null(tg)) FBC:::look_ahead(parts, U, fit$model, 3, 15, K = 2L) else
+          FBC:::look_ahead(parts, U, fit$model, 3, 15, tg, K = 2L)
+        set.seed(11)
+        sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U, tg))
+        ref <- look_ahead_runs_r(sys, parts, U, fit$model, 3, 15, 2L)
+        expect_identical(cpp$chosen, as.integer(ref$chosen))
+        expect_equal(cpp$variance, ref$variance, tolerance = 1e-8)
+        expect_equal(cpp$gain, ref$gain, tolerance = 1e-8)
+        expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+        expect_equal(dim(cpp$scores), c(10, 3))
+        expect_gt(max(cpp$scores[, 1]), 0)
+      }
+    }
+  }
+  # (the outputs are correlated, rhoS away from 0: a run's 2 values are
+  # not independent given a draw, and the joint fantasy matters)
+  expect_gt(abs(mean(parts$phi[, FBC:::param_indices(2, 1, "gp", noise = 2L, levels = 1L)$rhoS])), 0.05)
+})
+
+test_that("propose_runs() and design_loop() give runs of every output", {
+  po <- two_outputs(m = 16)
+  set.seed(1)
+  fit <- calibrate(po$sim, po$field, output = "out", discrepancy = "none", nMCMC = 600,
+                   nBurn = 200, nChains = 1, showProgress = FALSE)
+  set.seed(5)
+  pr <- propose_runs(fit, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 100)
+  # a run: its inputs, no output column
+  expect_named(pr, c("x", "t", "gain"))
+  expect_true(all(pr$x >= min(po$sim$x) & pr$x <= max(po$sim$x)))
+  expect_true(all(pr$t >= min(po$sim$t) & pr$t <= max(po$sim$t)))
+  expect_false(any(paste(pr$x, pr$t) %in% paste(po$sim$x, po$sim$t)))
+  expect_true(all(pr$gain > 0))
+  # given candidates are runs too (an output column refused)
+  cand <- data.frame(x = c(0.1, 0.5, 0.9), t = 1.7)
+  set.seed(5)
+  pr2 <- propose_runs(fit, n = 3, candidates = cand, ndraws = 40, nfantasy = 20)
+  expect_setequal(pr2$x, cand$x)
+  expect_snapshot(error = TRUE, propose_runs(fit, candidates = transform(cand, out = "conc")))
+  # a target names its output
+  set.seed(5)
+  pt <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, out = "rate"), ndraws = 40,
+                     nfantasy = 20, ncandidates = 100)
+  expect_named(pt, c("x", "t", "gain"))
+  expect_snapshot(error = TRUE, propose_runs(fit, target = data.frame(x = 0.5)))
+  # the runs go back in with update(), each as its two rows
+  f1 <- function(x, t) 5 * exp(-t * x)
+  f2 <- function(x, t) 2 * t * x
+  new <- rbind(data.frame(y = f1(pr$x, pr$t), x = pr$x, out = "conc", t = pr$t),
+               data.frame(y = f2(pr$x, pr$t), x = pr$x, out = "rate", t = pr$t))
+  fit2 <- update(fit, sim = new, nMCMC = 300)
+  expect_equal(fit2$model$dims$m, 32 + 6)
+  # design_loop(): one call of f per run, on the run's rows at each output
+  f <- function(x, kappa) {
+    stopifnot(is.factor(x$out), identical(as.character(x$out), c("conc", "rate")))
+    ifelse(x$out == "conc", f1(x$x, kappa[["t"]]), f2(x$x, kappa[["t"]]))
+  }
+  field <- po$field[po$field$x > 0.1 & po$field$x < 0.9, ]
+  set.seed(3)
+  out <- suppressWarnings(design_loop(f, field, lower = c(x = 0, t = 0.5), upper = c(x = 1, t = 3),
+                                      n0 = 5, batch = 2, budget = 3, output = "out",
+                                      discrepancy = "none", nMCMC = 600, nBurn = 200,
+                                      nChains = 1, design = list(ndraws = 40, nfantasy = 20),
+                                      showProgress = FALSE))
+  expect_equal(out$history$runs, c(5, 7, 8))
+  expect_equal(nrow(out$sim), 16)
+  expect_equal(out$fit$model$dims$m, 16)
+  expect_equal(out$sim$out, rep(c("conc", "rate"), 8))
+  expect_equal(out$sim$x[c(TRUE, FALSE)], out$sim$x[c(FALSE, TRUE)])
+  expect_equal(out$sim$y, ifelse(out$sim$out == "conc", f1(out$sim$x, out$sim$t), f2(out$sim$x, out$sim$t)))
+  # f must give a run's every output; independent outputs refused before any run
+  expect_snapshot(error = TRUE, design_loop(function(x, kappa) 1, field, lower = c(x = 0, t = 0.5),
+                                            upper = c(x = 1, t = 3), output = "out"))
+  expect_snapshot(error = TRUE, design_loop(f, field, lower = c(x = 0, t = 0.5),
+                                            upper = c(x = 1, t = 3), output = "out",
+                                            outputs = "independent"))
 })
 
 test_that("design_loop() warns once, at the end, when its runs do not cover the field's inputs", {
