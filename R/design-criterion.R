@@ -513,8 +513,10 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"
+    K <- length(model$scale$output$levels)
+    cand <- if (K > 1L) paste(nrow(U) / K, "candidates x", K, "outputs") else paste(nrow(U), "candidates")
     cli::cli_abort(c(
-      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({ndraws} draws x {rows} {what} x {nrow(U)} candidates).",
+      "The look-ahead would hold {format(8 * size / 2^20, digits = 3)} MB ({ndraws} draws x {rows} {what} x {cand}).",
       i = "Give fewer {.arg ndraws} or candidates."
     ), call = call)
   }

@@ -1001,6 +1001,9 @@ test_that("propose_runs() and design_loop() give runs of every output", {
                      nfantasy = 20, ncandidates = 100)
   expect_named(pt, c("x", "t", "gain"))
   expect_snapshot(error = TRUE, propose_runs(fit, target = data.frame(x = 0.5)))
+  # the size limit counts a run's rows, and says so
+  U <- FBC:::design_candidates(NULL, fit$scale, 300, fit$data$Xs, 1e-3)
+  expect_snapshot(error = TRUE, FBC:::check_look_ahead_size(1e4, fit$model, U, matrix(0, 0, 2)))
   # the runs go back in with update(), each as its two rows
   f1 <- function(x, t) 5 * exp(-t * x)
   f2 <- function(x, t) 2 * t * x
