@@ -44,6 +44,14 @@
 #   an exact grid.
 # - "sinussgasp": the same field, fitted with discrepancy = "sgasp" (the
 #   S-GaSP of Gu and Wang 2018); its reference likewise.
+# - "kinetics2": two outputs of one run (calibrate(output = "out"), one
+#   simulator GP over the inputs and the output): consecutive reactions
+#   A -> B -> C at one rate u, A(t) = 5 exp(-u t) (the kinetics problem's)
+#   and B(t) = 5 u t exp(-u t), t in [0, 3.1], u in [0.5, 3]; each output
+#   measured at kineticField's 30 inputs at u = 1.2, sd 0.2. A run gives
+#   both (propose_runs() scores it with both values); `runs` counts runs,
+#   the RMSE is over both outputs, and the reference integrates each
+#   output's noise sd on its own (each its own sigma2E and scale).
 # Reference: kappa's exact posterior given the true simulator (no emulator:
 # the limit of infinitely many runs), on a grid, with the fits' priors:
 # kappa Beta(1.1, 1.1) on the calibration range, the noise sd half-Cauchy
@@ -152,12 +160,22 @@ pb <- switch(problem,
                     bias = function(x) 1 - x / 3 - 2 * x^2 / 3, discrepancy = "sgasp",
                     lower = c(0, 0), upper = c(1, 1), sd = 0.1, ngrid = 1000,
                     xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
-  stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics or tuowu"))
+  # two outputs of a run: eta is each output's (etas), named by output
+  kinetics2 = list(etas = list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),
+                               B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1])),
+                   u0 = 1.2, lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
+                   xf = as.data.frame(kineticField)$t),
+  stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics, kinetics2 or tuowu"))
+# one output: etas is list(eta); several: eta is the first's (unused)
+if (is.null(pb$etas)) pb$etas <- list(pb$eta)
+K <- length(pb$etas)
+outs <- names(pb$etas)
 if (is.null(pb$discrepancy)) pb$discrepancy <- "none"
 # the field's true process: eta at u0, plus the bias where there is one
+# (truth(x, k): output k's)
 if (is.null(pb$truth)) {
-  pb$truth <- function(x) {
-    pb$eta(cbind(x, matrix(pb$u0, length(x), length(pb$u0), byrow = TRUE))) +
+  pb$truth <- function(x, k = 1L) {
+    pb$etas[[k]](cbind(x, matrix(pb$u0, length(x), length(pb$u0), byrow = TRUE))) +
       if (is.null(pb$bias)) 0 else pb$bias(x)
   }
 }
@@ -169,7 +187,7 @@ if (problem == "tuowu") {
 }
 q <- length(pb$u0)
 d <- 1 + q
-xname <- if (problem == "kinetics") "t" else "x"
+xname <- if (problem %in% c("kinetics", "kinetics2")) "t" else "x"
 unames <- paste0("u", seq_len(q))
 cols <- c(xname, unames)
 # kappa's grid per calibration input (cell midpoints over its range)
@@ -181,7 +199,7 @@ ugrid <- lapply(seq_len(q), function(j) {
 uwidth <- (pb$upper[-1] - pb$lower[-1]) / pb$ngrid
 # the field's prediction inputs (RMSE against the true process)
 xpred <- seq(min(pb$xf), max(pb$xf), length.out = 50)
-truePred <- pb$truth(xpred)
+truePred <- unlist(lapply(seq_len(K), function(k) pb$truth(xpred, k)))
 
 cpu <- function(expr) {
   t0 <- proc.time()
@@ -193,13 +211,25 @@ to_natural <- function(U) {
   U <- matrix(U, ncol = d)
   sweep(sweep(U, 2, pb$upper - pb$lower, "*"), 2, pb$lower, "+")
 }
+# the runs at X (rows); with several outputs each run's K rows in turn
+# (the output column after the experimental input)
 runs_at <- function(X) {
   X <- matrix(X, ncol = d)
-  out <- data.frame(y = pb$eta(X), X[, 1])
+  if (K == 1L) {
+    out <- data.frame(y = pb$eta(X), X[, 1])
+    names(out)[2] <- xname
+    out[unames] <- X[, -1]
+    return(out)
+  }
+  i <- rep(seq_len(nrow(X)), each = K)
+  k <- rep(seq_len(K), nrow(X))
+  Y <- vapply(pb$etas, function(e) e(X), numeric(nrow(X)))
+  out <- data.frame(y = matrix(Y, nrow(X))[cbind(i, k)], X[i, 1], out = outs[k])
   names(out)[2] <- xname
-  out[unames] <- X[, -1]
+  out[unames] <- X[i, -1, drop = FALSE]
   out
 }
+nruns <- function(sim) nrow(sim) / K
 
 # The reference: kappa's exact posterior marginals on the grid (see above).
 reference <- function(field) {
@@ -212,25 +242,31 @@ reference <- function(field) {
     big <- suppressWarnings(update(big, nMCMC = 6000))
     return(lapply(seq_len(q), function(j) dens(kappas(big)[, j], j)))
   }
-  ysd <- local({
-    set.seed(1)
-    sd(pb$eta(to_natural(matrix(runif(2000 * d), ncol = d))))
-  })
   U <- as.matrix(do.call(expand.grid, ugrid))
-  nf <- length(pb$xf)
-  # eta at every grid point, one field input at a time (the same numbers as
-  # one call over all of them, in a tenth of the memory for "three")
-  E <- vapply(pb$xf, function(x) pb$eta(cbind(x, U)), numeric(nrow(U)))
-  rss <- rowSums(sweep(E, 2, field$y)^2)
-  # log of the integral over the noise sd s (log grid, half-Cauchy prior
-  # with scale ysd, times s for the log grid's Jacobian), accumulated as a
-  # log-sum-exp over the grid
-  s <- exp(seq(log(0.005), log(20), length.out = 400)) * ysd
-  post <- rep(-Inf, nrow(U))
-  for (sk in s) {
-    v <- dcauchy(sk, 0, ysd, log = TRUE) + log(sk) - nf * log(sk) - rss / (2 * sk^2)
-    mx <- pmax(post, v)
-    post <- mx + log(exp(post - mx) + exp(v - mx))
+  post <- 0
+  for (k in seq_len(K)) {
+    # each output's noise sd on its own (its own sigma2E, its response's scale)
+    ysd <- local({
+      set.seed(1)
+      sd(pb$etas[[k]](to_natural(matrix(runif(2000 * d), ncol = d))))
+    })
+    yk <- if (K == 1L) field$y else field$y[field$out == outs[k]]
+    nf <- length(pb$xf)
+    # eta at every grid point, one field input at a time (the same numbers as
+    # one call over all of them, in a tenth of the memory for "three")
+    E <- vapply(pb$xf, function(x) pb$etas[[k]](cbind(x, U)), numeric(nrow(U)))
+    rss <- rowSums(sweep(E, 2, yk)^2)
+    # log of the integral over the noise sd s (log grid, half-Cauchy prior
+    # with scale ysd, times s for the log grid's Jacobian), accumulated as a
+    # log-sum-exp over the grid
+    s <- exp(seq(log(0.005), log(20), length.out = 400)) * ysd
+    pk <- rep(-Inf, nrow(U))
+    for (sk in s) {
+      v <- dcauchy(sk, 0, ysd, log = TRUE) + log(sk) - nf * log(sk) - rss / (2 * sk^2)
+      mx <- pmax(pk, v)
+      pk <- mx + log(exp(pk - mx) + exp(v - mx))
+    }
+    post <- post + pk
   }
   for (j in seq_len(q)) {
     z <- (U[, j] - pb$lower[1 + j]) / (pb$upper[1 + j] - pb$lower[1 + j])
@@ -291,7 +327,8 @@ hellinger <- function(K, ref) {
   }, 0))
 }
 fit_runs <- function(sim, field) {
-  suppressWarnings(calibrate(sim, field, discrepancy = pb$discrepancy, showProgress = FALSE))
+  suppressWarnings(calibrate(sim, field, discrepancy = pb$discrepancy, showProgress = FALSE,
+                             output = if (K > 1L) "out"))
 }
 kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
 # the largest posterior sd of log thetaS over the inputs
@@ -301,6 +338,7 @@ theta_sd <- function(fit) {
 }
 rmse <- function(fit) {
   nd <- stats::setNames(data.frame(xpred), xname)
+  if (K > 1L) nd <- data.frame(nd[rep(seq_along(xpred), K), , drop = FALSE], out = rep(outs, each = length(xpred)))
   p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
   sqrt(mean((p - truePred)^2))
 }
@@ -370,7 +408,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       b[1] <= pb$u0[j] && pb$u0[j] <= b[2]
     }, TRUE))
     tMetric <- cpu(row <- data.frame(
-      problem = problem, batch = batch, init = init, rep = r, method = method, runs = nrow(sim),
+      problem = problem, batch = batch, init = init, rep = r, method = method, runs = nruns(sim),
       hellinger = hellinger(K, ref), sd = sd(K[, 1]), thetaSd = theta_sd(fit), covers = cov, rmse = rmse(fit),
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef,
       reweighted = isTRUE(fit$settings$reweight$used),
@@ -379,7 +417,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
     # (the last row has no design step: the oracle's columns NA)
-    if (nrow(sim) >= init + added) return(rbind_fill(c(rows, list(row))))
+    if (nruns(sim) >= init + added) return(rbind_fill(c(rows, list(row))))
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState, ref))
     row$designCpu <- tDesign
     row$picked <- if (is.null(attr(U, "picked"))) NA_character_ else attr(U, "picked")
@@ -392,7 +430,7 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
     new <- runs_at(U)
     sim <- rbind(sim, new)
     tFit <- cpu(fit <- suppressWarnings(update(fit, sim = new)))
-    if (opts$fresh == "1") fresh <- compare_fresh(fit, tFit, sim, field, 7000 + 100 * r + nrow(sim), ref)
+    if (opts$fresh == "1") fresh <- compare_fresh(fit, tFit, sim, field, 7000 + 100 * r + nruns(sim), ref)
   }
 }
 
@@ -400,6 +438,13 @@ one_replicate <- function(r) {
   set.seed(1000 + r)
   field <- stats::setNames(data.frame(pb$truth(pb$xf) + rnorm(length(pb$xf), 0, pb$sd), pb$xf),
                            c("y", xname))
+  if (K > 1L) {
+    # each output at the field's inputs (the first output's noise as for one output)
+    field <- do.call(rbind, lapply(seq_len(K), function(k) {
+      y <- if (k == 1L) field$y else pb$truth(pb$xf, k) + rnorm(length(pb$xf), 0, pb$sd)
+      stats::setNames(data.frame(y, pb$xf, outs[k]), c("y", xname, "out"))
+    }))
+  }
   start <- lhs::maximinLHS(init, d)
   tRef <- cpu(ref <- reference(field))
   if (opts$refcheck == "1") {
