@@ -1068,6 +1068,18 @@ void run_means(const DesignSystems& sys, LookAhead& la, int r, int j, const doub
     mus[i] = cond_means(sys, la, r * la.K + i, j, la.mbuf.data() + (size_t)la.S * i);
 }
 
+// x <- L^-1 x in place (L K x K lower triangular, column-major); returns
+// |x|^2 after.
+inline double solve_small(const double* L, int K, double* x) {
+  double ss = 0.0;
+  for (int i = 0; i < K; ++i) {
+    for (int l = 0; l < i; ++l) x[i] -= L[i + K * l] * x[l];
+    x[i] /= L[i + K * i];
+    ss += x[i] * x[i];
+  }
+  return ss;
+}
+
 // Adds to L (S) the log-density of run r's values y (K) under each draw,
 // the normal's constant left out:
 //   L_s += -|e_s|^2 / 2 - sum log diag LK_rs,  e_s = LK_rs^-1 (y - M_s)
@@ -1077,14 +1089,9 @@ void run_log_density(LookAhead& la, int r, const double* const* mus, const doubl
   double e[16];  // K <= 16 (design_look_ahead())
   for (int s = 0; s < S; ++s) {
     const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
-    double ss = 0.0;
-    for (int i = 0; i < K; ++i) {
-      double x = y[i] - mus[i][s];
-      for (int l = 0; l < i; ++l) x -= Ls[i + K * l] * e[l];
-      e[i] = x / Ls[i + K * i];
-      ss += e[i] * e[i];
-      la.eK[s + (size_t)S * i] = e[i];
-    }
+    for (int i = 0; i < K; ++i) e[i] = y[i] - mus[i][s];
+    const double ss = solve_small(Ls, K, e);
+    for (int i = 0; i < K; ++i) la.eK[s + (size_t)S * i] = e[i];
     L[s] += -0.5 * ss - la.ldK[(size_t)r * S + s];
   }
 }
@@ -1098,14 +1105,10 @@ void run_target_terms(LookAhead& la, int r) {
   for (int t = 0; t < T; ++t)
     for (int s = 0; s < S; ++s) {
       const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
-      double g[16], gg = 0.0;
-      for (int i = 0; i < K; ++i) {
-        double x = la.CP[s + (size_t)S * (t + (size_t)T * (r * K + i))];
-        for (int l = 0; l < i; ++l) x -= Ls[i + K * l] * g[l];
-        g[i] = x / Ls[i + K * i];
-        gg += g[i] * g[i];
-        la.gK[s + (size_t)S * (t + (size_t)T * i)] = g[i];
-      }
+      double g[16];
+      for (int i = 0; i < K; ++i) g[i] = la.CP[s + (size_t)S * (t + (size_t)T * (r * K + i))];
+      const double gg = solve_small(Ls, K, g);
+      for (int i = 0; i < K; ++i) la.gK[s + (size_t)S * (t + (size_t)T * i)] = g[i];
       la.vK[s + (size_t)S * t] = std::max(la.VTP(s, t) - gg, 0.0);
     }
 }
