@@ -776,7 +776,9 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 // the weights w_s = exp(L_s - mx), in fantasy j given the pending points;
 // with a run at candidate c returning y (draw means mu_s there): per draw
 // b = CP_stc / cv_sc (cv = sd^2), m_st = MT_stj + b (y - mu_s),
-// v_st = max(VTP_st - b CP_stc, 0); without a run (c < 0) m = MT, v = VTP.
+// v_st = max(VTP_st - b CP_stc, 0); without a run (c < 0) m = MT, v = VTP;
+// after run c of K > 1 values m_st = MT_stj + g_st'e_s, v_st = vK_st (e_s
+// from run_log_density(), g and vK from run_target_terms(); y, mu unused).
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
 double target_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
                   const double* mu) {
@@ -792,6 +794,15 @@ double target_var(LookAhead& la, const double* L, double mx, int j, int c, doubl
     double a1 = 0.0, a2 = 0.0;
     if (c < 0) {
       for (int s = 0; s < S; ++s) { a1 += w[s] * (vt[s] + mt[s] * mt[s]); a2 += w[s] * mt[s]; }
+    } else if (la.K > 1) {
+      const double* v = la.vK.data() + (size_t)S * t;
+      for (int s = 0; s < S; ++s) {
+        double ms = mt[s];
+        for (int i = 0; i < la.K; ++i)
+          ms += la.gK[s + (size_t)S * (t + (size_t)la.T * i)] * la.eK[s + (size_t)S * i];
+        a1 += w[s] * (v[s] + ms * ms);
+        a2 += w[s] * ms;
+      }
     } else {
       // b and v for candidate c (target_terms(), the same in every fantasy)
       const double* b = la.tb.data() + (size_t)S * t;
@@ -1113,34 +1124,6 @@ void run_target_terms(LookAhead& la, int r) {
     }
 }
 
-// The calibrated prediction's variance averaged over the targets after a
-// run of K values (target_var() for runs): with e_s = la.eK (the run's
-// standardised residuals, run_log_density()) and g, v of run_target_terms(),
-// per draw m_st = MT_stj + g_st'e_s, v_st as given;
-//   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
-double run_target_var(LookAhead& la, const double* L, double mx, int j) {
-  const int S = la.S, K = la.K;
-  double* w = la.wbuf.memptr();
-  exp_weights(L, mx, S, w);
-  double sw = 0.0;
-  for (int s = 0; s < S; ++s) sw += w[s];
-  double out = 0.0;
-  for (int t = 0; t < la.T; ++t) {
-    const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
-    const double* v = la.vK.data() + (size_t)S * t;
-    double a1 = 0.0, a2 = 0.0;
-    for (int s = 0; s < S; ++s) {
-      double ms = mt[s];
-      for (int i = 0; i < K; ++i)
-        ms += la.gK[s + (size_t)S * (t + (size_t)la.T * i)] * la.eK[s + (size_t)S * i];
-      a1 += w[s] * (v[s] + ms * ms);
-      a2 += w[s] * ms;
-    }
-    out += a1 / sw - (a2 / sw) * (a2 / sw);
-  }
-  return out / la.T;
-}
-
 // score_candidates() for runs of K values (K > 1): fantasy j of run r is
 // y = M_src[j](r, j) + LK_r,src[j] z_j (z_j: Z's K deviates of row j, common
 // to every run), the draws reweighted by its K-variate normal density
@@ -1175,7 +1158,7 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
       std::copy(b, b + S, L);
       run_log_density(la, r, mus, y, L);
       const double mx = *std::max_element(L, L + S);
-      after += la.T > 0 ? run_target_var(la, L, mx, j) : weighted_var(la, L, mx);
+      after += crit_var(la, L, mx, j, r, 0.0, nullptr);
     }
     gain[r] = before - after / J;
   }

@@ -290,14 +290,8 @@ look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
       C <- y$s2S * y$corr(U, U)
       diag(C) <- diag(C) * (1 + FBC:::fbc_nugget)
       C <- C - crossprod(y$A)
-      if (length(P)) {
-        AP <- y$A[, P, drop = FALSE]
-        SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
-        diag(SPP) <- diag(SPP) * (1 + FBC:::fbc_nugget)
-        SPP <- SPP - crossprod(AP)
-        ScP <- y$s2S * y$corr(U, U[P, , drop = FALSE]) - crossprod(y$A, AP)
-        C <- C - ScP %*% solve(SPP, t(ScP))
-      }
+      # given the pending rows' values (P: rows of U)
+      if (length(P)) C <- C - C[, P, drop = FALSE] %*% solve(C[P, P, drop = FALSE], C[P, , drop = FALSE])
       C
     })
     M <- array(cond$M, c(S, nrow(U), J))
