@@ -190,7 +190,8 @@
 #' they are \eqn{K}-variate Gaussian given the data and the pending runs
 #' (correlated through the outputs' level correlation), and the draws are
 #' reweighted by that density. A prediction target names its output (the
-#' output column in `target`). Independent outputs
+#' output column in `target`), or without that column stands for every
+#' output at its inputs. Independent outputs
 #' (`outputs = "independent"`) are refused.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates (x outputs) numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
@@ -209,7 +210,8 @@
 #'   experimental inputs where calibrated predictions are wanted (a data
 #'   frame or matrix with the field's input columns, as [predict()]'s
 #'   `newdata`, 1 to 100 rows): shrink the prediction's integrated
-#'   variance there (see "A prediction target").
+#'   variance there (see "A prediction target"). With several outputs a
+#'   target without the output column means every output at its inputs.
 #' @param ndraws Posterior draws the criterion integrates over (evenly
 #'   spaced over the distinct retained ones, each weighted by its repeats:
 #'   the draws of a reweighted fit, [update_runs()], repeat).
@@ -369,6 +371,10 @@ design_target <- function(target, sc, call = parent.frame()) {
       i = "Such as {.code target = data.frame({sc$names$inputs[1]} = 0.5)}."
     ), call = call)
   }
+  out <- design_output(sc)
+  if (!is.null(out) && !(is.data.frame(target) && out$name %in% names(target))) {
+    target <- every_output(target, sc, out)
+  }
   if (length(sc$factors) && is.data.frame(target)) target <- levels_to_indicators(target, sc, "target", call)
   X <- tryCatch(check_newdata(target, sc), error = function(e) {
     cli::cli_abort("{.arg target} must be {.val kappa} or experimental inputs as {.fn predict}'s {.arg newdata}.",
@@ -378,6 +384,21 @@ design_target <- function(target, sc, call = parent.frame()) {
     cli::cli_abort("{.arg target} must have 1 to 100 points (the look-ahead's cost grows with their number), not {nrow(X)}.", call = call)
   }
   scale_inputs(X, sc, seq_len(sc$p))
+}
+
+# A target without the output's column (several outputs): every output at
+# each of its points (a data frame, or numeric experimental inputs in the
+# order of the field's numeric ones), the outputs innermost.
+every_output <- function(target, sc, out) {
+  if (!is.data.frame(target)) {
+    xn <- setdiff(sc$names$inputs, unlist(lapply(sc$factors, `[[`, "columns")))
+    target <- as.data.frame(matrix(target, ncol = length(xn), dimnames = list(NULL, xn)))
+  }
+  K <- length(out$levels)
+  target <- target[rep(seq_len(nrow(target)), each = K), , drop = FALSE]
+  target[[out$name]] <- rep(out$levels, length.out = nrow(target))
+  rownames(target) <- NULL
+  target
 }
 
 # The field's rows in the look-ahead's system: its groups of rows at one

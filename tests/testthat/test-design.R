@@ -1000,7 +1000,18 @@ test_that("propose_runs() and design_loop() give runs of every output", {
   pt <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, out = "rate"), ndraws = 40,
                      nfantasy = 20, ncandidates = 100)
   expect_named(pt, c("x", "t", "gain"))
-  expect_snapshot(error = TRUE, propose_runs(fit, target = data.frame(x = 0.5)))
+  # without the output column a target is every output at its inputs (a
+  # data frame or numeric)
+  both <- data.frame(x = c(0.5, 0.5, 0.8, 0.8), out = c("conc", "rate", "conc", "rate"))
+  set.seed(5)
+  p1 <- propose_runs(fit, n = 2, target = both, ndraws = 40, nfantasy = 20, ncandidates = 100)
+  for (tg in list(data.frame(x = c(0.5, 0.8)), c(0.5, 0.8))) {
+    set.seed(5)
+    p2 <- propose_runs(fit, n = 2, target = tg, ndraws = 40, nfantasy = 20, ncandidates = 100)
+    attr(p2, "time") <- attr(p1, "time")
+    expect_identical(p2, p1)
+  }
+  expect_equal(nrow(FBC:::design_target(data.frame(x = c(0.5, 0.8)), fit$scale)), 4)
   # the size limit counts a run's rows, and says so
   U <- FBC:::design_candidates(NULL, fit$scale, 300, fit$data$Xs, 1e-3)
   expect_snapshot(error = TRUE, FBC:::check_look_ahead_size(1e4, fit$model, U, matrix(0, 0, 2)))
