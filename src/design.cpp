@@ -897,13 +897,14 @@ double chol_floor(double* a, int K, double fl) {
 
 // Draw s's covariance of each run's K values given the data and the
 // pending points (B, ScP from pending_conditionals(); k pending points),
-// rows a, b of one run:
-//   Sigma_ab = s2S (Rs(U_a, U_b) + nugget [a = b]) - A_a'A_b - B_a ScP_b'
-// and its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in
-// the output alone (checked in design_look_ahead()), so Rs among them is
-// the first run's.
+// rows a != b of one run:
+//   Sigma_ab = s2S Rs(U_a, U_b) - A_a'A_b - B_a ScP_b',
+// its diagonal the rows' variances cv (pending_conditionals()' own), and
+// its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in the
+// output alone (checked in design_look_ahead()), so Rs among them is the
+// first run's.
 void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& mod,
-                     double nugget, const arma::mat& B, const arma::mat& ScP, int k, int s,
+                     const arma::vec& cv, const arma::mat& B, const arma::mat& ScP, int k, int s,
                      LookAhead& la) {
   const int K = la.K, S = la.S, q = U.n_cols;
   const double s2S = sys.s2S[s];
@@ -914,14 +915,15 @@ void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& 
            U.rows(0, K - 1), U.rows(0, K - 1), R0, false);
   for (int r = 0; r < la.Nr; ++r) {
     double* L = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
-    for (int l = 0; l < K; ++l)
-      for (int i = l; i < K; ++i) {
+    for (int l = 0; l < K; ++l) {
+      L[l + K * l] = cv[r * K + l];
+      for (int i = l + 1; i < K; ++i) {
         const int a = r * K + i, b = r * K + l;
-        double x = s2S * R0(i, l) * (i == l ? 1.0 + nugget : 1.0) -
-                   dot_sum(As.colptr(a), As.colptr(b), N);
+        double x = s2S * R0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
         for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
         L[i + K * l] = x;
       }
+    }
     la.ldK[(size_t)r * S + s] = chol_floor(L, K, 1e-12 * s2S);
   }
 }
@@ -983,7 +985,11 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       }
     }
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
-    if (la.K > 1) run_covariances(sys, U, mod, nugget, B, ScP, k, s, la);
+    if (la.K > 1) {
+      // (runs: their factors; the rows' sd are score_candidates()' alone)
+      run_covariances(sys, U, mod, cv, B, ScP, k, s, la);
+      continue;
+    }
     for (int c = 0; c < la.Nc; ++c) {
       la.sd(s, c) = std::sqrt(std::max(cv[c], 1e-12 * s2S));
       la.isd(s, c) = 1.0 / la.sd(s, c);
