@@ -394,11 +394,7 @@ every_output <- function(target, sc, out) {
     xn <- setdiff(sc$names$inputs, unlist(lapply(sc$factors, `[[`, "columns")))
     target <- as.data.frame(matrix(target, ncol = length(xn), dimnames = list(NULL, xn)))
   }
-  K <- length(out$levels)
-  target <- target[rep(seq_len(nrow(target)), each = K), , drop = FALSE]
-  target[[out$name]] <- rep(out$levels, length.out = nrow(target))
-  rownames(target) <- NULL
-  target
+  at_every_output(target, out)
 }
 
 # The field's rows in the look-ahead's system: its groups of rows at one

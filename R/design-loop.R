@@ -204,10 +204,7 @@ loop_output <- function(dots, field, levs, call = parent.frame()) {
 # as calibrate() gives a simulator function), returning K numbers.
 run_simulator <- function(f, X, xnames, cal, yname, output = NULL) {
   K <- if (is.null(output)) 1L else length(output$levels)
-  if (K > 1L) {
-    X <- X[rep(seq_len(nrow(X)), each = K), , drop = FALSE]
-    X[[output$name]] <- factor(rep(output$levels, length.out = nrow(X)), levels = output$levels)
-  }
+  if (K > 1L) X <- at_every_output(X, output)
   futures <- lapply(seq_len(nrow(X) / K), function(i) {
     rows <- (i - 1L) * K + seq_len(K)
     x <- X[rows, xnames, drop = FALSE]

@@ -99,3 +99,14 @@ level_factors <- function(model) {
   if (!identical(model$options$outputs, "independent")) return(fac)
   fac[names(fac) != model$scale$output$name]
 }
+
+# The data frame X with each row repeated at every output in turn (`out`:
+# the output's name and levels), its output column a factor: a run's rows
+# (design_loop()) or a target's points at every output (propose_runs()).
+at_every_output <- function(X, out) {
+  K <- length(out$levels)
+  X <- X[rep(seq_len(nrow(X)), each = K), , drop = FALSE]
+  X[[out$name]] <- factor(rep(out$levels, length.out = nrow(X)), levels = out$levels)
+  rownames(X) <- NULL
+  X
+}
