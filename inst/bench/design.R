@@ -168,7 +168,7 @@ pb <- switch(problem,
   stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics, kinetics2 or tuowu"))
 # one output: etas is list(eta); several: eta is the first's (unused)
 if (is.null(pb$etas)) pb$etas <- list(pb$eta)
-K <- length(pb$etas)
+nOut <- length(pb$etas)  # (not K: one_method()'s K is kappa's draws)
 outs <- names(pb$etas)
 if (is.null(pb$discrepancy)) pb$discrepancy <- "none"
 # the field's true process: eta at u0, plus the bias where there is one
@@ -199,7 +199,7 @@ ugrid <- lapply(seq_len(q), function(j) {
 uwidth <- (pb$upper[-1] - pb$lower[-1]) / pb$ngrid
 # the field's prediction inputs (RMSE against the true process)
 xpred <- seq(min(pb$xf), max(pb$xf), length.out = 50)
-truePred <- unlist(lapply(seq_len(K), function(k) pb$truth(xpred, k)))
+truePred <- unlist(lapply(seq_len(nOut), function(k) pb$truth(xpred, k)))
 
 cpu <- function(expr) {
   t0 <- proc.time()
@@ -211,25 +211,25 @@ to_natural <- function(U) {
   U <- matrix(U, ncol = d)
   sweep(sweep(U, 2, pb$upper - pb$lower, "*"), 2, pb$lower, "+")
 }
-# the runs at X (rows); with several outputs each run's K rows in turn
+# the runs at X (rows); with several outputs each run's nOut rows in turn
 # (the output column after the experimental input)
 runs_at <- function(X) {
   X <- matrix(X, ncol = d)
-  if (K == 1L) {
+  if (nOut == 1L) {
     out <- data.frame(y = pb$eta(X), X[, 1])
     names(out)[2] <- xname
     out[unames] <- X[, -1]
     return(out)
   }
-  i <- rep(seq_len(nrow(X)), each = K)
-  k <- rep(seq_len(K), nrow(X))
+  i <- rep(seq_len(nrow(X)), each = nOut)
+  k <- rep(seq_len(nOut), nrow(X))
   Y <- vapply(pb$etas, function(e) e(X), numeric(nrow(X)))
   out <- data.frame(y = matrix(Y, nrow(X))[cbind(i, k)], X[i, 1], out = outs[k])
   names(out)[2] <- xname
   out[unames] <- X[i, -1, drop = FALSE]
   out
 }
-nruns <- function(sim) nrow(sim) / K
+nruns <- function(sim) nrow(sim) / nOut
 
 # The reference: kappa's exact posterior marginals on the grid (see above).
 reference <- function(field) {
@@ -244,13 +244,13 @@ reference <- function(field) {
   }
   U <- as.matrix(do.call(expand.grid, ugrid))
   post <- 0
-  for (k in seq_len(K)) {
+  for (k in seq_len(nOut)) {
     # each output's noise sd on its own (its own sigma2E, its response's scale)
     ysd <- local({
       set.seed(1)
       sd(pb$etas[[k]](to_natural(matrix(runif(2000 * d), ncol = d))))
     })
-    yk <- if (K == 1L) field$y else field$y[field$out == outs[k]]
+    yk <- if (nOut == 1L) field$y else field$y[field$out == outs[k]]
     nf <- length(pb$xf)
     # eta at every grid point, one field input at a time (the same numbers as
     # one call over all of them, in a tenth of the memory for "three")
@@ -328,7 +328,7 @@ hellinger <- function(K, ref) {
 }
 fit_runs <- function(sim, field) {
   suppressWarnings(calibrate(sim, field, discrepancy = pb$discrepancy, showProgress = FALSE,
-                             output = if (K > 1L) "out"))
+                             output = if (nOut > 1L) "out"))
 }
 kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
 # the largest posterior sd of log thetaS over the inputs
@@ -338,7 +338,7 @@ theta_sd <- function(fit) {
 }
 rmse <- function(fit) {
   nd <- stats::setNames(data.frame(xpred), xname)
-  if (K > 1L) nd <- data.frame(nd[rep(seq_along(xpred), K), , drop = FALSE], out = rep(outs, each = length(xpred)))
+  if (nOut > 1L) nd <- data.frame(nd[rep(seq_along(xpred), nOut), , drop = FALSE], out = rep(outs, each = length(xpred)))
   p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
   sqrt(mean((p - truePred)^2))
 }
@@ -438,9 +438,9 @@ one_replicate <- function(r) {
   set.seed(1000 + r)
   field <- stats::setNames(data.frame(pb$truth(pb$xf) + rnorm(length(pb$xf), 0, pb$sd), pb$xf),
                            c("y", xname))
-  if (K > 1L) {
+  if (nOut > 1L) {
     # each output at the field's inputs (the first output's noise as for one output)
-    field <- do.call(rbind, lapply(seq_len(K), function(k) {
+    field <- do.call(rbind, lapply(seq_len(nOut), function(k) {
       y <- if (k == 1L) field$y else pb$truth(pb$xf, k) + rnorm(length(pb$xf), 0, pb$sd)
       stats::setNames(data.frame(y, pb$xf, outs[k]), c("y", xname, "out"))
     }))
