@@ -355,9 +355,31 @@ reweight_log_jacobian <- function(phis, old, new) {
     th <- which(cls == part[1])
     if (!length(th) || !kernel_has_alpha(new[[part[3]]])) next
     al <- which(cls == part[2])
-    out <- out + drop(phis[, al, drop = FALSE] %*% ratio[seq_along(th)])
+    out <- out + drop(phis[, al, drop = FALSE] %*% input_ratio(ratio, th, if (part[1] == "thetaS") new$scale$p + new$scale$q else new$scale$p))
   }
   out
+}
+
+# The inputs' ratios (of their ranges, or their logs) for the length-scales
+# at places i of phi, `per` of them per copy: with independent outputs
+# each output has its own copy of thetaS (p + q) and thetaB (p).
+input_ratio <- function(ratio, i, per) ratio[(seq_along(i) - 1L) %% per + 1L]
+
+# The output (1-based) each parameter of model's phi is in the units of:
+# with independent outputs a perOutput class's copy its own, a
+# measurement-error variance its noise group's (its field rows'), the rest
+# the first's (with shared outputs one sigma2S spans them all).
+param_outputs <- function(model) {
+  cls <- model$spec$classes
+  o <- model$spec$outputOf %||% integer(length(cls))
+  e <- which(cls == "sigma2E")
+  outF <- model$data$outF
+  if (!is.null(outF)) {
+    noise <- model$spec$model$noise %||% rep(1L, length(outF))
+    o[e] <- outF[match(seq_along(e), noise)]
+  }
+  o[is.na(o) | o == 0L] <- 1L
+  o
 }
 
 # The old runs and the new ones in one table of the old one's form.
@@ -422,17 +444,20 @@ warm_phi <- function(phi, old, new) {
   ratio <- (sn$xmax - sn$xmin) / (so$xmax - so$xmin)
   stretch <- function(cl, al, kern) {
     i <- which(cls == cl)
-    r <- rep(ratio[seq_along(i)], each = n)
+    r <- rep(input_ratio(ratio, i, if (cl == "thetaS") p + q else p), each = n)
     if (kernel_has_alpha(kern)) phi[, i] * r^phi[, which(cls == al)] else phi[, i] * r^2
   }
   th <- which(cls == "thetaS")
   out[, th] <- stretch("thetaS", "alphaS", new$kernelS)
   tb <- which(cls == "thetaB")
   if (length(tb)) out[, tb] <- stretch("thetaB", "alphaB", new$kernelB)
-  v <- cls %in% c("sigma2S", "sigma2B", "sigma2E")
-  out[, v] <- phi[, v] * (so$ysd[1] / sn$ysd[1])^2
+  # with several outputs each is standardised by its own runs' mean and sd
+  o <- param_outputs(new)
+  v <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
+  out[, v] <- phi[, v] * rep((so$ysd[o[v]] / sn$ysd[o[v]])^2, each = n)
   mu <- which(cls == "muB")
-  out[, mu] <- (phi[, mu] * so$ysd[1] + so$ymean[1] - sn$ymean[1]) / sn$ysd[1]
+  out[, mu] <- (phi[, mu] * rep(so$ysd[o[mu]], each = n) + rep(so$ymean[o[mu]] - sn$ymean[o[mu]], each = n)) /
+    rep(sn$ysd[o[mu]], each = n)
   fixed <- new$spec$table$family == prior_families[["fixed"]]
   out[, fixed] <- rep(new$spec$init[fixed], each = n)
   out

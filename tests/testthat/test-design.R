@@ -71,6 +71,66 @@ test_that("update(fit, sim =) carries the states to the new scaling", {
   expect_equal(out[ix$muB] * sn$ysd + sn$ymean, 0.2 * so$ysd + so$ymean)
 })
 
+test_that("update(fit, sim =) carries each output's parameters to the new scaling", {
+  # independent outputs: a copy of thetaS, alphaS and sigma2S per output,
+  # each output standardised by its own runs' sd; new runs that stretch
+  # the inputs' ranges and change each output's sd by its own ratio (the
+  # copies beyond the first were left NA, and the refit failed)
+  po <- two_outputs(m = 12)
+  f1 <- function(x, t) 5 * exp(-t * x)
+  f2 <- function(x, t) 2 * t * x
+  extra <- data.frame(x = c(-0.3, 1.4), t = c(0.3, 3.5))
+  more <- rbind(data.frame(y = f1(extra$x, extra$t), x = extra$x, out = "conc", t = extra$t),
+                data.frame(y = f2(extra$x, extra$t), x = extra$x, out = "rate", t = extra$t))
+  args <- list(output = "out", outputs = "independent", kernelS = "powexp", fit = FALSE)
+  old <- do.call(calibrate, c(list(po$sim, po$field), args))
+  new <- do.call(calibrate, c(list(rbind(po$sim, more), po$field), args))
+  so <- old$scale
+  sn <- new$scale
+  expect_gt(abs(log((sn$ysd[1] / so$ysd[1]) / (sn$ysd[2] / so$ysd[2]))), 0.05)
+  ix <- FBC:::param_indices(2, 1, "gp", noise = 2L, outputs = 2L)
+  phi <- old$spec$init
+  phi[ix$thetaS] <- 1:6
+  phi[ix$alphaS] <- c(1.5, 1.8, 1.9, 1.2, 1.6, 1.7)
+  phi[ix$sigma2S] <- c(1.5, 0.7)
+  phi[ix$sigma2E] <- c(0.01, 0.02)
+  phi[ix$sigma2B] <- c(0.3, 0.4)
+  phi[ix$muB] <- c(0.2, -0.1)
+  out <- FBC:::warm_phi(phi, old, new)
+  # per output: theta d^alpha in the inputs' own units kept, the
+  # variances and the bias mean in the output's own units
+  # (the output's indicator column's thetaS and alphaS are fixed)
+  fixed <- old$spec$table$family == FBC:::prior_families[["fixed"]]
+  th <- setdiff(ix$thetaS, which(fixed))
+  expect_length(th, 4)
+  r <- rep((sn$xmax - sn$xmin) / (so$xmax - so$xmin), 2)
+  expect_equal(out[th], phi[th] * r[th - 1]^phi[th + 6])
+  expect_true(all(is.finite(out)))
+  expect_equal(out[ix$sigma2S] * sn$ysd^2, phi[ix$sigma2S] * so$ysd^2)
+  expect_equal(out[ix$sigma2B] * sn$ysd^2, phi[ix$sigma2B] * so$ysd^2)
+  expect_equal(out[ix$sigma2E] * sn$ysd^2, phi[ix$sigma2E] * so$ysd^2)
+  expect_equal(out[ix$muB] * sn$ysd + sn$ymean, phi[ix$muB] * so$ysd + so$ymean)
+  # the Jacobian (reweight_log_jacobian()) against central differences of
+  # warm_phi() over the length-scales and smoothnesses
+  free <- c(th, th + 6)
+  T <- function(v) FBC:::warm_phi(replace(phi, free, v), old, new)[free]
+  J <- vapply(seq_along(free), function(j) {
+    h <- 1e-6 * max(1, abs(phi[free[j]]))
+    e <- replace(numeric(length(free)), j, h)
+    (T(phi[free] + e) - T(phi[free] - e)) / (2 * h)
+  }, numeric(length(free)))
+  phi2 <- replace(phi, ix$alphaS, 2 - phi[ix$alphaS] / 4)
+  T2 <- function(v) FBC:::warm_phi(replace(phi2, free, v), old, new)[free]
+  J2 <- vapply(seq_along(free), function(j) {
+    h <- 1e-6 * max(1, abs(phi2[free[j]]))
+    e <- replace(numeric(length(free)), j, h)
+    (T2(phi2[free] + e) - T2(phi2[free] - e)) / (2 * h)
+  }, numeric(length(free)))
+  jac <- FBC:::reweight_log_jacobian(rbind(phi, phi2), old, new)
+  expect_equal(unname(jac[1] - jac[2]), determinant(J)$modulus[1] - determinant(J2)$modulus[1],
+               tolerance = 1e-6)
+})
+
 test_that("the reweighting's weights are the new posterior over the old (plain-R dense)", {
   # the power exponential with alphaS sampled, and new runs that stretch the
   # design's ranges and the response's sd: every part of the map T and its
