@@ -191,8 +191,12 @@
 #' (correlated through the outputs' level correlation), and the draws are
 #' reweighted by that density. A prediction target names its output (the
 #' output column in `target`), or without that column stands for every
-#' output at its inputs. Independent outputs
-#' (`outputs = "independent"`) are refused.
+#' output at its inputs. With independent outputs (`outputs =
+#' "independent"`, each output its own simulator GP and hyperparameters,
+#' only \eqn{\kappa} shared) a run's \eqn{K} values are independent given
+#' a draw, each Gaussian given its own output's runs, field data and
+#' pending runs; the draws are reweighted by the product of their
+#' densities.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates (x outputs) numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
 #' (give fewer `ndraws` or candidates).
@@ -405,19 +409,14 @@ design_field_rows <- function(model) {
   sum(!duplicated(cbind(model$data$Xf, mm$noise, mm$source)))
 }
 
-# The models the look-ahead handles (the dense conditional of one output).
+# The models the look-ahead handles (a simulator with runs; the dense
+# conditional, refused beyond 3000 rows).
 check_design_model <- function(model, call = parent.frame()) {
   d <- model$dims
   if (!is.null(model$simulator)) {
     cli::cli_abort(c(
       "This fit calibrates a simulator function, which has no runs to add to: {.fn propose_runs} chooses simulator runs.",
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
-    ), call = call)
-  }
-  if (isTRUE(d$outputs > 1L)) {
-    cli::cli_abort(c(
-      "{.fn propose_runs} does not handle independent outputs ({.code outputs = \"independent\"}) yet.",
-      i = "It handles several outputs modelled by one simulator GP ({.code outputs = \"shared\"}, the default), categorical inputs, any discrepancy model and field data sets."
     ), call = call)
   }
   N <- d$m + design_field_rows(model)

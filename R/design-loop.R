@@ -179,20 +179,13 @@ with_levels <- function(X, levs) {
 # design_loop()'s several outputs: `output` (among its `...`, as for
 # calibrate()) names the field's column saying each row's output; its
 # name and levels (those of `levs`, the field's categorical inputs'), or
-# NULL. Independent outputs are refused here, before any run (propose_runs()
-# does not handle them).
+# NULL.
 loop_output <- function(dots, field, levs, call = parent.frame()) {
   nm <- dots$output
   if (is.null(nm)) return(NULL)
   if (!is.character(nm) || length(nm) != 1L || !nm %in% names(levs)) {
     cli::cli_abort("{.arg output} must name a categorical column of {.arg field} (the output of each row), not {.val {nm}}.",
                    call = call)
-  }
-  if (identical(dots$outputs, "independent")) {
-    cli::cli_abort(c(
-      "{.fn design_loop} does not handle independent outputs ({.code outputs = \"independent\"}) yet: {.fn propose_runs} does not.",
-      i = "It handles several outputs modelled by one simulator GP ({.code outputs = \"shared\"}, the default)."
-    ), call = call)
   }
   list(name = nm, levels = levs[[nm]])
 }

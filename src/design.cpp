@@ -40,11 +40,20 @@ namespace {
 // correlations, level_count() x S). With T target points: the
 // predictive means mT and variances VT of zeta(XT) (T x S) and their
 // covariances with the candidates' values CTU (T x Nc x S), given the data.
+//
+// With independent outputs (outputs = "independent", K of them) the data's
+// covariance is block diagonal over the outputs, each block its output's
+// system at its parameters (design_systems_outputs()): A's rows are the
+// outputs' runs and field groups in turn, a candidate's column zero but in
+// its output's rows; mu, v, mT, VT from its output's system, CTU zero
+// between outputs, ll the sum; the kernel's parameters and s2S per draw
+// and output (column or entry s + S o), outU each candidate's output.
 struct DesignSystems {
   arma::cube A, CTU;
   arma::mat mu, muT, v, thS, alS, rhoS, mT, VT;  // muT = mu' (S x Nc)
   arma::vec ll, s2S;
-  int T = 0;
+  int T = 0, blocks = 1;
+  std::vector<int> outU;
 };
 
 // Column j of L X = B in place, from row k0 on (the rows above solved):
@@ -535,30 +544,21 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
 }
 
 // Every draw's system (rows of phis) at the candidates U (and the target
-// points XT, T x p, none for kappa's criterion) on the dense algebra, the
-// simulator rows' block shared by consecutive draws with the same simulator
-// hyperparameters; keepA: every draw's A (a batch's pending points need
-// them).
-DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
-                             const arma::mat& XT, double nugget, const Rcpp::List& model,
-                             Model& mod, bool keepA) {
+// points XT, T x p, none for kappa's criterion) for one simulator GP (mod:
+// the model of the data, its algebra dense), the simulator rows' block
+// shared by consecutive draws with the same simulator hyperparameters;
+// keepA: every draw's A (a batch's pending points need them).
+DesignSystems block_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                            const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
+                            const arma::mat& XT, double nugget, const Model& mod, bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
-  mod = read_model(model, p, q);
-  if (!mod.emulator || mod.nOutputs() > 1)
-    Rcpp::stop("the look-ahead handles simulator runs with one simulator GP (not independent outputs)");
-  mod.algebra = ALG_DENSE;
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *pp;
-  if (!mod.source.empty() && XT.n_rows > 0)
-    Rcpp::stop("a prediction target needs one bias, not one per data set");
   if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
     Rcpp::stop("the data sets must give one per field row");
   const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
   if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
     Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
-  if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
-  if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
   const FieldGroups fg = field_groups(Xf, yf, mod.noise, mod.source);
   const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
@@ -602,6 +602,101 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
       Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
     if (s % 100 == 99) Rcpp::checkUserInterrupt();
   }
+  return out;
+}
+
+// The rows of X whose output (the output's indicator columns, f) is o.
+arma::uvec output_rows(const arma::mat& X, const LevelInput& f, int o) {
+  std::vector<arma::uword> r;
+  for (arma::uword i = 0; i < X.n_rows; ++i)
+    if (level_of(X, i, f) == o) r.push_back(i);
+  return arma::uvec(r);
+}
+
+// block_systems() with independent outputs: each output's system from its
+// rows and its parameters (OutputsPosterior's blocks), put together as
+// DesignSystems describes.
+DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
+                                     const arma::mat& Xs, const arma::vec& ys,
+                                     const arma::mat& phis, const arma::mat& U,
+                                     const arma::mat& XT, double nugget, const Model& mod,
+                                     bool keepA) {
+  const OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
+  if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
+  const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
+  std::vector<DesignSystems> b(K);
+  std::vector<arma::uvec> uo(K), to(K);
+  int N = 0;
+  for (int o = 0; o < K; ++o) {
+    uo[o] = output_rows(U, mod.outputs, o);
+    to[o] = output_rows(XT, mod.outputs, o);
+    const std::vector<int>& map = op.blockMap(o);
+    const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(map));
+    b[o] = block_systems(op.blockXf(o), op.blockYf(o), op.blockXs(o), op.blockYs(o), ph,
+                         U.rows(uo[o]), XT.rows(to[o]), nugget, op.blockModel(o), keepA);
+    N += b[o].A.n_rows;
+  }
+  DesignSystems out;
+  out.T = T;
+  out.blocks = K;
+  out.A.zeros(N, Nc, keepA ? S : 1);
+  out.mu.set_size(Nc, S);
+  out.v.set_size(Nc, S);
+  out.ll.zeros(S);
+  out.s2S.set_size(S * K);
+  out.thS.set_size(b[0].thS.n_rows, S * K);
+  out.alS.set_size(b[0].alS.n_rows, S * K);
+  out.rhoS.set_size(b[0].rhoS.n_rows, S * K);
+  out.outU.assign(Nc, 0);
+  if (T > 0) {
+    out.mT.set_size(T, S);
+    out.VT.set_size(T, S);
+    out.CTU.zeros(T, Nc, S);
+  }
+  int off = 0;
+  for (int o = 0; o < K; ++o) {
+    const DesignSystems& bo = b[o];
+    const int No = bo.A.n_rows;
+    for (arma::uword c : uo[o]) out.outU[c] = o;
+    out.mu.rows(uo[o]) = bo.mu;
+    out.v.rows(uo[o]) = bo.v;
+    out.ll += bo.ll;
+    out.s2S.subvec(S * o, S * o + S - 1) = bo.s2S;
+    out.thS.cols(S * o, S * o + S - 1) = bo.thS;
+    out.alS.cols(S * o, S * o + S - 1) = bo.alS;
+    out.rhoS.cols(S * o, S * o + S - 1) = bo.rhoS;
+    if (keepA && uo[o].n_elem > 0)
+      for (int s = 0; s < S; ++s)
+        for (arma::uword k = 0; k < uo[o].n_elem; ++k)
+          out.A.slice(s).col(uo[o][k]).rows(off, off + No - 1) = bo.A.slice(s).col(k);
+    if (T > 0 && to[o].n_elem > 0) {
+      out.mT.rows(to[o]) = bo.mT;
+      out.VT.rows(to[o]) = bo.VT;
+      for (int s = 0; s < S; ++s)
+        out.CTU.slice(s).submat(to[o], uo[o]) = bo.CTU.slice(s);
+    }
+    off += No;
+  }
+  return out;
+}
+
+// Every draw's system (block_systems(); with independent outputs
+// design_systems_outputs()) on the dense algebra; mod: the model read.
+DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
+                             const arma::mat& XT, double nugget, const Rcpp::List& model,
+                             Model& mod, bool keepA) {
+  const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
+  mod = read_model(model, p, q);
+  if (!mod.emulator) Rcpp::stop("the look-ahead handles simulator runs (a simulator GP)");
+  mod.algebra = ALG_DENSE;
+  if (!mod.source.empty() && XT.n_rows > 0)
+    Rcpp::stop("a prediction target needs one bias, not one per data set");
+  if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
+  if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
+  DesignSystems out = mod.nOutputs() > 1
+    ? design_systems_outputs(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA)
+    : block_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
   out.muT = out.mu.t();
   return out;
 }
@@ -842,6 +937,39 @@ double crit_var(LookAhead& la, const double* L, double mx, int j, int c, double 
   return la.T > 0 ? target_var(la, L, mx, j, c, y, mu) : weighted_var(la, L, mx);
 }
 
+// Draw s's prior covariance of the simulator's values at rows X and Y of
+// the candidates: s2S Rs(X, Y); with independent outputs (sys.blocks K >
+// 1; oX, oY the rows' outputs) output o's s2S_o Rs_o between two rows of
+// output o, 0 between outputs.
+void prior_cov(const DesignSystems& sys, const Model& mod, int s, const arma::mat& X,
+               const int* oX, const arma::mat& Y, const int* oY, arma::mat& out) {
+  const int q = X.n_cols;
+  if (sys.blocks == 1) {
+    sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), X, Y, out, false);
+    out *= sys.s2S[s];
+    return;
+  }
+  const int S = sys.s2S.n_elem / sys.blocks;
+  arma::mat R(X.n_rows, Y.n_rows);
+  out.zeros(X.n_rows, Y.n_rows);
+  for (int o = 0; o < sys.blocks; ++o) {
+    const int so = s + S * o;
+    sim_corr(mod, q, sys.thS.colptr(so), sys.alS.colptr(so), sys.rhoS.colptr(so), X, Y, R, false);
+    for (arma::uword j = 0; j < Y.n_rows; ++j)
+      for (arma::uword i = 0; i < X.n_rows; ++i)
+        if (oX[i] == o && oY[j] == o) out(i, j) = sys.s2S[so] * R(i, j);
+  }
+}
+
+// The smallest simulator variance of draw s (of its outputs' with
+// independent outputs): the scale of the conditional variances' floor.
+double min_s2S(const DesignSystems& sys, int s) {
+  const int S = sys.s2S.n_elem / sys.blocks;
+  double x = sys.s2S[s];
+  for (int o = 1; o < sys.blocks; ++o) x = std::min(x, sys.s2S[s + S * o]);
+  return x;
+}
+
 // Per draw, the candidates' values given the data and the pending points'
 // fantasised values: with A_P the pending columns of A,
 //   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
@@ -898,7 +1026,7 @@ double chol_floor(double* a, int K, double fl) {
 // Draw s's covariance of each run's K values given the data and the
 // pending points (B, ScP from pending_conditionals(); k pending points),
 // rows a != b of one run:
-//   Sigma_ab = s2S Rs(U_a, U_b) - A_a'A_b - B_a ScP_b',
+//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 = s2S Rs(U_a, U_b), prior_cov()),
 // its diagonal the rows' variances cv (pending_conditionals()' own), and
 // its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in the
 // output alone (checked in design_look_ahead()), so Rs among them is the
@@ -906,33 +1034,38 @@ double chol_floor(double* a, int K, double fl) {
 void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& mod,
                      const arma::vec& cv, const arma::mat& B, const arma::mat& ScP, int k, int s,
                      LookAhead& la) {
-  const int K = la.K, S = la.S, q = U.n_cols;
-  const double s2S = sys.s2S[s];
+  const int K = la.K, S = la.S;
   const arma::mat& As = sys.A.slice(s);
   const int N = As.n_rows;
-  arma::mat R0(K, K);
-  sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s),
-           U.rows(0, K - 1), U.rows(0, K - 1), R0, false);
+  arma::mat C0(K, K);
+  const int* o0 = sys.outU.empty() ? nullptr : sys.outU.data();
+  prior_cov(sys, mod, s, U.rows(0, K - 1), o0, U.rows(0, K - 1), o0, C0);
+  const double fl = 1e-12 * min_s2S(sys, s);
   for (int r = 0; r < la.Nr; ++r) {
     double* L = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
     for (int l = 0; l < K; ++l) {
       L[l + K * l] = cv[r * K + l];
       for (int i = l + 1; i < K; ++i) {
         const int a = r * K + i, b = r * K + l;
-        double x = s2S * R0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
+        double x = C0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
         for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
         L[i + K * l] = x;
       }
     }
-    la.ldK[(size_t)r * S + s] = chol_floor(L, K, 1e-12 * s2S);
+    la.ldK[(size_t)r * S + s] = chol_floor(L, K, fl);
   }
 }
 
 void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Model& mod,
                           double nugget, LookAhead& la) {
-  const int k = la.P.size(), q = U.n_cols;
+  const int k = la.P.size();
   const arma::uvec Pu = arma::conv_to<arma::uvec>::from(la.P);
   const arma::mat UP = U.rows(Pu);
+  // the rows' outputs (independent outputs; prior_cov())
+  std::vector<int> outP(k);
+  for (int i = 0; i < k && !sys.outU.empty(); ++i) outP[i] = sys.outU[la.P[i]];
+  const int* oU = sys.outU.empty() ? nullptr : sys.outU.data();
+  const int* oP = sys.outU.empty() ? nullptr : outP.data();
   const int S = la.S, Nc = la.Nc;
   arma::mat SPP(k, k), ScP(la.Nc, k), B, Sinv;
   la.Bk.resize((size_t)S * Nc * k);
@@ -943,17 +1076,16 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
     if (k > 0) {
       const arma::mat& As = sys.A.slice(s);
       const arma::mat AP = As.cols(Pu);
-      sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), UP, UP, SPP, false);
-      SPP *= s2S;
+      prior_cov(sys, mod, s, UP, oP, UP, oP, SPP);
       SPP.diag() *= 1.0 + nugget;
       SPP -= AP.t() * AP;
-      sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), U, UP, ScP, false);
+      prior_cov(sys, mod, s, U, oU, UP, oP, ScP);
       // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
       // batch's look-ahead)
       const int N = As.n_rows;
       for (int i = 0; i < k; ++i)
         for (int c = 0; c < la.Nc; ++c)
-          ScP(c, i) = s2S * ScP(c, i) - dot_sum(As.colptr(c), AP.colptr(i), N);
+          ScP(c, i) -= dot_sum(As.colptr(c), AP.colptr(i), N);
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
       // B = ScP SPP^-1 (SPP k x k; BLAS's Nc triangular solves were a
       // twentieth of a batch's look-ahead): B' = L^-T L^-1 ScP'.

@@ -681,10 +681,20 @@ public:
   void fieldLoo(const std::vector<std::vector<int> >& groups,
                 arma::vec& logdens) const override;
   std::string algebra() const override;
+  // Output o's block as its posterior sees it: its model (sub_model()),
+  // the places in phi of its parameters, its rows of the data (the
+  // look-ahead, design.cpp, builds each output's system from these).
+  const Model& blockModel(int o) const { return subModel_[o]; }
+  const std::vector<int>& blockMap(int o) const { return map_[o]; }
+  const arma::mat& blockXf(int o) const { return Xf_[o]; }
+  const arma::vec& blockYf(int o) const { return yf_[o]; }
+  const arma::mat& blockXs(int o) const { return Xs_[o]; }
+  const arma::vec& blockYs(int o) const { return ys_[o]; }
 
 private:
   int K_;
   LevelInput out_;
+  std::vector<Model> subModel_;
   // each output's data (the sub-posteriors hold references into these)
   std::vector<arma::mat> Xf_, Xs_;
   std::vector<arma::vec> yf_, ys_;

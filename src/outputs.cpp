@@ -88,8 +88,10 @@ OutputsPosterior::OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, con
     Xf_[o] = Xf.rows(rf); yf_[o] = yf.elem(rf);
     Xs_[o] = Xs.rows(rs); ys_[o] = ys.elem(rs);
   }
+  subModel_.reserve(K_);
   for (int o = 0; o < K_; ++o) {
-    Model sub;
+    subModel_.emplace_back();
+    Model& sub = subModel_.back();
     sub_model(model, o, sub);
     for (size_t k = 0; k < map_[o].size(); ++k) {
       const int j = map_[o][k];

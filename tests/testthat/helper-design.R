@@ -103,6 +103,77 @@ draw_system <- function(phi, model, U, XT = NULL) {
   out
 }
 
+# draw_system() with independent outputs (outputs = "independent"): each
+# output o's system from its own rows and parameters (phi's output-o
+# copies, kappa, and the sigma2E of its noise groups, as OutputsPosterior
+# maps them), put together as one draw's: A block-diagonal over the outputs
+# (a candidate's column nonzero in its output's rows only), mu, v, mT, VT
+# from its output's system, ll the sum, CTU zero between outputs, and the
+# prior covariance `corr` (with s2S 1): output o's s2S_o R_o(x, y) between
+# two points of output o, 0 between outputs.
+draw_system_outputs <- function(phi, model, U, XT = NULL) {
+  d <- model$dims
+  K <- d$outputs
+  sc <- model$scale
+  jo <- match(sc$output$columns, c(sc$names$inputs, sc$names$calibration))
+  out_of <- function(X) FBC:::indicator_codes(X[, jo, drop = FALSE])
+  noise <- model$spec$model$noise
+  if (is.null(noise)) noise <- rep(1L, d$n)
+  cls <- FBC:::param_class_of(d$p, d$q, model$discrepancy, noise = d$noise, levels = d$levels,
+                              sources = d$sources, outputs = K)
+  own <- FBC:::param_output_of(d$p, d$q, model$discrepancy, noise = d$noise, levels = d$levels,
+                               sources = d$sources, outputs = K)
+  ixE <- which(cls == "sigma2E")
+  oU <- out_of(U)
+  oT <- if (length(XT)) out_of(XT)
+  blocks <- lapply(seq_len(K), function(o) {
+    rf <- model$data$outF == o
+    rs <- model$data$outS == o
+    groups <- sort(unique(noise[rf]))
+    keep <- own == o | (own == 0 & cls != "sigma2E") | seq_along(cls) %in% ixE[groups]
+    mo <- model
+    mo$data <- list(Xf = model$data$Xf[rf, , drop = FALSE], yf = model$data$yf[rf],
+                    Xs = model$data$Xs[rs, , drop = FALSE], ys = model$data$ys[rs])
+    mo$dims$n <- sum(rf)
+    mo$dims$m <- sum(rs)
+    mo$dims$noise <- length(groups)
+    mo$scale$factors <- sc$factors[names(sc$factors) != sc$output$name]
+    mo$spec$model$noise <- match(noise[rf], groups)
+    if (!is.null(mo$spec$model$source)) mo$spec$model$source <- model$spec$model$source[rf]
+    draw_system(phi[keep], mo, U[oU == o, , drop = FALSE],
+                if (length(XT)) XT[oT == o, , drop = FALSE])
+  })
+  Nc <- nrow(U)
+  No <- vapply(blocks, function(b) nrow(b$A), 1L)
+  out <- list(A = matrix(0, sum(No), Nc), mu = numeric(Nc), v = numeric(Nc),
+              ll = sum(vapply(blocks, `[[`, 1, "ll")), s2S = 1)
+  for (o in seq_len(K)) {
+    out$A[sum(No[seq_len(o - 1)]) + seq_len(No[o]), oU == o] <- blocks[[o]]$A
+    out$mu[oU == o] <- blocks[[o]]$mu
+    out$v[oU == o] <- blocks[[o]]$v
+  }
+  out$corr <- function(X, Y) {
+    oX <- out_of(X)
+    oY <- out_of(Y)
+    C <- matrix(0, nrow(X), nrow(Y))
+    for (o in seq_len(K)) {
+      C[oX == o, oY == o] <- blocks[[o]]$s2S *
+        blocks[[o]]$corr(X[oX == o, , drop = FALSE], Y[oY == o, , drop = FALSE])
+    }
+    C
+  }
+  if (length(XT)) {
+    out$mT <- out$VT <- numeric(nrow(XT))
+    out$CTU <- matrix(0, nrow(XT), Nc)
+    for (o in unique(oT)) {
+      out$mT[oT == o] <- blocks[[o]]$mT
+      out$VT[oT == o] <- blocks[[o]]$VT
+      out$CTU[oT == o, oU == o] <- blocks[[o]]$CTU
+    }
+  }
+  out
+}
+
 # The greedy look-ahead over the particles' systems `sys`: n points chosen
 # one at a time, each maximising the expected reduction of kappa's
 # (weighted) posterior variance with the pending points' fantasised values
