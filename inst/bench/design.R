@@ -52,6 +52,8 @@
 #   both (propose_runs() scores it with both values); `runs` counts runs,
 #   the RMSE is over both outputs, and the reference integrates each
 #   output's noise sd on its own (each its own sigma2E and scale).
+# - "kinetics2i": the same, fitted with outputs = "independent" (each
+#   output its own simulator GP and hyperparameters, only kappa shared).
 # Reference: kappa's exact posterior given the true simulator (no emulator:
 # the limit of infinitely many runs), on a grid, with the fits' priors:
 # kappa Beta(1.1, 1.1) on the calibration range, the noise sd half-Cauchy
@@ -165,7 +167,12 @@ pb <- switch(problem,
                                B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1])),
                    u0 = 1.2, lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
                    xf = as.data.frame(kineticField)$t),
-  stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics, kinetics2 or tuowu"))
+  # the same, each output its own simulator GP (outputs = "independent")
+  kinetics2i = list(etas = list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),
+                                B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1])),
+                    u0 = 1.2, lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
+                    xf = as.data.frame(kineticField)$t, outputs = "independent"),
+  stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics, kinetics2, kinetics2i or tuowu"))
 # one output: etas is list(eta); several: eta is the first's (unused)
 if (is.null(pb$etas)) pb$etas <- list(pb$eta)
 nOut <- length(pb$etas)  # (not K: one_method()'s K is kappa's draws)
@@ -187,7 +194,7 @@ if (problem == "tuowu") {
 }
 q <- length(pb$u0)
 d <- 1 + q
-xname <- if (problem %in% c("kinetics", "kinetics2")) "t" else "x"
+xname <- if (problem %in% c("kinetics", "kinetics2", "kinetics2i")) "t" else "x"
 unames <- paste0("u", seq_len(q))
 cols <- c(xname, unames)
 # kappa's grid per calibration input (cell midpoints over its range)
@@ -328,7 +335,7 @@ hellinger <- function(K, ref) {
 }
 fit_runs <- function(sim, field) {
   suppressWarnings(calibrate(sim, field, discrepancy = pb$discrepancy, showProgress = FALSE,
-                             output = if (nOut > 1L) "out"))
+                             output = if (nOut > 1L) "out", outputs = if (is.null(pb$outputs)) "shared" else pb$outputs))
 }
 kappas <- function(fit) as.matrix(fit$Phi[, paste0("kappa", seq_len(q)), drop = FALSE])
 # the largest posterior sd of log thetaS over the inputs
