@@ -12,7 +12,9 @@
 #'   and `coef()` (a typo would otherwise be ignored silently), a warning for
 #'   `print()`.
 #' @return `summary()`: a data frame of class `summary.fbc`, one row per
-#'   parameter (the `estimates` element of the fit).
+#'   parameter (the `estimates` element of the fit). With several
+#'   measurement-error groups (outputs or field data sets) its `print()`
+#'   says which `sigma2E` is whose.
 #' @export
 #' @examples
 #' set.seed(1)
@@ -23,7 +25,9 @@
 summary.fbc <- function(object, ...) {
   check_dots_empty(..., fn = summary.fbc, name = "summary")
   object <- check_fbc(object, "object")
-  structure(object$estimates, class = c("summary.fbc", "data.frame"))
+  # (several measurement-error groups: which variance is whose, for print())
+  structure(object$estimates, class = c("summary.fbc", "data.frame"),
+            noiseLabels = object$scale$noiseLabels)
 }
 
 #' @rdname summary.fbc
@@ -41,6 +45,10 @@ print.summary.fbc <- function(x, digits = 3, ...) {
     formatC(col, digits = digits, format = "fg", flag = "#")
   })
   print(df, right = TRUE)
+  lab <- attr(x, "noiseLabels")
+  if (!is.null(lab)) {
+    cat(sprintf("measurement error: %s\n", paste0("sigma2E", seq_along(lab), " = ", lab, collapse = ", ")))
+  }
   invisible(x)
 }
 

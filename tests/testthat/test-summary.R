@@ -53,3 +53,18 @@ test_that("summary() and coef() refuse unknown arguments; print() of the summary
   expect_snapshot(error = TRUE, coef(fit, stats = "median"))
   expect_snapshot(x <- capture.output(print(summary(fit), right = FALSE)))
 })
+
+test_that("print() of the summary says which sigma2E is whose output", {
+  # two outputs (helper-outputs.R), each its own measurement error
+  po <- two_outputs(m = 16)
+  set.seed(1)
+  fit <- calibrate(po$sim, po$field, output = "out", discrepancy = "none", nMCMC = 200,
+                   nBurn = 100, nChains = 1, showProgress = FALSE)
+  out <- capture.output(print(summary(fit)))
+  expect_equal(out[length(out)], "measurement error: sigma2E1 = conc, sigma2E2 = rate")
+  expect_true(any(grepl("^sigma2E2 ", out)))
+  # one group: no such line
+  set.seed(5)
+  fit1 <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
+  expect_false(any(grepl("measurement error", capture.output(print(summary(fit1))))))
+})
