@@ -417,3 +417,41 @@ look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
   }
   list(chosen = chosen, gain = gain, variance = variance, scores = scores)
 }
+
+# Checks on propose_runs()'s runs for two_outputs() (helper-outputs.R):
+# their inputs (no output column), in the runs' ranges, none at a run.
+expect_two_output_runs <- function(pr, sim) {
+  expect_named(pr, c("x", "t", "gain"))
+  expect_true(all(pr$x >= min(sim$x) & pr$x <= max(sim$x)))
+  expect_true(all(pr$t >= min(sim$t) & pr$t <= max(sim$t)))
+  expect_false(any(paste(pr$x, pr$t) %in% paste(sim$x, sim$t)))
+}
+
+# A design_loop() of two_outputs()' functions on its field's inner inputs:
+# 5 starting runs, then a batch of 2 and the budget's last run (`...` to
+# calibrate()). Checks that f is called once per run with the run's rows
+# at each output (the output column a factor), that runs are counted as
+# runs, and that each row's response is its output's. Returns the loop.
+two_output_loop <- function(field, ...) {
+  f1 <- function(x, t) 5 * exp(-t * x)
+  f2 <- function(x, t) 2 * t * x
+  f <- function(x, kappa) {
+    stopifnot(is.factor(x$out), identical(as.character(x$out), c("conc", "rate")))
+    ifelse(x$out == "conc", f1(x$x, kappa[["t"]]), f2(x$x, kappa[["t"]]))
+  }
+  set.seed(3)
+  out <- suppressWarnings(design_loop(f, field[field$x > 0.1 & field$x < 0.9, ],
+                                      lower = c(x = 0, t = 0.5), upper = c(x = 1, t = 3),
+                                      n0 = 5, batch = 2, budget = 3, output = "out",
+                                      discrepancy = "none", nMCMC = 600, nBurn = 200,
+                                      nChains = 1, design = list(ndraws = 40, nfantasy = 20),
+                                      showProgress = FALSE, ...))
+  expect_equal(out$history$runs, c(5, 7, 8))
+  expect_equal(nrow(out$sim), 16)
+  expect_equal(out$fit$model$dims$m, 16)
+  expect_equal(out$sim$out, rep(c("conc", "rate"), 8))
+  expect_equal(out$sim$x[c(TRUE, FALSE)], out$sim$x[c(FALSE, TRUE)])
+  expect_equal(out$sim$y, ifelse(out$sim$out == "conc", f1(out$sim$x, out$sim$t),
+                                 f2(out$sim$x, out$sim$t)))
+  out
+}

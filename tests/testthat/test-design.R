@@ -113,22 +113,18 @@ test_that("update(fit, sim =) carries each output's parameters to the new scalin
   # the Jacobian (reweight_log_jacobian()) against central differences of
   # warm_phi() over the length-scales and smoothnesses
   free <- c(th, th + 6)
-  T <- function(v) FBC:::warm_phi(replace(phi, free, v), old, new)[free]
-  J <- vapply(seq_along(free), function(j) {
-    h <- 1e-6 * max(1, abs(phi[free[j]]))
-    e <- replace(numeric(length(free)), j, h)
-    (T(phi[free] + e) - T(phi[free] - e)) / (2 * h)
-  }, numeric(length(free)))
+  log_det <- function(x) {
+    T <- function(v) FBC:::warm_phi(replace(x, free, v), old, new)[free]
+    J <- vapply(seq_along(free), function(j) {
+      h <- 1e-6 * max(1, abs(x[free[j]]))
+      e <- replace(numeric(length(free)), j, h)
+      (T(x[free] + e) - T(x[free] - e)) / (2 * h)
+    }, numeric(length(free)))
+    determinant(J)$modulus[1]
+  }
   phi2 <- replace(phi, ix$alphaS, 2 - phi[ix$alphaS] / 4)
-  T2 <- function(v) FBC:::warm_phi(replace(phi2, free, v), old, new)[free]
-  J2 <- vapply(seq_along(free), function(j) {
-    h <- 1e-6 * max(1, abs(phi2[free[j]]))
-    e <- replace(numeric(length(free)), j, h)
-    (T2(phi2[free] + e) - T2(phi2[free] - e)) / (2 * h)
-  }, numeric(length(free)))
   jac <- FBC:::reweight_log_jacobian(rbind(phi, phi2), old, new)
-  expect_equal(unname(jac[1] - jac[2]), determinant(J)$modulus[1] - determinant(J2)$modulus[1],
-               tolerance = 1e-6)
+  expect_equal(unname(jac[1] - jac[2]), log_det(phi) - log_det(phi2), tolerance = 1e-6)
 })
 
 test_that("the reweighting's weights are the new posterior over the old (plain-R dense)", {
@@ -1037,10 +1033,7 @@ test_that("propose_runs() and design_loop() give runs of every output", {
   set.seed(5)
   pr <- propose_runs(fit, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 100)
   # a run: its inputs, no output column
-  expect_named(pr, c("x", "t", "gain"))
-  expect_true(all(pr$x >= min(po$sim$x) & pr$x <= max(po$sim$x)))
-  expect_true(all(pr$t >= min(po$sim$t) & pr$t <= max(po$sim$t)))
-  expect_false(any(paste(pr$x, pr$t) %in% paste(po$sim$x, po$sim$t)))
+  expect_two_output_runs(pr, po$sim)
   expect_true(all(pr$gain > 0))
   # given candidates are runs too (an output column refused)
   cand <- data.frame(x = c(0.1, 0.5, 0.9), t = 1.7)
@@ -1076,24 +1069,9 @@ test_that("propose_runs() and design_loop() give runs of every output", {
   fit2 <- update(fit, sim = new, nMCMC = 300)
   expect_equal(fit2$model$dims$m, 32 + 6)
   # design_loop(): one call of f per run, on the run's rows at each output
-  f <- function(x, kappa) {
-    stopifnot(is.factor(x$out), identical(as.character(x$out), c("conc", "rate")))
-    ifelse(x$out == "conc", f1(x$x, kappa[["t"]]), f2(x$x, kappa[["t"]]))
-  }
-  field <- po$field[po$field$x > 0.1 & po$field$x < 0.9, ]
-  set.seed(3)
-  out <- suppressWarnings(design_loop(f, field, lower = c(x = 0, t = 0.5), upper = c(x = 1, t = 3),
-                                      n0 = 5, batch = 2, budget = 3, output = "out",
-                                      discrepancy = "none", nMCMC = 600, nBurn = 200,
-                                      nChains = 1, design = list(ndraws = 40, nfantasy = 20),
-                                      showProgress = FALSE))
-  expect_equal(out$history$runs, c(5, 7, 8))
-  expect_equal(nrow(out$sim), 16)
-  expect_equal(out$fit$model$dims$m, 16)
-  expect_equal(out$sim$out, rep(c("conc", "rate"), 8))
-  expect_equal(out$sim$x[c(TRUE, FALSE)], out$sim$x[c(FALSE, TRUE)])
-  expect_equal(out$sim$y, ifelse(out$sim$out == "conc", f1(out$sim$x, out$sim$t), f2(out$sim$x, out$sim$t)))
+  two_output_loop(po$field)
   # f must give a run's every output
+  field <- po$field[po$field$x > 0.1 & po$field$x < 0.9, ]
   expect_snapshot(error = TRUE, design_loop(function(x, kappa) 1, field, lower = c(x = 0, t = 0.5),
                                             upper = c(x = 1, t = 3), output = "out"))
 })
@@ -1165,32 +1143,16 @@ test_that("propose_runs() and design_loop() handle independent outputs", {
   set.seed(5)
   pr <- propose_runs(fit, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 100)
   # runs: their inputs, in the design's ranges, distinct from the runs
-  expect_named(pr, c("x", "t", "gain"))
-  expect_true(all(pr$x >= min(po$sim$x) & pr$x <= max(po$sim$x)))
-  expect_true(all(pr$t >= min(po$sim$t) & pr$t <= max(po$sim$t)))
-  expect_false(any(paste(pr$x, pr$t) %in% paste(po$sim$x, po$sim$t)))
+  expect_two_output_runs(pr, po$sim)
   expect_true(all(is.finite(pr$gain)))
   # a target at one output
   set.seed(5)
   pt <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, out = "rate"), ndraws = 40,
                      nfantasy = 20, ncandidates = 100)
   expect_named(pt, c("x", "t", "gain"))
-  # a loop, one call of f per run
-  f1 <- function(x, t) 5 * exp(-t * x)
-  f2 <- function(x, t) 2 * t * x
-  f <- function(x, kappa) ifelse(x$out == "conc", f1(x$x, kappa[["t"]]), f2(x$x, kappa[["t"]]))
-  field <- po$field[po$field$x > 0.1 & po$field$x < 0.9, ]
-  set.seed(3)
-  out <- suppressWarnings(design_loop(f, field, lower = c(x = 0, t = 0.5), upper = c(x = 1, t = 3),
-                                      n0 = 5, batch = 2, budget = 3, output = "out",
-                                      outputs = "independent", discrepancy = "none",
-                                      nMCMC = 600, nBurn = 200, nChains = 1,
-                                      design = list(ndraws = 40, nfantasy = 20),
-                                      showProgress = FALSE))
-  expect_equal(out$history$runs, c(5, 7, 8))
+  # a loop, one call of f per run (its refits through update(fit, sim =))
+  out <- two_output_loop(po$field, outputs = "independent")
   expect_equal(out$fit$model$options$outputs, "independent")
-  expect_equal(out$sim$out, rep(c("conc", "rate"), 8))
-  expect_equal(out$sim$y, ifelse(out$sim$out == "conc", f1(out$sim$x, out$sim$t), f2(out$sim$x, out$sim$t)))
 })
 
 test_that("design_loop() warns once, at the end, when its runs do not cover the field's inputs", {
