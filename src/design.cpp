@@ -655,7 +655,7 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   }
   int off = 0;
   for (int o = 0; o < K; ++o) {
-    const DesignSystems& bo = b[o];
+    DesignSystems& bo = b[o];
     const int No = bo.A.n_rows;
     for (arma::uword c : uo[o]) out.outU[c] = o;
     out.mu.rows(uo[o]) = bo.mu;
@@ -675,6 +675,9 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
       for (int s = 0; s < S; ++s)
         out.CTU.slice(s).submat(to[o], uo[o]) = bo.CTU.slice(s);
     }
+    // (the block's copies freed as they are placed: A is the bulk)
+    bo.A.reset();
+    bo.CTU.reset();
     off += No;
   }
   return out;
