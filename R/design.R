@@ -355,15 +355,19 @@ reweight_log_jacobian <- function(phis, old, new) {
     th <- which(cls == part[1])
     if (!length(th) || !kernel_has_alpha(new[[part[3]]])) next
     al <- which(cls == part[2])
-    out <- out + drop(phis[, al, drop = FALSE] %*% input_ratio(ratio, th, if (part[1] == "thetaS") new$scale$p + new$scale$q else new$scale$p))
+    out <- out + drop(phis[, al, drop = FALSE] %*% input_ratio(ratio, part[1], length(th), new$scale))
   }
   out
 }
 
-# The inputs' ratios (of their ranges, or their logs) for the length-scales
-# at places i of phi, `per` of them per copy: with independent outputs
-# each output has its own copy of thetaS (p + q) and thetaB (p).
-input_ratio <- function(ratio, i, per) ratio[(seq_along(i) - 1L) %% per + 1L]
+# The inputs' ratios (of their ranges, or their logs) for the n
+# length-scales of class cl ("thetaS": over the p + q inputs, "thetaB":
+# the p experimental ones of scale sc), with independent outputs a copy
+# per output.
+input_ratio <- function(ratio, cl, n, sc) {
+  per <- if (cl == "thetaS") sc$p + sc$q else sc$p
+  ratio[(seq_len(n) - 1L) %% per + 1L]
+}
 
 # The output (1-based) each parameter of model's phi is in the units of:
 # with independent outputs a perOutput class's copy its own, a
@@ -424,8 +428,9 @@ warm_state <- function(state, old, new) {
 # model `old` in the scaling of `new`: kappa
 # through its own units; theta_k * (range_new / range_old)^a (a = alpha_k
 # for the power exponential, 2 otherwise: theta d^a is what the kernel
-# sees); variances by (sd_old / sd_new)^2 and muB by the change of mean;
-# fixed parameters at the new model's values.
+# sees); variances by (sd_old / sd_new)^2 and muB by the change of mean,
+# each output's by its own (param_outputs()); fixed parameters at the new
+# model's values.
 warm_phi <- function(phi, old, new) {
   if (is.null(dim(phi))) return(warm_phi(matrix(phi, 1L), old, new)[1L, ])
   # one row per draw (reweight_runs()), one column per parameter
@@ -444,7 +449,7 @@ warm_phi <- function(phi, old, new) {
   ratio <- (sn$xmax - sn$xmin) / (so$xmax - so$xmin)
   stretch <- function(cl, al, kern) {
     i <- which(cls == cl)
-    r <- rep(input_ratio(ratio, i, if (cl == "thetaS") p + q else p), each = n)
+    r <- rep(input_ratio(ratio, cl, length(i), sn), each = n)
     if (kernel_has_alpha(kern)) phi[, i] * r^phi[, which(cls == al)] else phi[, i] * r^2
   }
   th <- which(cls == "thetaS")
