@@ -547,13 +547,13 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
 // points XT, T x p, none for kappa's criterion) for one simulator GP (mod:
 // the model of the data, its algebra dense), the simulator rows' block
 // shared by consecutive draws with the same simulator hyperparameters;
-// keepA: every draw's A (a batch's pending points need them).
-DesignSystems block_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                            const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
-                            const arma::mat& XT, double nugget, const Model& mod, bool keepA) {
+// keepA: every draw's A (a batch's pending points need them). post: the
+// dense posterior of these data (its layout; its phi set to each draw's).
+DesignSystems block_systems(Posterior& post, const arma::mat& Xf, const arma::vec& yf,
+                            const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis,
+                            const arma::mat& U, const arma::mat& XT, double nugget,
+                            const Model& mod, bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
-  Posterior& post = *pp;
   if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
     Rcpp::stop("the data sets must give one per field row");
   const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
@@ -614,14 +614,14 @@ arma::uvec output_rows(const arma::mat& X, const LevelInput& f, int o) {
 }
 
 // block_systems() with independent outputs: each output's system from its
-// rows and its parameters (OutputsPosterior's blocks), put together as
-// DesignSystems describes.
+// rows and its parameters (OutputsPosterior's blocks, their posteriors
+// dense as mod's algebra is), put together as DesignSystems describes.
 DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
                                      const arma::mat& Xs, const arma::vec& ys,
                                      const arma::mat& phis, const arma::mat& U,
                                      const arma::mat& XT, double nugget, const Model& mod,
                                      bool keepA) {
-  const OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
+  OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
   if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
   const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
   std::vector<DesignSystems> b(K);
@@ -632,8 +632,9 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
     to[o] = output_rows(XT, mod.outputs, o);
     const std::vector<int>& map = op.blockMap(o);
     const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(map));
-    b[o] = block_systems(op.blockXf(o), op.blockYf(o), op.blockXs(o), op.blockYs(o), ph,
-                         U.rows(uo[o]), XT.rows(to[o]), nugget, op.blockModel(o), keepA);
+    b[o] = block_systems(op.block(o), op.blockXf(o), op.blockYf(o), op.blockXs(o),
+                         op.blockYs(o), ph, U.rows(uo[o]), XT.rows(to[o]), nugget,
+                         op.blockModel(o), keepA);
     N += b[o].A.n_rows;
   }
   DesignSystems out;
@@ -697,9 +698,13 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
     Rcpp::stop("a prediction target needs one bias, not one per data set");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
-  DesignSystems out = mod.nOutputs() > 1
-    ? design_systems_outputs(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA)
-    : block_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
+  DesignSystems out;
+  if (mod.nOutputs() > 1) {
+    out = design_systems_outputs(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
+  } else {
+    std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, mod);
+    out = block_systems(*post, Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
+  }
   out.muT = out.mu.t();
   return out;
 }

@@ -681,9 +681,10 @@ public:
   void fieldLoo(const std::vector<std::vector<int> >& groups,
                 arma::vec& logdens) const override;
   std::string algebra() const override;
-  // Output o's block as its posterior sees it: its model (sub_model()),
-  // the places in phi of its parameters, its rows of the data (the
-  // look-ahead, design.cpp, builds each output's system from these).
+  // Output o's block: its posterior, its model (sub_model()), the places
+  // in phi of its parameters, its rows of the data (the look-ahead,
+  // design.cpp, builds each output's system from these).
+  Posterior& block(int o) { return *sub_[o]; }
   const Model& blockModel(int o) const { return subModel_[o]; }
   const std::vector<int>& blockMap(int o) const { return map_[o]; }
   const arma::mat& blockXf(int o) const { return Xf_[o]; }
