@@ -115,10 +115,7 @@ print_design <- function(mo, sc, fn) {
     cat(sprintf("  field data sets (%s): %s%s\n", sc$source$name,
                 paste(sc$source$levels, collapse = ", "), own))
   }
-  if (!is.null(sc$noiseLabels)) {
-    cat(sprintf("  measurement error: %s\n", paste0("sigma2E", seq_along(sc$noiseLabels), " = ",
-                                                    sc$noiseLabels, collapse = ", ")))
-  }
+  if (!is.null(sc$noiseLabels)) cat(sprintf("  %s\n", noise_labels_line(sc$noiseLabels)))
   des <- kappa_design(sc)
   cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
               paste0("kappa", seq_len(sc$q), " = ", des$names, if (fn) " (prior " else " (design ",

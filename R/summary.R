@@ -46,10 +46,14 @@ print.summary.fbc <- function(x, digits = 3, ...) {
   })
   print(df, right = TRUE)
   lab <- attr(x, "noiseLabels")
-  if (!is.null(lab)) {
-    cat(sprintf("measurement error: %s\n", paste0("sigma2E", seq_along(lab), " = ", lab, collapse = ", ")))
-  }
+  if (!is.null(lab)) cat(noise_labels_line(lab), "\n", sep = "")
   invisible(x)
+}
+
+# Which measurement-error variance is whose (print() of a fit and of its
+# summary): "measurement error: sigma2E1 = conc, sigma2E2 = rate".
+noise_labels_line <- function(labels) {
+  paste0("measurement error: ", paste0("sigma2E", seq_along(labels), " = ", labels, collapse = ", "))
 }
 
 #' @rdname summary.fbc
