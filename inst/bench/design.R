@@ -162,16 +162,14 @@ pb <- switch(problem,
                     bias = function(x) 1 - x / 3 - 2 * x^2 / 3, discrepancy = "sgasp",
                     lower = c(0, 0), upper = c(1, 1), sd = 0.1, ngrid = 1000,
                     xf = rep(seq(0.1, 0.9, length.out = 5), 2)),
-  # two outputs of a run: eta is each output's (etas), named by output
-  kinetics2 = list(etas = list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),
-                               B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1])),
-                   u0 = 1.2, lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
-                   xf = as.data.frame(kineticField)$t),
-  # the same, each output its own simulator GP (outputs = "independent")
+  # two outputs of a run: eta is each output's (etas), named by output;
+  # kinetics2i the same, each output its own simulator GP
+  kinetics2 = ,
   kinetics2i = list(etas = list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),
                                 B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1])),
                     u0 = 1.2, lower = c(0, 0.5), upper = c(3.1, 3), sd = 0.2, ngrid = 1000,
-                    xf = as.data.frame(kineticField)$t, outputs = "independent"),
+                    xf = as.data.frame(kineticField)$t,
+                    outputs = if (problem == "kinetics2i") "independent" else "shared"),
   stop("problem must be sinus, sinusbias, sinussgasp, two, three, kinetics, kinetics2, kinetics2i or tuowu"))
 # one output: etas is list(eta); several: eta is the first's (unused)
 if (is.null(pb$etas)) pb$etas <- list(pb$eta)
