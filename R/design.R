@@ -91,7 +91,8 @@
 #'   the resampled draws), `topUp` (sweeps a chain added after them), `stale`
 #'   (the moves found stale in the continuation, if any). A
 #'   reweighted fit is continued by `update(fit, nMCMC = )` from its
-#'   resampled draws with the old adapted proposals.
+#'   resampled draws with the old adapted proposals (it warns when they
+#'   are stale).
 #' @seealso [propose_runs()], [design_loop()]
 #' @export
 #' @examples

@@ -6,6 +6,12 @@
 #' if they had been run longer in the first place (with fresh random
 #' streams). A run interrupted with Ctrl-C is continued the same way.
 #'
+#' A fit whose draws were reweighted after runs were added ([update_runs()])
+#' goes on with the proposals adapted before the runs were added: when a
+#' move then accepts under a quarter of its adaptation's target, `update()`
+#' warns (class `fbc_stale_proposals`), naming the moves; such chains mix
+#' slowly, and `calibrate(fit$model)` fits the model afresh.
+#'
 #' `update()` writes no checkpoint: the continued draws are only in the
 #' object it returns (an `update()` interrupted with Ctrl-C returns the
 #' draws made so far, and is continued by `update()` again). For a long
@@ -108,9 +114,25 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
     new_fbc_chains(results, object$model, object$call, s, prev = object)
   }
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
-  run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
-             nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
-             dat = object$data, spec = object$spec, moves = object$model$moves, whole = TRUE)
+  out <- run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
+                    nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
+                    dat = object$data, spec = object$spec, moves = object$model$moves, whole = TRUE)
+  if (isTRUE(s$reweight$used)) warn_stale(object, out, here)
+  out
+}
+
+# A reweighted fit (update_runs()) continues with the proposals adapted at
+# the last refit, before runs were added; update_runs()'s own continuation
+# checks them (top_up()) and refits when they are stale, a user's update()
+# says so: the moves accepting under a quarter of their target in the
+# sweeps just run (stale_moves()), which mix slowly.
+warn_stale <- function(before, after, call) {
+  stale <- stale_moves(before, after)
+  if (!length(stale)) return(invisible())
+  cli::cli_warn(c(
+    "The {cli::qty(length(stale))}move{?s} {.val {stale}} accepted under a quarter of {?its/their} target in these sweeps: the draws were reweighted after runs were added (see {.fn update_runs}) and the chains go on with proposals adapted before, which no longer suit the posterior, so they mix slowly.",
+    i = "{.code calibrate(fit$model)} fits the model on all runs afresh, with proposals adapted to it."
+  ), class = "fbc_stale_proposals", call = call)
 }
 
 # The most sweeps any chain of `fit` has run (counted from its start in

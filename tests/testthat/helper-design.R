@@ -1,3 +1,27 @@
+# The sinusoid of Koermer et al. (2024), eta(x, u) = sin(10 u x), without
+# its bias: m scattered runs on [0, 1]^2 (a Latin hypercube), 5 field
+# inputs x 2 replicates at u = pi / 5, noise sd 0.1.
+sinus_problem <- function(m = 12, seed = 1) {
+  set.seed(seed)
+  u <- (sample(m) - stats::runif(m)) / m
+  x <- (sample(m) - stats::runif(m)) / m
+  xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
+  list(sim = data.frame(y = sin(10 * u * x), x = x, u = u),
+       field = data.frame(y = sin(10 * pi / 5 * xf) + stats::rnorm(10, 0, 0.1), x = xf))
+}
+# `fit` with every adapted proposal's step made exp(6) = 400 times its
+# (sampler-scale) sd: as after several reweighted steps whose runs
+# narrowed the posterior, its moves accept almost nothing.
+stale_proposals <- function(fit) {
+  for (k in seq_along(fit$state$chains)) {
+    st <- fit$state$chains[[k]]$sampler
+    st$logsd[] <- 6
+    for (b in seq_along(st$blocks)) st$blocks[[b]]$logscale <- 6
+    fit$state$chains[[k]]$sampler <- st
+  }
+  fit
+}
+
 # The look-ahead of propose_runs() in plain R: the reference its C++
 # (src/design.cpp) is checked against (test-design.R). This is the
 # implementation the package ran before the criterion moved to C++ (dense

@@ -128,3 +128,27 @@ test_that("update() under a rule whose maxMCMC leaves no room says both numbers"
   expect_snapshot(error = TRUE,
                   update(fit, nMCMC = 100, converge = until_converged(maxMCMC = fit$settings$nMCMC)))
 })
+
+test_that("update(fit, nMCMC =) on a reweighted fit warns when its proposals are stale", {
+  # the reweighted, continued fit of test-design.R's stale-proposal test:
+  # its proposals, adapted at the fit on 12 runs, suit the posterior on 16
+  # (no warning); made 400 times too long (as after several reweighted
+  # steps) the continuation accepts almost nothing, and update() says which
+  # moves (update_runs()'s own continuation refits instead)
+  pb <- sinus_problem(m = 18)
+  set.seed(3)
+  fit <- suppressWarnings(calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", nChains = 2,
+                                    showProgress = FALSE))
+  set.seed(4)
+  ok <- update(fit, sim = pb$sim[13:16, ])
+  expect_true(ok$settings$reweight$used)
+  expect_no_warning(more <- update(ok, nMCMC = 300))
+  expect_equal(more$settings$nMCMC, ok$settings$nMCMC + 300)
+  w <- expect_warning(update(stale_proposals(ok), nMCMC = 300), class = "fbc_stale_proposals")
+  expect_match(conditionMessage(w), "kappa1")
+  expect_match(conditionMessage(w), "calibrate(fit$model)", fixed = TRUE)
+  set.seed(5)
+  expect_snapshot(stale <- update(stale_proposals(ok), nMCMC = 300))
+  # a fit that was not reweighted keeps its own proposals: never checked
+  expect_no_warning(update(stale_proposals(fit), nMCMC = 300))
+})
