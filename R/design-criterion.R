@@ -198,8 +198,9 @@
 #' pending runs; the draws are reweighted by the product of their
 #' densities.
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
-#' candidates (x outputs) numbers; beyond 5e7 (400 MB) it is refused, naming the sizes
-#' (give fewer `ndraws` or candidates).
+#' candidates (x outputs) numbers (with independent outputs m and the
+#' field's inputs of the output with the most); beyond 5e7 (400 MB) it is
+#' refused, naming the sizes (give fewer `ndraws` or candidates).
 #'
 #' @param fit An `fbc` object.
 #' @param n Number of points (a batch, chosen greedily with the pending
@@ -401,12 +402,18 @@ every_output <- function(target, sc, out) {
   at_every_output(target, out)
 }
 
-# The field's rows in the look-ahead's system: its groups of rows at one
-# input in one noise group and data set (replicates enter through their
-# mean; src/design.cpp, field_groups()).
-design_field_rows <- function(model) {
+# The rows of a draw's system in the look-ahead (src/design.cpp): the runs
+# and the field's groups of rows at one input in one noise group and data
+# set (replicates enter through their mean; field_groups()), as c(runs,
+# field). With independent outputs each output's system is its own (a
+# block; design_systems_outputs()): the largest output's.
+design_rows <- function(model) {
   mm <- model$spec$model
-  sum(!duplicated(cbind(model$data$Xf, mm$noise, mm$source)))
+  key <- cbind(model$data$Xf, mm$noise, mm$source)
+  count <- function(sim, field) c(length(sim), sum(!duplicated(key[field, , drop = FALSE])))
+  if (output_count(mm) == 1L) return(count(seq_len(model$dims$m), seq_len(nrow(key))))
+  rows <- mapply(count, output_rows(model, "sim"), output_rows(model, "field"))
+  rows[, which.max(colSums(rows))]
 }
 
 # The models the look-ahead handles (a simulator with runs; the dense
@@ -419,10 +426,11 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
-  N <- d$m + design_field_rows(model)
-  if (N > 3000) {
+  N <- design_rows(model)
+  if (sum(N) > 3000) {
+    each <- if (output_count(model$spec$model) > 1L) " (of one output: each has its own)" else ""
     cli::cli_abort(c(
-      "{.fn propose_runs} handles up to 3000 runs and distinct field inputs; this fit has {d$m} and {N - d$m}.",
+      "{.fn propose_runs} handles up to 3000 runs and distinct field inputs{each}; this fit has {N[1]} and {N[2]}.",
       i = "It factors their dense covariance for every draw it scores (exact, whatever algebra the fit ran), which is too slow beyond that."
     ), call = call)
   }
@@ -521,14 +529,15 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
 }
 
 # The look-ahead's memory, draws x (m + G + T) x candidates numbers (G
-# the field's distinct inputs: replicates enter through their means):
-# refused beyond 5e7 (400 MB).
+# the field's distinct inputs: replicates enter through their means; with
+# independent outputs m + G of the largest output, design_rows()): refused
+# beyond 5e7 (400 MB).
 check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
-  dat <- model$data
-  rows <- nrow(dat$Xs) + design_field_rows(model) + nrow(XT)
+  rows <- sum(design_rows(model)) + nrow(XT)
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"
+    if (output_count(model$spec$model) > 1L) what <- paste(what, "(the largest output's)")
     K <- length(model$scale$output$levels)
     cand <- if (K > 1L) paste(nrow(U) / K, "candidates x", K, "outputs") else paste(nrow(U), "candidates")
     cli::cli_abort(c(

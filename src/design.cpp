@@ -43,9 +43,11 @@ namespace {
 //
 // With independent outputs (outputs = "independent", K of them) the data's
 // covariance is block diagonal over the outputs, each block its output's
-// system at its parameters (design_systems_outputs()): A's rows are the
-// outputs' runs and field groups in turn, a candidate's column zero but in
-// its output's rows; mu, v, mT, VT from its output's system, CTU zero
+// system at its parameters (design_systems_outputs()): a candidate's
+// column of A holds its output's rows (its runs and field groups; zeros
+// below, to the largest output's count), so two candidates' columns meet
+// (A_a'A_b) only within an output (same_output(); between outputs the
+// product is 0); mu, v, mT, VT from its output's system, CTU zero
 // between outputs, ll the sum; the kernel's parameters and s2S per draw
 // and output (column or entry s + S o), outU each candidate's output.
 struct DesignSystems {
@@ -55,6 +57,13 @@ struct DesignSystems {
   int T = 0, blocks = 1;
   std::vector<int> outU;
 };
+
+// Whether candidates a and b (columns of A) share an output: their columns'
+// product A_a'A_b is a term of their covariance given the data (always
+// with one output or shared outputs; DesignSystems).
+inline bool same_output(const DesignSystems& sys, int a, int b) {
+  return sys.outU.empty() || sys.outU[a] == sys.outU[b];
+}
 
 // Column j of L X = B in place, from row k0 on (the rows above solved):
 // reference BLAS dtrsm's operations in its order, for k = k0..N-1:
@@ -624,18 +633,14 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
   if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
   const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
-  std::vector<DesignSystems> b(K);
-  std::vector<arma::uvec> uo(K), to(K);
+  // A's rows: the largest output's runs and field groups (block_systems()'
+  // m + n), so that each block is placed as it is made and freed (A is the
+  // bulk: the peak is the assembled A and one block's)
   int N = 0;
   for (int o = 0; o < K; ++o) {
-    uo[o] = output_rows(U, mod.outputs, o);
-    to[o] = output_rows(XT, mod.outputs, o);
-    const std::vector<int>& map = op.blockMap(o);
-    const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(map));
-    b[o] = block_systems(op.block(o), op.blockXf(o), op.blockYf(o), op.blockXs(o),
-                         op.blockYs(o), ph, U.rows(uo[o]), XT.rows(to[o]), nugget,
-                         op.blockModel(o), keepA);
-    N += b[o].A.n_rows;
+    const Model& bm = op.blockModel(o);
+    const int n = field_groups(op.blockXf(o), op.blockYf(o), bm.noise, bm.source).X.n_rows;
+    N = std::max(N, (int)op.blockXs(o).n_rows + n);
   }
   DesignSystems out;
   out.T = T;
@@ -645,41 +650,43 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   out.v.set_size(Nc, S);
   out.ll.zeros(S);
   out.s2S.set_size(S * K);
-  out.thS.set_size(b[0].thS.n_rows, S * K);
-  out.alS.set_size(b[0].alS.n_rows, S * K);
-  out.rhoS.set_size(b[0].rhoS.n_rows, S * K);
   out.outU.assign(Nc, 0);
   if (T > 0) {
     out.mT.set_size(T, S);
     out.VT.set_size(T, S);
     out.CTU.zeros(T, Nc, S);
   }
-  int off = 0;
   for (int o = 0; o < K; ++o) {
-    DesignSystems& bo = b[o];
+    const arma::uvec uo = output_rows(U, mod.outputs, o), to = output_rows(XT, mod.outputs, o);
+    const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(op.blockMap(o)));
+    const DesignSystems bo = block_systems(op.block(o), op.blockXf(o), op.blockYf(o),
+                                           op.blockXs(o), op.blockYs(o), ph, U.rows(uo),
+                                           XT.rows(to), nugget, op.blockModel(o), keepA);
     const int No = bo.A.n_rows;
-    for (arma::uword c : uo[o]) out.outU[c] = o;
-    out.mu.rows(uo[o]) = bo.mu;
-    out.v.rows(uo[o]) = bo.v;
+    if (No > N) Rcpp::stop("output %d's system has %d rows, not at most %d", o + 1, No, N);
+    if (o == 0) {
+      out.thS.set_size(bo.thS.n_rows, S * K);
+      out.alS.set_size(bo.alS.n_rows, S * K);
+      out.rhoS.set_size(bo.rhoS.n_rows, S * K);
+    }
+    for (arma::uword c : uo) out.outU[c] = o;
+    out.mu.rows(uo) = bo.mu;
+    out.v.rows(uo) = bo.v;
     out.ll += bo.ll;
     out.s2S.subvec(S * o, S * o + S - 1) = bo.s2S;
     out.thS.cols(S * o, S * o + S - 1) = bo.thS;
     out.alS.cols(S * o, S * o + S - 1) = bo.alS;
     out.rhoS.cols(S * o, S * o + S - 1) = bo.rhoS;
-    if (keepA && uo[o].n_elem > 0)
+    if (keepA && uo.n_elem > 0)
       for (int s = 0; s < S; ++s)
-        for (arma::uword k = 0; k < uo[o].n_elem; ++k)
-          out.A.slice(s).col(uo[o][k]).rows(off, off + No - 1) = bo.A.slice(s).col(k);
-    if (T > 0 && to[o].n_elem > 0) {
-      out.mT.rows(to[o]) = bo.mT;
-      out.VT.rows(to[o]) = bo.VT;
+        for (arma::uword k = 0; k < uo.n_elem; ++k)
+          out.A.slice(s).col(uo[k]).rows(0, No - 1) = bo.A.slice(s).col(k);
+    if (T > 0 && to.n_elem > 0) {
+      out.mT.rows(to) = bo.mT;
+      out.VT.rows(to) = bo.VT;
       for (int s = 0; s < S; ++s)
-        out.CTU.slice(s).submat(to[o], uo[o]) = bo.CTU.slice(s);
+        out.CTU.slice(s).submat(to, uo) = bo.CTU.slice(s);
     }
-    // (the block's copies freed as they are placed: A is the bulk)
-    bo.A.reset();
-    bo.CTU.reset();
-    off += No;
   }
   return out;
 }
@@ -982,6 +989,7 @@ double min_s2S(const DesignSystems& sys, int s) {
 // fantasised values: with A_P the pending columns of A,
 //   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
 //   ScP = s2S Rs(U, U_P) - A'A_P (a pending candidate's rows: SPP),
+// (the columns' products within an output only, same_output()),
 //   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
 // cv floored at 1e-12 s2S; B and D = YP' - mu_P are kept (Bk, Dk) and M
 // formed where it is used (cond_means()). Without pending points M is mu.
@@ -1034,7 +1042,8 @@ double chol_floor(double* a, int K, double fl) {
 // Draw s's covariance of each run's K values given the data and the
 // pending points (B, ScP from pending_conditionals(); k pending points),
 // rows a != b of one run:
-//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 = s2S Rs(U_a, U_b), prior_cov()),
+//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 = s2S Rs(U_a, U_b), prior_cov();
+//   A_a'A_b within an output only, same_output()),
 // its diagonal the rows' variances cv (pending_conditionals()' own), and
 // its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in the
 // output alone (checked in design_look_ahead()), so Rs among them is the
@@ -1055,7 +1064,8 @@ void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& 
       L[l + K * l] = cv[r * K + l];
       for (int i = l + 1; i < K; ++i) {
         const int a = r * K + i, b = r * K + l;
-        double x = C0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
+        double x = C0(i, l);
+        if (same_output(sys, a, b)) x -= dot_sum(As.colptr(a), As.colptr(b), N);
         for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
         L[i + K * l] = x;
       }
@@ -1086,14 +1096,24 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       const arma::mat AP = As.cols(Pu);
       prior_cov(sys, mod, s, UP, oP, UP, oP, SPP);
       SPP.diag() *= 1.0 + nugget;
-      SPP -= AP.t() * AP;
+      if (sys.outU.empty()) {
+        SPP -= AP.t() * AP;
+      } else {
+        for (int i = 0; i < k; ++i)
+          for (int j = 0; j <= i; ++j)
+            if (same_output(sys, la.P[i], la.P[j])) {
+              const double x = dot_sum(AP.colptr(i), AP.colptr(j), AP.n_rows);
+              SPP(i, j) -= x;
+              if (j < i) SPP(j, i) -= x;
+            }
+      }
       prior_cov(sys, mod, s, U, oU, UP, oP, ScP);
       // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
       // batch's look-ahead)
       const int N = As.n_rows;
       for (int i = 0; i < k; ++i)
         for (int c = 0; c < la.Nc; ++c)
-          ScP(c, i) -= dot_sum(As.colptr(c), AP.colptr(i), N);
+          if (same_output(sys, c, la.P[i])) ScP(c, i) -= dot_sum(As.colptr(c), AP.colptr(i), N);
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
       // B = ScP SPP^-1 (SPP k x k; BLAS's Nc triangular solves were a
       // twentieth of a batch's look-ahead): B' = L^-T L^-1 ScP'.

@@ -942,11 +942,20 @@ test_that("propose_runs() refuses beyond 3000 runs and distinct field inputs", {
   model <- fit$model
   # the field's 10 rows are 5 inputs x 2 replicates: 5 rows of the
   # look-ahead's system (the runs' count set by hand: no 3000-run fit)
-  expect_equal(FBC:::design_field_rows(model), 5)
+  expect_equal(FBC:::design_rows(model), c(12, 5))
   model$dims$m <- 2995L
   expect_silent(FBC:::check_design_model(model))
   model$dims$m <- 2996L
   expect_snapshot(error = TRUE, FBC:::check_design_model(model))
+  # independent outputs: each output's system is its own, the largest
+  # counts (conc 12 runs + 8 field inputs, rate 9 + 10); shared outputs:
+  # one system of all runs and field inputs
+  po <- two_outputs(m = 12)
+  sim <- po$sim[-(22:24), ]
+  field <- po$field[-(1:2), ]
+  ind <- calibrate(sim, field, output = "out", outputs = "independent", fit = FALSE)
+  expect_equal(FBC:::design_rows(ind), c(12, 8))
+  expect_equal(FBC:::design_rows(calibrate(sim, field, output = "out", fit = FALSE)), c(21, 18))
 })
 
 test_that("design_loop() runs a function simulator through futures and adds runs", {
