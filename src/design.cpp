@@ -965,14 +965,20 @@ void prior_cov(const DesignSystems& sys, const Model& mod, int s, const arma::ma
     return;
   }
   const int S = sys.s2S.n_elem / sys.blocks;
-  arma::mat R(X.n_rows, Y.n_rows);
+  arma::mat R;
   out.zeros(X.n_rows, Y.n_rows);
   for (int o = 0; o < sys.blocks; ++o) {
+    // the kernel between output o's rows of X and of Y only
+    std::vector<arma::uword> io, jo;
+    for (arma::uword i = 0; i < X.n_rows; ++i) if (oX[i] == o) io.push_back(i);
+    for (arma::uword j = 0; j < Y.n_rows; ++j) if (oY[j] == o) jo.push_back(j);
+    if (io.empty() || jo.empty()) continue;
+    const arma::uvec ri(io), rj(jo);
     const int so = s + S * o;
-    sim_corr(mod, q, sys.thS.colptr(so), sys.alS.colptr(so), sys.rhoS.colptr(so), X, Y, R, false);
-    for (arma::uword j = 0; j < Y.n_rows; ++j)
-      for (arma::uword i = 0; i < X.n_rows; ++i)
-        if (oX[i] == o && oY[j] == o) out(i, j) = sys.s2S[so] * R(i, j);
+    R.set_size(ri.n_elem, rj.n_elem);
+    sim_corr(mod, q, sys.thS.colptr(so), sys.alS.colptr(so), sys.rhoS.colptr(so), X.rows(ri),
+             Y.rows(rj), R, false);
+    out.submat(ri, rj) = sys.s2S[so] * R;
   }
 }
 
