@@ -312,8 +312,14 @@ design_limited_message <- function(gain, target) {
   } else {
     "Such as the bias's confounding with kappa or few, noisy field data: see `convergence_messages()`."
   }
-  text <- c(paste0("The best new run is expected to shrink ", what, " by ",
-                   format(100 * gain, digits = 2), "% only: it is limited by something new runs cannot change."),
+  # (a gain at or below 0 is the look-ahead's Monte Carlo error about 0)
+  size <- format(100 * gain, digits = 2)
+  text <- c(paste0(if (gain > 0) {
+    paste0("The best new run is expected to shrink ", what, " by ", size, "% only")
+  } else {
+    paste0("No new run is expected to shrink ", what, " measurably (the best's estimate, ", size,
+           "%, is Monte Carlo error about 0)")
+  }, ": it is limited by something new runs cannot change."),
             why)
   width <- max(20L, getOption("width", 80L) - 2L)
   lines <- mapply(function(x, bullet) paste(strwrap(x, width, prefix = "  ", initial = paste0(bullet, " ")), collapse = "\n"),

@@ -902,6 +902,7 @@ test_that("propose_runs() says when new runs cannot shrink kappa's posterior", {
   expect_snapshot({
     message(FBC:::design_limited_message(0.0023, target = FALSE))
     message(FBC:::design_limited_message(0.0023, target = TRUE))
+    message(FBC:::design_limited_message(-0.00015, target = FALSE))
   })
   # with the field's noise known (sd 0.14), a run can halve kappa's variance: no message
   fit <- sinus_fit(pb, nMCMC = 1200)
