@@ -136,7 +136,11 @@
 #' emulator's. When the field data cannot separate a change of kappa from
 #' a bias (the Kennedy-O'Hagan confounding, [convergence_messages()]) or
 #' the field data are few and noisy, kappa's posterior stays wide however
-#' many runs are made. `propose_runs()` says so when the best point's
+#' many runs are made (its shape still depends on where the runs are:
+#' with the KOH bias on the sinusoid of Koermer et al., kappa's sd stopped
+#' shrinking at about 25 runs, and the default reached Hellinger distance
+#' 0.1 from the reference in 24 runs, nested LHS in 49; 30 replicates,
+#' `inst/bench/RESULTS-design.md`). `propose_runs()` says so when the best point's
 #' expected gain is below 1% of the current variance (of kappa, or of the
 #' prediction at the targets), in a message (by default: when the plug-in
 #' and the joint look-ahead both find the plug-in's first pick worth under
