@@ -146,7 +146,7 @@ pb <- switch(problem,
   # concentrates at
   tuowu = list(eta = function(X) exp(X[, 1] / 10) * sin(X[, 1]) -
                  sqrt(X[, 2]^2 - X[, 2] + 1) * (sin(X[, 2] * X[, 1]) + cos(X[, 2] * X[, 1])),
-               truth = function(x) exp(x / 10) * sin(x),
+               truth = function(x, k = 1L) exp(x / 10) * sin(x),
                u0 = NA, lower = c(0, -1), upper = c(2 * pi, 1), sd = 0.2, ngrid = 1000,
                xf = rep(seq(0.2, 2 * pi - 0.2, length.out = 8), 2)),
   # the sinusoid with Koermer et al.'s bias, fitted with the KOH GP
