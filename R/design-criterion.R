@@ -429,7 +429,6 @@ design_rows <- function(model) {
 # The models the look-ahead handles (a simulator with runs; the dense
 # conditional, refused beyond 3000 rows).
 check_design_model <- function(model, call = parent.frame()) {
-  d <- model$dims
   if (!is.null(model$simulator)) {
     cli::cli_abort(c(
       "This fit calibrates a simulator function, which has no runs to add to: {.fn propose_runs} chooses simulator runs.",
