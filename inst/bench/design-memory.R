@@ -7,13 +7,15 @@
 #
 #   Rscript inst/bench/design-memory.R [reps] [m ...]
 #
-# Per m (runs, each giving both outputs) one default fit each way, then
-# `reps` batches of 5 (method = "joint": every draw kept, the largest
-# look-ahead; default candidates, 100 d runs x 2 outputs). Columns:
+# Per m (runs, each giving both outputs) one fit each way with
+# calibrate()'s defaults, then `reps` batches of 5 with propose_runs()'s
+# defaults (method "plugin": the draws at the MAP's hyperparameters,
+# pruned by their weight) and with method = "joint" (every draw kept, the
+# largest look-ahead); default candidates, 100 d runs x 2 outputs. Columns:
 #   peak MB   VmHWM during propose_runs() above the VmRSS before it, in a
 #             fresh R process holding the fit (median over reps, range)
-#   A MB      the look-ahead's per-draw candidate columns (draws x rows x
-#             candidate rows x 8 bytes): rows are all runs and field inputs
+#   A MB      (joint) the look-ahead's per-draw candidate columns (100
+#             draws x rows x candidate rows x 8 bytes): rows are all runs and field inputs
 #             with shared outputs, the largest output's with independent
 #             ones (before stop 50: all of them, zeros outside each
 #             candidate's output; "A MB then")
@@ -30,6 +32,31 @@ etas <- list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),
              B = function(X) 5 * X[, 2] * X[, 1] * exp(-X[, 2] * X[, 1]))
 tf <- as.data.frame(kineticField)$t
 
+# `reps` batches of 5 on the fit saved in `file`, each in a fresh R process
+# (callr) holding only the fit: in one process the memory of an earlier
+# batch stays and hides the next one's peak. c(peak MB, CPU s) per batch.
+batches <- function(file, method) {
+  vapply(seq_len(reps), function(r) {
+    callr::r(function(file, r, libs, method) {
+      .libPaths(libs)
+      suppressPackageStartupMessages(library(FBC))
+      status_mb <- function(field) {
+        v <- grep(paste0("^", field), readLines("/proc/self/status"), value = TRUE)
+        as.numeric(gsub("[^0-9]", "", v)) / 1024
+      }
+      fit <- readRDS(file)
+      set.seed(r)
+      gc()
+      before <- status_mb("VmRSS")
+      # Linux >= 4.0: writing 5 resets the peak RSS to the current RSS
+      writeLines("5", "/proc/self/clear_refs")
+      t0 <- proc.time()
+      pr <- suppressMessages(propose_runs(fit, n = 5, method = method))
+      c(peak = status_mb("VmHWM") - before, time = sum((proc.time() - t0)[1:2]))
+    }, list(file, r, .libPaths(), method))
+  }, numeric(2))
+}
+
 rows <- list()
 for (m in ms) {
   set.seed(m)
@@ -43,47 +70,26 @@ for (m in ms) {
   for (outputs in c("shared", "independent")) {
     set.seed(1)
     fit <- suppressWarnings(calibrate(sim, field, output = "out", outputs = outputs,
-                                      discrepancy = "none", nChains = 2, showProgress = FALSE))
-    # each batch in a fresh R process (callr), which holds only the fit: in
-    # this one the memory of an earlier batch stays with the process and
-    # hides the next one's peak
+                                      showProgress = FALSE))
     file <- tempfile(fileext = ".rds")
     saveRDS(fit, file)
-    res <- vapply(seq_len(reps), function(r) {
-      callr::r(function(file, r, libs) {
-        .libPaths(libs)
-        suppressPackageStartupMessages(library(FBC))
-        status_mb <- function(field) {
-          v <- grep(paste0("^", field), readLines("/proc/self/status"), value = TRUE)
-          as.numeric(gsub("[^0-9]", "", v)) / 1024
-        }
-        fit <- readRDS(file)
-        set.seed(r)
-        gc()
-        before <- status_mb("VmRSS")
-        # Linux >= 4.0: writing 5 resets the peak RSS to the current RSS
-        writeLines("5", "/proc/self/clear_refs")
-        t0 <- proc.time()
-        pr <- suppressMessages(propose_runs(fit, n = 5, method = "joint"))
-        c(peak = status_mb("VmHWM") - before, time = sum((proc.time() - t0)[1:2]))
-      }, list(file, r, .libPaths()))
-    }, numeric(2))
-    unlink(file)
-    peak <- res["peak", ]
-    time <- res["time", ]
-    # the look-ahead's A: draws x rows x candidate rows (FBC internals:
-    # design_rows(), the size check's count)
-    # (ndraws = 100, the default; candidates 100 d = 200 runs x 2 outputs)
+    # the joint look-ahead's A: 100 draws (ndraws, the default) x rows x
+    # candidate rows (100 d = 200 runs x 2 outputs); rows as the size check
+    # counts them (design_rows())
     N <- sum(rows_of(fit$model))
     if (outputs == "shared") Nall <- N  # every run and field input
-    S <- min(100, nrow(fit$Phi))
-    Nc <- 100 * 2 * 2
-    rows[[length(rows) + 1]] <- data.frame(
-      m = m, outputs = outputs,
-      `peak MB` = sprintf("%.0f (%.0f-%.0f)", median(peak), min(peak), max(peak)),
-      `A MB` = round(8 * S * N * Nc / 2^20),
-      `A MB then` = round(8 * S * Nall * Nc / 2^20),
-      `CPU s` = round(median(time), 2), check.names = FALSE)
+    A <- function(rows) round(8 * min(100, nrow(fit$Phi)) * rows * 400 / 2^20)
+    for (method in c("plugin", "joint")) {
+      res <- batches(file, method)
+      joint <- method == "joint"
+      rows[[length(rows) + 1]] <- data.frame(
+        m = m, outputs = outputs, method = method,
+        `peak MB` = sprintf("%.0f (%.0f-%.0f)", median(res["peak", ]), min(res["peak", ]),
+                            max(res["peak", ])),
+        `A MB` = if (joint) A(N) else NA, `A MB then` = if (joint) A(Nall) else NA,
+        `CPU s` = round(median(res["time", ]), 2), check.names = FALSE)
+    }
+    unlink(file)
   }
 }
 tab <- do.call(rbind, rows)
