@@ -17,8 +17,8 @@
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }
 
-.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs) {
-    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs)
+.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy) {
+    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy)
 }
 
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {

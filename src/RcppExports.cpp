@@ -66,8 +66,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // design_look_ahead
-Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs);
-RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP) {
+Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs, bool entropy);
+RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP, SEXP entropySEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -88,7 +88,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type order(orderSEXP);
     Rcpp::traits::input_parameter< double >::type prune(pruneSEXP);
     Rcpp::traits::input_parameter< int >::type outputs(outputsSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs));
+    Rcpp::traits::input_parameter< bool >::type entropy(entropySEXP);
+    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -346,7 +347,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_design_solve_lower_r", (DL_FUNC) &_FBC_design_solve_lower_r, 2},
     {"_FBC_design_exp_r", (DL_FUNC) &_FBC_design_exp_r, 2},
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
-    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 17},
+    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 18},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

@@ -796,8 +796,11 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // (column-major), and its sum log diag ldK[r S + s]; eK (S x K) a
 // fantasy's standardised residuals L_s^-1 (y - M_s); with targets gK
 // (S x T x K) and vK (S x T), run_target_terms() of the run scored.
+// `entropy`: without targets the criterion is kappa's entropy, not its
+// variance (crit_var()).
 struct LookAhead {
   int S, Nc, J, T = 0, K = 1, Nr = 0;
+  bool entropy = false;
   arma::mat kap, base, YP, sd, isd, lsd, VTP;
   arma::vec ksq, Lbuf, wbuf;
   std::vector<double> MT, CP, Bk, Dk, mbuf, tb, tv, LK, ldK, eK, gK, vK;
@@ -946,10 +949,29 @@ void target_terms(LookAhead& la, int c) {
   }
 }
 
-// The criterion's variance: kappa's (weighted_var()) or the targets'.
+// Kappa's entropy under the weights w_s = exp(L_s - mx), the draws being
+// the plug-in's kappa values (a grid or a uniform sample: the entropy of
+// their normalised weights p_s = w_s / sum w is kappa's differential
+// entropy up to a constant):
+//   -sum_s p_s log p_s = log sum w - sum_s w_s (L_s - mx) / sum w.
+double weighted_entropy(LookAhead& la, const double* L, double mx) {
+  const int S = la.S;
+  double* w = la.wbuf.memptr();
+  exp_weights(L, mx, S, w);
+  double sw = 0.0, swl = 0.0;
+  for (int s = 0; s < S; ++s) {
+    sw += w[s];
+    if (w[s] > 0.0) swl += w[s] * (L[s] - mx);  // (exp_weights()' underflow: 0, not 0 x -inf)
+  }
+  return std::log(sw) - swl / sw;
+}
+
+// The criterion's value: the targets' variance, or kappa's entropy
+// (la.entropy) or variance.
 double crit_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
                 const double* mu) {
-  return la.T > 0 ? target_var(la, L, mx, j, c, y, mu) : weighted_var(la, L, mx);
+  if (la.T > 0) return target_var(la, L, mx, j, c, y, mu);
+  return la.entropy ? weighted_entropy(la, L, mx) : weighted_var(la, L, mx);
 }
 
 // Draw s's prior covariance of the simulator's values at rows X and Y of
@@ -1387,7 +1409,10 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // r K .. r K + K - 1, alike but for the output's columns), a pick a run,
 // scored with its K values fantasised jointly (score_runs(); step k's
 // deviates Z's columns k K .. k K + K - 1) and pending as K points.
-// Returns the picks (1-based), their gains, the current variance, every
+// With `entropy` (and no targets) the criterion is the expected reduction
+// of kappa's entropy (weighted_entropy(), for the plug-in's kappa values).
+// Returns the picks (1-based), their gains, the current variance (or
+// entropy), every
 // candidate's gain per step (scores, Nc x n) and the draws scored (kept,
 // 1-based).
 // [[Rcpp::export(.design_look_ahead)]]
@@ -1396,7 +1421,8 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::mat& kappa, const arma::vec& lw0, bool plugin,
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
-                             const Rcpp::IntegerVector& order, double prune, int outputs) {
+                             const Rcpp::IntegerVector& order, double prune, int outputs,
+                             bool entropy) {
   Model mod;
   const int K = outputs;
   if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
@@ -1436,6 +1462,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   DesignSystems sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, mod, n > 1 || K > 1);
   LookAhead la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = sys.T; la.K = K; la.Nr = Nr;
+  la.entropy = entropy;
   if ((int)usrc.n_elem != la.J) Rcpp::stop("usrc must have %d uniforms", la.J);
   la.kap = kap;
   la.ksq = arma::sum(arma::square(kap), 1);

@@ -204,7 +204,7 @@ draw_system_outputs <- function(phi, model, U, XT = NULL) {
 # (Y, one column per pending point, nfantasy rows) conditioned on per draw.
 # With targets (sys from draw_system(XT =)) the criterion is the calibrated
 # prediction's variance averaged over them (target_var()).
-look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
+look_ahead_r <- function(sys, parts, U, model, n, nfantasy, entropy = FALSE) {
   S <- length(sys)
   lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
   kap <- parts$kappa
@@ -214,7 +214,7 @@ look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
     cond0 <- pending_conditionals(sys, U, integer(), matrix(0, nfantasy, 0))
     target_var(w0 / sum(w0), cond0$MT[, , 1], cond0$VTP)
   } else {
-    weighted_var(kap, matrix(w0 / sum(w0)))
+    kappa_crit(kap, entropy, matrix(w0 / sum(w0)))
   }
   # each fantasy j comes from draw src[j] (systematic resampling by the base weights)
   cw <- cumsum(w0)
@@ -229,7 +229,7 @@ look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
   base <- matrix(lw0, S, nfantasy)  # log-weights given the pending fantasies
   for (step in seq_len(n)) {
     cond <- pending_conditionals(sys, U, chosen, YP)
-    sc <- score_candidates(cond, src, matrix(zs, nfantasy)[, step], base, kap)
+    sc <- score_candidates(cond, src, matrix(zs, nfantasy)[, step], base, kap, entropy)
     sc$gain[chosen] <- -Inf
     scores[, step] <- sc$gain
     best <- which.max(sc$gain)
@@ -246,6 +246,13 @@ look_ahead_r <- function(sys, parts, U, model, n, nfantasy) {
 weighted_var <- function(kap, W) {
   colSums(W * rowSums(kap^2)) - colSums(crossprod(kap, W)^2)
 }
+
+# The entropy of each column of the normalised weights W, -sum w log w
+# (0 log 0 = 0): kappa's entropy on the plug-in's kappa values.
+weighted_entropy <- function(W) -colSums(ifelse(W > 0, W * log(W), 0))
+
+# The kappa criterion: its entropy or its variance.
+kappa_crit <- function(kap, entropy, W) if (entropy) weighted_entropy(W) else weighted_var(kap, W)
 
 # The calibrated prediction's variance averaged over the targets under the
 # normalised weights w (S), each draw's predictive means MT and variances
@@ -308,7 +315,7 @@ pending_conditionals <- function(sys, U, P, YP) {
 # value (z[j] its normal deviate, common to every candidate); the draws are
 # reweighted by its density under each. Returns the expected variance's
 # reduction (gain), the fantasised values Y (Nc x J) and the log-densities.
-score_candidates <- function(cond, src, z, base, kap) {
+score_candidates <- function(cond, src, z, base, kap, entropy = FALSE) {
   S <- nrow(cond$cv)
   Nc <- cond$Nc
   J <- length(src)
@@ -324,8 +331,8 @@ score_candidates <- function(cond, src, z, base, kap) {
   b <- exp(base - rep(apply(base, 2, max), each = S))
   b <- b / rep(colSums(b), each = S)
   if (cond$nT == 0) {
-    after <- rowMeans(matrix(weighted_var(kap, W), Nc, J))
-    before <- mean(weighted_var(kap, b))
+    after <- rowMeans(matrix(kappa_crit(kap, entropy, W), Nc, J))
+    before <- mean(kappa_crit(kap, entropy, b))
   } else {
     # per draw the run at c moves the targets' means by b (y - M) and their
     # variances by -b CP, b = CP / cv
@@ -350,7 +357,7 @@ score_candidates <- function(cond, src, z, base, kap) {
 # density (with targets the prediction's means and variances moved by the
 # run's K values); step k's deviates are the columns (k - 1) K + 1:K of
 # the normal quantiles, drawn as look_ahead() draws them.
-look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
+look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K, entropy = FALSE) {
   S <- length(sys)
   Nr <- nrow(U) / K
   J <- nfantasy
@@ -360,7 +367,7 @@ look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
   targets <- !is.null(sys[[1]]$mT)
   cond0 <- pending_conditionals(sys, U, integer(), matrix(0, J, 0))
   variance <- if (targets) target_var(w0 / sum(w0), cond0$MT[, , 1], cond0$VTP) else
-    weighted_var(kap, matrix(w0 / sum(w0)))
+    kappa_crit(kap, entropy, matrix(w0 / sum(w0)))
   cw <- cumsum(w0)
   usrc <- (seq_len(J) - stats::runif(1)) / J
   src <- vapply(usrc, function(u) min(S, which(cw >= u * cw[S])[1]), 1L)
@@ -392,7 +399,7 @@ look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
     M <- array(cond$M, c(S, nrow(U), J))
     before <- mean(vapply(seq_len(J), function(j) {
       b <- norm_w(base[, j])
-      if (targets) target_var(b, cond$MT[, , j], cond$VTP) else weighted_var(kap, matrix(b))
+      if (targets) target_var(b, cond$MT[, , j], cond$VTP) else kappa_crit(kap, entropy, matrix(b))
     }, numeric(1)))
     # the log-density of run r's values y under each draw, in fantasy j,
     # and (targets) each draw's moved means and variances
@@ -416,7 +423,7 @@ look_ahead_runs_r <- function(sys, parts, U, model, n, nfantasy, K) {
       after <- mean(vapply(seq_len(J), function(j) {
         y <- fantasy(r, j)
         w <- norm_w(base[, j] + dens(r, j, y))
-        if (!targets) return(weighted_var(kap, matrix(w)))
+        if (!targets) return(kappa_crit(kap, entropy, matrix(w)))
         nT <- cond$nT
         mt <- matrix(0, S, nT)
         vt <- matrix(0, S, nT)
