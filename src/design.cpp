@@ -1124,6 +1124,9 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
       const arma::mat AP = As.cols(Pu);
       prior_cov(sys, mod, s, UP, oP, UP, oP, SPP);
       SPP.diag() *= 1.0 + nugget;
+      // one GP: BLAS's A_P'A_P (the picks bit-identical to before the
+      // outputs' path); independent outputs: only products within an
+      // output, the columns of two outputs holding different rows
       if (sys.outU.empty()) {
         SPP -= AP.t() * AP;
       } else {
