@@ -557,19 +557,14 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
 // the model of the data, its algebra dense), the simulator rows' block
 // shared by consecutive draws with the same simulator hyperparameters;
 // keepA: every draw's A (a batch's pending points need them). post: the
-// dense posterior of these data (its layout; its phi set to each draw's).
-DesignSystems block_systems(Posterior& post, const arma::mat& Xf, const arma::vec& yf,
+// dense posterior of these data (its layout; its phi set to each draw's);
+// fg: the field's groups (system_field_groups()).
+DesignSystems block_systems(Posterior& post, const FieldGroups& fg, const arma::mat& Xf,
                             const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis,
                             const arma::mat& U, const arma::mat& XT, double nugget,
                             const Model& mod, bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
-  if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
-    Rcpp::stop("the data sets must give one per field row");
-  const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
-  if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
-    Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
   if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  const FieldGroups fg = field_groups(Xf, yf, mod.noise, mod.source);
   const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
   const int T = XT.n_rows;
   DesignSystems out;
@@ -614,6 +609,18 @@ DesignSystems block_systems(Posterior& post, const arma::mat& Xf, const arma::ve
   return out;
 }
 
+// The field's groups (field_groups()) for block_systems(), the data sets
+// and noise groups checked against the field's rows and post's sigma2E.
+FieldGroups system_field_groups(const Posterior& post, const arma::mat& Xf, const arma::vec& yf,
+                                const Model& mod) {
+  if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
+    Rcpp::stop("the data sets must give one per field row");
+  const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
+  if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
+    Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
+  return field_groups(Xf, yf, mod.noise, mod.source);
+}
+
 // The rows of X whose output (the output's indicator columns, f) is o.
 arma::uvec output_rows(const arma::mat& X, const LevelInput& f, int o) {
   std::vector<arma::uword> r;
@@ -637,10 +644,10 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   // m + n), so that each block is placed as it is made and freed (A is the
   // bulk: the peak is the assembled A and one block's)
   int N = 0;
+  std::vector<FieldGroups> fgs;
   for (int o = 0; o < K; ++o) {
-    const Model& bm = op.blockModel(o);
-    const int n = field_groups(op.blockXf(o), op.blockYf(o), bm.noise, bm.source).X.n_rows;
-    N = std::max(N, (int)op.blockXs(o).n_rows + n);
+    fgs.push_back(system_field_groups(op.block(o), op.blockXf(o), op.blockYf(o), op.blockModel(o)));
+    N = std::max(N, (int)(op.blockXs(o).n_rows + fgs[o].X.n_rows));
   }
   DesignSystems out;
   out.T = T;
@@ -659,7 +666,7 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   for (int o = 0; o < K; ++o) {
     const arma::uvec uo = output_rows(U, mod.outputs, o), to = output_rows(XT, mod.outputs, o);
     const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(op.blockMap(o)));
-    const DesignSystems bo = block_systems(op.block(o), op.blockXf(o), op.blockYf(o),
+    const DesignSystems bo = block_systems(op.block(o), fgs[o], op.blockXf(o),
                                            op.blockXs(o), op.blockYs(o), ph, U.rows(uo),
                                            XT.rows(to), nugget, op.blockModel(o), keepA);
     const int No = bo.A.n_rows;
@@ -710,7 +717,8 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
     out = design_systems_outputs(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
   } else {
     std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, mod);
-    out = block_systems(*post, Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
+    out = block_systems(*post, system_field_groups(*post, Xf, yf, mod), Xf, Xs, ys, phis, U, XT,
+                        nugget, mod, keepA);
   }
   out.muT = out.mu.t();
   return out;
