@@ -748,8 +748,10 @@ test_that("the plug-in's entropy gain is the mutual information of kappa and the
   la <- FBC:::look_ahead(parts, U, fit$model, 1, 4000, entropy = TRUE)
   # (the three differ: a run where the grid's predictions part says more)
   expect_gt(diff(range(mi)), 0.2)
-  # (measured on writing this: within 0.5% of I)
-  expect_equal(drop(la$scores), mi, tolerance = 0.02)
+  # (measured: I = 0.200, 0.567, 0.0025; over seeds 1-5 each candidate's
+  # estimate within 0.1-2.1% of it, all.equal()'s mean relative
+  # difference 0.6-1.1%; 0.6% with this seed)
+  expect_equal(drop(la$scores), mi, tolerance = 0.03)
   # the entropy before: -sum p log p over the grid
   expect_equal(la$variance, -sum(ifelse(p > 0, p * log(p), 0)), tolerance = 1e-10)
 })
