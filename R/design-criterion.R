@@ -13,8 +13,9 @@
 #' their MAP values (`method = "plugin"`, the default: measured as good as
 #' or better than picking by the joint criterion, `method = "joint"`; see
 #' "Joint or plug-in (measured)"), for kappa by the expected reduction of
-#' its entropy (measured: fewer runs than by its variance; see "Entropy or
-#' variance (measured)").
+#' its entropy (measured: fewer runs than by its variance where the
+#' emulator's error is what runs reduce, as many under a KOH bias; see
+#' "Entropy or variance (measured)").
 #'
 #' @section Criterion:
 #' For each retained draw \eqn{\phi_s} (kappa and the hyperparameters) the
