@@ -106,9 +106,11 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   while (runs - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
     # propose_runs()'s "limited" message once a loop, not at every step
+    # (half the candidates at kappa's draws, as propose_runs()'s own)
+    cand <- at_kappa(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
+                     cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
     pr <- withCallingHandlers(
-      do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)),
-                                   candidates = with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs)),
+      do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)), candidates = cand),
                               design)),
       fbc_design_limited = function(m) {
         if (limited) invokeRestart("muffleMessage")

@@ -5,7 +5,7 @@
 #   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
 #                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
-#                               [--tag=] [--fresh=0]
+#                               [--tag=] [--fresh=0] [--candidates=default]
 #
 # (replicates first .. first + reps - 1, each starting from `init` maximin
 # runs (10 by default: the results of the runs before the option existed,
@@ -69,7 +69,9 @@
 # KOH-IMSPE/EIVAR's way; the joint criterion picks where the two disagree
 # about its first pick's worth, column `picked`),
 # lhs::augmentLHS (nested maximin augmentation), random; ours and the
-# plug-in choose among 100 d uniform candidates per step. "oracle" (not in
+# plug-in choose among propose_runs()'s default candidates (100 d, half
+# uniform, half with kappa at its posterior draws; --candidates=uniform:
+# 100 d uniform ones made here, as every figure before stop 52). "oracle" (not in
 # the default methods): a greedy bound, batches of 1 only: of 25 uniform
 # candidates and ours' and the plug-in's picks, the one whose update() lands
 # closest to the reference (it knows the answer; next_runs()); it costs 27
@@ -100,7 +102,7 @@
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
              methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
-             fresh = "0")
+             fresh = "0", candidates = "default")
 args <- commandArgs(TRUE)
 if (length(args) && !any(grepl("^--", args))) {
   # the old positional form: reps batch added problem first
@@ -119,7 +121,7 @@ added <- as.integer(opts$added)
 problem <- opts$problem
 first <- as.integer(opts$first)
 init <- as.integer(opts$init)
-stopifnot(init >= 2L)
+stopifnot(init >= 2L, opts$candidates %in% c("default", "uniform"))
 methods <- strsplit(opts$methods, ",")[[1]]
 # "ours<N>": ours with N draws (propose_runs()'s ndraws; 100 by default)
 # "oracle": see next_runs()
@@ -350,6 +352,7 @@ rmse <- function(fit) {
 # (the oracle's rows: an attribute "seen", see below)
 next_runs <- function(method, fit, n, lhsState, ref) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
+  given <- function() if (opts$candidates == "uniform") cand()
   if (grepl("^ours[0-9]+$", method)) {
     nd <- as.integer(sub("ours", "", method))
     return(as.matrix(propose_runs(fit, n = n, candidates = cand(), ndraws = nd, method = "joint")[cols]))
@@ -376,8 +379,8 @@ next_runs <- function(method, fit, n, lhsState, ref) {
   # about the plug-in's first pick, ?propose_runs)
   picked <- function(pr) structure(as.matrix(pr[cols]), picked = attr(pr, "method"))
   switch(method,
-    ours = picked(propose_runs(fit, n = n, candidates = cand(), method = "joint")),
-    plugin = picked(suppressMessages(propose_runs(fit, n = n, candidates = cand(), method = "plugin"))),
+    ours = picked(propose_runs(fit, n = n, candidates = given(), method = "joint")),
+    plugin = picked(suppressMessages(propose_runs(fit, n = n, candidates = given(), method = "plugin"))),
     random = matrix(runif(d * n), n, d),
     lhs = {
       A <- lhs::augmentLHS(lhsState, n)

@@ -409,7 +409,9 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   pr <- propose_runs(fit, n = 3, ndraws = 60, nfantasy = 30, ncandidates = 200)
   expect_named(pr, c("x", "u", "gain"))
   expect_equal(nrow(pr), 3)
+  # (the runs' ranges, x's widened to the field's inputs: here within them)
   rng <- apply(pb$sim[, c("x", "u")], 2, range)
+  expect_true(min(pb$sim$x) < 0.1 && max(pb$sim$x) > 0.9)
   for (v in c("x", "u")) {
     expect_true(all(pr[[v]] >= rng[1, v] & pr[[v]] <= rng[2, v]))
   }
@@ -432,6 +434,53 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   ok <- data.frame(x = stats::runif(40000), u = stats::runif(40000))
   expect_silent(asNamespace("FBC")$check_look_ahead_size(60, fit$model,
                                                           as.matrix(ok), matrix(0, 0, 1)))
+})
+
+test_that("the default candidates: half at kappa's posterior draws, half uniform", {
+  pb <- sinus_problem()
+  fit <- sinus_fit(pb, nMCMC = 1200)
+  kap <- FBC:::sampler_draws(fit)[, 1, drop = FALSE]
+  held <- pmin(pmax(kap[, 1], 0), 1)
+  set.seed(2)
+  U <- FBC:::design_candidates(NULL, fit$scale, 400, fit$data$Xs, 0, kappa = kap)
+  expect_equal(dim(U), c(400, 2))
+  expect_true(all(U >= 0 & U <= 1))
+  # the first half's kappa are draws (held to the design's range), spread as
+  # the draws are; the rest, and the experimental input, uniform (KS tests,
+  # fixed seed)
+  expect_true(all(U[1:200, 2] %in% held))
+  expect_gt(suppressWarnings(stats::ks.test(U[1:200, 2], held))$p.value, 0.01)
+  expect_gt(stats::ks.test(U[201:400, 2], "punif")$p.value, 0.01)
+  expect_gt(stats::ks.test(U[, 1], "punif")$p.value, 0.01)
+  # the draws are narrower than the range: the uniform half is not like them
+  expect_lt(diff(stats::quantile(kap, c(0.05, 0.95))), 0.5)
+  expect_lt(suppressWarnings(stats::ks.test(U[201:400, 2], held))$p.value, 1e-6)
+  # propose_runs()'s default candidates are these (the same seed, the same picks)
+  set.seed(9)
+  U <- FBC:::design_candidates(NULL, fit$scale, 200, fit$data$Xs, 1e-3, kappa = kap)
+  given <- stats::setNames(as.data.frame(FBC:::unscale_inputs(U, fit$scale, 1:2)), c("x", "u"))
+  p2 <- propose_runs(fit, n = 2, candidates = given, ndraws = 60, nfantasy = 30)
+  set.seed(9)
+  p1 <- propose_runs(fit, n = 2, ndraws = 60, nfantasy = 30, ncandidates = 200)
+  attr(p2, "time") <- attr(p1, "time")
+  expect_equal(p1, p2, tolerance = 1e-12)
+  # runs in x of 0.3-0.7, the field's inputs 0.1-0.9: the default candidates'
+  # x reach the field's, their kappa stay in the runs' range
+  narrow <- pb
+  narrow$sim$x <- 0.3 + 0.4 * pb$sim$x
+  narrow$sim$y <- sin(10 * narrow$sim$u * narrow$sim$x)
+  fitN <- suppressWarnings(sinus_fit(narrow, nMCMC = 600))
+  set.seed(3)
+  U <- FBC:::design_candidates(NULL, fitN$scale, 400, fitN$data$Xs, 0,
+                               kappa = FBC:::sampler_draws(fitN)[, 1, drop = FALSE], Xf = fitN$data$Xf)
+  X <- FBC:::unscale_inputs(U, fitN$scale, 1:2)
+  expect_true(all(X[, 1] >= 0.1 - 1e-12 & X[, 1] <= 0.9 + 1e-12))
+  expect_lt(min(X[, 1]), 0.12)
+  expect_gt(max(X[, 1]), 0.88)
+  expect_true(all(X[, 2] >= min(narrow$sim$u) - 1e-12 & X[, 2] <= max(narrow$sim$u) + 1e-12))
+  set.seed(4)
+  prN <- propose_runs(fitN, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 200)
+  expect_true(all(prN$x >= 0.1 - 1e-12 & prN$x <= 0.9 + 1e-12))
 })
 
 test_that("a batch conditions on its pending points; single picks repeat", {
