@@ -673,6 +673,9 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
 # drawn here: the fantasies' draws by systematic resampling of the base
 # weights (uniforms (j - U) / nfantasy, one U), then per step a random
 # order of the nfantasy normal quantiles (common to every candidate).
+# Returns .design_look_ahead()'s list: `chosen`, `gain`, `variance` (the
+# criterion's current value: kappa's entropy with `entropy`), `scores`,
+# `kept`.
 look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
                        order = integer(), K = 1L, entropy = FALSE, call = parent.frame()) {
   dat <- model$data

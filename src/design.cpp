@@ -805,7 +805,7 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // fantasy's standardised residuals L_s^-1 (y - M_s); with targets gK
 // (S x T x K) and vK (S x T), run_target_terms() of the run scored.
 // `entropy`: without targets the criterion is kappa's entropy, not its
-// variance (crit_var()).
+// variance (crit_value()).
 struct LookAhead {
   int S, Nc, J, T = 0, K = 1, Nr = 0;
   bool entropy = false;
@@ -976,8 +976,8 @@ double weighted_entropy(LookAhead& la, const double* L, double mx) {
 
 // The criterion's value: the targets' variance, or kappa's entropy
 // (la.entropy) or variance.
-double crit_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
-                const double* mu) {
+double crit_value(LookAhead& la, const double* L, double mx, int j, int c, double y,
+                  const double* mu) {
   if (la.T > 0) return target_var(la, L, mx, j, c, y, mu);
   return la.entropy ? weighted_entropy(la, L, mx) : weighted_var(la, L, mx);
 }
@@ -1237,7 +1237,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
   double before = 0.0;
   for (int j = 0; j < la.J; ++j) {
     const double* b = la.base.colptr(j);
-    before += crit_var(la, b, *std::max_element(b, b + la.S), j, -1, 0.0, nullptr);
+    before += crit_value(la, b, *std::max_element(b, b + la.S), j, -1, 0.0, nullptr);
   }
   before /= la.J;
   double* L = la.Lbuf.memptr();
@@ -1271,7 +1271,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
         L[s] = b[s] - 0.5 * e * e - lsd[s];
         mx = std::max(mx, L[s]);
       }
-      after += crit_var(la, L, mx, j, c, y, mu);
+      after += crit_value(la, L, mx, j, c, y, mu);
     }
     gain[c] = before - after / la.J;
   }
@@ -1340,7 +1340,7 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
   double before = 0.0;
   for (int j = 0; j < J; ++j) {
     const double* b = la.base.colptr(j);
-    before += crit_var(la, b, *std::max_element(b, b + S), j, -1, 0.0, nullptr);
+    before += crit_value(la, b, *std::max_element(b, b + S), j, -1, 0.0, nullptr);
   }
   before /= J;
   double* L = la.Lbuf.memptr();
@@ -1363,7 +1363,7 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
       std::copy(b, b + S, L);
       run_log_density(la, r, mus, y, L);
       const double mx = *std::max_element(L, L + S);
-      after += crit_var(la, L, mx, j, r, 0.0, nullptr);
+      after += crit_value(la, L, mx, j, r, 0.0, nullptr);
     }
     gain[r] = before - after / J;
   }
@@ -1516,7 +1516,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   const double* mus[16];
   for (int step = 0; step < n; ++step) {
     pending_conditionals(sys, U, mod, nugget, la);
-    if (step == 0) variance = crit_var(la, lw.memptr(), lw.max(), 0, -1, 0.0, nullptr);
+    if (step == 0) variance = crit_value(la, lw.memptr(), lw.max(), 0, -1, 0.0, nullptr);
     if (K == 1) score_candidates(sys, la, s0.data(), Z.colptr(step), gain, Y);
     else score_runs(sys, la, s0.data(), Z, step * K, gain, Y);
     for (int c : la.P) gain[c / K] = R_NegInf;
