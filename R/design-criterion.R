@@ -201,7 +201,7 @@
 #'   Tuo and Wu's problem (30) \tab 28 (25-31) \tab 28 (26-33) \tab 12 / 9 (p 0.66) \cr
 #'   sinusoid with a bias, KOH fit (30) \tab 25.5 (21-29) \tab 25 (22-29) \tab 13 / 16 (p 0.71)
 #' }
-#' Fewer runs or as many everywhere; at distance 0.2 the default was
+#' Fewer runs, or even in the paired counts, everywhere; at distance 0.2 the default was
 #' first in 44 kinetics replicates and later in 21 (p 0.006), with two
 #' inputs 20 / 9 (p 0.06). From 10 starting runs in batches of 5 (30
 #' replicates): kinetics 15 runs against 20 (first in 10, later in 3),
