@@ -547,7 +547,9 @@ check_design_model <- function(model, call = parent.frame()) {
 # columns. The default candidates (`candidates` NULL) are uniform in the
 # runs' ranges, the experimental inputs' widened to the field's inputs
 # (`Xf`, scaled); given `kappa` (draws, scaled), the first half take their
-# calibration inputs from draws picked at random (held to the runs' range).
+# calibration inputs from draws picked at random (held to the runs' range)
+# and, given `Xf` too, their experimental inputs from the field's distinct
+# inputs picked at random.
 design_candidates <- function(candidates, sc, ncand, Xs, tol, kappa = NULL, Xf = NULL,
                               call = parent.frame()) {
   d <- sc$p + sc$q
@@ -568,7 +570,11 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, kappa = NULL, Xf =
       a <- sample.int(length(f$levels), ncand, replace = TRUE)
       U[, j] <- scale_inputs(indicator_matrix(f$levels[a], f$columns), sc, j)
     }
-    if (!is.null(kappa)) U <- at_kappa(U, sc$p + seq_len(sc$q), kappa, 0, 1)
+    if (!is.null(kappa)) {
+      U <- at_kappa(U, sc$p + seq_len(sc$q), kappa, 0, 1)
+      # and at the field's inputs, where the emulator is used (with kappa)
+      if (!is.null(Xf) && sc$p > 0L) U <- at_field(U, seq_len(sc$p), unique(Xf))
+    }
   } else {
     if (!is.null(out)) {
       if (is.data.frame(candidates) && out$name %in% names(candidates)) {
@@ -605,6 +611,14 @@ at_kappa <- function(X, cols, kappa, lo, hi) {
   h <- seq_len(nrow(X) %/% 2)
   pick <- kappa[sample.int(nrow(kappa), length(h), replace = TRUE), , drop = FALSE]
   X[h, cols] <- pmin(pmax(pick, rep(lo, each = length(h))), rep(hi, each = length(h)))
+  X
+}
+
+# Candidates X with the first half's experimental columns `cols` at rows
+# of `F` (the field's distinct inputs, the columns' units) picked at random.
+at_field <- function(X, cols, F) {
+  h <- seq_len(nrow(X) %/% 2)
+  X[h, cols] <- F[sample.int(nrow(F), length(h), replace = TRUE), , drop = FALSE]
   X
 }
 

@@ -81,6 +81,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   levs[output$name] <- NULL
   check_loop_ranges(lower, upper, setdiff(xnames, categorical))
   cal <- setdiff(names(lower), xnames)
+  xnum <- setdiff(names(lower), c(cal, categorical))
   n0 <- check_count(n0, "n0", min = 3)
   batch <- check_count(batch, "batch", min = 1)
   budget <- check_count(budget, "budget", min = 0)
@@ -106,9 +107,11 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   while (runs - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
     # propose_runs()'s "limited" message once a loop, not at every step
-    # (half the candidates at kappa's draws, as propose_runs()'s own)
+    # (half the candidates at kappa's draws and the field's numeric inputs,
+    # as propose_runs()'s own)
     cand <- at_kappa(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
                      cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
+    if (length(xnum)) cand <- at_field(cand, xnum, as.matrix(unique(field[xnum])))
     pr <- withCallingHandlers(
       do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)), candidates = cand),
                               design)),

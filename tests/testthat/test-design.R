@@ -436,7 +436,7 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
                                                           as.matrix(ok), matrix(0, 0, 1)))
 })
 
-test_that("the default candidates: half at kappa's posterior draws, half uniform", {
+test_that("the default candidates: half at kappa's posterior draws and the field's inputs, half uniform", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 1200)
   kap <- FBC:::sampler_draws(fit)[, 1, drop = FALSE]
@@ -457,7 +457,7 @@ test_that("the default candidates: half at kappa's posterior draws, half uniform
   expect_lt(suppressWarnings(stats::ks.test(U[201:400, 2], held))$p.value, 1e-6)
   # propose_runs()'s default candidates are these (the same seed, the same picks)
   set.seed(9)
-  U <- FBC:::design_candidates(NULL, fit$scale, 200, fit$data$Xs, 1e-3, kappa = kap)
+  U <- FBC:::design_candidates(NULL, fit$scale, 200, fit$data$Xs, 1e-3, kappa = kap, Xf = fit$data$Xf)
   given <- stats::setNames(as.data.frame(FBC:::unscale_inputs(U, fit$scale, 1:2)), c("x", "u"))
   p2 <- propose_runs(fit, n = 2, candidates = given, ndraws = 60, nfantasy = 30)
   set.seed(9)
@@ -475,8 +475,11 @@ test_that("the default candidates: half at kappa's posterior draws, half uniform
                                kappa = FBC:::sampler_draws(fitN)[, 1, drop = FALSE], Xf = fitN$data$Xf)
   X <- FBC:::unscale_inputs(U, fitN$scale, 1:2)
   expect_true(all(X[, 1] >= 0.1 - 1e-12 & X[, 1] <= 0.9 + 1e-12))
-  expect_lt(min(X[, 1]), 0.12)
-  expect_gt(max(X[, 1]), 0.88)
+  # the first half at the field's inputs, the rest uniform over 0.1-0.9
+  expect_equal(sort(unique(round(X[1:200, 1], 12))), seq(0.1, 0.9, length.out = 5))
+  expect_gt(stats::ks.test((X[201:400, 1] - 0.1) / 0.8, "punif")$p.value, 0.01)
+  expect_lt(min(X[201:400, 1]), 0.12)
+  expect_gt(max(X[201:400, 1]), 0.88)
   expect_true(all(X[, 2] >= min(narrow$sim$u) - 1e-12 & X[, 2] <= max(narrow$sim$u) + 1e-12))
   set.seed(4)
   prN <- propose_runs(fitN, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 200)
