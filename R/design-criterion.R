@@ -184,32 +184,35 @@
 #' extend them (measured, 5 maximin starting runs: on the sinusoid 10 of
 #' 32 replicates never reached Hellinger distance 0.1 within 30 runs,
 #' on kinetics 8 of 50 within 25). Their calibration inputs stay in the
-#' runs' ranges (those of kappa's default prior), and half the candidates take
-#' theirs from draws of kappa's posterior, picked at random: a run tells
-#' most about kappa where its calibration inputs are near kappa's
-#' posterior, and uniform candidates put ever fewer there as it narrows.
+#' runs' ranges (those of kappa's default prior). Half the candidates
+#' take their calibration inputs from draws of kappa's posterior and their
+#' experimental inputs from the field's distinct inputs, each picked at
+#' random: the emulator is used at the field's inputs with kappa, and a
+#' run tells most about kappa there; uniform candidates put ever fewer
+#' there as kappa's posterior narrows.
 #' Against 100 (p + q) uniform candidates over the problems' whole input
 #' boxes (paired replicates, 5 maximin starting runs, one run at a time;
 #' runs to Hellinger distance 0.1 from the exact posterior, median
 #' (quartiles)):
 #' \tabular{lccc}{
 #'   problem \tab default \tab uniform \tab default first / later \cr
-#'   sinusoid (60 replicates) \tab 15 (14-16) \tab 16 (15-18) \tab 40 / 14 (p 0.0005) \cr
-#'   kinetics (90) \tab 12 (10-14) \tab 12.5 (11-14) \tab 45 / 31 (p 0.14) \cr
-#'   two calibration inputs (30) \tab 27 (24-31) \tab 28 (25-31) \tab 16 / 13 (p 0.71) \cr
-#'   two independent outputs (30) \tab 12.5 (11-14) \tab 13 (11-15) \tab 15 / 9 (p 0.31) \cr
-#'   Tuo and Wu's problem (30) \tab 28 (25-31) \tab 28 (26-33) \tab 12 / 9 (p 0.66) \cr
-#'   sinusoid with a bias, KOH fit (30) \tab 25.5 (21-29) \tab 25 (22-29) \tab 13 / 16 (p 0.71)
+#'   sinusoid (60 replicates) \tab 14 (12-16) \tab 16 (15-18) \tab 47 / 10 (p 8e-7) \cr
+#'   kinetics (90) \tab 11 (10-13.75) \tab 12.5 (11-14) \tab 49 / 27 (p 0.015) \cr
+#'   two calibration inputs (30) \tab 27 (24-29) \tab 28 (25-31) \tab 16 / 12 (p 0.57) \cr
+#'   sinusoid with a bias, KOH fit (30) \tab 22 (19-25) \tab 25 (22-29) \tab 20 / 9 (p 0.06)
 #' }
-#' Fewer runs, or even in the paired counts, everywhere; at distance 0.2 the default was
-#' first in 44 kinetics replicates and later in 21 (p 0.006), with two
-#' inputs 20 / 9 (p 0.06). From 10 starting runs in batches of 5 (30
-#' replicates): kinetics 15 runs against 20 (first in 10, later in 3),
-#' the sinusoid 20 against 25 (12 / 3).
-#' All candidates at kappa's draws were not clearly better than half on
-#' kinetics (60 replicates: 12 runs both, all first in 29 and later in 19,
-#' p 0.19); the uniform half keeps runs going where kappa's posterior may
-#' yet move.
+#' The half at kappa's draws with uniform experimental inputs (measured
+#' first) came between: sinusoid 15 runs, kinetics 12 (from the uniform
+#' candidates' 16 and 12.5; the field's inputs then took the median to 14
+#' and 11: 36 / 19 and 39 / 32 paired replicates first / later); with it
+#' two calibration inputs needed 27 runs against 28 (16 / 13), two
+#' independent outputs 12.5 against 13 (15 / 9), Tuo and Wu's problem 28
+#' against 28 (12 / 9) and the sinusoid with a KOH bias 25.5 against 25
+#' (13 / 16); from 10 starting runs in batches of 5 (30 replicates)
+#' kinetics 15 against 20 (10 / 3) and the sinusoid 20 against 25
+#' (12 / 3). All candidates at kappa's draws were not clearly better than
+#' half on kinetics (60 replicates: 29 / 19, p 0.19); the uniform half
+#' keeps runs going where kappa's posterior may yet move.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -296,8 +299,8 @@
 #'   simulator design, the experimental inputs' widened to take in the
 #'   field's inputs (so the runs can reach field inputs beyond them), each
 #'   categorical input at a level drawn at random; half uniform, half with
-#'   their calibration inputs at draws of kappa's posterior (see
-#'   "Candidates (measured)"). With several outputs, runs: no output
+#'   their calibration inputs at draws of kappa's posterior and their
+#'   experimental inputs at the field's (see "Candidates (measured)"). With several outputs, runs: no output
 #'   column.
 #' @param target `"kappa"` (the default: shrink kappa's posterior) or
 #'   experimental inputs where calibrated predictions are wanted (a data
