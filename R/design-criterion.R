@@ -191,7 +191,10 @@
 #' run tells most about kappa there; uniform candidates put ever fewer
 #' there as kappa's posterior narrows.
 #' Against 100 (p + q) uniform candidates over the problems' whole input
-#' boxes (paired replicates, 5 maximin starting runs, one run at a time;
+#' boxes (`inst/bench/design.R`: fits with [calibrate()]'s and
+#' [update()]'s defaults but `discrepancy = "none"` on the problems
+#' without a bias; `propose_runs()`'s defaults; paired replicates, 5
+#' maximin starting runs, one run at a time;
 #' runs to Hellinger distance 0.1 from the exact posterior, median
 #' (quartiles)):
 #' \tabular{lccc}{
@@ -574,9 +577,9 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, kappa = NULL, Xf =
       U[, j] <- scale_inputs(indicator_matrix(f$levels[a], f$columns), sc, j)
     }
     if (!is.null(kappa)) {
-      U <- at_kappa(U, sc$p + seq_len(sc$q), kappa, 0, 1)
+      U <- half_at(U, sc$p + seq_len(sc$q), kappa, 0, 1)
       # and at the field's inputs, where the emulator is used (with kappa)
-      if (!is.null(Xf) && sc$p > 0L) U <- at_field(U, seq_len(sc$p), unique(Xf))
+      if (!is.null(Xf) && sc$p > 0L) U <- half_at(U, seq_len(sc$p), unique(Xf))
     }
   } else {
     if (!is.null(out)) {
@@ -607,21 +610,13 @@ design_candidates <- function(candidates, sc, ncand, Xs, tol, kappa = NULL, Xf =
   if (is.null(out)) U else runs_by_output(U, sc, out)
 }
 
-# Candidates X with the first half's calibration columns `cols` at kappa
-# draws (rows of `kappa`, the columns' units) picked at random, held to
-# [lo, hi].
-at_kappa <- function(X, cols, kappa, lo, hi) {
+# Candidates X with the first half's columns `cols` at rows of `F` (kappa's
+# draws, or the field's distinct inputs; the columns' units) picked at
+# random, held to [lo, hi].
+half_at <- function(X, cols, F, lo = -Inf, hi = Inf) {
   h <- seq_len(nrow(X) %/% 2)
-  pick <- kappa[sample.int(nrow(kappa), length(h), replace = TRUE), , drop = FALSE]
+  pick <- F[sample.int(nrow(F), length(h), replace = TRUE), , drop = FALSE]
   X[h, cols] <- pmin(pmax(pick, rep(lo, each = length(h))), rep(hi, each = length(h)))
-  X
-}
-
-# Candidates X with the first half's experimental columns `cols` at rows
-# of `F` (the field's distinct inputs, the columns' units) picked at random.
-at_field <- function(X, cols, F) {
-  h <- seq_len(nrow(X) %/% 2)
-  X[h, cols] <- F[sample.int(nrow(F), length(h), replace = TRUE), , drop = FALSE]
   X
 }
 

@@ -109,9 +109,9 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     # propose_runs()'s "limited" message once a loop, not at every step
     # (half the candidates at kappa's draws and the field's numeric inputs,
     # as propose_runs()'s own)
-    cand <- at_kappa(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
-                     cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
-    if (length(xnum)) cand <- at_field(cand, xnum, as.matrix(unique(field[xnum])))
+    cand <- half_at(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
+                    cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
+    if (length(xnum)) cand <- half_at(cand, xnum, as.matrix(unique(field[xnum])))
     pr <- withCallingHandlers(
       do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)), candidates = cand),
                               design)),
