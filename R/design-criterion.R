@@ -220,11 +220,14 @@
 #' default needed half as many runs as nested maximin LHS or fewer on
 #' every problem measured (Hellinger 0.1, median, the same replicates):
 #' the sinusoid 14 against > 50, kinetics 11 against 23, two calibration
-#' inputs 27 against 89, Tuo and Wu's problem 28.5 against 65, two shared
+#' inputs 27 against 89 (LHS run to 100 runs on 9 of them), Tuo and Wu's
+#' problem 28.5 against 65, two shared
 #' outputs 12 against 27.5, two independent outputs 13 against 27.5 (60
 #' replicates; the field's inputs cost a run there: 12 with the half's
 #' experimental inputs uniform, p 0.04), the sinusoid with a KOH bias 22
-#' against 49 and with the S-GaSP 22 against 48.5.
+#' against 49 and with the S-GaSP 22 against 48.5. From 10 starting runs
+#' in batches of 5 the margin is smaller: kinetics 20 against 25, Tuo and
+#' Wu's 40 against 60 (the sinusoid 20 against > 50).
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
