@@ -107,11 +107,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   while (runs - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
     # propose_runs()'s "limited" message once a loop, not at every step
-    # (half the candidates at kappa's draws and the field's numeric inputs,
-    # as propose_runs()'s own)
-    cand <- half_at(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
-                    cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
-    if (length(xnum)) cand <- half_at(cand, xnum, as.matrix(unique(field[xnum])))
+    cand <- loop_candidates(fit, field, lower, upper, levs, cal, xnum)
     pr <- withCallingHandlers(
       do.call(propose_runs, c(list(fit, n = min(batch, budget - (runs - n0)), candidates = cand),
                               design)),
@@ -152,6 +148,20 @@ check_loop_ranges <- function(lower, upper, xnames, call = parent.frame()) {
       i = "Such as {.code lower = c(x = 0, u = 0), upper = c(x = 1, u = 1)}."
     ), call = call)
   }
+}
+
+# design_loop()'s candidates: a maximin sample of `lower`-`upper` (the
+# categorical inputs at levels `levs`), half with the calibration inputs
+# `cal` at kappa's draws and the numeric experimental inputs `xnum` at the
+# field's, as propose_runs()'s own; every one held to `lower`-`upper` (the
+# field's inputs may lie beyond them).
+loop_candidates <- function(fit, field, lower, upper, levs, cal, xnum) {
+  cand <- half_at(with_levels(maximin_lhs(100 * length(lower), lower, upper, tries = 1), levs),
+                  cal, as.matrix(fit$Phi[, seq_along(cal), drop = FALSE]), lower[cal], upper[cal])
+  if (length(xnum)) {
+    cand <- half_at(cand, xnum, as.matrix(unique(field[xnum])), lower[xnum], upper[xnum])
+  }
+  cand
 }
 
 # n points of a Latin hypercube in the box, the best of `tries` by the

@@ -1085,6 +1085,16 @@ test_that("design_loop() runs a function simulator through futures and adds runs
   # the responses are the simulator's at the runs' inputs
   expect_equal(out$sim$y, sin(10 * out$sim$u * out$sim$x))
   expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
+  # its candidates stay in `lower`-`upper` where the field's inputs
+  # (0.1-0.9) go beyond them: the half at the field's inputs held there
+  set.seed(3)
+  cand <- FBC:::loop_candidates(out$fit, pb$field, c(x = 0.3, u = 0.2), c(x = 0.7, u = 0.8),
+                                list(), "u", "x")
+  expect_equal(nrow(cand), 200)
+  expect_true(all(cand$x >= 0.3 & cand$x <= 0.7 & cand$u >= 0.2 & cand$u <= 0.8))
+  # the first half at the field's inputs 0.3, 0.5, 0.7 (0.1 and 0.9 held
+  # to 0.3 and 0.7)
+  expect_setequal(unique(round(cand$x[1:100], 12)), c(0.3, 0.5, 0.7))
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
   expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
                                             output = "out"))
