@@ -315,8 +315,8 @@
 #'   field's inputs (so the runs can reach field inputs beyond them), each
 #'   categorical input at a level drawn at random; half uniform, half with
 #'   their calibration inputs at draws of kappa's posterior and their
-#'   experimental inputs at the field's (see "Candidates (measured)"). With several outputs, runs: no output
-#'   column.
+#'   experimental inputs at the field's (see "Candidates (measured)").
+#'   With several outputs, runs: no output column.
 #' @param target `"kappa"` (the default: shrink kappa's posterior) or
 #'   experimental inputs where calibrated predictions are wanted (a data
 #'   frame or matrix with the field's input columns, as [predict()]'s
