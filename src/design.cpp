@@ -34,7 +34,7 @@ namespace {
 // The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
 // Cov_s(y, eta(U)) (N x Nc, N = m + G: the runs and the field's distinct
 // inputs, field_groups(); slice s; kept for every draw only when a batch
-// needs them, else one slice reused), the means mu and variances v (Nc x S),
+// or several outputs need them, else no slices), the means mu and variances v (Nc x S),
 // the log-likelihoods ll, the simulator variances s2S and the kernel's
 // parameters per draw (thS, alS: (p + q) x S; rhoS: the levels' partial
 // correlations, level_count() x S). With T target points: the
@@ -539,7 +539,9 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
       mu[c] = sb.mu[c] + w.mu2[c];
       v[c] = v0 + sb.naa[c] + w.v2[c];
     }
-    if (out.A.n_slices > 1) {
+    // (kept: every draw's slice, one draw's too; n_slices > 1 here left a
+    // single draw's unwritten, read uninitialised by its batch's picks)
+    if (out.A.n_slices > 0) {
       out.A.slice(s).rows(0, m - 1) = sb.A;
       out.A.slice(s).rows(m, N - 1) = w.A2;
     }
@@ -569,7 +571,7 @@ DesignSystems block_systems(Posterior& post, const FieldGroups& fg, const arma::
   const int T = XT.n_rows;
   DesignSystems out;
   out.T = T;
-  out.A.set_size(N, Nc, keepA ? S : 1);
+  out.A.set_size(N, Nc, keepA ? S : 0);
   out.mu.set_size(Nc, S);
   out.v.set_size(Nc, S);
   out.thS.set_size(p + q, S);
@@ -652,7 +654,7 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
   DesignSystems out;
   out.T = T;
   out.blocks = K;
-  out.A.zeros(N, Nc, keepA ? S : 1);
+  out.A.zeros(N, Nc, keepA ? S : 0);
   out.mu.set_size(Nc, S);
   out.v.set_size(Nc, S);
   out.ll.zeros(S);

@@ -1100,6 +1100,38 @@ test_that("design_loop() runs a function simulator through futures and adds runs
                                             output = "out"))
 })
 
+test_that("the look-ahead with a single draw is the plain-R one, batches included", {
+  # every unknown at one draw (KOH-IMSPE's plug-in, inst/bench/design.R's
+  # "imspe"): the draws' A were kept only for more than one draw, and a
+  # batch's pending points read one draw's uninitialised (picks that
+  # changed from call to call, or solve() failing)
+  pb <- sinus_problem()
+  set.seed(4)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
+                   nChains = 1, showProgress = FALSE)
+  U <- matrix(stats::runif(60), 30, 2)
+  XT <- matrix(c(0.2, 0.5, 0.7), 3, 1)
+  phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))
+  one <- list(phi = phi, lw0 = 0, kappa = phi[, 1, drop = FALSE], plugin = TRUE)
+  set.seed(11)
+  cpp <- FBC:::look_ahead(one, U, fit$model, 3, 25, XT)
+  set.seed(11)
+  sys <- list(draw_system(phi[1, ], fit$model, U, XT))
+  ref <- look_ahead_r(sys, one, U, fit$model, 3, 25)
+  expect_identical(cpp$chosen, as.integer(ref$chosen))
+  expect_equal(cpp$scores, ref$scores, tolerance = 1e-8)
+  # (one draw: no reweighting, each step's gain the GP update's reduction
+  # of the targets' variance, smaller once a pick is pending)
+  expect_gt(min(cpp$scores[, 1]), -1e-12)
+  expect_lt(max(cpp$scores[, 2], na.rm = TRUE), max(cpp$scores[, 1]))
+  # and the same as two copies of the draw
+  set.seed(11)
+  two <- FBC:::look_ahead(list(phi = phi[c(1, 1), ], lw0 = c(0, 0), kappa = phi[c(1, 1), 1, drop = FALSE],
+                               plugin = TRUE), U, fit$model, 3, 25, XT)
+  expect_identical(two$chosen, cpp$chosen)
+  expect_equal(two$scores, cpp$scores, tolerance = 1e-10)
+})
+
 test_that("runs of several outputs: the C++ look-ahead equals the plain-R one", {
   # two outputs sharing the rate t (helper-outputs.R), one simulator GP
   # (outputs = "shared"): a run gives both, so the look-ahead scores runs
@@ -1144,6 +1176,17 @@ test_that("runs of several outputs: the C++ look-ahead equals the plain-R one", 
   # (the outputs are correlated, rhoS away from 0: a run's 2 values are
   # not independent given a draw, and the joint fantasy matters)
   expect_gt(abs(mean(parts$phi[, FBC:::param_indices(2, 1, "gp", noise = 2L, levels = 1L)$rhoS])), 0.05)
+  # a single draw (its A kept for the runs' factors, as for a batch): as
+  # two copies of it
+  one <- function(rows) list(phi = parts$phi[rows, , drop = FALSE], lw0 = rep(0, length(rows)),
+                             kappa = parts$kappa[rows, , drop = FALSE], plugin = TRUE)
+  set.seed(11)
+  a <- FBC:::look_ahead(one(1), U, fit$model, 3, 15, XT, K = 2L)
+  set.seed(11)
+  b <- FBC:::look_ahead(one(c(1, 1)), U, fit$model, 3, 15, XT, K = 2L)
+  expect_identical(a$chosen, b$chosen)
+  expect_equal(a$scores, b$scores, tolerance = 1e-10)
+  expect_true(all(is.finite(a$gain)))
 })
 
 test_that("propose_runs() and design_loop() give runs of every output", {
