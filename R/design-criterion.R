@@ -255,9 +255,10 @@
 #' KOH-IMSPE's runs gather at the one kappa it was given: the emulator
 #' becomes exact there, and kappa's posterior elsewhere keeps the
 #' emulator's error (on Tuo and Wu's problem 21 of 30 replicates were
-#' still beyond 0.1 at 60 runs, the median distance there 0.15). From 10 starting runs in batches of 5 the
-#' margin is smaller: kinetics 20 runs against 20 (the same in 17
-#' replicates), the sinusoid 20 against 25, Tuo and Wu's 40 against 45.
+#' still beyond 0.1 at 60 runs, the median distance there 0.15). From 10
+#' starting runs in batches of 5 the margin is smaller: kinetics 20 runs
+#' against 20 (the same in 17 replicates), the sinusoid 20 against 25,
+#' Tuo and Wu's 40 against 45.
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the

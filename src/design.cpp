@@ -539,8 +539,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
       mu[c] = sb.mu[c] + w.mu2[c];
       v[c] = v0 + sb.naa[c] + w.v2[c];
     }
-    // (kept: every draw's slice, one draw's too; n_slices > 1 here left a
-    // single draw's unwritten, read uninitialised by its batch's picks)
+    // (kept: every draw's slice, a single draw's too)
     if (out.A.n_slices > 0) {
       out.A.slice(s).rows(0, m - 1) = sb.A;
       out.A.slice(s).rows(m, N - 1) = w.A2;
