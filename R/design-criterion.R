@@ -251,15 +251,16 @@
 #'   Tuo and Wu's problem (30) \tab 28.5 (27-33.75) \tab > 60 (10 of 30 reach it) \tab > 2.1 \tab 25 / 3 \cr
 #'   sinusoid with a bias, KOH fit (30) \tab 22 (19-25) \tab > 50 (8 of 30) \tab > 2.2 \tab 29 / 0 \cr
 #'   the same, S-GaSP fit (30) \tab 22 (19.25-26.75) \tab > 50 (4 of 30) \tab > 2.2 \tab 30 / 0 \cr
+#'   two shared outputs (30) \tab 12 (10.25-15) \tab 14 (11.25-16) \tab 1.17 \tab 18 / 10 \cr
 #'   two independent outputs (60) \tab 13 (11-15.25) \tab 15.5 (13-17.25) \tab 1.19 \tab 37 / 18
 #' }
 #' KOH-IMSPE's runs gather at the one kappa it was given: the emulator
 #' becomes exact there, and kappa's posterior elsewhere keeps the
 #' emulator's error (on Tuo and Wu's problem 21 of 30 replicates were
 #' still beyond 0.1 at 60 runs, the median distance there 0.15). Where
-#' the field data pin kappa down early (kinetics' 30 points) its estimate
-#' is nearly right and the two come close: 1.25 on the first 30
-#' replicates, 1.08 on the next 30. From 10
+#' the field data pin kappa down early (kinetics' 30 points, and the two
+#' outputs' 30 each) its estimate is nearly right and the two come close:
+#' on kinetics 1.25 on the first 30 replicates, 1.08 on the next 30. From 10
 #' starting runs in batches of 5 the margin is smaller: kinetics 20 runs
 #' against 20 (the same in 17 replicates), the sinusoid 20 against 25,
 #' Tuo and Wu's 40 against 45.
