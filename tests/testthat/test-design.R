@@ -12,6 +12,13 @@ sinus_fit <- function(pb, nMCMC = 4200, seed = 3) {
   calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), nMCMC = nMCMC,
             nBurn = 200, nChains = 1, showProgress = FALSE)
 }
+# a short fit of the sinusoid, hyperparameters sampled (600 sweeps): the
+# draws the look-ahead's checks against plain R start from
+short_fit <- function(pb, discrepancy = "none", nChains = 1, seed = 4) {
+  set.seed(seed)
+  calibrate(pb$sim, pb$field, discrepancy = discrepancy, nMCMC = 600, nBurn = 200,
+            nChains = nChains, showProgress = FALSE)
+}
 sinus_loglik <- function(d) {
   function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
                              discrepancy = "none")
@@ -374,9 +381,7 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
 
 test_that("the look-ahead's particles are distinct draws weighted by their repeats", {
   pb <- sinus_problem()
-  set.seed(3)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 2, showProgress = FALSE)
+  fit <- short_fit(pb, nChains = 2, seed = 3)
   # the reference: runs of equal consecutive draws within a chain (an MCMC
   # sweep that moved nothing repeats a draw)
   runs <- rle(paste(fit$chain, apply(fit$Phi, 1, paste, collapse = " ")))$lengths
@@ -561,9 +566,7 @@ test_that("the look-ahead's weights exp(L - max) are exp()'s to a few units in t
 
 test_that("look_ahead()'s order gives the gains of given points in that order", {
   pb <- sinus_problem()
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 1, showProgress = FALSE)
+  fit <- short_fit(pb)
   U <- matrix(stats::runif(60), 30, 2)
   parts <- FBC:::design_particles(fit, 40, "joint")
   set.seed(11)
@@ -584,9 +587,7 @@ test_that("look_ahead()'s order gives the gains of given points in that order", 
 
 test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gains at its picks", {
   pb <- sinus_problem()
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 2, showProgress = FALSE)
+  fit <- short_fit(pb, nChains = 2)
   cand <- data.frame(x = stats::runif(60), u = stats::runif(60))
   set.seed(12)
   pr <- propose_runs(fit, n = 3, candidates = cand, method = "plugin", ndraws = 40, nfantasy = 30)
@@ -619,9 +620,7 @@ test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gain
 
 test_that("the plug-in's kappa values of no weight are left out, the criterion unchanged", {
   pb <- sinus_problem(m = 20)
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 2, showProgress = FALSE)
+  fit <- short_fit(pb, nChains = 2)
   all <- FBC:::design_particles(fit, 100, "plugin", prune = FALSE)
   pruned <- FBC:::design_particles(fit, 100, "plugin")
   expect_identical(pruned$phi, all$phi)
@@ -651,9 +650,7 @@ test_that("the plug-in's kappa values of no weight are left out, the criterion u
 
 test_that("where the plug-in and the joint look-ahead disagree about its pick, the joint criterion picks", {
   pb <- sinus_problem()
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 2, showProgress = FALSE)
+  fit <- short_fit(pb, nChains = 2)
   set.seed(5)
   U <- matrix(stats::runif(120), 60, 2)
   noTarget <- matrix(0, 0, 1)
@@ -698,9 +695,7 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
   # with the bias GP (KOH), the S-GaSP and without, joint and plug-in
   # particles
   for (disc in c("none", "gp", "sgasp")) {
-    set.seed(4)
-    fit <- calibrate(pb$sim, pb$field, discrepancy = disc, nMCMC = 600, nBurn = 200,
-                     nChains = 1, showProgress = FALSE)
+    fit <- short_fit(pb, discrepancy = disc)
     U <- matrix(stats::runif(60), 30, 2)
     for (method in c("joint", "plugin")) {
       parts <- FBC:::design_particles(fit, 40, method)
@@ -776,9 +771,7 @@ test_that("the plug-in's entropy gain is the mutual information of kappa and the
   # mixture of normals, by quadrature (integrate()); the look-ahead's by
   # its fantasies (stratified): within their Monte Carlo error.
   pb <- sinus_problem()
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 1, showProgress = FALSE)
+  fit <- short_fit(pb)
   parts <- FBC:::design_particles(fit, 50, "plugin", prune = FALSE)
   U <- matrix(c(0.3, 0.55, 0.8, 0.6, 0.6, 0.2), 3, 2)  # (x, u) scaled
   d <- fit$data
@@ -1106,9 +1099,7 @@ test_that("the look-ahead with a single draw is the plain-R one, batches include
   # batch's pending points read one draw's uninitialised (picks that
   # changed from call to call, or solve() failing)
   pb <- sinus_problem()
-  set.seed(4)
-  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 600, nBurn = 200,
-                   nChains = 1, showProgress = FALSE)
+  fit <- short_fit(pb)
   U <- matrix(stats::runif(60), 30, 2)
   XT <- matrix(c(0.2, 0.5, 0.7), 3, 1)
   phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))
