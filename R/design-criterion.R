@@ -415,14 +415,7 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
       i = "Choose runs for kappa ({.code target = \"kappa\"}, the default), or fit with one bias."
     ))
   }
-  # the default candidates reach the field's inputs beyond the runs' (so
-  # the runs can cover them), and half sit at kappa's posterior draws: a
-  # run tells about kappa where its calibration inputs are near kappa's
-  # posterior, and uniform candidates put ever fewer there as it narrows
-  # (measured, "Candidates")
-  U <- design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * (d - length(out1$j))),
-                         model$data$Xs, tol, kappa = sampler_draws(fit)[, seq_len(sc$q), drop = FALSE],
-                         Xf = model$data$Xf)
+  U <- fit_candidates(fit, candidates, ncandidates, tol)
   if (nrow(U) < n * K) {
     cli::cli_abort("Only {nrow(U) / K} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
@@ -593,6 +586,23 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "It factors their dense covariance for every draw it scores (exact, whatever algebra the fit ran), which is too slow beyond that."
     ), call = call)
   }
+}
+
+# propose_runs()'s candidates for `fit` (scaled rows; `candidates` NULL: the
+# default ones, `ncandidates` NULL: 100 per input up to 1000). The default
+# candidates reach the field's inputs beyond the runs' (so the runs can
+# cover them), and half sit at kappa's posterior draws: a run tells about
+# kappa where its calibration inputs are near kappa's posterior, and
+# uniform candidates put ever fewer there as it narrows (measured,
+# "Candidates").
+fit_candidates <- function(fit, candidates = NULL, ncandidates = NULL, tol = 1e-3,
+                           call = parent.frame()) {
+  model <- fit$model
+  sc <- model$scale
+  nin <- sc$p + sc$q - length(design_output(sc)$j)
+  design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * nin), model$data$Xs, tol,
+                    kappa = sampler_draws(fit)[, seq_len(sc$q), drop = FALSE],
+                    Xf = model$data$Xf, call = call)
 }
 
 # The candidates on the scaled inputs (rows), those within `tol` of an

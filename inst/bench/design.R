@@ -372,9 +372,7 @@ imspe_runs <- function(fit, n) {
   K <- if (is.null(out1)) 1L else length(out1$levels)
   phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))
   parts <- list(phi = phi, lw0 = 0, kappa = phi[, seq_len(sc$q), drop = FALSE], plugin = TRUE, prune = 0)
-  U <- FBC:::design_candidates(NULL, sc, min(1000, 100 * (dd - length(out1$j))), model$data$Xs, 1e-3,
-                               kappa = FBC:::sampler_draws(fit)[, seq_len(sc$q), drop = FALSE],
-                               Xf = model$data$Xf)
+  U <- FBC:::fit_candidates(fit)
   XT <- FBC:::design_target(stats::setNames(data.frame(xpred), xname), sc)
   crit <- FBC:::look_ahead(parts, U, model, n, 50L, XT, K = K)
   X <- FBC:::unscale_inputs(U[(crit$chosen - 1L) * K + 1L, , drop = FALSE], sc, seq_len(dd))
