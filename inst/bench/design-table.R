@@ -4,8 +4,9 @@
 # design.R's --init option):
 # - runs to reach Hellinger <= 0.1 to the reference per method (median and
 #   quartiles over replicates; a replicate that does not reach it within
-#   the budget is censored: "> max"), and the goals' ratios (LHS's and the
-#   plug-in's median over ours; a censored median gives a lower bound);
+#   the budget is censored: "> max"), and the goals' ratios (each method's
+#   median over ours, or without it over the default's, "plugin"; a
+#   censored median gives a lower bound);
 # - the curves: Hellinger, kappa1's sd, the posterior sd of log thetaS
 #   (largest over the inputs; where recorded), coverage and the RMSE of the
 #   calibrated field mean at chosen run counts (median [quartiles]);
@@ -62,7 +63,7 @@ for (st in unique(key)) {
   r <- res[key == st, ]
   init <- r$init[1]
   budget <- max(r$runs)
-  methods <- intersect(c("ours", "plugin", "lhs", "random"), unique(r$method))
+  methods <- intersect(c("ours", "plugin", "imspe", "lhs", "random"), unique(r$method))
   variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
   rv <- r
   # only replicates every method finished (paired)
@@ -77,15 +78,18 @@ for (st in unique(key)) {
     cat(sprintf("| %s | %s | %d/%d |\n", m, q3(reach[[m]], budget = budget),
                 sum(is.finite(reach[[m]])), length(reach[[m]])))
   }
-  if ("ours" %in% methods) {
-    mo <- median(reach$ours)
-    for (m in intersect(c("lhs", "plugin"), methods)) {
+  # the ratios against ours (the joint criterion), or without it the
+  # default (the plug-in)
+  base <- intersect(c("ours", "plugin"), methods)[1]
+  if (!is.na(base)) {
+    mo <- median(reach[[base]])
+    for (m in setdiff(intersect(c("lhs", "plugin", "imspe"), methods), base)) {
       mm <- median(reach[[m]])
-      txt <- if (is.infinite(mo)) "ours censored: no ratio" else if (is.infinite(mm))
+      txt <- if (is.infinite(mo)) sprintf("%s censored: no ratio", base) else if (is.infinite(mm))
         sprintf(">= %.2f (%s censored at %d)", budget / mo, m, budget) else sprintf("%.2f", mm / mo)
-      # paired: replicates where ours reached it no later than the other method
-      cat(sprintf("\n%s / ours, median runs: %s; ours no later in %d/%d replicates",
-                  m, txt, sum(reach$ours <= reach[[m]]), length(done)))
+      # paired: replicates where the base reached it no later than the other method
+      cat(sprintf("\n%s / %s, median runs: %s; %s no later in %d/%d replicates",
+                  m, base, txt, base, sum(reach[[base]] <= reach[[m]]), length(done)))
     }
     cat("\n")
   }
