@@ -41,8 +41,9 @@ res <- do.call(rbind, lapply(files, function(f) {
   # refitted every step)
   if (is.null(x$reweighted)) x$reweighted <- FALSE
   if (is.null(x$topUp)) x$topUp <- NA_integer_
+  if (is.null(x$until)) x$until <- 0  # (design.R --until)
   x[c("problem", "batch", "init", "rep", "method", "runs", "hellinger", "sd", "thetaSd",
-      "covers", "rmse", "fitCpu", "designCpu", fresh_cols, "reweighted", "topUp")]
+      "covers", "rmse", "fitCpu", "designCpu", fresh_cols, "reweighted", "topUp", "until")]
 }))
 q3 <- function(v, fmt = "%.0f", budget = Inf) {
   # (run counts as integers, but a median between two as x.5; NA dropped:
@@ -67,7 +68,10 @@ for (st in unique(key)) {
   variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
   rv <- r
   # only replicates every method finished (paired)
-  done <- Reduce(intersect, lapply(methods, function(m) unique(r$rep[r$method == m & r$runs == budget])))
+  # (or ended on reaching design.R's --until distance)
+  done <- Reduce(intersect, lapply(methods, function(m) {
+    unique(r$rep[r$method == m & (r$runs == budget | r$hellinger <= r$until)])
+  }))
   r <- r[r$rep %in% done, ]
   if (!nrow(r)) next
   cat(sprintf("\n### %s, batches of %d, %d starting runs (%d paired replicates)\n\n",

@@ -7,13 +7,17 @@
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
 #                               (also imspe, oracle, ours<N>)
 #                               [--tag=] [--fresh=0] [--candidates=default]
+#                               [--until=0]
 #
 # (replicates first .. first + reps - 1, each starting from `init` maximin
 # runs (10 by default: the results of the runs before the option existed,
 # to the bit); each replicate's rows are saved to
 # <out>/design-<problem>-b<batch>-i<init>-r<rep>.rds as it ends, so a run stopped
 # early keeps what it did; a --tag adds -<tag> to the file names, for
-# methods run separately on the same replicates; summarise with inst/bench/design-table.R. The
+# methods run separately on the same replicates; --until=0.1 ends a
+# method's loop once kappa's posterior is within that Hellinger distance
+# of the reference (its runs to the distance are then known; the rest of
+# the budget is not run: for long budgets); summarise with inst/bench/design-table.R. The
 # old positional form `design.R reps batch added problem first` still
 # works.)
 #
@@ -106,7 +110,7 @@
 suppressPackageStartupMessages(library(FBC))
 opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
              methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
-             fresh = "0", candidates = "default")
+             fresh = "0", candidates = "default", until = "0")
 args <- commandArgs(TRUE)
 if (length(args) && !any(grepl("^--", args))) {
   # the old positional form: reps batch added problem first
@@ -120,6 +124,7 @@ if (length(args) && !any(grepl("^--", args))) {
   }
 }
 reps <- as.integer(opts$reps)
+until <- as.numeric(opts$until)
 batch <- as.integer(opts$batch)
 added <- as.integer(opts$added)
 problem <- opts$problem
@@ -452,11 +457,11 @@ one_method <- function(method, r, start, field, ref, tRef, fit0) {
       draws = nrow(K), fitCpu = tFit, designCpu = NA_real_, refCpu = tRef,
       reweighted = isTRUE(fit$settings$reweight$used),
       topUp = if (isTRUE(fit$settings$reweight$used)) fit$settings$reweight$topUp else NA_integer_,
-      stale = paste(fit$settings$reweight$stale, collapse = "+")))
+      stale = paste(fit$settings$reweight$stale, collapse = "+"), until = until))
     row$metricCpu <- tMetric
     if (!is.null(fresh)) row <- cbind(row, fresh)
     # (the last row has no design step: the oracle's columns NA)
-    if (nruns(sim) >= init + added) return(rbind_fill(c(rows, list(row))))
+    if (nruns(sim) >= init + added || row$hellinger <= until) return(rbind_fill(c(rows, list(row))))
     tDesign <- cpu(U <- next_runs(method, fit, batch, lhsState, ref))
     row$designCpu <- tDesign
     row$picked <- if (is.null(attr(U, "picked"))) NA_character_ else attr(U, "picked")
