@@ -267,9 +267,10 @@
 #' kinetics 15 against 15, where a greedy oracle that knows the reference
 #' needs 13: no one-step rule could need 1.25 times fewer runs than
 #' KOH-IMSPE there. In batches of 5 the margin is smaller: the sinusoid
-#' 20 against 25, two inputs 35 against 45, three inputs 45 against over
-#' 50 (7 of 30 reach it), Tuo and Wu's 40 against 45, kinetics 20 against
-#' 20 (the same in 17 replicates).
+#' 20 against 25, two inputs 35 against 45, three inputs 45 against 60
+#' (1.33), Tuo and Wu's 40 against 50 over 60 replicates (1.25; 40
+#' against 45 on the first 30), kinetics 20 against 20 (the same in 17
+#' replicates).
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
