@@ -608,7 +608,7 @@ fit_candidates <- function(fit, candidates = NULL, ncandidates = NULL, tol = 1e-
   sc <- model$scale
   nin <- sc$p + sc$q - length(design_output(sc)$j)
   design_candidates(candidates, sc, ncandidates %||% min(1000, 100 * nin), model$data$Xs, tol,
-                    kappa = sampler_draws(fit)[, seq_len(sc$q), drop = FALSE],
+                    kappa = sampler_scale(fit$Phi[, seq_len(sc$q), drop = FALSE], sc),
                     Xf = model$data$Xf, call = call)
 }
 
