@@ -251,7 +251,7 @@
 #'   Tuo and Wu's problem (30) \tab 28.5 (27-33.75) \tab > 60 (10 of 30 reach it) \tab > 2.1 \tab 25 / 3 \cr
 #'   sinusoid with a bias, KOH fit (30) \tab 22 (19-25) \tab > 50 (8 of 30) \tab > 2.2 \tab 29 / 0 \cr
 #'   the same, S-GaSP fit (30) \tab 22 (19.25-26.75) \tab > 50 (4 of 30) \tab > 2.2 \tab 30 / 0 \cr
-#'   two shared outputs (30) \tab 12 (10.25-15) \tab 14 (11.25-16) \tab 1.17 \tab 18 / 10 \cr
+#'   two shared outputs (60) \tab 12 (10-14) \tab 13 (11-16) \tab 1.08 \tab 38 / 17 \cr
 #'   two independent outputs (60) \tab 13 (11-15.25) \tab 15.5 (13-17.25) \tab 1.19 \tab 37 / 18
 #' }
 #' KOH-IMSPE's runs gather at the one kappa it was given: the emulator
