@@ -114,6 +114,10 @@ for (st in unique(key)) {
     cat("\n")
   }
   steps <- intersect(init + c(0, 1, 2, 5, 10, 15, 20, 25, 30, 40), r$runs)
+  if (any(r$until > 0)) {
+    cat(sprintf("\n(Loops ended within Hellinger %g of the reference, design.R --until: past a replicate's end the rows below leave it out; their count is the covers column's.)\n",
+                max(r$until)))
+  }
   cat("\n| method | runs | Hellinger | kappa1 sd | log thetaS sd | covers | RMSE field mean |\n|---|---|---|---|---|---|---|\n")
   for (m in methods) for (n in steps) {
     s <- r[r$method == m & r$runs == n, ]
@@ -133,6 +137,7 @@ for (st in unique(key)) {
     cmp <- vapply(steps[-1], function(n) {
       o <- r[r$method == a & r$runs == n, ]
       p <- r[r$method == b & r$runs == n, ]
+      o <- o[o$rep %in% p$rep, ]  # (both still running: design.R --until)
       p <- p[match(o$rep, p$rep), ]
       sprintf("%d: %d/%d (%+.3f)", n, sum(o$hellinger < p$hellinger), nrow(o),
               median(p$hellinger - o$hellinger))
