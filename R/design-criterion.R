@@ -266,11 +266,13 @@
 #' 42.5 (1.47), Tuo and Wu's 32.5 against over 50 (9 of 30 reach it), and
 #' kinetics 15 against 15, where a greedy oracle that knows the reference
 #' needs 13: no one-step rule could need 1.25 times fewer runs than
-#' KOH-IMSPE there. In batches of 5 the margin is smaller: the sinusoid
-#' 20 against 25, two inputs 35 against 45, three inputs 45 against 60
-#' (1.33), Tuo and Wu's 40 against 50 over 60 replicates (1.25; 40
-#' against 45 on the first 30), kinetics 20 against 20 (the same in 17
-#' replicates).
+#' KOH-IMSPE there. In batches of 5 (counts in steps of 5; 60
+#' replicates but three inputs' 30): the sinusoid 20 against 30 (1.50;
+#' 25 on the first 30), two inputs 35 against 45, three inputs 45
+#' against 60 (1.33), Tuo and Wu's 40 against 50 (1.25; 45 on the first
+#' 30), kinetics 15 against 20 on a knife edge (31 of 60 replicates
+#' reach the distance with the first batch under the default, 23 under
+#' KOH-IMSPE; 20 against 20 on the first 30).
 #'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
@@ -313,8 +315,14 @@
 #' kinetics and 0.017 with two calibration inputs, 0.06-0.08 of the
 #' [update_runs()] fit it follows (mostly the old draws reweighted); a
 #' batch of 5 costs 0.017-0.020 on the sinusoid and kinetics and 0.052
-#' with two inputs (0.035-0.082 of its fit). Give fewer
-#' `nfantasy` or `ndraws` for a cheaper, noisier step.
+#' with two inputs (0.035-0.082 of its fit). With the default candidates
+#' since (half at kappa's draws and the field's inputs) the design steps
+#' summed are 0.037-0.083 of the fits summed one run at a time and
+#' 0.026-0.101 in batches of 5, the most with two calibration inputs
+#' (0.101 over 60 replicates in batches of 5: at the 10% line), where the
+#' steps the joint criterion picks in (a quarter to a third) cost 2.5-3x
+#' the others. Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
+#' step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
