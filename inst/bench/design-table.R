@@ -64,13 +64,16 @@ for (st in unique(key)) {
   r <- res[key == st, ]
   init <- r$init[1]
   budget <- max(r$runs)
-  methods <- intersect(c("ours", "plugin", "imspe", "lhs", "random"), unique(r$method))
+  # each method's own budget (files of runs with other --added may be
+  # merged: a method censored at its budget is "> its budget")
+  bud <- tapply(r$runs, r$method, max)
+  methods <- intersect(c("ours", "plugin", "imspe", "lhs", "random", "oracle"), unique(r$method))
   variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
   rv <- r
   # only replicates every method finished (paired)
   # (or ended on reaching design.R's --until distance)
   done <- Reduce(intersect, lapply(methods, function(m) {
-    unique(r$rep[r$method == m & (r$runs == budget | r$hellinger <= r$until)])
+    unique(r$rep[r$method == m & (r$runs == bud[[m]] | r$hellinger <= r$until)])
   }))
   r <- r[r$rep %in% done, ]
   if (!nrow(r)) next
@@ -79,7 +82,7 @@ for (st in unique(key)) {
   cat("| method | runs to Hellinger <= 0.1, median [quartiles] | replicates reaching it |\n|---|---|---|\n")
   reach <- lapply(stats::setNames(methods, methods), function(m) reach_runs(r[r$method == m, ]))
   for (m in methods) {
-    cat(sprintf("| %s | %s | %d/%d |\n", m, q3(reach[[m]], budget = budget),
+    cat(sprintf("| %s | %s | %d/%d |\n", m, q3(reach[[m]], budget = bud[[m]]),
                 sum(is.finite(reach[[m]])), length(reach[[m]])))
   }
   # the ratios against ours (the joint criterion), or without it the
@@ -87,10 +90,10 @@ for (st in unique(key)) {
   base <- intersect(c("ours", "plugin"), methods)[1]
   if (!is.na(base)) {
     mo <- median(reach[[base]])
-    for (m in setdiff(intersect(c("lhs", "plugin", "imspe"), methods), base)) {
+    for (m in setdiff(intersect(c("lhs", "plugin", "imspe", "oracle"), methods), base)) {
       mm <- median(reach[[m]])
       txt <- if (is.infinite(mo)) sprintf("%s censored: no ratio", base) else if (is.infinite(mm))
-        sprintf(">= %.2f (%s censored at %d)", budget / mo, m, budget) else sprintf("%.2f", mm / mo)
+        sprintf(">= %.2f (%s censored at %d)", bud[[m]] / mo, m, bud[[m]]) else sprintf("%.2f", mm / mo)
       # paired: replicates where the base reached it no later than the other method
       cat(sprintf("\n%s / %s, median runs: %s; %s no later in %d/%d replicates",
                   m, base, txt, base, sum(reach[[base]] <= reach[[m]]), length(done)))
@@ -102,7 +105,7 @@ for (st in unique(key)) {
   for (th in thresholds) {
     rt <- lapply(stats::setNames(methods, methods), function(m) reach_runs(r[r$method == m, ], th))
     cat(sprintf("\nHellinger <= %g: %s", th, paste(vapply(methods, function(m) {
-      sprintf("%s %s (%d/%d)", m, q3(rt[[m]], budget = budget), sum(is.finite(rt[[m]])), length(rt[[m]]))
+      sprintf("%s %s (%d/%d)", m, q3(rt[[m]], budget = bud[[m]]), sum(is.finite(rt[[m]])), length(rt[[m]]))
     }, ""), collapse = "; ")))
     if (all(c("ours", "plugin") %in% methods)) {
       a <- rt$ours; b <- rt$plugin

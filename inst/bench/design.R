@@ -83,7 +83,10 @@
 # the default methods): a greedy bound, batches of 1 only: of 25 uniform
 # candidates and ours' and the plug-in's picks, the one whose update() lands
 # closest to the reference (it knows the answer; next_runs()); it costs 27
-# updates a step.
+# updates a step. Its rows also hold the distances it saw (hOurs, hPlugin,
+# hBestUniform, hMedianUniform, hOracle) and, as list columns, its pick,
+# ours' and the plug-in's (pickOracle, pickOurs, pickPlugin) and kappa's
+# posterior mean and sd before the step (kMean, kSd).
 # Fits: calibrate() and update(fit, sim =) with the package defaults (4
 # chains, until converged) but discrepancy = "none" ("gp" for sinusbias).
 # Metrics per step (also the posterior sd of log thetaS, the largest over
@@ -408,7 +411,13 @@ next_runs <- function(method, fit, n, lhsState, ref) {
     # plug-in's, and the best and median of the 25 uniform candidates)
     return(structure(C[which.min(h), , drop = FALSE],
                      seen = data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
-                                       hMedianUniform = stats::median(h[1:25]), hOracle = min(h))))
+                                       hMedianUniform = stats::median(h[1:25]), hOracle = min(h),
+                                       # (where the oracle, ours and the plug-in picked, and
+                                       # kappa's posterior mean and sd before the step)
+                                       pickOracle = I(list(C[which.min(h), ])),
+                                       pickOurs = I(list(C[26, ])), pickPlugin = I(list(C[27, ])),
+                                       kMean = I(list(colMeans(kappas(fit)))),
+                                       kSd = I(list(apply(kappas(fit), 2, sd))))))
   }
   # (which criterion picked: the joint's where it and the plug-in disagree
   # about the plug-in's first pick, ?propose_runs)
