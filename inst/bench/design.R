@@ -408,16 +408,17 @@ next_runs <- function(method, fit, n, lhsState, ref) {
       hellinger(kappas(f), ref)
     }, numeric(1))
     # (per step: the distances the oracle saw for ours' pick, the
-    # plug-in's, and the best and median of the 25 uniform candidates)
-    return(structure(C[which.min(h), , drop = FALSE],
+    # plug-in's, and the best and median of the 25 uniform candidates;
+    # where the oracle, ours and the plug-in picked, and kappa's posterior
+    # mean and sd before the step)
+    best <- which.min(h)
+    K <- kappas(fit)
+    return(structure(C[best, , drop = FALSE],
                      seen = data.frame(hOurs = h[26], hPlugin = h[27], hBestUniform = min(h[1:25]),
-                                       hMedianUniform = stats::median(h[1:25]), hOracle = min(h),
-                                       # (where the oracle, ours and the plug-in picked, and
-                                       # kappa's posterior mean and sd before the step)
-                                       pickOracle = I(list(C[which.min(h), ])),
+                                       hMedianUniform = stats::median(h[1:25]), hOracle = h[best],
+                                       pickOracle = I(list(C[best, ])),
                                        pickOurs = I(list(C[26, ])), pickPlugin = I(list(C[27, ])),
-                                       kMean = I(list(colMeans(kappas(fit)))),
-                                       kSd = I(list(apply(kappas(fit), 2, sd))))))
+                                       kMean = I(list(colMeans(K))), kSd = I(list(apply(K, 2, sd))))))
   }
   # (which criterion picked: the joint's where it and the plug-in disagree
   # about the plug-in's first pick, ?propose_runs)
