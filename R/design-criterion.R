@@ -126,7 +126,13 @@
 #' larger: 1.33-1.40, below). A kappa grid per hyperparameter draw in
 #' place of the draws (5 x 20 particles) came between the two (17,
 #' quartiles 16-19, on the sinusoid) and more hyperparameter draws (10 x
-#' 20) did worse, so it was not adopted.
+#' 20) did worse, so it was not adopted. With two outputs the plug-in's
+#' kappa grid under 5 hyperparameter draws (5 x 100 particles, by kappa's
+#' entropy or its variance) needed as many runs as the default (12 with
+#' shared outputs, 14 with independent ones, 30 replicates), and so did 200
+#' fantasies of a run's two values in place of 50 (12 and 13, 60
+#' replicates): the room the oracle shows there is not the plug-in's
+#' hyperparameters nor the look-ahead's Monte Carlo error.
 #' The plug-in's own expected gains ignore the hyperparameters' spread and
 #' overstated what its picks were worth under the joint posterior
 #' (0.34-0.88 against 0.15-0.42 on the sinusoid's first picks at 5 runs),
