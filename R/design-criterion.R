@@ -271,9 +271,11 @@
 #' on kinetics 1.25 on the first 30 replicates, 1.08 on the next 30. With
 #' two outputs a greedy oracle that knows the reference needed 9 and 10
 #' runs (shared, independent; replicates 1-30) against KOH-IMSPE's 14 and
-#' 16 and the default's 12 and 14: the goal is within a one-step rule's
-#' reach there, and once kappa's posterior is narrow the default's picks
-#' were no better than a uniform run's. From 10
+#' 16 and the default's 12 and 14: a one-step rule that knows each run's
+#' value reaches the goal there (an expected gain cannot know it; the
+#' variants in "Joint or plug-in" needed the default's runs), and once
+#' kappa's posterior is narrow the default's picks were no better than a
+#' uniform run's. From 10
 #' starting runs (the issue's protocol, 30 replicates) one at a time: the
 #' sinusoid 17 runs against 25 (1.47), two calibration inputs 29 against
 #' 42.5 (1.47), Tuo and Wu's 32.5 against over 50 (9 of 30 reach it), and
