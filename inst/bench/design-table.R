@@ -67,7 +67,7 @@ for (st in unique(key)) {
   # each method's own budget (files of runs with other --added may be
   # merged: a method censored at its budget is "> its budget")
   bud <- tapply(r$runs, r$method, max)
-  methods <- intersect(c("ours", "plugin", "imspe", "lhs", "random", "oracle"), unique(r$method))
+  methods <- intersect(c("ours", "plugin", "imspe", "lhs", "random", "oracle", "known"), unique(r$method))
   variants <- sort(grep("^ours[0-9]+$", unique(r$method), value = TRUE))  # ours with N draws
   rv <- r
   # only replicates every method finished (paired)

@@ -5,7 +5,7 @@
 #   Rscript inst/bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
 #                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
-#                               (also imspe, oracle, ours<N>)
+#                               (also imspe, oracle, known, ours<N>)
 #                               [--tag=] [--fresh=0] [--candidates=default]
 #                               [--until=0]
 #
@@ -86,7 +86,9 @@
 # updates a step. Its rows also hold the distances it saw (hOurs, hPlugin,
 # hBestUniform, hMedianUniform, hOracle) and, as list columns, its pick,
 # ours' and the plug-in's (pickOracle, pickOurs, pickPlugin) and kappa's
-# posterior mean and sd before the step (kMean, kSd).
+# posterior mean and sd before the step (kMean, kSd). "known" (not in the
+# default methods, batches of 1): a bound that knows each candidate run's
+# values but not the reference (known_runs()).
 # Fits: calibrate() and update(fit, sim =) with the package defaults (4
 # chains, until converged) but discrepancy = "none" ("gp" for sinusbias).
 # Metrics per step (also the posterior sd of log thetaS, the largest over
@@ -138,7 +140,7 @@ methods <- strsplit(opts$methods, ",")[[1]]
 # "ours<N>": ours with N draws (propose_runs()'s ndraws; 100 by default)
 # "oracle": see next_runs()
 # "imspe": the issue's plug-in read literally (imspe_runs())
-stopifnot(all(methods %in% c("ours", "plugin", "imspe", "lhs", "random", "oracle") | grepl("^ours[0-9]+$", methods)))
+stopifnot(all(methods %in% c("ours", "plugin", "imspe", "lhs", "random", "oracle", "known") | grepl("^ours[0-9]+$", methods)))
 
 # eta(X): X in natural units, columns (experimental, calibration...)
 pb <- switch(problem,
@@ -387,6 +389,41 @@ imspe_runs <- function(fit, n) {
   colnames(X) <- c(sc$names$inputs, sc$names$calibration)
   X[, cols, drop = FALSE]
 }
+# "known" (not in the default methods; batches of 1): a bound between the
+# default and the oracle, which knows each run's values but not the
+# reference: among propose_runs()'s default candidates, the run whose true
+# values leave kappa's plug-in posterior (the default's particles: the MAP
+# hyperparameters, kappa on a grid, none pruned) with the least entropy.
+# With several outputs the values' density is the product of each
+# output's given the data (exact for independent outputs; with shared ones
+# their correlation given the data is left out).
+known_runs <- function(fit) {
+  model <- fit$model
+  sc <- model$scale
+  dat <- model$data
+  out1 <- FBC:::design_output(sc)
+  K <- if (is.null(out1)) 1L else length(out1$levels)
+  U <- FBC:::fit_candidates(fit)
+  parts <- FBC:::design_particles(fit, 100L, "plugin", prune = FALSE)
+  sys <- FBC:::.design_systems(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U,
+                               matrix(0, 0, ncol(dat$Xf)), FBC:::fbc_nugget, model$spec$model)
+  X <- FBC:::unscale_inputs(U[seq(1, nrow(U), by = K), , drop = FALSE], sc, seq_len(sc$p + sc$q))
+  colnames(X) <- c(sc$names$inputs, sc$names$calibration)
+  X <- X[, cols, drop = FALSE]
+  etas <- if (K == 1L) list(pb$eta) else pb$etas[out1$levels]
+  lw <- as.vector(parts$lw0 + sys$ll)
+  for (k in seq_len(K)) {
+    y <- (etas[[k]](X) - sc$ymean[k]) / sc$ysd[k]
+    rows <- seq(k, nrow(U), by = K)
+    lw <- lw + t(stats::dnorm(y, sys$mu[rows, , drop = FALSE], sqrt(sys$v[rows, , drop = FALSE]), log = TRUE))
+  }
+  ent <- apply(lw, 2, function(l) {
+    w <- exp(l - max(l))
+    w <- w / sum(w)
+    -sum(w[w > 0] * log(w[w > 0]))
+  })
+  X[which.min(ent), , drop = FALSE]
+}
 # (the oracle's rows: an attribute "seen", see below)
 next_runs <- function(method, fit, n, lhsState, ref) {
   cand <- function() stats::setNames(as.data.frame(to_natural(runif(100 * d * d))), cols)
@@ -427,6 +464,10 @@ next_runs <- function(method, fit, n, lhsState, ref) {
     ours = picked(propose_runs(fit, n = n, candidates = given(), method = "joint")),
     plugin = picked(suppressMessages(propose_runs(fit, n = n, candidates = given(), method = "plugin"))),
     imspe = imspe_runs(fit, n),
+    known = {
+      stopifnot(n == 1)
+      known_runs(fit)
+    },
     random = matrix(runif(d * n), n, d),
     lhs = {
       A <- lhs::augmentLHS(lhsState, n)
