@@ -90,7 +90,7 @@ for (st in unique(key)) {
   base <- intersect(c("ours", "plugin"), methods)[1]
   if (!is.na(base)) {
     mo <- median(reach[[base]])
-    for (m in setdiff(intersect(c("lhs", "plugin", "imspe", "oracle"), methods), base)) {
+    for (m in setdiff(intersect(c("lhs", "plugin", "imspe", "oracle", "known"), methods), base)) {
       mm <- median(reach[[m]])
       txt <- if (is.infinite(mo)) sprintf("%s censored: no ratio", base) else if (is.infinite(mm))
         sprintf(">= %.2f (%s censored at %d)", bud[[m]] / mo, m, bud[[m]]) else sprintf("%.2f", mm / mo)

@@ -374,10 +374,16 @@ rmse <- function(fit) {
 # prediction's variance there, exactly KOH-IMSPE's criterion on a grid of
 # the field's inputs. (FBC's internals: it is not an option of
 # propose_runs(), whose plug-in weights kappa on a grid as EIVAR does.)
+# Candidate runs `runs` (1-based; U holds K rows a run) in natural units,
+# the bench's columns (without the output's)
+candidate_runs <- function(U, runs, K, sc) {
+  X <- FBC:::unscale_inputs(U[(runs - 1L) * K + 1L, , drop = FALSE], sc, seq_len(sc$p + sc$q))
+  colnames(X) <- c(sc$names$inputs, sc$names$calibration)
+  X[, cols, drop = FALSE]
+}
 imspe_runs <- function(fit, n) {
   model <- fit$model
   sc <- model$scale
-  dd <- sc$p + sc$q
   out1 <- FBC:::design_output(sc)
   K <- if (is.null(out1)) 1L else length(out1$levels)
   phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))
@@ -385,9 +391,7 @@ imspe_runs <- function(fit, n) {
   U <- FBC:::fit_candidates(fit)
   XT <- FBC:::design_target(stats::setNames(data.frame(xpred), xname), sc)
   crit <- FBC:::look_ahead(parts, U, model, n, 50L, XT, K = K)
-  X <- FBC:::unscale_inputs(U[(crit$chosen - 1L) * K + 1L, , drop = FALSE], sc, seq_len(dd))
-  colnames(X) <- c(sc$names$inputs, sc$names$calibration)
-  X[, cols, drop = FALSE]
+  candidate_runs(U, crit$chosen, K, sc)
 }
 # "known" (not in the default methods; batches of 1): a bound between the
 # default and the oracle, which knows each run's values but not the
@@ -407,9 +411,7 @@ known_runs <- function(fit) {
   parts <- FBC:::design_particles(fit, 100L, "plugin", prune = FALSE)
   sys <- FBC:::.design_systems(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U,
                                matrix(0, 0, ncol(dat$Xf)), FBC:::fbc_nugget, model$spec$model)
-  X <- FBC:::unscale_inputs(U[seq(1, nrow(U), by = K), , drop = FALSE], sc, seq_len(sc$p + sc$q))
-  colnames(X) <- c(sc$names$inputs, sc$names$calibration)
-  X <- X[, cols, drop = FALSE]
+  X <- candidate_runs(U, seq_len(nrow(U) / K), K, sc)
   etas <- if (K == 1L) list(pb$eta) else pb$etas[out1$levels]
   lw <- as.vector(parts$lw0 + sys$ll)
   for (k in seq_len(K)) {
