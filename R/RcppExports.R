@@ -9,6 +9,10 @@
     .Call(`_FBC_design_solve_lower_r`, L, B)
 }
 
+.design_avx2 <- function(allow) {
+    .Call(`_FBC_design_avx2_r`, allow)
+}
+
 .design_exp <- function(x, mx) {
     .Call(`_FBC_design_exp_r`, x, mx)
 }
@@ -17,8 +21,12 @@
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }
 
-.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy) {
-    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy)
+.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps) {
+    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps)
+}
+
+.design_look_ahead_resume <- function(state) {
+    .Call(`_FBC_design_look_ahead_resume`, state)
 }
 
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {

@@ -523,14 +523,41 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L) {
   # point's expected reduction of the entropy, as the variance fraction a
   # normal posterior's reduction means, 1 - exp(-2 gain)
   entropy <- nrow(XT) == 0L
-  mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy)
-  crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
-                     order = seq_len(n), K = K)
-  crit$chosen <- mine$chosen
-  own <- if (entropy) -expm1(-2 * mine$gain) else mine$gain / mine$variance
-  if (crit$gain[1] / crit$variance < design_limited && own[1] >= design_limited) {
+  own_share <- function(la) if (entropy) -expm1(-2 * la$gain) else la$gain / la$variance
+  # the two look-aheads' random numbers, drawn first (in this order), so
+  # their first steps can be run alone: whether the joint criterion takes
+  # over depends on the first pick only, and where it does the plug-in's
+  # other picks would be thrown away (on two calibration inputs in batches
+  # of 5, three quarters of its look-ahead's CPU time)
+  rmine <- look_ahead_random(n * K, nfantasy)
+  rcrit <- look_ahead_random(n * K, nfantasy)
+  takeover <- function(crit1, own1) crit1$gain[1] / crit1$variance < design_limited && own1 >= design_limited
+  joint_alt <- function() {
     alt <- look_ahead(joint, U, model, n, nfantasy, XT, K = K)
-    if (alt$gain[1] / alt$variance >= design_limited) return(c(alt, method = "joint"))
+    if (alt$gain[1] / alt$variance >= design_limited) alt
+  }
+  # the plug-in's first step (the rest resumed below unless the joint
+  # criterion takes over)
+  mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine,
+                     steps = 1L)
+  tried <- FALSE
+  if (n > 1L) {
+    crit1 <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, 1L, nfantasy, XT,
+                        order = 1L, K = K, random = first_random(rcrit, K))
+    if (takeover(crit1, own_share(mine)[1])) {
+      alt <- joint_alt()
+      if (!is.null(alt)) return(c(alt, method = "joint"))
+      tried <- TRUE
+    }
+    mine <- look_ahead_resume(mine)
+  }
+  crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
+                     order = seq_len(n), K = K, random = rcrit)
+  crit$chosen <- mine$chosen
+  own <- own_share(mine)
+  if (!tried && takeover(crit, own[1])) {
+    alt <- joint_alt()
+    if (!is.null(alt)) return(c(alt, method = "joint"))
   }
   c(crit, method = "plugin", list(own = own))
 }
@@ -778,21 +805,39 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
 # variance (`entropy`: its entropy, for the plug-in's particles; or of the
 # prediction's variance at the targets XT) with the pending
 # points' fantasised values conditioned on per draw (with `order`, the
-# candidates U[order, ] in that order: their gains). Its random numbers are
-# drawn here: the fantasies' draws by systematic resampling of the base
-# weights (uniforms (j - U) / nfantasy, one U), then per step a random
-# order of the nfantasy normal quantiles (common to every candidate).
-# Returns .design_look_ahead()'s list: `chosen`, `gain`, `variance` (the
+# candidates U[order, ] in that order: their gains). Its random numbers,
+# `random`, from look_ahead_random() (drawn after the size check unless
+# given); `steps` < n runs the first steps only (look_ahead_resume() the
+# rest). Returns .design_look_ahead()'s list: `chosen`, `gain`, `variance` (the
 # criterion's current value: kappa's entropy with `entropy`), `scores`,
 # `kept`.
 look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(model$data$Xf)),
-                       order = integer(), K = 1L, entropy = FALSE, call = parent.frame()) {
+                       order = integer(), K = 1L, entropy = FALSE,
+                       random = look_ahead_random(n * K, nfantasy), steps = n,
+                       call = parent.frame()) {
   dat <- model$data
   check_look_ahead_size(nrow(parts$phi), model, U, XT, call)
-  usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic: the draws evenly
-  Z <- matrix(0, nfantasy, n * K)
-  for (k in seq_len(n * K)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
-                     isTRUE(parts$plugin), usrc, Z, XT, fbc_nugget, model$spec$model,
-                     as.integer(order), parts$prune %||% 0, as.integer(K), entropy)
+                     isTRUE(parts$plugin), random$usrc, random$Z, XT, fbc_nugget, model$spec$model,
+                     as.integer(order), parts$prune %||% 0, as.integer(K), entropy,
+                     as.integer(steps))
 }
+
+# The rest of a look-ahead begun with fewer `steps` than points (its
+# `state`): the same list as running them all at once.
+look_ahead_resume <- function(la) .design_look_ahead_resume(la$state)
+
+# look_ahead()'s random numbers for `cols` fantasised values a fantasy
+# (n points of K values): the fantasies' draws by systematic resampling
+# (uniforms (j - U) / nfantasy, one U), then per value a random order of
+# the nfantasy normal quantiles (common to every candidate).
+look_ahead_random <- function(cols, nfantasy) {
+  usrc <- (seq_len(nfantasy) - stats::runif(1)) / nfantasy  # systematic: the draws evenly
+  Z <- matrix(0, nfantasy, cols)
+  for (k in seq_len(cols)) Z[, k] <- stats::qnorm((sample.int(nfantasy) - 0.5) / nfantasy)
+  list(usrc = usrc, Z = Z)
+}
+
+# The random numbers of a look-ahead's first point alone (its first K
+# columns): its first step is the same as the whole batch's.
+first_random <- function(random, K) list(usrc = random$usrc, Z = random$Z[, seq_len(K), drop = FALSE])

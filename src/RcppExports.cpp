@@ -34,6 +34,17 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// design_avx2_r
+bool design_avx2_r(int allow);
+RcppExport SEXP _FBC_design_avx2_r(SEXP allowSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< int >::type allow(allowSEXP);
+    rcpp_result_gen = Rcpp::wrap(design_avx2_r(allow));
+    return rcpp_result_gen;
+END_RCPP
+}
 // design_exp_r
 arma::vec design_exp_r(const arma::vec& x, double mx);
 RcppExport SEXP _FBC_design_exp_r(SEXP xSEXP, SEXP mxSEXP) {
@@ -66,8 +77,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // design_look_ahead
-Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs, bool entropy);
-RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP, SEXP entropySEXP) {
+Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs, bool entropy, int steps);
+RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP, SEXP entropySEXP, SEXP stepsSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -89,7 +100,19 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< double >::type prune(pruneSEXP);
     Rcpp::traits::input_parameter< int >::type outputs(outputsSEXP);
     Rcpp::traits::input_parameter< bool >::type entropy(entropySEXP);
-    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy));
+    Rcpp::traits::input_parameter< int >::type steps(stepsSEXP);
+    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps));
+    return rcpp_result_gen;
+END_RCPP
+}
+// design_look_ahead_resume
+Rcpp::List design_look_ahead_resume(SEXP state);
+RcppExport SEXP _FBC_design_look_ahead_resume(SEXP stateSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< SEXP >::type state(stateSEXP);
+    rcpp_result_gen = Rcpp::wrap(design_look_ahead_resume(state));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -345,9 +368,11 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
     {"_FBC_design_solve_lower_r", (DL_FUNC) &_FBC_design_solve_lower_r, 2},
+    {"_FBC_design_avx2_r", (DL_FUNC) &_FBC_design_avx2_r, 1},
     {"_FBC_design_exp_r", (DL_FUNC) &_FBC_design_exp_r, 2},
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
-    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 18},
+    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 19},
+    {"_FBC_design_look_ahead_resume", (DL_FUNC) &_FBC_design_look_ahead_resume, 1},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

@@ -564,6 +564,58 @@ test_that("the look-ahead's weights exp(L - max) are exp()'s to a few units in t
   expect_identical(drop(FBC:::.design_exp(-1, 0)), exp(-1))
 })
 
+test_that("four lanes (AVX2) give the two lanes' numbers", {
+  skip_if_not(FBC:::.design_avx2(-1L), "this processor has no AVX2: two lanes only")
+  on.exit(FBC:::.design_avx2(1L))
+  pb <- sinus_problem()
+  fit <- short_fit(pb)
+  U <- matrix(stats::runif(100), 50, 2)
+  # an odd number of draws (41, 37 kept at most): every tail taken
+  L <- -seq(0, 750, length.out = 1003)
+  run <- function() {
+    out <- list(exp = FBC:::.design_exp(L, 0))
+    for (method in c("joint", "plugin")) {
+      parts <- FBC:::design_particles(fit, 41, method)
+      set.seed(21)
+      out[[method]] <- FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin")
+    }
+    out
+  }
+  four <- run()
+  expect_false(FBC:::.design_avx2(0L))
+  two <- run()
+  expect_identical(four, two)
+})
+
+test_that("a look-ahead's first step alone is its batch's first step, and resumes to the batch", {
+  pb <- sinus_problem()
+  fit <- short_fit(pb)
+  U <- matrix(stats::runif(60), 30, 2)
+  for (method in c("joint", "plugin")) {
+    parts <- FBC:::design_particles(fit, 40, method)
+    set.seed(13)
+    random <- FBC:::look_ahead_random(3, 25)
+    batch <- FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin",
+                              random = random)
+    one <- FBC:::look_ahead(parts, U, fit$model, 1, 25, entropy = method == "plugin",
+                            random = FBC:::first_random(random, 1L))
+    expect_identical(one$chosen, batch$chosen[1])
+    expect_identical(one$gain, batch$gain[1])
+    expect_identical(one$variance, batch$variance)
+    expect_identical(one$scores[, 1], batch$scores[, 1])
+    # the batch begun with one step and resumed: the batch's results
+    begun <- FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin",
+                              random = random, steps = 1L)
+    expect_identical(begun$chosen, batch$chosen[1])
+    expect_identical(begun$scores, batch$scores[, 1, drop = FALSE])
+    expect_identical(FBC:::look_ahead_resume(begun), batch)
+    expect_error(FBC:::look_ahead_resume(begun), "already finished")
+    # the random numbers drawn inside are the same as given
+    set.seed(13)
+    expect_identical(FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin"), batch)
+  }
+})
+
 test_that("look_ahead()'s order gives the gains of given points in that order", {
   pb <- sinus_problem()
   fit <- short_fit(pb)
