@@ -332,12 +332,20 @@
 #' batch of 5 costs 0.017-0.020 on the sinusoid and kinetics and 0.052
 #' with two inputs (0.035-0.082 of its fit). With the default candidates
 #' since (half at kappa's draws and the field's inputs) the design steps
-#' summed are 0.037-0.083 of the fits summed one run at a time and
-#' 0.026-0.101 in batches of 5, the most with two calibration inputs
-#' (0.101 over 60 replicates in batches of 5: at the 10% line), where the
-#' steps the joint criterion picks in (a quarter to a third) cost 2.5-3x
-#' the others. Give fewer `nfantasy` or `ndraws` for a cheaper, noisier
-#' step.
+#' summed were 0.037-0.083 of the fits summed one run at a time and
+#' 0.026-0.101 in batches of 5, the most with two calibration inputs,
+#' where the steps the joint criterion picks in (a quarter to a third)
+#' cost 2.5-3x the others. Since, the plug-in's batch is resumed after its
+#' first pick only where the joint criterion does not take over (that
+#' decision needs the first pick alone), and the scoring runs four lanes
+#' where the processor has AVX2 (the same numbers as two): with two
+#' calibration inputs, the same picks and fits on the same machine, a
+#' batch of 5 costs 0.082-0.083 of its fit against 0.113-0.116 before (CPU
+#' sums over 60 replicates, twice; per step a median 0.090-0.091 against
+#' 0.119-0.122) and one run at a
+#' time 0.069 against 0.079 (30 replicates); the sinusoid in batches of 5
+#' 0.078 against 0.096. Give fewer `nfantasy` or `ndraws` for a cheaper,
+#' noisier step.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
