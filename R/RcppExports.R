@@ -29,6 +29,10 @@
     .Call(`_FBC_design_look_ahead_resume`, state)
 }
 
+.design_look_ahead_release <- function(state) {
+    invisible(.Call(`_FBC_design_look_ahead_release`, state))
+}
+
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {
     .Call(`_FBC_fbc_heldout`, Xf, yf, Xs, ys, phis, nugget, fold, model)
 }

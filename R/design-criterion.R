@@ -522,8 +522,9 @@ design_limited <- 0.01
 # plug-in expects its first pick to be worth design_limited or more and the
 # joint look-ahead less, its picks give way to the joint criterion's if
 # that finds one worth more: the plug-in's hyperparameters, not the
-# posterior, misled it. `method` says which picked.
-pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L) {
+# posterior, misled it (`limit`: design_limited, or another share for the
+# tests). `method` says which picked.
+pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L, limit = design_limited) {
   if (is.null(plug)) {
     return(c(look_ahead(joint, U, model, n, nfantasy, XT, K = K), method = "joint"))
   }
@@ -539,10 +540,10 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L) {
   # of 5, three quarters of its look-ahead's CPU time)
   rmine <- look_ahead_random(n * K, nfantasy)
   rcrit <- look_ahead_random(n * K, nfantasy)
-  takeover <- function(crit1, own1) crit1$gain[1] / crit1$variance < design_limited && own1 >= design_limited
+  takeover <- function(crit1, own1) crit1$gain[1] / crit1$variance < limit && own1 >= limit
   joint_alt <- function() {
     alt <- look_ahead(joint, U, model, n, nfantasy, XT, K = K)
-    if (alt$gain[1] / alt$variance >= design_limited) alt
+    if (alt$gain[1] / alt$variance >= limit) alt
   }
   # the plug-in's first step (the rest resumed below unless the joint
   # criterion takes over)
@@ -553,11 +554,17 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L) {
     crit1 <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, 1L, nfantasy, XT,
                         order = 1L, K = K, random = first_random(rcrit, K))
     if (takeover(crit1, own_share(mine)[1])) {
+      # (the plug-in's systems freed first: the peak memory one look-ahead's)
+      .design_look_ahead_release(mine$state)
       alt <- joint_alt()
       if (!is.null(alt)) return(c(alt, method = "joint"))
       tried <- TRUE
+      # rarely (the joint criterion's best worth under 1% too): the
+      # plug-in's batch from the start, the same numbers
+      mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine)
+    } else {
+      mine <- look_ahead_resume(mine)
     }
-    mine <- look_ahead_resume(mine)
   }
   crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
                      order = seq_len(n), K = K, random = rcrit)

@@ -116,6 +116,16 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// design_look_ahead_release
+void design_look_ahead_release(SEXP state);
+RcppExport SEXP _FBC_design_look_ahead_release(SEXP stateSEXP) {
+BEGIN_RCPP
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< SEXP >::type state(stateSEXP);
+    design_look_ahead_release(state);
+    return R_NilValue;
+END_RCPP
+}
 // fbc_heldout
 Rcpp::List fbc_heldout(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& fold, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_heldout(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP foldSEXP, SEXP modelSEXP) {
@@ -373,6 +383,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
     {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 19},
     {"_FBC_design_look_ahead_resume", (DL_FUNC) &_FBC_design_look_ahead_resume, 1},
+    {"_FBC_design_look_ahead_release", (DL_FUNC) &_FBC_design_look_ahead_release, 1},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

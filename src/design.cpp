@@ -1742,3 +1742,11 @@ Rcpp::List design_look_ahead_resume(SEXP state) {
   xp.release();  // (its systems' memory back now, not at the next collection)
   return out;
 }
+
+// Frees a look-ahead in progress (design_look_ahead(steps < n)) now, not at
+// R's next garbage collection: its systems are as large as a look-ahead's.
+// [[Rcpp::export(.design_look_ahead_release)]]
+void design_look_ahead_release(SEXP state) {
+  Rcpp::XPtr<LookAheadRun> xp(state);
+  xp.release();
+}

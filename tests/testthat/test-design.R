@@ -717,11 +717,15 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   wrong$phi[, 1] <- wrong$kappa
   set.seed(12)
   pk <- FBC:::pick_runs(wrong, joint, U, fit$model, 2, 30, noTarget)
-  # the same steps by hand, the same random numbers
+  after <- stats::runif(1)
+  # the same steps by hand, the same random numbers (pick_runs() runs the
+  # plug-in's first step alone, and no more of it once the joint criterion
+  # takes over, but draws its random numbers as these do)
   set.seed(12)
   mine <- FBC:::look_ahead(wrong, U, fit$model, 2, 30, entropy = TRUE)
   honest <- FBC:::look_ahead(joint, U[mine$chosen, ], fit$model, 2, 30, order = 1:2)
   alt <- FBC:::look_ahead(joint, U, fit$model, 2, 30)
+  expect_identical(stats::runif(1), after)
   expect_true(all(U[mine$chosen, 2] < 0.3))
   # the two disagree: the plug-in expects its first pick to be worth more
   # than 1% (of the variance, as its entropy's reduction means), the joint
@@ -733,6 +737,22 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_identical(pk$chosen, alt$chosen)
   expect_identical(pk$gain, alt$gain)
   expect_null(pk$own)
+  # where the joint criterion's best is worth under the limit too (its
+  # 35% under a limit of 50%; the plug-in's pick 83% by its own, 0.9% by
+  # the joint look-ahead), the plug-in's picks stand: the same numbers and
+  # random stream as the steps by hand
+  set.seed(12)
+  pk <- FBC:::pick_runs(wrong, joint, U, fit$model, 2, 30, noTarget, limit = 0.5)
+  after <- stats::runif(1)
+  set.seed(12)
+  mine <- FBC:::look_ahead(wrong, U, fit$model, 2, 30, entropy = TRUE)
+  honest <- FBC:::look_ahead(joint, U[mine$chosen, ], fit$model, 2, 30, order = 1:2)
+  alt <- FBC:::look_ahead(joint, U, fit$model, 2, 30)
+  expect_identical(stats::runif(1), after)
+  expect_lt(alt$gain[1] / alt$variance, 0.5)
+  expect_gte(-expm1(-2 * mine$gain[1]), 0.5)
+  honest$chosen <- mine$chosen
+  expect_identical(pk, c(honest, method = "plugin", list(own = -expm1(-2 * mine$gain))))
   # the fit's own plug-in picks are worth something: they stand
   set.seed(12)
   pk <- FBC:::pick_runs(FBC:::design_particles(fit, 40, "plugin"), joint, U, fit$model, 2, 30,
