@@ -1728,6 +1728,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   look_ahead_steps(run, std::min(steps, n));
   Rcpp::List out = look_ahead_result(run);
   if (run.step < n) out["state"] = xp;
+  else xp.release();  // (finished: freed now, not at R's next collection)
   return out;
 }
 
