@@ -340,9 +340,9 @@
 #' decision needs the first pick alone), and the scoring runs four lanes
 #' where the processor has AVX2 (the same numbers as two): with two
 #' calibration inputs, the same picks and fits on the same machine, a
-#' batch of 5 costs 0.082-0.083 of its fit against 0.113-0.116 before (CPU
-#' sums over 60 replicates, twice; per step a median 0.090-0.091 against
-#' 0.119-0.122) and one run at a
+#' batch of 5 costs 0.082-0.084 of its fit against 0.113-0.116 before (CPU
+#' sums over 60 replicates, three times; per step a median 0.090-0.095
+#' against 0.117-0.122) and one run at a
 #' time 0.069 against 0.079 (30 replicates); the sinusoid in batches of 5
 #' 0.078 against 0.096. Give fewer `nfantasy` or `ndraws` for a cheaper,
 #' noisier step.
