@@ -740,14 +740,9 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   # where the joint criterion's best is worth under the limit too (its
   # 35% under a limit of 50%; the plug-in's pick 83% by its own, 0.9% by
   # the joint look-ahead), the plug-in's picks stand: the same numbers and
-  # random stream as the steps by hand
+  # random stream as the steps by hand above
   set.seed(12)
   pk <- FBC:::pick_runs(wrong, joint, U, fit$model, 2, 30, noTarget, limit = 0.5)
-  after <- stats::runif(1)
-  set.seed(12)
-  mine <- FBC:::look_ahead(wrong, U, fit$model, 2, 30, entropy = TRUE)
-  honest <- FBC:::look_ahead(joint, U[mine$chosen, ], fit$model, 2, 30, order = 1:2)
-  alt <- FBC:::look_ahead(joint, U, fit$model, 2, 30)
   expect_identical(stats::runif(1), after)
   expect_lt(alt$gain[1] / alt$variance, 0.5)
   expect_gte(-expm1(-2 * mine$gain[1]), 0.5)
