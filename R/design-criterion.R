@@ -559,7 +559,7 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L, limit = de
       alt <- joint_alt()
       if (!is.null(alt)) return(c(alt, method = "joint"))
       tried <- TRUE
-      # rarely (the joint criterion's best worth under 1% too): the
+      # rarely (the joint criterion's best under the limit too): the
       # plug-in's batch from the start, the same numbers
       mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine)
     } else {
