@@ -546,34 +546,29 @@ pick_runs <- function(plug, joint, U, model, n, nfantasy, XT, K = 1L, limit = de
     if (alt$gain[1] / alt$variance >= limit) alt
   }
   # the plug-in's first step (the rest resumed below unless the joint
-  # criterion takes over)
+  # criterion takes over) and the joint look-ahead's value of its pick:
+  # with n = 1 the whole of both
   mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine,
                      steps = 1L)
-  tried <- FALSE
-  if (n > 1L) {
-    crit1 <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, 1L, nfantasy, XT,
-                        order = 1L, K = K, random = first_random(rcrit, K))
-    if (takeover(crit1, own_share(mine)[1])) {
-      # (the plug-in's systems freed first: the peak memory one look-ahead's)
-      .design_look_ahead_release(mine$state)
-      alt <- joint_alt()
-      if (!is.null(alt)) return(c(alt, method = "joint"))
-      tried <- TRUE
-      # rarely (the joint criterion's best under the limit too): the
-      # plug-in's batch from the start, the same numbers
-      mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine)
-    } else {
-      mine <- look_ahead_resume(mine)
-    }
-  }
-  crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
-                     order = seq_len(n), K = K, random = rcrit)
-  crit$chosen <- mine$chosen
-  own <- own_share(mine)
-  if (!tried && takeover(crit, own[1])) {
+  crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, 1L, nfantasy, XT,
+                     order = 1L, K = K, random = first_random(rcrit, K))
+  if (takeover(crit, own_share(mine)[1])) {
+    # (the plug-in's systems freed first: the peak memory one look-ahead's)
+    if (!is.null(mine$state)) .design_look_ahead_release(mine$state)
     alt <- joint_alt()
     if (!is.null(alt)) return(c(alt, method = "joint"))
+    # rarely (the joint criterion's best under the limit too): the
+    # plug-in's batch from the start, the same numbers
+    if (n > 1L) mine <- look_ahead(plug, U, model, n, nfantasy, XT, K = K, entropy = entropy, random = rmine)
+  } else if (n > 1L) {
+    mine <- look_ahead_resume(mine)
   }
+  if (n > 1L) {
+    crit <- look_ahead(joint, U[run_rows(mine$chosen, K), , drop = FALSE], model, n, nfantasy, XT,
+                       order = seq_len(n), K = K, random = rcrit)
+  }
+  crit$chosen <- mine$chosen
+  own <- own_share(mine)
   c(crit, method = "plugin", list(own = own))
 }
 
