@@ -1491,7 +1491,15 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
 // A look-ahead in progress (design_look_ahead()): the systems, the state,
 // the inputs the steps read (U, the deviates Z, `order`: 0 = greedy) and
 // the results of the `step` steps run so far.
+// Look-aheads alive (design_look_ahead_live(): each is freed on return
+// or on release, not left to R's garbage collector).
+static int lookAheadsAlive = 0;
+
 struct LookAheadRun {
+  LookAheadRun() { ++lookAheadsAlive; }
+  ~LookAheadRun() { --lookAheadsAlive; }
+  LookAheadRun(const LookAheadRun&) = delete;
+  LookAheadRun& operator=(const LookAheadRun&) = delete;
   Model mod;
   DesignSystems sys;
   LookAhead la;
@@ -1751,3 +1759,7 @@ void design_look_ahead_release(SEXP state) {
   Rcpp::XPtr<LookAheadRun> xp(state);
   xp.release();
 }
+
+// The number of look-aheads alive (for tests: 0 after pick_runs()).
+// [[Rcpp::export(.design_look_ahead_live)]]
+int design_look_ahead_live() { return lookAheadsAlive; }

@@ -608,8 +608,11 @@ test_that("a look-ahead's first step alone is its batch's first step, and resume
                               random = random, steps = 1L)
     expect_identical(begun$chosen, batch$chosen[1])
     expect_identical(begun$scores, batch$scores[, 1, drop = FALSE])
+    expect_identical(FBC:::.design_look_ahead_live(), 1L)  # begun's, paused
     expect_identical(FBC:::look_ahead_resume(begun), batch)
     expect_error(FBC:::look_ahead_resume(begun), "already finished")
+    # every look-ahead freed on return, not left to the garbage collector
+    expect_identical(FBC:::.design_look_ahead_live(), 0L)
     # the random numbers drawn inside are the same as given
     set.seed(13)
     expect_identical(FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin"), batch)
@@ -734,6 +737,9 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_lt(honest$gain[1] / honest$variance, 0.01)
   expect_gt(alt$gain[1] / alt$variance, 0.1)
   expect_identical(pk$method, "joint")
+  # the plug-in's paused batch freed at the takeover, every look-ahead on
+  # return (none left to the garbage collector)
+  expect_identical(FBC:::.design_look_ahead_live(), 0L)
   expect_identical(pk$chosen, alt$chosen)
   expect_identical(pk$gain, alt$gain)
   expect_null(pk$own)
@@ -748,6 +754,7 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_gte(-expm1(-2 * mine$gain[1]), 0.5)
   honest$chosen <- mine$chosen
   expect_identical(pk, c(honest, method = "plugin", list(own = -expm1(-2 * mine$gain))))
+  expect_identical(FBC:::.design_look_ahead_live(), 0L)
   # the fit's own plug-in picks are worth something: they stand
   set.seed(12)
   pk <- FBC:::pick_runs(FBC:::design_particles(fit, 40, "plugin"), joint, U, fit$model, 2, 30,
@@ -755,6 +762,7 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_identical(pk$method, "plugin")
   expect_gt(pk$gain[1] / pk$variance, 0.01)
   expect_length(pk$own, 2)
+  expect_identical(FBC:::.design_look_ahead_live(), 0L)
 })
 
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
