@@ -419,12 +419,13 @@ known_runs <- function(fit) {
     rows <- seq(k, nrow(U), by = K)
     lw <- lw + t(stats::dnorm(y, sys$mu[rows, , drop = FALSE], sqrt(sys$v[rows, , drop = FALSE]), log = TRUE))
   }
-  ent <- apply(lw, 2, function(l) {
-    w <- exp(l - max(l))
-    w <- w / sum(w)
-    -sum(w[w > 0] * log(w[w > 0]))
-  })
-  X[which.min(ent), , drop = FALSE]
+  X[which.min(apply(lw, 2, weights_entropy)), , drop = FALSE]
+}
+# the entropy of the normalised weights exp(l)
+weights_entropy <- function(l) {
+  w <- exp(l - max(l))
+  w <- w / sum(w)
+  -sum(w[w > 0] * log(w[w > 0]))
 }
 # "cut" (a prototype, not in the default methods; batches of 1, one
 # output): the plug-in's entropy criterion with each candidate run's value
@@ -452,16 +453,11 @@ cut_runs <- function(fit, J = 50L) {
   cut <- FBC:::.design_systems(dat$Xf[0, , drop = FALSE], dat$yf[0], dat$Xs, dat$ys,
                                parts$phi[1, , drop = FALSE], U, noT, FBC:::fbc_nugget, model$spec$model)
   lw <- as.vector(parts$lw0 + sys$ll)
-  ent <- function(l) {
-    w <- exp(l - max(l))
-    w <- w / sum(w)
-    -sum(w[w > 0] * log(w[w > 0]))
-  }
   z <- stats::rnorm(J)
   gain <- vapply(seq_len(nrow(U)), function(c) {
     y <- cut$mu[c, 1] + sqrt(cut$v[c, 1]) * z
     L <- lw + stats::dnorm(outer(rep(1, length(lw)), y), sys$mu[c, ], sqrt(sys$v[c, ]), log = TRUE)
-    ent(lw) - mean(apply(L, 2, ent))
+    weights_entropy(lw) - mean(apply(L, 2, weights_entropy))
   }, numeric(1))
   candidate_runs(U, which.max(gain), 1L, sc)
 }
