@@ -1488,13 +1488,13 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
   }
 }
 
-// A look-ahead in progress (design_look_ahead()): the systems, the state,
-// the inputs the steps read (U, the deviates Z, `order`: 0 = greedy) and
-// the results of the `step` steps run so far.
 // Look-aheads alive (design_look_ahead_live(): each is freed on return
 // or on release, not left to R's garbage collector).
 static int lookAheadsAlive = 0;
 
+// A look-ahead in progress (design_look_ahead()): the systems, the state,
+// the inputs the steps read (U, the deviates Z, `order`: 0 = greedy) and
+// the results of the `step` steps run so far. Not copied (one per count).
 struct LookAheadRun {
   LookAheadRun() { ++lookAheadsAlive; }
   ~LookAheadRun() { --lookAheadsAlive; }
