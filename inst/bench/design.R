@@ -402,24 +402,33 @@ imspe_runs <- function(fit, n) {
 # output's given the data (exact for independent outputs; with shared ones
 # their correlation given the data is left out).
 known_runs <- function(fit) {
-  model <- fit$model
-  sc <- model$scale
-  dat <- model$data
+  sc <- fit$model$scale
   out1 <- FBC:::design_output(sc)
   K <- if (is.null(out1)) 1L else length(out1$levels)
-  U <- FBC:::fit_candidates(fit)
-  parts <- FBC:::design_particles(fit, 100L, "plugin", prune = FALSE)
-  sys <- FBC:::.design_systems(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U,
-                               matrix(0, 0, ncol(dat$Xf)), FBC:::fbc_nugget, model$spec$model)
+  ps <- plugin_systems(fit)
+  U <- ps$U
+  sys <- ps$sys
   X <- candidate_runs(U, seq_len(nrow(U) / K), K, sc)
   etas <- if (K == 1L) list(pb$eta) else pb$etas[out1$levels]
-  lw <- as.vector(parts$lw0 + sys$ll)
+  lw <- ps$lw
   for (k in seq_len(K)) {
     y <- (etas[[k]](X) - sc$ymean[k]) / sc$ysd[k]
     rows <- seq(k, nrow(U), by = K)
     lw <- lw + t(stats::dnorm(y, sys$mu[rows, , drop = FALSE], sqrt(sys$v[rows, , drop = FALSE]), log = TRUE))
   }
   X[which.min(apply(lw, 2, weights_entropy)), , drop = FALSE]
+}
+# known_runs()' and cut_runs()' plug-in: propose_runs()'s default
+# candidates U, the default's particles (none pruned), each particle's
+# prediction at U given the data (sys) and its log-weight lw
+plugin_systems <- function(fit) {
+  model <- fit$model
+  dat <- model$data
+  U <- FBC:::fit_candidates(fit)
+  parts <- FBC:::design_particles(fit, 100L, "plugin", prune = FALSE)
+  sys <- FBC:::.design_systems(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U,
+                               matrix(0, 0, ncol(dat$Xf)), FBC:::fbc_nugget, model$spec$model)
+  list(U = U, parts = parts, sys = sys, lw = as.vector(parts$lw0 + sys$ll))
 }
 # the entropy of the normalised weights exp(l)
 weights_entropy <- function(l) {
@@ -440,26 +449,25 @@ weights_entropy <- function(l) {
 # replicates 1-15 (later in 13), RESULTS-design.md, "Stop 60".
 cut_runs <- function(fit, J = 50L) {
   model <- fit$model
-  sc <- model$scale
   dat <- model$data
-  stopifnot(is.null(FBC:::design_output(sc)))
-  U <- FBC:::fit_candidates(fit)
-  parts <- FBC:::design_particles(fit, 100L, "plugin", prune = FALSE)
-  noT <- matrix(0, 0, ncol(dat$Xf))
-  sys <- FBC:::.design_systems(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, noT, FBC:::fbc_nugget,
-                               model$spec$model)
+  stopifnot(is.null(FBC:::design_output(model$scale)))
+  ps <- plugin_systems(fit)
+  U <- ps$U
+  sys <- ps$sys
+  lw <- ps$lw
   # (the plug-in's particles share the MAP hyperparameters: the runs-only
   # prediction is the same for each; the first's)
   cut <- FBC:::.design_systems(dat$Xf[0, , drop = FALSE], dat$yf[0], dat$Xs, dat$ys,
-                               parts$phi[1, , drop = FALSE], U, noT, FBC:::fbc_nugget, model$spec$model)
-  lw <- as.vector(parts$lw0 + sys$ll)
+                               ps$parts$phi[1, , drop = FALSE], U, matrix(0, 0, ncol(dat$Xf)),
+                               FBC:::fbc_nugget, model$spec$model)
   z <- stats::rnorm(J)
+  h0 <- weights_entropy(lw)
   gain <- vapply(seq_len(nrow(U)), function(c) {
     y <- cut$mu[c, 1] + sqrt(cut$v[c, 1]) * z
     L <- lw + stats::dnorm(outer(rep(1, length(lw)), y), sys$mu[c, ], sqrt(sys$v[c, ]), log = TRUE)
-    weights_entropy(lw) - mean(apply(L, 2, weights_entropy))
+    h0 - mean(apply(L, 2, weights_entropy))
   }, numeric(1))
-  candidate_runs(U, which.max(gain), 1L, sc)
+  candidate_runs(U, which.max(gain), 1L, model$scale)
 }
 # (the oracle's rows: an attribute "seen", see below)
 next_runs <- function(method, fit, n, lhsState, ref) {
