@@ -282,7 +282,10 @@ function_closures <- function(f, x, scale, nonFinite, codes = NULL) {
   inputs <- scale$names$inputs
   out <- scale$output
   frame <- is.data.frame(x)
-  kappa_of <- function(u) stats::setNames(lo + rng * u, kn)
+  kappa_of <- function(u) {
+    if (length(u) != length(lo)) stop("internal error: the compiled core gave kappa of length ", length(u))
+    stats::setNames(lo + rng * u, kn)
+  }
   ym <- y_mean(scale, codes)
   ys <- y_sd(scale, codes)
   list(

@@ -134,11 +134,15 @@ private:
   Buf2<double> ldS_, vv_, loglik_;
   arma::mat Bz_, Wz_;
 
-  arma::vec kappa() const { return phi.subvec(iKappa, iKappa + q - 1); }
+  // kappa as the named-by-R vector the closures take: q values copied from
+  // phi (one object, so that begin() and end() bound the same memory).
+  Rcpp::NumericVector kappa() const {
+    return Rcpp::NumericVector(phi.begin() + iKappa, phi.begin() + iKappa + q);
+  }
   // The scaled f at the field rows for the current kappa: false when the
   // closure returns NULL (a non-finite value the user asked to reject).
   bool callField(arma::vec& out) {
-    SEXP r = fieldFn_(Rcpp::NumericVector(kappa().begin(), kappa().end()));
+    SEXP r = fieldFn_(kappa());
     if (Rf_isNull(r)) return false;
     Rcpp::NumericVector v(r);
     if (v.size() != n) Rcpp::stop("the simulator's closure returned %d values for %d rows", (int) v.size(), n);
@@ -200,7 +204,7 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
   const int b = Xnew.n_rows;
   arma::vec fn(b, arma::fill::zeros);
   if (type != PT_BIAS) {
-    Rcpp::NumericVector r = atFn_(Rcpp::wrap(Xnew), Rcpp::NumericVector(kappa().begin(), kappa().end()));
+    Rcpp::NumericVector r = atFn_(Rcpp::wrap(Xnew), kappa());
     if (r.size() != b) Rcpp::stop("the simulator's closure returned %d values for %d points", (int) r.size(), b);
     fn = Rcpp::as<arma::vec>(r);
   }

@@ -175,6 +175,35 @@ test_that("f is called once per kappa proposal, with every field row", {
   expect_lte(calls, tries + 5L)
 })
 
+test_that("f sees a named kappa of length q on every call: sampler and predict()", {
+  field <- fn_field(n = 8)
+  for (q in 1:2) {
+    kn <- c("theta", "b")[seq_len(q)]
+    seen <- list()
+    f <- function(x, kappa) {
+      seen[[length(seen) + 1L]] <<- kappa
+      b <- if (q == 2) kappa[["b"]] else 0
+      sin(kappa[["theta"]] * x$x) + x$x + b
+    }
+    k <- list(kappaDist = "uniform", kappaP1 = stats::setNames(c(0, -1)[seq_len(q)], kn),
+              kappaP2 = stats::setNames(c(3, 1)[seq_len(q)], kn))
+    set.seed(4)
+    fit <- do.call(calibrate, c(list(f, field, discrepancy = "gp", nMCMC = 60, nBurn = 20,
+                                     nChains = 1, thinning = 1), k))
+    nSampler <- length(seen)
+    pr <- predict(fit, data.frame(x = c(0.5, 2)))
+    expect_gt(length(seen), nSampler)
+    expect_gt(nSampler, 60)
+    lens <- vapply(seen, length, integer(1))
+    expect_identical(unique(lens), q)
+    expect_true(all(vapply(seen, function(v) identical(names(v), kn), logical(1))))
+    expect_true(all(vapply(seen, function(v) all(is.finite(v)), logical(1))))
+    # each value inside the prior's range
+    lo <- k$kappaP1; hi <- k$kappaP2
+    expect_true(all(vapply(seen, function(v) all(v >= lo & v <= hi), logical(1))))
+  }
+})
+
 test_that("errors from f name the kappa that caused them", {
   field <- fn_field(n = 5)
   k <- list(kappaDist = "uniform", kappaP1 = c(theta = 0), kappaP2 = c(theta = 3))
@@ -192,7 +221,7 @@ test_that("errors from f name the kappa that caused them", {
   err <- expect_error(do.call(calibrate, c(list(late, field, nMCMC = 200, nBurn = 100, nChains = 1,
                                                  discrepancy = "none"), k)),
                       "failed at theta = ")
-  expect_gt(as.numeric(sub(".*theta = ([0-9.]+).*", "\\1", conditionMessage(err))), 1.6)
+  expect_gt(as.numeric(sub(".*theta = ([0-9]+[.]?[0-9]*).*", "\\1", conditionMessage(err))), 1.6)
 })
 
 test_that("nonFinite = \"reject\" turns non-finite values into rejected proposals", {
