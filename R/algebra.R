@@ -11,7 +11,7 @@
 #
 # Projected dense sweep: fbc_dense_flop_s * (m + n)^3 seconds on the
 # reference BLAS. A dense sweep costs about 1.2 Cholesky factorisations of
-# the (m + n) x (m + n) block (inst/bench/RESULTS-scale.md: 1.22 at m = 1000,
+# the (m + n) x (m + n) block (bench/RESULTS-scale.md: 1.22 at m = 1000,
 # 1.08 at 2000), and R's chol() took 1.22e-10 to 1.56e-10 s per N^3 at N =
 # 400 to 1500 on the reference BLAS of our 2-core machine (timed for this
 # rule, 2026-11-25; RESULTS-scale.md: 125 ms at N = 1060): 1.2 * 1.3e-10 =
@@ -24,7 +24,7 @@
 # 1000 scattered runs, n = 60): a dense sweep cost 17.6 ms against the
 # Vecchia algebra's 7.0 ms, and the default run on the dense algebra had not
 # converged after 49 CPU minutes where the Vecchia one takes 5-8 minutes on
-# the reference BLAS (inst/bench/RESULTS-defaults.md).
+# the reference BLAS (bench/RESULTS-defaults.md).
 fbc_dense_flop_s <- 1.5e-10
 # The dense algebra while its projected sweep costs less than this (s),
 # m + n up to about 870. At the limit 4 chains of 8000 sweeps take about 53
@@ -35,7 +35,7 @@ fbc_dense_flop_s <- 1.5e-10
 fbc_dense_sweep_max <- 0.1
 
 # Neighbours of the Vecchia algebra for m runs when not given (measured,
-# inst/bench/RESULTS-vecchia.md, scattered designs, against the exact
+# bench/RESULTS-vecchia.md, scattered designs, against the exact
 # algebra; the scale issue's bounds are kappa quantiles within 0.1 posterior
 # sd, predictive means within 2% RMSE): 20 below fbc_vecchia_k10_m runs
 # (m = 1000: 0.05 sd, 0.2% RMSE; m = 500: 0.10 sd, within the quantiles'

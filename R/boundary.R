@@ -3,7 +3,7 @@
 # with them in R/correlation.R; the prior families' in R/priors.R), and the
 # check, when the package loads, that they are the compiled core's
 # (src/model.cpp, .model_codes(); src/priors.cpp, .prior_codes()).
-# compiled_model() (R/model.R) is the one function that turns the model
+# compiled_model() (R/model-classes.R) is the one function that turns the model
 # into the list the compiled entry points take.
 
 # A table written row by row (one list per row, the same names in each),
@@ -52,4 +52,42 @@ check_model_codes <- function(compiled = .model_codes()) {
     ))
   }
   invisible(TRUE)
+}
+
+# The compiled entry points, each with the model description attached. The
+# first arguments are the scaled data; kernS, kernB and algebra give the
+# model codes, or `model` a whole compiled_model().
+.fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget, kernS = 1L, kernB = 1L, algebra = 0L,
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_loglik_c(Xf, yf, Xs, ys, phi, nugget, model)
+}
+
+.fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget,
+                        progress, kernS = 1L, kernB = 1L, algebra = 0L,
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_sample_c(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model)
+}
+
+.fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
+                         algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra),
+                         noise = integer(), source = integer()) {
+  .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise),
+                 as.integer(source))
+}
+
+.loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,
+                         scale = FALSE, kernS = 1L, kernB = 1L, algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .loglik_path_c(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
+}
+
+.fbc_loo <- function(Xf, yf, Xs, ys, phis, nugget, group,
+                     model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf))) {
+  .fbc_loo_c(Xf, yf, Xs, ys, phis, nugget, group, model)
+}
+
+.fbc_heldout <- function(Xf, yf, Xs, ys, phis, nugget, fold, kernS = 1L, kernB = 1L, algebra = 0L,
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+  .fbc_heldout_c(Xf, yf, Xs, ys, phis, nugget, fold, model)
 }

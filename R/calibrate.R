@@ -77,7 +77,7 @@
 #'   jump visits every mode of a multimodal posterior. On
 #'   RobustCalibration's documented example (`sin(theta x) + x`, no
 #'   discrepancy; a second mode near 0.27 holding 18% of the mass) it
-#'   finds both modes on every seed tried (`inst/bench/RESULTS-function.md`).
+#'   finds both modes on every seed tried (`bench/RESULTS-function.md`).
 #' * The calibration inputs come from the kappa prior:
 #'   `kappaDist = "uniform", kappaP1 = lower, kappaP2 = upper`, one entry
 #'   per input; a named `kappaP1` (or `kappaP2`) names them (else `kappa1`,
@@ -98,7 +98,7 @@
 #'   `f` itself, with no emulator variance); `print()`, `plot()`,
 #'   `update()`, `loo()`, `ppc_field()`, checkpoints (the function's code
 #'   is part of the run's identity) and `converge` work as for runs;
-#'   `validate_emulator()` has no emulator to check; [emulator_check()]
+#'   `emulator_cv()` has no emulator to check; [emulator_vs_direct()]
 #'   compares an emulator-based fit with the function's. `source` works
 #'   (a noise variance per field data set, one shared bias; `f` does not
 #'   see the data set's column).
@@ -144,7 +144,7 @@
 #' smooth for practical purposes with far better conditioned correlation
 #' matrices; on smooth functional outputs it removes the stuck chains the
 #' power exponential near \eqn{\alpha = 2} can give. Every family has the
-#' same caching and speed (`inst/bench/RESULTS-scale.md`).
+#' same caching and speed (`bench/RESULTS-scale.md`).
 #'
 #' @section Scaling:
 #' Each simulator input column is mapped to `[0, 1]` by its minimum and
@@ -193,11 +193,11 @@
 #' formed. The distances scale each input by \eqn{\theta_k^{1/\alpha}}
 #' from a pilot maximum-likelihood fit of the simulator GP on at most 400
 #' runs (Katzfuss, Guinness and Lawrence 2022), made once before sampling:
-#' every chain, `update()`, [predict.fbc()] and [validate_emulator()] use
+#' every chain, `update()`, [predict.fbc()] and [emulator_cv()] use
 #' the same approximation (`fit$spec$model$vecchia`). The posterior is that
 #' of the approximate model, exact when every node conditions on all its
 #' predecessors (`neighbours` at least \eqn{m}, tested); `print()` says
-#' when it ran, with \eqn{k}. `inst/bench/vecchia.R` measures it against
+#' when it ran, with \eqn{k}. `bench/vecchia.R` measures it against
 #' the exact algebra.
 #'
 #' Under `algebra = "auto"` the choice is by projected cost: a dense sweep
@@ -234,7 +234,7 @@
 #' its posterior mean. An unstructured correlation has \eqn{L(L-1)/2}
 #' parameters: for a categorical input with many levels, expect slower
 #' mixing. (Version 0.1.x used a product of one positive factor per level
-#' instead; see `inst/bench/RESULTS-outputs.md` for why it was replaced.)
+#' instead; see `bench/RESULTS-outputs.md` for why it was replaced.)
 #'
 #' `output = "name"` names such a column that says which output each row of
 #' `sim` and `field` holds (long format: one response column, one row per
@@ -269,7 +269,7 @@
 #' moves each output's simulator and bias hyperparameters in blocks of
 #' their own. Every output needs field data (an unobserved output modelled
 #' on its own says nothing about \eqn{\kappa}). Why shared stays the
-#' default (`inst/bench/RESULTS-outputs.md`): on two-output known-truth
+#' default (`bench/RESULTS-outputs.md`): on two-output known-truth
 #' problems (20 replicates each, outputs of different and of alike shapes)
 #' both structures pooled to intervals about half the better output's
 #' alone, shared at about 0.7 times the CPU; on the 3-output benchmark
@@ -320,7 +320,7 @@
 #'   corrected for the field data by Metropolis-Hastings, so that it need
 #'   not follow the ridge between `sigma2S` and the length-scales (at
 #'   m = 1000 1.1-2.3 times the slowest parameter's ESS per CPU second in
-#'   two paired runs, `inst/bench/RESULTS-defaults.md`); after a warm-up of
+#'   two paired runs, `bench/RESULTS-defaults.md`); after a warm-up of
 #'   data-dependent length (`nBurn = NULL`, the default) a block that walks
 #'   4 parameters instead proposes from a multivariate t (7 degrees
 #'   of freedom) fitted to its warm-up draws (an independence
@@ -353,7 +353,7 @@
 #'   \eqn{\kappa} move a sweep, not measurable beside the simulator block's
 #'   moves at m = 40, 300 and 1000 (fixed-length one-chain runs). Default
 #'   runs to convergence on a unimodal sinusoid, paired by seed
-#'   (`inst/bench/jump.R --part=default`): m = 40, 20 seeds, 12.9 CPU s in
+#'   (`bench/jump.R --part=default`): m = 40, 20 seeds, 12.9 CPU s in
 #'   all without it, 15.9 with (the runs with it a median 14% longer, 11
 #'   of 20 longer, 6 shorter); m = 300, 10 seeds, 627 against 589 s; m =
 #'   1000, 10 seeds, 942 against 370 s, where without it one run reached
@@ -375,7 +375,7 @@
 #' \eqn{\kappa} move an \eqn{m \times m \times n} triangular solve, while
 #' every other move costs \eqn{O(n^3)}; a sweep then costs about one
 #' factorisation of the \eqn{(n + m) \times (n + m)} covariance
-#' (`inst/bench/scale.R`). Product designs on the Kronecker algebra keep the
+#' (`bench/scale.R`). Product designs on the Kronecker algebra keep the
 #' default schedule: all their moves are cheap.
 #'
 #' A joint move proposes \eqn{w^* = w + e^{s} L \epsilon} on the walk scales.
@@ -394,7 +394,7 @@
 #' `state$chains[[k]]$sampler$moves` holds each chain's counts and adapted
 #' scales, `state$chains[[k]]$acceptance` the chain's rates by parameter and
 #' `state$chains[[k]]$scaleAcceptance` its scale move's rate.
-#' `inst/bench/mixing.R` measures both samplers and Stan's NUTS on the same
+#' `bench/mixing.R` measures both samplers and Stan's NUTS on the same
 #' model (see "Defaults").
 #'
 #' Each chain uses R's random number generator, so [set.seed()] reproduces a
@@ -474,7 +474,7 @@
 #' proposal of 4 or more parameters, learnt from at least 10 effective draws
 #' per parameter (batch means over the windows since its estimate started:
 #' at m = 1000 scattered runs a shape learnt from fewer left the simulator's
-#' block mixing at half the rate, see `inst/bench/RESULTS-defaults.md`).
+#' block mixing at half the rate, see `bench/RESULTS-defaults.md`).
 #' Warm-up ends at
 #' the second settled window in a row, after at least 200 sweeps and at
 #' most 5000 (or half of an explicit `nMCMC`); the joint proposals' running
@@ -510,11 +510,11 @@
 #' stopping when converged"). Four chains are the usual minimum for R-hat to
 #' detect chains stuck in different places. On the ball data the default
 #' run's chains warm up for about 500-1100 sweeps and stop after one to
-#' six checks (`inst/bench/RESULTS-warmup.md`); the earlier defaults,
+#' six checks (`bench/RESULTS-warmup.md`); the earlier defaults,
 #' `nMCMC = 8000, nBurn = 2000`, ran 4 x 8000 sweeps whatever the data (on
 #' the ball data R-hat <= 1.0021 and bulk ESS >= 1999 for seeds 1, 77 and
 #' 2024, in 26-27 CPU seconds) and still give the same draws when given. In
-#' `inst/bench/mixing.R` the default sampler's slowest parameter gains
+#' `bench/mixing.R` the default sampler's slowest parameter gains
 #' about 100 effective draws per CPU second on the ball data, 17 times
 #' Stan's NUTS on the same model and priors, and `kappa` about 300, 42 times
 #' Stan's. Thinning by 2 halves the memory at little cost in ESS. Harder
@@ -626,7 +626,7 @@
 #'   each simulator run and each field point conditions on (a whole number,
 #'   at least 1; more is closer to exact and slower). `NULL` (the default):
 #'   20 below 4000 runs, 10 from 4000 on. Measured on scattered designs
-#'   (`inst/bench/RESULTS-vecchia.md`): with 20, `kappa`'s quantiles within
+#'   (`bench/RESULTS-vecchia.md`): with 20, `kappa`'s quantiles within
 #'   0.05 posterior sd of the exact algebra's at m = 1000; with 10, within
 #'   0.1 sd at m = 500, a sweep costs about half and m = 20,000 runs
 #'   converged in 31 CPU minutes (4 chains, `nBurn = 3000`) where 20 had not

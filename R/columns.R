@@ -474,6 +474,6 @@ refuse_calibration_columns <- function(nm, scale, call = parent.frame()) {
   cli::cli_abort(c(
     "{.arg newdata} has {cli::qty(length(cal))}{?a column/columns} {.val {cal}} named like {?a calibration input/calibration inputs}, which {.fn predict} cannot set.",
     i = "Every prediction, {.code type = \"simulator\"} included, is made at the posterior draws of the calibration parameters (the calibrated simulator is {.code eta(x, kappa)} at each draw), so {cli::qty(length(cal))}{?this column/these columns} would be ignored.",
-    i = "Drop {cli::qty(length(cal))}{?it/them} ({.code newdata[, c({keep})]}) to predict at the calibrated values; {.fn validate_emulator} shows how the emulator predicts the simulator runs."
+    i = "Drop {cli::qty(length(cal))}{?it/them} ({.code newdata[, c({keep})]}) to predict at the calibrated values; {.fn emulator_cv} shows how the emulator predicts the simulator runs."
   ), call = call)
 }

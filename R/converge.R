@@ -54,7 +54,7 @@ fbc_fixed_nMCMC <- 8000L
 #' thousands of simulator runs the simulator's hyperparameters have a narrow,
 #' correlated posterior, and their joint move learns its shape from the
 #' second half of burn-in: on a scattered design of m = 1000 runs
-#' (`inst/bench/vecchia.R`) a burn-in of 1000 sweeps left their bulk ESS at
+#' (`bench/vecchia.R`) a burn-in of 1000 sweeps left their bulk ESS at
 #' about 60 per 12,000 draws and the rule ran 21,000 sweeps a chain, while a
 #' burn-in of 4000 gave about 630 per 12,000 draws: the longer burn-in is the
 #' cheaper run.

@@ -414,7 +414,7 @@ rho_bound_hint <- function(x, v, cls, bound) {
 # target 0.234 (above 0.4 or below 0.1): the proposal's shape, learned in the
 # second half of burn-in, does not fit the posterior, and a longer burn-in
 # is the cure, not a longer run (update() keeps the proposals). Measured at
-# m = 1000 (inst/bench/RESULTS-vecchia.md): a burn-in of 1000 left the
+# m = 1000 (bench/RESULTS-vecchia.md): a burn-in of 1000 left the
 # simulator block at acceptance 0.30-0.68 over the chains and bulk ESS 62
 # per 12,000 draws; 4000 gave 0.22-0.24 and 634.
 shape_messages <- function(x, slow) {

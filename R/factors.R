@@ -19,7 +19,7 @@
 # negative correlation between outputs and, with one level uncorrelated
 # with the others, left only the product of the others' factors determined
 # (the 3-output benchmark's chains did not converge; see
-# inst/bench/RESULTS-outputs.md). For two levels it is one exchangeable
+# bench/RESULTS-outputs.md). For two levels it is one exchangeable
 # correlation, now signed; with many levels the L (L - 1) / 2 parameters
 # grow quickly.
 #

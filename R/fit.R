@@ -217,7 +217,7 @@ fbc_spec_problems <- function(x) {
     return(c(out, "`spec` must be the model's (`model$spec`)."))
   }
   # the layout the compiled core gets is the model description's for these
-  # data (R/model.R)
+  # data (R/model-classes.R)
   sc <- x$scale
   disc <- discrepancy_name(spec$model$discrepancy)
   if (length(disc) != 1L || is.na(disc)) {
@@ -450,4 +450,17 @@ fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_t
 # call that resumes the run.
 upgrade_checkpoint <- function(x, call) {
   x
+}
+
+# The gate of every function that takes a fit: refuses what is not one and
+# returns it in the current format (upgrade_fbc()).
+check_fbc <- function(x, arg = "fit", call = parent.frame()) {
+  if (!inherits(x, "fbc")) {
+    cli::cli_abort("{.arg {arg}} must be an {.cls fbc} object from {.fn calibrate}, not {.obj_type_friendly {x}}.",
+                   call = call)
+  }
+  # an earlier format is brought up to date (and validated on the way);
+  # a current one is validated here
+  if (identical(x$version$format, fbc_fit_format)) validate_fbc(x, arg, call = call) else
+    upgrade_fbc(x, call = call)
 }

@@ -15,7 +15,7 @@
 # (rhoB); one set of length-scales, smoothness and variance for every
 # output (R/factors.R).
 #
-# Why shared stays the default: measured (inst/bench/RESULTS-outputs.md),
+# Why shared stays the default: measured (bench/RESULTS-outputs.md),
 # independent outputs pooled as well as shared on two-output known-truth
 # problems at about 1.4 times the CPU, and gave wider intervals than shared
 # on the 3-output benchmark; the issue's case (pooling wider than the

@@ -42,7 +42,7 @@
 #'   matrix with named columns), `obs` (the per-observation table: inputs,
 #'   `observed`, `mean`, `sd`, `median`, the intervals, `p`), `outside` (named by
 #'   level) and `ndraws`.
-#' @seealso [validate_emulator()] for the simulator runs.
+#' @seealso [emulator_cv()] for the simulator runs.
 #' @export
 #' @examples
 #' set.seed(1)

@@ -85,7 +85,7 @@
 #'   unnamed matrix gives the inputs by position. A column named like a
 #'   calibration input is refused: every prediction, `type = "simulator"`
 #'   included, is made at the posterior draws of \eqn{\kappa}, so a value
-#'   given there could not be used (drop the column; [validate_emulator()]
+#'   given there could not be used (drop the column; [emulator_cv()]
 #'   shows how the emulator predicts the simulator runs).
 #' @param method `"Bayesian"` (average over the posterior draws: see
 #'   `ndraws`) or `"MAP"` (the draw with the highest log posterior).

@@ -263,7 +263,7 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' tenth of the response's. On field data with noise sd 0.01, about 6% of
 #' the response's sd (\eqn{\eta(x, t) = e^{-tx} + x/2}, 40 runs, 10 or 30
 #' field points, no bias, `discrepancy = "gp"` and `"none"`, 3 data sets
-#' each; `inst/bench/defaults.R`, part `priors`), the inverse gamma's
+#' each; `bench/defaults.R`, part `priors`), the inverse gamma's
 #' posterior median of the noise sd was 0.046 to 0.085, its 90% interval
 #' never covered 0.01, and \eqn{\kappa}'s 90% interval was 1.2 to 8.3 times
 #' as wide as with the noise known. Under the half-Cauchy the noise sd's
@@ -274,7 +274,7 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' 0.5 gave the same. The same prior on \eqn{\sigma_B} narrowed
 #' \eqn{\kappa}'s interval below the known-noise one on these data without
 #' bias; it was not measured on biased data and is not the default. The
-#' table is in `inst/bench/RESULTS-defaults.md`. The vignette's prior stays
+#' table is in `bench/RESULTS-defaults.md`. The vignette's prior stays
 #' available by name: `set_hyperPriors(sigma2EDist = "inversegamma",
 #' sigma2EP1 = 1.5, sigma2EP2 = 1.5)`.
 #'

@@ -20,7 +20,7 @@
 # the default: a walk adapted within one mode of a multimodal kappa
 # posterior rarely leaves it (issue 29's simulator functions; with an
 # emulator, Tuo and Wu's problem at 18-24 runs, where chains kept their
-# modes for 25,000 draws: inst/bench/RESULTS-design.md).
+# modes for 25,000 draws: bench/RESULTS-design.md).
 sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   if (jump) {
     out <- sampler_moves(sampler, spec, large, jump = FALSE)
@@ -63,7 +63,7 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
     # the simulator blocks whose sigma2S is drawn from the runs' own
     # conditional (src/sampler.cpp, BlockMove; only where the algebra gives
     # ys' Ds^-1 ys ahead of a proposal, the Vecchia one: elsewhere the plain
-    # joint walk): at m = 1000 (inst/bench/RESULTS-defaults.md) the joint
+    # joint walk): at m = 1000 (bench/RESULTS-defaults.md) the joint
     # walk's mixing of sigma2S and the length-scales limited the run
     collapse = unname(which(startsWith(as.character(names(blocks)), "sim") &
                        vapply(blocks, function(b) spec$classes[b[length(b)]] == "sigma2S", logical(1)))),

@@ -1,6 +1,6 @@
 # The simulator as an R function (issue 29): calibrate(f, field, ...) with
 # f(x, kappa) called inside the sampler, no emulator. The model object is an
-# fbc_model like any other (R/fbc_model.R) with:
+# fbc_model like any other (R/model-object.R) with:
 #   - no simulator GP: the classes thetaS, alphaS, rhoS and sigma2S have
 #     length 0 (class_sizes(emulator = FALSE)), no runs (m = 0);
 #   - the calibration inputs' number, names and ranges from the kappa prior

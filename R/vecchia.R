@@ -2,7 +2,7 @@
 # each field latent condition on (src/vecchia.cpp). Made once per fit,
 # before sampling, the same for every chain, and kept in the model
 # description (spec$model$vecchia), so a run, its checkpoints, update(),
-# predict() and validate_emulator() all use the same approximation.
+# predict() and emulator_cv() all use the same approximation.
 #
 # The distances are those of the inputs scaled by w_k = theta_k^(1 / alpha)
 # (sqrt(theta_k) for the families without a smoothness), with theta a pilot

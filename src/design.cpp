@@ -1,4 +1,4 @@
-// Design of new simulator runs (propose_runs(), R/design-criterion.R): the
+// Design of new simulator runs (propose_runs(), R/propose_runs.R): the
 // look-ahead criterion over retained draws phi_s (kappa and every
 // hyperparameter, scaled space).
 //

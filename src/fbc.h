@@ -54,7 +54,7 @@ struct VecchiaDesign {
   arma::vec w;
 };
 
-// The discrepancy model (R/model.R, discrepancy_models) reaches the compiled
+// The discrepancy model (R/model-classes.R, discrepancy_models) reaches the compiled
 // core only through the layout: a bias GP when sigma2B has parameters, with
 // a mean when muB has, scaled (the S-GaSP of Gu and Wang 2018: the bias
 // GP's correlation R on the nu distinct field inputs replaced by
@@ -67,7 +67,7 @@ struct VecchiaDesign {
 enum PredictType { PT_FIELD = 1, PT_MEAN = 2, PT_SIMULATOR = 3, PT_BIAS = 4 };
 
 // Parameter classes of the model. C++ keeps no list of them: R's model
-// description (R/model.R, model_classes) owns the classes and the layout,
+// description (R/model-classes.R, model_classes) owns the classes and the layout,
 // and hands each class's offset and length over by name (read_model()).
 // Code that computes with a class looks it up by name, once, when a
 // posterior is built (Layout::offset_of(), Posterior::set_sizes()); a class
@@ -96,7 +96,7 @@ struct Layout {
 };
 
 // The model as the compiled entry points receive it from R
-// (compiled_model() in R/model.R): correlation families of the two GPs, the
+// (compiled_model() in R/model-classes.R): correlation families of the two GPs, the
 // algebra choice, the discrepancy model and the layout of phi.
 // A categorical input (R/factors.R): its indicator columns col .. col +
 // ncol - 1 among the experimental inputs (one column for two levels, one per
@@ -732,7 +732,7 @@ std::unique_ptr<Posterior> make_function_posterior(const arma::mat& Xf, const ar
                                                    const Model& model, const Rcpp::List& sim);
 
 // The rows of each label (labels 1 .. k over n rows, each used; heldout.cpp):
-// the folds of validate_emulator() and the groups of loo().
+// the folds of emulator_cv() and the groups of loo().
 std::vector<std::vector<int> > label_groups(const Rcpp::IntegerVector& labels, int n,
                                             const char* what);
 

@@ -1,4 +1,4 @@
-// Held-out predictions of the simulator runs (validate_emulator()): the
+// Held-out predictions of the simulator runs (emulator_cv()): the
 // simulator GP alone, y_s ~ N(0, sigma2S Ds), conditioned on the other runs.
 // With Q = Ds^-1 and a = Q ys from the posterior's algebra (simHeldout()),
 // per fold B of held-out runs (Rasmussen and Williams 2006, section 5.4.2):

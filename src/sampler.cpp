@@ -97,7 +97,7 @@ static const int WARM_ESS_K = 4;
 // the independence proposal of a simulator block after warm-up
 // (BlockMove): a multivariate t with IND_NU degrees of freedom whose scale
 // matrix is IND_INFLATE^2 times the warm-up's covariance estimate. At
-// m = 1000 (inst/bench/RESULTS-defaults.md, 2 chains x 6000 sweeps, seed 1)
+// m = 1000 (bench/RESULTS-defaults.md, 2 chains x 6000 sweeps, seed 1)
 // inflation 1.0 accepted 0.28 and gave the slowest thetaS a bulk ESS of
 // 1072 per 3700 draws; inflation 1.2 797 (nu = 20: 968, acceptance 0.22),
 // 1.5 460 (acceptance 0.12); the walk it replaces 236.
@@ -1218,7 +1218,7 @@ Rcpp::List fbc_sample(const arma::mat& Xf, const arma::vec& yf,
 // Log-likelihood log p(y | phi_s) at each row phi_s of `phis`, from
 // scratch on one posterior (its workspaces reused; -Inf where the
 // covariance is not positive definite); update(fit, sim = ) weighs the
-// old draws by it (R/design.R, reweight_runs()).
+// old draws by it (R/update_runs.R, reweight_runs()).
 // [[Rcpp::export(.fbc_loglik_draws_c)]]
 arma::vec fbc_loglik_draws(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                            const arma::vec& ys, const arma::mat& phis, double nugget,

@@ -26,7 +26,7 @@ stale_proposals <- function(fit) {
 # (src/design.cpp) is checked against (test-design.R). This is the
 # implementation the package ran before the criterion moved to C++ (dense
 # algebra throughout), with the random numbers drawn as look_ahead()
-# (R/design-criterion.R) draws them: the fantasies' draws by systematic
+# (R/propose_runs.R) draws them: the fantasies' draws by systematic
 # resampling of the base weights (one uniform), then per step a random
 # order of the normal quantiles.
 

@@ -110,7 +110,7 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   expect_type(convergence_messages(fit), "character")
   expect_s3_class(FBC:::prior_conflicts(fit), "data.frame")
   expect_s3_class(ppc_field(fit), "fbc_ppc")
-  expect_s3_class(validate_emulator(fit, method = "MAP"), "fbc_validation")
+  expect_s3_class(emulator_cv(fit, method = "MAP"), "fbc_emulator_cv")
   # update() continues the chains with the same columns and model
   up <- update(fit, nMCMC = 40)
   expect_identical(colnames(up$Phi), keep)

@@ -1,4 +1,4 @@
-# Design of new runs (R/design.R, R/design-criterion.R): adding runs with a
+# Design of new runs (R/update_runs.R, R/propose_runs.R): adding runs with a
 # warm start, the look-ahead criterion, batches.
 
 # every hyperparameter fixed (scaled units): kappa alone is sampled, so its
@@ -248,7 +248,7 @@ test_that("update(fit, sim =) refits when the continuation's proposals are stale
   # too long, as after several reweighted steps whose runs narrowed the
   # posterior), the continuation's first stretch accepts almost nothing and
   # the model is refitted with fresh proposals (such continuations ran to
-  # the rule's 50,000-sweep ceiling before: inst/bench/design.R
+  # the rule's 50,000-sweep ceiling before: bench/design.R
   # --problem=three)
   pb <- sinus_problem(m = 18)
   set.seed(3)
@@ -1169,7 +1169,7 @@ test_that("design_loop() runs a function simulator through futures and adds runs
 })
 
 test_that("the look-ahead with a single draw is the plain-R one, batches included", {
-  # every unknown at one draw (KOH-IMSPE's plug-in, inst/bench/design.R's
+  # every unknown at one draw (KOH-IMSPE's plug-in, bench/design.R's
   # "imspe"): the draws' A were kept only for more than one draw, and a
   # batch's pending points read one draw's uninitialised (picks that
   # changed from call to call, or solve() failing)

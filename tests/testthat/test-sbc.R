@@ -2,7 +2,7 @@
 # the exact posterior, the rank of a parameter drawn from its prior among
 # posterior draws given data simulated from it is uniform. sbc_ranks() and
 # rank_chisq() are in helper-chains.R; the larger run is
-# inst/validation/sbc.R (results in inst/validation/sbc-results.md).
+# bench/validation/sbc.R (results in bench/validation/sbc-results.md).
 
 test_that("SBC ranks of kappa, sigma2S, sigma2E and muB are uniform", {
   ranks <- sbc_ranks(L = 400, seed = 42, sampler = "single")

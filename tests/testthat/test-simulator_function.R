@@ -289,7 +289,7 @@ test_that("predict(): f at the new inputs plus the bias, against plain R at one 
   expect_gt(predict(fit, new, type = "simulator")$se[3], 0)
 })
 
-test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; validate_emulator() refuses", {
+test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; emulator_cv() refuses", {
   field <- fn_field(n = 10, seed = 5)
   dir <- withr::local_tempdir()
   args <- c(list(fn_model, field, discrepancy = "none", nMCMC = 300, nBurn = 100, nChains = 2,
@@ -314,7 +314,7 @@ test_that("print(), plot(), update(), loo(), ppc_field() and checkpoints work; v
   expect_identical(dim(lo$pointwise)[1], nrow(field))
   pp <- ppc_field(fit, ndraws = 100)
   expect_s3_class(pp, "fbc_ppc")
-  expect_snapshot(error = TRUE, validate_emulator(fit))
+  expect_snapshot(error = TRUE, emulator_cv(fit))
 })
 
 test_that("a matrix field gives f a matrix; converge runs until its rule; output needs a data frame", {

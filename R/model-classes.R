@@ -1,0 +1,314 @@
+# The model description: every parameter class of the KOH model, in one
+# table that all code reads (the parameter layout, priors' domains, walks,
+# initial proposal scales, the sampler's moves, Phi's columns, plot labels,
+# the conflict check, checkpoints' identity and the tests' helpers). Adding a
+# class is one row here, its default prior in set_hyperPriors() and the code
+# that computes with it: the compiled core keeps no list of the classes, it
+# receives each class's offset and length by name (compiled_model()) and
+# looks up those it computes with (src/model.cpp, class_needs()); the
+# package checks when it loads that R's table names every one of them
+# (check_model_codes(), R/boundary.R).
+#
+# Columns:
+#   class    name, in the vignette's notation; its parameters are named
+#            class1, class2, ... (muB, sigma2S ...: one parameter, no index)
+#   over     what the class expands over: "calibration" (one per
+#            calibration input, q), "inputs" (one per simulator input,
+#            p + q: experimental then calibration), "experimental" (p),
+#            "noise" (one per measurement-error group of the field data:
+#            outputs x sources, see R/factors.R), "levels" (the canonical
+#            partial correlations of the categorical inputs' levels,
+#            L (L - 1) / 2 per input with L levels), "sources" (the
+#            partial correlations between the field data sets' biases when
+#            each has its own: L (L - 1) / 2 for L data sets), "one"
+#   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
+#   walk     the scale its random walk runs on: "identity", "log",
+#            "logit12" (logit of x - 1), "atanh" (Fisher's z)
+#   sd0      initial proposal SD on that scale
+#   move     the move of sampler = "blocks" it belongs to: "each" (one move
+#            per parameter, repeated), "sim", "bias" (joint moves of the
+#            simulator and bias GPs), "single" (single site), "gibbs" (an
+#            exact draw when its prior allows, else single site)
+#   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
+#   smooth   the GP ("S" or "B") whose family decides whether the class is
+#            a parameter at all (a smoothness), "" when it always is
+#   perOutput  with outputs = "independent" (several outputs, each its own
+#            simulator and bias GP; see R/outputs.R) the class has one copy
+#            per output, output after output; kappa is shared and sigma2E
+#            is per measurement-error group (output x data set) already
+model_classes <- data.frame(
+  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
+  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one"),
+  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real"),
+  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity"),
+  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
+  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
+  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE),
+  stringsAsFactors = FALSE
+)
+
+# The smoothness classes (parameters only for a family that has one), the
+# argument of calibrate() choosing that family, and the classes with one
+# parameter per input (labelled with the input's name).
+smooth_classes <- model_classes$class[model_classes$smooth != ""]
+kernel_arg <- function(cls) paste0("kernel", model_classes$smooth[match(cls, model_classes$class)])
+per_input_classes <- model_classes$class[model_classes$over %in% c("inputs", "experimental")]
+
+
+# The domains of the table's `domain` column, with numeric bounds: a
+# sampled parameter lies strictly inside (its walk maps the open interval
+# onto the line), a fixed one may sit on a bound; `what` says it in words.
+model_domains <- data.frame(
+  domain = c("real", "positive", "unit12", "corr"),
+  lower  = c(-Inf, 0, 1, -1),
+  upper  = c(Inf, Inf, 2, 1),
+  what   = c("finite", "positive", "in [1, 2]", "in [-1, 1]"),
+  stringsAsFactors = FALSE
+)
+# The bounds c(lower, upper) of class `cls`'s domain.
+domain_bounds <- function(cls) {
+  row <- match(class_domain[[cls]], model_domains$domain)
+  c(model_domains$lower[row], model_domains$upper[row])
+}
+
+# Lookups by class, all read off the table.
+param_classes <- model_classes$class
+class_domain <- stats::setNames(model_classes$domain, model_classes$class)
+class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
+
+# The discrepancy models of calibrate(discrepancy =), one row each, the one
+# description all code reads (the compiled core sees a model only through
+# its layout: a bias GP when sigma2B has parameters, see src/fbc.h):
+#   name     the choice's name (the first is the default)
+#   code     its code in a fit's compiled model (spec$model$discrepancy;
+#            fits store it, so a code never changes)
+#   label    print()'s name of the model
+#   classes  the classes of the bias GP it has (space separated); a class
+#            named by no model is in every model
+discrepancy_models <- rows_table(
+  list(name = "gp", code = 0L, label = "Kennedy-O'Hagan",
+       classes = "thetaB alphaB rhoB rhoD sigma2B muB"),
+  list(name = "sgasp", code = 2L, label = "S-GaSP discrepancy, Gu and Wang 2018",
+       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ"),
+  list(name = "none", code = 1L, label = "no discrepancy: y_f = eta(x, kappa) + eps",
+       classes = "")
+)
+discrepancy_codes <- stats::setNames(discrepancy_models$code, discrepancy_models$name)
+
+# The discrepancy model of a code, and column `what` of a model's row.
+discrepancy_name <- function(code) names(discrepancy_codes)[match(code, discrepancy_codes)]
+discrepancy_info <- function(discrepancy, what) {
+  discrepancy_models[[what]][match(discrepancy, discrepancy_models$name)]
+}
+
+# Does each class have parameters under the discrepancy model? (A logical
+# vector over model_classes.)
+class_in_model <- function(discrepancy) {
+  has <- strsplit(discrepancy_models$classes, " ", fixed = TRUE)
+  some <- unique(unlist(has))
+  !model_classes$class %in% some |
+    model_classes$class %in% has[[match(discrepancy, discrepancy_models$name)]]
+}
+
+
+# Why the discrepancy model has no parameter of class `cls`, and which
+# models have one (for messages).
+discrepancy_lacks <- function(cls, discrepancy) {
+  if (discrepancy == "none") return("has no bias GP")
+  switch(cls,
+         muB = "has no bias mean (the S-GaSP bias has mean 0)",
+         lambdaZ = "has no S-GaSP scale",
+         "has no such parameter")
+}
+discrepancy_having <- function(cls) {
+  has <- names(discrepancy_codes)[vapply(names(discrepancy_codes), function(d)
+    class_in_model(d)[match(cls, model_classes$class)], logical(1))]
+  sprintf("Use %s in `calibrate()` to sample `%s`.",
+          paste(sprintf("`discrepancy = \"%s\"`", has), collapse = " or "), cls)
+}
+
+# How many parameters each class has with p experimental and q calibration
+# inputs under the discrepancy model `discrepancy`, with `noise`
+# measurement-error groups (named by class, in the table's order; the bias
+# classes have none without a bias), `outputs` independent outputs (the
+# perOutput classes have a copy per output) and, for a simulator given as
+# a function (`emulator` FALSE), no simulator-GP classes.
+class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
+                        outputs = 1L, emulator = TRUE) {
+  n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
+         levels = levels, sources = sources)
+  n <- as.integer(n[model_classes$over])
+  n[!class_in_model(discrepancy)] <- 0L
+  n[model_classes$perOutput] <- n[model_classes$perOutput] * as.integer(outputs)
+  # a simulator given as a function (R/simulator_function.R) has no
+  # simulator GP, hence none of its classes
+  if (!emulator) n[model_classes$class %in% emulator_classes] <- 0L
+  stats::setNames(n, model_classes$class)
+}
+
+# The classes of the simulator GP (the emulator): none when the simulator
+# is a function.
+emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
+
+# The layout of phi, the sampler's parameter vector: for each class, its
+# 1-based positions (a named list; integer(0) for an empty class).
+param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                           sources = 0L, outputs = 1L, emulator = TRUE) {
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, outputs = outputs,
+                       emulator = emulator)
+  ends <- unname(cumsum(sizes))
+  stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
+                  names(sizes))
+}
+
+# Parameter names in the order of phi: the class name, with an index when
+# the class expands over inputs (or over several noise groups); with
+# independent outputs (`outputs`: their labels, or a count) a perOutput
+# class's copies end in "[label]" (thetaS1[amount], sigma2S[amount]).
+param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                         sources = 0L, outputs = 1L, emulator = TRUE) {
+  K <- if (is.character(outputs)) length(outputs) else as.integer(outputs)
+  lab <- if (is.character(outputs)) outputs else as.character(seq_len(K))
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator = emulator)
+  unlist(lapply(seq_along(sizes), function(i) {
+    cls <- names(sizes)[i]
+    one <- if (sizes[i] == 0L) character(0)
+    else if (model_classes$over[i] == "one" || (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
+    else paste0(cls, seq_len(sizes[i]))
+    if (K > 1L && model_classes$perOutput[i] && length(one)) {
+      paste0(rep(one, K), "[", rep(lab, each = length(one)), "]")
+    } else one
+  }), use.names = FALSE)
+}
+
+# The class of each parameter of phi.
+param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                            sources = 0L, outputs = 1L, emulator = TRUE) {
+  rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources,
+                                       outputs = outputs, emulator = emulator))
+}
+
+# The output (1-based) each parameter of phi belongs to with `outputs`
+# independent outputs: 0 for the shared ones (kappa, sigma2E).
+param_output_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                             sources = 0L, outputs = 1L) {
+  one <- class_sizes(p, q, discrepancy, noise, levels, sources)
+  unlist(lapply(seq_along(one), function(i) {
+    if (outputs > 1L && model_classes$perOutput[i]) rep(seq_len(outputs), each = one[[i]])
+    else rep(0L, one[[i]])
+  }), use.names = FALSE)
+}
+
+# The classes that are not parameters for these correlation families: the
+# smoothness of a GP whose family has none (see ?correlation).
+absent_classes <- function(kernS, kernB) {
+  has <- c(S = kernel_has_alpha(kernS), B = kernel_has_alpha(kernB))
+  model_classes$class[model_classes$smooth %in% names(has)[!has]]
+}
+
+# The layout as the compiled core receives it (read_model() in src/model.cpp):
+# 0-based offsets and lengths named by class.
+layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
+                          sources = 0L, outputs = 1L, emulator = TRUE) {
+  idx <- param_indices(p, q, discrepancy, noise, levels, sources, outputs = outputs,
+                       emulator = emulator)
+  len <- lengths(idx)
+  ends <- cumsum(len)
+  list(offset = stats::setNames(as.integer(ends - len), names(idx)),
+       length = stats::setNames(as.integer(len), names(idx)))
+}
+
+# The model description the compiled entry points take: the correlation
+# families of the simulator and bias GPs (kernel_codes()), the algebra
+# (0 auto: Kronecker on a product design, else dense; 1 dense; 2 the
+# nearest-neighbour approximation, whose design vecchia_design() makes),
+# the discrepancy model (discrepancy_codes), the layout of phi and, with
+# several measurement-error groups, each field row's group (`noise`,
+# 1-based: sigma2E has max(noise) entries) and, with categorical inputs,
+# their indicator columns (`levels`, model_levels()) and, with a bias per
+# field data set, each field row's data set and their number (`source`:
+# list(codes, L), 1-based codes; the bias classes take it only with a bias)
+# and, with independent outputs (outputs = "independent", R/outputs.R), the
+# output's indicator columns (`outputs`: list(col, ncol, L) as
+# model_levels() gives one input; `levels` then leaves the output out).
+compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
+                           vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
+                           outputs = NULL, simulator = NULL) {
+  if (discrepancy == "none") source <- NULL
+  c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
+         discrepancy = discrepancy_codes[[discrepancy]]),
+    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
+                 source_count(source), outputs = output_count(outputs),
+                 emulator = is.null(simulator)),
+    if (!is.null(outputs)) list(outputs = lapply(outputs, as.integer)),
+    if (!is.null(vecchia)) list(vecchia = vecchia),
+    if (!is.null(noise)) list(noise = as.integer(noise)),
+    if (!is.null(levels)) list(levels = levels),
+    if (!is.null(source)) list(source = as.integer(source$codes),
+                               sourceLevels = as.integer(source$L)),
+    # a simulator given as a function: the closures the compiled core calls
+    # (function_closures(), R/simulator_function.R)
+    if (!is.null(simulator)) list(simulator = simulator))
+}
+
+# The number of partial correlations between the field data sets' biases
+# (class rhoD), from list(codes, L) or a compiled model.
+source_count <- function(source) {
+  L <- source$sourceLevels %||% source$L
+  if (is.null(L)) 0L else as.integer(L * (L - 1L) / 2L)
+}
+
+# The number of independent outputs (1: none, or shared), from
+# list(col, ncol, L) or a compiled model.
+output_count <- function(outputs) {
+  if (!is.null(outputs$outputs)) outputs <- outputs$outputs
+  if (is.null(outputs$L)) 1L else as.integer(outputs$L)
+}
+
+# The number of measurement-error groups of a compiled model.
+noise_count <- function(model) if (is.null(model$noise)) 1L else max(model$noise)
+
+# The categorical inputs as the compiled core takes them (src/fbc.h,
+# LevelInput): for each, the first of its indicator columns among the
+# experimental inputs `names` (1-based), their number and the number of
+# levels; NULL without categorical inputs (`factors` as read_factors()
+# gives them).
+model_levels <- function(factors, names) {
+  if (!length(factors)) return(NULL)
+  list(col = vapply(factors, function(f) match(f$columns[1], names), integer(1), USE.NAMES = FALSE),
+       ncol = vapply(factors, function(f) length(f$columns), integer(1), USE.NAMES = FALSE),
+       L = vapply(factors, function(f) length(f$levels), integer(1), USE.NAMES = FALSE))
+}
+
+# The number of partial correlations of the levels (class rhoS: L (L - 1) / 2
+# per categorical input with L levels), from model_levels() or a compiled
+# model.
+level_count <- function(levels) {
+  if (!is.null(levels$levels)) levels <- levels$levels
+  if (is.null(levels$L)) 0L else as.integer(sum(levels$L * (levels$L - 1L) / 2L))
+}
+
+# The dense algebra with at least this many simulator runs gets the
+# large-problem move schedule (sampler_moves(large = TRUE)).
+fbc_large_m <- 500L
+large_dense <- function(m, algebra) {
+  algebra$name %in% c("dense", "vecchia") && m >= fbc_large_m
+}
+
+# The sampler's walk scale (calibrate(), "Sampler") and back, by walk
+# code (walk_codes; src/transforms.cpp computes the same).
+walk_maps <- list(
+  identity = list(to = function(x) x, from = function(w) w),
+  log = list(to = function(x) log(x), from = function(w) exp(w)),
+  logit12 = list(to = function(x) stats::qlogis(x - 1), from = function(w) 1 + stats::plogis(w)),
+  atanh = list(to = function(x) atanh(x), from = function(w) tanh(w))
+)
+walk_map <- function(transform) {
+  name <- names(walk_codes)[match(transform, walk_codes)]
+  if (length(name) != 1L || is.na(name)) stop("unknown walk code ", format(transform))
+  walk_maps[[name]]
+}
+to_walk <- function(x, transform) walk_map(transform)$to(x)
+from_walk <- function(w, transform) walk_map(transform)$from(w)
