@@ -677,6 +677,18 @@
 #'   treats it as a rejected proposal, so the chains avoid the kappa where
 #'   `f` is undefined (the posterior is then restricted to where `f` is
 #'   finite).
+#' @param failedRuns What to do with failed runs, rows of `sim` whose
+#'   response is `NA`, `NaN` or infinite: `"setAside"` (the default) says
+#'   how many failed and where, keeps their inputs in the model and
+#'   calibrates on the successful runs; `"error"` refuses them. A failed
+#'   run is not evidence about kappa (the physical system does not fail
+#'   with the code), so the posterior is that of the successful runs. The
+#'   failed inputs feed a model of where the simulator fails: a Gaussian
+#'   process classifier over the numeric inputs (logistic link, Laplace
+#'   approximation, its length-scales and variance at their posterior mode;
+#'   plug-in values serve because it does not enter kappa's posterior).
+#'   Above 1,000 runs it is fitted to every failed run and a random sample
+#'   of the successful ones. See `predict(fit, newdata, type = "failure")`.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -746,12 +758,14 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       neighbours = NULL, checkpoint = NULL,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
                       sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
-                      fit = TRUE, nonFinite = c("error", "reject")) {
+                      fit = TRUE, nonFinite = c("error", "reject"),
+                      failedRuns = c("setAside", "error")) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery)
   if (inherits(sim, "fbc_model")) return(fit_model(model_to_fit(sim, call), run))
   check_flag(fit, "fit")
+  failedRuns <- match_choice(failedRuns, c("setAside", "error"), "failedRuns")
   if (is.function(sim)) {
     # the simulator as an R function (R/simulator_function.R)
     model <- build_function_model(sim, field,
@@ -767,7 +781,8 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                        discrepancy = discrepancy, kernelS = kernelS, kernelB = kernelB,
                        sampler = sampler, blockSim = blockSim, algebra = algebra,
                        neighbours = neighbours, output = output, source = source,
-                       sourceBias = sourceBias, outputs = outputs, modelCall = call)
+                       sourceBias = sourceBias, outputs = outputs, failedRuns = failedRuns,
+                       modelCall = call)
   if (!fit) return(model)
   fit_model(model, run)
 }

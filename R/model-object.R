@@ -62,8 +62,9 @@ NULL
 # `kappaDefault`: kappaP1 and kappaP2 were left at their defaults).
 build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, kernelS, kernelB,
                         sampler, blockSim, algebra, neighbours, output, source, sourceBias,
-                        outputs = "shared", modelCall = NULL, call = parent.frame()) {
-  dd <- model_data(sim, field, output, source, call = call)
+                        outputs = "shared", failedRuns = "setAside", modelCall = NULL,
+                        call = parent.frame()) {
+  dd <- model_data(sim, field, output, source, failedRuns, call = call)
   opt <- model_options(dd, discrepancy, sampler, blockSim, algebra, neighbours, hypers,
                        kernelS, kernelB, sourceBias, call = call)
   opt[c("output", "source")] <- list(output, source)
@@ -86,7 +87,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource,
-                   fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes)))
+                   fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes), failed = dd$failed))
   new_fbc_model(data = dat, raw = list(sim = dd$sim, field = dd$field), scale = pr$scale,
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
                 discrepancy = opt$discrepancy, sampler = opt$sampler, algebra = alg,
@@ -101,14 +102,15 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                              blockSim = blockSim, algebra = algebra,
                                              neighbours = neighbours, output = output,
                                              source = source, sourceBias = sourceBias,
-                                             outputs = outputs))),
+                                             outputs = outputs, failedRuns = failedRuns))),
                 call = modelCall)
 }
 
 # The data as numeric matrices with the factors read (read_factors()) and
 # the columns aligned (align_columns()): list(fac, sim, field, p, q, named).
-model_data <- function(sim, field, output, source, call) {
-  fac <- read_factors(sim, field, output, source, call = call)
+model_data <- function(sim, field, output, source, failedRuns = "setAside", call) {
+  runs <- split_failed_runs(sim, field, failedRuns, call = call)
+  fac <- read_factors(runs$sim, field, output, source, call = call)
   sim <- check_data_matrix(fac$sim, "sim", min_cols = 2L, min_rows = 3L, call = call)
   check_experimental_input(fac$field, call = call)
   field <- check_data_matrix(fac$field, "field", min_cols = 2L, min_rows = 1L, call = call)
@@ -128,7 +130,8 @@ model_data <- function(sim, field, output, source, call) {
       i = "A calibration input is a simulator input that the field experiment does not set (such as {.code g} in {.code ballSim})."
     ), call = call)
   }
-  list(fac = fac, sim = sim, field = field, p = p, q = q, named = cols$named)
+  list(fac = fac, sim = sim, field = field, p = p, q = q, named = cols$named,
+       failed = runs$failed)
 }
 
 # The model's choices, checked: discrepancy, sampler, algebra, neighbours,

@@ -92,7 +92,13 @@
 #' @param type What to predict: `"field"` (a new field observation),
 #'   `"mean"` (the field response without measurement error), `"simulator"`
 #'   (the calibrated simulator \eqn{\eta(x, \kappa)}) or `"bias"` (the
-#'   discrepancy \eqn{\delta(x)}).
+#'   discrepancy \eqn{\delta(x)}), or `"failure"`: the probability that a
+#'   simulator run at `newdata` fails, for a fit whose `sim` had failed
+#'   runs (see `failedRuns` in [calibrate()]). For `"failure"`, `newdata`
+#'   holds the simulator's inputs (experimental and calibration; by name,
+#'   or in `sim`'s order without the response; missing: the runs' own
+#'   inputs) and a vector of probabilities is returned; the other
+#'   arguments are not used.
 #' @param level Probability of the interval `[lower, upper]`.
 #' @param draws If `TRUE`, also return the per-draw predictive means (a
 #'   points x draws matrix: see "Memory and time").
@@ -115,12 +121,13 @@
 #' predict(fit, c(2.2, 2.4), method = "MAP")
 #' predict(fit, c(2.2, 2.4), type = "bias")
 predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
-                        type = c("field", "mean", "simulator", "bias"),
+                        type = c("field", "mean", "simulator", "bias", "failure"),
                         level = 0.95, draws = FALSE, ndraws = 1000, ...) {
   check_dots_empty(..., fn = predict.fbc, name = "predict")
   object <- check_fbc(object, "object")
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
-  type <- match_choice(type, c("field", "mean", "simulator", "bias"), "type")
+  type <- match_choice(type, c("field", "mean", "simulator", "bias", "failure"), "type")
+  if (type == "failure") return(predict_failure(object, if (!missing(newdata)) newdata))
   if (!is.numeric(level) || length(level) != 1L || is.na(level) || level <= 0 || level >= 1) {
     cli::cli_abort("{.arg level} must be a single number strictly between 0 and 1.")
   }
