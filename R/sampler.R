@@ -18,7 +18,7 @@
 # over jump_ranges(), once a sweep after the walks: `jump`, 1-based in phi,
 # and `jumpRange`, its interval on the sampler's scale, a row per jump),
 # the default: a walk adapted within one mode of a multimodal kappa
-# posterior rarely leaves it (issue 29's simulator functions; with an
+# posterior rarely leaves it (simulator functions; with an
 # emulator, Tuo and Wu's problem at 18-24 runs, where chains kept their
 # modes for 25,000 draws: bench/RESULTS-design.md).
 sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
