@@ -428,13 +428,13 @@ weights_entropy <- function(l) {
 # output): the plug-in's entropy criterion with each candidate run's value
 # fantasised from the emulator given the simulator runs alone (a "cut": the
 # field data left out of that prediction), the kappa particles then
-# reweighted by the joint model as the plug-in's are. Stop 60 found the
-# joint prediction miscalibrated at the plug-in's picks on Tuo and Wu's
+# reweighted by the joint model as the plug-in's are. The joint
+# prediction was found miscalibrated at the plug-in's picks on Tuo and Wu's
 # misspecified problem (the true value outside its central 95% in 28-34%
 # of the picks, the runs-only prediction's in 7-15%). No takeover by the
 # joint criterion. J = 50 fantasies (common to every candidate). Measured
 # and not adopted: 49 runs to Hellinger 0.1 against the default's 33 on
-# replicates 1-15 (later in 13), RESULTS-design.md, "Stop 60".
+# replicates 1-15 (later in 13).
 cut_runs <- function(fit, J = 50L) {
   model <- fit$model
   dat <- model$data
