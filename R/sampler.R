@@ -6,7 +6,7 @@
 # the schedule: one Move per entry, in the order of phi, then the scale
 # move.
 
-# The moves of each sampler (see "Sampler" in ?calibrate), read off the
+# The moves of each sampler (see vignette("sampler")), read off the
 # model description's `move` column: index vectors of the jointly moved
 # blocks (1-based, in phi; named by move) and how often each moves per
 # sweep, the scale move (the `scaled` classes that have parameters), the
