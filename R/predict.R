@@ -110,7 +110,8 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3,
+#'                  nChains = 2)
 #' predict(fit, c(2.2, 2.4))
 #' predict(fit, c(2.2, 2.4), method = "MAP")
 #' predict(fit, c(2.2, 2.4), type = "bias")
