@@ -77,17 +77,12 @@ fbc_fixed_nMCMC <- 8000L
 #' @export
 #' @examples
 #' until_converged()
-#' \donttest{
-#' # the default: until converged, checked soon after warm-up
+#' # a first stretch of 600 sweeps, then 300 at a time until every R-hat
+#' # < 1.01 and bulk ESS >= 200, at most 2000 sweeps a chain
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
+#'                  converge = until_converged(ess = 200, every = 300, maxMCMC = 2000))
 #' fit$settings$converge$sweeps
-#' # a short first stretch, then 500 sweeps at a time until converged
-#' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000,
-#'                  converge = until_converged(ess = 400, every = 500))
-#' fit$settings$converge$sweeps
-#' }
 until_converged <- function(rhat = 1.01, ess = 400, every = NULL, maxMCMC = 50000) {
   if (!is.numeric(rhat) || length(rhat) != 1L || is.na(rhat) || !(rhat > 1)) {
     cli::cli_abort("{.arg rhat} must be a number above 1 (got {format_value(rhat)}).")

@@ -59,7 +59,7 @@
 #' field <- data.frame(y = sin(2 * pi * xf) + rnorm(10, 0, 0.1), x = xf)
 #' set.seed(1)
 #' out <- design_loop(f, field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
-#'                    n0 = 10, batch = 5, budget = 10, discrepancy = "none",
+#'                    n0 = 6, batch = 3, budget = 3, discrepancy = "none",
 #'                    nChains = 2, design = list(ndraws = 50))
 #' out$history
 #' }

@@ -231,7 +231,7 @@ smooth_kernel_hint <- function(cls) {
 #' parameters with more than 1% of their draws beyond the range the
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
-#' [calibrate()]), calibration parameters confounded with the bias, and
+#' `vignette("model", package = "FBC")`), calibration parameters confounded with the bias, and
 #' prior-data conflicts.
 #'
 #' @section Confounding:

@@ -13,7 +13,7 @@
 #' space of [calibrate()] (\eqn{\nu} the nugget, `fit$settings$nugget`). The
 #' field data play no part. For one draw of the parameters, with
 #' \eqn{Q = K^{-1}} and \eqn{a = Q y_s} computed by the fit's simulator
-#' algebra (see "Simulator algebra" in [calibrate()]: from the Cholesky factor
+#' algebra (see `vignette("sampler", package = "FBC")`: from the Cholesky factor
 #' of \eqn{K}, or on a product design from the eigendecompositions of its two
 #' factors, without any `m x m` matrix), the closed-form identities of GP
 #' regression give the held-out predictive of every run without refitting

@@ -3,7 +3,7 @@
 #' Compares the posterior of each calibration input from an emulator-based
 #' fit (runs of the simulator as `sim`) with the one from the simulator
 #' itself (the function as `sim`, see "The simulator as a function" in
-#' [calibrate()]), same field data and model otherwise. The emulator's
+#' `vignette("model", package = "FBC")`), same field data and model otherwise. The emulator's
 #' error enters the calibration through kappa: a validation of its
 #' predictions ([emulator_cv()]) says how well it predicts runs, not
 #' how far it moves kappa's posterior. This says the latter.

@@ -334,7 +334,7 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 #'
 #' The correlation the simulator GP (or the bias GP) puts between the levels
 #' of a categorical input of a calibration (see "Categorical inputs,
-#' outputs and data sets" in [calibrate()]), at each posterior draw's
+#' outputs and data sets" in `vignette("model", package = "FBC")`), at each posterior draw's
 #' correlation parameters, averaged over the draws.
 #'
 #' @param fit An `fbc` object from [calibrate()] with a categorical input.

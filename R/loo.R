@@ -48,8 +48,8 @@
 #' \donttest{
 #' if (requireNamespace("loo", quietly = TRUE)) {
 #'   set.seed(1)
-#'   gp <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000)
-#'   none <- calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000,
+#'   gp <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2)
+#'   none <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
 #'                     discrepancy = "none")
 #'   loo::loo_compare(list(gp = loo::loo(gp), none = loo::loo(none)))
 #' }

@@ -29,7 +29,7 @@
 #            per parameter, repeated), "sim", "bias" (joint moves of the
 #            simulator and bias GPs), "single" (single site), "gibbs" (an
 #            exact draw when its prior allows, else single site)
-#   scaled   multiplied by the common-scale move (see ?calibrate, "Sampler")
+#   scaled   multiplied by the common-scale move (see vignette("sampler"))
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
 #   perOutput  with outputs = "independent" (several outputs, each its own
@@ -297,7 +297,7 @@ large_dense <- function(m, algebra) {
   algebra$name %in% c("dense", "vecchia") && m >= fbc_large_m
 }
 
-# The sampler's walk scale (calibrate(), "Sampler") and back, by walk
+# The sampler's walk scale (vignette("sampler")) and back, by walk
 # code (walk_codes; src/transforms.cpp computes the same).
 walk_maps <- list(
   identity = list(to = function(x) x, from = function(w) w),

@@ -41,7 +41,8 @@
 #' @importFrom ggplot2 .data
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3,
+#'                  nChains = 2)
 #' plot(fit)
 #' plot(fit, "thetaS", type = "trace")
 #' plot(fit, type = "fits", xlab = "height (m)")

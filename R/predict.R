@@ -74,13 +74,13 @@
 #' range the simulator design covers for it (by more than 5% of that range's
 #' width), `predict()` warns (class `fbc_extrapolation`), naming the
 #' parameter, the share of draws and their range: there the prediction rests
-#' on the emulator's extrapolation (see "Checks" in [calibrate()]).
+#' on the emulator's extrapolation (see "Checks" in `vignette("model", package = "FBC")`).
 #'
 #' @param object An `fbc` object from [calibrate()].
 #' @param newdata New experimental inputs in their own units: a numeric matrix
 #'   or data frame with the `p` experimental input columns (a vector when
 #'   `p = 1`). When the calibration's data carried column names (see
-#'   "Columns" in [calibrate()]) and `newdata` does too, its columns are
+#'   "Columns" in `vignette("model", package = "FBC")`) and `newdata` does too, its columns are
 #'   matched by name, in any order, and other columns are ignored; an
 #'   unnamed matrix gives the inputs by position. A column named like a
 #'   calibration input is refused: every prediction, `type = "simulator"`
@@ -116,7 +116,8 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3,
+#'                  nChains = 2)
 #' predict(fit, c(2.2, 2.4))
 #' predict(fit, c(2.2, 2.4), method = "MAP")
 #' predict(fit, c(2.2, 2.4), type = "bias")

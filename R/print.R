@@ -11,7 +11,7 @@
 #' nearest-neighbour approximation with its `neighbours`) with why it ran:
 #' asked for, or chosen by `algebra = "auto"` from the projected cost of a
 #' dense sweep, which it gives, with the ways towards the exact posterior
-#' when the approximation ran; see "Simulator algebra" in [calibrate()])
+#' when the approximation ran; see `vignette("sampler", package = "FBC")`)
 #' and the posterior
 #' summary of every parameter ([summary.fbc()]), followed by the convergence
 #' warnings of [convergence_messages()] (R-hat above 1.01, bulk ESS below

@@ -260,21 +260,9 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' noise, and with a heavy tail for noisy ones (Gelman 2006). The vignette's
 #' inverse gamma (shape 1.5, scale 1.5) on the variance says the noise is
 #' about as large as the signal: it puts almost no mass on an sd below a
-#' tenth of the response's. On field data with noise sd 0.01, about 6% of
-#' the response's sd (\eqn{\eta(x, t) = e^{-tx} + x/2}, 40 runs, 10 or 30
-#' field points, no bias, `discrepancy = "gp"` and `"none"`, 3 data sets
-#' each; `bench/defaults.R`, part `priors`), the inverse gamma's
-#' posterior median of the noise sd was 0.046 to 0.085, its 90% interval
-#' never covered 0.01, and \eqn{\kappa}'s 90% interval was 1.2 to 8.3 times
-#' as wide as with the noise known. Under the half-Cauchy the noise sd's
-#' median was 0.009 to 0.014 and its interval covered 0.01 in 10 of the 12
-#' fits (the two misses: one data set whose drawn noise has root mean square
-#' 0.0125, which the posterior matches), and \eqn{\kappa}'s interval was
-#' 0.96 to 1.50 times as wide as with the noise known; a half-Cauchy scale of
-#' 0.5 gave the same. The same prior on \eqn{\sigma_B} narrowed
-#' \eqn{\kappa}'s interval below the known-noise one on these data without
-#' bias; it was not measured on biased data and is not the default. The
-#' table is in `bench/RESULTS-defaults.md`. The vignette's prior stays
+#' tenth of the response's, and on precise field data it overstated the
+#' noise and widened \eqn{\kappa}'s interval (measured:
+#' `vignette("model", package = "FBC")`). The vignette's prior stays
 #' available by name: `set_hyperPriors(sigma2EDist = "inversegamma",
 #' sigma2EP1 = 1.5, sigma2EP2 = 1.5)`.
 #'

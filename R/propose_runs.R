@@ -11,11 +11,9 @@
 #' expected gain integrated over the joint posterior of \eqn{\kappa} and
 #' every hyperparameter. The points are picked with the hyperparameters at
 #' their MAP values (`method = "plugin"`, the default: measured as good as
-#' or better than picking by the joint criterion, `method = "joint"`; see
-#' "Joint or plug-in (measured)"), for kappa by the expected reduction of
-#' its entropy (measured: fewer runs than by its variance where the
-#' emulator's error is what runs reduce, as many under a KOH bias; see
-#' "Entropy or variance (measured)").
+#' or better than picking by the joint criterion, `method = "joint"`), for
+#' kappa by the expected reduction of its entropy; the measurements behind
+#' these choices are in `vignette("design", package = "FBC")`.
 #'
 #' @section Criterion:
 #' For each retained draw \eqn{\phi_s} (kappa and the hyperparameters) the
@@ -69,8 +67,7 @@
 #' criterion with the hyperparameters fixed at the MAP draw's (kappa on a
 #' grid for one calibration input, a uniform sample otherwise, weighted by
 #' its likelihood and prior), what EIVAR does (KOH-IMSPE fixes kappa at
-#' its estimate too, and needs more runs: "Against KOH-IMSPE's plug-in
-#' (measured)"); with
+#' its estimate too, and needs more runs: `vignette("design", package = "FBC")`); with
 #' `method = "joint"` by the joint criterion above. For kappa (no
 #' `target`) the plug-in scores by kappa's entropy, not its variance: on
 #' its kappa values \eqn{\kappa_k} (weights \eqn{p_k}) the expected
@@ -79,8 +76,7 @@
 #' \deqn{I(x, t) = H(y^*) - \frac12 \sum_k p_k \log(2 \pi e v_k),}{I(x, t) = H(y*) - (1/2) sum_k p_k log(2 pi e v_k),}
 #' estimated with the same fantasies (the variance weighs most what tells
 #' far-apart values of kappa apart; the entropy weighs telling any apart,
-#' and that reached the posterior in fewer runs: "Entropy or variance
-#' (measured)"). The plug-in ignores the
+#' and that reached the posterior in fewer runs). The plug-in ignores the
 #' hyperparameters' uncertainty, so its own gains overstate what its picks
 #' are worth: the `gain` reported is always the joint look-ahead's (of
 #' kappa's variance), at the plug-in's picks in its order (each given the
@@ -98,197 +94,6 @@
 #' interval). Where both find it worth under 1%, the "limited" message
 #' below is said.
 #'
-#' @section Joint or plug-in (measured):
-#' Runs to bring kappa's posterior within Hellinger distance 0.1 of the
-#' exact one (`bench/design.R`, 5 maximin starting runs, one run at a
-#' time, paired replicates; median (quartiles); RESULTS-design.md; the
-#' plug-in scoring kappa's variance, as it did before it scored its
-#' entropy):
-#' \tabular{lccc}{
-#'   problem \tab joint \tab plug-in \tab nested LHS \cr
-#'   sinusoid (60 replicates; LHS 30) \tab 18 (16-20) \tab 17 (15-19) \tab > 50 \cr
-#'   kinetics (30) \tab 13.5 (12-15) \tab 13 (11.25-14.75) \tab 22.5 (18-29) \cr
-#'   two calibration inputs (30) \tab 31.5 (27-34) \tab 28.5 (26-31) \tab > 35
-#' }
-#' Both criteria need far fewer runs than a space-filling design (with two
-#' inputs nested LHS needed 89 runs in the median, 52 to over 100, on the 9
-#' replicates run that far). The hyperparameters' uncertainty did not make
-#' the joint criterion's picks better: the plug-in was as fast or a little
-#' faster on every problem measured. On the sinusoid it reached the distance
-#' first in 38 of the 60 replicates and later in 18; on kinetics they were
-#' even (the joint first in 13 of 30, the plug-in in 15); with two inputs
-#' the plug-in was first in 16 of 30 and the joint in 11; on Tuo and Wu's
-#' misspecified problem (distance 0.2, 30 replicates) both needed 22 runs in
-#' the median and the plug-in was first in 19, the joint in 8. A greedy
-#' oracle that knows every candidate's outcome needs only 1.15-1.26 times
-#' fewer runs than the plug-in on the sinusoid and kinetics, so the room
-#' left for any one-step criterion is small there (with two outputs it is
-#' larger: 1.33-1.40, below). A kappa grid per hyperparameter draw in
-#' place of the draws (5 x 20 particles) came between the two (17,
-#' quartiles 16-19, on the sinusoid) and more hyperparameter draws (10 x
-#' 20) did worse, so it was not adopted. With two outputs the plug-in's
-#' kappa grid under 5 hyperparameter draws (5 x 100 particles, by kappa's
-#' entropy or its variance) needed as many runs as the default (12 with
-#' shared outputs, 14 with independent ones, 30 replicates), and so did 200
-#' fantasies of a run's two values in place of 50 (12 and 13, 60
-#' replicates): the room the oracle shows there is not the plug-in's
-#' hyperparameters nor the look-ahead's Monte Carlo error.
-#' The plug-in's own expected gains ignore the hyperparameters' spread and
-#' overstated what its picks were worth under the joint posterior
-#' (0.34-0.88 against 0.15-0.42 on the sinusoid's first picks at 5 runs),
-#' which is why the gains reported are the joint look-ahead's. With the issue's
-#' protocol (10 starting runs, batches of 5 and of 1, 30 replicates) the
-#' two were even in the median on the sinusoid (25 and 20 runs), kinetics
-#' (20 and 15), two inputs (40) and Tuo and Wu's problem (37.5 joint, 40
-#' plug-in); with three calibration inputs (batches of 5, 30 replicates)
-#' the plug-in needed 50 runs and the joint 55 (plug-in first in 18, the
-#' joint in 9; sign test p 0.12), and rerun with this version's fits (22
-#' replicates) 55 and 57.5 (p 0.81). The one significant difference: two
-#' inputs, one run at a time from 10 runs, 33.5 against 35 runs (plug-in
-#' first in 21 of 30, p 0.04). With the fewest runs as the aim, the
-#' plug-in's picks are as good or a little better on every problem
-#' measured, so they are the default; integrating over the hyperparameters
-#' pays in the gains reported, not in the picks. (The figures above are
-#' each criterion's own; `method = "joint"` keeps the joint criterion's
-#' picks.) The default as it is (the plug-in, the joint criterion picking
-#' where the two disagree; 10 starting runs, one run at a time, 30 paired
-#' replicates against the joint criterion): sinusoid 20 runs against 20,
-#' kinetics 15 against 15, two calibration inputs 32 against 35 (first in
-#' 19, later in 7, p 0.03); to distance 0.05: 25 against 26.5, 19 against
-#' 18, 46.5 against 49.5 (p 0.01). In batches of 5 on the sinusoid
-#' 25 runs, as both criteria.
-#'
-#' @section Entropy or variance (measured):
-#' The plug-in picking by kappa's entropy against by its variance (the
-#' default before; `bench/design.R`, 5 maximin starting runs, one run
-#' at a time, paired replicates; runs to Hellinger distance 0.1 from the
-#' exact posterior, median (quartiles)):
-#' \tabular{lccc}{
-#'   problem \tab entropy \tab variance \tab entropy first / later \cr
-#'   kinetics (90 replicates) \tab 12.5 (11-14) \tab 13 (11-15) \tab 44 / 25 (p 0.03) \cr
-#'   sinusoid (90) \tab 17 (15-18) \tab 17 (15-19) \tab 47 / 31 (p 0.09) \cr
-#'   two calibration inputs (30) \tab 28 (25-31) \tab 32 (27-36) \tab 18 / 8 (p 0.08) \cr
-#'   Tuo and Wu's problem (30) \tab 28 (26-33) \tab 31 (27-35) \tab 18 / 9 (p 0.12) \cr
-#'   two independent outputs (30) \tab 13 (11-15) \tab 14 (12-15) \tab 12 / 6 (p 0.24) \cr
-#'   sinusoid with a bias, KOH fit (30) \tab 25 (22-29) \tab 24 (20-28) \tab 12 / 18 (p 0.36)
-#' }
-#' Where the emulator's error is what the runs reduce (the first four,
-#' fitted without a bias) the entropy needed 0.6, 0.9, 2.9 and 0.9 runs
-#' fewer in the mean, and with it kinetics needed 1.84 times fewer runs
-#' than nested LHS (23 runs; 1.77 by the variance); with two independent
-#' outputs (kinetics' two products) the two were even in the paired
-#' counts (LHS 26 runs: 2.00 and 1.86 times); under the KOH bias,
-#' where the confounding sets kappa's width, the two were even (1 run more
-#' in the mean at distance 0.1, as many at 0.15 and 0.2). In batches of 5 from 10 runs (30
-#' replicates) the two were even on kinetics (20 runs, the same in 27
-#' replicates) and on the sinusoid (25; the entropy earlier in 11, later
-#' in 4). The joint criterion (`method = "joint"`)
-#' scores kappa's variance: its draws carry every hyperparameter, and the
-#' entropy of their weights would count what a run tells about those too.
-#'
-#' @section Candidates (measured):
-#' The default candidates are `100 (p + q)` points. Their experimental
-#' inputs span the runs' ranges widened to take in the field's inputs:
-#' a small starting design rarely reaches the field's extreme inputs
-#' (fits warn of it), and candidates held to the runs' ranges can never
-#' extend them (measured, 5 maximin starting runs: on the sinusoid 10 of
-#' 32 replicates never reached Hellinger distance 0.1 within 30 runs,
-#' on kinetics 8 of 50 within 25). Their calibration inputs stay in the
-#' runs' ranges (those of kappa's default prior). Half the candidates
-#' take their calibration inputs from draws of kappa's posterior and their
-#' experimental inputs from the field's distinct inputs, each picked at
-#' random: the emulator is used at the field's inputs with kappa, and a
-#' run tells most about kappa there; uniform candidates put ever fewer
-#' there as kappa's posterior narrows.
-#' Against 100 (p + q) uniform candidates over the problems' whole input
-#' boxes (`bench/design.R`: fits with [calibrate()]'s and
-#' [update()]'s defaults but `discrepancy = "none"` on the problems
-#' without a bias; `propose_runs()`'s defaults; paired replicates, 5
-#' maximin starting runs, one run at a time;
-#' runs to Hellinger distance 0.1 from the exact posterior, median
-#' (quartiles)):
-#' \tabular{lccc}{
-#'   problem \tab default \tab uniform \tab default first / later \cr
-#'   sinusoid (60 replicates) \tab 14 (12-16) \tab 16 (15-18) \tab 47 / 10 (p 8e-7) \cr
-#'   kinetics (90) \tab 11 (10-13.75) \tab 12.5 (11-14) \tab 49 / 27 (p 0.015) \cr
-#'   two calibration inputs (30) \tab 27 (24-29) \tab 28 (25-31) \tab 16 / 12 (p 0.57) \cr
-#'   sinusoid with a bias, KOH fit (30) \tab 22 (19-25) \tab 25 (22-29) \tab 20 / 9 (p 0.06)
-#' }
-#' The half at kappa's draws with uniform experimental inputs (measured
-#' first) came between: sinusoid 15 runs, kinetics 12 (from the uniform
-#' candidates' 16 and 12.5; the field's inputs then took the median to 14
-#' and 11: 36 / 19 and 39 / 32 paired replicates first / later); with it
-#' two calibration inputs needed 27 runs against 28 (16 / 13), two
-#' independent outputs 12.5 against 13 (15 / 9), Tuo and Wu's problem 28
-#' against 28 (12 / 9) and the sinusoid with a KOH bias 25.5 against 25
-#' (13 / 16); from 10 starting runs in batches of 5 (30 replicates)
-#' kinetics 15 against 20 (10 / 3) and the sinusoid 20 against 25
-#' (12 / 3). All candidates at kappa's draws were not clearly better than
-#' half on kinetics (60 replicates: 29 / 19, p 0.19); the uniform half
-#' keeps runs going where kappa's posterior may yet move.
-#' With these defaults, from 5 starting runs one run at a time, the
-#' default needed half as many runs as nested maximin LHS or fewer on
-#' every problem measured (Hellinger 0.1, median, the same replicates):
-#' the sinusoid 14 against > 50, kinetics 11 against 23, two calibration
-#' inputs 27 against 89 (LHS run to 100 runs on 9 of them), Tuo and Wu's
-#' problem 28.5 against 65, two shared
-#' outputs 12 against 27.5, two independent outputs 13 against 27.5 (60
-#' replicates; the field's inputs cost a run there: 12 with the half's
-#' experimental inputs uniform, p 0.04), the sinusoid with a KOH bias 22
-#' against 49 and with the S-GaSP 22 against 48.5. From 10 starting runs
-#' in batches of 5 the margin is smaller: kinetics 20 against 25, Tuo and
-#' Wu's 40 against 60 (the sinusoid 20 against > 50).
-#'
-#' @section Against KOH-IMSPE's plug-in (measured):
-#' The plug-in read as KOH-IMSPE has it (Koermer et al. 2024) fixes kappa
-#' too: every unknown at the MAP draw, runs picked by the reduction of the
-#' calibrated prediction's variance integrated over the field's range,
-#' which at one draw is the GP update's (`bench/design.R`, method
-#' `imspe`, choosing among the same candidates). Weighting kappa over its
-#' posterior, as the default does, took fewer runs to bring kappa's
-#' posterior within Hellinger distance 0.1 of the exact one (fits with
-#' [calibrate()]'s and [update()]'s defaults but each problem's
-#' discrepancy model; paired replicates, 5 maximin starting runs, one
-#' run at a time; median (quartiles); KOH-IMSPE's runs up to 60, 50 with
-#' a bias):
-#' \tabular{lcccc}{
-#'   problem \tab default \tab KOH-IMSPE \tab ratio \tab default first / later \cr
-#'   sinusoid (30 replicates) \tab 13 (12.25-14.75) \tab 22.5 (21.25-25.75) \tab 1.73 \tab 30 / 0 \cr
-#'   kinetics (60) \tab 12 (10.75-14.25) \tab 14.5 (12-17.25) \tab 1.21 \tab 39 / 14 \cr
-#'   two calibration inputs (30) \tab 27 (24.25-29) \tab 36 (30-46.75) \tab 1.33 \tab 23 / 5 \cr
-#'   Tuo and Wu's problem (30) \tab 28.5 (27-33.75) \tab > 60 (10 of 30 reach it) \tab > 2.1 \tab 25 / 3 \cr
-#'   sinusoid with a bias, KOH fit (30) \tab 22 (19-25) \tab > 50 (8 of 30) \tab > 2.2 \tab 29 / 0 \cr
-#'   the same, S-GaSP fit (30) \tab 22 (19.25-26.75) \tab > 50 (4 of 30) \tab > 2.2 \tab 30 / 0 \cr
-#'   two shared outputs (60) \tab 12 (10-14) \tab 13 (11-16) \tab 1.08 \tab 38 / 17 \cr
-#'   two independent outputs (60) \tab 13 (11-15.25) \tab 15.5 (13-17.25) \tab 1.19 \tab 37 / 18
-#' }
-#' KOH-IMSPE's runs gather at the one kappa it was given: the emulator
-#' becomes exact there, and kappa's posterior elsewhere keeps the
-#' emulator's error (on Tuo and Wu's problem 21 of 30 replicates were
-#' still beyond 0.1 at 60 runs, the median distance there 0.15). Where
-#' the field data pin kappa down early (kinetics' 30 points, and the two
-#' outputs' 30 each) its estimate is nearly right and the two come close:
-#' on kinetics 1.25 on the first 30 replicates, 1.08 on the next 30. With
-#' two outputs a greedy oracle that knows the reference needed 9 and 10
-#' runs (shared, independent; replicates 1-30) against KOH-IMSPE's 14 and
-#' 16 and the default's 12 and 14: a one-step rule that knows each run's
-#' value reaches the goal there (an expected gain cannot know it; the
-#' variants in "Joint or plug-in" needed the default's runs), and once
-#' kappa's posterior is narrow the default's picks were no better than a
-#' uniform run's. From 10
-#' starting runs (the issue's protocol, 30 replicates) one at a time: the
-#' sinusoid 17 runs against 25 (1.47), two calibration inputs 29 against
-#' 42.5 (1.47), Tuo and Wu's 32.5 against over 50 (9 of 30 reach it), and
-#' kinetics 15 against 15, where a greedy oracle that knows the reference
-#' needs 13: no one-step rule could need 1.25 times fewer runs than
-#' KOH-IMSPE there. In batches of 5 (counts in steps of 5; 60
-#' replicates but three inputs' 30): the sinusoid 20 against 30 (1.50;
-#' 25 on the first 30), two inputs 35 against 45, three inputs 45
-#' against 60 (1.33), Tuo and Wu's 40 against 50 (1.25; 45 on the first
-#' 30), kinetics 15 against 20 on a knife edge (31 of 60 replicates
-#' reach the distance with the first batch under the default, 23 under
-#' KOH-IMSPE; 20 against 20 on the first 30).
-#'
 #' @section When new runs cannot help:
 #' New runs shrink only the part of kappa's uncertainty that comes from the
 #' emulator's. When the field data cannot separate a change of kappa from
@@ -296,9 +101,7 @@
 #' the field data are few and noisy, kappa's posterior stays wide however
 #' many runs are made (its shape still depends on where the runs are:
 #' with the KOH bias on the sinusoid of Koermer et al., kappa's sd stopped
-#' shrinking at about 25 runs, and the default reached Hellinger distance
-#' 0.1 from the reference in 24-25 runs, nested LHS in 49; 30 replicates,
-#' `bench/RESULTS-design.md`). `propose_runs()` says so when the best point's
+#' shrinking at about 25 runs). `propose_runs()` says so when the best point's
 #' expected gain is below 1% of the current variance (of kappa, or of the
 #' prediction at the targets), in a message (by default: when the plug-in
 #' and the joint look-ahead both find the plug-in's first pick worth under
@@ -307,45 +110,15 @@
 #' @section Defaults and cost:
 #' The look-ahead costs draws x candidates x fantasies per point of a
 #' batch (one `exp()` each), plus a dense factor per draw, whatever the
-#' fit's length. The defaults (`ndraws = 100`, `nfantasy = 50`,
-#' `100 (p + q)` candidates) were chosen by measurement
-#' (`bench/design-cost.R`, the sinusoid with 10 runs, 20 replicates,
-#' against 100 draws x 400 fantasies): with them the first pick's
-#' reference gain was at least 96% of the best candidate's in every
-#' replicate; with 30 fantasies it fell to 79% in one, with 25 to 30%,
-#' and with 50 draws to 17%. The fantasies' draws are chosen by systematic
-#' resampling and their normal deviates are stratified, and all candidates
-#' share them, so the picks are steadier than the gains themselves
-#' (relative error about 10% per candidate with the defaults). The
-#' default picks by the plug-in, scores its `n` picks by the joint
-#' look-ahead, and where the two disagree runs the joint criterion too
-#' (0-31% of the steps measured). The plug-in's kappa values of no weight
-#' (likelihood times prior under 1e-10 of the largest) are left out, its
-#' particles, which share the hyperparameters, share the factor of the
-#' simulator runs' block, and field replicates enter through their inputs'
-#' means, which change the gains at the level of rounding only (the
-#' benchmark's picks identical). In design loops from 10 to 50
-#' runs (`bench/design.R`, 30 replicates, reference BLAS) a step one
-#' run at a time costs a median 0.008 CPU s on the sinusoid, 0.009 on
-#' kinetics and 0.017 with two calibration inputs, 0.06-0.08 of the
-#' [update_runs()] fit it follows (mostly the old draws reweighted); a
-#' batch of 5 costs 0.017-0.020 on the sinusoid and kinetics and 0.052
-#' with two inputs (0.035-0.082 of its fit). With the default candidates
-#' since (half at kappa's draws and the field's inputs) the design steps
-#' summed were 0.037-0.083 of the fits summed one run at a time and
-#' 0.026-0.101 in batches of 5, the most with two calibration inputs,
-#' where the steps the joint criterion picks in (a quarter to a third)
-#' cost 2.5-3x the others. Since, the plug-in's batch is resumed after its
-#' first pick only where the joint criterion does not take over (that
-#' decision needs the first pick alone), and the scoring runs four lanes
-#' where the processor has AVX2 (the same numbers as two): with two
-#' calibration inputs, the same picks and fits on the same machine, a
-#' batch of 5 costs 0.082-0.084 of its fit against 0.113-0.116 before (CPU
-#' sums over 60 replicates, three times; per step a median 0.090-0.095
-#' against 0.117-0.122) and one run at a
-#' time 0.069 against 0.079 (30 replicates); the sinusoid in batches of 5
-#' 0.078 against 0.096. Give fewer `nfantasy` or `ndraws` for a cheaper,
-#' noisier step.
+#' fit's length. The fantasies' draws are chosen by systematic resampling
+#' and their normal deviates are stratified, and all candidates share them,
+#' so the picks are steadier than the gains themselves. Give fewer
+#' `nfantasy` or `ndraws` for a cheaper, noisier step. How the defaults
+#' (`ndraws = 100`, `nfantasy = 50`, `100 (p + q)` candidates, half at
+#' kappa's draws and the field's inputs) were chosen, and how the default
+#' criterion compares with the joint one, with kappa's variance, with
+#' uniform candidates, with KOH-IMSPE and with nested Latin hypercubes:
+#' `vignette("design", package = "FBC")`.
 #'
 #' @section Scope:
 #' The conditional is computed per draw with a dense Cholesky factor of
@@ -389,7 +162,7 @@
 #'   field's inputs (so the runs can reach field inputs beyond them), each
 #'   categorical input at a level drawn at random; half uniform, half with
 #'   their calibration inputs at draws of kappa's posterior and their
-#'   experimental inputs at the field's (see "Candidates (measured)").
+#'   experimental inputs at the field's (see `vignette("design", package = "FBC")`).
 #'   With several outputs, runs: no output column.
 #' @param target `"kappa"` (the default: shrink kappa's posterior) or
 #'   experimental inputs where calibrated predictions are wanted (a data

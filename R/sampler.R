@@ -6,7 +6,7 @@
 # the schedule: one Move per entry, in the order of phi, then the scale
 # move.
 
-# The moves of each sampler (see "Sampler" in ?calibrate), read off the
+# The moves of each sampler (see vignette("sampler")), read off the
 # model description's `move` column: index vectors of the jointly moved
 # blocks (1-based, in phi; named by move) and how often each moves per
 # sweep, the scale move (the `scaled` classes that have parameters), the
@@ -18,7 +18,7 @@
 # over jump_ranges(), once a sweep after the walks: `jump`, 1-based in phi,
 # and `jumpRange`, its interval on the sampler's scale, a row per jump),
 # the default: a walk adapted within one mode of a multimodal kappa
-# posterior rarely leaves it (issue 29's simulator functions; with an
+# posterior rarely leaves it (simulator functions; with an
 # emulator, Tuo and Wu's problem at 18-24 runs, where chains kept their
 # modes for 25,000 draws: bench/RESULTS-design.md).
 sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {

@@ -1,5 +1,5 @@
 # Scaling: inputs mapped to [0, 1] by the simulator design's range, responses
-# standardised by the simulator response (see ?calibrate, "Scaling"), and
+# standardised by the simulator response (see vignette("model"), "Scaling"), and
 # back.
 
 # Relative nugget added to the diagonal of the simulator correlation matrix.

@@ -1,4 +1,4 @@
-# The simulator as an R function (issue 29): calibrate(f, field, ...) with
+# The simulator as an R function: calibrate(f, field, ...) with
 # f(x, kappa) called inside the sampler, no emulator. The model object is an
 # fbc_model like any other (R/model-object.R) with:
 #   - no simulator GP: the classes thetaS, alphaS, rhoS and sigma2S have
@@ -8,7 +8,7 @@
 #     scale kappa to [0, 1] for the sampler as a design's range would;
 #   - the response standardised by the mean of f over the field inputs at
 #     the prior's centre (kappaInit when given) and the sd of the field
-#     response (see ?calibrate, "The simulator as a function");
+#     response (see vignette("model"), "The simulator as a function");
 #   - several outputs (`output`, discrepancy "none" only): the output column
 #     of the field becomes its indicator columns as for runs (R/factors.R),
 #     f sees the column itself; each output standardised on its own, a

@@ -18,7 +18,8 @@
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3,
+#'                  nChains = 2)
 #' summary(fit)
 #' coef(fit)
 #' coef(fit, stat = "median")["kappa1"]
@@ -92,7 +93,8 @@ coef.fbc <- function(object, stat = c("mean", "median", "mode"), ...) {
 #' @export
 #' @examples
 #' set.seed(1)
-#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 500, nBurn = 200, thinning = 3,
+#'                  nChains = 2)
 #' head(fitted(fit, method = "MAP"))
 #' sd(residuals(fit, method = "MAP"))
 #' dim(as.matrix(fit))

@@ -38,26 +38,18 @@
 #' sweeps (`settings$reweight$stale` names them), or the rule is not met by
 #' the cap, or the reweighted draws hold under a quarter of the rule's
 #' effective draws, the model is refitted (from the continuation's last
-#' states when there was one). On a design loop (the sinusoid of
-#' bench/design.R, 5 to 35 runs in batches of 1, 10 replicates, 300
-#' steps) 168 steps were reweighted at 0.18 (quartiles 0.14-0.21) of a
-#' fresh fit's CPU time, 124 continued at 0.60 (0.47-0.80) and 8 refitted:
-#' the loop's fits took 0.30 of fresh fits' time in all (0.71 with refits
-#' only), and their kappa posteriors were about as close to fresh fits'
-#' (Hellinger distance 0.054, quartiles 0.046-0.061) as refits are (0.048).
-#' Their claimed bulk ESS is as honest as a fresh fit's
-#' (bench/design-reweight.R).
+#' states when there was one). On design loops most steps are reweighted or
+#' continued, at a fraction of a fresh fit's cost, with kappa posteriors as
+#' close to fresh fits' as refits are (measured: `vignette("design", package
+#' = "FBC")`).
 #'
 #' **Refitted** otherwise (and with `reweight = FALSE`, `nMCMC` or `nBurn`
 #' given): from the chains' last states (a warm start) with a fresh
 #' adaptive warm-up (or `nBurn` sweeps). The posterior is that of a fresh
 #' fit on all runs (tested against the grid posterior). A warm refit costs
-#' about what a fresh fit does (a design loop on a sinusoid from 6 to 35
-#' runs, 600 paired steps: 0.94 times a fresh fit's CPU time in the median,
-#' quartiles 0.72-1.15; bench/RESULTS-design.md): the warm start
-#' shortens the warm-up a little, but both need the same sampling for the
-#' stop rule's effective draws of the new posterior, about three quarters of
-#' a fit.
+#' about what a fresh fit does: the warm start shortens the warm-up a
+#' little, but both need the same sampling for the stop rule's effective
+#' draws of the new posterior.
 #'
 #' The draws and last states are carried to the new model's scaling (the
 #' map \eqn{T}): kappa in its own units, each length-scale `theta` by the
@@ -75,10 +67,7 @@
 #' @param nBurn Warm-up sweeps before draws are kept. `NULL` (the default)
 #'   runs the adaptive warm-up of [calibrate()] from the chains' last
 #'   states, so it ends when the proposals have settled on the new
-#'   posterior. Until this was measured (bench/design-warm.R) the
-#'   refit re-tuned the old adapted proposals for a fixed 200 sweeps,
-#'   which kept the chains' move to the new posterior among the draws and
-#'   cost 1.5-9 times a fresh fit (now 0.65-1.94 times).
+#'   posterior.
 #' @param showProgress As in [calibrate()].
 #' @param reweight Try the old draws reweighted first (`TRUE`, the default;
 #'   only when `nMCMC` and `nBurn` are `NULL`), or always refit (`FALSE`).

@@ -1,11 +1,10 @@
-# The applications with the defaults (issue 27's row "the four applications
-# and the vignettes' fits: no slower than today, no '!' warning unless the
-# data warrant it"): each shipped application calibrated with
+# The applications with the defaults (no slower than before, no '!' warning
+# unless the data warrant it): each shipped application calibrated with
 # `calibrate(sim, field, converge = TRUE)` and nothing else, 4 chains on the
 # sequential plan, seed 1.
 #
-#   Rscript bench/applications.R                 # the FBC on .libPaths()
-#   R_LIBS=/path/to/old/FBC Rscript bench/applications.R
+#   Rscript bench/run.R applications [--apps=ball,sw]   # the FBC on .libPaths()
+#   R_LIBS=/path/to/old/FBC Rscript bench/run.R applications
 #
 # Run it once with the current FBC and once with an earlier one installed in
 # another library to compare versions (each process loads one FBC; the
@@ -25,8 +24,9 @@ apps <- list(analytic = c("analyticSim", "analyticField"),
              sw = c("swSim", "swField"),
              kinetic = c("kineticSim", "kineticField"),
              decay = c("decaySim", "decayField"))
-args <- commandArgs(trailingOnly = TRUE)
-if (length(args)) apps <- apps[intersect(args, names(apps))]
+source("bench/options.R")
+opt <- bench_options(list(apps = names(apps)))
+apps <- apps[intersect(opt$apps, names(apps))]
 rows <- lapply(names(apps), function(a) {
   sim <- get(apps[[a]][1])
   field <- get(apps[[a]][2])

@@ -1,9 +1,9 @@
 # Where the default stopping rule would stop under other check schedules
-# (issue 27). The draws do not depend on when the rule checks (each chain
+# The draws do not depend on when the rule checks (each chain
 # continues its own random stream between checks), so one default run,
 # cut to each schedule's check points, says where that schedule stops.
 #
-#   Rscript bench/check-schedule.R [m=1000] [seed=1] [dir=.]
+#   Rscript bench/run.R check-schedule [--m=1000] [--seed=1] [--dir=.]
 #
 # Fits scattered_problem(m) (bench/problems.R) with calibrate()'s
 # defaults (saving the fit as <dir>/fit-m<m>-s<seed>.rds, reused if there),
@@ -12,11 +12,9 @@
 # first check that meets the rule (every R-hat < 1.01, bulk ESS >= 400).
 # Run from the package root.
 suppressPackageStartupMessages(library(FBC))
-kv <- function(key, default) {
-  a <- grep(paste0("^", key, "="), commandArgs(TRUE), value = TRUE)
-  if (length(a)) sub("^[^=]*=", "", a) else default
-}
-m <- as.integer(kv("m", 1000)); seed <- as.integer(kv("seed", 1)); dir <- kv("dir", ".")
+source("bench/options.R")
+opt <- bench_options(list(m = 1000L, seed = 1L, dir = "."))
+m <- opt$m; seed <- opt$seed; dir <- opt$dir
 source("bench/problems.R")
 f <- file.path(dir, sprintf("fit-m%d-s%d.rds", m, seed))
 if (!file.exists(f)) {

@@ -1,19 +1,19 @@
-# Defaults that converge (issue 27): every row with the arguments a new user
+# Defaults that converge: every row with the arguments a new user
 # leaves alone, `calibrate(sim, field, converge = TRUE)`, 4 chains on the
 # sequential plan.
 #
-#   Rscript bench/defaults.R precise          # precise field data (noise prior)
-#   Rscript bench/defaults.R ball             # the ball drop (+ RobustCalibration)
-#   Rscript bench/defaults.R m1000 m5000 m20000 functional
-#   Rscript bench/defaults.R priors           # the noise-prior study behind ?set_hyperPriors
-#   Rscript bench/defaults.R all              # every row but priors
-#   ... quick                                      # a smoke test (short runs)
-#   ... nopeer                                     # without RobustCalibration
-#   ... trace                                      # each convergence check's R-hat and
-#                                                  # bulk ESS per parameter, the warm-ups
-#   ... neighbours=10                              # name=value: an argument added to
-#                                                  # every calibrate() call (an experiment,
-#                                                  # not the default; the header says so)
+#   Rscript bench/run.R defaults --part=precise     # precise field data (noise prior)
+#   Rscript bench/run.R defaults --part=ball        # the ball drop (+ RobustCalibration)
+#   Rscript bench/run.R defaults --part=m1000,m5000,m20000,functional
+#   Rscript bench/run.R defaults --part=priors      # the noise-prior study behind ?set_hyperPriors
+#   Rscript bench/run.R defaults --part=all         # every row but priors
+#   ... --quick                                     # a smoke test (short runs)
+#   ... --nopeer                                    # without RobustCalibration
+#   ... --trace                                     # each convergence check's R-hat and
+#                                                   # bulk ESS per parameter, the warm-ups
+#   ... --calibrate=neighbours=10                   # an argument added to every
+#                                                   # calibrate() call (an experiment,
+#                                                   # not the default; the header says so)
 #
 # Each row: CPU s (user + system of this process, proc.time()), sweeps a
 # chain, warm-up sweeps, max R-hat, min bulk ESS over every parameter,
@@ -34,35 +34,39 @@
 #   m20000      the same with m = 20,000
 #   functional  decaySim / decayField, 80 x 50 product design (m = 4000)
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-quick <- "quick" %in% args
-trace <- "trace" %in% args
-nopeer <- "nopeer" %in% args  # leave RobustCalibration out (a diagnosis run)
-extra <- grep("=", args, value = TRUE, fixed = TRUE)
-# experiments on the package's own constants (not arguments): ess=N the
-# warm-up's effective draws per block parameter (fbc_warmup$ess), forget=F
-# the weight of each earlier epoch in a block's estimate (fbc_warmup$forget), growth=G
-# the stopping checks' growth factor (fbc_check_growth)
-internal <- grep("^(ess|forget|growth)=", extra, value = TRUE)
-# seed=N: the seed of the scattered rows' fits (default 1), for repeats
-seedArg <- grep("^seed=", extra, value = TRUE)
-fitSeed <- if (length(seedArg)) as.integer(sub("^seed=", "", seedArg)) else 1L
-extra <- setdiff(extra, c(internal, seedArg))
-for (a in internal) {
+source("bench/options.R")
+# --ess, --forget, --growth: experiments on the package's own constants (not
+# arguments): the warm-up's effective draws per block parameter
+# (fbc_warmup$ess), the weight of each earlier epoch in a block's estimate
+# (fbc_warmup$forget), the stopping checks' growth factor (fbc_check_growth).
+# --calibrate=name=value[,name=value]: arguments added to every calibrate()
+# call (an experiment, not the default; the header says so). --seed: the
+# seed of the scattered rows' fits, for repeats. --nopeer: without
+# RobustCalibration (a diagnosis run).
+opt <- bench_options(list(part = c("precise", "ball"), trace = FALSE, nopeer = FALSE,
+                          seed = 1L, ess = NA_real_, forget = NA_real_, growth = NA_real_,
+                          calibrate = character()))
+quick <- opt$quick
+trace <- opt$trace
+nopeer <- opt$nopeer
+fitSeed <- opt$seed
+internal <- character()
+for (key in c("ess", "forget", "growth")) {
+  v <- opt[[key]]
+  if (is.na(v)) next
+  internal <- c(internal, paste0(key, "=", v))
   ns <- asNamespace("FBC")
-  v <- as.numeric(sub("^.*=", "", a))
-  key <- sub("=.*$", "", a)
   nm <- if (key == "growth") "fbc_check_growth" else "fbc_warmup"
   val <- get(nm, ns)
   if (nm == "fbc_warmup") val[[key]] <- v else val <- v
   unlockBinding(nm, ns)
   assign(nm, val, envir = ns)
 }
+extra <- opt$calibrate
 extraArgs <- lapply(sub("^[^=]*=", "", extra), function(v) eval(str2lang(v)))
 names(extraArgs) <- sub("=.*$", "", extra)
-parts <- setdiff(args, c("quick", "trace", "nopeer", extra, internal, seedArg))
+parts <- opt$part
 known <- c("precise", "ball", "m1000", "m5000", "m20000", "functional", "priors")
-if (!length(parts)) parts <- c("precise", "ball")
 if ("all" %in% parts) parts <- setdiff(known, "priors")
 if (length(bad <- setdiff(parts, known))) stop("unknown part(s): ", paste(bad, collapse = ", "))
 

@@ -1,10 +1,10 @@
-# The design step's cost against the fit it follows (issue 30: "the design
-# step <= 10% of the time of the fit it follows"), on the sinusoid of
+# The design step's cost against the fit it follows (goal: the design step
+# at most 10% of the time of the fit it follows), on the sinusoid of
 # bench/design.R (eta(x, u) = sin(10 u x), field at u = pi / 5, 5
 # inputs x 2 replicates, sd 0.1, discrepancy "none"), and the accuracy of
 # cheaper look-aheads against a long one. A script, not a timed test:
 #
-#   Rscript bench/design-cost.R [reps] [steps]
+#   Rscript bench/run.R design-cost [--reps=5] [--steps=3] [--part=both|cost|accuracy]
 #
 # Part 1 (cost): per replicate, 10 maximin runs, a default fit, then `steps`
 # loop steps as design.R runs them (propose_runs() with its defaults among
@@ -19,12 +19,13 @@
 # the cheap batch (its greedy gains summed over the 5 points alone) as a
 # fraction of that from the 100 x 400 batch; CPU s of the batch.
 #
-#   Rscript bench/design-cost.R [reps] [steps] [part: both, cost, accuracy]
+#   Rscript bench/run.R design-cost [--reps=5] [--steps=3] [--part=both|cost|accuracy]
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(TRUE)
-reps <- if (length(args) >= 1) as.integer(args[1]) else 5L
-steps <- if (length(args) >= 2) as.integer(args[2]) else 3L
-part <- if (length(args) >= 3) args[3] else "both"
+source("bench/options.R")
+opt <- bench_options(list(reps = 5L, steps = 3L, part = "both"))
+reps <- opt$reps
+steps <- opt$steps
+part <- opt$part
 eta <- function(x, u) sin(10 * u * x)
 xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
 d <- 2

@@ -1,11 +1,11 @@
-# Peak memory of the design step with several outputs (issue 30): a batch
+# Peak memory of the design step with several outputs : a batch
 # of propose_runs() on the two-output kinetics problem of design.R
 # (kinetics2 / kinetics2i: A -> B -> C, concentrations of A and B, field
 # at u = 1.2, sd 0.2), fitted with shared outputs (one simulator GP over
 # both outputs' runs) and with independent outputs (a GP per output). A
 # script, not a timed test:
 #
-#   Rscript bench/design-memory.R [reps] [m ...]
+#   Rscript bench/run.R design-memory [--reps=3] [--m=50,150,300]
 #
 # Per m (runs, each giving both outputs) one fit each way with
 # calibrate()'s defaults, then `reps` batches of 5 with propose_runs()'s
@@ -17,15 +17,16 @@
 #   A MB      (joint) the look-ahead's per-draw candidate columns (100
 #             draws x rows x candidate rows x 8 bytes): rows are all runs and field inputs
 #             with shared outputs, the largest output's with independent
-#             ones (before stop 50: all of them, zeros outside each
+#             ones (earlier versions: all of them, zeros outside each
 #             candidate's output; "A MB then")
 #   CPU s     of the batch (median)
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(TRUE)
-reps <- if (length(args) >= 1) as.integer(args[1]) else 3L
-ms <- if (length(args) >= 2) as.integer(args[-1]) else c(50L, 150L, 300L)
+source("bench/options.R")
+opt <- bench_options(list(reps = 3L, m = c(50L, 150L, 300L)))
+reps <- opt$reps
+ms <- opt$m
 
-# (FBC before stop 50 counted every output's rows, design_field_rows())
+# (earlier versions of FBC counted every output's rows, design_field_rows())
 rows_of <- if (exists("design_rows", envir = asNamespace("FBC"))) FBC:::design_rows else
   function(model) c(model$dims$m, FBC:::design_field_rows(model))
 etas <- list(A = function(X) 5 * exp(-X[, 2] * X[, 1]),

@@ -1,8 +1,8 @@
 # Are update(fit, sim =)'s reweighted draws as good as their bulk ESS says?
-# (issue 30: a loop step reweights the old draws, ?update_runs). A script,
+# (a loop step reweights the old draws, ?update_runs). A script,
 # not a timed test:
 #
-#   Rscript bench/design-reweight.R [runs] [repeats]
+#   Rscript bench/run.R design-reweight [--runs=9] [--repeats=40]
 #
 # The sinusoid of design.R (eta = sin(10 u x), field at u = pi / 5, 5
 # inputs x 2 replicates, sd 0.1, discrepancy "none"), `runs` maximin runs
@@ -17,9 +17,10 @@
 # the fresh fits (the reference: the sampler's own ESS estimates). With 40
 # repeats the ratio's own sd is about 0.22.
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(TRUE)
-k <- if (length(args) >= 1) as.integer(args[1]) else 9L
-R <- if (length(args) >= 2) as.integer(args[2]) else 40L
+source("bench/options.R")
+opt <- bench_options(list(runs = 9L, repeats = 40L))
+k <- opt$runs
+R <- opt$repeats
 set.seed(11)
 eta <- function(X) sin(10 * X[, 2] * X[, 1])
 xf <- rep(seq(0.1, 0.9, length.out = 5), 2)

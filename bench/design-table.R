@@ -22,12 +22,11 @@
 # Wu's misspecified problem comes down slowly) with the paired counts
 # against the plug-in (earlier / same / later) and a two-sided sign test.
 #
-#   Rscript bench/design-table.R [dir] [--threshold=0.1]
-args <- commandArgs(TRUE)
-opt <- grepl("^--", args)
-dir <- if (any(!opt)) args[!opt][1] else "."
-thr_arg <- sub("^--threshold=", "", grep("^--threshold=", args, value = TRUE))
-thresholds <- if (length(thr_arg)) as.numeric(strsplit(thr_arg, ",")[[1]]) else numeric()
+#   Rscript bench/run.R design-table [--dir=.] [--threshold=0.1,0.2]
+source("bench/options.R")
+opt <- bench_options(list(dir = ".", threshold = numeric()))
+dir <- opt$dir
+thresholds <- opt$threshold
 files <- list.files(dir, "^design-.*-b[0-9]+(-i[0-9]+)?-r[0-9]+(-[A-Za-z0-9]+)?\\.rds$", full.names = TRUE)
 fresh_cols <- c(outer(c("warm", "fresh"), c("Cpu", "Sweeps", "Warmup", "Draws", "Rhat", "Ess", "Converged"),
                      paste0), "warmFresh")

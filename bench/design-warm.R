@@ -1,4 +1,4 @@
-# Warm refits against fresh fits (issue 30, deliverable 2). Two problems:
+# Warm refits against fresh fits. Two problems:
 #   sinusoid  eta = sin(10 u x), 5 field inputs x 2 replicates, sd 0.1, no
 #             bias; a default fit on 10 maximin runs, then 5 more runs
 #   ball      ballSim[1:40, ] then ballSim[41:50, ] (default discrepancy)
@@ -6,10 +6,10 @@
 # by update_runs() with its defaults, and a fresh default calibrate() on all
 # runs under the same seed. CPU s (user + system), sweeps a chain (total)
 # and the chains' warm-up lengths.
-#   Rscript bench/design-warm.R [reps]
+#   Rscript bench/run.R design-warm [--reps=4]
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-reps <- if (length(args)) as.integer(args[1]) else 4L
+source("bench/options.R")
+reps <- bench_options(list(reps = 4L))$reps
 eta <- function(x, u) sin(10 * u * x)
 cpu <- function(expr) {
   t <- proc.time()

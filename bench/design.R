@@ -1,8 +1,8 @@
-# Design of new runs (issue 30): kappa's posterior against a reference as
+# Design of new runs: kappa's posterior against a reference as
 # runs are added by each method, from the same maximin start and field
 # noise per replicate (paired). A script, not a timed test:
 #
-#   Rscript bench/design.R [--problem=sinus] [--batch=5] [--reps=3]
+#   Rscript bench/run.R design [--problem=sinus] [--batch=5] [--reps=3]
 #                               [--first=1] [--added=40] [--init=10]
 #                               [--methods=ours,plugin,lhs,random] [--out=.]
 #                               (also imspe, oracle, known, cut, ours<N>)
@@ -17,9 +17,7 @@
 # methods run separately on the same replicates; --until=0.1 ends a
 # method's loop once kappa's posterior is within that Hellinger distance
 # of the reference (its runs to the distance are then known; the rest of
-# the budget is not run: for long budgets); summarise with bench/design-table.R. The
-# old positional form `design.R reps batch added problem first` still
-# works.)
+# the budget is not run: for long budgets); summarise with `Rscript bench/run.R design-table`.)
 #
 # Problems, all but "sinusbias" and "sinussgasp" with discrepancy "none" (where new runs can
 # matter: with a KOH bias the confounding sets kappa's width, see
@@ -69,17 +67,17 @@
 # Monte Carlo error in the distance); the two agree (see RESULTS-design.md).
 # Methods: ours (propose_runs(method = "joint"): picked by the joint
 # criterion, the "ours" of every figure in RESULTS-design.md), plug-in
-# (propose_runs(method = "plugin"), the package's default since stop 44:
+# (propose_runs(method = "plugin"), the package's default:
 # the same criterion at the MAP hyperparameters, kappa weighted on a grid,
 # EIVAR's way; the joint criterion picks where the two disagree about its
 # first pick's worth, column `picked`), lhs::augmentLHS (nested maximin
-# augmentation), random; "imspe" (not in the default methods): the issue's
+# augmentation), random; "imspe" (not in the default methods): the
 # plug-in read literally, every unknown at the MAP draw, kappa too, picked
 # by KOH-IMSPE's criterion (imspe_runs()). Ours, the plug-in and imspe
 # choose among propose_runs()'s default candidates (100 d, half uniform,
 # half at kappa's posterior draws and the field's inputs; --candidates=uniform
-# for ours and the plug-in: 100 d uniform ones made here, as every figure
-# before stop 52). "oracle" (not in
+# for ours and the plug-in: 100 d uniform ones made here, as in earlier
+# versions). "oracle" (not in
 # the default methods): a greedy bound, batches of 1 only: of 25 uniform
 # candidates and ours' and the plug-in's picks, the one whose update() lands
 # closest to the reference (it knows the answer; next_runs()); it costs 27
@@ -113,21 +111,11 @@
 # reweighted draws were continued; NA when refitted) and `stale` (the moves
 # whose stale proposals ended a continuation, "+"-separated; "" if none).
 suppressPackageStartupMessages(library(FBC))
-opts <- list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L, init = 10L,
-             methods = "ours,plugin,lhs,random", out = ".", refcheck = "0", tag = "",
-             fresh = "0", candidates = "default", until = "0")
-args <- commandArgs(TRUE)
-if (length(args) && !any(grepl("^--", args))) {
-  # the old positional form: reps batch added problem first
-  names(args) <- c("reps", "batch", "added", "problem", "first")[seq_along(args)]
-  opts[names(args)] <- args
-} else {
-  for (a in args) {
-    kv <- regmatches(a, regexec("^--([a-z]+)=(.*)$", a))[[1]]
-    if (length(kv) != 3 || !kv[2] %in% names(opts)) stop("unknown option ", a)
-    opts[[kv[2]]] <- kv[3]
-  }
-}
+source("bench/options.R")
+opts <- bench_options(list(reps = 3L, batch = 5L, added = 40L, problem = "sinus", first = 1L,
+                           init = 10L, methods = c("ours", "plugin", "lhs", "random"),
+                           out = ".", refcheck = "0", tag = "", fresh = "0",
+                           candidates = "default", until = "0"))
 reps <- as.integer(opts$reps)
 until <- as.numeric(opts$until)
 batch <- as.integer(opts$batch)
@@ -136,10 +124,10 @@ problem <- opts$problem
 first <- as.integer(opts$first)
 init <- as.integer(opts$init)
 stopifnot(init >= 2L, opts$candidates %in% c("default", "uniform"))
-methods <- strsplit(opts$methods, ",")[[1]]
+methods <- opts$methods
 # "ours<N>": ours with N draws (propose_runs()'s ndraws; 100 by default)
 # "oracle": see next_runs()
-# "imspe": the issue's plug-in read literally (imspe_runs())
+# "imspe": the plug-in read literally (imspe_runs())
 stopifnot(all(methods %in% c("ours", "plugin", "imspe", "lhs", "random", "oracle", "known", "cut") | grepl("^ours[0-9]+$", methods)))
 
 # eta(X): X in natural units, columns (experimental, calibration...)
@@ -364,7 +352,7 @@ rmse <- function(fit) {
   p <- suppressWarnings(predict(fit, nd, type = "mean", ndraws = 200))$pred
   sqrt(mean((p - truePred)^2))
 }
-# "imspe" (not in the default methods): the issue's plug-in read literally,
+# "imspe" (not in the default methods): the plug-in read literally,
 # "the same criterion with MAP hyperparameters and kappa", KOH-IMSPE's way
 # (Koermer et al. 2024): every unknown at the MAP draw (the hyperparameters
 # and kappa), n runs picked greedily to shrink the integrated variance of
@@ -440,13 +428,13 @@ weights_entropy <- function(l) {
 # output): the plug-in's entropy criterion with each candidate run's value
 # fantasised from the emulator given the simulator runs alone (a "cut": the
 # field data left out of that prediction), the kappa particles then
-# reweighted by the joint model as the plug-in's are. Stop 60 found the
-# joint prediction miscalibrated at the plug-in's picks on Tuo and Wu's
+# reweighted by the joint model as the plug-in's are. The joint
+# prediction was found miscalibrated at the plug-in's picks on Tuo and Wu's
 # misspecified problem (the true value outside its central 95% in 28-34%
 # of the picks, the runs-only prediction's in 7-15%). No takeover by the
 # joint criterion. J = 50 fantasies (common to every candidate). Measured
 # and not adopted: 49 runs to Hellinger 0.1 against the default's 33 on
-# replicates 1-15 (later in 13), RESULTS-design.md, "Stop 60".
+# replicates 1-15 (later in 13).
 cut_runs <- function(fit, J = 50L) {
   model <- fit$model
   dat <- model$data

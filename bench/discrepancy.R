@@ -1,4 +1,4 @@
-# Known-answer study of the discrepancy models (issue 21): problems whose
+# Known-answer study of the discrepancy models: problems whose
 # L2 projection theta* = argmin_theta integral (zeta(x) - eta(x, theta))^2 dx
 # is computable, calibrated under discrepancy = "gp", "sgasp" and "none" on
 # replicated field data sets. For each problem and model: coverage of
@@ -7,15 +7,16 @@
 # at 60 new inputs, the coverage of zeta by its 90% Bayesian intervals
 # there, and CPU seconds per fit.
 #
-#   Rscript bench/discrepancy.R [reps] [out.rds]
+#   Rscript bench/run.R discrepancy [--reps=50] [--out=discrepancy-study.rds]
 #
 # Results accumulate in out.rds (default discrepancy-study.rds), one row per
 # fit, so an interrupted study resumes; the table is printed at the end.
 # bench/RESULTS-discrepancy.md holds the measured tables.
 library(FBC)
-args <- commandArgs(trailingOnly = TRUE)
-reps <- if (length(args) >= 1) as.integer(args[1]) else 50L
-out <- if (length(args) >= 2) args[2] else "discrepancy-study.rds"
+source("bench/options.R")
+opt <- bench_options(list(reps = 50L, out = "discrepancy-study.rds"))
+reps <- opt$reps
+out <- opt$out
 
 # theta* on the problem's x range and theta range (one-dimensional)
 l2_projection <- function(pr) {

@@ -1,4 +1,4 @@
-# The simulator as an R function (issue 29): FBC's calibrate(f, field)
+# The simulator as an R function: FBC's calibrate(f, field)
 # beside RobustCalibration's rcalibration(simul_type = 1, math_model = f),
 # in the same process, on
 #   - RobustCalibration's documented example (?rcalibration): reality
@@ -19,14 +19,14 @@
 #   length, S = 10000 with S_0 = 2000 burn-in; R-hat and ESS of theta from
 #   the 4 chains by the posterior package (the same estimators as FBC's).
 #
-#   R_LIBS=<FBC lib>:/work/lib/bench Rscript bench/function.R [reps]
+#   R_LIBS=<FBC lib>:<RobustCalibration lib> Rscript bench/run.R function [--reps=2]
 #
 # reps: repeats of each FBC fit with seeds 1, 2, ... (default 2). Then the
 # bimodal example (no discrepancy): its exact posterior on a grid against
 # 10 default runs. Results: bench/RESULTS-function.md.
 library(FBC)
-args <- commandArgs(trailingOnly = TRUE)
-reps <- if (length(args) >= 1) as.integer(args[1]) else 2L
+source("bench/options.R")
+reps <- bench_options(list(reps = 2L))$reps
 peer <- requireNamespace("RobustCalibration", quietly = TRUE)
 
 cpu <- function() sum(proc.time()[c("user.self", "sys.self")])

@@ -1,4 +1,4 @@
-# kappa's jump move (the default since stop 41): default fits with and
+# kappa's jump move (a default move): default fits with and
 # without it on a multimodal kappa posterior, and its cost a sweep.
 #
 # 1. Tuo and Wu's (2015) problem, eta(x, u) = exp(x/10) sin(x) -
@@ -20,7 +20,7 @@
 #    jump lengthen the stop rule's runs? (Seeds 1-20 at m = 40, 1-10 at 300
 #    and 1000: about 40 CPU minutes.)
 #
-#   Rscript bench/jump.R [--part=modes,cost,default] [--m=40,300,1000]
+#   Rscript bench/run.R jump [--part=modes,cost,default] [--m=40,300,1000]
 #                             [--seeds=10]
 suppressPackageStartupMessages(library(FBC))
 cpu <- function(expr) {
@@ -33,11 +33,10 @@ model_fit <- function(model, jump, ...) {
   if (!jump) model$moves$jump <- NULL
   suppressWarnings(calibrate(model, ...))
 }
-arg <- function(name, default) {
-  a <- grep(paste0("^--", name, "="), commandArgs(TRUE), value = TRUE)
-  if (length(a)) strsplit(sub("^[^=]*=", "", a), ",")[[1]] else default
-}
-parts <- arg("part", c("modes", "cost", "default"))
+source("bench/options.R")
+opt <- bench_options(list(part = c("modes", "cost", "default"), m = c(40L, 300L, 1000L),
+                          seeds = NA_integer_))
+parts <- opt$part
 sinusoid <- function(m) {
   X <- cbind(runif(m), runif(m))
   sim <- data.frame(y = sin(10 * X[, 2] * X[, 1]), x = X[, 1], u = X[, 2])
@@ -88,8 +87,8 @@ if ("default" %in% parts) {
 cat("\nDefault runs to convergence (4 chains, R-hat < 1.01 and bulk ESS >= 400), paired by seed\n\n")
 cat("| m | seed | jump | CPU s | sweeps | checks | met | largest R-hat | smallest ESS | jump accepted |\n|---|---|---|---|---|---|---|---|---|---|\n")
 res <- NULL
-for (m in as.integer(arg("m", c(40, 300, 1000)))) {
-  nseeds <- as.integer(arg("seeds", if (m <= 100) 20 else 10))
+for (m in opt$m) {
+  nseeds <- if (is.na(opt$seeds)) if (m <= 100) 20L else 10L else opt$seeds
   for (s in seq_len(nseeds)) {
     set.seed(s)
     model <- sinusoid(m)

@@ -1,10 +1,10 @@
-# Mixing benchmark (issue 10): time to a converged posterior, FBC's samplers
+# Mixing benchmark: time to a converged posterior, FBC's samplers
 # against Stan's NUTS on the same model and priors, measured in one run.
 #
 # Run after installing FBC (sequential plan, one core):
-#   Rscript bench/mixing.R            # FBC samplers and, if rstan is
+#   Rscript bench/run.R mixing           # FBC samplers and, if rstan is
 #                                          # installed, Stan NUTS
-#   Rscript bench/mixing.R nostan     # FBC only
+#   Rscript bench/run.R mixing --nostan  # FBC only (--seed=1,2,3: seeds)
 # Stan's part needs rstan (Debian: apt-get install r-cran-rstan; CRAN:
 # install.packages("rstan")); it is skipped when rstan is missing. rstan is
 # not a dependency of FBC. Debian's r-cran-bh ships no include/ folder, so
@@ -31,9 +31,10 @@ suppressPackageStartupMessages({
   library(FBC)
   library(posterior)
 })
-args <- commandArgs(trailingOnly = TRUE)
-useStan <- !("nostan" %in% args) && requireNamespace("rstan", quietly = TRUE)
-seeds <- if (length(grep("^seed=", args))) as.integer(sub("seed=", "", grep("^seed=", args, value = TRUE))) else 2024L
+source("bench/options.R")
+opt <- bench_options(list(nostan = FALSE, seed = 2024L))
+useStan <- !opt$nostan && requireNamespace("rstan", quietly = TRUE)
+seeds <- opt$seed
 cpu <- function() sum(proc.time()[c(1, 2, 4, 5)], na.rm = TRUE)
 
 decay_problem <- function() {

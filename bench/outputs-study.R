@@ -1,4 +1,4 @@
-# Several outputs, known truth (issue 31): does pooling outputs ever make
+# Several outputs, known truth: does pooling outputs ever make
 # kappa's posterior worse than the better output alone?
 #
 # Each problem: two outputs sharing kappa = (t1, t2), 40 runs (maximin LHS
@@ -6,7 +6,7 @@
 # design: the Kronecker algebra), 15 field points per output on [0.1, 1.9]
 # at the truth (2, 0.7) with 1% noise (sd 1% of the output's mean |value|),
 # discrepancy "none" (the right model), Matern 5/2 (the default).
-#   AB  (shapes differ, the issue's):  A = t1 exp(-t2 x),  B = 100 (t1 + t2 x^2 / 2)
+#   AB  (shapes differ, the original):  A = t1 exp(-t2 x),  B = 100 (t1 + t2 x^2 / 2)
 #   AR  (shapes alike):                A = t1 exp(-t2 x),  R = t1 t2 exp(-t2 x)
 # Per replicate (new design, new noise): each output alone, both under
 # outputs = "independent" and under outputs = "shared"; 2 chains x 2000
@@ -15,26 +15,24 @@
 # the median over replicates of width / the better single output's width
 # ("ratio"), the coverage, the CPU s, and the Gaussian independent
 # combination of the two single-output widths (1 / sqrt(1/wA^2 + 1/wB^2)).
-#   Rscript bench/outputs-study.R [reps=20] [problems=AB,AR] [sweeps=2000]
-#     [runs=40] [nx=12] [lo=1,0.2] [hi=3,1.2] [xmax=2] [out=file.rds]
+#   Rscript bench/run.R outputs-study [--reps=20] [--problems=AB,AR] [--sweeps=2000]
+#     [--runs=40] [--nx=12] [--lo=1,0.2] [--hi=3,1.2] [--xmax=2] [--out=file.rds]
 # (runs, nx: the runs and x-points; lo, hi: the runs' ranges of t1, t2;
 # xmax: the x range [0, xmax]; out: the rows saved as they come)
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-arg <- function(name, default) {
-  a <- grep(paste0("^", name, "="), args, value = TRUE)
-  if (length(a)) sub(paste0("^", name, "="), "", a) else default
-}
-reps <- as.integer(arg("reps", "20"))
-problems <- strsplit(arg("problems", "AB,AR"), ",")[[1]]
-sweeps <- as.integer(arg("sweeps", "2000"))
-out <- arg("out", "")
+source("bench/options.R")
+opt <- bench_options(list(reps = 20L, problems = c("AB", "AR"), sweeps = 2000L, out = "",
+                          lo = c(1, 0.2), hi = c(3, 1.2), xmax = 2, runs = 40L, nx = 12L))
+reps <- opt$reps
+problems <- opt$problems
+sweeps <- opt$sweeps
+out <- opt$out
 truth <- c(2, 0.7)
-lo <- as.numeric(strsplit(arg("lo", "1,0.2"), ",")[[1]])
-hi <- as.numeric(strsplit(arg("hi", "3,1.2"), ",")[[1]])
-xmax <- as.numeric(arg("xmax", "2"))
-nRuns <- as.integer(arg("runs", "40"))
-nx <- as.integer(arg("nx", "12"))
+lo <- opt$lo
+hi <- opt$hi
+xmax <- opt$xmax
+nRuns <- opt$runs
+nx <- opt$nx
 shapes <- list(
   AB = list(A = function(x, t1, t2) t1 * exp(-t2 * x), B = function(x, t1, t2) 100 * (t1 + t2 * x^2 / 2)),
   AR = list(A = function(x, t1, t2) t1 * exp(-t2 * x), R = function(x, t1, t2) t1 * t2 * exp(-t2 * x))

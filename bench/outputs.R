@@ -1,21 +1,20 @@
-# Several outputs on a product design (issue 23): 3 outputs x 50 points x
+# Several outputs on a product design: 3 outputs x 50 points x
 # 80 runs (m = 12,000 simulator rows), the Kronecker algebra over
 # (output x point) x run. Time to a converged posterior (every R-hat < 1.01,
 # bulk ESS >= 400: calibrate(converge = ...)), 4 chains on the sequential
 # plan, CPU seconds, and the 90% intervals of kappa against the truth;
 # with `single`, the same for the first output alone (its intervals are
 # wider).
-# nburn=<sweeps> sets the burn-in (default 2000, calibrate()'s); the first stretch is
+# --nburn=<sweeps> sets the burn-in (default 2000, calibrate()'s); the first stretch is
 # nburn + 1000 sweeps, then checks every 500.
-#   Rscript bench/outputs.R [quick] [single] [nburn=2000] [outputs=independent|shared]
+#   Rscript bench/run.R outputs [--quick] [--single] [--nburn=2000] [--outputs=independent|shared]
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-quick <- "quick" %in% args
-nburnArg <- grep("^nburn=", args, value = TRUE)
-nBurn <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 2000L
-# outputs=independent|shared: how the outputs are modelled (calibrate(outputs =))
-outArg <- grep("^outputs=", args, value = TRUE)
-outputs <- if (length(outArg)) sub("^outputs=", "", outArg) else "shared"
+source("bench/options.R")
+# --outputs=independent|shared: how the outputs are modelled (calibrate(outputs =))
+opt <- bench_options(list(single = FALSE, nburn = 2000L, outputs = "shared"))
+quick <- opt$quick
+nBurn <- opt$nburn
+outputs <- opt$outputs
 set.seed(1)
 x <- seq(0, 4, length.out = 50)
 runs <- if (requireNamespace("lhs", quietly = TRUE)) lhs::maximinLHS(80, 2) else
@@ -52,7 +51,7 @@ run <- function(sim, field, output) {
              covers = all(q[1, ] <= truth & truth <= q[2, ]))
 }
 res <- run(sim, field, "output")
-if ("single" %in% args) {
+if (opt$single) {
   one <- function(d) d[d$output == "amount", names(d) != "output"]
   res <- rbind(res, run(one(sim), one(field), NULL))
 }

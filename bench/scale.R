@@ -1,20 +1,20 @@
-# Scale benchmark (issue 11): functional output through the Kronecker
+# Scale benchmark: functional output through the Kronecker
 # algebra, and large unstructured designs through the dense one.
 #
 # Run after installing FBC, choosing the parts by argument:
-#   Rscript bench/scale.R sweep            # ms/sweep of all three cases (minutes)
-#   Rscript bench/scale.R functional       # the functional converged runs (defaults,
+#   Rscript bench/run.R scale --part=sweep        # ms/sweep of all three cases (minutes)
+#   Rscript bench/run.R scale --part=functional       # the functional converged runs (defaults,
 #                                               #   alphaS = 2, kernelS = "gaussian" and
 #                                               #   "matern52"; or functional-alpha2,
 #                                               #   functional-gaussian, functional-matern52 alone)
-#   Rscript bench/scale.R kernels          # ms/sweep of every correlation family on the
+#   Rscript bench/run.R scale --part=kernels          # ms/sweep of every correlation family on the
 #                                               #   ball data, the functional problem and m = 1000
-#   Rscript bench/scale.R m1000            # converged run at m = 1000 (hours
-#   Rscript bench/scale.R m2000            #   on the reference BLAS)
-#   Rscript bench/scale.R m1000-gaussian   # the same with kernelS = "gaussian", as
-#   Rscript bench/scale.R m2000-gaussian   #   print() advises when alphaS piles at 2
-#   Rscript bench/scale.R sweep functional m1000 m2000   # everything
-# Add `quick` for a smoke test (few sweeps, short converged runs). Each part
+#   Rscript bench/run.R scale --part=m1000            # converged run at m = 1000 (hours
+#   Rscript bench/run.R scale --part=m2000            #   on the reference BLAS)
+#   Rscript bench/run.R scale --part=m1000-gaussian   # the same with kernelS = "gaussian", as
+#   Rscript bench/run.R scale --part=m2000-gaussian   #   print() advises when alphaS piles at 2
+#   Rscript bench/run.R scale --part=sweep,functional,m1000,m2000   # everything
+# Add --quick for a smoke test (few sweeps, short converged runs). Each part
 # runs in a fresh R process (callr), so its peak memory is its own.
 #
 # Cases:
@@ -41,10 +41,10 @@
 #               first calibrate() call's CPU s, and the 90% intervals of kappa
 #               against the truth
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-quick <- "quick" %in% args
-parts <- setdiff(args, "quick")
-if (!length(parts)) parts <- "sweep"
+source("bench/options.R")
+opt <- bench_options(list(part = "sweep"))
+quick <- opt$quick
+parts <- opt$part
 known <- c("sweep", "kernels", "functional", "functional-alpha2", "functional-gaussian",
            "functional-matern52", "m1000", "m2000", "m1000-gaussian", "m2000-gaussian")
 if (length(bad <- setdiff(parts, known))) {

@@ -1,11 +1,11 @@
-# Benchmark of emulator_cv() (issue 19, item 5): CPU seconds of MAP
+# Benchmark of emulator_cv(): CPU seconds of MAP
 # validation through the compiled algebra (.fbc_heldout(): the Kronecker
 # eigendecompositions on a product design, the dense Cholesky factor
 # otherwise), against the former R-side computation, kept here as
 # old_heldout() for the comparison only (one m x m correlation matrix,
 # chol() and chol2inv() per draw, then one chol2inv() per fold).
 #
-# Run after installing FBC:  Rscript bench/validate.R
+# Run after installing FBC:  Rscript bench/run.R validate
 # Cases (MAP draw of a short calibrate() run, default folds):
 #   decay     decaySim/decayField: m = 4000, a 50 x 80 product design
 #             (Kronecker algebra), 10 folds (m > 2000)

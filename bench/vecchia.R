@@ -1,15 +1,15 @@
-# Scale benchmark of the nearest-neighbour (Vecchia) algebra (issue 20).
+# Scale benchmark of the nearest-neighbour (Vecchia) algebra.
 #
-#   Rscript bench/vecchia.R sweep              # ms/sweep and peak MB, m = 1000 ... 100,000
-#   Rscript bench/vecchia.R converged-1000     # time to a converged posterior (also -5000,
+#   Rscript bench/run.R vecchia --part=sweep              # ms/sweep and peak MB, m = 1000 ... 100,000
+#   Rscript bench/run.R vecchia --part=converged-1000     # time to a converged posterior (also -5000,
 #                                                   #   -20000)
-#   Rscript bench/vecchia.R exact-1000         # the same with the exact (dense) algebra
-#   Rscript bench/vecchia.R accuracy-500       # long runs of both algebras (also -1000,
+#   Rscript bench/run.R vecchia --part=exact-1000         # the same with the exact (dense) algebra
+#   Rscript bench/run.R vecchia --part=accuracy-500       # long runs of both algebras (also -1000,
 #                                                   #   -2000): kappa quantiles, predictions
-#   Rscript bench/vecchia.R peer               # RobustCalibration at m = 1000 (if installed)
-#   ... k=10 nburn=4000                             # neighbours and burn-in of converged/accuracy
-#   sweep sizes=1000:20,5000:10,20000:10            # the sweep part at these m:k only
-# Add `quick` for a smoke test. Each part runs in a fresh R process (callr),
+#   Rscript bench/run.R vecchia --part=peer               # RobustCalibration at m = 1000 (if installed)
+#   ... --k=10 --nburn=4000                       # neighbours and burn-in of converged/accuracy
+#   --part=sweep --sizes=1000:20,5000:10,20000:10     # the sweep part at these m:k only
+# Add --quick for a smoke test. Each part runs in a fresh R process (callr),
 # so its peak memory (VmHWM) is its own; CPU seconds are user + system of
 # that process and its children. Run under the BLAS you want to measure
 # (OpenBLAS per process: R_LD_LIBRARY_PATH=<dir of its libblas.so.3>
@@ -24,25 +24,21 @@
 # first stretch of nburn + 1000 sweeps (nburn of them burn-in, default 3000):
 # every R-hat < 1.01 and bulk ESS >= 400.
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-quick <- "quick" %in% args
-# nburn=<sweeps>: the burn-in of the converged and accuracy parts (default
+source("bench/options.R")
+# --nburn=<sweeps>: the burn-in of the converged and accuracy parts (default
 # 3000: the simulator block's joint proposal learns its shape there; with
 # 1000 the m = 1000 problem needed 21,000 sweeps a chain, see RESULTS-vecchia.md)
-nburnArg <- grep("^nburn=", args, value = TRUE)
-nBurnLong <- if (length(nburnArg)) as.integer(sub("^nburn=", "", nburnArg)) else 3000L
-# k=<neighbours>: the converged and accuracy parts' neighbours (default 20)
-kArg <- grep("^k=", args, value = TRUE)
-kNeighbours <- if (length(kArg)) as.integer(sub("^k=", "", kArg)) else 20L
-# sizes=<m>:<k>,...: the sweep part's problems (default 1000:20, 5000:20,
-# 20000:20, 20000:30, 100000:20; e.g. sizes=1000:20,5000:10,20000:10 for
+# --k=<neighbours>: the converged and accuracy parts' neighbours (default 20)
+# --sizes=<m>:<k>,...: the sweep part's problems (default 1000:20, 5000:20,
+# 20000:20, 20000:30, 100000:20; e.g. --sizes=1000:20,5000:10,20000:10 for
 # the sizes and neighbours the default rule picks)
-sizesArg <- grep("^sizes=", args, value = TRUE)
-sweepSizes <- if (length(sizesArg)) {
-  lapply(strsplit(strsplit(sub("^sizes=", "", sizesArg), ",")[[1]], ":"), as.numeric)
-} else list(c(1000, 20), c(5000, 20), c(20000, 20), c(20000, 30), c(100000, 20))
-parts <- setdiff(args, c("quick", nburnArg, kArg, sizesArg))
-if (!length(parts)) parts <- "sweep"
+opt <- bench_options(list(part = "sweep", nburn = 3000L, k = 20L,
+                          sizes = c("1000:20", "5000:20", "20000:20", "20000:30", "100000:20")))
+quick <- opt$quick
+nBurnLong <- opt$nburn
+kNeighbours <- opt$k
+sweepSizes <- lapply(strsplit(opt$sizes, ":"), as.numeric)
+parts <- opt$part
 
 helpers <- function() {
   peak_mb <- function() {

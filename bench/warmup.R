@@ -1,17 +1,17 @@
-# Warm-up that ends when it is done, and a run that stops when converged
-# (issue 27): the ball drop with calibrate()'s defaults against the old fixed
+# Warm-up that ends when it is done, and a run that stops when converged:
+# the ball drop with calibrate()'s defaults against the old fixed
 # run (nMCMC = 8000, nBurn = 2000, converge = TRUE), 4 chains, sequential
 # plan, CPU seconds of this process (user + sys) to every R-hat < 1.01 and
 # bulk ESS >= 400. RobustCalibration's default run on the same data is timed
 # in the same process when it is installed (never a dependency of FBC).
 #
-#   R_LIBS=<lib> Rscript bench/warmup.R [seeds]     # default seeds 1 2 3
+#   R_LIBS=<lib> Rscript bench/run.R warmup [--seeds=1,2,3]
 #
 # Prints one row per run and a summary (median and range over the seeds).
 
 library(FBC)
-args <- commandArgs(trailingOnly = TRUE)
-seeds <- if (length(args)) as.integer(args) else 1:3
+source("bench/options.R")
+seeds <- bench_options(list(seeds = 1:3))$seeds
 future::plan(future::sequential)
 `%||%` <- function(x, y) if (is.null(x)) y else x
 

@@ -6,7 +6,9 @@ needed <- c("Rcpp", "RcppArmadillo", "cli", "ggplot2", "lhs", "testthat", "knitr
             # Suggests the tests use: kill-and-resume in a child process,
             # the batchtools backend, PSIS-LOO (loo.fbc) and bayesplot's
             # plots (all skip when missing, but CI runs them)
-            "callr", "future.batchtools", "loo", "bayesplot")
+            "callr", "future.batchtools", "loo", "bayesplot",
+            # the generics posterior_predict(), log_lik(), ... (Imports)
+            "rstantools")
 have <- function(p) requireNamespace(p, quietly = TRUE)
 missing <- needed[!vapply(needed, have, logical(1))]
 if (length(missing)) {

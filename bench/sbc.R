@@ -8,14 +8,15 @@
 # 0..99; we test with a chi-square on 10 bins per parameter.
 #
 # Run from the package root after installing FBC:
-#   Rscript bench/validation/sbc.R [L] > /dev/null
-# It writes bench/validation/sbc-results.md. L = 1000 (the default) takes 2-3
+#   Rscript bench/run.R sbc [--L=1000] [--out=bench/RESULTS-sbc.md] > /dev/null
+# It writes bench/RESULTS-sbc.md. L = 1000 (the default) takes 2-3
 # minutes.
 
 library(FBC)
-args <- commandArgs(trailingOnly = TRUE)
-L <- if (length(args)) as.integer(args[1]) else 1000L
-out_file <- if (length(args) > 1) args[2] else file.path("inst", "validation", "sbc-results.md")
+source("bench/options.R")
+opt <- bench_options(list(L = 1000L, out = file.path("bench", "RESULTS-sbc.md")))
+L <- opt$L
+out_file <- opt$out
 nDraws <- 99L; thin <- 20L; nBurn <- 1000L
 n <- 8L; m <- 20L; p <- 1L; q <- 1L
 set.seed(20240601)
@@ -97,7 +98,7 @@ counts <- apply(ranks, 2, function(r) tabulate(floor(r * bins / (nDraws + 1)) + 
 pv <- apply(counts, 2, function(cn) suppressWarnings(chisq.test(cn))$p.value)
 
 lines <- c(
-  "# SBC results (bench/validation/sbc.R)", "",
+  "# SBC results (Rscript bench/run.R sbc)", "",
   sprintf("Generated %s with FBC %s, R %s.", format(Sys.time(), "%Y-%m-%d %H:%M"),
           utils::packageVersion("FBC"), getRversion()), "",
   sprintf(paste("Simulation-based calibration (Talts et al. 2018): %d replications of a p = 1,",

@@ -1,10 +1,8 @@
-# Speed benchmark of the FBC sampler against the Cholesky floor (issue 4).
+# Speed benchmark of the FBC sampler against the Cholesky floor.
 #
-# Run after installing the package:
-#   Rscript bench/bench.R                  # or, from an installed copy,
-#   Rscript "$(Rscript -e 'cat(system.file("bench", "bench.R", package = "FBC"))')"
-#   R_LIBS=/path/to/lib Rscript bench/bench.R
-# Optional first argument: "quick" (fewer sweeps, for a smoke test).
+# Run after installing the package, from the package root:
+#   Rscript bench/run.R speed [--quick]     # --quick: fewer sweeps, a smoke test
+#   R_LIBS=/path/to/lib Rscript bench/run.R speed
 #
 # For each problem it reports, in one run on one machine:
 #   ms/sweep  time of one Metropolis-within-Gibbs sweep (every free parameter
@@ -20,8 +18,8 @@
 #   peak MB   peak resident memory (VmHWM) of this R process during the case.
 # "blocks" rows use the default sampler (joint moves; see ?calibrate).
 suppressPackageStartupMessages(library(FBC))
-args <- commandArgs(trailingOnly = TRUE)
-quick <- length(args) > 0 && args[1] == "quick"
+source("bench/options.R")
+quick <- bench_options()$quick
 
 # ---- helpers -------------------------------------------------------------
 peak_mb <- function(field = "VmHWM") {
