@@ -638,7 +638,8 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
                                      const arma::mat& phis, const arma::mat& U,
                                      const arma::mat& XT, double nugget, const Model& mod,
                                      bool keepA) {
-  OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
+  OutputsPosterior& op = dynamic_cast<OutputsPosterior&>(*pp);
   if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
   const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
   // A's rows: the largest output's runs and field groups (block_systems()'
