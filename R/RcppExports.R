@@ -5,18 +5,6 @@
     .Call(`_FBC_fbc_cache_budget_r`, bytes)
 }
 
-.design_solve_lower <- function(L, B) {
-    .Call(`_FBC_design_solve_lower_r`, L, B)
-}
-
-.design_avx2 <- function(allow) {
-    .Call(`_FBC_design_avx2_r`, allow)
-}
-
-.design_exp <- function(x, mx) {
-    .Call(`_FBC_design_exp_r`, x, mx)
-}
-
 .design_systems <- function(Xf, yf, Xs, ys, phis, U, XT, nugget, model) {
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }

@@ -2,7 +2,7 @@
 # name, in one place (kernel_codes, of the correlation families, lives
 # with them in R/correlation.R; the prior families' in R/priors.R), and the
 # check, when the package loads, that they are the compiled core's
-# (src/model.cpp, .model_codes(); src/priors.cpp, .prior_codes()).
+# (src/posterior.cpp, .model_codes(); src/priors.cpp, .prior_codes()).
 # compiled_model() (R/model-classes.R) is the one function that turns the model
 # into the list the compiled entry points take.
 
@@ -47,7 +47,7 @@ check_model_codes <- function(compiled = .model_codes()) {
   }, logical(1))]
   if (length(differ)) {
     cli::cli_abort(c(
-      "The code tables of R (R/boundary.R) and of the compiled core (src/model.cpp) differ.",
+      "The code tables of R (R/boundary.R) and of the compiled core (src/posterior.cpp) differ.",
       x = "They differ for {.val {differ}}."
     ))
   }

@@ -5,7 +5,7 @@
 # class is one row here, its default prior in set_hyperPriors() and the code
 # that computes with it: the compiled core keeps no list of the classes, it
 # receives each class's offset and length by name (compiled_model()) and
-# looks up those it computes with (src/model.cpp, class_needs()); the
+# looks up those it computes with (src/posterior.cpp, class_needs()); the
 # package checks when it loads that R's table names every one of them
 # (check_model_codes(), R/boundary.R).
 #
@@ -208,7 +208,7 @@ absent_classes <- function(kernS, kernB) {
   model_classes$class[model_classes$smooth %in% names(has)[!has]]
 }
 
-# The layout as the compiled core receives it (read_model() in src/model.cpp):
+# The layout as the compiled core receives it (read_model() in src/posterior.cpp):
 # 0-based offsets and lengths named by class.
 layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
                           sources = 0L, outputs = 1L, emulator = TRUE) {

@@ -22,41 +22,6 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
-// design_solve_lower_r
-arma::mat design_solve_lower_r(const arma::mat& L, const arma::mat& B);
-RcppExport SEXP _FBC_design_solve_lower_r(SEXP LSEXP, SEXP BSEXP) {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    Rcpp::traits::input_parameter< const arma::mat& >::type L(LSEXP);
-    Rcpp::traits::input_parameter< const arma::mat& >::type B(BSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_solve_lower_r(L, B));
-    return rcpp_result_gen;
-END_RCPP
-}
-// design_avx2_r
-bool design_avx2_r(int allow);
-RcppExport SEXP _FBC_design_avx2_r(SEXP allowSEXP) {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    Rcpp::traits::input_parameter< int >::type allow(allowSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_avx2_r(allow));
-    return rcpp_result_gen;
-END_RCPP
-}
-// design_exp_r
-arma::vec design_exp_r(const arma::vec& x, double mx);
-RcppExport SEXP _FBC_design_exp_r(SEXP xSEXP, SEXP mxSEXP) {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    Rcpp::traits::input_parameter< const arma::vec& >::type x(xSEXP);
-    Rcpp::traits::input_parameter< double >::type mx(mxSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_exp_r(x, mx));
-    return rcpp_result_gen;
-END_RCPP
-}
 // design_systems_r
 Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& XT, double nugget, const Rcpp::List& model);
 RcppExport SEXP _FBC_design_systems_r(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
@@ -387,9 +352,6 @@ END_RCPP
 
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
-    {"_FBC_design_solve_lower_r", (DL_FUNC) &_FBC_design_solve_lower_r, 2},
-    {"_FBC_design_avx2_r", (DL_FUNC) &_FBC_design_avx2_r, 1},
-    {"_FBC_design_exp_r", (DL_FUNC) &_FBC_design_exp_r, 2},
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
     {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 19},
     {"_FBC_design_look_ahead_resume", (DL_FUNC) &_FBC_design_look_ahead_resume, 1},

@@ -65,122 +65,19 @@ inline bool same_output(const DesignSystems& sys, int a, int b) {
   return sys.outU.empty() || sys.outU[a] == sys.outU[b];
 }
 
-// Column j of L X = B in place, from row k0 on (the rows above solved):
-// reference BLAS dtrsm's operations in its order, for k = k0..N-1:
-//   if B(k,j) != 0: B(k,j) /= L(k,k), B(i,j) -= B(k,j) L(i,k) (i > k).
-void solve_lower_col(const arma::mat& L, double* b, arma::uword k0) {
-  const arma::uword N = L.n_rows;
-  for (arma::uword k = k0; k < N; ++k) {
-    if (b[k] == 0.0) continue;
-    const double* l = L.colptr(k);
-    b[k] /= l[k];
-    const double x = b[k];
-    for (arma::uword i = k + 1; i < N; ++i) b[i] -= x * l[i];
-  }
-}
-
-// b_c[i] -= x_c l[i] for the four columns c and rows i0 <= i < n, two rows
-// per vector operation (the same numbers as one at a time).
-inline void axpy4(double* const b[4], const double x[4], const double* l, arma::uword i0,
-                  arma::uword n) {
-  arma::uword i = i0;
-#ifdef FBC_V2D
-  const v2d x0 = {x[0], x[0]}, x1 = {x[1], x[1]}, x2 = {x[2], x[2]}, x3 = {x[3], x[3]};
-  for (; i + 2 <= n; i += 2) {
-    const v2d li = load2(l + i);
-    store2(b[0] + i, load2(b[0] + i) - x0 * li);
-    store2(b[1] + i, load2(b[1] + i) - x1 * li);
-    store2(b[2] + i, load2(b[2] + i) - x2 * li);
-    store2(b[3] + i, load2(b[3] + i) - x3 * li);
-  }
-#endif
-  for (; i < n; ++i)
-    for (int c = 0; c < 4; ++c) b[c][i] -= x[c] * l[i];
-}
-
-// Solves L X = B in place (L lower triangular N x N, B N x nc) with each
-// entry's operations those of solve_lower_col() (reference dtrsm's), so
-// the same numbers as solve_lower() with the reference BLAS; four columns
-// at a time, two rows per vector operation (a column whose B(k,j) is 0
-// finishes alone). The candidates' N x Nc solve by dtrsm was a sixth of a
-// design step.
-void solve_lower_cols(const arma::mat& L, arma::mat& B) {
-  const arma::uword N = L.n_rows, nc = B.n_cols;
-  arma::uword j = 0;
-#ifdef FBC_V2D
-  for (; j + 4 <= nc; j += 4) {
-    double* b[4] = {B.colptr(j), B.colptr(j + 1), B.colptr(j + 2), B.colptr(j + 3)};
-    arma::uword k = 0;
-    for (; k < N; ++k) {
-      if (b[0][k] == 0.0 || b[1][k] == 0.0 || b[2][k] == 0.0 || b[3][k] == 0.0) break;
-      const double* l = L.colptr(k);
-      double x[4];
-      for (int c = 0; c < 4; ++c) x[c] = (b[c][k] /= l[k]);
-      axpy4(b, x, l, k + 1, N);
-    }
-    if (k < N) for (int c = 0; c < 4; ++c) solve_lower_col(L, b[c], k);
-  }
-#endif
-  for (; j < nc; ++j) solve_lower_col(L, B.colptr(j), 0);
-}
 
 // The candidates' conditional means and variances from A (N x Nc) and the
-// residual r: mu_c = sum_i A_ic r_i, v_c = v0 - sum_i A_ic^2 (sums in i's
-// order; four columns at a time for independent chains).
+// residual r: mu_c = sum_i A_ic r_i, v_c = v0 - sum_i A_ic^2.
 void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* mu, double* v) {
-  const arma::uword N = A.n_rows, nc = A.n_cols;
-  arma::uword c = 0;
-  for (; c + 4 <= nc; c += 4) {
-    const double* a0 = A.colptr(c);
-    const double* a1 = A.colptr(c + 1);
-    const double* a2 = A.colptr(c + 2);
-    const double* a3 = A.colptr(c + 3);
-    double ar[4] = {0.0, 0.0, 0.0, 0.0}, aa[4] = {0.0, 0.0, 0.0, 0.0};
-    for (arma::uword i = 0; i < N; ++i) {
-      ar[0] += a0[i] * r[i]; aa[0] += a0[i] * a0[i];
-      ar[1] += a1[i] * r[i]; aa[1] += a1[i] * a1[i];
-      ar[2] += a2[i] * r[i]; aa[2] += a2[i] * a2[i];
-      ar[3] += a3[i] * r[i]; aa[3] += a3[i] * a3[i];
-    }
-    for (int k = 0; k < 4; ++k) { mu[c + k] = ar[k]; v[c + k] = v0 - aa[k]; }
-  }
-  for (; c < nc; ++c) {
+  for (arma::uword c = 0; c < A.n_cols; ++c) {
     const double* a = A.colptr(c);
     double ar = 0.0, aa = 0.0;
-    for (arma::uword i = 0; i < N; ++i) { ar += a[i] * r[i]; aa += a[i] * a[i]; }
+    for (arma::uword i = 0; i < A.n_rows; ++i) { ar += a[i] * r[i]; aa += a[i] * a[i]; }
     mu[c] = ar;
     v[c] = v0 - aa;
   }
 }
 
-// Small dense systems without BLAS and LAPACK calls, whose per-call cost
-// dominated at the look-ahead's sizes (a field block of 5-30 distinct
-// inputs, 10-50 runs, batches of up to a few points): up to small_n rows,
-// plain loops; above it LAPACK.
-const arma::uword small_n = 64;
-
-// In-place lower Cholesky factor of the symmetric A (its lower triangle
-// read; small_chol() up to small_n rows, LAPACK above). False if A is not
-// positive definite.
-bool chol_small(arma::mat& A) {
-  const int n = A.n_rows;
-  return (arma::uword)n > small_n ? chol_lower(A) : small_chol(A.memptr(), n, n, n);
-}
-
-// C <- C - W'W on the lower triangle (W m x n; BLAS dsyrk above small_n).
-void syrk_small(const arma::mat& W, arma::mat& C) {
-  const arma::uword n = W.n_cols, m = W.n_rows;
-  if (n > small_n) { syrk_lower(W, -1.0, 1.0, C); return; }
-  for (arma::uword j = 0; j < n; ++j) {
-    const double* wj = W.colptr(j);
-    for (arma::uword i = j; i < n; ++i) {
-      const double* wi = W.colptr(i);
-      double s = 0.0;
-      for (arma::uword r = 0; r < m; ++r) s += wi[r] * wj[r];
-      C(i, j) -= s;
-    }
-  }
-}
 
 // The simulator GP's correlation Rs(X, Y) (d input columns) at thetaS th
 // and alphaS al, times the categorical inputs' level correlations
@@ -224,36 +121,6 @@ struct SimBlock {
   double ld = 0.0, rr = 0.0;
 };
 
-// B <- B - Wt A (Wt n x m, A m x nc, B n x nc), each entry's terms
-// subtracted in k's order: the updates the field rows of L X = B receive
-// from the simulator rows' solved values A (L = [L1 0; Wt L2]), in
-// solve_lower_col()'s order (where it skips a zero A(k, j) this subtracts
-// zeros: the same numbers); four columns at a time, two rows per vector
-// operation.
-void sub_cols(const arma::mat& Wt, const arma::mat& A, arma::mat& B) {
-  const arma::uword n = Wt.n_rows, m = Wt.n_cols, nc = B.n_cols;
-  arma::uword j = 0;
-#ifdef FBC_V2D
-  for (; j + 4 <= nc; j += 4) {
-    double* b[4] = {B.colptr(j), B.colptr(j + 1), B.colptr(j + 2), B.colptr(j + 3)};
-    const double* a[4] = {A.colptr(j), A.colptr(j + 1), A.colptr(j + 2), A.colptr(j + 3)};
-    for (arma::uword k = 0; k < m; ++k) {
-      const double* l = Wt.colptr(k);
-      const double x[4] = {a[0][k], a[1][k], a[2][k], a[3][k]};
-      axpy4(b, x, l, 0, n);
-    }
-  }
-#endif
-  for (; j < nc; ++j) {
-    double* b = B.colptr(j);
-    const double* a = A.colptr(j);
-    for (arma::uword k = 0; k < m; ++k) {
-      const double* l = Wt.colptr(k);
-      const double x = a[k];
-      for (arma::uword i = 0; i < n; ++i) b[i] -= x * l[i];
-    }
-  }
-}
 
 // The field rows grouped by input and measurement-error group: rows at the
 // same experimental input (replicates) share eta(x, kappa) and the bias,
@@ -401,16 +268,16 @@ bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
   sim_corr(post, mod, Xs, Xs, sb.L, true);
   sb.L *= s2S;
   for (int i = 0; i < m; ++i) sb.L(i, i) *= 1.0 + nugget;
-  if (!chol_small(sb.L)) return false;
+  if (!chol_lower(sb.L)) return false;
   sb.r = ys;
-  solve_lower_col(sb.L, sb.r.memptr(), 0);
+  solve_lower(sb.L, sb.r);
   sb.rr = arma::dot(sb.r, sb.r);
   sb.ld = 0.0;
   for (int i = 0; i < m; ++i) sb.ld += std::log(sb.L(i, i));
   sb.A.set_size(m, U.n_rows);
   sim_corr(post, mod, Xs, U, sb.A, false);
   sb.A *= s2S;
-  solve_lower_cols(sb.L, sb.A);
+  solve_lower(sb.L, sb.A);
   sb.mu.set_size(U.n_rows);
   sb.naa.set_size(U.n_rows);
   design_moments(sb.A, sb.r, 0.0, sb.mu.memptr(), sb.naa.memptr());
@@ -500,7 +367,7 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   const double* alS = phi.memptr() + post.iAlphaS;
   sim_corr(post, mod, Xs, w.Xk, w.W, false);
   w.W *= s2S;
-  solve_lower_cols(sb.L, w.W);
+  solve_lower(sb.L, w.W);
   sim_corr(post, mod, w.Xk, w.Xk, w.S, true);
   w.S *= s2S;
   if (post.bias) {
@@ -510,12 +377,12 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
       for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
   }
   for (int i = 0; i < n; ++i) w.S(i, i) += s2E[fg.noise[i]] * fg.invr[i];
-  syrk_small(w.W, w.S);
+  syrk_lower(w.W, -1.0, 1.0, w.S);
   w.Wt = w.W.t();
-  if (!chol_small(w.S)) return false;
+  if (!chol_lower(w.S)) return false;
   const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
   w.r2 = fg.ybar - muB - w.W.t() * sb.r;
-  solve_lower_col(w.S, w.r2.memptr(), 0);
+  solve_lower(w.S, w.r2);
   double ld2 = 0.0;
   for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
   double quad = (m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2);
@@ -529,8 +396,8 @@ bool design_system(const Posterior& post, const Model& mod, const FieldGroups& f
   if (Nc > 0) {
     sim_corr(post, mod, w.Xk, U, w.A2, false);
     w.A2 *= s2S;
-    sub_cols(w.Wt, sb.A, w.A2);
-    solve_lower_cols(w.S, w.A2);
+    w.A2 -= w.Wt * sb.A;
+    solve_lower(w.S, w.A2);
     design_moments(w.A2, w.r2, 0.0, w.mu2.memptr(), w.v2.memptr());
     const double v0 = s2S * (1.0 + nugget);
     double* mu = out.mu.colptr(s);
@@ -638,7 +505,8 @@ DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
                                      const arma::mat& phis, const arma::mat& U,
                                      const arma::mat& XT, double nugget, const Model& mod,
                                      bool keepA) {
-  OutputsPosterior op(Xf, yf, Xs, ys, nugget, mod);
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
+  OutputsPosterior& op = dynamic_cast<OutputsPosterior&>(*pp);
   if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
   const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
   // A's rows: the largest output's runs and field groups (block_systems()'
@@ -725,180 +593,9 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   return out;
 }
 
-// 2^(j / 64), j = 0 .. 63 (exp_weights()'s table)
-struct Exp2Table {
-  double v[64];
-  Exp2Table() { for (int j = 0; j < 64; ++j) v[j] = std::exp2(j / 64.0); }
-};
-
-// exp_weights()' lanes: w_s = exp(L_s - mx) for the first S - S % W
-// entries, W at a time (VD: W doubles, VI: W 64-bit integers), by x =
-// (64 n + j) ln 2 / 64 + r (k = 64 n + j the integer nearest 64 x / ln 2,
-// ln 2 / 64 in two parts so r is exact to rounding, |r| <= ln 2 / 128),
-// exp(x) = 2^n 2^(j/64) exp(r), exp(r) by its Taylor polynomial of degree
-// 5 (truncation under 4e-17), 2^n from the exponent's bits; 0 for x < -708
-// (a weight under 1e-307 of the largest). Each lane the same IEEE
-// operations (no fused multiply-add), so the same numbers at any W.
-// Returns the entries done.
-#ifdef FBC_V2D
-template <class VD, class VI, int W>
-static inline __attribute__((always_inline)) int exp_lanes(const double* L, double mx, int S,
-                                                           double* w) {
-  static const Exp2Table tab;
-  VD magic, k64, c1, c2, lo, vmx, one, h, c3, c4, c5;
-  VI mbits, bias, m63;
-  for (int i = 0; i < W; ++i) {
-    magic[i] = 6755399441055744.0;  // 1.5 2^52
-    k64[i] = 92.332482616893656;    // 64 / ln 2
-    c1[i] = 0.010830424696223417;   // ln 2 / 64 in two parts
-    c2[i] = 2.572804622327669e-14;
-    lo[i] = -708.0;
-    vmx[i] = mx;
-    one[i] = 1.0;
-    h[i] = 0.5;
-    c3[i] = 1.0 / 6;
-    c4[i] = 1.0 / 24;
-    c5[i] = 1.0 / 120;
-    bias[i] = 1023;
-    m63[i] = 63;
-  }
-  std::memcpy(&mbits, &magic, sizeof mbits);
-  int s = 0;
-  for (; s + W <= S; s += W) {
-    VD x0;
-    std::memcpy(&x0, L + s, sizeof x0);
-    x0 -= vmx;
-    const VI under = x0 < lo;
-    VI xb, lb;
-    std::memcpy(&xb, &x0, sizeof xb);
-    std::memcpy(&lb, &lo, sizeof lb);
-    xb = (xb & ~under) | (lb & under);  // max(x0, -708)
-    VD x;
-    std::memcpy(&x, &xb, sizeof x);
-    const VD t = x * k64 + magic;
-    const VD k = t - magic;
-    const VD r = (x - k * c1) - k * c2;
-    const VD r2 = r * r;
-    const VD p = (one + r) + r2 * ((h + r * c3) + r2 * (c4 + r * c5));
-    VI kb;
-    std::memcpy(&kb, &t, sizeof kb);
-    kb -= mbits;
-    const VI j = kb & m63;
-    const VI eb = ((kb >> 6) + bias) << 52;
-    VD scale, tj;
-    std::memcpy(&scale, &eb, sizeof scale);
-    for (int i = 0; i < W; ++i) tj[i] = tab.v[j[i]];
-    VD e = p * tj * scale;
-    VI bits;
-    std::memcpy(&bits, &e, sizeof bits);
-    bits &= ~under;
-    std::memcpy(w + s, &bits, sizeof bits);
-  }
-  return s;
-}
-typedef long long v2i __attribute__((vector_size(16)));
-#endif
-
-// Four lanes where the processor has AVX2 (x86-64, GCC or clang; chosen
-// at run time): the same numbers as two lanes, the look-ahead's scoring
-// a tenth faster.
-#if defined(FBC_V2D) && defined(__x86_64__)
-#define FBC_AVX2 1
-typedef double v4d __attribute__((vector_size(32)));
-typedef long long v4i __attribute__((vector_size(32)));
-__attribute__((target("avx2"))) int exp_lanes4(const double* L, double mx, int S, double* w) {
-  return exp_lanes<v4d, v4i, 4>(L, mx, S, w);
-}
-bool avx2_allowed = true;  // (.design_avx2(), for the tests: the two lanes' path)
-bool has_avx2() {
-  static const bool cpu = __builtin_cpu_supports("avx2");
-  return cpu && avx2_allowed;
-}
-#endif
-
-// The scoring's other loops over the draws, W at a time (each lane the
-// same operations as one entry at a time; returning the entries done):
-// buf_s += b_s d_s (axpy_lanes), buf_s += mu_s (add_lanes), and a
-// fantasy's log-weights L_s = base_s - e_s^2 / 2 - lsd_s, e_s = (y - mu_s)
-// isd_s, with their maximum in mx (logw_lanes).
-#ifdef FBC_V2D
-template <class VD, int W>
-static inline __attribute__((always_inline)) int axpy_lanes(const double* b, const double* d,
-                                                            double* buf, int S) {
-  int s = 0;
-  for (; s + W <= S; s += W) {
-    VD x, y, z;
-    std::memcpy(&x, buf + s, sizeof x);
-    std::memcpy(&y, b + s, sizeof y);
-    std::memcpy(&z, d + s, sizeof z);
-    x = x + y * z;
-    std::memcpy(buf + s, &x, sizeof x);
-  }
-  return s;
-}
-template <class VD, int W>
-static inline __attribute__((always_inline)) int add_lanes(const double* mu, double* buf, int S) {
-  int s = 0;
-  for (; s + W <= S; s += W) {
-    VD x, y;
-    std::memcpy(&x, buf + s, sizeof x);
-    std::memcpy(&y, mu + s, sizeof y);
-    x = x + y;
-    std::memcpy(buf + s, &x, sizeof x);
-  }
-  return s;
-}
-template <class VD, int W>
-static inline __attribute__((always_inline)) int logw_lanes(double y, const double* mu,
-                                                            const double* isd, const double* base,
-                                                            const double* lsd, double* L, int S,
-                                                            double& mx) {
-  VD yv, hv, m;
-  for (int i = 0; i < W; ++i) { yv[i] = y; hv[i] = 0.5; m[i] = mx; }
-  int s = 0;
-  for (; s + W <= S; s += W) {
-    VD a, b, c, d;
-    std::memcpy(&a, mu + s, sizeof a);
-    std::memcpy(&b, isd + s, sizeof b);
-    std::memcpy(&c, base + s, sizeof c);
-    std::memcpy(&d, lsd + s, sizeof d);
-    const VD e = (yv - a) * b;
-    const VD l = c - hv * e * e - d;
-    std::memcpy(L + s, &l, sizeof l);
-    for (int i = 0; i < W; ++i) m[i] = std::max(m[i], l[i]);
-  }
-  for (int i = 0; i < W; ++i) mx = std::max(mx, m[i]);
-  return s;
-}
-#endif
-#ifdef FBC_AVX2
-__attribute__((target("avx2"))) int axpy_lanes4(const double* b, const double* d, double* buf,
-                                                int S) {
-  return axpy_lanes<v4d, 4>(b, d, buf, S);
-}
-__attribute__((target("avx2"))) int add_lanes4(const double* mu, double* buf, int S) {
-  return add_lanes<v4d, 4>(mu, buf, S);
-}
-__attribute__((target("avx2"))) int logw_lanes4(double y, const double* mu, const double* isd,
-                                                const double* base, const double* lsd, double* L,
-                                                int S, double& mx) {
-  return logw_lanes<v4d, 4>(y, mu, isd, base, lsd, L, S, mx);
-}
-#endif
-
-// w_s = exp(L_s - mx) for s < S (L_s <= mx): exp_lanes() four or two at a
-// time, the last entry (S odd) by std::exp. Within 2 units in the last
-// place of std::exp (its test) at half its cost: the look-ahead's scoring
-// was two thirds libm's exp.
+// w_s = exp(L_s - mx) for s < S (L_s <= mx).
 void exp_weights(const double* L, double mx, int S, double* w) {
-  int s = 0;
-#ifdef FBC_AVX2
-  if (has_avx2()) s = exp_lanes4(L, mx, S, w);
-#endif
-#ifdef FBC_V2D
-  s += exp_lanes<v2d, v2i, 2>(L + s, mx, S - s, w + s);
-#endif
-  for (; s < S; ++s) w[s] = std::exp(L[s] - mx);
+  for (int s = 0; s < S; ++s) w[s] = std::exp(L[s] - mx);
 }
 
 // The greedy look-ahead's state: S draws, Nc candidates, J fantasies.
@@ -931,58 +628,11 @@ struct LookAhead {
   std::vector<int> P;
 };
 
-// Sums s of a_s b_s (b null: of a_s), two lanes at a time where the
-// compiler has vector types.
+// The sum over s of a_s b_s (b null: of a_s).
 double dot_sum(const double* a, const double* b, int S) {
-  int s = 0;
   double out = 0.0;
-#ifdef FBC_V2D
-  v2d acc = {0.0, 0.0};
-  if (b) for (; s + 2 <= S; s += 2) acc += load2(a + s) * load2(b + s);
-  else for (; s + 2 <= S; s += 2) acc += load2(a + s);
-  out = acc[0] + acc[1];
-#endif
-  for (; s < S; ++s) out += b ? a[s] * b[s] : a[s];
+  for (int s = 0; s < S; ++s) out += b ? a[s] * b[s] : a[s];
   return out;
-}
-
-// The sums for q <= 2 calibration inputs in one pass over w: sum w,
-// sum w |k|^2, sum w k_1 (and sum w k_2), each as dot_sum() would sum it
-// (the same numbers), in registers.
-void weight_sums(const double* w, const double* ksq, const double* k1, const double* k2, int S,
-                 double* sum) {
-  int s = 0;
-#ifdef FBC_V2D
-  v2d a0 = {0.0, 0.0}, a1 = a0, a2 = a0, a3 = a0;
-  if (k2) {
-    for (; s + 2 <= S; s += 2) {
-      const v2d ws = load2(w + s);
-      a0 += ws;
-      a1 += ws * load2(ksq + s);
-      a2 += ws * load2(k1 + s);
-      a3 += ws * load2(k2 + s);
-    }
-  } else {
-    for (; s + 2 <= S; s += 2) {
-      const v2d ws = load2(w + s);
-      a0 += ws;
-      a1 += ws * load2(ksq + s);
-      a2 += ws * load2(k1 + s);
-    }
-  }
-  sum[0] = a0[0] + a0[1];
-  sum[1] = a1[0] + a1[1];
-  sum[2] = a2[0] + a2[1];
-  sum[3] = a3[0] + a3[1];
-#else
-  sum[0] = sum[1] = sum[2] = sum[3] = 0.0;
-#endif
-  for (; s < S; ++s) {
-    sum[0] += w[s];
-    sum[1] += w[s] * ksq[s];
-    sum[2] += w[s] * k1[s];
-    if (k2) sum[3] += w[s] * k2[s];
-  }
 }
 
 // Sum over kappa's columns of its variance under the weights
@@ -993,13 +643,9 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
   double* w = la.wbuf.memptr();
   exp_weights(L, mx, S, w);
   double sum[18];  // q <= 16
-  if (q <= 2) {
-    weight_sums(w, la.ksq.memptr(), la.kap.colptr(0), q == 2 ? la.kap.colptr(1) : nullptr, S, sum);
-  } else {
-    sum[0] = dot_sum(w, nullptr, S);
-    sum[1] = dot_sum(w, la.ksq.memptr(), S);
-    for (int k = 0; k < q; ++k) sum[2 + k] = dot_sum(w, la.kap.colptr(k), S);
-  }
+  sum[0] = dot_sum(w, nullptr, S);
+  sum[1] = dot_sum(w, la.ksq.memptr(), S);
+  for (int k = 0; k < q; ++k) sum[2 + k] = dot_sum(w, la.kap.colptr(k), S);
   const double sw = sum[0];
   double out = sum[1] / sw;
   for (int k = 0; k < q; ++k) {
@@ -1270,25 +916,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
         for (int c = 0; c < la.Nc; ++c)
           if (same_output(sys, c, la.P[i])) ScP(c, i) -= dot_sum(As.colptr(c), AP.colptr(i), N);
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
-      // B = ScP SPP^-1 (SPP k x k; BLAS's Nc triangular solves were a
-      // twentieth of a batch's look-ahead): B' = L^-T L^-1 ScP'.
-      // small_chol() factors SPP and carries on over the candidates' rows
-      // below it, each becoming L^-1 ScP(c, :)'; small_back() then solves L'.
-      const int ld = k + Nc;
-      Sinv.set_size(ld, k);
-      Sinv.rows(0, k - 1) = SPP;
-      Sinv.rows(k, ld - 1) = ScP;
-      if (small_chol(Sinv.memptr(), k, ld, ld)) {
-        B.set_size(la.Nc, k);
-        std::vector<double> y(k);
-        for (int c = 0; c < la.Nc; ++c) {
-          for (int i = 0; i < k; ++i) y[i] = Sinv(k + c, i);
-          small_back(Sinv.memptr(), k, ld, y.data());
-          for (int i = 0; i < k; ++i) B(c, i) = y[i];
-        }
-      } else {
-        B = arma::solve(SPP, ScP.t()).t();
-      }
+      B = arma::solve(SPP, ScP.t()).t();  // ScP SPP^-1
       cv -= arma::sum(B % ScP, 1);
       // B and D = YP' - mu_P kept with the draws innermost, for
       // cond_means()
@@ -1323,31 +951,13 @@ inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, i
                                 double* buf) {
   if (la.P.empty()) return sys.muT.colptr(c);
   const int S = la.S, k = la.P.size();
-#ifdef FBC_AVX2
-  const bool four = has_avx2();
-#endif
-  std::fill(buf, buf + S, 0.0);
+  const double* mu = sys.muT.colptr(c);
+  std::copy(mu, mu + S, buf);
   for (int i = 0; i < k; ++i) {
     const double* b = la.Bk.data() + (size_t)S * (c + (size_t)la.Nc * i);
     const double* dy = la.Dk.data() + (size_t)S * (i + (size_t)k * j);
-    int s = 0;
-#ifdef FBC_AVX2
-    if (four) s = axpy_lanes4(b, dy, buf, S);
-#endif
-#ifdef FBC_V2D
-    s += axpy_lanes<v2d, 2>(b + s, dy + s, buf + s, S - s);
-#endif
-    for (; s < S; ++s) buf[s] += b[s] * dy[s];
+    for (int s = 0; s < S; ++s) buf[s] += b[s] * dy[s];
   }
-  const double* mu = sys.muT.colptr(c);
-  int s = 0;
-#ifdef FBC_AVX2
-  if (four) s = add_lanes4(mu, buf, S);
-#endif
-#ifdef FBC_V2D
-  s += add_lanes<v2d, 2>(mu + s, buf + s, S - s);
-#endif
-  for (; s < S; ++s) buf[s] += mu[s];
   return buf;
 }
 
@@ -1378,14 +988,7 @@ void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
       Y(c, j) = y;
       const double* b = la.base.colptr(j);
       double mx = R_NegInf;
-      int s = 0;
-#ifdef FBC_AVX2
-      if (has_avx2()) s = logw_lanes4(y, mu, isd, b, lsd, L, la.S, mx);
-#endif
-#ifdef FBC_V2D
-      s += logw_lanes<v2d, 2>(y, mu + s, isd + s, b + s, lsd + s, L + s, la.S - s, mx);
-#endif
-      for (; s < la.S; ++s) {
+      for (int s = 0; s < la.S; ++s) {
         const double e = (y - mu[s]) * isd[s];
         L[s] = b[s] - 0.5 * e * e - lsd[s];
         mx = std::max(mx, L[s]);
@@ -1565,37 +1168,6 @@ Rcpp::List look_ahead_result(const LookAheadRun& run) {
 
 }  // namespace
 
-// solve_lower_cols() (L lower triangular, B N x nc) on a copy of B, for the
-// tests (against the BLAS solve, with exact zeros in B).
-// [[Rcpp::export(.design_solve_lower)]]
-arma::mat design_solve_lower_r(const arma::mat& L, const arma::mat& B) {
-  if (L.n_rows != L.n_cols || B.n_rows != L.n_rows) Rcpp::stop("L must be square with B's rows");
-  arma::mat X = B;
-  solve_lower_cols(L, X);
-  return X;
-}
-
-// Whether the look-ahead runs four lanes (AVX2) where the processor has
-// them: `allow` 1 or 0 sets it (for the tests: the same numbers either
-// way), -1 only asks. Returns whether four lanes are used.
-// [[Rcpp::export(.design_avx2)]]
-bool design_avx2_r(int allow) {
-#ifdef FBC_AVX2
-  if (allow >= 0) avx2_allowed = allow > 0;
-  return has_avx2();
-#else
-  (void)allow;
-  return false;
-#endif
-}
-
-// exp_weights() (exp(x - mx) per entry), for the tests (against R's exp).
-// [[Rcpp::export(.design_exp)]]
-arma::vec design_exp_r(const arma::vec& x, double mx) {
-  arma::vec w(x.n_elem);
-  exp_weights(x.memptr(), mx, x.n_elem, w.memptr());
-  return w;
-}
 
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each

@@ -134,7 +134,7 @@ struct Model {
 // Reads list(kernS, kernB, algebra, offset, length) (offset and length
 // integer vectors named by class) and checks that the layout tiles phi and
 // gives the classes the compiled core computes with the lengths p and q
-// imply (class_needs(), model.cpp).
+// imply (class_needs(), posterior.cpp).
 Model read_model(const Rcpp::List& model, int p, int q);
 // Fills lay.d, lay.cls and lay.pos from lay.offset and lay.length (and
 // checks that the classes tile phi).
@@ -663,10 +663,14 @@ private:
 // diagonal over the outputs, so log L = sum_o log L_o(kappa, phi_o), each
 // output's block a posterior of its own (its algebra chosen as for one
 // output) over its rows, its parameters a map into the common phi.
+// `block` builds one output's posterior (posterior.cpp).
+typedef std::unique_ptr<Posterior> (*BlockFactory)(const arma::mat&, const arma::vec&,
+                                                   const arma::mat&, const arma::vec&, double,
+                                                   const Model&);
 class OutputsPosterior : public Posterior {
 public:
   OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                   const arma::vec& ys, double nugget, const Model& model);
+                   const arma::vec& ys, double nugget, const Model& model, BlockFactory block);
   bool init(const arma::vec& phi0) override;
   double logLik() const override { return ll_; }
   double propose(const std::vector<int>& idx, const arma::vec& values) override;

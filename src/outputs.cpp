@@ -6,8 +6,8 @@
 // (yf, ys) grouped by output, C = blockdiag(C_1, ..., C_K), so
 //   log L(phi) = sum_o log L_o(kappa, phi_o),
 // each term the KOH log-likelihood (model.cpp) of output o's rows alone.
-// Each output's block is a posterior of its own (make_posterior(): the
-// Kronecker algebra on a product design, dense otherwise), over its own
+// Each output's block is a posterior of its own (the factory's `block`:
+// the Kronecker algebra on a product design, dense otherwise), over its own
 // copy of its rows; its parameter vector phi_o is a map into phi (kappa,
 // then its copy of each perOutput class, its own measurement-error groups).
 // A move touches the outputs whose parameters it moves (kappa: all).
@@ -57,7 +57,8 @@ void OutputsPosterior::sub_model(const Model& model, int o, Model& sub) {
 }
 
 OutputsPosterior::OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                                   const arma::vec& ys, double nugget, const Model& model)
+                                   const arma::vec& ys, double nugget, const Model& model,
+                                   BlockFactory block)
   : K_(model.nOutputs()), out_(model.outputs) {
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
   set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
@@ -98,7 +99,7 @@ OutputsPosterior::OutputsPosterior(const arma::mat& Xf, const arma::vec& yf, con
       owner_[j] = layout.is(j, "kappa") ? -1 : o;
       local_[j] = k;
     }
-    sub_.push_back(make_posterior(Xf_[o], yf_[o], Xs_[o], ys_[o], nugget, sub));
+    sub_.push_back(block(Xf_[o], yf_[o], Xs_[o], ys_[o], nugget, sub));
   }
   for (int j = 0; j < d; ++j)
     if (owner_[j] == -2) Rcpp::stop("independent outputs: parameter %d belongs to no output", j + 1);

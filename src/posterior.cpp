@@ -1,0 +1,276 @@
+// The model as R hands it over (read_model()) and the algebra for the data
+// at hand (make_posterior()): every entry point builds its posterior here,
+// and nothing else names the algebras.
+#include "fbc.h"
+
+// The classes the compiled core computes with and the number of parameters
+// each must have for a model of `m` with p experimental and q calibration
+// inputs (K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
+// ld level correlations): thetaS and alphaS p + q per output, the bias
+// classes p or 1 per output with a bias, none without. -1: 0 or one per
+// output with a bias (muB, lambdaZ: which is the discrepancy model's).
+// R's table (model_classes) may hold more classes.
+struct ClassNeed { const char* name; int length; };
+static std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc,
+                                          int ld) {
+  return {{"kappa", q}, {"thetaS", e * K * (p + q)}, {"alphaS", e * K * (p + q)},
+          {"thetaB", K * b * p}, {"alphaB", K * b * p}, {"sigma2S", e * K}, {"sigma2B", K * b},
+          {"sigma2E", G}, {"muB", -1}, {"lambdaZ", -1}, {"rhoS", e * K * lc},
+          {"rhoB", K * b * lc}, {"rhoD", K * b * ld}};
+}
+
+// The compiled core's code tables by name (walks, kernels, algebras,
+// prediction types) and the names of the classes it computes with: R's
+// tables (R/boundary.R) must agree and R's model_classes name every such
+// class, which the package checks when it loads (check_model_codes()).
+// [[Rcpp::export(.model_codes)]]
+Rcpp::List model_codes() {
+  using Rcpp::_;
+  const std::vector<ClassNeed> need = class_needs(1, 1, 1, 1, 1, 1, 0, 0);
+  Rcpp::CharacterVector cls(need.size());
+  for (size_t c = 0; c < need.size(); ++c) cls[c] = need[c].name;
+  const Rcpp::List kern = kernel_table();
+  return Rcpp::List::create(
+      _["walk"] = Rcpp::IntegerVector::create(_["identity"] = TR_IDENTITY, _["log"] = TR_LOG,
+                                              _["logit12"] = TR_LOGIT12, _["atanh"] = TR_ATANH),
+      _["kernel"] = kern["code"], _["kernelAlpha"] = kern["alpha"],
+      _["algebra"] = Rcpp::IntegerVector::create(_["auto"] = ALG_AUTO, _["dense"] = ALG_DENSE,
+                                                 _["vecchia"] = ALG_VECCHIA),
+      _["type"] = Rcpp::IntegerVector::create(_["field"] = PT_FIELD, _["mean"] = PT_MEAN,
+                                              _["simulator"] = PT_SIMULATOR, _["bias"] = PT_BIAS),
+      _["class"] = cls);
+}
+
+// The Vecchia algebra's design (R/vecchia.R, vecchia_design()) into vd.
+static void read_vecchia(const Rcpp::List& v, VecchiaDesign& vd) {
+  vd.k = Rcpp::as<int>(v["k"]);
+  vd.kf = Rcpp::as<int>(v["kf"]);
+  const Rcpp::IntegerVector ord = v["order"];
+  const Rcpp::IntegerMatrix nbr = v["neighbours"];
+  if (vd.k < 1 || vd.kf < 0 || nbr.ncol() != vd.k || nbr.nrow() != ord.size())
+    Rcpp::stop("the Vecchia design's neighbours must be an m x k matrix");
+  vd.w = Rcpp::as<arma::vec>(v["scaling"]);
+  vd.ord.resize(ord.size());
+  vd.nbr.assign((size_t) ord.size() * vd.k, -1);
+  for (int i = 0; i < ord.size(); ++i) {
+    vd.ord[i] = ord[i] - 1;
+    for (int c = 0; c < vd.k; ++c) {
+      const int r = nbr(i, c);
+      if (r == NA_INTEGER || r < 0 || r > ord.size())
+        Rcpp::stop("the Vecchia design's neighbours must be row numbers");
+      vd.nbr[(size_t) i * vd.k + c] = r - 1;  // 0 (none) becomes -1
+    }
+  }
+}
+
+// The field rows' groups and the categorical inputs of `model` into `out`:
+// each row's measurement-error group (`noise`, 1-based in R), the
+// categorical inputs' indicator columns and levels (`levels`), and with a
+// bias per data set each row's data set (`source`, `sourceLevels`).
+static void read_groups(const Rcpp::List& model, int p, Model& out) {
+  // sigma2E: one per measurement-error group of the field rows
+  if (model.containsElementNamed("noise")) {
+    const Rcpp::IntegerVector g = model["noise"];
+    out.noise.resize(g.size());
+    for (int i = 0; i < g.size(); ++i) {
+      if (g[i] == NA_INTEGER || g[i] < 1) Rcpp::stop("noise groups must be 1, 2, ...");
+      out.noise[i] = g[i] - 1;
+    }
+  }
+  // the categorical inputs: their indicator columns and levels
+  if (model.containsElementNamed("levels")) {
+    const Rcpp::List lv = model["levels"];
+    const Rcpp::IntegerVector col = lv["col"], ncol = lv["ncol"], L = lv["L"];
+    if (col.size() != L.size() || ncol.size() != L.size())
+      Rcpp::stop("the levels need col, ncol and L for each categorical input");
+    for (int f = 0; f < L.size(); ++f) {
+      LevelInput in;
+      in.col = col[f] - 1; in.ncol = ncol[f]; in.L = L[f];
+      if (in.L < 2 || in.col < 0 || in.col + in.ncol > p ||
+          in.ncol != (in.L == 2 ? 1 : in.L))
+        Rcpp::stop("categorical input %d: its indicator columns do not fit the inputs", f + 1);
+      out.levels.push_back(in);
+    }
+  }
+  // a bias per field data set: the data set of each field row
+  if (model.containsElementNamed("source")) {
+    const Rcpp::IntegerVector s = model["source"];
+    out.sourceL = Rcpp::as<int>(model["sourceLevels"]);
+    out.source.resize(s.size());
+    for (int i = 0; i < s.size(); ++i) {
+      if (s[i] == NA_INTEGER || s[i] < 1 || s[i] > out.sourceL)
+        Rcpp::stop("the field data sets must be 1, ..., %d", out.sourceL);
+      out.source[i] = s[i] - 1;
+    }
+  }
+}
+
+// The layout of `model` (offset and length named by class, R's table order).
+static Layout read_layout(const Rcpp::List& model) {
+  const Rcpp::IntegerVector off = model["offset"], len = model["length"];
+  const Rcpp::CharacterVector nm = off.names(), nl = len.names();
+  if (off.size() != len.size() || Rf_isNull(off.names()))
+    Rcpp::stop("the layout needs an offset and a length named by class");
+  Layout lay;
+  for (int c = 0; c < off.size(); ++c) {
+    if (nm[c] != nl[c]) Rcpp::stop("the layout's offsets and lengths name different classes");
+    lay.names.push_back(Rcpp::as<std::string>(nm[c]));
+    lay.offset.push_back(off[c]);
+    lay.length.push_back(len[c]);
+  }
+  fill_layout(lay);
+  return lay;
+}
+
+// The independent outputs' indicator columns of `model` into out.outputs.
+static void read_outputs(const Rcpp::List& model, int p, Model& out) {
+  if (!model.containsElementNamed("outputs")) return;
+  const Rcpp::List ov = model["outputs"];
+  LevelInput& o = out.outputs;
+  o.col = Rcpp::as<int>(ov["col"]) - 1; o.ncol = Rcpp::as<int>(ov["ncol"]);
+  o.L = Rcpp::as<int>(ov["L"]);
+  if (o.L < 2 || o.col < 0 || o.col + o.ncol > p || o.ncol != (o.L == 2 ? 1 : o.L))
+    Rcpp::stop("the outputs' indicator columns do not fit the inputs");
+  if (out.algebra == ALG_VECCHIA)
+    Rcpp::stop("independent outputs have no nearest-neighbour algebra");
+  if (!out.emulator) Rcpp::stop("a simulator function has no independent outputs");
+}
+
+Model read_model(const Rcpp::List& model, int p, int q) {
+  Model out;
+  out.kernS = Rcpp::as<int>(model["kernS"]);
+  out.kernB = Rcpp::as<int>(model["kernB"]);
+  out.algebra = Rcpp::as<int>(model["algebra"]);
+  read_groups(model, p, out);
+  // a simulator given as a function (function.cpp) has no simulator GP
+  out.emulator = !model.containsElementNamed("simulator");
+  // independent outputs: the perOutput classes (all but kappa and sigma2E)
+  // hold one copy per output
+  read_outputs(model, p, out);
+  Layout& lay = out.layout;
+  lay = read_layout(model);
+  // what each class expands over (class_needs()); a bias when sigma2B has
+  // parameters
+  const int K = out.nOutputs(), b = lay.length_of("sigma2B") > 0 ? 1 : 0;
+  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
+  for (const ClassNeed& c : class_needs(p, q, K, out.emulator ? 1 : 0, b, G, level_count(out.levels),
+                                        out.sourceL * (out.sourceL - 1) / 2)) {
+    const int have = lay.length_of(c.name), want = c.length < 0 ? have : c.length;
+    if (have != want || (c.length < 0 && have != 0 && have != K * b))
+      Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have,
+                 c.length < 0 ? K * b : want);
+  }
+  if (out.algebra == ALG_VECCHIA) {
+    if (!model.containsElementNamed("vecchia"))
+      Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
+    read_vecchia(model["vecchia"], out.vecchia);
+  }
+  return out;
+}
+
+// One output's algebra: Kronecker on a product design unless the model asks
+// for the dense one, Vecchia when it asks for that, else dense.
+static std::unique_ptr<Posterior> make_block(const arma::mat& Xf, const arma::vec& yf,
+                                             const arma::mat& Xs, const arma::vec& ys,
+                                             double nugget, const Model& model) {
+  if (model.algebra == ALG_VECCHIA)
+    return std::unique_ptr<Posterior>(new VecchiaPosterior(Xf, yf, Xs, ys, nugget, model));
+  if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
+  if (model.algebra == ALG_AUTO) {
+    ProductDesign pd;
+    if (product_design(Xs, Xf.n_cols, pd) && kronecker_pays(pd))
+      return std::unique_ptr<Posterior>(new KroneckerPosterior(Xf, yf, Xs, ys, nugget, model, pd));
+  }
+  return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget, model));
+}
+
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget, const Model& model) {
+  check_kernel(model.kernS);
+  check_kernel(model.kernB);
+  if (model.algebra != ALG_AUTO && model.algebra != ALG_DENSE && model.algebra != ALG_VECCHIA)
+    Rcpp::stop("unknown algebra code %d", model.algebra);
+  if (model.nOutputs() > 1)
+    return std::unique_ptr<Posterior>(new OutputsPosterior(Xf, yf, Xs, ys, nugget, model,
+                                                           make_block));
+  return make_block(Xf, yf, Xs, ys, nugget, model);
+}
+
+std::unique_ptr<Posterior> make_posterior(const arma::mat& Xf, const arma::vec& yf,
+                                          const arma::mat& Xs, const arma::vec& ys,
+                                          double nugget, const Rcpp::List& model) {
+  if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
+  const Model mod = read_model(model, Xf.n_cols, Xs.n_cols - Xf.n_cols);
+  if (!mod.emulator) return make_function_posterior(Xf, yf, mod, model["simulator"]);
+  return make_posterior(Xf, yf, Xs, ys, nugget, mod);
+}
+
+
+// Log-likelihood at each row of `phis`, reached by moves from the previous
+// row, so that the cached block updates can be checked against a dense
+// formula. `groups[j]` > 0 puts parameter j in a group moved jointly (one
+// propose() of the group's changed coordinates); 0 moves it alone.
+// scale: when the scaled variances (Posterior::scaled) all change by one
+// factor, move them by proposeScale(). decoys: before each move, propose
+// another value and reject it. model: the model description (read_model()).
+// [[Rcpp::export(.loglik_path_c)]]
+Rcpp::NumericVector loglik_path(const arma::mat& Xf, const arma::vec& yf,
+                                const arma::mat& Xs, const arma::vec& ys,
+                                const arma::mat& phis, double nugget,
+                                SEXP groups, bool decoys, bool scale,
+                                const Rcpp::List& model) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
+  Posterior& post = *pp;
+  Rcpp::NumericVector out(phis.n_rows, NA_REAL);
+  if (!post.init(phis.row(0).t())) return out;
+  out[0] = post.logLik();
+  const int d = post.d;
+  std::vector<int> grp(d, 0);
+  if (!Rf_isNull(groups)) {
+    const Rcpp::IntegerVector g(groups);
+    for (int j = 0; j < std::min<int>(d, g.size()); ++j) grp[j] = g[j];
+  }
+  const int nG = *std::max_element(grp.begin(), grp.end());
+  auto move = [&](const std::vector<int>& idx, const arma::vec& vals) {
+    if (decoys) {
+      arma::vec dv(vals.n_elem);
+      for (size_t i = 0; i < idx.size(); ++i) dv[i] = 0.5 * (vals[i] + post.phi[idx[i]]) + 0.01;
+      post.propose(idx, dv);
+      post.reject();
+    }
+    const double ll = post.propose(idx, vals);
+    if (!std::isfinite(ll)) { post.reject(); return false; }
+    post.accept();
+    return true;
+  };
+  for (arma::uword r = 1; r < phis.n_rows; ++r) {
+    const arma::vec row = phis.row(r).t();
+    if (scale) {
+      const std::vector<int>& v = post.scaled;
+      const double c = row[v[0]] / post.phi[v[0]];
+      bool same = c != 1.0;
+      for (int j : v) same = same && std::fabs(row[j] / post.phi[j] - c) < 1e-12 * c;
+      if (same) {
+        if (decoys) { post.proposeScale(1.3); post.reject(); }
+        if (!std::isfinite(post.proposeScale(c))) { post.reject(); return out; }
+        post.accept();
+        for (int j : v) post.phi[j] = row[j];  // exact values
+      }
+    }
+    for (int g = 1; g <= nG; ++g) {
+      std::vector<int> idx;
+      for (int j = 0; j < d; ++j) if (grp[j] == g && row[j] != post.phi[j]) idx.push_back(j);
+      if (idx.empty()) continue;
+      arma::vec vals(idx.size());
+      for (size_t i = 0; i < idx.size(); ++i) vals[i] = row[idx[i]];
+      if (!move(idx, vals)) return out;
+    }
+    for (int j = 0; j < d; ++j) {
+      if (row[j] == post.phi[j]) continue;
+      if (!move(std::vector<int>{j}, arma::vec{row[j]})) return out;
+    }
+    out[r] = post.logLik();
+  }
+  return out;
+}
