@@ -251,7 +251,7 @@ test_that("validation in blocks of draws equals one call, and shows progress whe
 })
 
 test_that("with several outputs: an RMSE per output, and the output drawn as categorical", {
-  # issue 32: the raw RMSE pooled outputs of different units (here conc ~ 1
+  # The raw RMSE pooled outputs of different units (here conc ~ 1
   # and rate ~ 100), and plot() drew the output's indicator as a numeric input
   set.seed(3)
   x <- runif(30); t <- runif(30, 0.5, 3)

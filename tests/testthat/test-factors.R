@@ -353,7 +353,7 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
 })
 
 test_that("a missing level in the source, output or a categorical column is refused naming rows", {
-  # issue 32: an NA became a data set "NA" with its own noise, or a level
+  # An NA became a data set "NA" with its own noise, or a level
   # the simulator runs do not have
   pr <- two_outputs(seed = 3)
   field <- cbind(pr$field, lab = rep(c("A", "B"), length.out = nrow(pr$field)))
@@ -374,7 +374,7 @@ test_that("a missing level in the source, output or a categorical column is refu
 })
 
 test_that("a level correlation at +-1 is explained, and a split one is flagged by level_correlation()", {
-  # issue 32: rhoS piling at +1 was answered with "check that this prior's
+  # rhoS piling at +1 was answered with "check that this prior's
   # support is wide enough"; draws split between +1 and -1 were averaged
   pr <- two_outputs(seed = 3)
   set.seed(12)
@@ -398,7 +398,7 @@ test_that("a level correlation at +-1 is explained, and a split one is flagged b
 })
 
 test_that("messages name the output that is constant, and the field data sets' column for what it is", {
-  # issue 32: "constant for an output" did not say which; a field-only
+  # "constant for an output" did not say which; a field-only
   # column named by `output =`, and the data sets' column under a shared
   # bias in level_correlation() ("no categorical input"), were not explained
   pr <- two_outputs(seed = 3)
@@ -422,7 +422,7 @@ test_that("messages name the output that is constant, and the field data sets' c
 })
 
 test_that("a categorical column of field alone is not called a column of sim", {
-  # issue 32: "... that `sim` has not as categorical" for a column sim lacks
+  # "... that `sim` has not as categorical" for a column sim lacks
   pr <- two_outputs(seed = 3)
   field <- cbind(pr$field, lab = "A", site = "north")
   expect_snapshot(error = TRUE, calibrate(pr$sim, field, output = "out"))

@@ -96,7 +96,7 @@ test_that("loo() refuses what it cannot use", {
 
 test_that("unit = \"input\" leaves out every output and data set observed at an input together", {
   skip_if_not_installed("loo")
-  # issue 32: data sets at one input were grouped, outputs were not. Two
+  # Data sets at one input were grouped, outputs were not. Two
   # outputs at 6 inputs, a second laboratory repeating the first output at
   # 3 of them: 6 inputs, 15 observations
   set.seed(5)
@@ -123,7 +123,7 @@ test_that("unit = \"input\" leaves out every output and data set observed at an 
 
 test_that("loo() needs a few draws per chain", {
   skip_if_not_installed("loo")
-  # issue 32: ndraws = 3 with 2 chains gave one draw a chain and failed inside loo
+  # ndraws = 3 with 2 chains gave one draw a chain and failed inside loo
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
   expect_snapshot(error = TRUE, loo::loo(fit, ndraws = 3))

@@ -115,7 +115,7 @@ test_that("two independent outputs: kappa draws match the grid posterior", {
 })
 
 test_that("two outputs of different shapes pooled independently: kappa no wider than the better alone", {
-  # A = t1 exp(-t2 x), B = 100 (t1 + t2 x^2 / 2) (issue 31): 20 runs x 8
+  # A = t1 exp(-t2 x), B = 100 (t1 + t2 x^2 / 2): 20 runs x 8
   # x-points, 10 field points per output at the truth (2, 0.7), 1% noise,
   # no discrepancy
   set.seed(311)

@@ -149,7 +149,7 @@ test_that("a fixed parameter is shown as its value; an improper prior is not dra
 })
 
 test_that("fits plot: a row of panels per output and field data set", {
-  # issue 32: with source = the data sets were overlaid in one panel
+  # With source = the data sets were overlaid in one panel
   set.seed(3)
   x <- runif(30); t <- runif(30, 0.5, 3)
   sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),

@@ -80,7 +80,7 @@ test_that("a model that overstates the noise, or misplaces the mean, is caught",
   pp <- ppc_field(fixed_fit(noisy), ndraws = 8)
   expect_lt(pp$outside[["50%"]], 0.2)
   expect_match(capture.output(print(pp)), "overstates the noise", all = FALSE)
-  # issue 32: the cause is named where it is seen: sigma2E (scaled space,
+  # The cause is named where it is seen: sigma2E (scaled space,
   # times the response's variance) against the observations' mean squared
   # residual
   fit <- fixed_fit(noisy)

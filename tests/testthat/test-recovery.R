@@ -82,7 +82,7 @@ test_that("biased kinetics model: predictions cover zeta(t) = 3.5 exp(-1.7 t) + 
 })
 
 test_that("precise field data: the noise sd's 90% interval covers the truth, gp and none", {
-  # issue 27: eta(x, t) = exp(-t x) + x / 2, 40 runs, 10 field points at t =
+  # eta(x, t) = exp(-t x) + x / 2, 40 runs, 10 field points at t =
   # 1.5 with noise sd 0.01 (the response's sd is about 0.16) and no bias;
   # under the vignette's inverse gamma the noise sd's median was 0.08 and its
   # interval excluded 0.01
