@@ -127,7 +127,7 @@ failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   ell <- exp(opt$par[seq_len(d)])
   s2 <- exp(opt$par[d + 1L])
   mode <- laplace_mode(Z[keep, , drop = FALSE], y[keep], ell, s2)
-  structure(list(X = X, lower = lower, range = range, Z = Z[keep, , drop = FALSE],
+  structure(list(X = X, y_all = y, lower = lower, range = range, Z = Z[keep, , drop = FALSE],
                  y = y[keep], ell = ell, s2 = s2, f = mode$f, L = mode$L, sW = mode$sW,
                  grad = y[keep] - stats::plogis(mode$f), subsample = length(keep) < nrow(Z)),
             class = "fbc_failure_classifier")

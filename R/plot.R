@@ -18,6 +18,10 @@
 #'   95% prediction intervals against each experimental input (one facet
 #'   each; with several outputs or field data sets, `output =` or
 #'   `source =`, a row of facets for each). `parameter` is ignored.
+#' * `"failure"`: for a fit whose simulator runs failed in places, the
+#'   probability that a run fails (`predict(x, type = "failure")`) over two
+#'   inputs, `inputs`, the others held at the median of the runs, with the
+#'   successful and failed runs marked.
 #'
 #' Facets and axes use the data's own names: a calibration parameter is
 #' labelled by its input (`"g (kappa1)"`, and the axis `"g"`), a
@@ -30,10 +34,12 @@
 #'   `"alphaS"`, `"thetaB"`, `"alphaB"`, `"sigma2S"`, `"sigma2B"`,
 #'   `"sigma2E"`, `"muB"` (the bias's classes only with a bias GP, the
 #'   smoothness classes only for a family that has one).
-#' @param type `"density"`, `"trace"` or `"fits"`.
+#' @param type `"density"`, `"trace"`, `"fits"` or `"failure"`.
 #' @param xlab For `"fits"`, the names of the experimental inputs (one per
 #'   input; default the column names of the field data, else `x1`, ..., `xp`).
 #'   For the other types, the x-axis title.
+#' @param inputs For `"failure"`, the two inputs of the simulator to plot
+#'   against (names; default the first two).
 #' @param ... Not used: an argument given here is an error (a typo such
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return A ggplot object; print it to draw it, or add layers and themes.
@@ -46,11 +52,13 @@
 #' plot(fit)
 #' plot(fit, "thetaS", type = "trace")
 #' plot(fit, type = "fits", xlab = "height (m)")
-plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, ...) {
+plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, inputs = NULL,
+                     ...) {
   check_dots_empty(..., fn = plot.fbc, name = "plot")
   x <- check_fbc(x, "x")
-  type <- match_choice(type, c("density", "trace", "fits"), "type")
+  type <- match_choice(type, c("density", "trace", "fits", "failure"), "type")
   if (type == "fits") return(plot_fits(x, xlab))
+  if (type == "failure") return(plot_failure(x, inputs))
   if (!is.character(parameter) || length(parameter) != 1L || !(parameter %in% param_classes)) {
     cli::cli_abort(c(
       "{.arg parameter} must be one parameter class: {.or {.val {param_classes}}}.",
@@ -262,4 +270,42 @@ fits_rows <- function(x) {
   src <- if (is.null(out)) lab else substring(lab, nchar(out) + 2L)
   src <- paste(sc$source$name, src)
   if (is.null(out)) src else paste(out, src, sep = ", ")
+}
+
+# The probability of failure over two inputs (the others at the runs'
+# median), with the runs marked.
+plot_failure <- function(x, inputs) {
+  predict_failure(x, NULL) # refuses a fit without failed runs, naming why
+  cl <- x$model$design$failed$classifier
+  nm <- colnames(cl$X)
+  if (length(nm) < 2L) {
+    cli::cli_abort("{.code type = \"failure\"} plots against two numeric inputs, and the runs have one ({.val {nm}}).")
+  }
+  inputs <- inputs %||% nm[1:2]
+  if (!is.character(inputs) || length(inputs) != 2L || anyNA(inputs) || !all(inputs %in% nm) ||
+      inputs[1] == inputs[2]) {
+    cli::cli_abort(c(
+      "{.arg inputs} must name two different numeric inputs of the simulator, among {.val {nm}}.",
+      x = if (is.character(inputs)) "Got {.val {inputs}}." else "Got {.obj_type_friendly {inputs}}."
+    ))
+  }
+  g <- expand.grid(a = seq(min(cl$X[, inputs[1]]), max(cl$X[, inputs[1]]), length.out = 60),
+                   b = seq(min(cl$X[, inputs[2]]), max(cl$X[, inputs[2]]), length.out = 60))
+  G <- matrix(apply(cl$X, 2, stats::median), nrow(g), length(nm), byrow = TRUE,
+              dimnames = list(NULL, nm))
+  G[, inputs] <- as.matrix(g)
+  g$p <- failure_probability(cl, G)
+  runs <- data.frame(a = cl$X[, inputs[1]], b = cl$X[, inputs[2]],
+                     run = ifelse(cl$y_all == 1, "failed", "successful"))
+  ggplot2::ggplot(g, ggplot2::aes(x = .data$a, y = .data$b)) +
+    ggplot2::geom_raster(ggplot2::aes(fill = .data$p)) +
+    ggplot2::geom_point(data = runs, ggplot2::aes(shape = .data$run)) +
+    ggplot2::scale_fill_gradient(low = "white", high = "firebrick", limits = c(0, 1),
+                                 name = "P(run fails)") +
+    ggplot2::scale_shape_manual(values = c(failed = 4, successful = 1), name = NULL) +
+    ggplot2::labs(x = inputs[1], y = inputs[2],
+                  caption = if (length(nm) > 2L) {
+                    paste("Other inputs at the runs' median:",
+                          paste(setdiff(nm, inputs), collapse = ", "))
+                  })
 }

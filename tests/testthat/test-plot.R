@@ -172,3 +172,25 @@ test_that("fits plot: a row of panels per output and field data set", {
   fit2 <- calibrate(ballSim, ball, source = "lab", nMCMC = 60, nBurn = 30, nChains = 1)
   expect_identical(levels(plot(fit2, type = "fits")$data$output), c("lab A", "lab B"))
 })
+
+test_that("plot(type = \"failure\") maps the probability of failure over two inputs", {
+  s <- ballSim
+  s[s[, "g"] > 11 & s[, "h"] > 2.5, 1] <- NA
+  set.seed(7)
+  fit <- suppressMessages(calibrate(s, ballField, nMCMC = 100, nBurn = 50, nChains = 1,
+                                    showProgress = FALSE))
+  p <- plot(fit, type = "failure", inputs = c("g", "h"))
+  expect_s3_class(p, "ggplot")
+  d <- ggplot2::layer_data(p, 1)
+  expect_equal(nrow(d), 3600L)
+  # the failed corner (g > 11, h > 2.5) is likelier to fail than the opposite one
+  hi <- p$data$p[p$data$a > 12 & p$data$b > 3.2]
+  lo <- p$data$p[p$data$a < 8 & p$data$b < 1.5]
+  expect_gt(mean(hi), 0.7)
+  expect_lt(mean(lo), 0.2)
+  expect_equal(sum(ggplot2::layer_data(p, 2)$shape == 4), sum(is.na(s[, 1])))
+  expect_snapshot(plot(fit, type = "failure", inputs = c("g", "kappa")), error = TRUE)
+  set.seed(7)
+  clean <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 50, nChains = 1, showProgress = FALSE)
+  expect_snapshot(plot(clean, type = "failure"), error = TRUE)
+})
