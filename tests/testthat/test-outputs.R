@@ -164,3 +164,27 @@ test_that("independent outputs: refusals, and print() says how the outputs are m
   model <- calibrate(pr$sim, pr$field, output = "out", outputs = "independent", fit = FALSE)
   expect_output(print(model), "Outputs: +2 \\(conc, rate\\), independent")
 })
+
+test_that("missing field cells (an output absent at some field rows, long format): kappa matches the grid posterior", {
+  # the "rate" output is not measured at 4 of the 10 field inputs: those
+  # rows are absent; every hyperparameter fixed, the reference is the dense
+  # likelihood of the observed cells times kappa's prior
+  skip_if_not_slow()
+  pr <- two_outputs()
+  field <- pr$field[-c(12, 14, 17, 19), ]
+  hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.7, 10, 0.4),
+                         thetaBDist = "fixed", thetaBInit = c(1, 5), sigma2SDist = "fixed",
+                         sigma2SInit = 3.5, sigma2BDist = "fixed", sigma2BInit = 0.5,
+                         sigma2EDist = "fixed", sigma2EInit = 0.05, muBDist = "fixed", muBInit = 0)
+  set.seed(10)
+  fit <- calibrate(pr$sim, field, output = "out", outputs = "independent", nMCMC = 9000,
+                   nBurn = 1000, thinning = 4, nChains = 1, hypers = hyp)
+  d <- fit$model$data
+  expect_equal(nrow(d$Xf), 16L)
+  expect_identical(as.vector(table(fit$model$design$noise)), c(10L, 6L))
+  expect_kappa_grid(fit, function(phi) outputs_loglik_dense(d$Xf, d$yf, d$Xs, d$ys, phi, 2L),
+                    u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
+  # predictions at a missing cell carry that output's noise
+  pm <- predict(fit, data.frame(x = field$x[1:2], out = "rate"), method = "MAP")
+  expect_true(all(is.finite(pm$pred)))
+})
