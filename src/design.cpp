@@ -18,579 +18,84 @@
 // data, so a fantasised run both reweights the draws and moves each draw's
 // predictive mean and variance (target_var()).
 //
-// Per draw, one dense factor of the joint covariance of y, built by blocks
-// (design_system()): the simulator rows' block depends on the simulator's
-// hyperparameters only, so draws that share them (the plug-in's particles,
-// which differ in kappa alone) share it, and each draw adds its field rows'
-// Schur complement, which gives the exact log-likelihood too. The
-// conditional at candidates with any calibration input t (not the draw's
-// kappa, as Posterior::condition() has it) and their cross-covariances
-// come from that factor; the posterior object supplies the parameters'
-// layout only.
+// Every draw's conditionals, log-likelihood and prior covariances come from
+// the model's own posterior (Posterior::runConditional(), runPrior()): this
+// file holds the criterion only.
 #include "fbc.h"
 
 namespace {
 
-// The draws' conditionals at the candidates U (Nc rows): A_s = L_s^-1
-// Cov_s(y, eta(U)) (N x Nc, N = m + G: the runs and the field's distinct
-// inputs, field_groups(); slice s; kept for every draw only when a batch
-// or several outputs need them, else no slices), the means mu and variances v (Nc x S),
-// the log-likelihoods ll, the simulator variances s2S and the kernel's
-// parameters per draw (thS, alS: (p + q) x S; rhoS: the levels' partial
-// correlations, level_count() x S). With T target points: the
-// predictive means mT and variances VT of zeta(XT) (T x S) and their
-// covariances with the candidates' values CTU (T x Nc x S), given the data.
-//
-// With independent outputs (outputs = "independent", K of them) the data's
-// covariance is block diagonal over the outputs, each block its output's
-// system at its parameters (design_systems_outputs()): a candidate's
-// column of A holds its output's rows (its runs and field groups; zeros
-// below, to the largest output's count), so two candidates' columns meet
-// (A_a'A_b) only within an output (same_output(); between outputs the
-// product is 0); mu, v, mT, VT from its output's system, CTU zero
-// between outputs, ll the sum; the kernel's parameters and s2S per draw
-// and output (column or entry s + S o), outU each candidate's output.
+// The draws' conditionals at the candidates U (Nc rows) from the model's
+// posterior (RunConditional, per draw s): A's slice s (kept only when a
+// batch or a run of several values needs it), the means mu and variances
+// v (Nc x S, muT = mu'), the log-likelihoods ll, the variances' floors
+// (1e-12 of the smallest prior variance); with T target points the
+// predictive means mT, variances VT (T x S) and their covariances with the
+// candidates' values CTU (T x Nc x S). post and phis: the posterior and
+// the draws, for the prior covariances of pending points (prior_cov()).
 struct DesignSystems {
+  std::unique_ptr<Posterior> post;
+  arma::mat phis;
   arma::cube A, CTU;
-  arma::mat mu, muT, v, thS, alS, rhoS, mT, VT;  // muT = mu' (S x Nc)
-  arma::vec ll, s2S;
-  int T = 0, blocks = 1;
-  std::vector<int> outU;
+  arma::mat mu, muT, v, mT, VT;
+  arma::vec ll, floor;
+  int T = 0;
 };
 
-// Whether candidates a and b (columns of A) share an output: their columns'
-// product A_a'A_b is a term of their covariance given the data (always
-// with one output or shared outputs; DesignSystems).
-inline bool same_output(const DesignSystems& sys, int a, int b) {
-  return sys.outU.empty() || sys.outU[a] == sys.outU[b];
-}
-
-
-// The candidates' conditional means and variances from A (N x Nc) and the
-// residual r: mu_c = sum_i A_ic r_i, v_c = v0 - sum_i A_ic^2.
-void design_moments(const arma::mat& A, const arma::vec& r, double v0, double* mu, double* v) {
-  for (arma::uword c = 0; c < A.n_cols; ++c) {
-    const double* a = A.colptr(c);
-    double ar = 0.0, aa = 0.0;
-    for (arma::uword i = 0; i < A.n_rows; ++i) { ar += a[i] * r[i]; aa += a[i] * a[i]; }
-    mu[c] = ar;
-    v[c] = v0 - aa;
-  }
-}
-
-
-// The simulator GP's correlation Rs(X, Y) (d input columns) at thetaS th
-// and alphaS al, times the categorical inputs' level correlations
-// C_f[a_f(x), a_f(y)] (from rhoS rho; their indicator columns have thetaS
-// 0, src/levels.cpp); lower: the lower triangle only.
-void sim_corr(const Model& mod, int d, const double* th, const double* al, const double* rho,
-              const arma::mat& X, const arma::mat& Y, arma::mat& out, bool lower) {
-  kernel_corr(mod.kernS, X, Y, d, th, al, out, lower);
-  level_scale(mod.levels, rho, X, Y, out, lower);
-}
-
-// The same at the current draw post.phi.
-void sim_corr(const Posterior& post, const Model& mod, const arma::mat& X, const arma::mat& Y,
-              arma::mat& out, bool lower) {
-  const double* phi = post.phi.memptr();
-  sim_corr(mod, post.p + post.q, phi + post.iThetaS, phi + post.iAlphaS, phi + post.iRhoS, X, Y,
-           out, lower);
-}
-
-// The bias GP's correlation Rb(X, Y) over the experimental inputs at the
-// current draw, times the levels' correlations (rhoB) and, with a bias per
-// data set (srcX, srcY the rows' data sets; null without), the data sets'
-// D[srcX_i, srcY_j] (rhoD), as SchurPosterior::biasLevels() has them.
-void bias_corr(const Posterior& post, const Model& mod, const arma::mat& X, const int* srcX,
-               const arma::mat& Y, const int* srcY, arma::mat& out, bool lower) {
-  const double* phi = post.phi.memptr();
-  kernel_corr(mod.kernB, X, Y, post.p, phi + post.iThetaB, phi + post.iAlphaB, out, lower);
-  level_scale(mod.levels, phi + post.iRhoB, X, Y, out, lower);
-  if (srcX) source_scale(mod.sourceL, phi + post.iRhoD, srcX, srcY, out, lower);
-}
-
-// The simulator rows' part of a draw's system, which depends on the
-// simulator's hyperparameters (s2S, thetaS, alphaS, rhoS) only and so is shared by
-// draws that have the same (the plug-in's particles differ in kappa alone):
-//   L1 = chol(s2S (Rs(Xs, Xs) + nugget I)),  r1 = L1^-1 ys,
-//   A1 = L1^-1 s2S Rs(Xs, U),  mu1 = A1' r1,  naa1 = -diag(A1' A1),
-//   ld1 = sum log diag L1,  rr1 = r1' r1;  key: the hyperparameters they are for.
-struct SimBlock {
-  arma::mat L, A;
-  arma::vec r, mu, naa, key;
-  double ld = 0.0, rr = 0.0;
-};
-
-
-// The field rows grouped by input and measurement-error group: rows at the
-// same experimental input (replicates) share eta(x, kappa) and the bias,
-// and those of one noise group k (a data set) also their variance s2E_k, so
-// the data enter the conditionals only through each group's mean, measured
-// with variance s2E_k(g) / r_g (r_g rows), and the likelihood factorises as
-//   log N(yf, ys) = log N(ybar, ys)
-//                   - (sum_k [SS_k / s2E_k + (n_k - G_k) log s2E_k] + (n - G) log 2 pi + sum_g log r_g) / 2
-// with SS_k the squared deviations of group k's rows from their group's
-// mean, n_k its rows and G_k its groups. With a bias per data set
-// (`source`) the rows of one data set share its bias, so a group is also
-// within one data set. X: the G groups' inputs in order of appearance,
-// noise their noise groups and src their data sets (0-based; src empty
-// without), ybar their means, invr 1 / r_g; ss and extra (n_k - G_k) per
-// noise group.
-struct FieldGroups {
-  arma::mat X;
-  arma::vec ybar, invr, ss, extra;
-  std::vector<int> noise, src, first;  // first: each group's first row
-  double logr = 0.0;
-  int n = 0;
-};
-
-FieldGroups field_groups(const arma::mat& Xf, const arma::vec& yf, const std::vector<int>& noise,
-                         const std::vector<int>& source) {
-  const arma::uword n = Xf.n_rows;
-  const int K = noise.empty() ? 1 : *std::max_element(noise.begin(), noise.end()) + 1;
-  std::vector<int> key = noise;  // (noise group, data set) as one number
-  if (!source.empty()) {
-    key.resize(n);
-    for (arma::uword i = 0; i < n; ++i) key[i] = source[i] * K + (noise.empty() ? 0 : noise[i]);
-  }
-  std::vector<int> of;
-  const std::vector<int> first = group_rows(Xf, key, of);
-  const arma::uword G = first.size();
-  FieldGroups f;
-  f.n = n;
-  f.first = first;
-  f.X = Xf.rows(arma::conv_to<arma::uvec>::from(first));
-  f.noise.resize(G);
-  for (arma::uword g = 0; g < G; ++g) f.noise[g] = noise.empty() ? 0 : noise[first[g]];
-  if (!source.empty()) {
-    f.src.resize(G);
-    for (arma::uword g = 0; g < G; ++g) f.src[g] = source[first[g]];
-  }
-  f.ybar.zeros(G);
-  arma::vec r(G, arma::fill::zeros);
-  for (arma::uword i = 0; i < n; ++i) { f.ybar[of[i]] += yf[i]; r[of[i]] += 1.0; }
-  f.ybar /= r;
-  f.ss.zeros(K);
-  f.extra.zeros(K);
-  for (arma::uword i = 0; i < n; ++i) {
-    const int k = f.noise[of[i]];
-    f.ss[k] += (yf[i] - f.ybar[of[i]]) * (yf[i] - f.ybar[of[i]]);
-    f.extra[k] += 1.0;
-  }
-  for (arma::uword g = 0; g < G; ++g) f.extra[f.noise[g]] -= 1.0;
-  f.invr = 1.0 / r;
-  f.logr = arma::accu(arma::log(r));
-  return f;
-}
-
-// One draw's workspace: Xk = (Xf, kappa) (n x (p + q)), W = L1^-1 s2S
-// Rs(Xs, Xk) (m x n) and its transpose Wt, the field block S (n x n; its
-// factor L2 after design_system()), the bias correlation Rb (n x n), A2
-// (n x Nc), the residual r2 (n), the moments' field parts mu2, v2; for
-// targets Tk = (XT, kappa) (T x (p + q)), K1 (m x T), K2 (n x T), RbT
-// (n x T) and RTU (T x Nc).
-struct SystemWork {
-  arma::mat Xk, W, Wt, S, Rb, A2, Tk, K1, K2, RbT, RTU;
-  arma::vec r2, mu2, v2;
-};
-
-// The S-GaSP bias (Gu and Wang 2018) is the bias GP scaled on the sampler's
-// distinct field inputs XU (distinct within a data set with a bias per
-// data set), its discretization points: Rz = R - R (R + c I)^-1 R on them,
-// c = nu / lambdaZ (Posterior::biasModel()), and at new inputs
-// Posterior::biasModelCross(). The look-ahead's field groups (split further
-// by noise group) take their rows of it: group g is XU's row uOf[g]. RU, B,
-// Wz: workspaces; KT (nu x T), rT (T): the cross-correlation and variance
-// at the targets.
-struct SgaspBias {
-  bool on = false;
-  arma::mat XU, RU, B, Wz, KT;
-  arma::vec rT;
-  std::vector<int> srcU, uOf;
-};
-
-SgaspBias sgasp_bias(const Posterior& post, const Model& mod, const arma::mat& Xf,
-                     const FieldGroups& fg) {
-  SgaspBias z;
-  z.on = post.sgasp && post.bias;
-  if (!z.on) return z;
-  std::vector<int> of;
-  const std::vector<int> first = group_rows(Xf, mod.source, of);
-  z.XU = Xf.rows(arma::conv_to<arma::uvec>::from(first));
-  if (!mod.source.empty())
-    for (int i : first) z.srcU.push_back(mod.source[i]);
-  for (int i : fg.first) z.uOf.push_back(of[i]);
-  z.RU.set_size(first.size(), first.size());
-  return z;
-}
-
-// The bias correlation of the field groups (lower triangle of Rb): the bias
-// GP's kernel, times the data sets' correlation D[src_g, src_h] with a bias
-// per data set, and for the S-GaSP scaled on XU (sgasp_bias()). False if
-// the S-GaSP's matrix is not positive definite.
-bool field_bias_corr(const Posterior& post, const Model& mod, const FieldGroups& fg,
-                     SgaspBias& z, arma::mat& Rb) {
-  if (!z.on) {
-    const int* src = fg.src.empty() ? nullptr : fg.src.data();
-    bias_corr(post, mod, fg.X, src, fg.X, src, Rb, true);
-    return true;
-  }
-  const int* src = z.srcU.empty() ? nullptr : z.srcU.data();
-  bias_corr(post, mod, z.XU, src, z.XU, src, z.RU, true);
-  if (!post.biasModel(z.RU, z.B, z.Wz)) return false;
-  const int n = fg.X.n_rows;
-  for (int j = 0; j < n; ++j)
-    for (int i = j; i < n; ++i) {
-      const int a = z.uOf[i], b = z.uOf[j];
-      Rb(i, j) = a >= b ? z.RU(a, b) : z.RU(b, a);
-    }
-  return true;
-}
-
-// The shared block for the current draw's simulator hyperparameters
-// (recomputed only when they differ from the last draw's). False if the
-// simulator block is not positive definite.
-bool sim_block(const Posterior& post, const Model& mod, const arma::mat& Xs,
-               const arma::vec& ys, const arma::mat& U, double nugget, SimBlock& sb) {
-  const arma::vec& phi = post.phi;
-  const int m = post.m, d = post.p + post.q, nl = level_count(mod.levels);
-  arma::vec key(2 * d + 1 + nl);
-  key[0] = phi[post.iSigma2S];
-  for (int k = 0; k < d; ++k) {
-    key[1 + k] = phi[post.iThetaS + k];
-    key[1 + d + k] = phi[post.iAlphaS + k];
-  }
-  for (int k = 0; k < nl; ++k) key[1 + 2 * d + k] = phi[post.iRhoS + k];
-  if (sb.key.n_elem == key.n_elem && arma::all(sb.key == key)) return true;
-  sb.key.reset();
-  const double s2S = key[0];
-  sb.L.set_size(m, m);
-  sim_corr(post, mod, Xs, Xs, sb.L, true);
-  sb.L *= s2S;
-  for (int i = 0; i < m; ++i) sb.L(i, i) *= 1.0 + nugget;
-  if (!chol_lower(sb.L)) return false;
-  sb.r = ys;
-  solve_lower(sb.L, sb.r);
-  sb.rr = arma::dot(sb.r, sb.r);
-  sb.ld = 0.0;
-  for (int i = 0; i < m; ++i) sb.ld += std::log(sb.L(i, i));
-  sb.A.set_size(m, U.n_rows);
-  sim_corr(post, mod, Xs, U, sb.A, false);
-  sb.A *= s2S;
-  solve_lower(sb.L, sb.A);
-  sb.mu.set_size(U.n_rows);
-  sb.naa.set_size(U.n_rows);
-  design_moments(sb.A, sb.r, 0.0, sb.mu.memptr(), sb.naa.memptr());
-  sb.key = key;
-  return true;
-}
-
-// One draw's target part (sb, W, S = L2, r2, A2 from design_system()):
-//   K1 = L1^-1 s2S Rs(Xs, Tk),  K2 = L2^-1 (s2S Rs(Xk, Tk) + s2B Rb(Xf, XT) - W' K1),
-//   mT = muB + K1' r1 + K2' r2,  VT = s2S + s2B - diag(K1'K1 + K2'K2)   (predict()'s type "mean"),
-//   CTU = s2S Rs(Tk, U) - K1' A1 - K2' A2;
-// for the S-GaSP Rb(Xf, XT) is its cross-correlation and the s2B of VT s2B rz(XT)
-// (sgasp_bias()).
-void design_targets(const Posterior& post, const Model& mod, const arma::mat& Xs,
-                    const arma::mat& Xf, const arma::mat& XT, const arma::mat& U,
-                    const SimBlock& sb, SgaspBias& z, SystemWork& w, DesignSystems& out,
-                    arma::uword s) {
-  const arma::vec& phi = post.phi;
-  const int p = post.p, q = post.q;
-  const double s2S = phi[post.iSigma2S];
-  for (int k = 0; k < q; ++k) w.Tk.col(p + k).fill(phi[post.iKappa + k]);
-  sim_corr(post, mod, Xs, w.Tk, w.K1, false);
-  w.K1 *= s2S;
-  solve_lower(sb.L, w.K1);
-  sim_corr(post, mod, w.Xk, w.Tk, w.K2, false);
-  w.K2 *= s2S;
-  double s2B = 0.0;
-  if (post.bias) {
-    s2B = phi[post.iSigma2B];
-    if (!z.on) {
-      bias_corr(post, mod, Xf, nullptr, XT, nullptr, w.RbT, false);
-    } else {
-      z.KT.set_size(z.XU.n_rows, XT.n_rows);  // (biasModelCross() writes over it)
-      bias_corr(post, mod, z.XU, nullptr, XT, nullptr, z.KT, false);
-      post.biasModelCross([&]() {
-        arma::mat R(z.XU.n_rows, z.XU.n_rows);
-        bias_corr(post, mod, z.XU, nullptr, z.XU, nullptr, R, false);
-        return R;
-      }, z.KT, z.rT);
-      for (arma::uword t = 0; t < XT.n_rows; ++t)
-        for (arma::uword g = 0; g < Xf.n_rows; ++g) w.RbT(g, t) = z.KT(z.uOf[g], t);
-    }
-    w.K2 += s2B * w.RbT;
-  }
-  w.K2 -= w.W.t() * w.K1;
-  solve_lower(w.S, w.K2);
-  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
-  out.mT.col(s) = muB + w.K1.t() * sb.r + w.K2.t() * w.r2;
-  if (!z.on) {
-    out.VT.col(s) = (s2S + s2B) - arma::sum(arma::square(w.K1), 0).t() -
-                    arma::sum(arma::square(w.K2), 0).t();
-  } else {
-    out.VT.col(s) = (s2S + s2B * z.rT) - arma::sum(arma::square(w.K1), 0).t() -
-                    arma::sum(arma::square(w.K2), 0).t();
-  }
-  sim_corr(post, mod, w.Tk, U, w.RTU, false);
-  out.CTU.slice(s) = s2S * w.RTU - w.K1.t() * sb.A - w.K2.t() * w.A2;
-}
-
-// One draw's system, the simulator rows' block sb (sim_block()) and the
-// field groups' Schur complement (fg, field_groups(): Xf below is fg.X, yf
-// the groups' means, R = diag(1 / r_g)). With Xk = (Xf, kappa) and prior
-// mean mu0 = (0, muB) the joint covariance of y = (ys, yf) is
-//   C = [ s2S (Rs(Xs,Xs) + nugget I)   s2S Rs(Xs,Xk)                      ]
-//       [ .                  s2S Rs(Xk,Xk) + s2B Rb(Xf,Xf) + s2E R        ],
-// L = chol(C) = [L1 0; W' L2] with W = L1^-1 s2S Rs(Xs, Xk),
-//   L2 = chol(s2S Rs(Xk,Xk) + s2B Rb + s2E R - W'W),  r2 = L2^-1 (yf - muB - W' r1)
-//   (s2E R: diag(s2E_k(g) / r_g), group g's noise variance over its rows;
-//   with a bias per data set Rb(g, h) carries the factor D[src_g, src_h]),
-//   A = L^-1 s2S Rs(Z, U) = [A1; A2],  A2 = L2^-1 (s2S Rs(Xk, U) - W' A1),
-//   mu = A' r = mu1 + A2' r2,  v = s2S (1 + nugget) - diag(A1'A1) - diag(A2'A2),
-//   ll = log N(ys, every field row) = -((m + n) log 2 pi + 2 (ld1 + sum log diag L2)
-//        + r1'r1 + r2'r2 + sum_k [SS_k / s2E_k + (n_k - G_k) log s2E_k] + sum_g log r_g) / 2.
-// False if C is not positive definite.
-bool design_system(const Posterior& post, const Model& mod, const FieldGroups& fg,
-                   const arma::mat& Xs, const arma::vec& ys,
-                   const arma::mat& U, const arma::mat& XT, double nugget, SimBlock& sb,
-                   SgaspBias& z, SystemWork& w, DesignSystems& out, arma::uword s) {
-  if (!sim_block(post, mod, Xs, ys, U, nugget, sb)) return false;
-  const arma::vec& phi = post.phi;
-  const arma::mat& Xf = fg.X;
-  const int m = post.m, n = Xf.n_rows, p = post.p, q = post.q, N = m + n;
-  const double s2S = phi[post.iSigma2S];
-  const double* s2E = phi.memptr() + post.iSigma2E;  // one per noise group
-  for (int k = 0; k < q; ++k) w.Xk.col(p + k).fill(phi[post.iKappa + k]);
-  const double* thS = phi.memptr() + post.iThetaS;
-  const double* alS = phi.memptr() + post.iAlphaS;
-  sim_corr(post, mod, Xs, w.Xk, w.W, false);
-  w.W *= s2S;
-  solve_lower(sb.L, w.W);
-  sim_corr(post, mod, w.Xk, w.Xk, w.S, true);
-  w.S *= s2S;
-  if (post.bias) {
-    if (!field_bias_corr(post, mod, fg, z, w.Rb)) return false;
-    const double s2B = phi[post.iSigma2B];
-    for (int j = 0; j < n; ++j)
-      for (int i = j; i < n; ++i) w.S(i, j) += s2B * w.Rb(i, j);
-  }
-  for (int i = 0; i < n; ++i) w.S(i, i) += s2E[fg.noise[i]] * fg.invr[i];
-  syrk_lower(w.W, -1.0, 1.0, w.S);
-  w.Wt = w.W.t();
-  if (!chol_lower(w.S)) return false;
-  const double muB = post.biasMean ? phi[post.iMuB] : 0.0;
-  w.r2 = fg.ybar - muB - w.W.t() * sb.r;
-  solve_lower(w.S, w.r2);
-  double ld2 = 0.0;
-  for (int i = 0; i < n; ++i) ld2 += std::log(w.S(i, i));
-  double quad = (m + fg.n) * LOG_2PI + 2.0 * (sb.ld + ld2) + sb.rr + arma::dot(w.r2, w.r2);
-  // the replicates' deviations from their groups' means, per noise group
-  for (arma::uword k = 0; k < fg.ss.n_elem; ++k) {
-    quad += fg.ss[k] / s2E[k];
-    quad += fg.extra[k] * std::log(s2E[k]);
-  }
-  out.ll[s] = -0.5 * (quad + fg.logr);
-  const int Nc = U.n_rows;
-  if (Nc > 0) {
-    sim_corr(post, mod, w.Xk, U, w.A2, false);
-    w.A2 *= s2S;
-    w.A2 -= w.Wt * sb.A;
-    solve_lower(w.S, w.A2);
-    design_moments(w.A2, w.r2, 0.0, w.mu2.memptr(), w.v2.memptr());
-    const double v0 = s2S * (1.0 + nugget);
-    double* mu = out.mu.colptr(s);
-    double* v = out.v.colptr(s);
-    for (int c = 0; c < Nc; ++c) {
-      mu[c] = sb.mu[c] + w.mu2[c];
-      v[c] = v0 + sb.naa[c] + w.v2[c];
-    }
-    // (kept: every draw's slice, a single draw's too)
-    if (out.A.n_slices > 0) {
-      out.A.slice(s).rows(0, m - 1) = sb.A;
-      out.A.slice(s).rows(m, N - 1) = w.A2;
-    }
-  }
-  if (out.T > 0) design_targets(post, mod, Xs, Xf, XT, U, sb, z, w, out, s);
-  out.s2S[s] = s2S;
-  std::copy(thS, thS + p + q, out.thS.colptr(s));
-  std::copy(alS, alS + p + q, out.alS.colptr(s));
-  std::copy(phi.memptr() + post.iRhoS, phi.memptr() + post.iRhoS + out.rhoS.n_rows, out.rhoS.colptr(s));
-  return true;
-}
-
-// Every draw's system (rows of phis) at the candidates U (and the target
-// points XT, T x p, none for kappa's criterion) for one simulator GP (mod:
-// the model of the data, its algebra dense), the simulator rows' block
-// shared by consecutive draws with the same simulator hyperparameters;
-// keepA: every draw's A (a batch's pending points need them). post: the
-// dense posterior of these data (its layout; its phi set to each draw's);
-// fg: the field's groups (system_field_groups()).
-DesignSystems block_systems(Posterior& post, const FieldGroups& fg, const arma::mat& Xf,
-                            const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis,
-                            const arma::mat& U, const arma::mat& XT, double nugget,
-                            const Model& mod, bool keepA) {
-  const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
-  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
-  const int m = Xs.n_rows, n = fg.X.n_rows, N = m + n, S = phis.n_rows, Nc = U.n_rows;
-  const int T = XT.n_rows;
-  DesignSystems out;
-  out.T = T;
-  out.A.set_size(N, Nc, keepA ? S : 0);
-  out.mu.set_size(Nc, S);
-  out.v.set_size(Nc, S);
-  out.thS.set_size(p + q, S);
-  out.alS.set_size(p + q, S);
-  out.rhoS.set_size(level_count(mod.levels), S);
-  out.ll.set_size(S);
-  out.s2S.set_size(S);
-  SimBlock sb;
-  SgaspBias z = sgasp_bias(post, mod, Xf, fg);
-  SystemWork w;
-  w.Xk.set_size(n, p + q);
-  w.Xk.cols(0, p - 1) = fg.X;
-  w.W.set_size(m, n);
-  w.Wt.set_size(n, m);
-  w.S.set_size(n, n);
-  w.Rb.set_size(n, n);
-  w.A2.set_size(n, Nc);
-  w.mu2.set_size(Nc);
-  w.v2.set_size(Nc);
-  if (T > 0) {
-    out.mT.set_size(T, S);
-    out.VT.set_size(T, S);
-    out.CTU.set_size(T, Nc, S);
-    w.Tk.set_size(T, p + q);
-    w.Tk.cols(0, p - 1) = XT;
-    w.K1.set_size(m, T);
-    w.K2.set_size(n, T);
-    w.RbT.set_size(n, T);
-    w.RTU.set_size(T, Nc);
-  }
-  for (int s = 0; s < S; ++s) {
-    post.phi = phis.row(s).t();
-    if (!design_system(post, mod, fg, Xs, ys, U, XT, nugget, sb, z, w, out, s))
-      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
-    if (s % 100 == 99) Rcpp::checkUserInterrupt();
-  }
-  return out;
-}
-
-// The field's groups (field_groups()) for block_systems(), the data sets
-// and noise groups checked against the field's rows and post's sigma2E.
-FieldGroups system_field_groups(const Posterior& post, const arma::mat& Xf, const arma::vec& yf,
-                                const Model& mod) {
-  if (!mod.source.empty() && mod.source.size() != Xf.n_rows)
-    Rcpp::stop("the data sets must give one per field row");
-  const int K = mod.noise.empty() ? 1 : *std::max_element(mod.noise.begin(), mod.noise.end()) + 1;
-  if (post.layout.length_of("sigma2E") != K || (!mod.noise.empty() && mod.noise.size() != Xf.n_rows))
-    Rcpp::stop("the noise groups must give one group per field row and sigma2E one variance per group");
-  return field_groups(Xf, yf, mod.noise, mod.source);
-}
-
-// The rows of X whose output (the output's indicator columns, f) is o.
-arma::uvec output_rows(const arma::mat& X, const LevelInput& f, int o) {
-  std::vector<arma::uword> r;
-  for (arma::uword i = 0; i < X.n_rows; ++i)
-    if (level_of(X, i, f) == o) r.push_back(i);
-  return arma::uvec(r);
-}
-
-// block_systems() with independent outputs: each output's system from its
-// rows and its parameters (OutputsPosterior's blocks, their posteriors
-// dense as mod's algebra is), put together as DesignSystems describes.
-DesignSystems design_systems_outputs(const arma::mat& Xf, const arma::vec& yf,
-                                     const arma::mat& Xs, const arma::vec& ys,
-                                     const arma::mat& phis, const arma::mat& U,
-                                     const arma::mat& XT, double nugget, const Model& mod,
-                                     bool keepA) {
-  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, mod);
-  OutputsPosterior& op = dynamic_cast<OutputsPosterior&>(*pp);
-  if (phis.n_cols != (arma::uword)op.d) Rcpp::stop("phis must have %d columns", op.d);
-  const int K = mod.nOutputs(), S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
-  // A's rows: the largest output's runs and field groups (block_systems()'
-  // m + n), so that each block is placed as it is made and freed (A is the
-  // bulk: the peak is the assembled A and one block's)
-  int N = 0;
-  std::vector<FieldGroups> fgs;
-  for (int o = 0; o < K; ++o) {
-    fgs.push_back(system_field_groups(op.block(o), op.blockXf(o), op.blockYf(o), op.blockModel(o)));
-    N = std::max(N, (int)(op.blockXs(o).n_rows + fgs[o].X.n_rows));
-  }
-  DesignSystems out;
-  out.T = T;
-  out.blocks = K;
-  out.A.zeros(N, Nc, keepA ? S : 0);
-  out.mu.set_size(Nc, S);
-  out.v.set_size(Nc, S);
-  out.ll.zeros(S);
-  out.s2S.set_size(S * K);
-  out.outU.assign(Nc, 0);
-  if (T > 0) {
-    out.mT.set_size(T, S);
-    out.VT.set_size(T, S);
-    out.CTU.zeros(T, Nc, S);
-  }
-  for (int o = 0; o < K; ++o) {
-    const arma::uvec uo = output_rows(U, mod.outputs, o), to = output_rows(XT, mod.outputs, o);
-    const arma::mat ph = phis.cols(arma::conv_to<arma::uvec>::from(op.blockMap(o)));
-    const DesignSystems bo = block_systems(op.block(o), fgs[o], op.blockXf(o),
-                                           op.blockXs(o), op.blockYs(o), ph, U.rows(uo),
-                                           XT.rows(to), nugget, op.blockModel(o), keepA);
-    const int No = bo.A.n_rows;
-    if (No > N) Rcpp::stop("output %d's system has %d rows, not at most %d", o + 1, No, N);
-    if (o == 0) {
-      out.thS.set_size(bo.thS.n_rows, S * K);
-      out.alS.set_size(bo.alS.n_rows, S * K);
-      out.rhoS.set_size(bo.rhoS.n_rows, S * K);
-    }
-    for (arma::uword c : uo) out.outU[c] = o;
-    out.mu.rows(uo) = bo.mu;
-    out.v.rows(uo) = bo.v;
-    out.ll += bo.ll;
-    out.s2S.subvec(S * o, S * o + S - 1) = bo.s2S;
-    out.thS.cols(S * o, S * o + S - 1) = bo.thS;
-    out.alS.cols(S * o, S * o + S - 1) = bo.alS;
-    out.rhoS.cols(S * o, S * o + S - 1) = bo.rhoS;
-    if (keepA && uo.n_elem > 0)
-      for (int s = 0; s < S; ++s)
-        for (arma::uword k = 0; k < uo.n_elem; ++k)
-          out.A.slice(s).col(uo[k]).rows(0, No - 1) = bo.A.slice(s).col(k);
-    if (T > 0 && to.n_elem > 0) {
-      out.mT.rows(to) = bo.mT;
-      out.VT.rows(to) = bo.VT;
-      for (int s = 0; s < S; ++s)
-        out.CTU.slice(s).submat(to, uo) = bo.CTU.slice(s);
-    }
-  }
-  return out;
-}
-
-// Every draw's system (block_systems(); with independent outputs
-// design_systems_outputs()) on the dense algebra; mod: the model read.
+// Every draw's conditionals (rows of phis) at the candidates U and the
+// target points XT (T x p; none for kappa's criterion) on the model's
+// posterior; keepA: every draw's A.
 DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& XT, double nugget, const Rcpp::List& model,
-                             Model& mod, bool keepA) {
+                             bool keepA) {
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
-  mod = read_model(model, p, q);
+  const Model mod = read_model(model, p, q);
   if (!mod.emulator) Rcpp::stop("the look-ahead handles simulator runs (a simulator GP)");
-  mod.algebra = ALG_DENSE;
   if (!mod.source.empty() && XT.n_rows > 0)
     Rcpp::stop("a prediction target needs one bias, not one per data set");
   if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
   if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
-  DesignSystems out;
-  if (mod.nOutputs() > 1) {
-    out = design_systems_outputs(Xf, yf, Xs, ys, phis, U, XT, nugget, mod, keepA);
-  } else {
-    std::unique_ptr<Posterior> post = make_posterior(Xf, yf, Xs, ys, nugget, mod);
-    out = block_systems(*post, system_field_groups(*post, Xf, yf, mod), Xf, Xs, ys, phis, U, XT,
-                        nugget, mod, keepA);
+  DesignSystems sys;
+  sys.post = make_posterior(Xf, yf, Xs, ys, nugget, mod);
+  Posterior& post = *sys.post;
+  if (phis.n_cols != (arma::uword)post.d) Rcpp::stop("phis must have %d columns", post.d);
+  const int S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
+  sys.phis = phis;
+  sys.T = T;
+  sys.mu.set_size(Nc, S);
+  sys.v.set_size(Nc, S);
+  sys.ll.set_size(S);
+  sys.floor.zeros(S);
+  if (T > 0) { sys.mT.set_size(T, S); sys.VT.set_size(T, S); }
+  RunConditional rc;
+  for (int s = 0; s < S; ++s) {
+    if (!post.init(phis.row(s).t()))
+      Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
+    sys.ll[s] = post.logLik();
+    if (Nc + T > 0) {
+      post.runConditional(U, XT, rc);
+      if (s == 0) {
+        sys.A.set_size(rc.A.n_rows, Nc, keepA ? S : 0);
+        if (T > 0) sys.CTU.set_size(T, Nc, S);
+      }
+      if (keepA) sys.A.slice(s) = rc.A;
+      sys.mu.col(s) = rc.mu;
+      sys.v.col(s) = rc.v;
+      if (Nc > 0) sys.floor[s] = 1e-12 * rc.v0.min() / (1.0 + nugget);
+      if (T > 0) { sys.mT.col(s) = rc.mT; sys.VT.col(s) = rc.VT; sys.CTU.slice(s) = rc.CTU; }
+    }
+    if (s % 100 == 99) Rcpp::checkUserInterrupt();
   }
-  out.muT = out.mu.t();
-  return out;
+  sys.muT = sys.mu.t();
+  return sys;
+}
+
+// Draw s's prior covariance of the simulator's values at rows X and Y of
+// the candidates (the model's: Posterior::runPrior()).
+void prior_cov(const DesignSystems& sys, int s, const arma::mat& X, const arma::mat& Y,
+               arma::mat& out) {
+  sys.post->runPrior(sys.phis.row(s).t(), X, Y, out);
 }
 
 // w_s = exp(L_s - mx) for s < S (L_s <= mx).
@@ -744,54 +249,8 @@ double crit_value(LookAhead& la, const double* L, double mx, int j, int c, doubl
   return la.entropy ? weighted_entropy(la, L, mx) : weighted_var(la, L, mx);
 }
 
-// Draw s's prior covariance of the simulator's values at rows X and Y of
-// the candidates: s2S Rs(X, Y); with independent outputs (sys.blocks K >
-// 1; oX, oY the rows' outputs) output o's s2S_o Rs_o between two rows of
-// output o, 0 between outputs.
-void prior_cov(const DesignSystems& sys, const Model& mod, int s, const arma::mat& X,
-               const int* oX, const arma::mat& Y, const int* oY, arma::mat& out) {
-  const int q = X.n_cols;
-  if (sys.blocks == 1) {
-    sim_corr(mod, q, sys.thS.colptr(s), sys.alS.colptr(s), sys.rhoS.colptr(s), X, Y, out, false);
-    out *= sys.s2S[s];
-    return;
-  }
-  const int S = sys.s2S.n_elem / sys.blocks;
-  arma::mat R;
-  out.zeros(X.n_rows, Y.n_rows);
-  for (int o = 0; o < sys.blocks; ++o) {
-    // the kernel between output o's rows of X and of Y only
-    std::vector<arma::uword> io, jo;
-    for (arma::uword i = 0; i < X.n_rows; ++i) if (oX[i] == o) io.push_back(i);
-    for (arma::uword j = 0; j < Y.n_rows; ++j) if (oY[j] == o) jo.push_back(j);
-    if (io.empty() || jo.empty()) continue;
-    const arma::uvec ri(io), rj(jo);
-    const int so = s + S * o;
-    R.set_size(ri.n_elem, rj.n_elem);
-    sim_corr(mod, q, sys.thS.colptr(so), sys.alS.colptr(so), sys.rhoS.colptr(so), X.rows(ri),
-             Y.rows(rj), R, false);
-    out.submat(ri, rj) = sys.s2S[so] * R;
-  }
-}
-
-// The smallest simulator variance of draw s (of its outputs' with
-// independent outputs): the scale of the conditional variances' floor.
-double min_s2S(const DesignSystems& sys, int s) {
-  const int S = sys.s2S.n_elem / sys.blocks;
-  double x = sys.s2S[s];
-  for (int o = 1; o < sys.blocks; ++o) x = std::min(x, sys.s2S[s + S * o]);
-  return x;
-}
-
-// Per draw, the candidates' values given the data and the pending points'
-// fantasised values: with A_P the pending columns of A,
-//   SPP = s2S (Rs(U_P, U_P) + nugget I) - A_P'A_P,
-//   ScP = s2S Rs(U, U_P) - A'A_P (a pending candidate's rows: SPP),
-// (the columns' products within an output only, same_output()),
-//   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
-// cv floored at 1e-12 s2S; B and D = YP' - mu_P are kept (Bk, Dk) and M
-// formed where it is used (cond_means()). Without pending points M is mu.
-// With targets (CT = CTU_s, CTP its pending columns):
+// Draw s's targets given the data and the pending points (SPP, ScP from
+// pending_conditionals(); CT = CTU_s, CTP its pending columns):
 //   BT = CTP SPP^-1,  VTP = VT - diag(BT CTP'),  MT(:, j) = mT + BT (YP(j, :)' - mu_P),
 //   CP = CT - BT ScP'  (without pending points VTP = VT, MT = mT, CP = CT).
 void pending_targets(const DesignSystems& sys, const arma::mat& SPP, const arma::mat& ScP,
@@ -818,8 +277,8 @@ void pending_targets(const DesignSystems& sys, const arma::mat& SPP, const arma:
 }
 
 // In-place lower Cholesky factor of the K x K symmetric a (column-major,
-// lower triangle read) with each pivot floored at fl (as a single value's
-// variance is: cv >= 1e-12 s2S); returns sum log diag.
+// lower triangle read) with each pivot floored at fl (a single value's
+// variance's floor, DesignSystems::floor); returns sum log diag.
 double chol_floor(double* a, int K, double fl) {
   double ld = 0.0;
   for (int j = 0; j < K; ++j) {
@@ -840,83 +299,64 @@ double chol_floor(double* a, int K, double fl) {
 // Draw s's covariance of each run's K values given the data and the
 // pending points (B, ScP from pending_conditionals(); k pending points),
 // rows a != b of one run:
-//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 = s2S Rs(U_a, U_b), prior_cov();
-//   A_a'A_b within an output only, same_output()),
+//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 the prior, prior_cov()),
 // its diagonal the rows' variances cv (pending_conditionals()' own), and
 // its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in the
-// output alone (checked in design_look_ahead()), so Rs among them is the
-// first run's.
-void run_covariances(const DesignSystems& sys, const arma::mat& U, const Model& mod,
-                     const arma::vec& cv, const arma::mat& B, const arma::mat& ScP, int k, int s,
-                     LookAhead& la) {
+// output alone (checked in design_look_ahead()), so the prior among them
+// is the first run's.
+void run_covariances(const DesignSystems& sys, const arma::mat& U, const arma::vec& cv,
+                     const arma::mat& B, const arma::mat& ScP, int k, int s, LookAhead& la) {
   const int K = la.K, S = la.S;
   const arma::mat& As = sys.A.slice(s);
   const int N = As.n_rows;
-  arma::mat C0(K, K);
-  const int* o0 = sys.outU.empty() ? nullptr : sys.outU.data();
-  prior_cov(sys, mod, s, U.rows(0, K - 1), o0, U.rows(0, K - 1), o0, C0);
-  const double fl = 1e-12 * min_s2S(sys, s);
+  arma::mat C0;
+  prior_cov(sys, s, U.rows(0, K - 1), U.rows(0, K - 1), C0);
   for (int r = 0; r < la.Nr; ++r) {
     double* L = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
     for (int l = 0; l < K; ++l) {
       L[l + K * l] = cv[r * K + l];
       for (int i = l + 1; i < K; ++i) {
         const int a = r * K + i, b = r * K + l;
-        double x = C0(i, l);
-        if (same_output(sys, a, b)) x -= dot_sum(As.colptr(a), As.colptr(b), N);
+        double x = C0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
         for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
         L[i + K * l] = x;
       }
     }
-    la.ldK[(size_t)r * S + s] = chol_floor(L, K, fl);
+    la.ldK[(size_t)r * S + s] = chol_floor(L, K, sys.floor[s]);
   }
 }
 
-void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Model& mod,
-                          double nugget, LookAhead& la) {
+// Per draw, the candidates' values given the data and the pending points'
+// fantasised values: with A_P the pending columns of A,
+//   SPP = C0(U_P, U_P) (nugget on its diagonal) - A_P'A_P,
+//   ScP = C0(U, U_P) - A'A_P (a pending candidate's rows: SPP),
+//   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
+// cv floored (sys.floor); B and D = YP' - mu_P are kept (Bk, Dk) and M
+// formed where it is used (cond_means()). Without pending points M is mu.
+// With targets (CT = CTU_s, CTP its pending columns):
+//   BT = CTP SPP^-1,  VTP = VT - diag(BT CTP'),  MT(:, j) = mT + BT (YP(j, :)' - mu_P),
+//   CP = CT - BT ScP'  (without pending points VTP = VT, MT = mT, CP = CT).
+void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double nugget,
+                          LookAhead& la) {
   const int k = la.P.size();
   const arma::uvec Pu = arma::conv_to<arma::uvec>::from(la.P);
   const arma::mat UP = U.rows(Pu);
-  // the rows' outputs (independent outputs; prior_cov())
-  std::vector<int> outP(k);
-  for (int i = 0; i < k && !sys.outU.empty(); ++i) outP[i] = sys.outU[la.P[i]];
-  const int* oU = sys.outU.empty() ? nullptr : sys.outU.data();
-  const int* oP = sys.outU.empty() ? nullptr : outP.data();
   const int S = la.S, Nc = la.Nc;
-  arma::mat SPP(k, k), ScP(la.Nc, k), B, Sinv;
+  arma::mat SPP(k, k), ScP(la.Nc, k), B;
   la.Bk.resize((size_t)S * Nc * k);
   la.Dk.resize((size_t)S * k * la.J);
   for (int s = 0; s < la.S; ++s) {
-    const double s2S = sys.s2S[s];
     arma::vec cv = sys.v.col(s);
     if (k > 0) {
       const arma::mat& As = sys.A.slice(s);
       const arma::mat AP = As.cols(Pu);
-      prior_cov(sys, mod, s, UP, oP, UP, oP, SPP);
+      prior_cov(sys, s, UP, UP, SPP);
       SPP.diag() *= 1.0 + nugget;
-      // one GP: BLAS's A_P'A_P (the picks bit-identical to before the
-      // outputs' path); independent outputs: only products within an
-      // output, the columns of two outputs holding different rows
-      if (sys.outU.empty()) {
-        SPP -= AP.t() * AP;
-      } else {
-        for (int i = 0; i < k; ++i)
-          for (int j = 0; j <= i; ++j)
-            if (same_output(sys, la.P[i], la.P[j])) {
-              const double x = dot_sum(AP.colptr(i), AP.colptr(j), AP.n_rows);
-              SPP(i, j) -= x;
-              if (j < i) SPP(j, i) -= x;
-            }
-      }
-      prior_cov(sys, mod, s, U, oU, UP, oP, ScP);
-      // (N-long dot products: BLAS dgemm's per-call cost was a tenth of a
-      // batch's look-ahead)
-      const int N = As.n_rows;
-      for (int i = 0; i < k; ++i)
-        for (int c = 0; c < la.Nc; ++c)
-          if (same_output(sys, c, la.P[i])) ScP(c, i) -= dot_sum(As.colptr(c), AP.colptr(i), N);
+      SPP -= AP.t() * AP;
+      prior_cov(sys, s, U, UP, ScP);
+      ScP -= As.t() * AP;
       for (int i = 0; i < k; ++i) ScP.row(la.P[i]) = SPP.row(i);
-      B = arma::solve(SPP, ScP.t()).t();  // ScP SPP^-1
+      B = arma::solve(SPP, ScP.t()).t();
       cv -= arma::sum(B % ScP, 1);
       // B and D = YP' - mu_P kept with the draws innermost, for
       // cond_means()
@@ -930,11 +370,11 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, const Mo
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
     if (la.K > 1) {
       // (runs: their factors; the rows' sd are score_candidates()' alone)
-      run_covariances(sys, U, mod, cv, B, ScP, k, s, la);
+      run_covariances(sys, U, cv, B, ScP, k, s, la);
       continue;
     }
     for (int c = 0; c < la.Nc; ++c) {
-      la.sd(s, c) = std::sqrt(std::max(cv[c], 1e-12 * s2S));
+      la.sd(s, c) = std::sqrt(std::max(cv[c], sys.floor[s]));
       la.isd(s, c) = 1.0 / la.sd(s, c);
       la.lsd(s, c) = std::log(la.sd(s, c));
     }
@@ -1103,7 +543,6 @@ struct LookAheadRun {
   ~LookAheadRun() { --lookAheadsAlive; }
   LookAheadRun(const LookAheadRun&) = delete;
   LookAheadRun& operator=(const LookAheadRun&) = delete;
-  Model mod;
   DesignSystems sys;
   LookAhead la;
   arma::mat U, Z, Y, scores;
@@ -1124,7 +563,7 @@ void look_ahead_steps(LookAheadRun& run, int upto) {
   const double* mus[16];
   for (; run.step < upto; ++run.step) {
     const int step = run.step;
-    pending_conditionals(sys, run.U, run.mod, run.nugget, la);
+    pending_conditionals(sys, run.U, run.nugget, la);
     if (step == 0) run.variance = crit_value(la, run.lw.memptr(), run.lw.max(), 0, -1, 0.0, nullptr);
     if (K == 1) score_candidates(sys, la, run.s0.data(), run.Z.colptr(step), run.gain, run.Y);
     else score_runs(sys, la, run.s0.data(), run.Z, step * K, run.gain, run.Y);
@@ -1177,8 +616,7 @@ Rcpp::List look_ahead_result(const LookAheadRun& run) {
 Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                             const arma::mat& XT, double nugget, const Rcpp::List& model) {
-  Model mod;
-  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, mod, false);
+  DesignSystems sys = design_systems(Xf, yf, Xs, ys, phis, U, XT, nugget, model, false);
   return Rcpp::List::create(Rcpp::Named("mu") = sys.mu, Rcpp::Named("v") = sys.v,
                             Rcpp::Named("ll") = sys.ll, Rcpp::Named("mT") = sys.mT,
                             Rcpp::Named("VT") = sys.VT);
@@ -1246,11 +684,10 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   run.order.assign(order.begin(), order.end());
   run.n = n;
   run.kept = arma::regspace<arma::uvec>(0, phis.n_rows - 1);
-  Model& mod = run.mod;
   if (plugin && prune > 0 && phis.n_rows > 2) {
     // the likelihoods alone first (no candidates, no targets)
     const arma::vec lw = lw0 + design_systems(Xf, yf, Xs, ys, phis, arma::mat(0, U.n_cols),
-                                              arma::mat(0, Xf.n_cols), nugget, model, mod,
+                                              arma::mat(0, Xf.n_cols), nugget, model,
                                               false).ll;
     const arma::uvec top = arma::stable_sort_index(lw, "descend");
     const double lo = lw[top[0]] - prune;
@@ -1262,7 +699,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   const arma::mat ph = phis.rows(run.kept), kap = kappa.rows(run.kept);
   const arma::vec lwk = lw0.elem(run.kept);
   run.nugget = nugget;
-  run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, mod, n > 1 || K > 1);
+  run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, n > 1 || K > 1);
   LookAhead& la = run.la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = run.sys.T; la.K = K; la.Nr = Nr;
   la.entropy = entropy;
