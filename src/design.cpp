@@ -1,38 +1,27 @@
 // Design of new simulator runs (propose_runs(), R/propose_runs.R): the
 // look-ahead criterion over retained draws phi_s (kappa and every
-// hyperparameter, scaled space).
-//
-// For each draw the simulator's value y* at a candidate input u = (x, t)
-// is Gaussian given the data y = (ys, yf): N(mu_s(u), v_s(u)). A run at u
-// returning y* reweights the draws by N(y*; mu_s, v_s), exactly. The
-// criterion is the expected reduction of kappa's posterior variance (summed
-// over the calibration inputs) over fantasised values y*, and a batch is
+// hyperparameter, scaled space). Per draw the simulator's value y* at a
+// candidate input u = (x, t) is Gaussian given the data, N(mu_s(u), v_s(u)),
+// so a run at u returning y* reweights the draws by N(y*; mu_s, v_s),
+// exactly. The criterion is the expected reduction, over fantasised values
+// y*, of kappa's posterior variance (summed over the calibration inputs) or
+// entropy, or with target points XT of the calibrated prediction's
+// integrated variance (zeta(x) = eta(x, kappa) + delta(x), predict(type =
+// "mean"), moved by each fantasised run too: target_var()). A batch is
 // chosen greedily, each next point scored with the pending points' values
-// fantasised jointly with it (per draw their joint Gaussian).
-//
-// With a prediction target (target points XT, T > 0) the criterion is the
-// expected reduction of the calibrated prediction's integrated posterior
-// predictive variance instead: zeta(x) = eta(x, kappa) + delta(x) (predict(
-// type = "mean")) averaged over the T points. Per draw zeta(XT), the
-// candidates' values and the pending points' are jointly Gaussian given the
-// data, so a fantasised run both reweights the draws and moves each draw's
-// predictive mean and variance (target_var()).
-//
-// Every draw's conditionals, log-likelihood and prior covariances come from
-// the model's own posterior (Posterior::runConditional(), runPrior()): this
-// file holds the criterion only.
+// fantasised jointly with it. Every draw's conditionals, log-likelihood and
+// prior covariances are the model's own posterior's
+// (Posterior::runConditional(), runPrior()): this file holds the criterion.
 #include "fbc.h"
 
 namespace {
 
-// The draws' conditionals at the candidates U (Nc rows) from the model's
-// posterior (RunConditional, per draw s): A's slice s (kept only when a
-// batch or a run of several values needs it), the means mu and variances
-// v (Nc x S, muT = mu'), the log-likelihoods ll, the variances' floors
-// (1e-12 of the smallest prior variance); with T target points the
-// predictive means mT, variances VT (T x S) and their covariances with the
-// candidates' values CTU (T x Nc x S). post and phis: the posterior and
-// the draws, for the prior covariances of pending points (prior_cov()).
+// The draws' conditionals at the candidates U (Nc rows), per draw s
+// (RunConditional): A's slice s (kept when a batch or a run of several
+// values needs it), means mu and variances v (Nc x S, muT = mu'), the
+// log-likelihoods ll, the variances' floors (1e-12 of the smallest prior
+// variance), with T targets mT, VT (T x S) and CTU (T x Nc x S); post and
+// phis give the pending points' prior covariances (prior_cov()).
 struct DesignSystems {
   std::unique_ptr<Posterior> post;
   arma::mat phis;
@@ -103,33 +92,28 @@ void exp_weights(const double* L, double mx, int S, double* w) {
   for (int s = 0; s < S; ++s) w[s] = std::exp(L[s] - mx);
 }
 
-// The greedy look-ahead's state: S draws, Nc candidates, J fantasies.
-// kap (S x q) kappa, ksq (S) |kappa_s|^2, base (S x J) the draws'
-// log-weights given the pending points' fantasies, YP (J x k) those values,
-// P the pending candidates; per step, with pending points, the terms of
-// the conditional means given them (cond_means()), s fastest: B's
-// Bk[s + S (c + Nc i)] and the fantasies' deviations Dk[s + S (i + k j)];
-// the standard deviations sd, their inverses and logs (S x Nc), mbuf a
-// draw's means. With T targets, given
-// the pending points: the targets' means MT[s + S (t + T j)], variances
-// VTP (S x T) and covariances with the candidates CP[s + S (t + T c)];
-// tb, tv (S x T) target_terms() of the candidate scored.
-//
-// With several outputs (K > 1) a run gives K values, the candidates' rows
-// r K .. r K + K - 1 (Nr = Nc / K runs, the same inputs but the output):
-// per run r and draw s the lower Cholesky factor of the K values'
-// covariance given the data and the pending points, LK[(r S + s) K^2 ..]
-// (column-major), and its sum log diag ldK[r S + s]; eK (S x K) a
-// fantasy's standardised residuals L_s^-1 (y - M_s); with targets gK
-// (S x T x K) and vK (S x T), run_target_terms() of the run scored.
-// `entropy`: without targets the criterion is kappa's entropy, not its
-// variance (crit_value()).
+// The greedy look-ahead's state: S draws, Nr runs of K values each (the
+// candidates' rows r K .. r K + K - 1, the same inputs but the output; K = 1
+// with one output: Nc = Nr K), J fantasies. kap (S x q) kappa, ksq (S)
+// |kappa_s|^2, base (S x J) the draws' log-weights given the pending points'
+// fantasies, YP (J x k) those values, P the pending candidates; per step,
+// with pending points, the terms of the conditional means given them
+// (cond_means()), s fastest: B's Bk[s + S (c + Nc i)] and the fantasies'
+// deviations Dk[s + S (i + k j)]; mbuf the draws' means. Per run r and draw s
+// the lower Cholesky factor of its K values' covariance given the data and
+// the pending points, LK[(r S + s) K^2 ..] (column-major), and its sum log
+// diag ldK[r S + s]; eK (S x K) a fantasy's standardised residuals
+// L_s^-1 (y - M_s). With T targets, given the pending points: the targets'
+// means MT[s + S (t + T j)], variances VTP (S x T) and covariances with the
+// candidates CP[s + S (t + T c)]; gK (S x T x K) and vK (S x T)
+// run_target_terms() of the run scored. `entropy`: without targets the
+// criterion is kappa's entropy, not its variance (crit_value()).
 struct LookAhead {
   int S, Nc, J, T = 0, K = 1, Nr = 0;
   bool entropy = false;
-  arma::mat kap, base, YP, sd, isd, lsd, VTP;
+  arma::mat kap, base, YP, VTP;
   arma::vec ksq, Lbuf, wbuf;
-  std::vector<double> MT, CP, Bk, Dk, mbuf, tb, tv, LK, ldK, eK, gK, vK;
+  std::vector<double> MT, CP, Bk, Dk, mbuf, LK, ldK, eK, gK, vK;
   std::vector<int> P;
 };
 
@@ -162,14 +146,11 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 
 // The calibrated prediction's variance averaged over the T targets under
 // the weights w_s = exp(L_s - mx), in fantasy j given the pending points;
-// with a run at candidate c returning y (draw means mu_s there): per draw
-// b = CP_stc / cv_sc (cv = sd^2), m_st = MT_stj + b (y - mu_s),
-// v_st = max(VTP_st - b CP_stc, 0); without a run (c < 0) m = MT, v = VTP;
-// after run c of K > 1 values m_st = MT_stj + g_st'e_s, v_st = vK_st (e_s
-// from run_log_density(), g and vK from run_target_terms(); y, mu unused).
+// after a run (`run`) m_st = MT_stj + g_st'e_s, v_st = vK_st (e_s from
+// run_log_density(), g and vK from run_target_terms()), before it m = MT,
+// v = VTP:
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
-double target_var(LookAhead& la, const double* L, double mx, int j, int c, double y,
-                  const double* mu) {
+double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   const int S = la.S;
   double* w = la.wbuf.memptr();
   exp_weights(L, mx, S, w);
@@ -178,51 +159,20 @@ double target_var(LookAhead& la, const double* L, double mx, int j, int c, doubl
   double out = 0.0;
   for (int t = 0; t < la.T; ++t) {
     const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
-    const double* vt = la.VTP.colptr(t);
+    const double* v = run ? la.vK.data() + (size_t)S * t : la.VTP.colptr(t);
     double a1 = 0.0, a2 = 0.0;
-    if (c < 0) {
-      for (int s = 0; s < S; ++s) { a1 += w[s] * (vt[s] + mt[s] * mt[s]); a2 += w[s] * mt[s]; }
-    } else if (la.K > 1) {
-      const double* v = la.vK.data() + (size_t)S * t;
-      for (int s = 0; s < S; ++s) {
-        double ms = mt[s];
-        for (int i = 0; i < la.K; ++i)
-          ms += la.gK[s + (size_t)S * (t + (size_t)la.T * i)] * la.eK[s + (size_t)S * i];
-        a1 += w[s] * (v[s] + ms * ms);
-        a2 += w[s] * ms;
-      }
-    } else {
-      // b and v for candidate c (target_terms(), the same in every fantasy)
-      const double* b = la.tb.data() + (size_t)S * t;
-      const double* v = la.tv.data() + (size_t)S * t;
-      for (int s = 0; s < S; ++s) {
-        const double ms = mt[s] + b[s] * (y - mu[s]);
-        a1 += w[s] * (v[s] + ms * ms);
-        a2 += w[s] * ms;
-      }
+    for (int s = 0; s < S; ++s) {
+      double ms = mt[s];
+      for (int i = 0; run && i < la.K; ++i)
+        ms += la.gK[s + (size_t)S * (t + (size_t)la.T * i)] * la.eK[s + (size_t)S * i];
+      a1 += w[s] * (v[s] + ms * ms);
+      a2 += w[s] * ms;
     }
     out += a1 / sw - (a2 / sw) * (a2 / sw);
   }
   return out / la.T;
 }
 
-// target_var()'s terms of candidate c, which no fantasy changes (computed
-// once for its J fantasies): b_st = CP_stc / cv_sc, v_st = max(VTP_st -
-// b_st CP_stc, 0), in la.tb and la.tv (s fastest).
-void target_terms(LookAhead& la, int c) {
-  const int S = la.S;
-  const double* isd = la.isd.colptr(c);
-  for (int t = 0; t < la.T; ++t) {
-    const double* cp = la.CP.data() + (size_t)S * (t + (size_t)la.T * c);
-    const double* vt = la.VTP.colptr(t);
-    double* b = la.tb.data() + (size_t)S * t;
-    double* v = la.tv.data() + (size_t)S * t;
-    for (int s = 0; s < S; ++s) {
-      b[s] = cp[s] * isd[s] * isd[s];
-      v[s] = std::max(vt[s] - b[s] * cp[s], 0.0);
-    }
-  }
-}
 
 // Kappa's entropy under the weights w_s = exp(L_s - mx), the draws being
 // the plug-in's kappa values (a grid or a uniform sample: the entropy of
@@ -243,9 +193,8 @@ double weighted_entropy(LookAhead& la, const double* L, double mx) {
 
 // The criterion's value: the targets' variance, or kappa's entropy
 // (la.entropy) or variance.
-double crit_value(LookAhead& la, const double* L, double mx, int j, int c, double y,
-                  const double* mu) {
-  if (la.T > 0) return target_var(la, L, mx, j, c, y, mu);
+double crit_value(LookAhead& la, const double* L, double mx, int j, bool run) {
+  if (la.T > 0) return target_var(la, L, mx, j, run);
   return la.entropy ? weighted_entropy(la, L, mx) : weighted_var(la, L, mx);
 }
 
@@ -307,17 +256,15 @@ double chol_floor(double* a, int K, double fl) {
 void run_covariances(const DesignSystems& sys, const arma::mat& U, const arma::vec& cv,
                      const arma::mat& B, const arma::mat& ScP, int k, int s, LookAhead& la) {
   const int K = la.K, S = la.S;
-  const arma::mat& As = sys.A.slice(s);
-  const int N = As.n_rows;
   arma::mat C0;
-  prior_cov(sys, s, U.rows(0, K - 1), U.rows(0, K - 1), C0);
+  if (K > 1) prior_cov(sys, s, U.rows(0, K - 1), U.rows(0, K - 1), C0);
   for (int r = 0; r < la.Nr; ++r) {
     double* L = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
     for (int l = 0; l < K; ++l) {
       L[l + K * l] = cv[r * K + l];
       for (int i = l + 1; i < K; ++i) {
         const int a = r * K + i, b = r * K + l;
-        double x = C0(i, l) - dot_sum(As.colptr(a), As.colptr(b), N);
+        double x = C0(i, l) - dot_sum(sys.A.slice(s).colptr(a), sys.A.slice(s).colptr(b), sys.A.n_rows);
         for (int p = 0; p < k; ++p) x -= B(a, p) * ScP(b, p);
         L[i + K * l] = x;
       }
@@ -368,16 +315,7 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double n
       }
     }
     if (la.T > 0) pending_targets(sys, SPP, ScP, Pu, s, la);
-    if (la.K > 1) {
-      // (runs: their factors; the rows' sd are score_candidates()' alone)
-      run_covariances(sys, U, cv, B, ScP, k, s, la);
-      continue;
-    }
-    for (int c = 0; c < la.Nc; ++c) {
-      la.sd(s, c) = std::sqrt(std::max(cv[c], sys.floor[s]));
-      la.isd(s, c) = 1.0 / la.sd(s, c);
-      la.lsd(s, c) = std::log(la.sd(s, c));
-    }
+    run_covariances(sys, U, cv, B, ScP, k, s, la);
   }
 }
 
@@ -401,43 +339,6 @@ inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, i
   return buf;
 }
 
-// Each candidate's gain given the pending points: fantasy j of candidate c
-// is Y(c, j) = M_src[j](c, j) + sd_src[j](c) z_j (z common to every
-// candidate); the draws are reweighted by N(Y; M_s(c, j), sd_s(c)^2), the
-// normal's constant left out (it cancels):
-//   gain(c) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa)
-// (with targets the prediction's variance, target_var(), before and after).
-void score_candidates(const DesignSystems& sys, LookAhead& la, const int* src,
-                      const double* z, arma::vec& gain, arma::mat& Y) {
-  double before = 0.0;
-  for (int j = 0; j < la.J; ++j) {
-    const double* b = la.base.colptr(j);
-    before += crit_value(la, b, *std::max_element(b, b + la.S), j, -1, 0.0, nullptr);
-  }
-  before /= la.J;
-  double* L = la.Lbuf.memptr();
-  for (int c = 0; c < la.Nc; ++c) {
-    double after = 0.0;
-    if (la.T > 0) target_terms(la, c);
-    for (int j = 0; j < la.J; ++j) {
-      const double* mu = cond_means(sys, la, c, j, la.mbuf.data());
-      const double* isd = la.isd.colptr(c);
-      const double* lsd = la.lsd.colptr(c);
-      const int r = src[j];
-      const double y = mu[r] + la.sd(r, c) * z[j];
-      Y(c, j) = y;
-      const double* b = la.base.colptr(j);
-      double mx = R_NegInf;
-      for (int s = 0; s < la.S; ++s) {
-        const double e = (y - mu[s]) * isd[s];
-        L[s] = b[s] - 0.5 * e * e - lsd[s];
-        mx = std::max(mx, L[s]);
-      }
-      after += crit_value(la, L, mx, j, c, y, mu);
-    }
-    gain[c] = before - after / la.J;
-  }
-}
 
 // Run r's K rows' conditional means in fantasy j (cond_means(), S each,
 // into la.mbuf's K slices): mus[i] for row r K + i.
@@ -491,18 +392,20 @@ void run_target_terms(LookAhead& la, int r) {
     }
 }
 
-// score_candidates() for runs of K values (K > 1): fantasy j of run r is
+// Each run's gain given the pending points: fantasy j of run r is
 // y = M_src[j](r, j) + LK_r,src[j] z_j (z_j: Z's K deviates of row j, common
 // to every run), the draws reweighted by its K-variate normal density
-// (run_log_density()); gain(r) as there, over the Nr runs; Y (Nc x J) the
-// fantasised values by row.
+// (run_log_density(), the normal's constant left out: it cancels):
+//   gain(r) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa)
+// (with targets the prediction's variance, target_var(), before and after);
+// Y (Nc x J) the fantasised values by row.
 void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const arma::mat& Z,
                 int col, arma::vec& gain, arma::mat& Y) {
   const int K = la.K, S = la.S, J = la.J;
   double before = 0.0;
   for (int j = 0; j < J; ++j) {
     const double* b = la.base.colptr(j);
-    before += crit_value(la, b, *std::max_element(b, b + S), j, -1, 0.0, nullptr);
+    before += crit_value(la, b, *std::max_element(b, b + S), j, false);
   }
   before /= J;
   double* L = la.Lbuf.memptr();
@@ -525,24 +428,16 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
       std::copy(b, b + S, L);
       run_log_density(la, r, mus, y, L);
       const double mx = *std::max_element(L, L + S);
-      after += crit_value(la, L, mx, j, r, 0.0, nullptr);
+      after += crit_value(la, L, mx, j, true);
     }
     gain[r] = before - after / J;
   }
 }
 
-// Look-aheads alive (design_look_ahead_live(): each is freed on return
-// or on release, not left to R's garbage collector).
-static int lookAheadsAlive = 0;
-
 // A look-ahead in progress (design_look_ahead()): the systems, the state,
 // the inputs the steps read (U, the deviates Z, `order`: 0 = greedy) and
-// the results of the `step` steps run so far. Not copied (one per count).
+// the results of the `step` steps run so far.
 struct LookAheadRun {
-  LookAheadRun() { ++lookAheadsAlive; }
-  ~LookAheadRun() { --lookAheadsAlive; }
-  LookAheadRun(const LookAheadRun&) = delete;
-  LookAheadRun& operator=(const LookAheadRun&) = delete;
   DesignSystems sys;
   LookAhead la;
   arma::mat U, Z, Y, scores;
@@ -564,27 +459,18 @@ void look_ahead_steps(LookAheadRun& run, int upto) {
   for (; run.step < upto; ++run.step) {
     const int step = run.step;
     pending_conditionals(sys, run.U, run.nugget, la);
-    if (step == 0) run.variance = crit_value(la, run.lw.memptr(), run.lw.max(), 0, -1, 0.0, nullptr);
-    if (K == 1) score_candidates(sys, la, run.s0.data(), run.Z.colptr(step), run.gain, run.Y);
-    else score_runs(sys, la, run.s0.data(), run.Z, step * K, run.gain, run.Y);
+    if (step == 0) run.variance = crit_value(la, run.lw.memptr(), run.lw.max(), 0, false);
+    score_runs(sys, la, run.s0.data(), run.Z, step * K, run.gain, run.Y);
     for (int c : la.P) run.gain[c / K] = R_NegInf;
     run.scores.col(step) = run.gain;
     const int b = run.order.size() > 0 ? run.order[step] - 1 : (int)run.gain.index_max();
     run.chosen[step] = b + 1;
     run.best[step] = run.gain[b];
     for (int j = 0; j < la.J; ++j) {
-      if (K > 1) {
-        run_means(sys, la, b, j, mus);
-        double y[16];
-        for (int i = 0; i < K; ++i) y[i] = run.Y(b * K + i, j);
-        run_log_density(la, b, mus, y, la.base.colptr(j));
-        continue;
-      }
-      const double* mu = cond_means(sys, la, b, j, la.mbuf.data());
-      for (int s = 0; s < la.S; ++s) {
-        const double e = (run.Y(b, j) - mu[s]) * la.isd(s, b);
-        la.base(s, j) += -0.5 * e * e - la.lsd(s, b);
-      }
+      run_means(sys, la, b, j, mus);
+      double y[16];
+      for (int i = 0; i < K; ++i) y[i] = run.Y(b * K + i, j);
+      run_log_density(la, b, mus, y, la.base.colptr(j));
     }
     for (int i = 0; i < K; ++i) {
       la.P.push_back(b * K + i);
@@ -610,8 +496,8 @@ Rcpp::List look_ahead_result(const LookAheadRun& run) {
 
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each
-// draw (design_system()); with target points XT (T x p) their predictive
-// means mT and variances VT (T x S).
+// draw; with target points XT (T x p) their predictive means mT and
+// variances VT (T x S).
 // [[Rcpp::export(.design_systems)]]
 Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                             const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
@@ -623,29 +509,20 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 }
 
 // The greedy look-ahead: n points chosen one at a time, each maximising
-// the expected reduction of kappa's weighted posterior variance (or, with
-// target points XT, T x p, of the calibrated prediction's integrated
-// variance there) given the pending points (score_candidates()). Base log-weights lw0 (+ ll with
-// `plugin`), normalised w; fantasy j comes from draw src[j], the first s
-// with sum_{r <= s} w_r >= usrc[j] (usrc uniforms: the draws by w), with the
-// normal deviate Z(j, step) in each step; after a pick the base
-// log-weights gain its log-densities. With `order` (1-based, n distinct
-// candidates) step k takes candidate order[k] instead of the best: the
-// gains of given points in a given order. With `plugin` and prune > 0 the
-// draws whose weight lw0 + ll is under exp(-prune) of the largest are left
-// out first (the two largest always kept): they add nothing but their cost.
-// With `outputs` K > 1 the candidates are runs of K rows each (U's rows
-// r K .. r K + K - 1, alike but for the output's columns), a pick a run,
-// scored with its K values fantasised jointly (score_runs(); step k's
-// deviates Z's columns k K .. k K + K - 1) and pending as K points.
-// With `entropy` (and no targets) the criterion is the expected reduction
-// of kappa's entropy (weighted_entropy(), for the plug-in's kappa values).
-// Returns the picks (1-based), their gains, the current variance (or
-// entropy), every candidate's gain per step (scores, Nc x n) and the draws
-// scored (kept, 1-based). With `steps` < n only the first steps are run
-// and the list holds the look-ahead in progress too (`state`, for
-// design_look_ahead_resume(): the same results as running all n at once),
-// the picks and scores those of the steps run.
+// the criterion's expected reduction given the pending points
+// (score_runs()). Base log-weights lw0 (+ ll with `plugin`), normalised w;
+// fantasy j comes from draw src[j], the first s with sum_{r <= s} w_r >=
+// usrc[j], with the normal deviates Z(j, step K ..) in each step. With
+// `order` (1-based, n distinct candidates) step k takes order[k] instead of
+// the best. With `plugin` and prune > 0 the draws whose weight lw0 + ll is
+// under exp(-prune) of the largest are left out first (the two largest
+// kept). With `outputs` K > 1 the candidates are runs of K rows each (U's
+// rows r K .. r K + K - 1, alike but for the output's columns). `entropy`:
+// kappa's entropy, not its variance. Returns the picks (1-based), their
+// gains, the current variance (or entropy), every run's gain per step
+// (scores, Nr x n) and the draws scored (kept, 1-based); with `steps` < n
+// only the first steps, and the look-ahead in progress (`state`, for
+// design_look_ahead_resume(): the same results as all n at once).
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
@@ -715,27 +592,18 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   }
   la.base = arma::repmat(run.lw, 1, la.J);
   la.YP.set_size(la.J, 0);
-  la.sd.set_size(la.S, la.Nc);
-  la.isd.set_size(la.S, la.Nc);
-  la.lsd.set_size(la.S, la.Nc);
   la.Lbuf.set_size(la.S);
   la.mbuf.resize((size_t)la.S * K);  // cond_means()'s (run_means()': K of them)
   la.wbuf.set_size(la.S);
+  la.LK.resize((size_t)K * K * la.S * Nr);
+  la.ldK.resize((size_t)la.S * Nr);
+  la.eK.resize((size_t)la.S * K);
   if (la.T > 0) {
     la.VTP.set_size(la.S, la.T);
     la.MT.resize((size_t)la.S * la.T * la.J);
     la.CP.resize((size_t)la.S * la.T * la.Nc);
-    la.tb.resize((size_t)la.S * la.T);  // target_terms()'s
-    la.tv.resize((size_t)la.S * la.T);
-  }
-  if (K > 1) {
-    la.LK.resize((size_t)K * K * la.S * Nr);
-    la.ldK.resize((size_t)la.S * Nr);
-    la.eK.resize((size_t)la.S * K);
-    if (la.T > 0) {
-      la.gK.resize((size_t)la.S * la.T * K);
-      la.vK.resize((size_t)la.S * la.T);
-    }
+    la.gK.resize((size_t)la.S * la.T * K);
+    la.vK.resize((size_t)la.S * la.T);
   }
   run.gain.set_size(Nr);
   run.best.set_size(n);
@@ -768,7 +636,3 @@ void design_look_ahead_release(SEXP state) {
   Rcpp::XPtr<LookAheadRun> xp(state);
   xp.release();
 }
-
-// The number of look-aheads alive (for tests: 0 after pick_runs()).
-// [[Rcpp::export(.design_look_ahead_live)]]
-int design_look_ahead_live() { return lookAheadsAlive; }
