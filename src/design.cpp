@@ -32,8 +32,7 @@ struct DesignSystems {
 };
 
 // Every draw's conditionals (rows of phis) at the candidates U and the
-// target points XT (T x p; none for kappa's criterion) on the model's
-// posterior; keepA: every draw's A.
+// targets XT (T x p; none for kappa's criterion); keepA: every draw's A.
 DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
                              const arma::mat& XT, double nugget, const Rcpp::List& model,
@@ -52,10 +51,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   const int S = phis.n_rows, Nc = U.n_rows, T = XT.n_rows;
   sys.phis = phis;
   sys.T = T;
-  sys.mu.set_size(Nc, S);
-  sys.v.set_size(Nc, S);
-  sys.ll.set_size(S);
-  sys.floor.zeros(S);
+  sys.mu.set_size(Nc, S); sys.v.set_size(Nc, S); sys.ll.set_size(S); sys.floor.zeros(S);
   if (T > 0) { sys.mT.set_size(T, S); sys.VT.set_size(T, S); }
   RunConditional rc;
   for (int s = 0; s < S; ++s) {
@@ -69,8 +65,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
         if (T > 0) sys.CTU.set_size(T, Nc, S);
       }
       if (keepA) sys.A.slice(s) = rc.A;
-      sys.mu.col(s) = rc.mu;
-      sys.v.col(s) = rc.v;
+      sys.mu.col(s) = rc.mu; sys.v.col(s) = rc.v;
       if (Nc > 0) sys.floor[s] = 1e-12 * rc.v0.min() / (1.0 + nugget);
       if (T > 0) { sys.mT.col(s) = rc.mT; sys.VT.col(s) = rc.VT; sys.CTU.slice(s) = rc.CTU; }
     }
@@ -80,8 +75,7 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   return sys;
 }
 
-// Draw s's prior covariance of the simulator's values at rows X and Y of
-// the candidates (the model's: Posterior::runPrior()).
+// Draw s's prior covariance of the simulator's values at rows X and Y.
 void prior_cov(const DesignSystems& sys, int s, const arma::mat& X, const arma::mat& Y,
                arma::mat& out) {
   sys.post->runPrior(sys.phis.row(s).t(), X, Y, out);
@@ -106,8 +100,7 @@ void exp_weights(const double* L, double mx, int S, double* w) {
 // L_s^-1 (y - M_s). With T targets, given the pending points: the targets'
 // means MT[s + S (t + T j)], variances VTP (S x T) and covariances with the
 // candidates CP[s + S (t + T c)]; gK (S x T x K) and vK (S x T)
-// run_target_terms() of the run scored. `entropy`: without targets the
-// criterion is kappa's entropy, not its variance (crit_value()).
+// run_target_terms() of the run scored; `entropy`: see crit_value().
 struct LookAhead {
   int S, Nc, J, T = 0, K = 1, Nr = 0;
   bool entropy = false;
@@ -128,17 +121,12 @@ double dot_sum(const double* a, const double* b, int S) {
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
 // sum_k (sum_s w_s k_sk)^2.
 double weighted_var(LookAhead& la, const double* L, double mx) {
-  const int q = la.kap.n_cols, S = la.S;
   double* w = la.wbuf.memptr();
-  exp_weights(L, mx, S, w);
-  double sum[18];  // q <= 16
-  sum[0] = dot_sum(w, nullptr, S);
-  sum[1] = dot_sum(w, la.ksq.memptr(), S);
-  for (int k = 0; k < q; ++k) sum[2 + k] = dot_sum(w, la.kap.colptr(k), S);
-  const double sw = sum[0];
-  double out = sum[1] / sw;
-  for (int k = 0; k < q; ++k) {
-    const double mk = sum[2 + k] / sw;
+  exp_weights(L, mx, la.S, w);
+  const double sw = dot_sum(w, nullptr, la.S);
+  double out = dot_sum(w, la.ksq.memptr(), la.S) / sw;
+  for (arma::uword k = 0; k < la.kap.n_cols; ++k) {
+    const double mk = dot_sum(w, la.kap.colptr(k), la.S) / sw;
     out -= mk * mk;
   }
   return out;
@@ -245,14 +233,11 @@ double chol_floor(double* a, int K, double fl) {
   return ld;
 }
 
-// Draw s's covariance of each run's K values given the data and the
-// pending points (B, ScP from pending_conditionals(); k pending points),
-// rows a != b of one run:
-//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 the prior, prior_cov()),
-// its diagonal the rows' variances cv (pending_conditionals()' own), and
-// its factor (chol_floor()) in la.LK, la.ldK. A run's rows differ in the
-// output alone (checked in design_look_ahead()), so the prior among them
-// is the first run's.
+// Draw s's covariance of each run's K values given the data and the k
+// pending points (B, ScP: pending_conditionals()), rows a != b of one run
+//   Sigma_ab = C0_ab - A_a'A_b - B_a ScP_b'   (C0 the prior: the first run's,
+// a run's rows differing in the output alone), its diagonal the rows'
+// variances cv, and its factor (chol_floor()) in la.LK, la.ldK.
 void run_covariances(const DesignSystems& sys, const arma::mat& U, const arma::vec& cv,
                      const arma::mat& B, const arma::mat& ScP, int k, int s, LookAhead& la) {
   const int K = la.K, S = la.S;
@@ -280,9 +265,6 @@ void run_covariances(const DesignSystems& sys, const arma::mat& U, const arma::v
 //   B = ScP SPP^-1,  cv = v - diag(B ScP'),  M(:, j) = mu + B (YP(j, :)' - mu_P),
 // cv floored (sys.floor); B and D = YP' - mu_P are kept (Bk, Dk) and M
 // formed where it is used (cond_means()). Without pending points M is mu.
-// With targets (CT = CTU_s, CTP its pending columns):
-//   BT = CTP SPP^-1,  VTP = VT - diag(BT CTP'),  MT(:, j) = mT + BT (YP(j, :)' - mu_P),
-//   CP = CT - BT ScP'  (without pending points VTP = VT, MT = mT, CP = CT).
 void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double nugget,
                           LookAhead& la) {
   const int k = la.P.size();
@@ -322,9 +304,8 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double n
 // The draws' conditional means at candidate c in fantasy j (S values):
 // mu(c, s) without pending points, else
 //   M_s(c, j) = mu(c, s) + sum_i B_s(c, i) D_s(i, j)
-// computed here into `buf` (the draws innermost). Stored for every
-// candidate and fantasy (S x Nc x J, 4 MB with 35 draws), M's writes
-// were most of a batch's look-ahead.
+// computed here into `buf` (the draws innermost), not stored for every
+// candidate and fantasy (S x Nc x J).
 inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, int c, int j,
                                 double* buf) {
   if (la.P.empty()) return sys.muT.colptr(c);
@@ -392,13 +373,11 @@ void run_target_terms(LookAhead& la, int r) {
     }
 }
 
-// Each run's gain given the pending points: fantasy j of run r is
-// y = M_src[j](r, j) + LK_r,src[j] z_j (z_j: Z's K deviates of row j, common
-// to every run), the draws reweighted by its K-variate normal density
-// (run_log_density(), the normal's constant left out: it cancels):
+// Each run's gain given the pending points: fantasy j of run r is y =
+// M_src[j](r, j) + LK_r,src[j] z_j (z_j: Z's K deviates of row j), the draws
+// reweighted by its normal density (run_log_density()):
 //   gain(r) = mean_j Var_{base(:, j)}(kappa) - mean_j Var_{base(:, j) + log N}(kappa)
-// (with targets the prediction's variance, target_var(), before and after);
-// Y (Nc x J) the fantasised values by row.
+// (or the criterion's other value, crit_value()); Y (Nc x J) the fantasies.
 void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const arma::mat& Z,
                 int col, arma::vec& gain, arma::mat& Y) {
   const int K = la.K, S = la.S, J = la.J;
@@ -434,9 +413,8 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
   }
 }
 
-// A look-ahead in progress (design_look_ahead()): the systems, the state,
-// the inputs the steps read (U, the deviates Z, `order`: 0 = greedy) and
-// the results of the `step` steps run so far.
+// A look-ahead in progress: the systems, the state, the inputs the steps
+// read (U, the deviates Z, `order`: empty = greedy), the steps' results.
 struct LookAheadRun {
   DesignSystems sys;
   LookAhead la;
@@ -549,17 +527,14 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
         if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
     }
   }
-  if (kappa.n_rows != phis.n_rows || kappa.n_cols > 16 || lw0.n_elem != phis.n_rows)
-    Rcpp::stop("kappa and lw0 must have a row per draw (at most 16 calibration inputs)");
-  if (phis.n_rows < 1) Rcpp::stop("phis must have a draw");
+  if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows)
+    Rcpp::stop("kappa and lw0 must have a row per draw, and phis a draw");
   if ((int)usrc.n_elem != (int)Z.n_rows) Rcpp::stop("usrc must have %d uniforms", (int)Z.n_rows);
   // (owned by R from here: freed if a step is interrupted)
   Rcpp::XPtr<LookAheadRun> xp(new LookAheadRun, true);
   LookAheadRun& run = *xp;
-  run.U = U;
-  run.Z = Z;
+  run.U = U; run.Z = Z; run.n = n; run.nugget = nugget;
   run.order.assign(order.begin(), order.end());
-  run.n = n;
   run.kept = arma::regspace<arma::uvec>(0, phis.n_rows - 1);
   if (plugin && prune > 0 && phis.n_rows > 2) {
     // the likelihoods alone first (no candidates, no targets)
@@ -575,13 +550,10 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   }
   const arma::mat ph = phis.rows(run.kept), kap = kappa.rows(run.kept);
   const arma::vec lwk = lw0.elem(run.kept);
-  run.nugget = nugget;
   run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, n > 1 || K > 1);
   LookAhead& la = run.la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = run.sys.T; la.K = K; la.Nr = Nr;
-  la.entropy = entropy;
-  la.kap = kap;
-  la.ksq = arma::sum(arma::square(kap), 1);
+  la.entropy = entropy; la.kap = kap; la.ksq = arma::sum(arma::square(kap), 1);
   run.lw = plugin ? arma::vec(lwk + run.sys.ll) : lwk;
   const arma::vec cw = arma::cumsum(arma::exp(run.lw - run.lw.max()));
   run.s0.resize(la.J);
@@ -591,25 +563,17 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
     run.s0[j] = s;
   }
   la.base = arma::repmat(run.lw, 1, la.J);
-  la.YP.set_size(la.J, 0);
-  la.Lbuf.set_size(la.S);
-  la.mbuf.resize((size_t)la.S * K);  // cond_means()'s (run_means()': K of them)
-  la.wbuf.set_size(la.S);
-  la.LK.resize((size_t)K * K * la.S * Nr);
-  la.ldK.resize((size_t)la.S * Nr);
+  la.YP.set_size(la.J, 0); la.Lbuf.set_size(la.S); la.wbuf.set_size(la.S);
+  la.mbuf.resize((size_t)la.S * K);  // run_means()' K slices
+  la.LK.resize((size_t)K * K * la.S * Nr); la.ldK.resize((size_t)la.S * Nr);
   la.eK.resize((size_t)la.S * K);
   if (la.T > 0) {
-    la.VTP.set_size(la.S, la.T);
-    la.MT.resize((size_t)la.S * la.T * la.J);
-    la.CP.resize((size_t)la.S * la.T * la.Nc);
+    la.VTP.set_size(la.S, la.T); la.vK.resize((size_t)la.S * la.T);
+    la.MT.resize((size_t)la.S * la.T * la.J); la.CP.resize((size_t)la.S * la.T * la.Nc);
     la.gK.resize((size_t)la.S * la.T * K);
-    la.vK.resize((size_t)la.S * la.T);
   }
-  run.gain.set_size(Nr);
-  run.best.set_size(n);
-  run.Y.set_size(la.Nc, la.J);
-  run.scores.set_size(Nr, n);
-  run.chosen.assign(n, 0);
+  run.gain.set_size(Nr); run.best.set_size(n); run.Y.set_size(la.Nc, la.J);
+  run.scores.set_size(Nr, n); run.chosen.assign(n, 0);
   look_ahead_steps(run, std::min(steps, n));
   Rcpp::List out = look_ahead_result(run);
   if (run.step < n) out["state"] = xp;
@@ -617,8 +581,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   return out;
 }
 
-// The rest of a look-ahead begun with design_look_ahead(steps < n): its
-// results as design_look_ahead()'s with every step run.
+// The rest of a look-ahead begun with design_look_ahead(steps < n).
 // [[Rcpp::export(.design_look_ahead_resume)]]
 Rcpp::List design_look_ahead_resume(SEXP state) {
   Rcpp::XPtr<LookAheadRun> xp(state);
@@ -629,8 +592,7 @@ Rcpp::List design_look_ahead_resume(SEXP state) {
   return out;
 }
 
-// Frees a look-ahead in progress (design_look_ahead(steps < n)) now, not at
-// R's next garbage collection: its systems are as large as a look-ahead's.
+// Frees a look-ahead in progress now, not at R's next garbage collection.
 // [[Rcpp::export(.design_look_ahead_release)]]
 void design_look_ahead_release(SEXP state) {
   Rcpp::XPtr<LookAheadRun> xp(state);
