@@ -21,10 +21,6 @@
     invisible(.Call(`_FBC_design_look_ahead_release`, state))
 }
 
-.design_look_ahead_live <- function() {
-    .Call(`_FBC_design_look_ahead_live`)
-}
-
 .fbc_heldout_c <- function(Xf, yf, Xs, ys, phis, nugget, fold, model) {
     .Call(`_FBC_fbc_heldout`, Xf, yf, Xs, ys, phis, nugget, fold, model)
 }

@@ -423,7 +423,7 @@ check_design_model <- function(model, call = parent.frame()) {
     each <- if (output_count(model$spec$model) > 1L) " (of one output: each has its own)" else ""
     cli::cli_abort(c(
       "{.fn propose_runs} handles up to 3000 runs and distinct field inputs{each}; this fit has {N[1]} and {N[2]}.",
-      i = "It factors their dense covariance for every draw it scores (exact, whatever algebra the fit ran), which is too slow beyond that."
+      i = "It conditions every candidate on all of them for every draw it scores, which is too slow beyond that."
     ), call = call)
   }
 }

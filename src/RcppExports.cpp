@@ -91,16 +91,6 @@ BEGIN_RCPP
     return R_NilValue;
 END_RCPP
 }
-// design_look_ahead_live
-int design_look_ahead_live();
-RcppExport SEXP _FBC_design_look_ahead_live() {
-BEGIN_RCPP
-    Rcpp::RObject rcpp_result_gen;
-    Rcpp::RNGScope rcpp_rngScope_gen;
-    rcpp_result_gen = Rcpp::wrap(design_look_ahead_live());
-    return rcpp_result_gen;
-END_RCPP
-}
 // fbc_heldout
 Rcpp::List fbc_heldout(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::IntegerVector& fold, const Rcpp::List& model);
 RcppExport SEXP _FBC_fbc_heldout(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP foldSEXP, SEXP modelSEXP) {
@@ -356,7 +346,6 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 19},
     {"_FBC_design_look_ahead_resume", (DL_FUNC) &_FBC_design_look_ahead_resume, 1},
     {"_FBC_design_look_ahead_release", (DL_FUNC) &_FBC_design_look_ahead_release, 1},
-    {"_FBC_design_look_ahead_live", (DL_FUNC) &_FBC_design_look_ahead_live, 0},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},

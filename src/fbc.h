@@ -282,6 +282,21 @@ struct Touch {
   }
 };
 
+// The simulator's conditional at candidate inputs for the design of new
+// runs (Posterior::runConditional(), design.cpp). With y the data and C =
+// L L' its covariance (any square root the algebra has; with independent
+// outputs block diagonal, each candidate's column nonzero in its output's
+// rows only): A = L^-1 Cov(y, eta(U)) (N x Nc), so that
+// Cov(eta(U_a), eta(U_b) | y) = prior - A_a'A_b; mu and v the candidates'
+// means and variances given y (a run's value: the nugget included), v0
+// their prior variances; with targets XT, zeta(x) = eta(x, kappa) + delta(x)
+// (predict(type = "mean")): its means mT, variances VT given y and its
+// covariances CTU with the candidates' values (T x Nc).
+struct RunConditional {
+  arma::mat A, CTU;
+  arma::vec mu, v, v0, mT, VT;
+};
+
 // The posterior's likelihood part with every factor cached, so that a move
 // recomputes only the blocks it touches. This is the one interface the
 // sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
@@ -364,6 +379,18 @@ public:
   virtual bool canPreview() const { return false; }
   virtual double currentZz() const { return NA_REAL; }
 
+  // The simulator's conditional at candidate inputs U (Nc x (p + q), any
+  // calibration input) and the targets XT (T x p, none: 0 rows) at the
+  // current state (RunConditional; the design of new runs, design.cpp).
+  virtual void runConditional(const arma::mat&, const arma::mat&, RunConditional&) {
+    Rcpp::stop("the design of new runs needs a simulator GP");
+  }
+  // The simulator's prior covariance s2S Rs(X, Y) between rows of X and Y
+  // (p + q columns) at parameters ph, which need not be the state's.
+  virtual void runPrior(const arma::vec&, const arma::mat&, const arma::mat&, arma::mat&) const {
+    Rcpp::stop("the design of new runs needs a simulator GP");
+  }
+
   // The discrepancy model's bias correlation on the distinct field inputs
   // from the bias GP's R, and its cross-correlation and variance at new
   // inputs (model.cpp; Ruu() gives R on the distinct inputs if needed; the
@@ -443,6 +470,9 @@ public:
                arma::vec& var) override;
   void fieldLoo(const std::vector<std::vector<int> >& groups,
                 arma::vec& logdens) const override;
+  void runConditional(const arma::mat& U, const arma::mat& XT, RunConditional& out) override;
+  void runPrior(const arma::vec& ph, const arma::mat& X, const arma::mat& Y,
+                arma::mat& K) const override;
 
 protected:
   SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
@@ -476,6 +506,11 @@ protected:
   // a = Ds^-1 ys and, per fold B (0-based runs), QBB[k] = (Ds^-1)_BB.
   virtual void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                           std::vector<arma::mat>& QBB) = 0;
+  // at the current state, a square root of Ds^-1 applied to the runs'
+  // correlations with points Z (p + q columns, any calibration input):
+  // W (r x nz) with W_a'W_b = Rs(Xs, Z_a)' Ds^-1 Rs(Xs, Z_b), wy with
+  // W'wy = Rs(Xs, Z)' Ds^-1 ys, and G = Rs(Xs,Xk)' Ds^-1 Rs(Xs, Z) (nu x nz).
+  virtual void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) = 0;
 
 private:
   Touch touch_;
@@ -529,6 +564,7 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
 
 private:
   bool cached_;
@@ -573,6 +609,7 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
 
 private:
   void split_levels();
@@ -612,6 +649,7 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
 
 private:
   // the runs' pass (simUpdate()) at phi: log|Ds|, zz; false if not PD
@@ -684,17 +722,10 @@ public:
                arma::vec& var) override;
   void fieldLoo(const std::vector<std::vector<int> >& groups,
                 arma::vec& logdens) const override;
+  void runConditional(const arma::mat& U, const arma::mat& XT, RunConditional& out) override;
+  void runPrior(const arma::vec& ph, const arma::mat& X, const arma::mat& Y,
+                arma::mat& K) const override;
   std::string algebra() const override;
-  // Output o's block: its posterior, its model (sub_model()), the places
-  // in phi of its parameters, its rows of the data (the look-ahead,
-  // design.cpp, builds each output's system from these).
-  Posterior& block(int o) { return *sub_[o]; }
-  const Model& blockModel(int o) const { return subModel_[o]; }
-  const std::vector<int>& blockMap(int o) const { return map_[o]; }
-  const arma::mat& blockXf(int o) const { return Xf_[o]; }
-  const arma::vec& blockYf(int o) const { return yf_[o]; }
-  const arma::mat& blockXs(int o) const { return Xs_[o]; }
-  const arma::vec& blockYs(int o) const { return ys_[o]; }
 
 private:
   int K_;
@@ -743,19 +774,8 @@ std::vector<std::vector<int> > label_groups(const Rcpp::IntegerVector& labels, i
 // Bytes the dense algebra may spend on per-dimension caches (dense.cpp).
 extern double fbc_cache_budget;
 
-// Two entries at a time where the compiler has vector types (GCC, clang):
-// the same IEEE operations lane by lane, so the same numbers as one double
-// at a time (loads and stores through memcpy: no alignment, no aliasing).
-#if defined(__GNUC__)
-#define FBC_V2D 1
-typedef double v2d __attribute__((vector_size(16)));
-static inline v2d load2(const double* p) { v2d v; std::memcpy(&v, p, sizeof v); return v; }
-static inline void store2(double* p, const v2d& v) { std::memcpy(p, &v, sizeof v); }
-#endif
-
 // Small matrices without LAPACK calls (the Vecchia algebra's conditionals,
-// vecchia.cpp; the design look-ahead's systems, design.cpp), inline for
-// their hot loops.
+// vecchia.cpp), inline for their hot loops.
 
 // In-place lower Cholesky of the leading s x s block of A (leading dimension
 // lda), carried on over rows s .. rows - 1 (A[r, j] -> (A[r, j] - sum_l<j
@@ -770,23 +790,13 @@ inline bool small_chol(double* A, int s, int lda, int rows) {
     for (int l = 0; l < j; ++l) {
       const double* cl = A + (size_t) l * lda;
       const double ljl = cl[j];
-      int i = j;
-#ifdef FBC_V2D
-      const v2d lv = {ljl, ljl};
-      for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) - load2(cl + i) * lv);
-#endif
-      for (; i < rows; ++i) cj[i] -= cl[i] * ljl;
+      for (int i = j; i < rows; ++i) cj[i] -= cl[i] * ljl;
     }
     double d = cj[j];
     if (!(d > 0)) return false;
     d = std::sqrt(d);
     cj[j] = d;
-    int i = j + 1;
-#ifdef FBC_V2D
-    const v2d dv = {d, d};
-    for (; i + 2 <= rows; i += 2) store2(cj + i, load2(cj + i) / dv);
-#endif
-    for (; i < rows; ++i) cj[i] = cj[i] / d;
+    for (int i = j + 1; i < rows; ++i) cj[i] = cj[i] / d;
   }
   return true;
 }

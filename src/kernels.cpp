@@ -43,8 +43,6 @@ struct Gaussian : KernelBase {
 };
 // The Matern families: s the sum in the exponent, w the product of the
 // polynomials poly(a) (M::factor).
-// (accum and factor are templates so that a vector of two entries,
-// flat_accum() below, takes the same operations as one double.)
 template <class M> struct MaternBase : KernelBase {
   static constexpr bool poly = true;
   static double dist(double d) { return std::fabs(d); }
@@ -235,23 +233,7 @@ void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G) {
 // whose term is the distance value itself).
 template <class F>
 static void flat_accum(const double* g, size_t ne, double c, double* s, double* w) {
-  size_t e = 0;
-#ifdef FBC_V2D
-  const v2d cv = {c, c};
-  for (; e + 2 <= ne; e += 2) {
-    v2d sv = load2(s + e);
-    const v2d tv = load2(g + e);
-    if (F::poly) {
-      v2d wv = load2(w + e);
-      F::accum(cv, tv, sv, wv);
-      store2(w + e, wv);
-    } else {
-      sv += cv * tv;
-    }
-    store2(s + e, sv);
-  }
-#endif
-  for (; e < ne; ++e) {
+  for (size_t e = 0; e < ne; ++e) {
     if (F::poly) F::accum(c, g[e], s[e], w[e]); else s[e] += c * g[e];
   }
 }

@@ -292,3 +292,36 @@ void KroneckerPosterior::simHeldout(const std::vector<std::vector<int> >& folds,
     }
   }
 }
+
+// Ds^-1/2 = diag(lam)^-1/2 (Ux (x) Ut)' with lam_ij = lx_i lt_j + nugget;
+// Rs(Xs, z) = rx(z) (x) rt(z), so W_ij = (Ux' rx)_i (Ut' rt)_j / sqrt(lam_ij),
+// wy_ij = (Ux' Y Ut)_ij / sqrt(lam_ij), and the field latents' columns
+// (Ax, ct) the same way.
+void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy,
+                                   arma::mat& G) {
+  const int I = dz_.I, J = dz_.J, nz = Z.n_rows;
+  const arma::vec th = phi.subvec(iThetaS, iThetaS + p + q - 1);
+  const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p + q - 1);
+  const arma::mat Zx = Z.cols(0, p - 1);
+  arma::mat rx = corr_matrix(dz_.Xg, Zx, th.head(p), al.head(p), kernS_);
+  level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Zx, rx, false);
+  const arma::mat rt = corr_matrix(dz_.Tg, Z.cols(p, p + q - 1), th.tail(q), al.tail(q), kernS_);
+  const arma::mat ax = Ux_.cur().t() * rx, at = Ut_.cur().t() * rt;
+  const arma::vec& lx = lx_.cur();
+  const arma::vec& lt = lt_.cur();
+  const arma::mat& Ax = Ax_.cur();
+  const arma::vec& ct = ct_.cur();
+  const arma::mat& Yt = Yt_.cur();
+  W.set_size(m, nz);
+  wy.set_size(m);
+  arma::mat WB(m, nu_);
+  for (int j = 0; j < J; ++j)
+    for (int i = 0; i < I; ++i) {
+      const int r = i + I * j;
+      const double is = 1.0 / std::sqrt(lx[i] * lt[j] + nugget_);
+      for (int c = 0; c < nz; ++c) W(r, c) = ax(i, c) * at(j, c) * is;
+      for (int u = 0; u < nu_; ++u) WB(r, u) = Ax(i, u) * ct[j] * is;
+      wy[r] = Yt(i, j) * is;
+    }
+  G = WB.t() * W;
+}

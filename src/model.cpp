@@ -485,3 +485,63 @@ void SchurPosterior::flip(const Touch& t) {
   if (t.field || t.scale) LS_.flip();
   ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip();
 }
+
+// s2S Rs(X, Y) over the p + q inputs at ph (the levels' correlations too).
+void SchurPosterior::runPrior(const arma::vec& ph, const arma::mat& X, const arma::mat& Y,
+                              arma::mat& K) const {
+  K = corr_matrix(X, Y, ph.subvec(iThetaS, iThetaS + p + q - 1),
+                  ph.subvec(iAlphaS, iAlphaS + p + q - 1), kernS_);
+  level_scale(levels, ph.memptr() + iRhoS, X, Y, K, false);
+  K *= ph[iSigma2S];
+}
+
+// With y = (ys, yf) and C = [D B; B' A] (D = s2S Ds), L = [D^1/2 0; B'D^-1/2 LS]
+// (LS the Schur complement's factor) is a square root of C, and for points
+// Z with k = Cov(ys, eta(Z)) = s2S Rs(Xs, Z), kf = Cov(yf, .):
+//   L^-1 Cov(y, .) = [ sqrt(s2S) W ; LS^-1 (kf - s2S G) ]   (simWhiten()),
+//   L^-1 (y - E y) = [ wy / sqrt(s2S) ; LS^-1 (yf - muB - wz) ];
+// kf = s2S Rs(Xk, Z) for the simulator's values, plus s2B Rb(Xf, x)
+// (biasCross()) for the targets' zeta. Means: the products of the two.
+void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
+                                    RunConditional& out) {
+  const double s2S = phi[iSigma2S], rs = std::sqrt(s2S);
+  const double s2B = bias ? phi[iSigma2B] : 0.0, muB = biasMean ? phi[iMuB] : 0.0;
+  arma::mat Xk(nu_, p + q);
+  Xk.cols(0, p - 1) = Xu_;
+  for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
+  arma::vec v(n), wy;
+  const arma::vec& wz = wz_.cur();
+  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
+  solve_lower(LS_.cur(), v);
+  auto root = [&](const arma::mat& Z, const arma::mat* Kb, arma::mat& A) {
+    arma::mat W, G, R;
+    simWhiten(Z, W, wy, G);
+    runPrior(phi, Xk, Z, R);
+    R -= s2S * G;
+    if (Kb) R += s2B * *Kb;
+    const int r = W.n_rows;
+    arma::mat H(n, Z.n_rows);
+    for (arma::uword c = 0; c < Z.n_rows; ++c)
+      for (int i = 0; i < n; ++i) H(i, c) = R(grp_[i], c);
+    solve_lower(LS_.cur(), H);
+    A = arma::join_cols(rs * W, H);
+    (void) r;
+  };
+  root(U, nullptr, out.A);
+  const arma::vec res = arma::join_cols(wy / rs, v);
+  out.mu = out.A.t() * res;
+  out.v0.set_size(U.n_rows);
+  out.v0.fill(s2S * (1.0 + nugget_));
+  out.v = out.v0 - arma::sum(arma::square(out.A), 0).t();
+  if (XT.n_rows == 0) return;
+  arma::mat Zt(XT.n_rows, p + q), Kb, AT, R;
+  Zt.cols(0, p - 1) = XT;
+  for (int k = 0; k < q; ++k) Zt.col(p + k).fill(phi[iKappa + k]);
+  arma::vec rb(XT.n_rows, arma::fill::zeros);
+  if (bias) biasCross(XT, Kb, rb);
+  root(Zt, bias ? &Kb : nullptr, AT);
+  out.mT = muB + AT.t() * res;
+  out.VT = s2S + s2B * rb - arma::sum(arma::square(AT), 0).t();
+  runPrior(phi, Zt, U, R);
+  out.CTU = R - AT.t() * out.A;
+}

@@ -250,3 +250,56 @@ std::string OutputsPosterior::algebra() const {
   for (int o = 0; o < K_; ++o) s += (o ? ", " : " ") + sub_[o]->algebra();
   return s;
 }
+
+// Each output's block answers for its candidates and targets; A's rows are
+// the blocks' rows one after the other (a candidate's column zero outside its
+// output's), CTU zero between outputs.
+void OutputsPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
+                                      RunConditional& out) {
+  std::vector<RunConditional> rc(K_);
+  std::vector<arma::uvec> uo(K_), to(K_);
+  int N = 0;
+  for (int o = 0; o < K_; ++o) {
+    std::vector<arma::uword> a, b;
+    for (arma::uword i = 0; i < U.n_rows; ++i) if (level_of(U, i, out_) == o) a.push_back(i);
+    for (arma::uword i = 0; i < XT.n_rows; ++i) if (level_of(XT, i, out_) == o) b.push_back(i);
+    uo[o] = arma::uvec(a); to[o] = arma::uvec(b);
+    sub_[o]->runConditional(U.rows(uo[o]), XT.rows(to[o]), rc[o]);
+    N += rc[o].A.n_rows;
+  }
+  out.A.zeros(N, U.n_rows);
+  out.mu.set_size(U.n_rows); out.v.set_size(U.n_rows); out.v0.set_size(U.n_rows);
+  out.mT.set_size(XT.n_rows); out.VT.set_size(XT.n_rows);
+  out.CTU.zeros(XT.n_rows, U.n_rows);
+  int at = 0;
+  for (int o = 0; o < K_; ++o) {
+    const RunConditional& r = rc[o];
+    if (uo[o].n_elem) {
+      out.A.submat(arma::regspace<arma::uvec>(at, at + r.A.n_rows - 1), uo[o]) = r.A;
+      out.mu.elem(uo[o]) = r.mu; out.v.elem(uo[o]) = r.v; out.v0.elem(uo[o]) = r.v0;
+    }
+    if (to[o].n_elem) {
+      out.mT.elem(to[o]) = r.mT; out.VT.elem(to[o]) = r.VT;
+      if (uo[o].n_elem) out.CTU.submat(to[o], uo[o]) = r.CTU;
+    }
+    at += r.A.n_rows;
+  }
+}
+
+// Output o's prior between rows of output o, 0 between outputs.
+void OutputsPosterior::runPrior(const arma::vec& ph, const arma::mat& X, const arma::mat& Y,
+                                arma::mat& K) const {
+  K.zeros(X.n_rows, Y.n_rows);
+  arma::mat Ko;
+  for (int o = 0; o < K_; ++o) {
+    std::vector<arma::uword> a, b;
+    for (arma::uword i = 0; i < X.n_rows; ++i) if (level_of(X, i, out_) == o) a.push_back(i);
+    for (arma::uword j = 0; j < Y.n_rows; ++j) if (level_of(Y, j, out_) == o) b.push_back(j);
+    if (a.empty() || b.empty()) continue;
+    const arma::uvec ra(a), rb(b);
+    arma::vec po(map_[o].size());
+    for (size_t k = 0; k < map_[o].size(); ++k) po[k] = ph[map_[o][k]];
+    sub_[o]->runPrior(po, X.rows(ra), Y.rows(rb), Ko);
+    K.submat(ra, rb) = Ko;
+  }
+}

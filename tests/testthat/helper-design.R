@@ -486,3 +486,26 @@ two_output_loop <- function(field, ...) {
                                  f2(out$sim$x, out$sim$t)))
   out
 }
+
+# every hyperparameter fixed (scaled units): kappa alone is sampled, so its
+# posterior is a 1-D grid (helper-grid.R)
+sinus_hypers <- function() {
+  set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(8, 8), sigma2SDist = "fixed",
+                  sigma2SInit = 1, sigma2EDist = "fixed", sigma2EInit = 0.02)
+}
+sinus_fit <- function(pb, nMCMC = 4200, seed = 3) {
+  set.seed(seed)
+  calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), nMCMC = nMCMC,
+            nBurn = 200, nChains = 1, showProgress = FALSE)
+}
+# a short fit of the sinusoid, hyperparameters sampled (600 sweeps): the
+# draws the look-ahead's checks against plain R start from
+short_fit <- function(pb, discrepancy = "none", nChains = 1, seed = 4) {
+  set.seed(seed)
+  calibrate(pb$sim, pb$field, discrepancy = discrepancy, nMCMC = 600, nBurn = 200,
+            nChains = nChains, showProgress = FALSE)
+}
+sinus_loglik <- function(d) {
+  function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
+                             discrepancy = "none")
+}

@@ -1,339 +1,5 @@
-# Design of new runs (R/update_runs.R, R/propose_runs.R): adding runs with a
-# warm start, the look-ahead criterion, batches.
-
-# every hyperparameter fixed (scaled units): kappa alone is sampled, so its
-# posterior is a 1-D grid (helper-grid.R)
-sinus_hypers <- function() {
-  set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(8, 8), sigma2SDist = "fixed",
-                  sigma2SInit = 1, sigma2EDist = "fixed", sigma2EInit = 0.02)
-}
-sinus_fit <- function(pb, nMCMC = 4200, seed = 3) {
-  set.seed(seed)
-  calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), nMCMC = nMCMC,
-            nBurn = 200, nChains = 1, showProgress = FALSE)
-}
-# a short fit of the sinusoid, hyperparameters sampled (600 sweeps): the
-# draws the look-ahead's checks against plain R start from
-short_fit <- function(pb, discrepancy = "none", nChains = 1, seed = 4) {
-  set.seed(seed)
-  calibrate(pb$sim, pb$field, discrepancy = discrepancy, nMCMC = 600, nBurn = 200,
-            nChains = nChains, showProgress = FALSE)
-}
-sinus_loglik <- function(d) {
-  function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
-                             discrepancy = "none")
-}
-
-test_that("update(fit, sim =) gives the posterior of a fit on all runs (grid)", {
-  pb <- sinus_problem(m = 20)
-  first <- pb
-  first$sim <- pb$sim[1:12, ]
-  fit <- sinus_fit(first)
-  fit2 <- update(fit, sim = pb$sim[13:20, ], nMCMC = 4200)
-  # the model is the one calibrate() builds on all runs
-  all <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), fit = FALSE)
-  expect_identical(fit2$model$data, all$data)
-  expect_identical(fit2$model$spec$table, all$spec$table)
-  expect_true(fit2$settings$warmStart)
-  # the refit's warm-up is the adaptive one (nBurn = NULL): its length is the
-  # data's, and the draws kept are the sweeps after it
-  w <- fit2$settings$warmup
-  expect_true(w >= 200 && w < 4200)
-  expect_equal(nrow(fit2$Phi), (4200 - w) / fit2$settings$thinning)
-  # kappa's draws against the grid posterior on all 20 runs; 8 runs more
-  # move it (the 12-run posterior is not the reference's)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
-  expect_gt(abs(mean(fit2$Phi[, 1]) - mean(fit$Phi[, 1])) / sd(fit2$Phi[, 1]), 0.1)
-})
-
-test_that("update(fit, sim =) carries the states to the new scaling", {
-  pb <- sinus_problem(m = 20)
-  old <- calibrate(pb$sim[1:12, ], pb$field, fit = FALSE)
-  new <- calibrate(pb$sim, pb$field, fit = FALSE)
-  phi <- old$spec$init
-  ix <- FBC:::param_indices(1, 1, "gp")
-  phi[ix$kappa] <- 0.3
-  phi[ix$thetaS] <- c(2, 3)
-  phi[ix$sigma2S] <- 1.5
-  phi[ix$muB] <- 0.2
-  out <- FBC:::warm_phi(phi, old, new)
-  so <- old$scale
-  sn <- new$scale
-  # kappa in its own units, theta d^2 and the variances in the data's units kept
-  expect_equal(sn$xmin[2] + (sn$xmax[2] - sn$xmin[2]) * out[ix$kappa],
-               so$xmin[2] + (so$xmax[2] - so$xmin[2]) * 0.3)
-  expect_equal(out[ix$thetaS] / (sn$xmax - sn$xmin)^2, c(2, 3) / (so$xmax - so$xmin)^2)
-  expect_equal(out[ix$sigma2S] * sn$ysd^2, 1.5 * so$ysd^2)
-  expect_equal(out[ix$muB] * sn$ysd + sn$ymean, 0.2 * so$ysd + so$ymean)
-})
-
-test_that("update(fit, sim =) carries each output's parameters to the new scaling", {
-  # independent outputs: a copy of thetaS, alphaS and sigma2S per output,
-  # each output standardised by its own runs' sd; new runs that stretch
-  # the inputs' ranges and change each output's sd by its own ratio (the
-  # copies beyond the first were left NA, and the refit failed)
-  po <- two_outputs(m = 12)
-  f1 <- function(x, t) 5 * exp(-t * x)
-  f2 <- function(x, t) 2 * t * x
-  extra <- data.frame(x = c(-0.3, 1.4), t = c(0.3, 3.5))
-  more <- rbind(data.frame(y = f1(extra$x, extra$t), x = extra$x, out = "conc", t = extra$t),
-                data.frame(y = f2(extra$x, extra$t), x = extra$x, out = "rate", t = extra$t))
-  args <- list(output = "out", outputs = "independent", kernelS = "powexp", fit = FALSE)
-  old <- do.call(calibrate, c(list(po$sim, po$field), args))
-  # (two runs at the corners make x and t look related among 14: the
-  # wide-format check's warning, not this test's subject)
-  new <- suppressWarnings(do.call(calibrate, c(list(rbind(po$sim, more), po$field), args)))
-  so <- old$scale
-  sn <- new$scale
-  expect_gt(abs(log((sn$ysd[1] / so$ysd[1]) / (sn$ysd[2] / so$ysd[2]))), 0.05)
-  ix <- FBC:::param_indices(2, 1, "gp", noise = 2L, outputs = 2L)
-  phi <- old$spec$init
-  phi[ix$thetaS] <- 1:6
-  phi[ix$alphaS] <- c(1.5, 1.8, 1.9, 1.2, 1.6, 1.7)
-  phi[ix$sigma2S] <- c(1.5, 0.7)
-  phi[ix$sigma2E] <- c(0.01, 0.02)
-  phi[ix$sigma2B] <- c(0.3, 0.4)
-  phi[ix$muB] <- c(0.2, -0.1)
-  out <- FBC:::warm_phi(phi, old, new)
-  # per output: theta d^alpha in the inputs' own units kept, the
-  # variances and the bias mean in the output's own units
-  # (the output's indicator column's thetaS and alphaS are fixed)
-  fixed <- old$spec$table$family == FBC:::prior_families[["fixed"]]
-  th <- setdiff(ix$thetaS, which(fixed))
-  expect_length(th, 4)
-  r <- rep((sn$xmax - sn$xmin) / (so$xmax - so$xmin), 2)
-  expect_equal(out[th], phi[th] * r[th - 1]^phi[th + 6])
-  expect_true(all(is.finite(out)))
-  expect_equal(out[ix$sigma2S] * sn$ysd^2, phi[ix$sigma2S] * so$ysd^2)
-  expect_equal(out[ix$sigma2B] * sn$ysd^2, phi[ix$sigma2B] * so$ysd^2)
-  expect_equal(out[ix$sigma2E] * sn$ysd^2, phi[ix$sigma2E] * so$ysd^2)
-  expect_equal(out[ix$muB] * sn$ysd + sn$ymean, phi[ix$muB] * so$ysd + so$ymean)
-  # the Jacobian (reweight_log_jacobian()) against central differences of
-  # warm_phi() over the length-scales and smoothnesses
-  free <- c(th, th + 6)
-  log_det <- function(x) {
-    T <- function(v) FBC:::warm_phi(replace(x, free, v), old, new)[free]
-    J <- vapply(seq_along(free), function(j) {
-      h <- 1e-6 * max(1, abs(x[free[j]]))
-      e <- replace(numeric(length(free)), j, h)
-      (T(x[free] + e) - T(x[free] - e)) / (2 * h)
-    }, numeric(length(free)))
-    determinant(J)$modulus[1]
-  }
-  phi2 <- replace(phi, ix$alphaS, 2 - phi[ix$alphaS] / 4)
-  jac <- FBC:::reweight_log_jacobian(rbind(phi, phi2), old, new)
-  expect_equal(unname(jac[1] - jac[2]), log_det(phi) - log_det(phi2), tolerance = 1e-6)
-})
-
-test_that("the reweighting's weights are the new posterior over the old (plain-R dense)", {
-  # the power exponential with alphaS sampled, and new runs that stretch the
-  # design's ranges and the response's sd: every part of the map T and its
-  # Jacobian is exercised
-  pb <- sinus_problem(m = 14)
-  pb$sim$x[13:14] <- c(-0.2, 1.3)
-  pb$sim$y[13:14] <- sin(10 * pb$sim$u[13:14] * pb$sim$x[13:14]) * 1.5
-  set.seed(4)
-  fit <- calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", kernelS = "powexp",
-                   nMCMC = 400, nBurn = 200, nChains = 2, showProgress = FALSE)
-  new <- calibrate(pb$sim, pb$field, discrepancy = "none", kernelS = "powexp", fit = FALSE)
-  expect_true(all(new$scale$xmax - new$scale$xmin != fit$scale$xmax - fit$scale$xmin))
-  rows <- round(seq(3, nrow(fit$Phi), length.out = 6))
-  lw <- FBC:::reweight_log_weights(fit, new, rows)
-  # the reference: the new model's log posterior at T(phi) (plain-R dense
-  # likelihood, the spec's prior functions in reported units), plus
-  # log |det dT/dphi| by central differences over the free parameters,
-  # minus the old fit's logPost
-  tab <- new$spec$table
-  free <- which(tab$family != FBC:::prior_families[["fixed"]])
-  phis <- FBC:::sampler_draws(fit, rows)
-  ref <- vapply(seq_along(rows), function(r) {
-    phi <- phis[r, ]
-    T <- function(v) {
-      x <- phi
-      x[free] <- v
-      FBC:::warm_phi(x, fit$model, new)[free]
-    }
-    J <- vapply(seq_along(free), function(j) {
-      h <- 1e-6 * max(1, abs(phi[free[j]]))
-      e <- replace(numeric(length(free)), j, h)
-      (T(phi[free] + e) - T(phi[free] - e)) / (2 * h)
-    }, numeric(length(free)))
-    out <- FBC:::warm_phi(phi, fit$model, new)
-    reported <- out
-    reported[1] <- new$scale$xmin[2] + (new$scale$xmax[2] - new$scale$xmin[2]) * out[1]
-    lp <- sum(vapply(free, function(j) new$spec$fns[[j]](reported[j]), numeric(1)))
-    ll <- dense_loglik(new$data$Xf, new$data$yf, new$data$Xs, new$data$ys, out, fbc_nugget,
-                       "powexp", "powexp", discrepancy = "none")
-    ll + lp + determinant(J)$modulus - fit$logPost[rows[r]]
-  }, numeric(1))
-  # equal up to one constant (the weights' normalisation)
-  expect_lt(max(abs((lw - ref) - mean(lw - ref))), 1e-5)
-  expect_gt(sd(ref), 0.1)
-  expect_equal(attr(lw, "logLik") + attr(lw, "logPrior") - as.vector(lw),
-               fit$logPost[rows] - FBC:::reweight_log_jacobian(phis, fit$model, new))
-})
-
-test_that("update(fit, sim =) reweights the old draws when they suffice (grid)", {
-  # 8 runs more that move kappa's posterior by half its sd
-  pb <- sinus_problem(m = 20)
-  first <- pb
-  first$sim <- pb$sim[1:12, ]
-  fit <- sinus_fit(first)
-  fit2 <- update(fit, sim = pb$sim[13:20, ])
-  expect_gt(abs(mean(fit2$Phi[, 1]) - mean(fit$Phi[, 1])) / sd(fit2$Phi[, 1]), 0.5)
-  rw <- fit2$settings$reweight
-  expect_true(rw$used)
-  expect_equal(rw$runs, 12)
-  expect_equal(rw$draws, 2000)  # every draw (fbc_reweight_draws)
-  expect_gte(rw$ess, 400)
-  expect_true(fit2$settings$warmStart)
-  # the model is calibrate()'s on all runs; the draws are its posterior
-  all <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), fit = FALSE)
-  expect_identical(fit2$model$data, all$data)
-  expect_equal(nrow(fit2$Phi), 2000)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
-  expect_equal(fit2$estimates["kappa1", "ess"], rw$ess)
-  # the draws and their log densities are the new model's
-  phi <- FBC:::sampler_draws(fit2, 1:3)
-  expect_equal(fit2$logLik[1:3], apply(phi, 1, sinus_loglik(fit2$data)), tolerance = 1e-8)
-  expect_output(print(fit2), "reweighted")
-  # the chains go on from the reweighted draws
-  fit3 <- update(fit2, nMCMC = 200)
-  expect_equal(nrow(fit3$Phi), 2100)  # thinning 2
-  expect_equal(fit3$Phi[1:2000, ], fit2$Phi)
-  # without reweighting, a refit
-  set.seed(5)
-  fit4 <- update(fit, sim = pb$sim[13:20, ], reweight = FALSE)
-  expect_null(fit4$settings$reweight)
-  expect_gt(nrow(fit4$Phi), 400)
-})
-
-test_that("update(fit, sim =) continues reweighted draws short of the rule", {
-  # one run more that moves kappa's posterior: the weights' Kish share
-  # (0.13) leaves 178 of the rule's 400 effective draws, so the resampled
-  # chains go on from their last draws (resample-move)
-  pb <- sinus_problem(m = 13)
-  first <- pb
-  first$sim <- pb$sim[1:12, ]
-  fit <- sinus_fit(first)
-  fit2 <- update(fit, sim = pb$sim[13, ])
-  rw <- fit2$settings$reweight
-  expect_true(rw$used)
-  expect_gte(rw$ess, 100)
-  expect_lt(rw$ess, 400)
-  expect_gt(rw$topUp, 0)
-  # the resampled draws first, then the continuation's (thinning 2)
-  expect_equal(nrow(fit2$Phi), rw$draws + rw$topUp / 2)
-  expect_equal(fit2$settings$nMCMC, fit$settings$nMCMC + rw$topUp)
-  expect_true(fit2$settings$converge$converged)
-  expect_gte(min(fit2$estimates$ess, na.rm = TRUE), 400)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
-  expect_output(print(fit2), "then continued")
-  # chains with many sweeps since their last refit (a loop's reweighted
-  # steps add up): the rule's ceiling (maxMCMC, 50,000) counts from here
-  # (it was an error), and the checks come every 500 sweeps, not when half
-  # the chains' sweeps again have passed (25,650 sweeps here)
-  old <- fit
-  old$state$chains[[1]]$sampler$iter <- 49950L
-  fit3 <- update(old, sim = pb$sim[13, ])
-  expect_true(fit3$settings$converge$converged)
-  expect_gt(fit3$settings$reweight$topUp, 0)
-  expect_lte(fit3$settings$reweight$topUp, 5000)
-})
-
-test_that("update(fit, sim =) refits when the continuation's proposals are stale", {
-  # four runs more leave the reweighted draws 219 of the rule's 400
-  # effective draws, so the chains go on with the proposals adapted at the
-  # last fit (500 sweeps suffice here). Made stale (every step 400 times
-  # too long, as after several reweighted steps whose runs narrowed the
-  # posterior), the continuation's first stretch accepts almost nothing and
-  # the model is refitted with fresh proposals (such continuations ran to
-  # the rule's 50,000-sweep ceiling before: bench/design.R
-  # --problem=three)
-  pb <- sinus_problem(m = 18)
-  set.seed(3)
-  fit <- suppressWarnings(calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", nChains = 2,
-                                    showProgress = FALSE))
-  stale <- stale_proposals(fit)
-  set.seed(4)
-  ok <- update(fit, sim = pb$sim[13:16, ])
-  expect_true(ok$settings$reweight$used)
-  expect_gt(ok$settings$reweight$topUp, 0)
-  expect_lt(ok$settings$reweight$topUp, FBC:::fbc_topup_max)
-  expect_length(ok$settings$reweight$stale, 0)
-  set.seed(4)
-  re <- update(stale, sim = pb$sim[13:16, ])
-  rw <- re$settings$reweight
-  expect_false(rw$used)
-  expect_equal(rw$ess, ok$settings$reweight$ess)  # the same weights
-  expect_equal(rw$topUp, FBC:::fbc_first_check)
-  expect_true(all(c("kappa1", "sim") %in% rw$stale))
-  expect_true(re$settings$converge$converged)
-  # a refit: its own adaptive warm-up (fresh proposals) in every chain
-  expect_length(re$settings$warmup, 2)
-  expect_true(all(re$settings$warmup >= 200))
-  expect_true(all(FBC:::move_report(re)$acceptance > 0.02))
-  # the same posterior as the continued fit's (kappa's mean within 4 Monte
-  # Carlo sds)
-  mc <- sqrt(var(ok$Phi[, 1]) / ok$estimates["kappa1", "ess"] +
-             var(re$Phi[, 1]) / re$estimates["kappa1", "ess"])
-  expect_lt(abs(mean(re$Phi[, 1]) - mean(ok$Phi[, 1])), 4 * mc)
-  expect_output(print(re), "refitted; the fit on 12 runs reweighted was tried, but their continuation's proposals were stale \\(kappa1")
-  expect_output(print(ok), "reweighted by the new runs and resampled")
-})
-
-test_that("stale_moves() names the adapted moves accepting under a quarter of their target", {
-  # the continuation's counts are after minus before; targets 0.44 (walks,
-  # single sites, the scale move, a one-parameter block) and 0.234 (a block
-  # of several): thresholds 0.11 and 0.0585; jumps and Gibbs moves are not
-  # adapted
-  moves <- function(acc, tries) {
-    list(name = c("kappa1", "sim", "one", "sigma2E", "scale", "kappa1 jump", "muB"),
-         kind = c("walk", "joint", "joint", "single", "scale", "jump", "gibbs"),
-         params = c("kappa1", "thetaS1,thetaS2,sigma2S", "thetaB1", "sigma2E",
-                    "sigma2S,sigma2E", "kappa1", "muB"),
-         accepted = acc, tries = tries)
-  }
-  fit_with <- function(...) list(state = list(chains = lapply(list(...), function(m) list(sampler = list(moves = m)))))
-  before <- fit_with(moves(rep(50, 7), rep(100, 7)), moves(rep(50, 7), rep(100, 7)))
-  # pooled over two chains, 200 tries each: rates 0.10, 0.06, 0.10, 0.12,
-  # 0.50, 0.01, 1
-  gained <- c(20, 12, 20, 24, 100, 2, 200)
-  after <- fit_with(moves(50 + gained / 2, rep(200, 7)), moves(50 + gained / 2, rep(200, 7)))
-  expect_identical(FBC:::stale_moves(before, after), c("kappa1", "one"))
-  # the block at 0.05 is under its 0.0585
-  gained[2] <- 10
-  after <- fit_with(moves(50 + gained / 2, rep(200, 7)), moves(50 + gained / 2, rep(200, 7)))
-  expect_identical(FBC:::stale_moves(before, after), c("kappa1", "sim", "one"))
-  # no tries in the stretch: not stale
-  expect_identical(FBC:::stale_moves(before, before), character())
-})
-
-test_that("update(fit, sim =) refits when the reweighted draws fall short", {
-  # from 6 runs to 40 kappa's posterior moves 10 sds: the old draws cannot
-  # carry it
-  pb <- sinus_problem(m = 40)
-  first <- pb
-  first$sim <- pb$sim[1:6, ]
-  fit <- suppressWarnings(sinus_fit(first))  # (6 runs do not span the field's x)
-  # (a stricter rule than the default for the grid check's sake)
-  fit2 <- update(fit, sim = pb$sim[7:40, ], converge = until_converged(ess = 1500))
-  rw <- fit2$settings$reweight
-  expect_false(rw$used)
-  expect_lt(rw$ess, 1500 / 4)  # below a quarter of the rule's: no continuation
-  expect_output(print(fit2), sprintf("refitted; the fit on 6 runs reweighted was tried, but they held %.0f of the rule's effective draws", rw$ess))
-  expect_true(fit2$settings$warmStart)
-  expect_true(fit2$settings$warmup >= 200)
-  # (kappa's sd is 0.01 of its range: a grid finer than the default's)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data), u = seq(0.5, 0.75, length.out = 501))
-})
-
-test_that("update(fit, sim =) checks the new runs", {
-  pb <- sinus_problem()
-  fit <- sinus_fit(pb, nMCMC = 400)
-  expect_snapshot(error = TRUE, update(fit, sim = pb$sim[, c("y", "x")]))
-  expect_snapshot(error = TRUE, update(fit, sim = "runs"))
-})
+# Choosing new runs (R/propose_runs.R): the look-ahead criterion against
+# plain-R references, batches, the plug-in and the joint criterion.
 
 test_that("the look-ahead weights give the posterior of a refit with the fantasised run", {
   pb <- sinus_problem()
@@ -542,11 +208,8 @@ test_that("a look-ahead's first step alone is its batch's first step, and resume
                               random = random, steps = 1L)
     expect_identical(begun$chosen, batch$chosen[1])
     expect_identical(begun$scores, batch$scores[, 1, drop = FALSE])
-    expect_identical(FBC:::.design_look_ahead_live(), 1L)  # begun's, paused
     expect_identical(FBC:::look_ahead_resume(begun), batch)
     expect_error(FBC:::look_ahead_resume(begun), "already finished")
-    # every look-ahead freed on return, not left to the garbage collector
-    expect_identical(FBC:::.design_look_ahead_live(), 0L)
     # the random numbers drawn inside are the same as given
     set.seed(13)
     expect_identical(FBC:::look_ahead(parts, U, fit$model, 3, 25, entropy = method == "plugin"), batch)
@@ -671,9 +334,6 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_lt(honest$gain[1] / honest$variance, 0.01)
   expect_gt(alt$gain[1] / alt$variance, 0.1)
   expect_identical(pk$method, "joint")
-  # the plug-in's paused batch freed at the takeover, every look-ahead on
-  # return (none left to the garbage collector)
-  expect_identical(FBC:::.design_look_ahead_live(), 0L)
   expect_identical(pk$chosen, alt$chosen)
   expect_identical(pk$gain, alt$gain)
   expect_null(pk$own)
@@ -688,7 +348,6 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_gte(-expm1(-2 * mine$gain[1]), 0.5)
   honest$chosen <- mine$chosen
   expect_identical(pk, c(honest, method = "plugin", list(own = -expm1(-2 * mine$gain))))
-  expect_identical(FBC:::.design_look_ahead_live(), 0L)
   # the fit's own plug-in picks are worth something: they stand
   set.seed(12)
   pk <- FBC:::pick_runs(FBC:::design_particles(fit, 40, "plugin"), joint, U, fit$model, 2, 30,
@@ -696,7 +355,6 @@ test_that("where the plug-in and the joint look-ahead disagree about its pick, t
   expect_identical(pk$method, "plugin")
   expect_gt(pk$gain[1] / pk$variance, 0.01)
   expect_length(pk$own, 2)
-  expect_identical(FBC:::.design_look_ahead_live(), 0L)
 })
 
 test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
@@ -1071,37 +729,6 @@ test_that("propose_runs() refuses beyond 3000 runs and distinct field inputs", {
   expect_equal(FBC:::design_rows(calibrate(sim, field, output = "out", fit = FALSE)), c(21, 18))
 })
 
-test_that("design_loop() runs a function simulator through futures and adds runs", {
-  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
-  pb <- sinus_problem()
-  set.seed(2)
-  out <- design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 8,
-                     batch = 2, budget = 3, discrepancy = "none", hypers = sinus_hypers(),
-                     nMCMC = 600, nBurn = 200, nChains = 1,
-                     design = list(ndraws = 40, nfantasy = 20, target = data.frame(x = 0.5)))
-  # 8 initial runs, then a batch of 2 and the last 1 of the budget (chosen
-  # for a prediction target, passed through `design`)
-  expect_equal(out$history$runs, c(8, 10, 11))
-  expect_equal(nrow(out$sim), 11)
-  expect_equal(out$fit$model$dims$m, 11)
-  # the responses are the simulator's at the runs' inputs
-  expect_equal(out$sim$y, sin(10 * out$sim$u * out$sim$x))
-  expect_true(all(out$sim$x >= 0 & out$sim$x <= 1 & out$sim$u >= 0 & out$sim$u <= 1))
-  # its candidates stay in `lower`-`upper` where the field's inputs
-  # (0.1-0.9) go beyond them: the half at the field's inputs held there
-  set.seed(3)
-  cand <- FBC:::loop_candidates(out$fit, pb$field, c(x = 0.3, u = 0.2), c(x = 0.7, u = 0.8),
-                                list(), "u", "x")
-  expect_equal(nrow(cand), 200)
-  expect_true(all(cand$x >= 0.3 & cand$x <= 0.7 & cand$u >= 0.2 & cand$u <= 0.8))
-  # the first half at the field's inputs 0.3, 0.5, 0.7 (0.1 and 0.9 held
-  # to 0.3 and 0.7)
-  expect_setequal(unique(round(cand$x[1:100], 12)), c(0.3, 0.5, 0.7))
-  expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0), upper = c(x = 1)))
-  expect_snapshot(error = TRUE, design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1),
-                                            output = "out"))
-})
-
 test_that("the look-ahead with a single draw is the plain-R one, batches included", {
   # every unknown at one draw (KOH-IMSPE's plug-in, bench/design.R's
   # "imspe"): the draws' A were kept only for more than one draw, and a
@@ -1189,57 +816,6 @@ test_that("runs of several outputs: the C++ look-ahead equals the plain-R one", 
   expect_true(all(is.finite(a$gain)))
 })
 
-test_that("propose_runs() and design_loop() give runs of every output", {
-  po <- two_outputs(m = 16)
-  set.seed(1)
-  fit <- calibrate(po$sim, po$field, output = "out", discrepancy = "none", nMCMC = 600,
-                   nBurn = 200, nChains = 1, showProgress = FALSE)
-  set.seed(5)
-  pr <- propose_runs(fit, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 100)
-  # a run: its inputs, no output column
-  expect_two_output_runs(pr, po$sim)
-  expect_true(all(pr$gain > 0))
-  # given candidates are runs too (an output column refused)
-  cand <- data.frame(x = c(0.1, 0.5, 0.9), t = 1.7)
-  set.seed(5)
-  pr2 <- propose_runs(fit, n = 3, candidates = cand, ndraws = 40, nfantasy = 20)
-  expect_setequal(pr2$x, cand$x)
-  expect_snapshot(error = TRUE, propose_runs(fit, candidates = transform(cand, out = "conc")))
-  # a target names its output
-  set.seed(5)
-  pt <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, out = "rate"), ndraws = 40,
-                     nfantasy = 20, ncandidates = 100)
-  expect_named(pt, c("x", "t", "gain"))
-  # without the output column a target is every output at its inputs (a
-  # data frame or numeric)
-  both <- data.frame(x = c(0.5, 0.5, 0.8, 0.8), out = c("conc", "rate", "conc", "rate"))
-  set.seed(5)
-  p1 <- propose_runs(fit, n = 2, target = both, ndraws = 40, nfantasy = 20, ncandidates = 100)
-  for (tg in list(data.frame(x = c(0.5, 0.8)), c(0.5, 0.8))) {
-    set.seed(5)
-    p2 <- propose_runs(fit, n = 2, target = tg, ndraws = 40, nfantasy = 20, ncandidates = 100)
-    attr(p2, "time") <- attr(p1, "time")
-    expect_identical(p2, p1)
-  }
-  expect_equal(nrow(FBC:::design_target(data.frame(x = c(0.5, 0.8)), fit$scale)), 4)
-  # the size limit counts a run's rows, and says so
-  U <- FBC:::design_candidates(NULL, fit$scale, 300, fit$data$Xs, 1e-3)
-  expect_snapshot(error = TRUE, FBC:::check_look_ahead_size(1e4, fit$model, U, matrix(0, 0, 2)))
-  # the runs go back in with update(), each as its two rows
-  f1 <- function(x, t) 5 * exp(-t * x)
-  f2 <- function(x, t) 2 * t * x
-  new <- rbind(data.frame(y = f1(pr$x, pr$t), x = pr$x, out = "conc", t = pr$t),
-               data.frame(y = f2(pr$x, pr$t), x = pr$x, out = "rate", t = pr$t))
-  fit2 <- update(fit, sim = new, nMCMC = 300)
-  expect_equal(fit2$model$dims$m, 32 + 6)
-  # design_loop(): one call of f per run, on the run's rows at each output
-  two_output_loop(po$field)
-  # f must give a run's every output
-  field <- po$field[po$field$x > 0.1 & po$field$x < 0.9, ]
-  expect_snapshot(error = TRUE, design_loop(function(x, kappa) 1, field, lower = c(x = 0, t = 0.5),
-                                            upper = c(x = 1, t = 3), output = "out"))
-})
-
 test_that("independent outputs: the C++ look-ahead equals the plain-R one, an output's system each", {
   # outputs = "independent": each output its own simulator GP and
   # hyperparameters, only kappa shared; a run's 2 values are independent
@@ -1304,45 +880,35 @@ test_that("independent outputs: the C++ look-ahead equals the plain-R one, an ou
   }
 })
 
-test_that("propose_runs() and design_loop() handle independent outputs", {
-  po <- two_outputs(m = 16)
-  set.seed(1)
-  fit <- calibrate(po$sim, po$field, output = "out", outputs = "independent",
-                   discrepancy = "gp", nMCMC = 600, nBurn = 200, nChains = 1,
-                   showProgress = FALSE)
-  set.seed(5)
-  pr <- propose_runs(fit, n = 3, ndraws = 40, nfantasy = 20, ncandidates = 100)
-  # runs: their inputs, in the design's ranges, distinct from the runs
-  expect_two_output_runs(pr, po$sim)
-  expect_true(all(is.finite(pr$gain)))
-  # a target at one output
-  set.seed(5)
-  pt <- propose_runs(fit, n = 1, target = data.frame(x = 0.5, out = "rate"), ndraws = 40,
-                     nfantasy = 20, ncandidates = 100)
-  expect_named(pt, c("x", "t", "gain"))
-  # a loop, one call of f per run (its refits through update(fit, sim =))
-  out <- two_output_loop(po$field, outputs = "independent")
-  expect_equal(out$fit$model$options$outputs, "independent")
-})
-
-test_that("design_loop() warns once, at the end, when its runs do not cover the field's inputs", {
-  # runs in x <= 0.5 while the field's x reach 0.9 (sinus_problem()): every
-  # fit of the loop extrapolates; the loop says so once, after its last fit
-  f <- function(x, kappa) sin(10 * kappa[["u"]] * x$x)
-  pb <- sinus_problem()
-  set.seed(2)
-  ws <- list()
-  out <- withCallingHandlers(
-    design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 0.5, u = 1), n0 = 8,
-                batch = 1, budget = 2, discrepancy = "none", hypers = sinus_hypers(),
-                nMCMC = 400, nBurn = 100, nChains = 1, design = list(ndraws = 40, nfantasy = 20),
-                showProgress = FALSE),
-    warning = function(w) {
-      ws[[length(ws) + 1]] <<- w
-      invokeRestart("muffleWarning")
-    })
-  expect_equal(nrow(out$history), 3)
-  expect_length(ws, 1)
-  expect_s3_class(ws[[1]], "fbc_extrapolation")
-  expect_match(conditionMessage(ws[[1]]), "outside the range of the simulator design")
+test_that("the look-ahead's conditionals are the model's own on every algebra", {
+  # a product design (the Kronecker algebra) against the dense algebra on
+  # the same model and draws: the same conditionals to rounding; the
+  # nearest-neighbour algebra with 20 of the 29 earlier runs as neighbours
+  # within a few percent of the candidates' spread
+  set.seed(21)
+  g <- expand.grid(x = seq(0, 1, by = 0.25), u = seq(0, 1, by = 0.2))
+  sim <- data.frame(y = sin(10 * g$u * g$x), g)[sample(nrow(g)), ]
+  xf <- c(0.15, 0.4, 0.65, 0.9)
+  field <- data.frame(y = sin(2 * pi * xf) + stats::rnorm(4, 0, 0.05), x = xf)
+  set.seed(13)
+  fit <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1, showProgress = FALSE)
+  expect_identical(fit$model$algebra$name, "kronecker")
+  d <- fit$data
+  phis <- FBC:::sampler_draws(fit, 1:5)
+  U <- matrix(stats::runif(20), 10, 2)
+  XT <- matrix(c(0.2, 0.7), 2, 1)
+  sys <- function(model) FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, U, XT, fbc_nugget, model)
+  dense_model <- fit$spec$model
+  dense_model$algebra <- FBC:::.model_codes()$algebra[["dense"]]
+  kron <- sys(fit$spec$model)
+  dense <- sys(dense_model)
+  for (k in c("mu", "v", "ll", "mT", "VT")) expect_equal(kron[[k]], dense[[k]], tolerance = 1e-8)
+  set.seed(13)
+  near <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1, showProgress = FALSE,
+                    algebra = "vecchia", neighbours = 20)
+  vec <- sys(near$spec$model)
+  spread <- diff(range(dense$mu))
+  expect_lt(max(abs(vec$mu - dense$mu)) / spread, 0.05)
+  expect_lt(max(abs(vec$mT - dense$mT)) / spread, 0.05)
+  expect_lt(max(abs(sqrt(pmax(vec$v, 0)) - sqrt(dense$v))) / spread, 0.05)
 })
