@@ -21,6 +21,7 @@ test_that("estimates carry posterior's rank-normalised split R-hat and bulk ESS"
 })
 
 test_that("set.seed() reproduces a run, and the plan does not matter", {
+  skip_if_not_slow()
   a <- small_fit(nChains = 2, seed = 7)
   b <- small_fit(nChains = 2, seed = 7)
   expect_identical(a$Phi, b$Phi)

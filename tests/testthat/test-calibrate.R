@@ -2,6 +2,7 @@
 # test-exact-posterior.R.
 
 test_that("calibrate() recovers a known calibration parameter", {
+  skip_if_not_slow()
   # exact simulator eta(x, t) = t x^2 + sin(3x); field at t = 1.3 plus noise
   eta <- function(x, t) t * x^2 + sin(3 * x)
   set.seed(7)
@@ -21,6 +22,7 @@ test_that("calibrate() recovers a known calibration parameter", {
 })
 
 test_that("the default ball calibration covers g = 9.81", {
+  skip_if_not_slow()
   set.seed(2024)
   fit <- calibrate(ballSim, ballField)
   ci <- quantile(fit$Phi[, "kappa1"], c(0.025, 0.975))
@@ -45,6 +47,7 @@ test_that("the default ball calibration covers g = 9.81", {
 })
 
 test_that("set.seed() reproduces a run and the inputs are not modified", {
+  skip_if_not_slow()
   sim <- as.data.frame(ballSim)
   field <- ballField
   sim0 <- sim; field0 <- field
@@ -196,6 +199,7 @@ test_that("calibrate() explains bad input", {
 })
 
 test_that("showProgress = TRUE runs the same chain", {
+  skip_if_not_slow()
   withr_opts <- options(cli.progress_show_after = 0, cli.dynamic = FALSE)
   on.exit(options(withr_opts))
   set.seed(12); a <- calibrate(ballSim, ballField, nMCMC = 400, nBurn = 100, thinning = 1)

@@ -5,6 +5,7 @@
 # seed, on any plan.
 
 test_that("a chain in pieces makes the draws of the uninterrupted chain", {
+  skip_if_not_slow()
   # A checkpointed run (checkpoint after every piece) equals a plain one...
   ref <- ck_reference()
   dir <- tempfile("ck-")
@@ -50,6 +51,7 @@ test_that("a relative checkpoint directory is kept as the absolute one used", {
 })
 
 test_that("an interrupted run resumes from its checkpoint to the uninterrupted draws", {
+  skip_if_not_slow()
   ref <- ck_reference()
   dir <- tempfile("ck-")
   on.exit(unlink(dir, recursive = TRUE), add = TRUE)
@@ -86,6 +88,7 @@ test_that("an interrupted run resumes from its checkpoint to the uninterrupted d
 })
 
 test_that("a session killed with SIGKILL mid-run resumes to the uninterrupted draws", {
+  skip_if_not_slow()
   skip_on_cran()
   skip_if_not_installed("callr")
   ref <- ck_reference()
@@ -113,6 +116,7 @@ test_that("a session killed with SIGKILL mid-run resumes to the uninterrupted dr
 })
 
 test_that("multisession: a worker killed mid-run loses nothing but time; the session goes on", {
+  skip_if_not_slow()
   skip_on_cran()
   skip_if_not_installed("callr")
   ref <- ck_reference()
@@ -159,6 +163,7 @@ test_that("multisession: a worker killed mid-run loses nothing but time; the ses
 })
 
 test_that("multisession: Ctrl-C returns the chains' draws and leaves the workers free", {
+  skip_if_not_slow()
   skip_on_cran()
   skip_if_not_installed("callr")
   marker <- tempfile("started-")
@@ -222,6 +227,7 @@ test_that("process_alive() sees a running process, and a killed one as gone even
 })
 
 test_that("multisession: a second Ctrl-C kills the workers and keeps the checkpoints", {
+  skip_if_not_slow()
   skip_on_cran()
   skip_if_not_installed("callr")
   dir <- tempfile("ck-")

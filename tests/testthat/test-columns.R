@@ -66,6 +66,7 @@ test_that("a response the names cannot identify is refused, naming both candidat
 })
 
 test_that("the default ball fit gives the same g posterior from a (h, t) field", {
+  skip_if_not_slow()
   skip_on_cran()
   set.seed(2024)
   a <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 400)

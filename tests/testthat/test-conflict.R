@@ -91,6 +91,7 @@ test_that("small field noise: the vignette's sigma2E prior is flagged, and the s
 })
 
 test_that("no conflict on the ball data with the vignette's priors", {
+  skip_if_not_slow()
   set.seed(1)
   fit <- calibrate(ballSim, ballField, nMCMC = 1000, nBurn = 400, nChains = 2, hypers = vignette_noise,
                    kernelS = "powexp", kernelB = "powexp")
@@ -103,6 +104,7 @@ test_that("no conflict on the ball data with the vignette's priors", {
 })
 
 test_that("the conflict message, on draws built by hand", {
+  skip_if_not_slow()
   # every parameter fixed except sigma2E, log-normal around 0.16
   fit <- hand_built_fit("sigma2E")
   Phi <- fit$Phi

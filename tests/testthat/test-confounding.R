@@ -4,6 +4,7 @@
 # S-GaSP (interval about half the range) and without a discrepancy.
 
 test_that("the confounding check fires under the bias GP and is silent otherwise on the ball data", {
+  skip_if_not_slow()
   set.seed(4)
   args <- list(ballSim, ballField, nMCMC = 700, nBurn = 300, nChains = 2, kernelS = "matern52",
                kernelB = "matern52")

@@ -20,6 +20,7 @@ cv_fit <- local({
 })
 
 test_that("a run under a rule stops at the first check that meets it", {
+  skip_if_not_slow()
   fit <- cv_fit()
   cv <- fit$settings$converge
   expect_true(cv$converged)
@@ -54,6 +55,7 @@ test_that("a rule that is not met stops at the ceiling and says so", {
 })
 
 test_that("an interrupted run under a rule resumes to the same end and draws", {
+  skip_if_not_slow()
   ref <- cv_fit()
   dir <- tempfile("cv-")
   on.exit(unlink(dir, recursive = TRUE), add = TRUE)
@@ -87,6 +89,7 @@ test_that("an interrupted run under a rule resumes to the same end and draws", {
 })
 
 test_that("update() continues under a rule as one longer update", {
+  skip_if_not_slow()
   set.seed(cv_seed)
   fit0 <- do.call(calibrate, c(list(ballSim, ballField), cv_args))
   set.seed(8)

@@ -78,6 +78,7 @@ test_that("kinetics data follow the source file and y = 5 exp(-u t)", {
 })
 
 test_that("a short analytic calibration covers the true kappa", {
+  skip_if_not_slow()
   set.seed(11)
   fit <- calibrate(analyticSim, analyticField, nMCMC = 2500, nBurn = 1000, thinning = 3,
                    nChains = 2, hypers = precise_hypers())

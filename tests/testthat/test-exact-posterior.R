@@ -56,6 +56,7 @@ expect_dense_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
 }
 
 test_that("kappa draws match the grid posterior on the ball data (q = 1, default kernels)", {
+  skip_if_not_slow()
   hyp <- all_fixed(thetaS = c(1.5, 0.2), thetaB = 2, sigma2S = 3.5, sigma2B = 0.9, sigma2E = 0.15,
                    muB = 0.2)
   set.seed(11)
@@ -71,6 +72,7 @@ test_that("kappa draws match the grid posterior on the ball data (q = 1, default
 })
 
 test_that("Matern families: kappa draws match the grid posterior on the ball data", {
+  skip_if_not_slow()
   # the reference: dense_loglik() with the Matern formulas of ?correlation
   # written in plain R (helper-dense.R), times the Beta(1.1, 1.1) prior
   hyp <- set_hyperPriors(
@@ -86,6 +88,7 @@ test_that("Matern families: kappa draws match the grid posterior on the ball dat
 })
 
 test_that("without a discrepancy, kappa draws match the grid posterior on the ball data", {
+  skip_if_not_slow()
   # the reference: dense_loglik(discrepancy = "none") (no bias block) times
   # the Beta(1.1, 1.1) prior; the posterior is narrow, so a fine grid
   hyp <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(3.6, 0.42), alphaSDist = "fixed",
@@ -100,6 +103,7 @@ test_that("without a discrepancy, kappa draws match the grid posterior on the ba
 })
 
 test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors (ball data)", {
+  skip_if_not_slow()
   # the reference: dense_loglik(discrepancy = "sgasp"), the S-GaSP bias block
   # written from Gu and Wang's discretized kernel in plain R
   # (helper-dense.R), times the priors
@@ -143,6 +147,7 @@ test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors
 })
 
 test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
+  skip_if_not_slow()
   # data drawn from the model itself (dense_cov) at kappa = (0.3, 0.7)
   set.seed(5)
   n <- 8; m <- 30
@@ -168,6 +173,7 @@ test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
 })
 
 test_that("the joint thetaS move (default sampler) matches the 2-D grid posterior of thetaS", {
+  skip_if_not_slow()
   # Everything but thetaS = (thetaS1, thetaS2) fixed, Gamma(4, 2) priors on
   # both; the reference is the plain-R dense likelihood times the priors on a
   # grid of thetaS. The block move proposes both at once on the log scale, so
@@ -256,6 +262,7 @@ test_that("the exact muB draw matches muB's closed-form Gaussian posterior", {
 })
 
 test_that("the scale move and single-site variance moves match the 3-D grid posterior", {
+  skip_if_not_slow()
   # sigma2S, sigma2B, sigma2E free (InvGamma(3, 1), (3, 0.5), (3, 0.2)),
   # everything else fixed: the default sampler moves each variance alone and
   # all three by one factor (C -> c C). A missing Jacobian (3e) or a wrong
@@ -303,6 +310,7 @@ test_that("the scale move and single-site variance moves match the 3-D grid post
 })
 
 test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches the 2-D grid posterior", {
+  skip_if_not_slow()
   # sigma2S, sigma2E free (InvGamma(3, 1), (3, 0.2)), everything else fixed,
   # no bias: the scale move multiplies the two variances that exist, with
   # Jacobian 2e (a Jacobian of 3e would shift these marginals)
@@ -342,6 +350,7 @@ test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches th
 })
 
 test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
+  skip_if_not_slow()
   pr <- small_model_problem(25)
   hyp <- set_hyperPriors(
     thetaSDist = "fixed", thetaSInit = c(1.5, 3), alphaSDist = "fixed", alphaSInit = 1.9,

@@ -186,6 +186,7 @@ test_that("outputs on a product design: the Kronecker likelihood equals the dens
 })
 
 test_that("two outputs: kappa draws match the grid posterior", {
+  skip_if_not_slow()
   # every hyperparameter fixed; the reference is dense_loglik() with the two
   # outputs' noise groups times the Beta(1.1, 1.1) prior on the scaled kappa
   pr <- two_outputs()
@@ -207,6 +208,7 @@ test_that("two outputs: kappa draws match the grid posterior", {
 })
 
 test_that("two outputs recover kappa with an interval narrower than either output alone", {
+  skip_if_not_slow()
   pr <- two_outputs()
   args <- list(nMCMC = 2500, nBurn = 1000, nChains = 2, kernelS = "matern52",
                kernelB = "matern52")

@@ -63,6 +63,7 @@ test_that("loo() of a fit with every parameter fixed is the exact density in the
 })
 
 test_that("loo_compare() ranks the discrepancy models of the ball data", {
+  skip_if_not_slow()
   skip_if_not_installed("loo")
   set.seed(4)
   args <- list(ballSim, ballField, nMCMC = 700, nBurn = 300, nChains = 2, kernelS = "matern52",

@@ -97,6 +97,7 @@ test_that("independent outputs: likelihood, moves and predictions are each outpu
 })
 
 test_that("two independent outputs: kappa draws match the grid posterior", {
+  skip_if_not_slow()
   # every hyperparameter fixed (each output the same values); the reference
   # is the sum of each output's dense_loglik() times the Beta(1.1, 1.1)
   # prior on the scaled kappa

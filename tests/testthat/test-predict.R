@@ -180,6 +180,7 @@ test_that("bad arguments give clear errors", {
 })
 
 test_that("ball data: predictions at h = 2.2, 2.4 match the reference (vignette 1.4)", {
+  skip_if_not_slow()
   set.seed(42)
   fit <- calibrate(ballSim, ballField, nMCMC = 2500, nBurn = 500, thinning = 4)
   for (method in c("Bayesian", "MAP")) {

@@ -46,6 +46,7 @@ test_that("print() ends with the convergence warnings, one per problem", {
 })
 
 test_that("print() shows no warning for a converged run", {
+  skip_if_not_slow()
   # only kappa sampled (its move is cheap): 4 chains mix well within 1500 sweeps
   hyp <- set_hyperPriors(
     thetaSDist = "fixed", alphaSDist = "fixed", alphaSInit = 1.9, thetaBDist = "fixed",

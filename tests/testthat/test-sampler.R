@@ -139,6 +139,7 @@ test_that("single-site and adapted moves follow the one adaptation rule", {
 })
 
 test_that("the simulator block's sigma2S drawn from the runs' conditional targets the grid posterior", {
+  skip_if_not_slow()
   # 30 runs, 12 field rows (p = q = 1), the Vecchia algebra with 5
   # neighbours (the algebra that gives ys' Ds^-1 ys ahead of a proposal),
   # every parameter fixed but thetaS1, thetaS2 and sigma2S: the sim block's
@@ -184,6 +185,7 @@ test_that("the simulator block's sigma2S drawn from the runs' conditional target
 })
 
 test_that("after warm-up the simulator block proposes from its warm-up estimate and targets the grid posterior", {
+  skip_if_not_slow()
   # 40 runs of a smooth function (p = 2, q = 1), 12 field rows, the dense
   # algebra; every parameter fixed but thetaS1-3 and sigma2S: the simulator
   # block walks 4 parameters, so after a warm-up of data-dependent length

@@ -5,6 +5,7 @@
 # bench/validation/sbc.R (results in bench/validation/sbc-results.md).
 
 test_that("SBC ranks of kappa, sigma2S, sigma2E and muB are uniform", {
+  skip_if_not_slow()
   ranks <- sbc_ranks(L = 400, seed = 42, sampler = "single")
   expect_equal(dim(ranks), c(400, 4))
   expect_true(all(ranks >= 0 & ranks <= 99))
@@ -15,6 +16,7 @@ test_that("SBC ranks of kappa, sigma2S, sigma2E and muB are uniform", {
 })
 
 test_that("the same check rejects a posterior that is off (it has power)", {
+  skip_if_not_slow()
   # data made with 2x the noise variance the model believes in: the true
   # sigma2E sits low among the posterior draws
   ranks <- sbc_ranks(L = 400, seed = 42, sigma2EFactor = 2, sampler = "single")
@@ -24,6 +26,7 @@ test_that("the same check rejects a posterior that is off (it has power)", {
 })
 
 test_that("SBC ranks are uniform under every joint move of the default sampler", {
+  skip_if_not_slow()
   # thetaS and sigma2B sampled too: the (thetaS1, thetaS2, sigma2S) block with
   # its adapted proposal, the sigma2S/sigma2B/sigma2E scale move and the
   # exact muB draw all act (the vignette's one-at-a-time sampler: above)

@@ -25,6 +25,7 @@ test_that("coef() gives posterior means, medians or modes of every column of Phi
 })
 
 test_that("as.matrix(), fitted() and residuals() are the draws and the calibrated fits", {
+  skip_if_not_slow()
   set.seed(5)
   fit <- calibrate(ballSim, ballField, nMCMC = 150, nBurn = 50, thinning = 2)
   expect_identical(as.matrix(fit), fit$Phi)

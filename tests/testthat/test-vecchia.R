@@ -88,6 +88,7 @@ test_that("with every predecessor as neighbour predictions and held-out runs are
 })
 
 test_that("with few neighbours the kappa draws match the approximation's own grid posterior", {
+  skip_if_not_slow()
   # the ball data, every hyperparameter fixed, 5 neighbours: the reference is
   # the compiled approximate log-likelihood of the fit's own design on a grid
   # of kappa, times the Beta(1.1, 1.1) prior
@@ -107,6 +108,7 @@ test_that("with few neighbours the kappa draws match the approximation's own gri
 })
 
 test_that("a Vecchia run resumes from its checkpoint to the same draws, and update() continues it", {
+  skip_if_not_slow()
   args <- list(ballSim, ballField, nMCMC = 400, nBurn = 200, nChains = 2, kernelS = "matern52",
                algebra = "vecchia", neighbours = 10)
   set.seed(21)

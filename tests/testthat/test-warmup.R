@@ -44,6 +44,7 @@ test_that("warm-up ends early where the proposals settle at once, and the draws 
 })
 
 test_that("warm-up goes on while a proposal is badly scaled, and the draws are the posterior's", {
+  skip_if_not_slow()
   # precise field data (sigma2E fixed 1000 times smaller): kappa's posterior
   # is some 30 times narrower than its initial proposal SD, so its walk
   # accepts almost nothing until the scale has come down by steps of at
@@ -107,6 +108,7 @@ test_that("run-length arguments are checked, naming the argument", {
 })
 
 test_that("set.seed() reproduces a run of data-dependent length on every plan", {
+  skip_if_not_slow()
   skip_on_cran()
   args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(35)
@@ -172,6 +174,7 @@ with_warmup_ess <- function(ess, code) {
 }
 
 test_that("warm-up waits for the joint blocks' shapes to be learnt from enough effective draws", {
+  skip_if_not_slow()
   # the ball drop with a second, irrelevant field input z: the simulator
   # block is thetaS of h, z and g and sigma2S (4 parameters), the bias block
   # thetaB of h and z and sigma2B (3): the rule holds blocks of 4 or more
@@ -267,6 +270,7 @@ test_that("a block's warm-up estimate keeps the earlier epochs at falling weight
 })
 
 test_that("a run interrupted in its warm-up resumes from its checkpoint to the uninterrupted draws", {
+  skip_if_not_slow()
   args <- list(ballSim, ballField, nChains = 2, kernelS = "matern52", kernelB = "matern52")
   set.seed(37)
   ref <- do.call(calibrate, args)
@@ -292,6 +296,7 @@ test_that("a run interrupted in its warm-up resumes from its checkpoint to the u
 })
 
 test_that("a run of data-dependent length interrupted after its warm-up resumes to the uninterrupted draws", {
+  skip_if_not_slow()
   # the ball drop with an irrelevant field input z: the simulator block
   # walks 4 parameters, so after warm-up it proposes from its warm-up
   # estimate, which the resumed piece must rebuild to the bit
