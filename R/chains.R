@@ -91,8 +91,13 @@ check_chain_results <- function(results, nMCMC, checkpoint = NULL, call = parent
     if (length(died)) {
       msg <- c(msg, "!" = "{cli::qty(length(died))}The worker{?s} running chain{?s} {died} stopped (killed or crashed): {?its/their} draws are those of {?its/their} last checkpoint.")
     }
+    waiting <- which(kept > 0L & vapply(results, function(r) identical(r$status, "waiting"), logical(1)))
+    if (length(waiting)) {
+      msg <- c(msg, i = "{cli::qty(length(waiting))}Chain{?s} {waiting} {cli::qty(length(waiting))}{?was/were} waiting for {?its/their} turn: {?its/their} draws are those of {?its/their} last completed stretch.")
+    }
     if (n > 1L) {
-      msg <- c(msg, i = "Keeping {sum(kept > 0L)} of {n} chain{?s} with {sum(kept)} retained draw{?s}; chains that had not started or kept no draw are dropped.")
+      msg <- c(msg, i = paste0("Keeping {sum(kept > 0L)} of {n} chain{?s} with {sum(kept)} retained draw{?s}",
+                               if (any(kept == 0L)) "; chains that kept no draw (not started) are dropped" else "", "."))
     } else {
       msg <- c(msg, i = "Returning the {sum(kept)} draw{?s} retained so far.")
     }

@@ -274,10 +274,18 @@ near_groups <- function(U, eps) {
 # column, when the calibration inputs (with their squares and products with
 # the other experimental inputs) explain at least `fbc_wide_share` of a
 # shared column's variation in `sim` beyond what the other experimental
-# inputs explain, and at least `fbc_wide_alone` of it on their own. `sim`: the numeric matrix (response, p experimental, q
-# calibration inputs, named when `named`).
+# inputs explain, and at least `fbc_wide_alone` of it on their own. With
+# few runs a design input explains by chance a large share: the share must
+# also exceed what chance gives with probability fbc_wide_chance (the
+# partial R^2 of k added regressors to r columns on m runs, under
+# independence and Gaussian variation Beta(k / 2, (m - r - k) / 2);
+# wide_share()): 0.94 at m = 8 (p = q = 1), where the fixed 50% warned on
+# 7.5% of maximin designs; 0.5 from m = 23. `sim`: the numeric matrix
+# (response, p experimental, q calibration inputs, named when `named`).
 fbc_wide_share <- 0.5
 fbc_wide_alone <- 0.1
+fbc_wide_chance <- 0.001
+wide_share <- function(m, r, k) max(fbc_wide_share, stats::qbeta(1 - fbc_wide_chance, k / 2, (m - r - k) / 2))
 
 warn_wide_outputs <- function(sim, p, named = TRUE, call = parent.frame()) {
   m <- nrow(sim)
@@ -305,7 +313,7 @@ warn_wide_outputs <- function(sim, p, named = TRUE, call = parent.frame()) {
     # alone, too: given an output among the others, a design input is
     # "explained" by the calibration inputs through it
     alone <- 1 - rss(cbind(1, Tm, Tm^2)) / sum((v - mean(v))^2)
-    if (gain >= fbc_wide_share && alone >= fbc_wide_alone) {
+    if (gain >= wide_share(m, ncol(reduced), ncol(full) - ncol(reduced)) && alone >= fbc_wide_alone) {
       flagged <- c(flagged, nm[j])
       share <- c(share, gain)
     }

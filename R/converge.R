@@ -50,6 +50,12 @@ fbc_fixed_nMCMC <- 8000L
 #' with the same draws. Warm-up is not extended: the proposals stay as
 #' warm-up left them.
 #'
+#' What R-hat cannot see: a mode that every chain visits too rarely. The
+#' chains agree, so the rule is met, while the mode's share of the draws is
+#' far from its share of the posterior; `print()` says when kappa's draws
+#' are multimodal, and more chains (`nChains = 8`) show how stable the
+#' shares are.
+#'
 #' So give the run the burn-in its proposals need. With hundreds or
 #' thousands of simulator runs the simulator's hyperparameters have a narrow,
 #' correlated posterior, and their joint move learns its shape from the
@@ -257,7 +263,8 @@ run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, s
       starts[[k]]$finished <- starts[[k]]$state$iter >= chain_stop(starts[[k]]$state, target[k], post[k], nBurn)
     }
     results <- run_chains(starts = starts, seeds = seeds, target = target, nBurn = nBurn,
-                          thinning = thinning, showProgress = showProgress, post = post, ...)
+                          thinning = thinning, showProgress = showProgress, post = post,
+                          stretch = !is.null(rule), ...)
     stops <- vapply(seq_along(results), function(k) {
       if (is.null(results[[k]])) NA_integer_ else chain_stop(results[[k]]$state, target[k], post[k], nBurn)
     }, integer(1))

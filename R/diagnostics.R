@@ -295,59 +295,86 @@ smooth_kernel_hint <- function(cls) {
 convergence_messages <- function(x) {
   x <- check_fbc(x, "x")
   est <- x$estimates
-  msgs <- character()
   nChains <- length(unique(x$chain))
-  if (isTRUE(x$state$interrupted)) {
-    msgs <- c(msgs, "The run was interrupted before the end; continue it with `update(fit, nMCMC = ...)`.")
+  msgs <- if (isTRUE(x$state$interrupted)) {
+    "The run was interrupted before the end; continue it with `update(fit, nMCMC = ...)`."
   }
-  rhat <- est$rhat
-  ess <- est$ess
-  bad <- which(rhat > fbc_rhat_max)
+  bad <- which(est$rhat > fbc_rhat_max)
+  low <- which(est$ess < fbc_ess_min)
   modes <- local_mode_chains(x)
-  if (length(bad)) {
-    msgs <- c(msgs, sprintf(
-      "R-hat above %.2f for %s (max %.3f): the chains disagree. %s.",
-      fbc_rhat_max, paste(rownames(est)[bad], collapse = ", "), max(rhat[bad]),
-      if (nrow(modes)) {
-        sprintf("Chain%s %s %s in a local mode (below): running longer rarely moves %s",
-                if (nrow(modes) > 1) "s" else "", paste(modes$chain, collapse = " and "),
-                if (nrow(modes) > 1) "are" else "is", if (nrow(modes) > 1) "them" else "it")
-      } else {
-        paste0("Run longer with `update(fit, nMCMC = ...)`",
-               if (nChains < 4) " or use more chains (`nChains = 4`)" else "")
-      }
-    ))
-  }
-  low <- which(ess < fbc_ess_min)
-  if (length(low)) {
-    msgs <- c(msgs, sprintf(
-      "Bulk ESS below %d for %s (min %.0f): too few effective draws for stable intervals. %s.",
-      fbc_ess_min, paste(rownames(est)[low], collapse = ", "), min(ess[low]),
-      if (nrow(modes)) "A chain in a local mode (below) is the cause, not the run's length" else
-        "Run longer with `update(fit, nMCMC = ...)`"
-    ))
-  }
-  msgs <- c(msgs, shape_messages(x, rownames(est)[union(bad, low)]))
+  ridge <- kappa_ridge(x, rownames(est)[union(bad, low)])
+  msgs <- c(msgs, mixing_messages(est, bad, low, modes, ridge, nChains),
+            ridge_messages(ridge), shape_messages(x, rownames(est)[union(bad, low)]))
   if (nChains == 1L) {
     msgs <- c(msgs, "Only one chain: R-hat compares its two halves only. Use `nChains = 4` to check that independent chains agree.")
   }
-  for (i in seq_len(nrow(modes))) {
-    md <- modes[i, ]
+  c(msgs, local_mode_messages(modes), stuck_messages(x), bound_messages(x),
+    kappa_modes_messages(x), field_pull_messages(x),
+    kappa_beyond_messages(x), confounding_messages(x), conflict_messages(x))
+}
+
+# The R-hat and bulk ESS messages (parameters `bad`, `low` of the estimates
+# `est`), with what to do: a chain in a local mode (`modes`) or calibration
+# inputs that trade off (`ridge`, kappa_ridge()) is the cause, not the
+# run's length; else run longer.
+mixing_messages <- function(est, bad, low, modes, ridge, nChains) {
+  msgs <- character()
+  cause <- if (nrow(modes)) "mode" else if (length(ridge$vars)) "ridge" else "length"
+  if (length(bad)) {
     msgs <- c(msgs, sprintf(
+      "R-hat above %.2f for %s (max %.3f): the chains disagree. %s.",
+      fbc_rhat_max, paste(rownames(est)[bad], collapse = ", "), max(est$rhat[bad]),
+      switch(cause,
+        mode = sprintf("Chain%s %s %s in a local mode (below): running longer rarely moves %s",
+                       if (nrow(modes) > 1) "s" else "", paste(modes$chain, collapse = " and "),
+                       if (nrow(modes) > 1) "are" else "is", if (nrow(modes) > 1) "them" else "it"),
+        ridge = "Calibration inputs that trade off (below) are the cause",
+        paste0("Run longer with `update(fit, nMCMC = ...)`",
+               if (nChains < 4) " or use more chains (`nChains = 4`)" else ""))
+    ))
+  }
+  if (length(low)) {
+    msgs <- c(msgs, sprintf(
+      "Bulk ESS below %d for %s (min %.0f): too few effective draws for stable intervals. %s.",
+      fbc_ess_min, paste(rownames(est)[low], collapse = ", "), min(est$ess[low]),
+      switch(cause,
+        mode = "A chain in a local mode (below) is the cause, not the run's length",
+        ridge = "Calibration inputs that trade off (below) are the cause",
+        "Run longer with `update(fit, nMCMC = ...)`")
+    ))
+  }
+  msgs
+}
+
+# A chain in a local mode (local_mode_chains()), one message each.
+local_mode_messages <- function(modes) {
+  vapply(seq_len(nrow(modes)), function(i) {
+    md <- modes[i, ]
+    sprintf(
       "Chain %d sits in a local mode: its log posterior is lower than chain %d's (median %s against %s), with %s at %s (chain %d: %s), and it did not leave it in %d draws. Such a mode likely holds little of the posterior's mass (about %s of the other's if of the same shape), yet the summaries give it a chain's share. Rerun with another seed (`set.seed()`), or with more chains (`nChains = 8`) to see how often chains fall into it.",
       md$chain, md$best, format(md$logPost, digits = 4), format(md$bestLogPost, digits = 4),
       md$var, format(md$value, digits = 3), md$best, format(md$bestValue, digits = 3), md$draws,
-      format(exp(md$logPost - md$bestLogPost), digits = 2)))
-  }
+      format(exp(md$logPost - md$bestLogPost), digits = 2))
+  }, character(1))
+}
+
+# A chain that never moved (stuck_chains()), one message each.
+stuck_messages <- function(x) {
   stuck <- stuck_chains(x)
-  for (k in unique(stuck$chain)) {
+  vapply(unique(stuck$chain), function(k) {
     st <- stuck[stuck$chain == k, ]
-    msgs <- c(msgs, sprintf(
+    sprintf(
       "Chain %d never moved %s in its %d draws: it is stuck (every proposal rejected), not converged, and R-hat and ESS cannot be trusted. Rerun with another seed or a longer burn-in (`nBurn`), and check the priors and initial values.",
-      k, paste(sprintf("%s (at %s)", st$var, signif(st$value, 4)), collapse = " and "), st$draws[1]))
-  }
+      k, paste(sprintf("%s (at %s)", st$var, signif(st$value, 4)), collapse = " and "), st$draws[1])
+  }, character(1))
+}
+
+# Draws piling up at a bound (bound_piling()) and a posterior pressing
+# against its prior's bound (bound_pressing()), one message each.
+bound_messages <- function(x) {
+  kappaHint <- "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
   pile <- bound_piling(x)
-  for (i in seq_len(nrow(pile))) {
+  msgs <- vapply(seq_len(nrow(pile)), function(i) {
     v <- pile$var[i]
     cls <- x$spec$classes[match(v, x$spec$vars)]
     hint <- switch(cls,
@@ -356,27 +383,24 @@ convergence_messages <- function(x) {
         if (pile$bound[i] == 2) paste0(smooth_kernel_hint(cls), ", or fix it") else "consider fixing it",
         sprintf(" (e.g. `%sDist = \"fixed\", %sInit = %g` in set_hyperPriors()).",
                 cls, cls, pile$bound[i])),
-      kappa = "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb.",
+      kappa = kappaHint,
       rhoS = , rhoB = , rhoD = rho_bound_hint(x, v, cls, pile$bound[i]),
       "Check that this prior's support is wide enough."
     )
-    msgs <- c(msgs, sprintf("%.0f%% of the draws of %s lie at its bound %g. %s",
-                            100 * pile$share[i], v, pile$bound[i], hint))
-  }
+    sprintf("%.0f%% of the draws of %s lie at its bound %g. %s", 100 * pile$share[i], v,
+            pile$bound[i], hint)
+  }, character(1))
   press <- bound_pressing(x, pile)
-  for (i in seq_len(nrow(press))) {
+  c(msgs, vapply(seq_len(nrow(press)), function(i) {
     v <- press$var[i]
     cls <- x$spec$classes[match(v, x$spec$vars)]
-    hint <- if (cls == "kappa") {
-      "The posterior wants values outside the prior's range: widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."
-    } else {
+    hint <- if (cls == "kappa") kappaHint else {
       sprintf("Widen its prior (`%sDist`, `%sP1`, `%sP2` in set_hyperPriors()) unless this bound is known.", cls, cls, cls)
     }
-    msgs <- c(msgs, sprintf(
+    sprintf(
       "The posterior of %s presses against its prior's bound %g (its density is highest there): the prior, not the data, sets this edge. %s",
-      v, press$bound[i], hint))
-  }
-  c(msgs, kappa_beyond_messages(x), confounding_messages(x), conflict_messages(x))
+      v, press$bound[i], hint)
+  }, character(1)))
 }
 
 # What a level correlation (rhoS, rhoB: levels of a categorical input;
@@ -452,4 +476,125 @@ estimate_table <- function(Phi, chain = rep(1L, nrow(Phi))) {
   out$rhat <- diag$rhat
   out$ess <- diag$ess
   out
+}
+
+# Calibration inputs that trade off: kappa columns whose pooled draws
+# correlate at |r| >= fbc_ridge_cor form groups (pairs linked into
+# components). For each group, what the data identify: the combination
+# along the direction of least posterior variance (the covariance's last
+# eigenvector, scaled so that its first kappa has coefficient 1) and its
+# posterior sd, beside the sd of each kappa alone. `flagged`: the
+# parameters with too high R-hat or too low ESS (the cause then, not the
+# run's length). list(groups, vars) with `vars` the flagged kappas in a
+# group; NULL groups when there are none.
+fbc_ridge_cor <- 0.9
+kappa_ridge <- function(x, flagged = character()) {
+  k <- grep("^kappa[0-9]+$", colnames(x$Phi), value = TRUE)
+  k <- k[apply(x$Phi[, k, drop = FALSE], 2, stats::sd) > 0]
+  none <- list(groups = list(), vars = character())
+  if (length(k) < 2L) return(none)
+  r <- suppressWarnings(stats::cor(x$Phi[, k, drop = FALSE]))
+  link <- abs(r) >= fbc_ridge_cor & !is.na(r)
+  comp <- seq_along(k)
+  for (it in seq_along(k)) for (i in seq_along(k)) comp[i] <- min(comp[link[i, ]])
+  groups <- lapply(Filter(function(g) length(g) > 1L, split(seq_along(k), comp)), function(g) {
+    v <- k[g]
+    S <- stats::cov(x$Phi[, v, drop = FALSE])
+    e <- eigen(S, symmetric = TRUE)
+    a <- e$vectors[, length(v)]
+    a <- a / a[1]
+    list(vars = v, cor = r[g, g, drop = FALSE], coef = a, sd = sqrt(max(e$values[length(v)], 0)),
+         sdEach = sqrt(diag(S)))
+  })
+  list(groups = unname(groups),
+       vars = intersect(unlist(lapply(groups, `[[`, "vars")), flagged))
+}
+
+# One message per group of kappa_ridge(): which inputs trade off, what the
+# data identify, what to do.
+ridge_messages <- function(ridge) {
+  vapply(ridge$groups, function(g) {
+    lab <- g$vars
+    pair <- if (length(lab) == 2L) sprintf("correlation %.2f", g$cor[1, 2]) else
+      sprintf("correlations %.2f to %.2f", min(abs(g$cor[upper.tri(g$cor)])), max(abs(g$cor[upper.tri(g$cor)])))
+    comb <- paste0(ifelse(seq_along(lab) == 1L, "", ifelse(g$coef < 0, " - ", " + ")),
+                   ifelse(seq_along(lab) == 1L | abs(abs(g$coef) - 1) < 0.005, "",
+                          paste0(format(signif(abs(g$coef), 3)), " ")), lab, collapse = "")
+    sprintf(
+      "The calibration inputs %s trade off (%s): the data identify %s (posterior sd %s) much better than each alone (sd %s), and a summary of one of them mostly shows where the ridge meets the prior. Report the combination, or fix one of them (or give it an informative prior), or add field data that separate them.",
+      paste(lab, collapse = ", "), pair, comb, fmt_num(g$sd),
+      paste(vapply(g$sdEach, fmt_num, ""), collapse = ", "))
+  }, character(1))
+}
+
+# Kappa's draws with more than one mode: each calibration input's pooled
+# draws, a kernel density (Silverman's bandwidth, which oversmooths a
+# mixture: a mode it shows is there) on 512 points; a mode is a local
+# maximum whose basin (down to the lowest points between it and its
+# neighbours) holds at least fbc_mode_share of the draws, with a valley
+# between two modes below fbc_mode_dip of the lower peak. One row per
+# kappa with two or more such modes: var, the modes' locations and shares,
+# and the chains that visited each (a draw in its basin).
+fbc_mode_share <- 0.02
+fbc_mode_dip <- 0.5
+kappa_modes <- function(x) {
+  k <- grep("^kappa[0-9]+$", colnames(x$Phi), value = TRUE)
+  out <- list()
+  for (v in k) {
+    d <- x$Phi[, v]
+    if (length(d) < 100L || stats::sd(d) == 0) next
+    m <- draw_modes(d)
+    if (nrow(m) < 2L) next
+    basin <- findInterval(d, c(-Inf, m$cut[-1], Inf))
+    m$chains <- vapply(seq_len(nrow(m)), function(i) length(unique(x$chain[basin == i])), integer(1))
+    out[[v]] <- cbind(var = v, m)
+  }
+  if (length(out)) do.call(rbind, unname(out)) else NULL
+}
+
+# The modes of draws `d` (see kappa_modes()): location, share, and the
+# lower edge of each basin (`cut`, the first -Inf).
+draw_modes <- function(d) {
+  den <- stats::density(d, n = 512)
+  y <- den$y
+  n <- length(y)
+  peak <- which(diff(sign(diff(y))) < 0) + 1L
+  if (y[1] > y[2]) peak <- c(1L, peak)
+  if (y[n] > y[n - 1]) peak <- c(peak, n)
+  repeat {  # merge neighbours without a deep enough valley, or a small basin
+    if (length(peak) < 2L) break
+    valley <- vapply(seq_len(length(peak) - 1L), function(i) {
+      peak[i] - 1L + which.min(y[peak[i]:peak[i + 1]])
+    }, integer(1))
+    edges <- c(-Inf, den$x[valley], Inf)
+    share <- as.vector(table(factor(findInterval(d, edges), levels = seq_along(peak)))) / length(d)
+    shallow <- y[valley] > fbc_mode_dip * pmin(y[peak[-1]], y[peak[-length(peak)]])
+    small <- share < fbc_mode_share
+    if (!any(shallow) && !any(small)) break
+    # drop the lowest peak of the worst offence
+    i <- if (any(small)) which(small)[which.min(y[peak[small]])] else {
+      j <- which(shallow)[1]
+      c(j, j + 1L)[which.min(y[peak[c(j, j + 1L)]])]
+    }
+    peak <- peak[-i]
+  }
+  if (length(peak) < 2L) return(data.frame(at = den$x[peak], share = 1, cut = -Inf))
+  data.frame(at = den$x[peak], share = share, cut = edges[-length(edges)])
+}
+
+# One message per multimodal kappa (kappa_modes()).
+kappa_modes_messages <- function(x) {
+  m <- kappa_modes(x)
+  if (is.null(m)) return(character())
+  nChains <- length(unique(x$chain))
+  vapply(unique(m$var), function(v) {
+    r <- m[m$var == v, ]
+    rare <- r$chains < nChains
+    sprintf(
+      "The draws of %s are multimodal: modes near %s. Its mean and sd average over them; report the modes (see `plot(fit, \"kappa\")`).%s R-hat cannot see a mode that every chain visits too rarely: more chains (`nChains = 8`) show how stable the shares are.",
+      v, paste(sprintf("%s (%s of the draws)", vapply(r$at, fmt_num, ""), fmt_share(r$share)), collapse = ", "),
+      if (any(rare)) sprintf(" Only %s of the %d chains visited the mode near %s.",
+                                paste(r$chains[rare], collapse = ", "), nChains,
+                                paste(vapply(r$at[rare], fmt_num, ""), collapse = ", ")) else "")
+  }, character(1))
 }

@@ -29,6 +29,10 @@
 #            per parameter, repeated), "sim", "bias" (joint moves of the
 #            simulator and bias GPs), "single" (single site), "gibbs" (an
 #            exact draw when its prior allows, else single site)
+#   joint    (with move "each") also one joint adapted walk of the class's
+#            free parameters, beside their own moves, when it has at least
+#            two: calibration inputs that trade off move along their ridge
+#            (sampler_moves(), "overlay")
 #   scaled   multiplied by the common-scale move (see vignette("sampler"))
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
@@ -43,6 +47,7 @@ model_classes <- data.frame(
   walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity"),
   sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
   move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
+  joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
   smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
   perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE),

@@ -82,8 +82,11 @@ outputs_line <- function(model) {
                    length(out$levels), lev))
   }
   if (identical(model$options$outputs, "independent")) {
-    sprintf("%d (%s), independent: each its own simulator GP (thetaS, alphaS, sigma2S)%s; only kappa shared",
-            length(out$levels), lev, if (model$discrepancy == "none") "" else " and bias GP")
+    # the classes each output's GPs have (no smoothness under a Matern or Gaussian kernel)
+    gp <- function(k, kernel) paste0("theta", k, if (kernel_has_alpha(kernel)) paste0(", alpha", k), ", sigma2", k)
+    sprintf("%d (%s), independent: each its own simulator GP (%s)%s; only kappa shared",
+            length(out$levels), lev, gp("S", model$kernelS),
+            if (model$discrepancy == "none") "" else sprintf(" and bias GP (%s)", gp("B", model$kernelB)))
   } else {
     sprintf("%d (%s), shared: one simulator GP over the inputs and the output (one set of length-scales), outputs correlated by rhoS%s",
             length(out$levels), lev, if (model$discrepancy == "none") "" else " (bias: rhoB)")

@@ -80,6 +80,7 @@ print.fbc <- function(x, digits = 3, ...) {
   }
   cat("\n")
   print(summary(x), digits = digits)
+  cat(scale_note_line(sc), "\n", sep = "")
   msgs <- convergence_messages(x)
   if (length(msgs)) {
     cat("\nWarning", if (length(msgs) > 1L) "s", ":\n", sep = "")
@@ -115,11 +116,24 @@ print_design <- function(mo, sc, fn) {
     cat(sprintf("  field data sets (%s): %s%s\n", sc$source$name,
                 paste(sc$source$levels, collapse = ", "), own))
   }
-  if (!is.null(sc$noiseLabels)) cat(sprintf("  %s\n", noise_labels_line(sc$noiseLabels)))
   des <- kappa_design(sc)
   cat(sprintf("  calibration input%s: %s\n", if (sc$q > 1L) "s" else "",
               paste0("kappa", seq_len(sc$q), " = ", des$names, if (fn) " (prior " else " (design ",
                      des$range, ")", collapse = ", ")))
+}
+
+# The note under print.fbc()'s table: the hyperparameters are on the
+# standardised scale (each output's response divided by its sd), so a
+# variance (sigma2E, sigma2S, sigma2B) times sd^2 is in the response's units.
+scale_note_line <- function(sc) {
+  sds <- sc$ysd
+  what <- if (!is.null(sc$output) && length(sds) > 1L) {
+    paste0(sc$output$levels, " ", vapply(sds, fmt_num, ""), collapse = ", ")
+  } else {
+    sprintf("%s %s", sc$names$response, fmt_num(sds[1]))
+  }
+  sprintf("hyperparameters on the standardised scale (response / its sd: %s): a variance such as sigma2E times sd^2 is in the response's units",
+          what)
 }
 
 # The run's lines of print.fbc(): the stopping rule and each move's

@@ -252,7 +252,7 @@ free_workers <- function() {
 # reached) kills this run's worker processes on this machine and restarts
 # the plan's workers, and the chains come back as far as their checkpoints.
 run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
-                       showProgress, run = NULL, every = 60, post = NULL) {
+                       showProgress, run = NULL, every = 60, post = NULL, stretch = FALSE) {
   n <- length(starts)
   sequential <- plan_is_sequential()
   if (is.null(run) && !sequential) {
@@ -272,7 +272,7 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
               dir = run$dir, every = run$every %||% every, id = run$id, user = isTRUE(run$user),
               token = basename(tempfile("")), sampler = fbc_sampler_hook(),
               owner = list(pid = Sys.getpid(), host = Sys.info()[["nodename"]]),
-              progress = NULL)
+              progress = NULL, stretch = stretch)
   todo <- which(!vapply(starts, function(s) isTRUE(s$finished), logical(1)))
   bar <- NULL
   if (showProgress && length(todo)) {
@@ -324,7 +324,37 @@ run_chains <- function(dat, spec, starts, seeds, moves, target, nBurn, thinning,
   if (length(rs$errors)) stop(rs$errors[[1]])
   # a dead worker's connection, or one a Ctrl-C cut short, is useless
   if ((length(rs$failed) || dirty) && !hard) reset_plan()
-  recover_chains(rs$results, rs$failed, run, starts)
+  recover_chains(waiting_chains(rs$results, rs$futures, rs$failed, todo, starts, seeds),
+                 rs$failed, run, starts)
+}
+
+# The chains of `todo` an interrupt left waiting for their turn (never
+# launched in this call): each as far as its start, that is with the draws
+# of its earlier stretches (a later stretch of a run under
+# until_converged()), marked interrupted (status "waiting").
+waiting_chains <- function(results, futures, failed, todo, starts, seeds) {
+  for (k in todo) {
+    if (!is.null(results[[k]]) || !is.null(futures[[k]]) || k %in% failed) next
+    results[[k]] <- result_from_start(starts[[k]], interrupted = TRUE)
+    results[[k]]$status <- "waiting"
+    results[[k]]$seed <- seeds[[k]]
+  }
+  results
+}
+
+# The bar's format: under a rule (`stretch`) the bar and its ETA are those
+# of the stretch under way, to the next check, not of the whole run.
+progress_format <- function(stretch) {
+  sprintf("{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA%s: {cli::pb_eta} | {cli::pb_status}",
+          if (stretch) " (this stretch, to the next check)" else "")
+}
+
+# The bar's status: each chain's acceptance, "warm-up" for a chain in its
+# warm-up, "waiting" for one that has not started (its turn not come: the
+# sequential plan, or fewer workers than chains).
+progress_status <- function(started, burn, acc) {
+  a <- ifelse(!started, "waiting", ifelse(burn, "warm-up", ifelse(is.na(acc), "-", sprintf("%.2f", acc))))
+  paste("chains:", paste(a, collapse = " "))
 }
 
 # The progress bar of a run's chains (the run's size said first with
@@ -344,7 +374,7 @@ chain_progress <- function(job, starts) {
   total <- vapply(seq_len(n), function(k) {
     expected_stop(starts[[k]]$state, target[k], post[k], job$nBurn)
   }, numeric(1)) - job$from
-  bar <- progress_bar(n, total, job$nBurn, .envir = parent.frame())
+  bar <- progress_bar(n, total, job$nBurn, isTRUE(job$stretch), .envir = parent.frame())
   bar$progressor <- progressr::progressor(steps = sum(total), enable = TRUE,
                                           initiate = FALSE, auto_finish = FALSE, on_exit = FALSE)
   bar
@@ -512,25 +542,23 @@ expected_stop <- function(state, target, post, nBurn) {
 
 # One progress bar for all chains: sweeps done over all, time left and each
 # chain's acceptance rate (mean over its parameters, after burn-in).
-progress_bar <- function(n, total, nBurn, .envir = parent.frame()) {
+progress_bar <- function(n, total, nBurn, stretch = FALSE, .envir = parent.frame()) {
   done <- rep(0, n)
   totals <- rep_len(total, n)
   acc <- rep(NA_real_, n)
   burn <- rep(TRUE, n)
+  started <- rep(FALSE, n)
   id <- cli::cli_progress_bar(
     name = "Calibrating", total = sum(total), clear = TRUE, auto_terminate = FALSE,
-    .envir = .envir,
-    format = "{cli::pb_name} {cli::pb_bar} {cli::pb_percent} | ETA: {cli::pb_eta} | {cli::pb_status}"
+    .envir = .envir, format = progress_format(stretch)
   )
-  status <- function() {
-    a <- ifelse(burn, "warm-up", ifelse(is.na(acc), "-", sprintf("%.2f", acc)))
-    paste("acceptance", paste(a, collapse = " "))
-  }
+  status <- function() progress_status(started, burn, acc)
   list(
     update = function(k, d, a, b, tot = NULL) {
       done[k] <<- d
       acc[k] <<- a
       burn[k] <<- isTRUE(b)
+      started[k] <<- TRUE
       # a run whose length depends on the warm-up: each chain's expected total
       if (!is.null(tot)) totals[k] <<- tot
       try(cli::cli_progress_update(id = id, set = sum(done), total = sum(totals),

@@ -56,10 +56,21 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   gibbs <- which(move == "gibbs")
   rep_each <- if (large) 1L else 3L
   rep_joint <- as.integer(ifelse(startsWith(as.character(names(joint)), "sim") & large, 1L, 2L))
-  blocks <- c(each, joint)
+  # kappa's joint walk (the table's `joint`), beside each kappa's own walk
+  # and jump: an overlay block, moved after the per-parameter moves
+  # (src/sampler.cpp), with the covariance adapted from the chain's draws
+  # as the GP blocks' is; with it each kappa's own walk moves once a sweep
+  # (on a 5-kappa simulator function, bench/RESULTS-kappa.md: ESS per CPU
+  # second twice that of three walks a sweep)
+  together <- kappa_joint(spec, free, model_classes$joint[row])
+  overlay <- if (length(together)) length(each) + length(joint) + 1L else integer()
+  if (length(together)) rep_each <- 1L
+  blocks <- c(each, joint, together)
   list(
     blocks = blocks,
-    repeats = c(rep(rep_each, length(each)), rep_joint),
+    repeats = c(rep(rep_each, length(each)), rep_joint,
+                rep(if (large) 1L else fbc_kappa_joint_repeats, length(together))),
+    overlay = overlay,
     # the simulator blocks whose sigma2S is drawn from the runs' own
     # conditional (src/sampler.cpp, BlockMove; only where the algebra gives
     # ys' Ds^-1 ys ahead of a proposal, the Vecchia one: elsewhere the plain
@@ -84,6 +95,19 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
     params = spec$vars
   )
 }
+
+# Kappa's joint block: the free parameters of the `joint` classes (walked:
+# prior scale b != 0), as one block named by its class, when there are at
+# least two; else none.
+kappa_joint <- function(spec, free, joint) {
+  idx <- which(joint & free & spec$table$b != 0)
+  if (length(idx) < 2L) return(list())
+  stats::setNames(list(idx), spec$classes[idx[1]])
+}
+# (three a sweep, once on a large dense problem: one move costs what one
+# kappa's walk costs, one call of a simulator function or one kappa move's
+# algebra)
+fbc_kappa_joint_repeats <- 3L
 
 # The report of a fit's moves, one row per move of the schedule: its kind
 # ("walk": a one-parameter adapted walk, "joint", "independent": a joint
@@ -135,12 +159,17 @@ move_acceptance <- function(moves, vars, stored = NULL) {
   }
   acc <- stats::setNames(rep(NA_real_, length(vars)), vars)
   rate <- move_rates(moves)
+  done <- rep(NA, length(vars))
   scale <- NA_real_
   for (i in seq_along(rate)) {
     if (moves$kind[i] == "scale") {
       scale <- rate[i]
     } else if (moves$kind[i] != "jump") {  # a jump: by name only (kappa's rate is its walk's)
-      acc[match(strsplit(moves$params[i], ",", fixed = TRUE)[[1]], vars)] <- rate[i]
+      # an overlay (kappa's joint walk) after a parameter's own move: by name only
+      at <- match(strsplit(moves$params[i], ",", fixed = TRUE)[[1]], vars)
+      at <- at[is.na(done[at])]
+      acc[at] <- rate[i]
+      done[at] <- TRUE
     }
   }
   structure(acc, scale = scale)
@@ -165,6 +194,7 @@ fit_acceptance <- function(states, vars) {
 proposal_sd <- function(state, vars, fixed) {
   sd <- stats::setNames(exp(state$logsd), vars)
   for (b in state$blocks) {
+    if (isTRUE(b$overlay)) next  # kappa's joint walk: each kappa's own walk is reported
     sd[b$index] <- exp(b$logscale) * sqrt(rowSums(as.matrix(b$chol)^2))
   }
   m <- state$moves

@@ -19,6 +19,11 @@
 //   data-dependent length a simulator block of 4 walked parameters proposes
 //   instead w* ~ t_7(mu, C) (mu, C its warm-up estimate; independence
 //   Metropolis-Hastings, log r adding log q(w) - log q(w*));
+// * overlay block (after the per-parameter moves, before the jumps): a
+//   block, as above, over parameters that also have moves of their own
+//   (kappa's joint walk beside each kappa's walk and jump: calibration
+//   inputs that trade off, only a combination of them identified, move
+//   along their ridge together, which no one-parameter move can);
 // * muB (gaussian prior N(m0, s0^2)): drawn exactly from its full conditional,
 //   log L being Gaussian in muB (Posterior::muBQuadratic): precision
 //   a'a + 1/s0^2, mean (a'b + m0/s0^2) / precision (no muB without a bias);
@@ -150,6 +155,9 @@ struct Block {
   // BlockMove's collapse); 0 for all. The warm-up's effective-draws rule
   // counts these only, whose shape (L's leading block) the walk uses.
   int walked = 0;
+  // an overlay block (R's sampler_moves()$overlay): a joint walk over
+  // parameters that also have moves of their own (kappa's joint block)
+  bool overlay = false;
 
   void start(const std::vector<int>& index, const arma::vec& logsd) {
     idx = index;
@@ -203,6 +211,7 @@ struct Block {
       Rcpp::Named("chol") = L, Rcpp::Named("shaped") = shaped,
       Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
       Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
+    if (overlay) out.push_back(true, "overlay");
     if (restart >= 0) return out;
     out.push_back(Rcpp::NumericVector(winCount.begin(), winCount.end()), "winCount");
     out.push_back(Rcpp::NumericVector(winIndex.begin(), winIndex.end()), "winIndex");
@@ -800,6 +809,7 @@ static void read_chain(Chain& ch, const Rcpp::List& state, int d) {
 // does not inflate it (a warm-up of data-dependent length starts it afresh
 // at 200, 400, 800, ...).
 static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSpec,
+                                      const std::vector<int>& overlay,
                                       const Rcpp::List& state, int nBurn) {
   const int d = ch.post.d;
   const int restartAt = nBurn < 0 ? -1 : nBurn >= 400 ? nBurn / 2 : 0;
@@ -822,10 +832,11 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
       Rcpp::stop("the block proposal to continue from has the wrong size");
     blocks[b].restart = restartAt;
     blocks[b].forget = ch.warmForget;
+    blocks[b].overlay = std::find(overlay.begin(), overlay.end(), b + 1) != overlay.end();
     for (int j : blocks[b].idx) {
-      if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || inBlock[j])
+      if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || (inBlock[j] && !blocks[b].overlay))
         Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
-      inBlock[j] = 1;
+      if (!blocks[b].overlay) inBlock[j] = 1;
     }
   }
   return blocks;
@@ -875,7 +886,11 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   const Rcpp::List blockSpec = moves["blocks"];
   const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
     Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
-  std::vector<Block> blocks = make_blocks(ch, blockSpec, state, nBurn);
+  // the blocks (1-based) that overlay parameters with moves of their own:
+  // a joint walk made after the per-parameter moves, before the jumps
+  const std::vector<int> overlay = moves.containsElementNamed("overlay") ?
+    Rcpp::as<std::vector<int> >(moves["overlay"]) : std::vector<int>();
+  std::vector<Block> blocks = make_blocks(ch, blockSpec, overlay, state, nBurn);
   // the blocks (1-based) whose sigma2S is drawn from the runs' conditional
   const std::vector<int> collapse = moves.containsElementNamed("collapse") ?
     Rcpp::as<std::vector<int> >(moves["collapse"]) : std::vector<int>();
@@ -885,6 +900,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
+    if (blocks[b].overlay) continue;
     for (int j : blocks[b].idx) inBlock[j] = 1;
     blockAt[blocks[b].idx[0]] = b;
   }
@@ -893,18 +909,21 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     Rcpp::CharacterVector(blockSpec.size()) : Rcpp::CharacterVector(bn);
   Schedule schedule;
   ch.blocks.assign(blocks.size(), nullptr);
+  auto add_block = [&](int b) {
+    BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
+    if (!mv->b.overlay) {
+      collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
+      mv->independent = std::find(independent.begin(), independent.end(), b + 1) != independent.end();
+    }
+    schedule.emplace_back(mv);
+    ch.blocks[b] = &mv->b;
+    const std::string nm(blockNames[b]);
+    mv->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
+  };
   for (int j = 0; j < d; ++j) {
     if (pr.family[j] == PF_FIXED) continue;
     if (inBlock[j]) {
-      if (blockAt[j] < 0) continue;
-      const int b = blockAt[j];
-      BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
-      collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
-      mv->independent = std::find(independent.begin(), independent.end(), b + 1) != independent.end();
-      schedule.emplace_back(mv);
-      ch.blocks[b] = &mv->b;
-      const std::string nm(blockNames[b]);
-      mv->name = nm.empty() ? "block" + std::to_string(b + 1) : nm;
+      if (blockAt[j] >= 0) add_block(blockAt[j]);
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j, ch));
       schedule.back()->name = ch.param_name(j);
@@ -913,6 +932,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       schedule.back()->name = ch.param_name(j);
     }
   }
+  for (size_t b = 0; b < blocks.size(); ++b)
+    if (blocks[b].overlay) add_block(b);
   // the jump moves (R's sampler_moves()$jump, 1-based, and $jumpRange, a
   // row per jump), after the walks
   if (moves.containsElementNamed("jump")) {

@@ -90,3 +90,10 @@ test_that("an interrupt before any draw is an error", {
 test_that("nChains is checked", {
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, nChains = 0))
 })
+
+test_that("the progress bar labels waiting chains and says when its ETA is a stretch's", {
+  expect_identical(FBC:::progress_status(c(TRUE, TRUE, FALSE), c(FALSE, TRUE, TRUE), c(0.31, NA, NA)),
+                   "chains: 0.31 warm-up waiting")
+  expect_match(FBC:::progress_format(TRUE), "ETA (this stretch, to the next check)", fixed = TRUE)
+  expect_false(grepl("stretch", FBC:::progress_format(FALSE)))
+})

@@ -235,9 +235,10 @@ test_that("large dense problems move each kappa and the simulator block once a s
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
   small <- FBC:::sampler_moves("blocks", sp)
   large <- FBC:::sampler_moves("blocks", sp, large = TRUE)
-  expect_identical(large$blocks, small$blocks)  # kappa1, kappa2, simulator, bias
-  expect_identical(small$repeats, c(3L, 3L, 2L, 2L))
-  expect_identical(large$repeats, c(1L, 1L, 1L, 2L))
+  expect_identical(large$blocks, small$blocks)  # kappa1, kappa2, simulator, bias, kappa's joint walk
+  # (beside kappa's joint walk, three a sweep, each kappa walks once)
+  expect_identical(small$repeats, c(1L, 1L, 2L, 2L, 3L))
+  expect_identical(large$repeats, c(1L, 1L, 1L, 2L, 1L))
   expect_identical(FBC:::sampler_moves("single", sp, large = TRUE)$blocks, list())
   # the schedule follows the size and the algebra (product designs keep it)
   expect_true(FBC:::large_dense(500, list(name = "dense")))

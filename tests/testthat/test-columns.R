@@ -280,3 +280,24 @@ test_that("an output given in wide format (a second response column) gets a warn
   expect_false(FBC:::warn_wide_outputs(as.matrix(sim[, c("y1", "x", "t")]), 1))
   expect_warning(short_fit(sim, field), "wide format")
 })
+
+test_that("the wide-format check's share grows as the runs get fewer", {
+  # the share chance exceeds with probability 0.001 (p = q = 1: 2 regressors
+  # added to the intercept): 1 - 0.001^(2 / (m - 3)) at m = 8, 0.5 from 23
+  expect_equal(FBC:::wide_share(8, 1, 2), 1 - 0.001^(2 / 5))
+  expect_equal(FBC:::wide_share(12, 1, 2), 1 - 0.001^(2 / 9))
+  expect_identical(FBC:::wide_share(23, 1, 2), 0.5)
+  expect_identical(FBC:::wide_share(200, 5, 6), 0.5)
+  # 8-run Latin hypercube designs of (x, t) with an unrelated response: with
+  # the fixed 50% about one in six warned; none of 400 now
+  set.seed(2)
+  warned <- vapply(1:400, function(i) {
+    X <- cbind(x = (sample(8) - runif(8)) / 8, t = (sample(8) - runif(8)) / 8)
+    FBC:::warn_wide_outputs(cbind(y = rnorm(8), X), 1)
+  }, logical(1))
+  expect_identical(sum(warned), 0L)
+  # a second output among 8 runs is still caught
+  t <- (sample(8) - runif(8)) / 8
+  sim <- cbind(y1 = rnorm(8), y2 = 2 * t + t^2, t = t)
+  expect_warning(FBC:::warn_wide_outputs(sim, 1), "wide format")
+})

@@ -88,6 +88,29 @@ test_that("an interrupted run under a rule resumes to the same end and draws", {
   )
 })
 
+test_that("Ctrl-C in a later stretch keeps every chain's draws up to its last completed stretch", {
+  # no checkpoint, the sequential plan: call 17 is chain 1's first piece
+  # after the first check (see above); chain 2 waits for its turn
+  old <- options(FBC.sampler = interrupt_at_call(17))
+  on.exit(options(old), add = TRUE)
+  set.seed(cv_seed)
+  w <- NULL
+  part <- withCallingHandlers(
+    do.call(calibrate, c(list(ballSim, ballField, converge = cv_rule), cv_args)),
+    warning = function(e) { w <<- conditionMessage(e); invokeRestart("muffleWarning") }
+  )
+  options(old)
+  expect_true(part$state$interrupted)
+  # both chains kept: chain 1 to 450 sweeps, chain 2 to the first check's 400
+  expect_identical(sort(unique(part$chain)), 1:2)
+  expect_identical(as.vector(table(part$chain)), c(75L, 50L))
+  expect_match(w, "Chain 2 was waiting for its turn", fixed = TRUE)
+  expect_match(w, "Keeping 2 of 2 chains with 125 retained draws.", fixed = TRUE)
+  # chain 2's draws are those of the uninterrupted run's first stretch
+  ref <- cv_fit()
+  expect_identical(part$Phi[part$chain == 2L, ], ref$Phi[ref$chain == 2L, ][1:50, ])
+})
+
 test_that("update() continues under a rule as one longer update", {
   skip_if_not_slow()
   set.seed(cv_seed)

@@ -95,3 +95,19 @@ test_that("print()'s digits is checked, and used", {
   expect_match(out[grep("^sigma2E", out)], formatC(med, digits = 5, format = "fg", flag = "#"),
                fixed = TRUE, all = FALSE)
 })
+
+test_that("print() of independent outputs: the kernel's classes, one measurement-error line, the scale note", {
+  pr <- two_outputs()
+  set.seed(1)
+  fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "independent", nMCMC = 300,
+                   nBurn = 150, nChains = 1, discrepancy = "none")
+  out <- capture.output(suppressWarnings(print(fit)))
+  # Matern 5/2 has no smoothness: no alphaS to name
+  expect_true(any(grepl("each its own simulator GP (thetaS, sigma2S); only kappa shared", out, fixed = TRUE)))
+  expect_false(any(grepl("alphaS", out)))
+  expect_identical(sum(grepl("measurement error: sigma2E1 = conc, sigma2E2 = rate", out, fixed = TRUE)), 1L)
+  sds <- vapply(split(pr$sim$y, pr$sim$out), sd, numeric(1))
+  expect_true(any(grepl(sprintf("(response / its sd: conc %s, rate %s)", signif(sds[1], 4), signif(sds[2], 4)),
+                        out, fixed = TRUE)))
+  expect_snapshot(cat(FBC:::scale_note_line(fit$scale)))
+})

@@ -242,3 +242,67 @@ test_that("after warm-up the simulator block proposes from its warm-up estimate 
   fixed <- do.call(calibrate, c(args, list(nMCMC = 600, nBurn = 300)))
   expect_identical(FBC:::move_report(fixed)$kind, "joint")
 })
+
+test_that("kappa's joint walk: an overlay block of the free kappas beside their own moves", {
+  # q = 2 (the ball data's kappa with a second, made-up calibration input)
+  sp <- function(q, fixed = FALSE) {
+    set.seed(1)
+    X <- cbind(x = runif(30), t1 = runif(30), t2 = runif(30))[, 1:(1 + q), drop = FALSE]
+    sim <- data.frame(y = rowSums(X), X)
+    field <- data.frame(y = 1 + runif(5), x = runif(5))
+    kp <- if (fixed) list(kappaDist = c("beta", "fixed"), kappaInit = c(NA, 0.5)) else list()
+    model <- do.call(calibrate, c(list(sim, field, fit = FALSE), kp))
+    model$moves
+  }
+  mv <- sp(2)
+  expect_identical(mv$overlay, length(mv$blocks))
+  expect_identical(names(mv$blocks)[mv$overlay], "kappa")
+  expect_identical(unname(mv$blocks[[mv$overlay]]), 1:2)
+  expect_identical(mv$repeats[mv$overlay], 3L)
+  # each kappa keeps its walk (once a sweep beside the joint one) and its jump
+  expect_identical(unname(unlist(mv$blocks[c("kappa1", "kappa2")])), 1:2)
+  expect_identical(mv$repeats[match(c("kappa1", "kappa2"), names(mv$blocks))], c(1L, 1L))
+  expect_identical(mv$jump, 1:2)
+  # one free kappa: no joint walk
+  expect_length(sp(1)$overlay, 0L)
+  expect_length(sp(2, fixed = TRUE)$overlay, 0L)
+})
+
+test_that("calibration inputs that trade off converge with the defaults and match the grid posterior", {
+  # only kappa1 + kappa2 matters: f = (kappa1 + kappa2) sin(2 pi x) + x; no
+  # discrepancy, sigma2E fixed; uniform priors on [0, 1]^2. Each kappa
+  # walking alone took tens of thousands of sweeps.
+  set.seed(1)
+  x <- seq(0, 1, length.out = 20)
+  field <- data.frame(y = 0.9 * sin(2 * pi * x) + x + rnorm(20, 0, 0.1), x = x)
+  f <- function(x, kappa) (kappa[[1]] + kappa[[2]]) * sin(2 * pi * x$x) + x$x
+  hyp <- set_hyperPriors(sigma2EDist = "fixed", sigma2EInit = 0.1^2 / stats::sd(field$y)^2)
+  set.seed(2)
+  fit <- calibrate(f, field, kappaDist = "uniform", kappaP1 = c(0, 0), kappaP2 = c(1, 1),
+                   discrepancy = "none", hypers = hyp)
+  cv <- fit$settings$converge
+  expect_true(cv$converged)
+  expect_lte(cv$sweeps, 5000L)
+  mr <- FBC:::move_report(fit)
+  expect_identical(mr$kind[mr$move == "kappa"], "joint")
+  # plain R: the posterior on a grid of (kappa1, kappa2)
+  g <- seq(0.0025, 0.9975, by = 0.005)
+  s <- outer(g, g, `+`)
+  sv <- sort(unique(round(s, 6)))
+  llS <- vapply(sv, function(v) sum(dnorm(field$y, v * sin(2 * pi * x) + x, 0.1, log = TRUE)), 0)
+  ll <- matrix(llS[match(round(s, 6), sv)], length(g))
+  dens <- exp(ll - max(ll))
+  probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
+  # kappa1's marginal, and the identified sum
+  m1 <- rowSums(dens)
+  expect_lt(max(abs(quantile(fit$Phi[, "kappa1"], probs, names = FALSE) -
+                      grid_quantile(g, m1, probs))) / sd(fit$Phi[, "kappa1"]), 0.15)
+  sumDraws <- fit$Phi[, "kappa1"] + fit$Phi[, "kappa2"]
+  ws <- tapply(as.vector(dens), round(as.vector(s), 6), sum)
+  ref <- grid_quantile(as.numeric(names(ws)), as.vector(ws), probs)
+  expect_lt(max(abs(quantile(sumDraws, probs, names = FALSE) - ref)) / sd(sumDraws), 0.15)
+  # print() names the trade-off and what the data identify
+  msg <- convergence_messages(fit)
+  expect_true(any(grepl("kappa1, kappa2 trade off", msg, fixed = TRUE)))
+  expect_true(any(grepl("the data identify kappa1 + kappa2", msg, fixed = TRUE)))
+})
