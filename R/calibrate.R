@@ -126,7 +126,7 @@
 #' meets: there the power exponential's smoothness piles up at its bound 2
 #' (the README's example warned of it), and at m = 1000 scattered runs its
 #' block did not mix in 30,000 sweeps a chain (`alphaS` R-hat 2.6, bulk ESS
-#' 5), while the Matérn 5/2 converged in 5500 (issue 27). The vignette's
+#' 5), while the Matérn 5/2 converged in 5500. The vignette's
 #' power exponential stays available as `kernelS = "powexp"` (and
 #' `kernelB`); it was the default of FBC 0.1.0.
 #'

@@ -1,4 +1,4 @@
-# The simulator as an R function (issue 29): calibrate(f, field, ...) with
+# The simulator as an R function: calibrate(f, field, ...) with
 # f(x, kappa) called inside the sampler, no emulator. The model object is an
 # fbc_model like any other (R/model-object.R) with:
 #   - no simulator GP: the classes thetaS, alphaS, rhoS and sigma2S have

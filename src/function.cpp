@@ -1,5 +1,5 @@
-// The posterior of a simulator given as an R function f(x, kappa) (issue 29;
-// R/simulator_function.R builds the closures). No simulator GP: in the
+// The posterior of a simulator given as an R function f(x, kappa)
+// (R/simulator_function.R builds the closures). No simulator GP: in the
 // scaled space, with fs(kappa) the scaled f at the n field rows,
 //   yf = fs(kappa) + delta + eps,
 //   S = sigma2B Rb + sigma2E I   (KOH, with mean muB; S-GaSP: Rb -> Rz, no
