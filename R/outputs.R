@@ -18,7 +18,7 @@
 # Why shared stays the default: measured (bench/RESULTS-outputs.md),
 # independent outputs pooled as well as shared on two-output known-truth
 # problems at about 1.4 times the CPU, and gave wider intervals than shared
-# on the 3-output benchmark; the issue's case (pooling wider than the
+# on the 3-output benchmark; the case feared (pooling wider than the
 # better output) was not reproduced under either.
 
 # The `outputs` choice, checked: NULL without an `output` column; with

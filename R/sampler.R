@@ -231,14 +231,8 @@ sample_chain <- function(dat, spec, state, moves, nIter, nBurn, thinning, showPr
     # a fit made before the ranges were stored with its moves
     moves$jumpRange <- jump_ranges(spec$table, moves$jump)
   }
-  args <- list(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state,
-               nIter, nBurn, thinning, fbc_nugget, progress)
-  # the model only where it differs from the default one of these data, so
-  # a sampler hook written for the twelve usual arguments keeps working
-  model <- spec$model
-  p <- ncol(dat$Xf)
-  default <- compiled_model(p, ncol(dat$Xs) - p)
-  do.call(sampler, c(args, if (!identical(model, default)) list(model = model)))
+  sampler(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(spec$table), moves, state, nIter, nBurn,
+          thinning, fbc_nugget, progress, model = spec$model)
 }
 
 # The interval the jump move of each parameter `j` (1-based rows of the

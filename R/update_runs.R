@@ -1,4 +1,4 @@
-# Design of new simulator runs (issue 30): adding runs to a fit with a warm
+# Design of new simulator runs: adding runs to a fit with a warm
 # start (update_runs()), choosing where to run next from the joint
 # posterior (propose_runs(), R/propose_runs.R) and the loop for a
 # simulator given as an R function (design_loop(), R/design_loop.R).
