@@ -44,7 +44,13 @@
 #'   data frame per step: `runs`, each calibration input's posterior mean,
 #'   sd and 90% interval width, the design step's and the fit's CPU
 #'   seconds, and `reweighted`: whether the step's posterior is the last
-#'   fit's draws reweighted, see [update_runs()]).
+#'   fit's draws reweighted, see [update_runs()]), and `failed`: the runs
+#'   where `f` failed (an error, or `NA`, `NaN` or an infinite value), as
+#'   `run` (the row of `sim`) and `condition` (the error's message). A
+#'   failed run is kept in `sim` with an `NA` response and set aside by the
+#'   fits (see `failedRuns` in [calibrate()]); the loop goes on, and
+#'   [propose_runs()] weighs each candidate's gain by its probability of
+#'   succeeding.
 #'
 #' A fit's warning that field inputs lie beyond the runs' range (a small
 #' starting design seldom reaches the edges of the field's inputs) is given
@@ -87,6 +93,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   budget <- check_count(budget, "budget", min = 0)
   X <- with_levels(maximin_lhs(n0, lower, upper), levs)
   sim <- run_simulator(f, X, xnames, cal, names(field)[1], output)
+  failures <- attr(sim, "failed")
   runs <- n0
   # a fit's warning that the field inputs lie beyond the runs' range: kept
   # (muffled) at each step, and given once at the end if the last fit's
@@ -98,7 +105,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     withCallingHandlers(expr, fbc_extrapolation = function(w) {
       extrapolation <<- w
       invokeRestart("muffleWarning")
-    })
+    }, fbc_failed_runs = function(m) invokeRestart("muffleMessage"))
   }
   t0 <- proc.time()
   fit <- keep_extrapolation(calibrate(sim, field, showProgress = FALSE, ...))
@@ -118,6 +125,9 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     tDesign <- cpu_since(t0)
     new <- run_simulator(f, pr[c(setdiff(xnames, output$name), cal)], xnames, cal,
                          names(field)[1], output)
+    if (nrow(attr(new, "failed"))) {
+      failures <- rbind(failures, transform(attr(new, "failed"), run = run + runs))
+    }
     sim <- rbind(sim, new)
     runs <- runs + nrow(pr)
     t0 <- proc.time()
@@ -130,7 +140,14 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     }
   }
   if (!is.null(extrapolation)) warning(extrapolation)
-  list(fit = fit, sim = sim, history = history)
+  if (nrow(failures)) {
+    cli::cli_inform(c(
+      "{nrow(failures)} of the {runs} simulator runs failed and {?was/were} set aside; {.code $failed} has their conditions.",
+      i = "{.code predict(result$fit, newdata, type = \"failure\")} gives the probability that a run fails."
+    ))
+  }
+  rownames(failures) <- NULL
+  list(fit = fit, sim = sim, history = history, failed = failures)
 }
 
 cpu_since <- function(t0) {
@@ -220,19 +237,28 @@ run_simulator <- function(f, X, xnames, cal, yname, output = NULL) {
     future::future(f(x, kappa), seed = TRUE, globals = list(f = f, x = x, kappa = kappa),
                    label = sprintf("FBC simulator run %d", i))
   })
-  y <- unlist(lapply(futures, function(ft) {
-    v <- future::value(ft)
-    if (!is.numeric(v) || length(v) != K || !all(is.finite(v))) {
-      what <- if (K > 1L) "{K} finite numbers for a run's {K} rows of {.arg x} (one per output)" else "one finite number for one row of {.arg x}"
+  # a call that errors, or returns NA, NaN or Inf, is a failed run (NA),
+  # its condition kept; one that returns something else is an error
+  why <- character(length(futures))
+  y <- unlist(lapply(seq_along(futures), function(i) {
+    v <- tryCatch(future::value(futures[[i]]), error = function(e) {
+      why[i] <<- conditionMessage(e)
+      rep(NA_real_, K)
+    })
+    if (!is.numeric(v) && !(is.logical(v) && all(is.na(v))) || length(v) != K) {
+      what <- if (K > 1L) "{K} numbers for a run's {K} rows of {.arg x} (one per output)" else "one number for one row of {.arg x}"
       cli::cli_abort(paste0("{.arg f} must return ", what, "; it returned {.obj_type_friendly {v}}."))
     }
-    v
+    if (!nzchar(why[i]) && !all(is.finite(v))) why[i] <<- "returned a value that is not finite"
+    as.numeric(v)
   }))
   out <- data.frame(y, X[c(xnames, cal)])
   names(out)[1] <- yname
   # (a categorical input's levels as text, as the starting design has them)
   out[] <- lapply(out, function(v) if (is.factor(v)) as.character(v) else v)
   rownames(out) <- NULL
+  failed <- which(nzchar(why))
+  attr(out, "failed") <- data.frame(run = failed, condition = why[failed])
   out
 }
 

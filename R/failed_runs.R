@@ -75,7 +75,7 @@ inform_failed_runs <- function(inputs, bad, classifier, call = parent.frame()) {
                                          collapse = ", "), ").")
     } else "They are spread over the whole design."
   }
-  cli::cli_inform(c(
+  cli::cli_inform(class = "fbc_failed_runs", c(
     "{sum(bad)} of the {length(bad)} simulator runs failed (NA, NaN or infinite response) and {?is/are} set aside: the calibration uses the other {sum(!bad)}.",
     i = if (!is.null(where)) where,
     i = "{.code predict(fit, newdata, type = \"failure\")} gives the probability that a run fails; {.code failedRuns = \"error\"} refuses failed runs."
@@ -105,7 +105,9 @@ failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   if (!any(num)) return(NULL)
   X <- as.matrix(inputs[, num, drop = FALSE])
   storage.mode(X) <- "double"
-  if (is.null(colnames(X))) colnames(X) <- paste0("x", which(num))
+  # (unnamed runs: inputs by position, labelled by their column of sim)
+  named <- !is.null(usable_names(X))
+  if (!named) colnames(X) <- paste0("input ", which(num) + 1L)
   lower <- apply(X, 2, min)
   range <- pmax(apply(X, 2, max) - lower, .Machine$double.eps)
   Z <- sweep(sweep(X, 2, lower), 2, range, "/")
@@ -129,7 +131,8 @@ failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   mode <- laplace_mode(Z[keep, , drop = FALSE], y[keep], ell, s2)
   structure(list(X = X, y_all = y, lower = lower, range = range, Z = Z[keep, , drop = FALSE],
                  y = y[keep], ell = ell, s2 = s2, f = mode$f, L = mode$L, sW = mode$sW,
-                 grad = y[keep] - stats::plogis(mode$f), subsample = length(keep) < nrow(Z)),
+                 grad = y[keep] - stats::plogis(mode$f), subsample = length(keep) < nrow(Z),
+                 named = named),
             class = "fbc_failure_classifier")
 }
 
@@ -200,7 +203,7 @@ predict_failure <- function(object, newdata, call = parent.frame()) {
   if (is.data.frame(X) || is.matrix(X)) {
     nm <- usable_names(X)
     need <- colnames(cl$X)
-    if (!is.null(nm) && all(need %in% nm)) {
+    if (isTRUE(cl$named) && !is.null(nm) && all(need %in% nm)) {
       X <- X[, need, drop = FALSE]
     } else if (ncol(X) != length(need)) {
       cli::cli_abort(c(

@@ -603,7 +603,22 @@ look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(mode
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
                      isTRUE(parts$plugin), random$usrc, random$Z, XT, fbc_nugget, model$spec$model,
                      as.integer(order), parts$prune %||% 0, as.integer(K), entropy,
-                     as.integer(steps))
+                     as.integer(steps), run_success(model, U, K))
+}
+
+# Each candidate run's probability of succeeding, by the model of where the
+# simulator fails (failure_classifier()), which multiplies its expected gain
+# in the look-ahead; numeric(0) (no weighting) when no run failed.
+run_success <- function(model, U, K = 1L) {
+  cl <- model$design$failed$classifier
+  if (is.null(cl) || !nrow(U)) return(numeric())
+  sc <- model$scale
+  X <- as.data.frame(unscale_inputs(U[seq(1L, nrow(U), by = K), , drop = FALSE], sc,
+                                    seq_len(sc$p + sc$q)))
+  names(X) <- c(sc$names$inputs, sc$names$calibration)
+  X <- indicators_to_levels(X, sc)
+  X <- if (isTRUE(cl$named)) X[colnames(cl$X)] else X[vapply(X, is.numeric, logical(1))]
+  1 - failure_probability(cl, as.matrix(X))
 }
 
 # The rest of a look-ahead begun with fewer `steps` than points (its

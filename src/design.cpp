@@ -419,7 +419,7 @@ struct LookAheadRun {
   DesignSystems sys;
   LookAhead la;
   arma::mat U, Z, Y, scores;
-  arma::vec lw, gain, best;
+  arma::vec lw, gain, best, success;
   arma::uvec kept;
   std::vector<int> order, s0, chosen;
   double variance = 0.0, nugget = 0.0;
@@ -439,6 +439,7 @@ void look_ahead_steps(LookAheadRun& run, int upto) {
     pending_conditionals(sys, run.U, run.nugget, la);
     if (step == 0) run.variance = crit_value(la, run.lw.memptr(), run.lw.max(), 0, false);
     score_runs(sys, la, run.s0.data(), run.Z, step * K, run.gain, run.Y);
+    if (run.success.n_elem) run.gain %= run.success;  // a run's gain if it succeeds
     for (int c : la.P) run.gain[c / K] = R_NegInf;
     run.scores.col(step) = run.gain;
     const int b = run.order.size() > 0 ? run.order[step] - 1 : (int)run.gain.index_max();
@@ -486,21 +487,19 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
                             Rcpp::Named("VT") = sys.VT);
 }
 
-// The greedy look-ahead: n points chosen one at a time, each maximising
-// the criterion's expected reduction given the pending points
-// (score_runs()). Base log-weights lw0 (+ ll with `plugin`), normalised w;
-// fantasy j comes from draw src[j], the first s with sum_{r <= s} w_r >=
-// usrc[j], with the normal deviates Z(j, step K ..) in each step. With
-// `order` (1-based, n distinct candidates) step k takes order[k] instead of
-// the best. With `plugin` and prune > 0 the draws whose weight lw0 + ll is
-// under exp(-prune) of the largest are left out first (the two largest
-// kept). With `outputs` K > 1 the candidates are runs of K rows each (U's
-// rows r K .. r K + K - 1, alike but for the output's columns). `entropy`:
-// kappa's entropy, not its variance. Returns the picks (1-based), their
-// gains, the current variance (or entropy), every run's gain per step
-// (scores, Nr x n) and the draws scored (kept, 1-based); with `steps` < n
-// only the first steps, and the look-ahead in progress (`state`, for
-// design_look_ahead_resume(): the same results as all n at once).
+// The greedy look-ahead: n points chosen one at a time, each maximising the criterion's expected
+// reduction given the pending points (score_runs()). Base log-weights lw0 (+ ll with `plugin`),
+// normalised w; fantasy j comes from draw src[j], the first s with sum_{r <= s} w_r >= usrc[j],
+// with the normal deviates Z(j, step K ..) in each step. With `order` (1-based, n distinct
+// candidates) step k takes order[k] instead of the best. With `plugin` and prune > 0 the draws
+// whose weight lw0 + ll is under exp(-prune) of the largest are left out first (the two largest
+// kept). With `outputs` K > 1 the candidates are runs of K rows each (U's rows r K .. r K + K - 1,
+// alike but for the output's columns). `entropy`: kappa's entropy, not its variance. Returns
+// the picks (1-based), their gains, the current variance (or entropy), every run's gain per step
+// (scores, Nr x n) and the draws scored (kept, 1-based); with `steps` < n only the first steps,
+// and the look-ahead in progress (`state`, for design_look_ahead_resume(): the same results as
+// all n at once). `success` (empty, or each run's probability of not failing) multiplies the
+// gains.
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
@@ -508,12 +507,13 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
                              const Rcpp::IntegerVector& order, double prune, int outputs,
-                             bool entropy, int steps) {
+                             bool entropy, int steps, const arma::vec& success) {
   const int K = outputs;
   if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
     Rcpp::stop("outputs must be 1 to 16, dividing U's rows and Z's columns");
   const int n = Z.n_cols / K, Nr = U.n_rows / K;
-  if (steps < 1) Rcpp::stop("steps must be 1 or more");
+  if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr))
+    Rcpp::stop("steps must be 1 or more, and success empty or one per run");
   // a run's rows differ as the first run's do (run_covariances())
   for (int r = 1; r < Nr && K > 1; ++r)
     for (int i = 1; i < K; ++i)
@@ -530,10 +530,9 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows)
     Rcpp::stop("kappa and lw0 must have a row per draw, and phis a draw");
   if ((int)usrc.n_elem != (int)Z.n_rows) Rcpp::stop("usrc must have %d uniforms", (int)Z.n_rows);
-  // (owned by R from here: freed if a step is interrupted)
-  Rcpp::XPtr<LookAheadRun> xp(new LookAheadRun, true);
+  Rcpp::XPtr<LookAheadRun> xp(new LookAheadRun, true);  // (R's now: freed if interrupted)
   LookAheadRun& run = *xp;
-  run.U = U; run.Z = Z; run.n = n; run.nugget = nugget;
+  run.U = U; run.Z = Z; run.n = n; run.nugget = nugget; run.success = success;
   run.order.assign(order.begin(), order.end());
   run.kept = arma::regspace<arma::uvec>(0, phis.n_rows - 1);
   if (plugin && prune > 0 && phis.n_rows > 2) {

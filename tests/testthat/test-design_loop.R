@@ -124,3 +124,30 @@ test_that("design_loop() warns once, at the end, when its runs do not cover the 
   expect_s3_class(ws[[1]], "fbc_extrapolation")
   expect_match(conditionMessage(ws[[1]]), "outside the range of the simulator design")
 })
+
+test_that("design_loop() records the runs where f fails and goes on", {
+  # f errors where x + u > 1.4 and returns NaN where u < 0.08
+  f <- function(x, kappa) {
+    if (x$x + kappa[["u"]] > 1.4) stop("solver diverged at x = ", round(x$x, 3))
+    if (kappa[["u"]] < 0.08) return(NaN)
+    sin(10 * kappa[["u"]] * x$x)
+  }
+  pb <- sinus_problem()
+  set.seed(4)
+  out <- suppressWarnings(suppressMessages(
+    design_loop(f, pb$field, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 12,
+                batch = 2, budget = 4, discrepancy = "none", hypers = sinus_hypers(),
+                nMCMC = 400, nBurn = 200, nChains = 1,
+                design = list(ndraws = 30, nfantasy = 10))))
+  bad <- out$sim$x + out$sim$u > 1.4 | out$sim$u < 0.08
+  expect_true(any(bad))
+  expect_identical(out$failed$run, which(bad))
+  expect_true(all(is.na(out$sim$y[bad])))
+  expect_equal(out$sim$y[!bad], sin(10 * out$sim$u[!bad] * out$sim$x[!bad]))
+  err <- out$sim$x + out$sim$u > 1.4
+  expect_match(out$failed$condition[err[bad]], "^solver diverged at x = ")
+  expect_match(out$failed$condition[!err[bad]], "not finite")
+  expect_equal(out$fit$model$dims$m, sum(!bad))
+  expect_identical(out$fit$model$design$failed$rows, which(bad))
+  expect_equal(max(out$history$runs), 16)
+})

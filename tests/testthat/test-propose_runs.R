@@ -912,3 +912,29 @@ test_that("the look-ahead's conditionals are the model's own on every algebra", 
   expect_lt(max(abs(vec$mT - dense$mT)) / spread, 0.05)
   expect_lt(max(abs(sqrt(pmax(vec$v, 0)) - sqrt(dense$v))) / spread, 0.05)
 })
+
+test_that("propose_runs() weighs each candidate's gain by its probability of succeeding", {
+  pb <- sinus_problem(m = 20)
+  sim <- pb$sim
+  # runs fail for u above 0.6
+  fails <- sim$u > 0.6
+  sim$y[fails] <- NA
+  set.seed(8)
+  fit <- suppressMessages(calibrate(sim, pb$field, discrepancy = "none", hypers = sinus_hypers(),
+                                    nMCMC = 600, nBurn = 200, nChains = 1, showProgress = FALSE))
+  cand <- data.frame(x = rep(c(0.3, 0.6), 2), u = rep(c(0.3, 0.9), each = 2))
+  model <- fit$model
+  U <- FBC:::scale_inputs(as.matrix(cand), model$scale, seq_len(2))
+  s <- FBC:::run_success(model, U)
+  expect_equal(s, 1 - predict(fit, cand, type = "failure"))
+  expect_true(all(s[cand$u > 0.6] < 0.5) && all(s[cand$u < 0.6] > 0.5))
+  # the gains are the unweighted look-ahead's times the success probability
+  parts <- FBC:::design_particles(fit, 30, "joint")
+  r <- FBC:::look_ahead_random(1, 10)
+  w <- FBC:::look_ahead(parts, U, model, 1L, 10L, random = r)
+  model0 <- model
+  model0$design$failed <- NULL
+  u <- FBC:::look_ahead(parts, U, model0, 1L, 10L, random = r)
+  expect_equal(w$scores[, 1], u$scores[, 1] * s)
+  expect_equal(FBC:::run_success(model0, U), numeric())
+})
