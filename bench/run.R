@@ -29,7 +29,8 @@ benchmarks <- c(
   "design-reweight" = "update(fit, sim =)'s reweighted draws against fresh fits",
   "design-warm" = "warm refits against fresh fits",
   sbc          = "simulation-based calibration of the sampler",
-  peers        = "FBC beside RobustCalibration on the same data, same process"
+  peers        = "FBC beside RobustCalibration on the same data, same process",
+  "failed-runs" = "failed runs: spot weld as shipped; design around a failure region"
 )
 
 args <- commandArgs(trailingOnly = TRUE)
