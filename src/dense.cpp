@@ -180,11 +180,14 @@ void DensePosterior::simHeldout(const std::vector<std::vector<int> >& folds, arm
 }
 
 // W = Ls^-1 Rs(Xs, Z), wy = Ls^-1 ys, G = (Ls^-1 Rs(Xs,Xk))' W.
-void DensePosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) {
-  W = corr_matrix(Xs_, Z, phi.subvec(iThetaS, iThetaS + p + q - 1),
-                  phi.subvec(iAlphaS, iAlphaS + p + q - 1), kernS_);
-  level_scale(levels, phi.memptr() + iRhoS, Xs_, Z, W, false);
-  solve_lower(Ls_.cur(), W);
-  wy = z_.cur();
+void DensePosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                               bool haveW) {
+  if (!haveW) {
+    W = corr_matrix(Xs_, Z, phi.subvec(iThetaS, iThetaS + p + q - 1),
+                    phi.subvec(iAlphaS, iAlphaS + p + q - 1), kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, Xs_, Z, W, false);
+    solve_lower(Ls_.cur(), W);
+    wy = z_.cur();
+  }
   G = W_.cur().t() * W;
 }

@@ -17,11 +17,10 @@
 namespace {
 
 // The draws' conditionals at the candidates U (Nc rows), per draw s
-// (RunConditional): A's slice s (kept when a batch or a run of several
-// values needs it), means mu and variances v (Nc x S, muT = mu'), the
-// log-likelihoods ll, the variances' floors (1e-12 of the smallest prior
-// variance), with T targets mT, VT (T x S) and CTU (T x Nc x S); post and
-// phis give the pending points' prior covariances (prior_cov()).
+// (RunConditional): A's slice s (kept for a batch or runs of several
+// values), mu, v (Nc x S, muT = mu'), ll, the variances' floors (1e-12 of
+// the smallest prior variance), with T targets mT, VT (T x S), CTU (T x Nc
+// x S); post and phis: the pending points' priors (prior_cov()).
 struct DesignSystems {
   std::unique_ptr<Posterior> post;
   arma::mat phis;
@@ -40,10 +39,9 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   const int p = Xf.n_cols, q = Xs.n_cols - Xf.n_cols;
   const Model mod = read_model(model, p, q);
   if (!mod.emulator) Rcpp::stop("the look-ahead handles simulator runs (a simulator GP)");
-  if (!mod.source.empty() && XT.n_rows > 0)
-    Rcpp::stop("a prediction target needs one bias, not one per data set");
-  if (U.n_cols != (arma::uword)(p + q)) Rcpp::stop("U must have %d columns", p + q);
-  if (XT.n_rows > 0 && XT.n_cols != (arma::uword)p) Rcpp::stop("XT must have %d columns", p);
+  if (!mod.source.empty() && XT.n_rows > 0) Rcpp::stop("a prediction target needs one bias");
+  if (U.n_cols != (arma::uword)(p + q) || (XT.n_rows > 0 && XT.n_cols != (arma::uword)p))
+    Rcpp::stop("U must have %d columns, XT %d", p + q, p);
   DesignSystems sys;
   sys.post = make_posterior(Xf, yf, Xs, ys, nugget, mod);
   Posterior& post = *sys.post;
@@ -55,7 +53,14 @@ DesignSystems design_systems(const arma::mat& Xf, const arma::vec& yf, const arm
   if (T > 0) { sys.mT.set_size(T, S); sys.VT.set_size(T, S); }
   RunConditional rc;
   for (int s = 0; s < S; ++s) {
-    if (!post.init(phis.row(s).t()))
+    // from the last draw by a move of the parameters that differ (the
+    // plug-in's particles: kappa alone), its factors updated, not redone
+    const arma::vec ph = phis.row(s).t();
+    std::vector<int> idx;
+    for (int j = 0; j < post.d && s > 0; ++j) if (ph[j] != post.phi[j]) idx.push_back(j);
+    bool ok = s > 0 && (idx.empty() || std::isfinite(post.propose(idx, ph.elem(arma::conv_to<arma::uvec>::from(idx)))));
+    if (ok && !idx.empty()) post.accept(); else if (s > 0 && !idx.empty()) post.reject();
+    if (!ok && !post.init(ph))
       Rcpp::stop("The covariance matrix of draw %d is not positive definite.", s + 1);
     sys.ll[s] = post.logLik();
     if (Nc + T > 0) {
@@ -86,21 +91,16 @@ void exp_weights(const double* L, double mx, int S, double* w) {
   for (int s = 0; s < S; ++s) w[s] = std::exp(L[s] - mx);
 }
 
-// The greedy look-ahead's state: S draws, Nr runs of K values each (the
-// candidates' rows r K .. r K + K - 1, the same inputs but the output; K = 1
-// with one output: Nc = Nr K), J fantasies. kap (S x q) kappa, ksq (S)
-// |kappa_s|^2, base (S x J) the draws' log-weights given the pending points'
-// fantasies, YP (J x k) those values, P the pending candidates; per step,
-// with pending points, the terms of the conditional means given them
-// (cond_means()), s fastest: B's Bk[s + S (c + Nc i)] and the fantasies'
-// deviations Dk[s + S (i + k j)]; mbuf the draws' means. Per run r and draw s
-// the lower Cholesky factor of its K values' covariance given the data and
-// the pending points, LK[(r S + s) K^2 ..] (column-major), and its sum log
-// diag ldK[r S + s]; eK (S x K) a fantasy's standardised residuals
-// L_s^-1 (y - M_s). With T targets, given the pending points: the targets'
-// means MT[s + S (t + T j)], variances VTP (S x T) and covariances with the
-// candidates CP[s + S (t + T c)]; gK (S x T x K) and vK (S x T)
-// run_target_terms() of the run scored; `entropy`: see crit_value().
+// The greedy look-ahead's state: S draws, Nr runs of K values each (rows
+// r K .. r K + K - 1 of the Nc candidates), J fantasies. kap (S x q) kappa,
+// ksq |kappa_s|^2, base (S x J) the log-weights given the pending points'
+// fantasies YP (J x k), P the pending candidates; with pending points the
+// conditional means' terms (cond_means(); s fastest) Bk[s + S (c + Nc i)]
+// and Dk[s + S (i + k j)]; per run r and draw s the factor of its values'
+// covariance LK[(r S + s) K^2 ..] and its log-determinant / 2 ldK[r S + s];
+// eK (S x K) a fantasy's standardised residuals. With T targets: their
+// means MT[s + S (t + T j)], variances VTP (S x T), covariances with the
+// candidates CP[s + S (t + T c)]; gK, vK: run_target_terms().
 struct LookAhead {
   int S, Nc, J, T = 0, K = 1, Nr = 0;
   bool entropy = false;
@@ -134,9 +134,7 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 
 // The calibrated prediction's variance averaged over the T targets under
 // the weights w_s = exp(L_s - mx), in fantasy j given the pending points;
-// after a run (`run`) m_st = MT_stj + g_st'e_s, v_st = vK_st (e_s from
-// run_log_density(), g and vK from run_target_terms()), before it m = MT,
-// v = VTP:
+// after a run m_st = MT_stj + g_st'e_s, v_st = vK_st, before it MT, VTP:
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
 double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   const int S = la.S;
@@ -162,10 +160,8 @@ double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
 }
 
 
-// Kappa's entropy under the weights w_s = exp(L_s - mx), the draws being
-// the plug-in's kappa values (a grid or a uniform sample: the entropy of
-// their normalised weights p_s = w_s / sum w is kappa's differential
-// entropy up to a constant):
+// Kappa's entropy under the weights w_s = exp(L_s - mx) of the plug-in's
+// kappa values (a grid or a uniform sample: up to a constant, kappa's):
 //   -sum_s p_s log p_s = log sum w - sum_s w_s (L_s - mx) / sum w.
 double weighted_entropy(LookAhead& la, const double* L, double mx) {
   const int S = la.S;
@@ -340,20 +336,30 @@ inline double solve_small(const double* L, int K, double* x) {
   return ss;
 }
 
-// Adds to L (S) the log-density of run r's values y (K) under each draw,
-// the normal's constant left out:
-//   L_s += -|e_s|^2 / 2 - sum log diag LK_rs,  e_s = LK_rs^-1 (y - M_s)
-// (mus from run_means()); e_s kept in la.eK (S x K) for the targets.
-void run_log_density(LookAhead& la, int r, const double* const* mus, const double* y, double* L) {
+// L_s = b_s + the log-density of run r's values y (K) under draw s, the
+// normal's constant left out (b may be L; returns the largest L_s):
+//   -|e_s|^2 / 2 - sum log diag LK_rs,  e_s = LK_rs^-1 (y - M_s) (kept in la.eK).
+double run_log_density(LookAhead& la, int r, const double* const* mus, const double* y,
+                       const double* b, double* L) {
   const int K = la.K, S = la.S;
-  double e[16];  // K <= 16 (design_look_ahead())
+  const double* ld = la.ldK.data() + (size_t)r * S;
+  double e[16], mx = R_NegInf;  // K <= 16 (design_look_ahead())
   for (int s = 0; s < S; ++s) {
     const double* Ls = la.LK.data() + (size_t)K * K * ((size_t)r * S + s);
-    for (int i = 0; i < K; ++i) e[i] = y[i] - mus[i][s];
-    const double ss = solve_small(Ls, K, e);
-    for (int i = 0; i < K; ++i) la.eK[s + (size_t)S * i] = e[i];
-    L[s] += -0.5 * ss - la.ldK[(size_t)r * S + s];
+    double ss;
+    if (K == 1) {  // (one value: the scoring's inner loop)
+      e[0] = (y[0] - mus[0][s]) / Ls[0];
+      ss = e[0] * e[0];
+      la.eK[s] = e[0];
+    } else {
+      for (int i = 0; i < K; ++i) e[i] = y[i] - mus[i][s];
+      ss = solve_small(Ls, K, e);
+      for (int i = 0; i < K; ++i) la.eK[s + (size_t)S * i] = e[i];
+    }
+    L[s] = b[s] - 0.5 * ss - ld[s];
+    mx = std::max(mx, L[s]);
   }
+  return mx;
 }
 
 // target_var()'s terms of run r (K values), which no fantasy changes: per
@@ -403,10 +409,7 @@ void score_runs(const DesignSystems& sys, LookAhead& la, const int* src, const a
         y[i] = x;
         Y(r * K + i, j) = x;
       }
-      const double* b = la.base.colptr(j);
-      std::copy(b, b + S, L);
-      run_log_density(la, r, mus, y, L);
-      const double mx = *std::max_element(L, L + S);
+      const double mx = run_log_density(la, r, mus, y, la.base.colptr(j), L);
       after += crit_value(la, L, mx, j, true);
     }
     gain[r] = before - after / J;
@@ -426,9 +429,8 @@ struct LookAheadRun {
   int n = 0, step = 0;
 };
 
-// Runs a look-ahead's steps up to `upto` (greedy: each picks the candidate
-// of largest gain given the pending ones, or order[step]; its fantasised
-// values then reweight the draws in each fantasy).
+// Runs a look-ahead's steps up to `upto`: each picks the best run (or
+// order[step]), whose fantasised values then reweight the draws.
 void look_ahead_steps(LookAheadRun& run, int upto) {
   const DesignSystems& sys = run.sys;
   LookAhead& la = run.la;
@@ -449,7 +451,7 @@ void look_ahead_steps(LookAheadRun& run, int upto) {
       run_means(sys, la, b, j, mus);
       double y[16];
       for (int i = 0; i < K; ++i) y[i] = run.Y(b * K + i, j);
-      run_log_density(la, b, mus, y, la.base.colptr(j));
+      run_log_density(la, b, mus, y, la.base.colptr(j), la.base.colptr(j));
     }
     for (int i = 0; i < K; ++i) {
       la.P.push_back(b * K + i);
@@ -458,8 +460,7 @@ void look_ahead_steps(LookAheadRun& run, int upto) {
     Rcpp::checkUserInterrupt();
   }
 }
-
-// design_look_ahead()'s list of the steps run.
+// (the list of the steps run)
 Rcpp::List look_ahead_result(const LookAheadRun& run) {
   const int k = run.step;
   return Rcpp::List::create(
@@ -471,7 +472,6 @@ Rcpp::List look_ahead_result(const LookAheadRun& run) {
 }
 
 }  // namespace
-
 
 // The draws' conditionals at candidates (scaled): mean and variance of the
 // simulator's value given the data (Nc x S) and the log-likelihood of each

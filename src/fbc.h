@@ -509,8 +509,11 @@ protected:
   // at the current state, a square root of Ds^-1 applied to the runs'
   // correlations with points Z (p + q columns, any calibration input):
   // W (r x nz) with W_a'W_b = Rs(Xs, Z_a)' Ds^-1 Rs(Xs, Z_b), wy with
-  // W'wy = Rs(Xs, Z)' Ds^-1 ys, and G = Rs(Xs,Xk)' Ds^-1 Rs(Xs, Z) (nu x nz).
-  virtual void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) = 0;
+  // W'wy = Rs(Xs, Z)' Ds^-1 ys, and G = Rs(Xs,Xk)' Ds^-1 Rs(Xs, Z) (nu x nz);
+  // haveW: W and wy are given (they depend on the simulator's correlation
+  // parameters alone), only G is wanted.
+  virtual void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                         bool haveW) = 0;
 
 private:
   Touch touch_;
@@ -523,6 +526,10 @@ private:
   Buf2<arma::vec> wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;
+  // runConditional()'s runs' part at the candidates, kept while the
+  // simulator's correlation parameters (runKey_) and the candidates stay
+  arma::vec runKey_, runWy_;
+  arma::mat runU_, runW_;
   double evaluate(const Touch& t);
   bool fieldFactor(const arma::mat& Q, const arma::mat* Rb, double s2S, double s2B, double& ldS);
   void flip(const Touch& t);
@@ -564,7 +571,8 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
-  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                 bool haveW) override;
 
 private:
   bool cached_;
@@ -609,7 +617,8 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
-  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                 bool haveW) override;
 
 private:
   void split_levels();
@@ -649,7 +658,8 @@ protected:
   void simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G) override;
   void simHeldout(const std::vector<std::vector<int> >& folds, arma::vec& a,
                   std::vector<arma::mat>& QBB) override;
-  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) override;
+  void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                 bool haveW) override;
 
 private:
   // the runs' pass (simUpdate()) at phi: log|Ds|, zz; false if not PD

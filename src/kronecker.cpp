@@ -298,7 +298,7 @@ void KroneckerPosterior::simHeldout(const std::vector<std::vector<int> >& folds,
 // wy_ij = (Ux' Y Ut)_ij / sqrt(lam_ij), and the field latents' columns
 // (Ax, ct) the same way.
 void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy,
-                                   arma::mat& G) {
+                                   arma::mat& G, bool haveW) {
   const int I = dz_.I, J = dz_.J, nz = Z.n_rows;
   const arma::vec th = phi.subvec(iThetaS, iThetaS + p + q - 1);
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p + q - 1);
@@ -312,15 +312,15 @@ void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& 
   const arma::mat& Ax = Ax_.cur();
   const arma::vec& ct = ct_.cur();
   const arma::mat& Yt = Yt_.cur();
-  W.set_size(m, nz);
-  wy.set_size(m);
+  if (!haveW) { W.set_size(m, nz); wy.set_size(m); }
   arma::mat WB(m, nu_);
   for (int j = 0; j < J; ++j)
     for (int i = 0; i < I; ++i) {
       const int r = i + I * j;
       const double is = 1.0 / std::sqrt(lx[i] * lt[j] + nugget_);
-      for (int c = 0; c < nz; ++c) W(r, c) = ax(i, c) * at(j, c) * is;
       for (int u = 0; u < nu_; ++u) WB(r, u) = Ax(i, u) * ct[j] * is;
+      if (haveW) continue;
+      for (int c = 0; c < nz; ++c) W(r, c) = ax(i, c) * at(j, c) * is;
       wy[r] = Yt(i, j) * is;
     }
   G = WB.t() * W;

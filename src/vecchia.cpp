@@ -560,32 +560,34 @@ void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, a
 
 // Ds^-1 ~ U U' (the runs' conditionals, as simHeldout() has them): W = U' K
 // for K = Rs(Xs, Z), wy = U' ys, G = (U' Rs(Xs,Xk))' W.
-void VecchiaPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G) {
+void VecchiaPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
+                                 bool haveW) {
   const int k = vd_.k;
   const arma::vec th = phi.subvec(iThetaS, iThetaS + p + q - 1);
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p + q - 1);
-  arma::mat K = corr_matrix(Xs_, Z, th, al, kernS_);
-  level_scale(levels, phi.memptr() + iRhoS, Xs_, Z, K, false);
+  arma::mat K;
+  if (!haveW) {
+    K = corr_matrix(Xs_, Z, th, al, kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, Xs_, Z, K, false);
+    W.zeros(m, Z.n_rows);
+    wy.zeros(m);
+  }
   arma::mat Xk(nu_, p + q);
   Xk.cols(0, p - 1) = Xu_;
   for (int d = 0; d < q; ++d) Xk.col(p + d).fill(phi[iKappa + d]);
   arma::mat KB = corr_matrix(Xs_, Xk, th, al, kernS_);
   level_scale(levels, phi.memptr() + iRhoS, Xs_, Xk, KB, false);
-  W.zeros(m, Z.n_rows);
   arma::mat WB(m, nu_, arma::fill::zeros);
-  wy.zeros(m);
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
     const int c = gatherRun(i), s = vd_.ord[i];
     const double sd = std::sqrt(conditional(c + 1, c + 1, true, runDist(i)));
-    W.row(i) = K.row(s) / sd;
     WB.row(i) = KB.row(s) / sd;
-    wy[i] = ys_[s] / sd;
+    if (!haveW) { W.row(i) = K.row(s) / sd; wy[i] = ys_[s] / sd; }
     for (int r = 0; r < c; ++r) {
       const double b = rhs_[r] / sd;
-      W.row(i) -= b * K.row(nb[r]);
       WB.row(i) -= b * KB.row(nb[r]);
-      wy[i] -= b * ys_[nb[r]];
+      if (!haveW) { W.row(i) -= b * K.row(nb[r]); wy[i] -= b * ys_[nb[r]]; }
     }
   }
   G = WB.t() * W;
