@@ -201,10 +201,11 @@
 #' the exact algebra.
 #'
 #' Under `algebra = "auto"` the choice is by projected cost: a dense sweep
-#' costs about 1.2 Cholesky factorisations of the \eqn{(m + n) \times (m +
-#' n)} block, projected as \eqn{1.5 \times 10^{-10} (m + n)^3} CPU seconds
-#' on the reference BLAS (timed on a 2-core machine: 0.16 s at \eqn{m + n =
-#' 1060}). While that is under 0.1 s (\eqn{m + n} up to about 870) the
+#' is projected move by move (each move of the simulator block factors the
+#' \eqn{m \times m} block and builds it over the \eqn{p + q} inputs, each
+#' kappa move solves the \eqn{m \times n} cross block) from constants
+#' measured on the reference BLAS (`bench/dense-cost.R`, within 1.5 times of
+#' measured sweeps). While that is under 0.1 s the
 #' dense algebra runs, exact; above, the nearest-neighbour one, whose sweep
 #' costs milliseconds (8 ms at m = 1000). The rule is the same on every BLAS,
 #' so the same data get the same algebra on every machine: an optimized BLAS
