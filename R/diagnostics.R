@@ -593,8 +593,8 @@ kappa_modes_messages <- function(x) {
     sprintf(
       "The draws of %s are multimodal: modes near %s. Its mean and sd average over them; report the modes (see `plot(fit, \"kappa\")`).%s R-hat cannot see a mode that every chain visits too rarely: more chains (`nChains = 8`) show how stable the shares are.",
       v, paste(sprintf("%s (%s of the draws)", vapply(r$at, fmt_num, ""), fmt_share(r$share)), collapse = ", "),
-      if (any(rare)) sprintf(" Only %s of the %d chains visited the mode near %s.",
-                                paste(r$chains[rare], collapse = ", "), nChains,
-                                paste(vapply(r$at[rare], fmt_num, ""), collapse = ", ")) else "")
+      if (any(rare)) sprintf(" Not every chain visited every mode (of the %d chains: %s).", nChains,
+                             paste(sprintf("%d near %s", r$chains, vapply(r$at, fmt_num, "")),
+                                   collapse = ", ")) else "")
   }, character(1))
 }

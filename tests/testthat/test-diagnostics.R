@@ -265,7 +265,7 @@ test_that("calibration inputs that trade off: named, with what the data identify
   expect_length(r$groups, 1L)
   g <- r$groups[[1]]
   expect_identical(g$vars, c("kappa1", "kappa2"))
-  expect_equal(g$coef, c(1, 1), tolerance = 0.01)
+  expect_equal(g$coef, c(1, 1), tolerance = 0.03)
   expect_equal(g$sd, 0.03, tolerance = 0.05)
   expect_identical(r$vars, "kappa2")  # flagged and in a group
   expect_snapshot(cat(FBC:::ridge_messages(r)))
@@ -289,9 +289,11 @@ test_that("kappa's draws with two modes are said, with their shares; one mode is
   expect_equal(m$share[order(m$at)], c(0.4, 0.6), tolerance = 0.01)
   expect_identical(m$chains, c(4L, 4L))
   expect_snapshot(cat(FBC:::kappa_modes_messages(fit)))
-  # a mode only chain 3 visited
+  # the mode near -0.18 only chain 3 visited, the other chains 1, 2 and 4
   fit$chain <- c(rep(c(1L, 2L, 4L), 800), rep(3L, 1600))
-  expect_match(FBC:::kappa_modes_messages(fit), "Only 1 of the 4 chains visited the mode near")
+  expect_match(FBC:::kappa_modes_messages(fit),
+               "Not every chain visited every mode (of the 4 chains: 1 near -0.1777, 3 near 0.5405)",
+               fixed = TRUE)
   # unimodal shapes: a Gaussian, a skewed beta piled at a bound, a uniform
   for (d in list(rnorm(4000), rbeta(4000, 1, 8), runif(4000), rgamma(4000, 2))) {
     expect_null(FBC:::kappa_modes(list(Phi = cbind(kappa1 = d), chain = rep(1:4, 1000))))
