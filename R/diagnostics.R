@@ -232,7 +232,14 @@ smooth_kernel_hint <- function(cls) {
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
 #' [calibrate()]), calibration parameters confounded with the bias, and
-#' prior-data conflicts.
+#' prior-data conflicts. Also: calibration parameters that trade off (draws
+#' correlated at \eqn{|r| \ge 0.9}; the message gives the combination the data
+#' identify, and replaces "run longer" in the R-hat and ESS messages), a
+#' calibration parameter whose draws are multimodal (each mode's share), and
+#' an emulator bent by the field data (at 30 draws, the field data's pull on
+#' the emulator's mean at the field inputs, in runs-only predictive sds, has
+#' a median above 3: the posterior rests on an emulator fitted towards the
+#' field data; more runs where kappa's draws lie are the remedy).
 #'
 #' @section Confounding:
 #' With a bias GP (`discrepancy = "gp"` or `"sgasp"`), a calibration
