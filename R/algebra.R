@@ -9,25 +9,22 @@
 # - else the nearest-neighbour (Vecchia) approximation with
 #   vecchia_neighbours(m) neighbours.
 #
-# Projected dense sweep: fbc_dense_flop_s * (m + n)^3 seconds on the
-# reference BLAS. A dense sweep costs about 1.2 Cholesky factorisations of
-# the (m + n) x (m + n) block (bench/RESULTS-scale.md: 1.22 at m = 1000,
-# 1.08 at 2000), and R's chol() took 1.22e-10 to 1.56e-10 s per N^3 at N =
-# 400 to 1500 on the reference BLAS of our 2-core machine (timed for this
-# rule, 2026-11-25; RESULTS-scale.md: 125 ms at N = 1060): 1.2 * 1.3e-10 =
-# 1.5e-10 s per (m + n)^3.
-#
-# The choice is made on this projection whatever BLAS runs, so the same data
-# get the same algebra (and set.seed() the same draws, up to rounding) on
-# every machine. An optimized BLAS does not move the line in the dense
-# algebra's favour (measured 2026-11-25, OpenBLAS 0.3.21, one thread, m =
-# 1000 scattered runs, n = 60): a dense sweep cost 17.6 ms against the
-# Vecchia algebra's 7.0 ms, and the default run on the dense algebra had not
-# converged after 49 CPU minutes where the Vecchia one takes 5-8 minutes on
-# the reference BLAS (bench/RESULTS-defaults.md).
-fbc_dense_flop_s <- 1.5e-10
-# The dense algebra while its projected sweep costs less than this (s),
-# m + n up to about 870. At the limit 4 chains of 8000 sweeps take about 53
+# Projected dense sweep: what a sweep does, move by move, with constants
+# measured per input and per move (bench/dense-cost.R --constants, on the
+# reference BLAS of the 2-core machine, RESULTS-dense-cost.md). A move of
+# the simulator block builds the m x m correlation (d = p + q inputs), factors
+# it and solves the cross block to the n field rows:
+#   sim(m, n, d)   = A m^3 + B d m^2 + C n m^2;
+# a kappa move (its walk, its jump, kappa's joint walk) rebuilds the m x n
+# cross correlation and solves it with the kept factor:
+#   kappa(m, n, d) = C n m^2 + D d n m;
+# every move refactors the n x n field block: E n^3. The sweep is the sum
+# over the default schedule (sampler_moves(): its repeats, the large-problem
+# schedule from fbc_large_m runs). The old rule, 1.5e-10 (m + n)^3, ignored
+# the inputs and the moves and was 1.6-8 times too low at p = q = 3.
+# The dense algebra while its projected sweep (of the small-problem
+# schedule) costs less than this (s): m up to about 530 at p = q = 1,
+# n = 30, 440 at p = q = 2, n = 60. At the limit 4 chains of 8000 sweeps take about 53
 # CPU minutes on the reference BLAS, 4 x 3000 (a run the stopping rule ends
 # early) 20; the Vecchia algebra's sweep costs 8 ms at m = 1000, k = 20
 # (RESULTS-vecchia.md), so above the limit the exact algebra is an hour or
@@ -47,9 +44,30 @@ fbc_dense_sweep_max <- 0.1
 fbc_vecchia_k10_m <- 4000L
 vecchia_neighbours <- function(m) if (m < fbc_vecchia_k10_m) 20L else 10L
 
-# Projected CPU seconds of one dense sweep with m runs and n field rows.
-dense_sweep_cost <- function(m, n) {
-  fbc_dense_flop_s * (m + n)^3
+fbc_dense_cost <- c(A = 2.36e-10, B = 7.93e-9, C = 4.15e-10, D = 8.22e-12, E = 1.88e-9)
+
+# Moves a default sweep makes (sampler_moves(), "blocks" sampler, kappa's
+# priors proper and free): of the simulator block, of kappa (walks, jumps,
+# the joint walk), and the others (bias block, sigma2E, muB, scale).
+dense_sweep_moves <- function(q, large, bias = TRUE) {
+  joint <- q >= 2L
+  walks <- q * (if (large || joint) 1L else 3L)
+  out <- c(sim = if (large) 1L else 2L,
+           kappa = walks + q + (if (joint) (if (large) 1L else fbc_kappa_joint_repeats) else 0L),
+           other = (if (bias) 2L + 1L else 0L) + 2L)
+  storage.mode(out) <- "integer"
+  out
+}
+
+# Projected CPU seconds of one dense sweep with m runs, n field rows, p
+# experimental and q calibration inputs (see the top).
+dense_sweep_cost <- function(m, n, p, q, large = m >= fbc_large_m, bias = TRUE) {
+  k <- fbc_dense_cost
+  d <- p + q
+  mv <- dense_sweep_moves(q, large, bias)
+  mv[["sim"]] * (k[["A"]] * m^3 + k[["B"]] * d * m^2 + k[["C"]] * n * m^2) +
+    mv[["kappa"]] * (k[["C"]] * n * m^2 + k[["D"]] * d * n * m) +
+    sum(mv) * k[["E"]] * n^3
 }
 
 # The algebra for a calibration (the contract shared with the model code):
@@ -68,8 +86,15 @@ dense_sweep_cost <- function(m, n) {
 # `neighbours` is given for an algebra that does not use it.
 choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   m <- nrow(Xs)
-  cost <- dense_sweep_cost(m, n)
-  costTxt <- sprintf("about %s s a sweep", format(signif(cost, 2), scientific = FALSE))
+  # the sweep the dense algebra would run (the large-problem schedule from
+  # fbc_large_m runs), and the rule's yardstick: the sweep of the
+  # small-problem schedule, which grows with m (the large schedule's sweep
+  # is cheaper, so a rule on it would switch dense, Vecchia, dense again as
+  # m grows past fbc_large_m)
+  cost <- dense_sweep_cost(m, n, p, ncol(Xs) - p)
+  rule <- dense_sweep_cost(m, n, p, ncol(Xs) - p, large = FALSE)
+  txt <- function(x) sprintf("about %s s a sweep", format(signif(x, 2), scientific = FALSE))
+  costTxt <- txt(cost)
   dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]]) else integer(0)
   out <- if (algebra == "vecchia") {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
@@ -82,16 +107,16 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
     list(name = "kronecker", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = "exact; the runs are a product design, so no m x m matrix is formed",
          dims = dims)
-  } else if (cost < fbc_dense_sweep_max) {
+  } else if (rule < fbc_dense_sweep_max) {
     list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
-         reason = sprintf("exact; projected at %s (m + n = %d; under %g s)", costTxt,
-                          m + n, fbc_dense_sweep_max))
+         reason = sprintf("exact; projected at %s (m = %d, n = %d, %d inputs; under %g s)", costTxt,
+                          m, n, ncol(Xs), fbc_dense_sweep_max))
   } else {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
     list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = FALSE,
          reason = sprintf(
-           "the exact dense algebra would cost %s (m + n = %d; over %g s): `algebra = \"dense\"` is exact, a larger `neighbours =` comes closer",
-           costTxt, m + n, fbc_dense_sweep_max))
+           "the exact dense algebra is projected at %s (m = %d, n = %d, %d inputs; over %g s): `algebra = \"dense\"` is exact, a larger `neighbours =` comes closer",
+           txt(rule), m, n, ncol(Xs), fbc_dense_sweep_max))
   }
   if (!is.null(neighbours) && out$name != "vecchia") {
     ran <- if (out$name == "kronecker") "Kronecker" else out$name

@@ -232,7 +232,14 @@ smooth_kernel_hint <- function(cls) {
 #' simulator design covers (by more than 5% of its width; there the
 #' posterior rests on the emulator's extrapolation: see "Checks" in
 #' `vignette("model", package = "FBC")`), calibration parameters confounded with the bias, and
-#' prior-data conflicts.
+#' prior-data conflicts. Also: calibration parameters that trade off (draws
+#' correlated at \eqn{|r| \ge 0.9}; the message gives the combination the data
+#' identify, and replaces "run longer" in the R-hat and ESS messages), a
+#' calibration parameter whose draws are multimodal (each mode's share), and
+#' an emulator bent by the field data (at 30 draws, the field data's pull on
+#' the emulator's mean at the field inputs, in runs-only predictive sds, has
+#' a median above 3: the posterior rests on an emulator fitted towards the
+#' field data; more runs where kappa's draws lie are the remedy).
 #'
 #' @section Confounding:
 #' With a bias GP (`discrepancy = "gp"` or `"sgasp"`), a calibration
@@ -593,8 +600,8 @@ kappa_modes_messages <- function(x) {
     sprintf(
       "The draws of %s are multimodal: modes near %s. Its mean and sd average over them; report the modes (see `plot(fit, \"kappa\")`).%s R-hat cannot see a mode that every chain visits too rarely: more chains (`nChains = 8`) show how stable the shares are.",
       v, paste(sprintf("%s (%s of the draws)", vapply(r$at, fmt_num, ""), fmt_share(r$share)), collapse = ", "),
-      if (any(rare)) sprintf(" Only %s of the %d chains visited the mode near %s.",
-                                paste(r$chains[rare], collapse = ", "), nChains,
-                                paste(vapply(r$at[rare], fmt_num, ""), collapse = ", ")) else "")
+      if (any(rare)) sprintf(" Not every chain visited every mode (of the %d chains: %s).", nChains,
+                             paste(sprintf("%d near %s", r$chains, vapply(r$at, fmt_num, "")),
+                                   collapse = ", ")) else "")
   }, character(1))
 }

@@ -54,8 +54,8 @@ cached_field_pull <- function(x) {
 }
 
 # The message when the median pull exceeds fbc_pull_max.
-field_pull_messages <- function(x) {
-  fp <- cached_field_pull(x)
+field_pull_messages <- function(x) field_pull_text(cached_field_pull(x))
+field_pull_text <- function(fp) {
   if (is.null(fp) || !(stats::median(fp$pull) > fbc_pull_max)) return(character())
   hi <- fp$pull > fbc_pull_max
   at <- vapply(colnames(fp$kappa), function(v) {

@@ -1,8 +1,31 @@
 # choose_algebra(): the algebra and neighbours by projected cost (R/algebra.R).
 
-test_that("the projected dense sweep is the documented constant times (m + n)^3", {
-  # 1.5e-10 s per (m + n)^3 on the reference BLAS (R/algebra.R)
-  expect_equal(FBC:::dense_sweep_cost(1000, 60), 1.5e-10 * 1060^3)
+test_that("the projected dense sweep: the measured constants times what the default sweep does", {
+  k <- FBC:::fbc_dense_cost
+  # m = 1000, n = 60, p = q = 2: the large schedule (one simulator-block
+  # move; kappa: 2 walks, 2 jumps, 1 joint; bias, sigma2E, muB, scale)
+  mv <- FBC:::dense_sweep_moves(2, TRUE)
+  expect_identical(mv, c(sim = 1L, kappa = 5L, other = 5L))
+  expect_equal(FBC:::dense_sweep_cost(1000, 60, 2, 2),
+               k[["A"]] * 1000^3 + k[["B"]] * 4 * 1000^2 + k[["C"]] * 60 * 1000^2 +
+                 5 * (k[["C"]] * 60 * 1000^2 + k[["D"]] * 4 * 60 * 1000) + 11 * k[["E"]] * 60^3)
+  # the moves counted are those sampler_moves() schedules
+  for (q in 1:3) for (large in c(FALSE, TRUE)) {
+    p <- 2
+    sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q),
+                                  p2 = rep(1.1, q)), set_hyperPriors(),
+                             list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+    sm <- FBC:::sampler_moves("blocks", sp, large = large)
+    nm <- names(sm$blocks)
+    kappaMoves <- sum(sm$repeats[startsWith(nm, "kappa")]) + length(sm$jump)
+    mv <- FBC:::dense_sweep_moves(q, large)
+    expect_identical(mv[["sim"]], sm$repeats[nm == "sim"])
+    expect_identical(mv[["kappa"]], as.integer(kappaMoves))
+    # bias block, sigma2E, muB (exact), scale
+    expect_identical(mv[["other"]], sm$repeats[nm == "bias"] + 1L + 1L + 1L)
+  }
+  # more inputs and more kappa moves cost more, at the same m + n
+  expect_gt(FBC:::dense_sweep_cost(780, 30, 3, 3), FBC:::dense_sweep_cost(780, 30, 1, 1))
   expect_identical(FBC:::vecchia_neighbours(3999), 20L)
   expect_identical(FBC:::vecchia_neighbours(4000), 10L)
 })
@@ -62,7 +85,7 @@ test_that("print() says which algebra ran and why", {
   fit <- calibrate(ballSim, ballField, nMCMC = 40, nBurn = 10, nChains = 1, discrepancy = "none")
   expect_identical(fit$model$algebra$name, "dense")
   # the projected cost depends on the BLAS (0.00065 s on the reference one)
-  expect_output(print(fit), "algebra: dense: exact; projected at about [0-9.]+ s a sweep \\(m \\+ n = 163; under 0.1 s\\)")
+  expect_output(print(fit), "algebra: dense: exact; projected at about [0-9.]+ s a sweep \\(m = 100, n = 63, 2 inputs; under 0.1 s\\)")
   # a fit made before the reason was kept prints the old line
   old <- fit
   old$model$algebra$reason <- NULL

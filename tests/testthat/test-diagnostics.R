@@ -254,3 +254,78 @@ test_that("sigma2E held at a uniform prior's lower edge: ppc_field()'s hint and 
   expect_match(convergence_messages(fit),
                "The posterior of sigma2E presses against its prior's bound 0.5", all = FALSE)
 })
+
+test_that("calibration inputs that trade off: named, with what the data identify", {
+  set.seed(1)
+  s <- rnorm(4000, 0.9, 0.03)          # identified: kappa1 + kappa2
+  k1 <- runif(4000, 0.05, 0.85)
+  Phi <- cbind(kappa1 = k1, kappa2 = s - k1, kappa3 = runif(4000), sigma2E = rexp(4000))
+  fit <- list(Phi = Phi, chain = rep(1:4, each = 1000))
+  r <- FBC:::kappa_ridge(fit, c("kappa2", "sigma2E"))
+  expect_length(r$groups, 1L)
+  g <- r$groups[[1]]
+  expect_identical(g$vars, c("kappa1", "kappa2"))
+  expect_equal(g$coef, c(1, 1), tolerance = 0.03)
+  expect_equal(g$sd, 0.03, tolerance = 0.05)
+  expect_identical(r$vars, "kappa2")  # flagged and in a group
+  expect_snapshot(cat(FBC:::ridge_messages(r)))
+  # the R-hat / ESS message points at them instead of "run longer"
+  est <- data.frame(rhat = c(1.2, 1.3, 1, 1), ess = c(50, 40, 900, 900),
+                    row.names = colnames(Phi))
+  msg <- FBC:::mixing_messages(est, 1:2, 1:2, data.frame(), r, 4L)
+  expect_true(all(grepl("Calibration inputs that trade off (below) are the cause", msg, fixed = TRUE)))
+  # independent kappas: none
+  fit$Phi[, "kappa2"] <- runif(4000)
+  expect_length(FBC:::kappa_ridge(fit)$groups, 0L)
+})
+
+test_that("kappa's draws with two modes are said, with their shares; one mode is not", {
+  set.seed(2)
+  two <- c(rnorm(2400, 0.54, 0.04), rnorm(1600, -0.18, 0.03))
+  fit <- list(Phi = cbind(kappa1 = two), chain = rep(1:4, 1000))
+  m <- FBC:::kappa_modes(fit)
+  expect_equal(nrow(m), 2L)
+  expect_equal(sort(m$at), c(-0.18, 0.54), tolerance = 0.03)
+  expect_equal(m$share[order(m$at)], c(0.4, 0.6), tolerance = 0.01)
+  expect_identical(m$chains, c(4L, 4L))
+  expect_snapshot(cat(FBC:::kappa_modes_messages(fit)))
+  # the mode near -0.18 only chain 3 visited, the other chains 1, 2 and 4
+  fit$chain <- c(rep(c(1L, 2L, 4L), 800), rep(3L, 1600))
+  expect_match(FBC:::kappa_modes_messages(fit),
+               "Not every chain visited every mode (of the 4 chains: 1 near -0.1777, 3 near 0.5405)",
+               fixed = TRUE)
+  # unimodal shapes: a Gaussian, a skewed beta piled at a bound, a uniform
+  for (d in list(rnorm(4000), rbeta(4000, 1, 8), runif(4000), rgamma(4000, 2))) {
+    expect_null(FBC:::kappa_modes(list(Phi = cbind(kappa1 = d), chain = rep(1:4, 1000))))
+  }
+})
+
+test_that("the field data's pull on the emulator: flagged above 3 runs-only sd, said with where to add runs", {
+  fp <- list(pull = c(rep(3.4, 18), rep(2, 12)), rows = 1:30,
+             kappa = cbind(kappa1 = c(rep(0.54, 18), rep(-0.18, 12)) + seq(0, 0.029, by = 0.001)))
+  expect_snapshot(cat(FBC:::field_pull_text(fp)))
+  fp$pull <- c(rep(2.9, 18), rep(3.5, 12))
+  expect_length(FBC:::field_pull_text(fp), 0L)
+  expect_length(FBC:::field_pull_text(NULL), 0L)
+})
+
+test_that("the field data's pull equals the plain-R conditionals at a draw", {
+  fit <- small_fit(nChains = 1)
+  fp <- FBC:::field_pull(fit)
+  expect_length(fp$pull, 30L)
+  d <- fit$data
+  p <- ncol(d$Xf); q <- ncol(d$Xs) - p
+  i <- 7L
+  phi <- FBC:::sampler_draws(fit, fp$rows[i])[1, ]
+  th <- unpack_phi(phi, p, q, fit$model$discrepancy)
+  Z <- cbind(d$Xf, matrix(th$kappa, nrow(d$Xf), q, byrow = TRUE))
+  # runs only: eta(Z) | ys
+  K <- th$sigma2S * (dense_corr(d$Xs, d$Xs, th$thetaS, th$alphaS, "matern52") + 1e-6 * diag(nrow(d$Xs)))
+  k <- th$sigma2S * dense_corr(d$Xs, Z, th$thetaS, th$alphaS, "matern52")
+  mRuns <- drop(crossprod(k, solve(K, d$ys)))
+  vRuns <- th$sigma2S - colSums(k * solve(K, k))
+  # runs and field: eta(Z) | ys, yf
+  joint <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phi, d$Xf, "simulator", kernS = "matern52",
+                         kernB = "matern52", discrepancy = fit$model$discrepancy)
+  expect_equal(fp$pull[i], max(abs(joint$mean - mRuns) / sqrt(vRuns)), tolerance = 1e-4)
+})
