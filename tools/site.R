@@ -18,7 +18,9 @@ for (f in files) {
   links <- sub('^href="', "", links)
   links <- links[!grepl("^(https?:|mailto:|javascript:|data:)", links)]
   for (l in unique(links)) {
-    target <- file.path(dirname(f), utils::URLdecode(l))
+    # a file:// link (a local copy of MathJax) must exist where it points
+    target <- if (startsWith(l, "file://")) sub("^file://", "", l) else
+      file.path(dirname(f), utils::URLdecode(l))
     if (!file.exists(target)) broken <- c(broken, sprintf("%s -> %s", f, l))
   }
 }

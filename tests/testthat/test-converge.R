@@ -106,6 +106,7 @@ test_that("Ctrl-C in a later stretch keeps every chain's draws up to its last co
   expect_identical(as.vector(table(part$chain)), c(75L, 50L))
   expect_match(w, "Chain 2 was waiting for its turn", fixed = TRUE)
   expect_match(w, "Keeping 2 of 2 chains with 125 retained draws.", fixed = TRUE)
+  expect_snapshot(cat(w))
   # chain 2's draws are those of the uninterrupted run's first stretch
   ref <- cv_fit()
   expect_identical(part$Phi[part$chain == 2L, ], ref$Phi[ref$chain == 2L, ][1:50, ])
