@@ -481,7 +481,7 @@ test_that("a run with outputs and a bias per data set resumes to the uninterrupt
 })
 
 test_that("a checkpoint of other data sets (rows moved between sources) is refused naming the rows", {
-  # issue 32: the same field values, the same number of data sets, rows 1
+  # the same field values, the same number of data sets, rows 1
   # and 7 swapped between laboratories: another model (other noise groups)
   set.seed(5)
   x <- runif(30); t <- runif(30, 0.5, 3)

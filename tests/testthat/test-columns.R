@@ -249,7 +249,7 @@ test_that("runs closer than the nugget can carry are reported, distinct designs 
 })
 
 test_that("near-duplicate runs are found on either side of a grid line", {
-  # issue 32: rounding the scaled inputs to a 1e-7 grid split a pair 1e-8
+  # rounding the scaled inputs to a 1e-7 grid split a pair 1e-8
   # apart that straddled a grid line (0.45e-7 and 0.55e-7 round apart)
   U <- rbind(c(0.45e-7, 0.3), c(0.55e-7, 0.3), c(0.9, 0.9), c(0.2, 0.1), c(0.9 + 5e-8, 0.9),
              c(0.9 + 9e-8, 0.9))
@@ -266,7 +266,7 @@ test_that("near-duplicate runs are found on either side of a grid line", {
 })
 
 test_that("an output given in wide format (a second response column) gets a warning", {
-  # issue 32: y2 = 2 t x is shared with field, so it is read as an
+  # y2 = 2 t x is shared with field, so it is read as an
   # experimental input; it varies with the calibration input t, which a
   # design input does not
   set.seed(1)

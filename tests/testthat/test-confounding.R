@@ -44,7 +44,7 @@ test_that("a well-informed calibration parameter is not flagged, however large t
 })
 
 test_that("with several measurement-error groups the check compares sigma2B with each group's", {
-  # issue 32: with `source =` the noise variances are sigma2E1, sigma2E2 and
+  # with `source =` the noise variances are sigma2E1, sigma2E2 and
   # the check looked for a column sigma2E only. The ball data split into two
   # data sets (alternate rows): the same confounding as the one-group fit
   set.seed(4)

@@ -310,7 +310,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
     expect_equal(fit$Phi[one, ][1:20, ], old$Phi[old$chain == 1L, ][1:20, ], tolerance = 1e-8)
   }
   # chain 2 started from the checkpoint's start and stream under this
-  # version's adaptation rule (one rule for every move since issue 19): its
+  # version's adaptation rule (one rule for every move): its
   # draws are those of this version's uninterrupted run with the same seed
   set.seed(7)
   now <- old_run()
@@ -326,7 +326,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
                "written by another version of FBC")
 })
 
-test_that("a fit of format 5 is upgraded to one algebra record, the model it was (issue 28)", {
+test_that("a fit of format 5 is upgraded to one algebra record, the model it was", {
   # a product design: the Kronecker algebra, 5 x 5 settings
   g <- expand.grid(x = (1:5) / 6, t = seq(0.5, 3, length.out = 5))
   sim <- data.frame(y = exp(-g$t * g$x), x = g$x, t = g$t)

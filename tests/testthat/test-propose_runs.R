@@ -634,7 +634,7 @@ test_that("a prediction target draws the runs to its inputs", {
     propose_runs(fit, n = 5, candidates = cand, target = data.frame(x = x0), ndraws = 60,
                  nfantasy = 30)
   })
-  # measured (the default, plug-in picks, stop 44): the batch for x0 =
+  # measured (the default, plug-in picks): the batch for x0 =
   # 0.15 at x = 0.17, 0.48, 0.19, 0.16, 0.18 (first gain 87% of the
   # prediction's variance), for x0 = 0.85 at 0.84, 0.48, 0.84, 0.80, 0.46;
   # for kappa (the default target) the same call puts them at x = 0.28-0.90
