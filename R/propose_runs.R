@@ -189,7 +189,9 @@
 #'   several outputs a run's inputs, each run to give every output), `gain`
 #'   (the point's expected reduction of kappa's posterior variance, or of
 #'   the prediction's integrated variance, as a fraction of the current,
-#'   given the points above it).
+#'   given the points above it; the look-ahead's Monte Carlo estimate,
+#'   which can fall below 0 where the true gain is about 0, is clipped at
+#'   0 and kept unclipped in attribute `gainEstimate`).
 #'   Attributes `variance` (current, scaled), `time` (CPU seconds),
 #'   `method` (the criterion that picked: `"joint"` also where the plug-in
 #'   and the joint look-ahead disagreed about the plug-in's pick, see
@@ -244,13 +246,18 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
     sc$factors[[out1$name]] <- NULL
   }
   out <- indicators_to_levels(out, sc)
-  out$gain <- crit$gain / crit$variance
+  # an expected variance reduction cannot be negative: an estimate below
+  # 0 is the look-ahead's Monte Carlo error about 0, reported as 0 (the
+  # estimates themselves are kept in attribute gainEstimate)
+  est <- crit$gain / crit$variance
+  out$gain <- pmax(est, 0)
   tm <- proc.time() - t0
+  attr(out, "gainEstimate") <- est
   attr(out, "variance") <- crit$variance
   attr(out, "method") <- crit$method
   attr(out, "pluginGain") <- crit$own
   attr(out, "time") <- sum(tm[c(1, 2)])
-  if (out$gain[1] < design_limited) message(design_limited_message(out$gain[1], nrow(XT) > 0))
+  if (est[1] < design_limited) message(design_limited_message(est[1], nrow(XT) > 0))
   out
 }
 

@@ -237,6 +237,22 @@ test_that("look_ahead()'s order gives the gains of given points in that order", 
   expect_error(FBC:::look_ahead(parts, U, fit$model, 2, 25, order = c(1, 31)), "index")
 })
 
+test_that("a gain estimated below 0 is reported as 0, the estimate kept", {
+  pb <- sinus_problem()
+  fit <- short_fit(pb, nChains = 2)
+  # the fourth of six plug-in picks is worth about nothing by the joint
+  # look-ahead: its Monte Carlo estimate falls below 0
+  set.seed(1)
+  cand <- data.frame(x = stats::runif(60), u = stats::runif(60))
+  pr <- suppressMessages(propose_runs(fit, n = 6, candidates = cand, method = "plugin",
+                                      ndraws = 40, nfantasy = 30))
+  est <- attr(pr, "gainEstimate")
+  expect_true(any(est < 0))
+  expect_gt(min(est), -0.05)
+  expect_true(all(pr$gain >= 0))
+  expect_identical(pr$gain, pmax(est, 0))
+})
+
 test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gains at its picks", {
   pb <- sinus_problem()
   fit <- short_fit(pb, nChains = 2)
@@ -253,7 +269,8 @@ test_that("propose_runs(method = \"plugin\") reports the joint look-ahead's gain
   joint <- FBC:::look_ahead(FBC:::design_particles(fit, 40, "joint"), U[plug$chosen, ], fit$model,
                             3, 30, order = 1:3)
   expect_equal(as.matrix(pr[c("x", "u")]), as.matrix(cand[plug$chosen, ]), ignore_attr = TRUE)
-  expect_identical(pr$gain, joint$gain / joint$variance)
+  expect_identical(attr(pr, "gainEstimate"), joint$gain / joint$variance)
+  expect_identical(pr$gain, pmax(joint$gain / joint$variance, 0))
   # (its own gains: the entropy's expected reductions as the variance
   # fraction they mean for a normal posterior)
   expect_identical(attr(pr, "pluginGain"), -expm1(-2 * plug$gain))
