@@ -282,6 +282,9 @@ near_groups <- function(U, eps) {
 # wide_share()): 0.94 at m = 8 (p = q = 1), where the fixed 50% warned on
 # 7.5% of maximin designs; 0.5 from m = 23. `sim`: the numeric matrix
 # (response, p experimental, q calibration inputs, named when `named`).
+# Runs chosen by design_loop() or added by update_runs() are never suspect
+# (their inputs were set as inputs): those muffle the warning, a condition
+# of class fbc_wide_outputs (muffle_wide_outputs()).
 fbc_wide_share <- 0.5
 fbc_wide_alone <- 0.1
 fbc_wide_chance <- 0.001
@@ -323,8 +326,12 @@ warn_wide_outputs <- function(sim, p, named = TRUE, call = parent.frame()) {
     "{cli::qty(length(flagged))}Column{?s} {.val {flagged}} of {.arg sim}, read as {?an experimental input/experimental inputs} (shared with {.arg field}), {?varies/vary} with the calibration {cli::qty(q)}input{?s} {.val {nm[calib]}} in the simulator runs: {?it explains/they explain} {fmt_share(share)} of {cli::qty(length(flagged))}{?its/their} variation beyond the other inputs.",
     i = "A design input is set independently of the calibration inputs; an output is not. Is it a second output given in wide format?",
     i = "Several outputs go in long format: one response column, a column naming the output of each row, and {.code calibrate(output = \"<that column>\")} (see {.topic FBC::calibrate}, \"Categorical inputs, outputs and data sets\")."
-  ), call = call)
+  ), class = "fbc_wide_outputs", call = call)
   invisible(TRUE)
+}
+
+muffle_wide_outputs <- function(expr) {
+  withCallingHandlers(expr, fbc_wide_outputs = function(w) invokeRestart("muffleWarning"))
 }
 
 fmt_num <- function(x) format(signif(x, 4), trim = TRUE)

@@ -108,7 +108,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     }, fbc_failed_runs = function(m) invokeRestart("muffleMessage"))
   }
   t0 <- proc.time()
-  fit <- keep_extrapolation(calibrate(sim, field, showProgress = FALSE, ...))
+  fit <- keep_extrapolation(muffle_wide_outputs(calibrate(sim, field, showProgress = FALSE, ...)))
   history <- loop_row(fit, runs, 0, cpu_since(t0))
   limited <- FALSE
   while (runs - n0 < budget && !loop_done(fit, width, cal)) {

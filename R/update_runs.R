@@ -110,7 +110,8 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
   allSim <- bind_runs(args$sim, sim)
   rest <- args[setdiff(names(args), "sim")]
   # (the call is set afterwards: do.call() would evaluate a call given to it)
-  model <- do.call(build_model, c(list(sim = allSim), rest, list(call = environment())))
+  model <- muffle_wide_outputs(do.call(build_model, c(list(sim = allSim), rest,
+                                                     list(call = environment()))))
   model$call <- fit$call
   if (!identical(model$spec$vars, old$spec$vars)) {
     cli::cli_abort(c(

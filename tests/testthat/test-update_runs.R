@@ -311,3 +311,17 @@ test_that("update(fit, sim =) checks the new runs", {
   expect_snapshot(error = TRUE, update(fit, sim = pb$sim[, c("y", "x")]))
   expect_snapshot(error = TRUE, update(fit, sim = "runs"))
 })
+
+test_that("runs added by update_runs() are never taken for an output in wide format", {
+  pb <- sinus_problem()
+  fit <- short_fit(pb)
+  # 30 runs on the diagonal x = u: given to calibrate() with the others,
+  # x looks set by u (61% of its variation), as a second output would be
+  v <- seq(0.05, 0.95, length.out = 30)
+  more <- data.frame(y = sin(10 * v * v), x = v, u = v)
+  expect_warning(FBC:::warn_wide_outputs(as.matrix(rbind(pb$sim, more)), 1),
+                 class = "fbc_wide_outputs")
+  # the fit's columns were judged when it was made: adding runs keeps them
+  expect_no_warning(up <- update_runs(fit, more, nMCMC = 300, nBurn = 100, converge = FALSE))
+  expect_identical(nrow(up$model$options$args$sim), 42L)
+})
