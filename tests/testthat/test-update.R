@@ -152,3 +152,17 @@ test_that("update(fit, nMCMC =) on a reweighted fit warns when its proposals are
   # a fit that was not reweighted keeps its own proposals: never checked
   expect_no_warning(update(stale_proposals(fit), nMCMC = 300))
 })
+
+test_that("update(fit, sim = ) with runs the fit already has says so once", {
+  pb <- sinus_problem()
+  fit <- short_fit(pb)
+  said <- character()
+  up <- withCallingHandlers(
+    update(fit, sim = pb$sim[1:2, ], nMCMC = 300, reweight = FALSE),
+    message = function(m) {
+      said <<- c(said, conditionMessage(m))
+      invokeRestart("muffleMessage")
+    })
+  expect_length(grep("duplicated run", said), 1L)
+  expect_match(said[grep("duplicated run", said)], "rows 1 and 13; 2 and 14")
+})
