@@ -42,6 +42,11 @@ print.fbc <- function(x, digits = 3, ...) {
   cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$data$yf),
               if (fn) "the simulator a function" else sprintf("m = %d simulator runs", length(x$data$ys)),
               sc$p, sc$q))
+  failed <- mo$design$failed
+  if (length(failed$rows)) {
+    cat(sprintf("  failed runs: %d of %d set aside (not evidence about kappa); where runs fail: predict(fit, newdata, type = \"failure\")\n",
+                length(failed$rows), failed$m))
+  }
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
   print_design(mo, sc, fn)

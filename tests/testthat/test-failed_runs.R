@@ -38,6 +38,10 @@ test_that("the posterior with failed runs is the posterior of the successful run
   expect_identical(a$Phi, b$Phi)
   expect_identical(a$model$design$failed$rows, c(3L, 10L, 20L))
   expect_identical(s[c(3, 10, 20), 1], c(NA, NaN, Inf)) # the user's data untouched
+  # print() says how many were set aside; without failed runs, nothing
+  said <- utils::capture.output(print(a))
+  expect_length(grep(sprintf("failed runs: 3 of %d set aside", nrow(ballSim)), said, fixed = TRUE), 1L)
+  expect_length(grep("failed runs", utils::capture.output(print(b))), 0L)
 })
 
 test_that("failedRuns = \"error\" refuses failed runs, and bad inputs of failed runs are refused", {
