@@ -35,6 +35,23 @@
 #' runs them in parallel); [set.seed()] reproduces a run on any plan.
 #' Ctrl-C returns the draws so far; `checkpoint` lets a run resume.
 #'
+#' @section Failed runs and missing cells:
+#' A row of `sim` whose response is `NA`, `NaN` or infinite is a failed run.
+#' By default it is set aside with one message (how many, and where), its
+#' inputs are kept in the model, and the calibration uses the successful
+#' runs: a failed run is not evidence about kappa (the physical system does
+#' not fail with the code), so the posterior is that of the successful runs.
+#' The failed inputs feed a model of where the simulator fails, a Gaussian
+#' process classifier over the numeric inputs (logistic link, Laplace
+#' approximation, its length-scales and variance at their posterior mode:
+#' plug-in values serve because it does not enter kappa's posterior; above
+#' 1,000 runs it sees every failed run and a sample of the successful ones):
+#' `predict(fit, newdata, type = "failure")`, `plot(fit, type = "failure")`,
+#' and [propose_runs()] weighs its candidates by it. Failed runs of a product
+#' design (functional output) leave it incomplete: the algebra is then chosen
+#' for the successful runs, and `print()` says which ran. Field data in long
+#' format may miss an output at some field inputs.
+#'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs
 #'   (matched by name, or by position without names); or the simulator
@@ -129,18 +146,9 @@
 #'   treats it as a rejected proposal, so the chains avoid the kappa where
 #'   `f` is undefined (the posterior is then restricted to where `f` is
 #'   finite).
-#' @param failedRuns What to do with failed runs, rows of `sim` whose
-#'   response is `NA`, `NaN` or infinite: `"setAside"` (the default) says
-#'   how many failed and where, keeps their inputs in the model and
-#'   calibrates on the successful runs; `"error"` refuses them. A failed
-#'   run is not evidence about kappa (the physical system does not fail
-#'   with the code), so the posterior is that of the successful runs. The
-#'   failed inputs feed a model of where the simulator fails: a Gaussian
-#'   process classifier over the numeric inputs (logistic link, Laplace
-#'   approximation, its length-scales and variance at their posterior mode;
-#'   plug-in values serve because it does not enter kappa's posterior).
-#'   Above 1,000 runs it is fitted to every failed run and a random sample
-#'   of the successful ones. See `predict(fit, newdata, type = "failure")`.
+#' @param failedRuns What to do with failed runs (see "Failed runs and
+#'   missing cells"): `"setAside"` (the default) or `"error"`, which refuses
+#'   them.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
