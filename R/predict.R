@@ -66,9 +66,8 @@
 #' draws: on the ball data (m = 100 runs, n = 63 field points) 5000 points
 #' with 1000 draws take about a minute of CPU. With the nearest-neighbour
 #' algebra each draw refactorizes the run side, so the default costs about
-#' ndraws times a sweep at large m (about 90 CPU s for 1000 points at m =
-#' 5000): `ndraws = 100` is ten times cheaper, `method = "MAP"` costs one
-#' draw. `draws = TRUE` returns the
+#' ndraws factorizations, a minute or more at m in the thousands:
+#' `ndraws = 100` is ten times cheaper, `method = "MAP"` costs one draw. `draws = TRUE` returns the
 #' whole points x draws matrix (8 bytes each: 40 MB for 5000 points and
 #' 1000 draws), which does not fit in the blocks' budget: use it with a
 #' moderate `ndraws`.
