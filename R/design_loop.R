@@ -125,8 +125,10 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     tDesign <- cpu_since(t0)
     new <- run_simulator(f, pr[c(setdiff(xnames, output$name), cal)], xnames, cal,
                          names(field)[1], output)
-    if (nrow(attr(new, "failed"))) {
-      failures <- rbind(failures, transform(attr(new, "failed"), run = run + runs))
+    failedNow <- attr(new, "failed")
+    if (nrow(failedNow)) {
+      failedNow$run <- failedNow$run + runs
+      failures <- rbind(failures, failedNow)
     }
     sim <- rbind(sim, new)
     runs <- runs + nrow(pr)

@@ -8,7 +8,7 @@ test_that("density plot: posterior, prior in reported units, mode; one facet per
   fit <- fit_for_plots()
   p <- plot(fit)
   expect_s3_class(p, "ggplot")
-  geoms <- vapply(p$layers, function(l) class(l$geom)[1], character(1))
+  geoms <- vapply(p$layers, function(l) class(l$geom)[1], character(1), USE.NAMES = FALSE)
   expect_identical(geoms, c("GeomArea", "GeomLine", "GeomVline"))
   post <- ggplot2::layer_data(p, 1)
   # the posterior curve is a density estimate of the kappa draws (integrates
@@ -59,7 +59,7 @@ test_that("trace plot has one facet per parameter and the draws in order", {
 test_that("fits plot: field data, MAP fits and 95% intervals against each input", {
   fit <- fit_for_plots()
   p <- plot(fit, type = "fits", xlab = "height")
-  geoms <- vapply(p$layers, function(l) class(l$geom)[1], character(1))
+  geoms <- vapply(p$layers, function(l) class(l$geom)[1], character(1), USE.NAMES = FALSE)
   expect_identical(geoms, c("GeomLinerange", "GeomPoint", "GeomPoint"))
   df <- p$data
   expect_equal(df$x, unname(ballField[, "h"]))
