@@ -77,6 +77,14 @@
     .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }
 
+.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid) {
+    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid)
+}
+
+.fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model) {
+    .Call(`_FBC_fbc_sim_mean`, Xf, yf, Xs, ys, phis, nugget, model)
+}
+
 .vecchia_order <- function(X, w) {
     .Call(`_FBC_vecchia_order`, X, w)
 }

@@ -473,8 +473,15 @@ public:
   void runConditional(const arma::mat& U, const arma::mat& XT, RunConditional& out) override;
   void runPrior(const arma::vec& ph, const arma::mat& X, const arma::mat& Y,
                 arma::mat& K) const override;
+  // The simulator's conditional mean given y at the current state as a
+  // kernel expansion (sensitivity.cpp): E[eta(z) | y] = sum_j w_j Rs(z, Z_j)
+  // over the centres Z = (Xs; the distinct field rows at kappa).
+  void simMean(arma::mat& Z, arma::vec& w);
 
 protected:
+  // x <- Ds^-1 x at the current state (sensitivity.cpp; by default from
+  // simHeldout()'s inverse, an algebra may do better).
+  virtual void simSolve(arma::vec& x);
   SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                  const arma::vec& ys, double nugget, const Model& model);
   const arma::mat& Xf_; const arma::vec& yf_;
@@ -573,6 +580,7 @@ protected:
                   std::vector<arma::mat>& QBB) override;
   void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
                  bool haveW) override;
+  void simSolve(arma::vec& x) override;  // two triangular solves (sensitivity.cpp)
 
 private:
   bool cached_;

@@ -1,0 +1,412 @@
+#' Global sensitivity of the simulator and of the calibrated prediction
+#'
+#' Which inputs drive the output? `sensitivity()` gives first-order and total
+#' Sobol indices of the simulator over its experimental and calibration
+#' inputs, and of the calibrated prediction over the experimental inputs,
+#' each as a posterior: one value per posterior draw, summarised by its
+#' median and an interval, with the Monte Carlo error of the median.
+#'
+#' @section What is computed:
+#' For each posterior draw of the parameters (the GP hyperparameters and
+#' \eqn{\kappa}), the simulator's emulator has a conditional mean given the
+#' simulator runs and the field data (the field data enter through
+#' \eqn{\kappa} as they do in the model), a function of all \eqn{p + q}
+#' inputs. Its Sobol variances under a product measure of the inputs
+#' (uniform over the design's box by default) are computed in closed form
+#' from one-dimensional integrals of the correlation against each input's
+#' measure (Oakley and O'Hagan 2004): exact (error functions) for the
+#' Gaussian correlation against a uniform measure, and 64-node
+#' Gauss-Legendre quadrature otherwise (the Matern families, the power
+#' exponential, or a density given in `inputs`), at a cost of
+#' \eqn{O(N^2 (p + q))} per draw with \eqn{N} the runs plus the distinct
+#' field inputs.
+#'
+#' The indices are those of the emulator's *posterior mean* at each draw, so
+#' their spread over the draws carries the uncertainty in the GP's
+#' hyperparameters and in \eqn{\kappa}; the emulator's own uncertainty given
+#' them (the spread of GP sample paths about their mean, which Marrel et al.
+#' 2009 propagate by conditional simulation) is not in it. With a well-
+#' designed set of runs the latter is small next to the former; with few
+#' runs the intervals can be too narrow (see the benchmark's coverage).
+#'
+#' The calibrated prediction's indices are those of the mean field response
+#' \eqn{E[\eta(x, \kappa) + \delta(x)]} at each draw over the experimental
+#' inputs alone (uniform over their box), \eqn{\kappa} integrated over its
+#' posterior by the draws: computed by tensor Gauss-Legendre quadrature of
+#' [predict()]'s conditional means (`nodes` per input). The predictive
+#' variance averaged over the same box is split into shares (summing to
+#' one): the measurement error (`noise`); the emulator and the bias, which
+#' split the conditional variance of the mean response by their covariances
+#' with it (\eqn{Var(\eta + \delta) = Cov(\eta, \eta + \delta) + Cov(\delta,
+#' \eta + \delta)}); and the spread of the conditional mean over the draws
+#' (`kappa`: the uncertainty in \eqn{\kappa}, with that of the GP parameters
+#' it comes with). Their sum is the squared standard error [predict()]
+#' gives.
+#'
+#' @param fit An `fbc` object from [calibrate()], with an emulated simulator,
+#'   one output, numeric inputs and the dense or Kronecker algebra.
+#' @param inputs Input distributions other than uniform over the design's
+#'   box: a named list whose names are inputs of the simulator and whose
+#'   elements are either a range `c(lower, upper)` (uniform, in the input's
+#'   units) or a density function of the input in its units (say kappa's
+#'   prior), integrated over the design's range of that input by quadrature.
+#' @param ndraws The number of posterior draws used (evenly spaced over all
+#'   retained draws, as in [predict()]); `NULL` uses them all.
+#' @param level Probability of the intervals.
+#' @param prediction If `TRUE`, also the calibrated prediction's indices and
+#'   the variance shares (the slower part).
+#' @param nodes Gauss-Legendre nodes per experimental input for the
+#'   prediction's quadrature (a tensor grid of `nodes^p` points).
+#' @param ... Not used: an argument given here is an error.
+#' @return An object of class `fbc_sensitivity`: `simulator` and
+#'   `prediction` (data frames with one row per input and index: `median`,
+#'   `lower`, `upper`, `mcse` the Monte Carlo standard error of the median),
+#'   `shares` (the prediction's variance shares), `draws` (per-draw indices:
+#'   arrays draws x inputs x index), `main` (main effects: for each input a
+#'   data frame of the conditional mean over a grid, in the response's units,
+#'   with its median and interval over the draws) and `settings`.
+#'   `as.data.frame()` stacks the indices; `plot()` shows the main effects or
+#'   the indices.
+#' @references Oakley, J. E. and O'Hagan, A. (2004). Probabilistic
+#'   sensitivity analysis of complex models: a Bayesian approach. JRSS B 66,
+#'   751-769. Marrel, A., Iooss, B., Laurent, B. and Roustant, O. (2009).
+#'   Calculations of Sobol indices for the Gaussian process metamodel.
+#'   Reliability Engineering & System Safety 94, 742-751.
+#' @export
+#' @examples
+#' set.seed(1)
+#' fit <- calibrate(ballSim, ballField, nMCMC = 300, nBurn = 100, nChains = 1)
+#' s <- sensitivity(fit, ndraws = 100)
+#' s
+#' as.data.frame(s)
+sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, prediction = TRUE,
+                        nodes = 12, ...) {
+  check_dots_empty(..., fn = sensitivity, name = "sensitivity")
+  fit <- check_fbc(fit, "fit")
+  check_sensitivity_fit(fit)
+  if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 2)
+  check_level(level)
+  check_flag(prediction, "prediction")
+  nodes <- check_count(nodes, "nodes", min = 2)
+  sc <- fit$scale
+  p <- sc$p
+  q <- sc$q
+  D <- p + q
+  nm <- sim_input_names(sc, D)
+  measure <- sensitivity_measure(inputs, sc, nm)
+  rows <- draw_rows(nrow(fit$Phi), ndraws)
+  phis <- sampler_draws(fit, rows)
+  M <- length(rows)
+
+  G <- 25L
+  grid <- matrix(seq(0, 1, length.out = G), G, D)
+  for (k in seq_len(D)) grid[, k] <- seq(measure$lower[k], measure$upper[k], length.out = G)
+  res <- at_draws(fit, .fbc_sobol_c, phis, exact = measure$exact, lower = measure$lower,
+                  upper = measure$upper, nodes = measure$nodes, weights = measure$weights,
+                  grid = grid)
+  V <- pmax(as.vector(res$V), .Machine$double.xmin)
+  S1 <- t(res$V1) / V
+  ST <- t(res$VT) / V
+  dn <- list(NULL, nm)
+  dimnames(S1) <- dimnames(ST) <- dn
+  sim_draws <- array(c(S1, ST), c(M, D, 2), list(NULL, nm, c("first", "total")))
+  role <- rep(c("experimental", "calibration"), c(p, q))
+  out <- list(
+    simulator = index_table(sim_draws, role, level),
+    prediction = NULL, shares = NULL,
+    draws = list(simulator = sim_draws),
+    main = list(simulator = main_effects(res$main, grid, sc, nm, G, level))
+  )
+  if (prediction) {
+    pr <- prediction_sensitivity(fit, phis, nodes, level)
+    out$prediction <- pr$table
+    out$shares <- pr$shares
+    out$draws$prediction <- pr$draws
+    out$main$prediction <- pr$main
+  }
+  out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = nm, role = role,
+                       measure = measure$label, nodes = nodes,
+                       kernel = kernels$label[match(fit$spec$model$kernS, kernels$code)])
+  class(out) <- "fbc_sensitivity"
+  out
+}
+
+# The fits whose simulator's mean is one kernel expansion.
+check_sensitivity_fit <- function(fit, call = parent.frame()) {
+  mdl <- fit$spec$model
+  why <- c(
+    if (!is.null(mdl$simulator)) "its simulator is an R function (there is no emulator)",
+    if (!is.null(mdl$outputs)) "it has several independent outputs",
+    if (!is.null(mdl$levels)) "it has categorical inputs",
+    if (identical(as.integer(mdl$algebra), 2L)) "it uses the nearest-neighbour (Vecchia) algebra"
+  )
+  if (length(why)) {
+    cli::cli_abort(c(
+      "{.fn sensitivity} needs a fit with one emulated output, numeric inputs and the dense or Kronecker algebra.",
+      x = "{.arg fit} cannot be used: {why[1]}."
+    ), call = call)
+  }
+  invisible(fit)
+}
+
+check_level <- function(level, arg = "level", call = parent.frame()) {
+  if (!is.numeric(level) || length(level) != 1L || is.na(level) || level <= 0 || level >= 1) {
+    cli::cli_abort("{.arg {arg}} must be a single number strictly between 0 and 1.", call = call)
+  }
+  invisible(level)
+}
+
+# Gauss-Legendre nodes and weights on [0, 1] (Golub-Welsch), weights summing to one.
+gauss_legendre01 <- function(n) {
+  if (n == 1L) return(list(x = 0.5, w = 1))
+  i <- seq_len(n - 1L)
+  b <- i / sqrt(4 * i^2 - 1)
+  J <- matrix(0, n, n)
+  J[cbind(i, i + 1L)] <- b
+  J[cbind(i + 1L, i)] <- b
+  e <- eigen(J, symmetric = TRUE)
+  o <- order(e$values)
+  list(x = (e$values[o] + 1) / 2, w = e$vectors[1, o]^2)
+}
+
+# Nodes per input of the simulator's measure.
+fbc_sensitivity_quadrature <- 64L
+
+# Each input's measure in scaled units: uniform on [lower, upper] (exact:
+# closed form where the family allows) or quadrature nodes and weights.
+sensitivity_measure <- function(inputs, sc, nm, call = parent.frame()) {
+  D <- length(nm)
+  Q <- fbc_sensitivity_quadrature
+  gl <- gauss_legendre01(Q)
+  lower <- rep(0, D)
+  upper <- rep(1, D)
+  exact <- rep(TRUE, D)
+  dens <- vector("list", D)
+  label <- rep("uniform over the design's range", D)
+  if (!is.null(inputs)) {
+    if (!is.list(inputs) || is.null(names(inputs)) || any(!nzchar(names(inputs)))) {
+      cli::cli_abort("{.arg inputs} must be a named list (names: inputs of the simulator).",
+                     call = call)
+    }
+    bad <- setdiff(names(inputs), nm)
+    if (length(bad)) {
+      cli::cli_abort(c("{.arg inputs} names {?an input/inputs} the simulator does not have: {.val {bad}}.",
+                       i = "Its inputs are {.val {nm}}."), call = call)
+    }
+    for (v in names(inputs)) {
+      k <- match(v, nm)
+      el <- inputs[[v]]
+      lo <- sc$xmin[k]
+      wd <- sc$xmax[k] - sc$xmin[k]
+      if (is.function(el)) {
+        dens[[k]] <- el
+        exact[k] <- FALSE
+        label[k] <- "the density given, over the design's range"
+      } else if (is.numeric(el) && length(el) == 2L && all(is.finite(el)) && el[1] < el[2]) {
+        lower[k] <- (el[1] - lo) / wd
+        upper[k] <- (el[2] - lo) / wd
+        label[k] <- sprintf("uniform on [%s, %s]", format(el[1], digits = 4), format(el[2], digits = 4))
+      } else {
+        cli::cli_abort(c(
+          "{.arg inputs${v}} must be a range {.code c(lower, upper)} with lower < upper, or a density function.",
+          x = "It is {.obj_type_friendly {el}}."
+        ), call = call)
+      }
+    }
+  }
+  nodes <- weights <- matrix(0, Q, D)
+  for (k in seq_len(D)) {
+    nodes[, k] <- lower[k] + (upper[k] - lower[k]) * gl$x
+    w <- gl$w
+    if (!is.null(dens[[k]])) {
+      f <- dens[[k]](sc$xmin[k] + (sc$xmax[k] - sc$xmin[k]) * nodes[, k])
+      if (!is.numeric(f) || length(f) != Q || any(!is.finite(f)) || any(f < 0) || sum(f) <= 0) {
+        cli::cli_abort("{.arg inputs${nm[k]}} must return finite, non-negative densities, not all zero, on the design's range.",
+                       call = call)
+      }
+      w <- w * f
+    }
+    weights[, k] <- w / sum(w)
+  }
+  list(lower = lower, upper = upper, exact = exact, nodes = nodes, weights = weights,
+       label = stats::setNames(label, nm))
+}
+
+# Median, interval and the Monte Carlo error of the median of each input's
+# indices (draws x inputs x index).
+index_table <- function(draws, role, level) {
+  nm <- dimnames(draws)[[2]]
+  a <- (1 - level) / 2
+  rows <- lapply(dimnames(draws)[[3]], function(ix) {
+    x <- draws[, , ix, drop = FALSE]
+    dim(x) <- dim(x)[1:2]
+    data.frame(
+      input = nm, role = role, index = ix,
+      median = apply(x, 2, stats::median),
+      lower = apply(x, 2, stats::quantile, probs = a, names = FALSE),
+      upper = apply(x, 2, stats::quantile, probs = 1 - a, names = FALSE),
+      mcse = apply(x, 2, function(v) posterior::mcse_median(v)),
+      stringsAsFactors = FALSE
+    )
+  })
+  out <- do.call(rbind, rows)
+  rownames(out) <- NULL
+  out
+}
+
+# Main effects (G grid values x inputs, stacked, per draw) as one data frame
+# per input in the response's and the inputs' units.
+main_effects <- function(main, grid, sc, nm, G, level) {
+  a <- (1 - level) / 2
+  lapply(stats::setNames(seq_along(nm), nm), function(k) {
+    v <- y_mean(sc) + y_sd(sc) * main[(k - 1L) * G + seq_len(G), , drop = FALSE]
+    data.frame(
+      x = sc$xmin[k] + (sc$xmax[k] - sc$xmin[k]) * grid[, k],
+      median = apply(v, 1, stats::median),
+      lower = apply(v, 1, stats::quantile, probs = a, names = FALSE),
+      upper = apply(v, 1, stats::quantile, probs = 1 - a, names = FALSE)
+    )
+  })
+}
+
+# The calibrated prediction over the experimental inputs: per draw the
+# conditional means and variances on a tensor Gauss-Legendre grid over the
+# experimental box, the Sobol indices of the mean response and the shares
+# of the predictive variance.
+prediction_sensitivity <- function(fit, phis, nodes, level) {
+  sc <- fit$scale
+  p <- sc$p
+  M <- nrow(phis)
+  gl <- gauss_legendre01(nodes)
+  X <- as.matrix(expand.grid(rep(list(gl$x), p)))
+  wt <- Reduce(`%o%`, rep(list(gl$w), p))
+  w <- as.vector(wt)
+  cond <- function(type) {
+    at_draws(fit, .fbc_predict_c, phis, Xnew = X, type = type, block = 500L,
+             noise = integer(0), source = integer(0))
+  }
+  mn <- cond(predict_type_codes[["mean"]])
+  has_bias <- fit$spec$model$length[["sigma2B"]] > 0L
+  vs <- if (has_bias) cond(predict_type_codes[["simulator"]])$var else mn$var
+  vb <- if (has_bias) cond(predict_type_codes[["bias"]])$var else 0 * mn$var
+  s2E <- phis[, fit$spec$model$offset[["sigma2E"]] + 1L]
+  # Sobol indices of each draw's mean response on the grid
+  nm <- sim_input_names(sc, p + sc$q)[seq_len(p)]
+  S <- array(NA_real_, c(M, p, 2), list(NULL, nm, c("first", "total")))
+  dims <- rep(nodes, p)
+  for (d in seq_len(M)) {
+    f <- array(mn$mean[, d], dims)
+    f0 <- sum(w * f)
+    V <- max(sum(w * f^2) - f0^2, .Machine$double.xmin)
+    for (k in seq_len(p)) {
+      # E[f | x_k] and E[f | x_-k] by summing the grid's weights out
+      e1 <- apply(array(w * f, dims), k, sum) / gl$w
+      S[d, k, "first"] <- (sum(gl$w * e1^2) - f0^2) / V
+      if (p == 1L) {
+        S[d, k, "total"] <- 1
+      } else {
+        ek <- apply(sweep(f, k, gl$w, "*"), seq_len(p)[-k], sum)
+        wk <- apply(wt, seq_len(p)[-k], sum)
+        S[d, k, "total"] <- 1 - (sum(wk * ek^2) - f0^2) / V
+      }
+    }
+  }
+  # variance shares over the box: each draw's conditional variances and the
+  # spread of the conditional means over the draws (predict()'s se^2)
+  ysd2 <- y_sd(sc)^2
+  spread <- if (M > 1L) rowSums((mn$mean - rowMeans(mn$mean))^2) / (M - 1L) else 0 * w
+  comp <- c(
+    kappa = sum(w * spread),
+    bias = sum(w * rowMeans((mn$var + vb - vs) / 2)),
+    emulator = sum(w * rowMeans((mn$var + vs - vb) / 2)),
+    noise = mean(s2E)
+  )
+  shares <- data.frame(source = names(comp), variance = ysd2 * comp, share = comp / sum(comp),
+                       stringsAsFactors = FALSE)
+  rownames(shares) <- NULL
+  # main effects of the averaged prediction: E[f | x_k] per draw at the nodes
+  main <- lapply(stats::setNames(seq_len(p), nm), function(k) {
+    e <- vapply(seq_len(M), function(d) {
+      apply(array(w * mn$mean[, d], dims), k, sum) / gl$w
+    }, numeric(nodes))
+    e <- y_mean(sc) + y_sd(sc) * matrix(e, nodes)
+    a <- (1 - level) / 2
+    data.frame(x = sc$xmin[k] + (sc$xmax[k] - sc$xmin[k]) * gl$x,
+               median = apply(e, 1, stats::median),
+               lower = apply(e, 1, stats::quantile, probs = a, names = FALSE),
+               upper = apply(e, 1, stats::quantile, probs = 1 - a, names = FALSE))
+  })
+  list(table = index_table(S, rep("experimental", p), level), shares = shares, draws = S,
+       main = main)
+}
+
+#' @export
+print.fbc_sensitivity <- function(x, digits = 3, ...) {
+  check_dots_empty(..., fn = print.fbc_sensitivity, name = "print", cls = "fbc_sensitivity",
+                   action = "warn")
+  s <- x$settings
+  cat(sprintf("<fbc_sensitivity> Sobol indices from %d posterior draws (%s correlation), %g%% intervals\n",
+              s$ndraws, s$kernel, 100 * s$level))
+  cat("Simulator, over its inputs (", paste(sprintf("%s: %s", names(s$measure), s$measure),
+                                           collapse = "; "), "):\n", sep = "")
+  show <- function(tab) {
+    tab$interval <- sprintf("[%s, %s]", formatC(tab$lower, digits, format = "f"),
+                            formatC(tab$upper, digits, format = "f"))
+    tab$median <- formatC(tab$median, digits, format = "f")
+    tab$mcse <- formatC(tab$mcse, digits, format = "f")
+    print(tab[c("input", "index", "median", "interval", "mcse")], row.names = FALSE)
+  }
+  show(x$simulator)
+  if (!is.null(x$prediction)) {
+    cat(sprintf("Calibrated prediction, over the experimental inputs (kappa over its posterior; %d^p quadrature nodes):\n",
+                s$nodes))
+    show(x$prediction)
+    cat("Shares of the predictive variance over the experimental inputs:\n")
+    sh <- x$shares
+    cat(paste(sprintf("  %s %s", format(sh$source), formatC(sh$share, digits, format = "f")),
+              collapse = "\n"), "\n", sep = "")
+  }
+  cat("mcse: Monte Carlo standard error of the median over the draws.\n")
+  invisible(x)
+}
+
+#' @export
+as.data.frame.fbc_sensitivity <- function(x, row.names = NULL, optional = FALSE, ...) {
+  out <- cbind(of = "simulator", x$simulator, stringsAsFactors = FALSE)
+  if (!is.null(x$prediction)) {
+    out <- rbind(out, cbind(of = "prediction", x$prediction, stringsAsFactors = FALSE))
+  }
+  rownames(out) <- row.names
+  out
+}
+
+#' @export
+plot.fbc_sensitivity <- function(x, what = c("main", "indices"), of = c("simulator", "prediction"),
+                                 ...) {
+  check_dots_empty(..., fn = plot.fbc_sensitivity, name = "plot", cls = "fbc_sensitivity")
+  what <- match_choice(what, c("main", "indices"), "what")
+  of <- match_choice(of, c("simulator", "prediction"), "of")
+  if (of == "prediction" && is.null(x$prediction)) {
+    cli::cli_abort("{.arg x} has no prediction part: call {.fn sensitivity} with {.code prediction = TRUE}.")
+  }
+  if (what == "main") {
+    me <- x$main[[of]]
+    df <- do.call(rbind, lapply(names(me), function(v) cbind(input = v, me[[v]])))
+    df$input <- factor(df$input, names(me))
+    ggplot2::ggplot(df, ggplot2::aes(x = .data$x, y = .data$median)) +
+      ggplot2::geom_ribbon(ggplot2::aes(ymin = .data$lower, ymax = .data$upper), alpha = 0.3) +
+      ggplot2::geom_line() +
+      ggplot2::facet_wrap(~input, scales = "free_x") +
+      ggplot2::labs(x = NULL, y = "conditional mean",
+                    title = sprintf("Main effects of the %s", of))
+  } else {
+    tab <- x[[of]]
+    tab$input <- factor(tab$input, unique(tab$input))
+    ggplot2::ggplot(tab, ggplot2::aes(x = .data$input, y = .data$median, colour = .data$index)) +
+      ggplot2::geom_pointrange(ggplot2::aes(ymin = .data$lower, ymax = .data$upper),
+                               position = ggplot2::position_dodge(width = 0.4)) +
+      ggplot2::coord_cartesian(ylim = c(0, 1)) +
+      ggplot2::labs(x = NULL, y = "Sobol index", colour = NULL,
+                    title = sprintf("Sobol indices of the %s", of))
+  }
+}

@@ -1,0 +1,193 @@
+// Global sensitivity of the simulator (R/sensitivity.R): per draw, the
+// emulator's conditional mean given y = (yf, ys) as a kernel expansion
+//   mu(z) = sum_j w_j R(z, Z_j),   R(z, z') = prod_k r_k(z_k - z'_k),
+// (SchurPosterior::simMean()) and its Sobol variances in closed form from
+// one-dimensional integrals of the correlation against each input's measure
+// mu_k (Oakley and O'Hagan 2004):
+//   I1[j, k]    = int r_k(t - Z_jk) dmu_k(t),
+//   I2_k[j, l]  = int r_k(t - Z_jk) r_k(t - Z_lk) dmu_k(t),
+//   f0 = E mu = sum_j w_j prod_k I1[j, k],
+//   E[E(mu | z_k)^2]    = (w a_k)' I2_k (w a_k),   a_k[j] = prod_{i != k} I1[j, i],
+//   E[mu^2]             = w' (I2_1 o ... o I2_D) w                     (o: entrywise),
+//   E[E(mu | z_-k)^2]   = (w I1[, k])' (o_{i != k} I2_i) (w I1[, k]),
+// so that V = E[mu^2] - f0^2, the first-order variance V_k = E[E(mu | z_k)^2]
+// - f0^2 and the total one VT_k = V - (E[E(mu | z_-k)^2] - f0^2): O(N^2 D)
+// per draw (N = m + distinct field rows) after the posterior's factors.
+// The one-dimensional integrals are exact for the Gaussian family (and the
+// power exponential at alpha = 2) against a uniform measure, and otherwise
+// Gauss-Legendre (or the user's) quadrature nodes and weights, the
+// correlations at the nodes from the kernel module (kernels.cpp).
+#include "fbc.h"
+#include <numeric>
+
+static const double PI_ = 3.141592653589793238462643383280;
+
+// x <- Ds^-1 x from the inverse simHeldout() forms (one fold of every run).
+void SchurPosterior::simSolve(arma::vec& x) {
+  std::vector<std::vector<int> > folds(1, std::vector<int>(m));
+  std::iota(folds[0].begin(), folds[0].end(), 0);
+  arma::vec a;
+  std::vector<arma::mat> QBB;
+  simHeldout(folds, a, QBB);
+  x = QBB[0] * x;
+}
+
+// Ds = Ls Ls': two triangular solves.
+void DensePosterior::simSolve(arma::vec& x) {
+  const arma::mat& L = Ls_.cur();
+  solve_lower(L, x);
+  x = arma::solve(arma::trimatu(arma::trimatl(L).t()), x);
+}
+
+// With C = [D B; B' A] and the Schur complement S = LS LS' (model.cpp),
+//   E[eta(z) | y] = Rs(z, Xs) Ds^-1 ys
+//                   + s2S [Rs(z, Xk) - Rs(z, Xs) Ds^-1 Rs(Xs, Xk)] S^-1 r
+// (r = yf - muB - Rs(Xk, Xs) Ds^-1 ys, replicates summed onto their distinct
+// row): with beta = s2S S^-1 r summed by distinct row, the weights are
+// Ds^-1 (ys - Rs(Xs, Xk) beta) on the runs and beta on the field rows.
+void SchurPosterior::simMean(arma::mat& Z, arma::vec& w) {
+  const double s2S = phi[iSigma2S], muB = biasMean ? phi[iMuB] : 0.0;
+  const arma::vec& wz = wz_.cur();
+  arma::vec v(n);
+  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
+  const arma::mat& LS = LS_.cur();
+  solve_lower(LS, v);
+  v = arma::solve(arma::trimatu(arma::trimatl(LS).t()), v);
+  arma::vec beta(nu_, arma::fill::zeros);
+  for (int i = 0; i < n; ++i) beta[grp_[i]] += s2S * v[i];
+  arma::mat Xk(nu_, p + q);
+  if (p > 0) Xk.cols(0, p - 1) = Xu_;
+  for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
+  arma::mat K;
+  runPrior(phi, Xs_, Xk, K);  // s2S Rs(Xs, Xk)
+  arma::vec c = ys_ - K * beta / s2S;
+  simSolve(c);
+  Z = arma::join_cols(Xs_, Xk);
+  w = arma::join_cols(c, beta);
+}
+
+// erf(x) - erf(y) for x >= y without cancellation in the tails.
+static double erf_diff(double x, double y) {
+  if (y > 0) return std::erfc(y) - std::erfc(x);
+  if (x < 0) return std::erfc(-x) - std::erfc(-y);
+  return std::erf(x) - std::erf(y);
+}
+
+// The Gaussian family exp(-theta d^2) against the uniform measure on [a, b]:
+// I1 and I2 in closed form (erf).
+static void gauss_uniform(const arma::vec& c, double theta, double a, double b, double* I1,
+                          arma::mat& I2) {
+  const arma::uword N = c.n_elem;
+  if (!(theta > 1e-300)) {
+    for (arma::uword j = 0; j < N; ++j) I1[j] = 1.0;
+    I2.ones(N, N);
+    return;
+  }
+  const double len = b - a, st = std::sqrt(theta), s2 = std::sqrt(2.0 * theta);
+  const double k1 = std::sqrt(PI_ / theta) / (2.0 * len);
+  const double k2 = std::sqrt(PI_ / (2.0 * theta)) / (2.0 * len);
+  for (arma::uword j = 0; j < N; ++j) I1[j] = k1 * erf_diff(st * (b - c[j]), st * (a - c[j]));
+  I2.set_size(N, N);
+  for (arma::uword l = 0; l < N; ++l) {
+    for (arma::uword j = l; j < N; ++j) {
+      const double d = c[j] - c[l], mid = 0.5 * (c[j] + c[l]);
+      const double v = std::exp(-0.5 * theta * d * d) * k2 * erf_diff(s2 * (b - mid), s2 * (a - mid));
+      I2.at(j, l) = v;
+      I2.at(l, j) = v;
+    }
+  }
+}
+
+// Per draw (rows of phis): the Sobol variances of the simulator's posterior
+// mean over its D = p + q inputs, and its main effects at the grid values.
+// exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
+// form where the family allows); otherwise nodes[, k] and weights[, k]
+// (weights summing to one). grid: G x D values (scaled) for the main effects.
+// [[Rcpp::export(.fbc_sobol_c)]]
+Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                     const arma::vec& ys, const arma::mat& phis, double nugget,
+                     const Rcpp::List& model, const Rcpp::LogicalVector& exact,
+                     const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes,
+                     const arma::mat& weights, const arma::mat& grid) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
+  SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
+  if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
+  Posterior& post = *pp;
+  const int kern = Rcpp::as<int>(model["kernS"]);
+  const int D = post.p + post.q, M = phis.n_rows, G = grid.n_rows, Q = nodes.n_rows;
+  if ((int) exact.size() != D || (int) nodes.n_cols != D || (int) weights.n_cols != D ||
+      (int) grid.n_cols != D || (int) lower.n_elem != D || (int) upper.n_elem != D)
+    Rcpp::stop("the measure must have %d inputs", D);
+  arma::vec f0(M), V(M);
+  arma::mat V1(D, M), VT(D, M), main(G * D, M);
+  arma::mat Z, I1, Rq, Rg;
+  arma::vec w;
+  std::vector<arma::mat> I2(D), pre(D + 1);
+  for_each_draw(post, phis, [&](arma::uword d) {
+    sp->simMean(Z, w);
+    const arma::uword N = Z.n_rows;
+    I1.set_size(N, D);
+    for (int k = 0; k < D; ++k) {
+      const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
+      const bool gauss = kern == 2 || (kern == 1 && alpha == 2.0);  // Gaussian, power exponential
+      const arma::vec c = Z.col(k);
+      if (exact[k] && gauss) {
+        gauss_uniform(c, theta, lower[k], upper[k], I1.colptr(k), I2[k]);
+      } else {
+        Rq.set_size(N, Q);
+        kernel_corr(kern, arma::mat(c), arma::mat(nodes.col(k)), 1, &theta, &alpha, Rq, false);
+        I1.col(k) = Rq * weights.col(k);
+        Rq.each_row() %= arma::sqrt(weights.col(k)).t();
+        I2[k] = Rq * Rq.t();
+      }
+    }
+    // a_k = prod_{i != k} I1[, i], through the product of all where nonzero
+    arma::vec all = arma::prod(I1, 1);
+    f0[d] = arma::dot(w, all);
+    // suffix products pre[k] = I2_k o ... o I2_{D-1} (pre[D]: ones)
+    pre[D].ones(N, N);
+    for (int k = D - 1; k >= 0; --k) pre[k] = pre[k + 1] % I2[k];
+    const double Emu2 = arma::as_scalar(w.t() * pre[0] * w);
+    V[d] = Emu2 - f0[d] * f0[d];
+    arma::mat prefix(N, N, arma::fill::ones);
+    for (int k = 0; k < D; ++k) {
+      arma::vec ak(N, arma::fill::ones);
+      for (int i = 0; i < D; ++i) if (i != k) ak %= I1.col(i);
+      const arma::vec wa = w % ak;
+      V1(k, d) = arma::as_scalar(wa.t() * I2[k] * wa) - f0[d] * f0[d];
+      const arma::vec wi = w % I1.col(k);
+      const arma::mat Mk = prefix % pre[k + 1];
+      VT(k, d) = V[d] - (arma::as_scalar(wi.t() * Mk * wi) - f0[d] * f0[d]);
+      prefix %= I2[k];
+      // main effect E[mu | z_k = t] = sum_j w_j a_k[j] r_k(t - Z_jk) at the grid
+      const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
+      Rg.set_size(G, N);
+      kernel_corr(kern, arma::mat(grid.col(k)), arma::mat(Z.col(k)), 1, &theta, &alpha, Rg, false);
+      main.col(d).subvec(k * G, (k + 1) * G - 1) = Rg * wa;
+    }
+    return true;
+  });
+  return Rcpp::List::create(Rcpp::Named("f0") = f0, Rcpp::Named("V") = V,
+                            Rcpp::Named("V1") = V1, Rcpp::Named("VT") = VT,
+                            Rcpp::Named("main") = main);
+}
+
+// The simulator's posterior mean per draw as a kernel expansion (for tests
+// and the sampling estimator): the centres Z and weights w of each draw.
+// [[Rcpp::export(.fbc_sim_mean_c)]]
+Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                        const arma::vec& ys, const arma::mat& phis, double nugget,
+                        const Rcpp::List& model) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
+  SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
+  if (!sp) Rcpp::stop("the simulator's mean needs one simulator GP");
+  Rcpp::List out(phis.n_rows);
+  for_each_draw(*pp, phis, [&](arma::uword d) {
+    arma::mat Z;
+    arma::vec w;
+    sp->simMean(Z, w);
+    out[d] = Rcpp::List::create(Rcpp::Named("Z") = Z, Rcpp::Named("w") = w);
+    return true;
+  });
+  return out;
+}
