@@ -125,11 +125,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     tDesign <- cpu_since(t0)
     new <- run_simulator(f, pr[c(setdiff(xnames, output$name), cal)], xnames, cal,
                          names(field)[1], output)
-    failedNow <- attr(new, "failed")
-    if (nrow(failedNow)) {
-      failedNow$run <- failedNow$run + runs
-      failures <- rbind(failures, failedNow)
-    }
+    failures <- add_failures(failures, attr(new, "failed"), runs)
     sim <- rbind(sim, new)
     runs <- runs + nrow(pr)
     t0 <- proc.time()
@@ -285,4 +281,12 @@ loop_done <- function(fit, width, cal) {
   w <- vapply(seq_along(cal), function(j) diff(stats::quantile(fit$Phi[, j], c(0.05, 0.95))),
               numeric(1))
   all(w < rep_len(width, length(w)))
+}
+
+# The failed calls of a step appended to the loop's record, numbered among
+# all runs (`before` runs came before the step's).
+add_failures <- function(failures, new, before) {
+  if (!nrow(new)) return(failures)
+  new$run <- new$run + before
+  rbind(failures, new)
 }
