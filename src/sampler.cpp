@@ -134,6 +134,22 @@ static double adapt_step(double logscale, double rate, double target, int batch)
 static double list_num(const Rcpp::List& s, const char* name, double dflt) {
   return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
 }
+static std::vector<int> list_ints(const Rcpp::List& s, const char* name) {
+  return s.containsElementNamed(name) ? Rcpp::as<std::vector<int> >(s[name]) : std::vector<int>();
+}
+static bool has(const std::vector<int>& v, int x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+// Welford update of a running mean and centred sums of squares M2 (lower
+// triangle) by w, the n-th draw (e: a workspace).
+static void welford(const arma::vec& w, int n, arma::vec& mean, arma::mat& M2, arma::vec& e) {
+  const int k = w.n_elem;
+  for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
+  mean += e / n;
+  for (int a = 0; a < k; ++a)
+    for (int b = 0; b <= a; ++b) M2(a, b) += e[a] * (w[b] - mean[b]);
+}
 
 // An adaptive joint random walk over some parameters (see the top).
 struct Block {
@@ -233,25 +249,14 @@ struct Block {
   // Start the running mean and covariance afresh (L is kept).
   void forget_all() { n = 0; mean.zeros(); cov.zeros(); }
   // Welford update of the running mean and covariance of w.
-  void record() {
-    ++n;
-    const int k = idx.size();
-    for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
-    mean += e / n;
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
-  }
+  void record() { welford(w, ++n, mean, cov, e); }
   // Warm-up of data-dependent length: w at sweep `it` joins its window
   // (Welford within the window).
   void record_window(int it) {
     const int j = (it - 1) / WINDOW;
     if (curN > 0 && j != curWin) close_window();
     curWin = j; ++curN; ++n;
-    const int k = idx.size();
-    for (int i = 0; i < k; ++i) e[i] = w[i] - curMean[i];
-    curMean += e / curN;
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b <= a; ++b) curM2(a, b) += e[a] * (w[b] - curMean[b]);
+    welford(w, curN, curMean, curM2, e);
   }
   // The open window joins the closed ones.
   void close_window() {
@@ -279,9 +284,8 @@ struct Block {
   // mu = sum a n m / S, covariance
   //   C = sum a (M2 + n (m - mu)(m - mu)') / S,  S = sum a n
   // (cov.wt(method = "ML") with the weights a per draw), over the closed
-  // windows and the open one (withOpen). `count` the draws weighed (a > 0);
-  // pi the closed windows' shares a n / S (withOpen false).
-  int pooled(bool withOpen, arma::vec& mu, arma::mat& C, arma::vec& pi) const {
+  // windows and the open one (withOpen); returns the draws weighed (a > 0).
+  int pooled(bool withOpen, arma::vec& mu, arma::mat& C) const {
     const int B = winCount.n_elem, k = idx.size();
     const int newest = withOpen && curN > 0 ? curWin : (B ? (int) winIndex[B - 1] : curWin);
     const int E = epoch(std::max(newest, 0));
@@ -295,7 +299,7 @@ struct Block {
     }
     const bool open = withOpen && curN > 0;
     if (open) { S += curN; count += curN; }
-    mu.zeros(k); C.zeros(k, k); pi.zeros(B);
+    mu.zeros(k); C.zeros(k, k);
     if (S <= 0) return 0;
     for (int b = 0; b < B; ++b) mu += a[b] * winCount[b] * winMeans.col(b) / S;
     if (open) mu += curN * curMean / S;
@@ -303,7 +307,6 @@ struct Block {
       if (a[b] == 0) continue;
       const arma::vec d = winMeans.col(b) - mu;
       C += a[b] * (winM2.cols(b * k, b * k + k - 1) + winCount[b] * d * d.t());
-      pi[b] = a[b] * winCount[b] / S;
     }
     if (open) {
       const arma::vec d = curMean - mu;
@@ -363,8 +366,8 @@ struct Block {
     logscale = adapt_step(logscale, rate, k == 1 ? 0.44 : 0.234, batch);
     bool enough = n >= 2 * BATCH;
     if (restart < 0) {
-      arma::vec mu, pi;
-      enough = pooled(true, mu, tmp, pi) >= 2 * BATCH;
+      arma::vec mu;
+      enough = pooled(true, mu, tmp) >= 2 * BATCH;
     } else if (enough) {
       tmp = cov / (n - 1);
     }
@@ -451,6 +454,23 @@ static bool metropolis(Chain& ch, int j, double llNew, double lpNew, double extr
   if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j] + extra) {
     ch.post.accept();
     ch.ll = llNew; ch.lp[j] = lpNew;
+    return true;
+  }
+  ch.post.reject();
+  return false;
+}
+
+// The same for a move of the parameters idx with log priors lpNew: accept
+// when log u < llNew - ll + the terms (the log prior, Jacobian and proposal
+// changes, added in their order).
+static bool metropolis(Chain& ch, const std::vector<int>& idx, const double* lpNew, double llNew,
+                       std::initializer_list<double> terms) {
+  double r = llNew - ch.ll;
+  for (double t : terms) r += t;
+  if (std::isfinite(llNew) && std::log(R::unif_rand()) < r) {
+    ch.post.accept();
+    ch.ll = llNew;
+    for (size_t i = 0; i < idx.size(); ++i) ch.lp[idx[i]] = lpNew[i];
     return true;
   }
   ch.post.reject();
@@ -561,9 +581,9 @@ struct BlockMove : Move {
     const int kw = b.walk_count();
     if (!independent || b.restart >= 0 || ch.warmCapped || kw < WARM_ESS_K || kw > IND_MAX_K)
       return;
-    arma::vec mu, pi;
+    arma::vec mu;
     arma::mat C;
-    if (b.pooled(true, mu, C, pi) < 2 * BATCH) return;
+    if (b.pooled(true, mu, C) < 2 * BATCH) return;
     indMu = mu.head(kw);
     indL = C.submat(0, 0, kw - 1, kw - 1) * (IND_INFLATE * IND_INFLATE);
     if (!chol_lower(indL)) return;
@@ -620,15 +640,7 @@ struct BlockMove : Move {
     if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
     lpDiff += b.lpNew[kt] - ch.lp[js];
     const double lq = log_ig(s2, aq, bOld) - log_ig(s2New, aq, bNew);
-    const double llNew = post.propose(b.idx, b.vals);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac + lq) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) ch.lp[b.idx[i]] = b.lpNew[i];
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, b.idx, b.lpNew.memptr(), post.propose(b.idx, b.vals), {lpDiff, jac, lq});
   }
   // the walk's positions w of every parameter of the block (what a burn-in
   // records)
@@ -642,19 +654,12 @@ struct BlockMove : Move {
       position(ch);
       return acc;
     }
-    Posterior& post = ch.post;
-    const int k = b.idx.size();
     double lpDiff = 0, jac = 0;
-    if (!proposal(ch, k, lpDiff, jac)) return false;
-    const double llNew = post.propose(b.idx, b.vals);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) { ch.lp[b.idx[i]] = b.lpNew[i]; b.w[i] = b.wNew[i]; }
-      return true;
-    }
-    post.reject();
-    return false;
+    if (!proposal(ch, b.idx.size(), lpDiff, jac)) return false;
+    if (!metropolis(ch, b.idx, b.lpNew.memptr(), ch.post.propose(b.idx, b.vals), {lpDiff, jac}))
+      return false;
+    b.w = b.wNew;
+    return true;
   }
   // burn-in: the walk's position joins the running covariance (afresh from
   // the restart sweep on)
@@ -721,15 +726,7 @@ struct ScaleMove : Move {
       lpDiff += lpNew[i] - ch.lp[j];
     }
     if (!std::isfinite(lpDiff)) return false;
-    const double llNew = post.proposeScale(c);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + k * e) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) ch.lp[idx[i]] = lpNew[i];
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, idx, lpNew.data(), post.proposeScale(c), {lpDiff, k * e});
   }
   double& batchCount() override { return accBatch; }
   void adapt(const Chain&) override {
@@ -832,7 +829,7 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
       Rcpp::stop("the block proposal to continue from has the wrong size");
     blocks[b].restart = restartAt;
     blocks[b].forget = ch.warmForget;
-    blocks[b].overlay = std::find(overlay.begin(), overlay.end(), b + 1) != overlay.end();
+    blocks[b].overlay = has(overlay, b + 1);
     for (int j : blocks[b].idx) {
       if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || (inBlock[j] && !blocks[b].overlay))
         Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
@@ -888,15 +885,12 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
   // the blocks (1-based) that overlay parameters with moves of their own:
   // a joint walk made after the per-parameter moves, before the jumps
-  const std::vector<int> overlay = moves.containsElementNamed("overlay") ?
-    Rcpp::as<std::vector<int> >(moves["overlay"]) : std::vector<int>();
+  const std::vector<int> overlay = list_ints(moves, "overlay");
   std::vector<Block> blocks = make_blocks(ch, blockSpec, overlay, state, nBurn);
   // the blocks (1-based) whose sigma2S is drawn from the runs' conditional
-  const std::vector<int> collapse = moves.containsElementNamed("collapse") ?
-    Rcpp::as<std::vector<int> >(moves["collapse"]) : std::vector<int>();
+  const std::vector<int> collapse = list_ints(moves, "collapse");
   // the blocks (1-based) that switch to the independence proposal after warm-up
-  const std::vector<int> independent = moves.containsElementNamed("independent") ?
-    Rcpp::as<std::vector<int> >(moves["independent"]) : std::vector<int>();
+  const std::vector<int> independent = list_ints(moves, "independent");
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
@@ -912,8 +906,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   auto add_block = [&](int b) {
     BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
     if (!mv->b.overlay) {
-      collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
-      mv->independent = std::find(independent.begin(), independent.end(), b + 1) != independent.end();
+      collapse_sigma2S(*mv, ch, has(collapse, b + 1));
+      mv->independent = has(independent, b + 1);
     }
     schedule.emplace_back(mv);
     ch.blocks[b] = &mv->b;
@@ -936,17 +930,15 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     if (blocks[b].overlay) add_block(b);
   // the jump moves (R's sampler_moves()$jump, 1-based, and $jumpRange, a
   // row per jump), after the walks
-  if (moves.containsElementNamed("jump")) {
-    const std::vector<int> jump = Rcpp::as<std::vector<int> >(moves["jump"]);
-    if (!jump.empty()) {
-      if (!moves.containsElementNamed("jumpRange"))
-        Rcpp::stop("the jump moves need their intervals (moves$jumpRange)");
-      const Rcpp::NumericMatrix range = moves["jumpRange"];
-      if (range.nrow() != (int) jump.size() || range.ncol() != 2)
-        Rcpp::stop("moves$jumpRange must have a row per jump move and 2 columns");
-      for (size_t r = 0; r < jump.size(); ++r)
-        schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
-    }
+  const std::vector<int> jump = list_ints(moves, "jump");
+  if (!jump.empty()) {
+    if (!moves.containsElementNamed("jumpRange"))
+      Rcpp::stop("the jump moves need their intervals (moves$jumpRange)");
+    const Rcpp::NumericMatrix range = moves["jumpRange"];
+    if (range.nrow() != (int) jump.size() || range.ncol() != 2)
+      Rcpp::stop("moves$jumpRange must have a row per jump move and 2 columns");
+    for (size_t r = 0; r < jump.size(); ++r)
+      schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
   }
   if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
@@ -1285,9 +1277,9 @@ Rcpp::List fbc_block_estimate(const arma::mat& W, double forget, int walked = 0)
     b.record_window(it);
     if (it % WINDOW == 0) ess = b.window_ess();
   }
-  arma::vec mu, pi;
+  arma::vec mu;
   arma::mat C;
-  const int count = b.pooled(true, mu, C, pi);
+  const int count = b.pooled(true, mu, C);
   return Rcpp::List::create(Rcpp::Named("mean") = mu, Rcpp::Named("cov") = C,
                             Rcpp::Named("count") = count, Rcpp::Named("ess") = ess);
 }
