@@ -246,19 +246,11 @@ void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double*
 // i >= j, at packed_offset(j, m) + i - j.
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
 
-// kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles).
-template <class F>
-static void kernel_dist_packed_t(const arma::vec& a, std::vector<double>& G) {
-  const size_t m = a.n_elem;
-  G.resize(m * (m + 1) / 2);
-  for (size_t j = 0; j < m; ++j) {
-    double* g = G.data() + packed_offset(j, m);
-    const double aj = a[j];
-    for (size_t i = j; i < m; ++i) g[i - j] = F::dist(a[i] - aj);
-  }
-}
+// kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles): the
+// flat entries of kernel_dist_tri() for one dimension are that layout.
 void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
-  KERNEL_DISPATCH(kern, kernel_dist_packed_t, a, G);
+  G.resize(a.n_elem * (a.n_elem + 1) / 2);
+  kernel_dist_tri(kern, a, a.n_elem, 1, G.data());
 }
 
 // kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()

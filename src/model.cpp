@@ -119,19 +119,16 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   }
   u_.zeros(n);
   ptrF_.resize(p); ptrB_.resize(p);
-  Gf_.resize(p);
-  for (int k = 0; k < p; ++k) {
-    Gf_[k].zeros(nu_, nu_);
-    kernel_dist(kernS_, Xu_.col(k), Xu_.col(k), Gf_[k], true);
-  }
-  // the bias GP's distance cache, when its family caches another g(d)
-  if (kernB_ != kernS_) {
-    Gfb_.resize(p);
+  auto dist_cache = [&](int kern, std::vector<arma::mat>& G) {
+    G.resize(p);
     for (int k = 0; k < p; ++k) {
-      Gfb_[k].zeros(nu_, nu_);
-      kernel_dist(kernB_, Xu_.col(k), Xu_.col(k), Gfb_[k], true);
+      G[k].zeros(nu_, nu_);
+      kernel_dist(kern, Xu_.col(k), Xu_.col(k), G[k], true);
     }
-  }
+  };
+  dist_cache(kernS_, Gf_);
+  // the bias GP's distance cache, when its family caches another g(d)
+  if (kernB_ != kernS_) dist_cache(kernB_, Gfb_);
 }
 
 // Add what a move of parameter j touches to t (by j's class in the layout).
@@ -211,15 +208,28 @@ void SchurPosterior::reject() {
   restore();
 }
 
+// LS^-1 (yf - muB - wz), each field row's wz its distinct row's.
+static arma::vec field_residual(const arma::mat& LS, const arma::vec& yf, double muB,
+                                const arma::vec& wz, const std::vector<int>& grp) {
+  arma::vec v(yf.n_elem);
+  for (arma::uword i = 0; i < yf.n_elem; ++i) v[i] = yf[i] - muB - wz[grp[i]];
+  solve_lower(LS, v);
+  return v;
+}
+
+// LS^-1 K_F with K_F's rows those of K (a row per distinct field row) at
+// each field row's.
+static arma::mat field_rows(const arma::mat& LS, const arma::mat& K, const std::vector<int>& grp) {
+  arma::mat H = K.rows(arma::conv_to<arma::uvec>::from(grp));
+  solve_lower(LS, H);
+  return H;
+}
+
 void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
   arma::vec a(n, arma::fill::ones);
-  arma::vec b(n);
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) b[i] = yf_[i] - wz[grp_[i]];
   solve_lower(LS_.cur(), a);
-  solve_lower(LS_.cur(), b);
   aa = arma::dot(a, a);
-  ab = arma::dot(a, b);
+  ab = arma::dot(a, field_residual(LS_.cur(), yf_, 0.0, wz_.cur(), grp_));
 }
 
 // The S-GaSP correlation on the nu distinct field inputs (Gu and Wang 2018,
@@ -349,14 +359,8 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     Kf += s2B * Kb;
     v0 += s2B * rb;
   }
-  arma::vec v(n);
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
-  solve_lower(LS_.cur(), v);
-  arma::mat H(n, b);
-  for (int c = 0; c < b; ++c)
-    for (int i = 0; i < n; ++i) H(i, c) = Kf(grp_[i], c);
-  solve_lower(LS_.cur(), H);
+  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
+  const arma::mat H = field_rows(LS_.cur(), Kf, grp_);
   for (int c = 0; c < b; ++c) {
     const double* h = H.colptr(c);
     double hv = 0.0, hh = 0.0;
@@ -397,6 +401,19 @@ bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double
   return true;
 }
 
+// A correlation's per-dimension terms over the experimental inputs into P:
+// the distance cache G[k] itself for a family without a smoothness, else
+// the power matrix at alpha[k], recomputed (into pow[k].alt()) where redo[k].
+static void power_terms(int kern, const std::vector<arma::mat>& G, const double* alpha,
+                        const std::vector<char>& redo, std::vector<Buf2<arma::mat> >& pow,
+                        std::vector<const arma::mat*>& P) {
+  for (size_t k = 0; k < G.size(); ++k) {
+    if (!kernel_has_alpha(kern)) { P[k] = &G[k]; continue; }
+    if (redo[k]) kernel_term(kern, G[k], alpha[k], pow[k].alt(), true);
+    P[k] = redo[k] ? &pow[k].alt() : &pow[k].cur();
+  }
+}
+
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double SchurPosterior::evaluate(const Touch& t) {
@@ -412,15 +429,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   // Experimental-input part of Rs(Xk,Xk).
   const arma::mat* Rkk = &Rkk_.cur();
   if (t.expDim) {
-    const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + p - 1);
-    std::vector<const arma::mat*>& Pf = ptrF_;
-    for (int k = 0; k < p; ++k) {
-      const bool redo = t.simPow[k];
-      if (!kernel_has_alpha(kernS_)) { Pf[k] = &Gf_[k]; continue; }
-      if (redo) kernel_term(kernS_, Gf_[k], alphaS[k], Pfs_[k].alt(), true);
-      Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
-    }
-    kernel_combine(kernS_, Pf, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
+    power_terms(kernS_, Gf_, phi.memptr() + iAlphaS, t.simPow, Pfs_, ptrF_);
+    kernel_combine(kernS_, ptrF_, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
     level_scale(levels, phi.memptr() + iRhoS, Xu_, Xu_, Rkk_.alt(), true);
     Rkk = &Rkk_.alt();
   }
@@ -436,17 +446,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   // Bias correlation Rb over the experimental inputs (none without a bias).
   const arma::mat* Rb = &Rb_.cur();
   if (t.biasCorr && bias) {
-    const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
-    const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
-    std::vector<const arma::mat*>& P = ptrB_;
-    const std::vector<arma::mat>& Gb = Gfb_.empty() ? Gf_ : Gfb_;
-    for (int k = 0; k < p; ++k) {
-      const bool redo = t.biasPow[k];
-      if (!kernel_has_alpha(kernB_)) { P[k] = &Gb[k]; continue; }
-      if (redo) kernel_term(kernB_, Gb[k], alphaB[k], Pfb_[k].alt(), true);
-      P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
-    }
-    kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
+    power_terms(kernB_, Gfb_.empty() ? Gf_ : Gfb_, phi.memptr() + iAlphaB, t.biasPow, Pfb_, ptrB_);
+    kernel_combine(kernB_, ptrB_, phi.subvec(iThetaB, iThetaB + p - 1), Rb_.alt(), true);
     biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), Rb_.alt(), true);
     if (!biasModel(Rb_.alt(), Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
@@ -509,10 +510,8 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
   arma::mat Xk(nu_, p + q);
   Xk.cols(0, p - 1) = Xu_;
   for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
-  arma::vec v(n), wy;
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
-  solve_lower(LS_.cur(), v);
+  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
+  arma::vec wy;
   auto root = [&](const arma::mat& Z, const arma::mat* Kb, arma::mat& W, bool haveW,
                   arma::mat& A) {
     arma::mat G, R;
@@ -520,11 +519,7 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
     runPrior(phi, Xk, Z, R);
     R -= s2S * G;
     if (Kb) R += s2B * *Kb;
-    arma::mat H(n, Z.n_rows);
-    for (arma::uword c = 0; c < Z.n_rows; ++c)
-      for (int i = 0; i < n; ++i) H(i, c) = R(grp_[i], c);
-    solve_lower(LS_.cur(), H);
-    A = arma::join_cols(rs * W, H);
+    A = arma::join_cols(rs * W, field_rows(LS_.cur(), R, grp_));
   };
   // the runs' part at the candidates (runW_, runWy_) depends on the
   // simulator's correlation parameters alone: kept from the last call

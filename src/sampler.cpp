@@ -62,8 +62,7 @@
 // keeps the older epochs at falling weight, so the estimate changes
 // smoothly, leaves the drift from the start little weight, and its
 // effective draws keep growing. A reshaped block keeps its proposal's size
-// (log s absorbs the
-// change of log det(L)^(1/k)). The decision is part of the chain's state, so
+// (log s absorbs the change of log det(L)^(1/k)). The decision is part of the chain's state, so
 // a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
@@ -433,8 +432,10 @@ struct Move {
   virtual bool step(Chain& ch) = 0;
   // after repeat `rep` of sweep `it` (burn-in or not): what the move learns
   virtual void after(bool, int, int) {}
-  // acceptances / repeats in the current batch (the move's own count)
-  virtual double& batchCount() = 0;
+  // acceptances / repeats in the current batch (the move's own count; a
+  // block's is its Block's)
+  double accBatch = 0;
+  virtual double& batchCount() { return accBatch; }
   virtual void adapt(const Chain&) {}
   virtual double logScale() const { return NA_REAL; }
   // the log size of its proposal, whose drift a warm-up watches
@@ -480,9 +481,10 @@ static bool metropolis(Chain& ch, const std::vector<int>& idx, const double* lpN
 // Single-site random-walk Metropolis move of parameter j.
 struct SiteMove : Move {
   int j;
-  double logsd, accBatch;  // log SD of its walk, acceptances this batch
-  SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]), accBatch(ch.accBatch[j_]) {
+  double logsd;  // log SD of its walk
+  SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]) {
     idx = {j_};
+    accBatch = ch.accBatch[j_];
   }
   const char* kind() const override { return "single"; }
   bool step(Chain& ch) override {
@@ -496,7 +498,6 @@ struct SiteMove : Move {
     if (!std::isfinite(jac)) return false;
     return metropolis(ch, j, post.propose(j, xNew), lpNew, jac);
   }
-  double& batchCount() override { return accBatch; }
   void adapt(const Chain& ch) override {
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
   }
@@ -679,10 +680,8 @@ struct BlockMove : Move {
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
 struct GibbsMuBMove : Move {
-  double accBatch;  // draws this batch (every one is accepted)
-  GibbsMuBMove(int j, const Chain& ch) : accBatch(ch.accBatch[j]) { idx = {j}; }
+  GibbsMuBMove(int j, const Chain& ch) { idx = {j}; accBatch = ch.accBatch[j]; }
   const char* kind() const override { return "gibbs"; }
-  double& batchCount() override { return accBatch; }
   void write(arma::vec&, arma::vec& acc, Rcpp::List&) const override { acc[idx[0]] = accBatch; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
@@ -704,7 +703,7 @@ struct GibbsMuBMove : Move {
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
 struct ScaleMove : Move {
   std::vector<double> lpNew;  // the proposal's log priors (workspace)
-  double logsd, accBatch;     // log SD of log c, acceptances this batch
+  double logsd;               // log SD of log c
   int batch;                  // its burn-in batches so far
   ScaleMove(const Posterior& post, const Rcpp::List& state) {
     idx = post.scaled;
@@ -728,7 +727,6 @@ struct ScaleMove : Move {
     if (!std::isfinite(lpDiff)) return false;
     return metropolis(ch, idx, lpNew.data(), post.proposeScale(c), {lpDiff, k * e});
   }
-  double& batchCount() override { return accBatch; }
   void adapt(const Chain&) override {
     ++batch;
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, batch);
@@ -751,8 +749,8 @@ struct ScaleMove : Move {
 // algebra per step.
 struct JumpMove : Move {
   int j;
-  double lo, hi, accBatch;  // the interval on the sampler's scale; acceptances this batch
-  JumpMove(int j_, double lo_, double hi_, const Chain& ch) : j(j_), lo(lo_), hi(hi_), accBatch(0) {
+  double lo, hi;  // the interval on the sampler's scale
+  JumpMove(int j_, double lo_, double hi_, const Chain& ch) : j(j_), lo(lo_), hi(hi_) {
     if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
       Rcpp::stop("the jump move of %s needs a finite interval", ch.param_name(j_).c_str());
     idx = {j_};
@@ -770,7 +768,6 @@ struct JumpMove : Move {
     if (!std::isfinite(lpNew)) return false;
     return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
   }
-  double& batchCount() override { return accBatch; }
 };
 
 typedef std::vector<std::unique_ptr<Move> > Schedule;
