@@ -136,6 +136,12 @@ static double list_num(const Rcpp::List& s, const char* name, double dflt) {
 static std::vector<int> list_ints(const Rcpp::List& s, const char* name) {
   return s.containsElementNamed(name) ? Rcpp::as<std::vector<int> >(s[name]) : std::vector<int>();
 }
+// R's 1-based indices, 0-based.
+static std::vector<int> zero_based(const Rcpp::IntegerVector& ix) {
+  std::vector<int> out(ix.begin(), ix.end());
+  for (int& j : out) j -= 1;
+  return out;
+}
 static bool has(const std::vector<int>& v, int x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
@@ -193,9 +199,7 @@ struct Block {
     curN = 0; curWin = -1; curMean.zeros(k); curM2.zeros(k, k);
   }
   void read(const Rcpp::List& s) {
-    const Rcpp::IntegerVector ix = s["index"];
-    idx.assign(ix.begin(), ix.end());
-    for (int& j : idx) j -= 1;
+    idx = zero_based(s["index"]);
     mean = Rcpp::as<arma::vec>(s["mean"]);
     cov = Rcpp::as<arma::mat>(s["cov"]);
     L = Rcpp::as<arma::mat>(s["chol"]);
@@ -818,9 +822,7 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
     if (haveBlocks) {
       blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
     } else {
-      std::vector<int> idx(ix.begin(), ix.end());
-      for (int& j : idx) j -= 1;
-      blocks[b].start(idx, ch.logsd);
+      blocks[b].start(zero_based(ix), ch.logsd);
     }
     if ((int) blocks[b].idx.size() != ix.size())
       Rcpp::stop("the block proposal to continue from has the wrong size");
