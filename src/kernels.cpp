@@ -103,16 +103,13 @@ template <class... Ks> static Rcpp::List kernel_table_of(KernelList<Ks...>) {
 }
 Rcpp::List kernel_table() { return kernel_table_of(Kernels()); }
 
-// P(i,j) = |a_i - b_j|^alpha (pow; exact squares and absolute values).
-static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma::mat& out) {
-  const arma::uword na = a.n_elem, nb = b.n_elem;
-  for (arma::uword j = 0; j < nb; ++j) {
+// out(i, j) = f(a_i - b_j) (lower: i >= j only).
+template <class Fn>
+static void outer_fill(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower, Fn f) {
+  for (arma::uword j = 0; j < b.n_elem; ++j) {
     double* col = out.colptr(j);
     const double bj = b[j];
-    for (arma::uword i = 0; i < na; ++i) {
-      const double d = std::fabs(a[i] - bj);
-      col[i] = (alpha == 2.0) ? d * d : (alpha == 1.0 ? d : std::pow(d, alpha));
-    }
+    for (arma::uword i = lower ? j : 0; i < a.n_elem; ++i) col[i] = f(a[i] - bj);
   }
 }
 
@@ -121,12 +118,7 @@ static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma:
 // alpha needs an exp per entry instead of a pow).
 template <class F>
 static void kernel_dist_t(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
-  const arma::uword na = a.n_elem, nb = b.n_elem;
-  for (arma::uword j = 0; j < nb; ++j) {
-    double* col = out.colptr(j);
-    const double bj = b[j];
-    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = F::dist(a[i] - bj);
-  }
+  outer_fill(a, b, out, lower, F::dist);
 }
 void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
   KERNEL_DISPATCH(kern, kernel_dist_t, a, b, out, lower);
@@ -242,8 +234,6 @@ void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double*
   KERNEL_DISPATCH(kern, kernel_corr_flat_t, G, ne, K, theta, alpha, out, w);
 }
 
-// Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),
-// i >= j, at packed_offset(j, m) + i - j.
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
 
 // kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles): the
@@ -253,8 +243,6 @@ void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
   kernel_dist_tri(kern, a, a.n_elem, 1, G.data());
 }
 
-// kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()
-// caches G[k] where given (non-null), on the fly elsewhere: the same numbers.
 template <class F>
 static void kernel_corr_self_t(const arma::mat& X, int K, const double* theta,
                                const double* alpha, const std::vector<const double*>& G,
@@ -296,7 +284,6 @@ void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const doub
   KERNEL_DISPATCH(kern, kernel_corr_point_t, X, col0, K, point, theta, alpha, out);
 }
 
-// R(X, Y)_{ij} = prod_k r(|X_ik - Y_jk|; theta_k, alpha_k).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
                       const arma::vec& theta, const arma::vec& alpha, int kern) {
   check_kernel(kern);
@@ -304,7 +291,12 @@ arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
     arma::mat out(X.n_rows, Y.n_rows, arma::fill::zeros);
     arma::mat P(X.n_rows, Y.n_rows);
     for (arma::uword k = 0; k < X.n_cols; ++k) {
-      pow_dist(X.col(k), Y.col(k), alpha[k], P);
+      // |x - y|^alpha, exact squares and absolute values
+      const double al = alpha[k];
+      outer_fill(X.col(k), Y.col(k), P, false, [al](double x) {
+        const double d = std::fabs(x);
+        return al == 2.0 ? d * d : (al == 1.0 ? d : std::pow(d, al));
+      });
       out += theta[k] * P;
     }
     return arma::exp(-out);
