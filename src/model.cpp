@@ -37,20 +37,43 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iMuB = lay.offset_of("muB"); iLambdaZ = lay.offset_of("lambdaZ");
   iRhoS = lay.offset_of("rhoS"); iRhoB = lay.offset_of("rhoB"); iRhoD = lay.offset_of("rhoD");
   levels = model.levels;
+  simNoise = lay.length_of("sigma2R") > 0;
+  iSigma2R = lay.offset_of("sigma2R");
+  if (simNoise) {
+    if ((int) model.repCount.size() != m_)
+      Rcpp::stop("the replicate counts must give one count per unique run (%d)", m_);
+    repInv.set_size(m_);
+    repLogN = 0.0;
+    for (int i = 0; i < m_; ++i) {
+      repInv[i] = 1.0 / model.repCount[i];
+      repLogN += std::log(model.repCount[i]);
+    }
+    repSSW = model.repSSW; repDf = model.repDf;
+  }
   scaled.clear();
-  for (const char* c : {"sigma2S", "sigma2B", "sigma2E"})
+  for (const char* c : {"sigma2S", "sigma2B", "sigma2E", "sigma2R"})
     for (int k = 0; k < lay.length_of(c); ++k) scaled.push_back(lay.offset_of(c) + k);
   phi.zeros(d);
+}
+
+// The replicates' within term: the runs at each unique input less their
+// mean, -0.5 [sum_i (n_i - 1) log(2 pi r) + SSW / r + sum_i log n_i] (the
+// means carry the rest: their noise variance r / n_i is in the simulator
+// block; the last sum is the Jacobian from the runs to their means and
+// deviations, so that the log-likelihood is that of every run).
+double Posterior::noiseLoglik(double r) const {
+  return -0.5 * (repDf * (LOG_2PI + std::log(r)) + repSSW / r + repLogN);
 }
 
 // What a move of a class touches (add_touch()), by the class's name; a class
 // not named here moves only the residual (muB).
 enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
-                 TK_FIELD };
+                 TK_FIELD, TK_SIMNOISE };
 static const std::pair<const char*, int> class_touch[] = {
     {"kappa", TK_KAPPA}, {"thetaS", TK_SIM}, {"alphaS", TK_SIMPOW}, {"rhoS", TK_SIMLEVELS},
     {"thetaB", TK_BIAS}, {"alphaB", TK_BIASPOW}, {"lambdaZ", TK_BIAS}, {"rhoB", TK_BIAS},
-    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD}};
+    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD},
+    {"sigma2R", TK_SIMNOISE}};
 
 void fill_layout(Layout& lay) {
   lay.d = 0;
@@ -159,6 +182,11 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
     break;
   case TK_FIELD:
     t.field = true;
+    // with the simulator's own noise, Ds holds sigma2R / sigma2S
+    if (simNoise && j == iSigma2S) t.simCorr = t.cross = true;
+    break;
+  case TK_SIMNOISE:
+    t.simCorr = t.cross = t.field = true;
     break;
   default:  // muB: only the residual moves
     break;
@@ -194,7 +222,8 @@ double SchurPosterior::proposeScale(double c) {
   const double ldDs = ldDs_.cur(), zz = zz_.cur();
   const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
   loglik_.alt() = ll;
   return ll;
 }
@@ -402,8 +431,9 @@ bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double
 double SchurPosterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0;
-  // D = sigma2S Ds is positive definite only for sigma2S > 0.
+  // D = sigma2S Ds is positive definite only for sigma2S > 0 (and sigma2R > 0).
   if (!(s2S > 0)) return R_NegInf;
+  if (simNoise && !(phi[iSigma2R] > 0)) return R_NegInf;
 
   // Simulator block (the algebra's).
   double ldDs = ldDs_.cur(), zz = zz_.cur();
@@ -467,7 +497,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   const double vv = arma::dot(u_, u_);
 
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
   loglik_.alt() = ll;
   return ll;
 }
