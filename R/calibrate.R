@@ -149,6 +149,14 @@
 #' @param failedRuns What to do with failed runs (see "Failed runs and
 #'   missing cells"): `"setAside"` (the default) or `"error"`, which refuses
 #'   them.
+#' @param simNoise The simulator's own noise, for a stochastic simulator
+#'   with replicate runs (identical input rows of `sim`; see
+#'   [simulator_noise]): `"auto"` (the default: `"constant"` when replicates
+#'   differ beyond rounding, else `"none"`), `"none"` (a deterministic
+#'   simulator), `"constant"` (one noise variance `sigma2R`, sampled with
+#'   the rest, the replicates entering by their sufficient statistics) or
+#'   `"input"` (not available yet). The field is the system's mean
+#'   behaviour: its noise is measurement error only.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -201,7 +209,8 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       checkpointEvery = 60, converge = NULL, output = NULL, source = NULL,
                       sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE, nonFinite = c("error", "reject"),
-                      failedRuns = c("setAside", "error")) {
+                      failedRuns = c("setAside", "error"),
+                      simNoise = c("auto", "none", "constant", "input")) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery)
@@ -209,6 +218,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
   check_flag(fit, "fit")
   failedRuns <- match_choice(failedRuns, c("setAside", "error"), "failedRuns")
   if (is.function(sim)) {
+    check_sim_noise_function(simNoise)
     # the simulator as an R function (R/simulator_function.R)
     model <- build_function_model(sim, field,
       kappa = list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2),
@@ -224,7 +234,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                        sampler = sampler, blockSim = blockSim, algebra = algebra,
                        neighbours = neighbours, output = output, source = source,
                        sourceBias = sourceBias, outputs = outputs, failedRuns = failedRuns,
-                       modelCall = call)
+                       simNoise = simNoise, modelCall = call)
   if (!fit) return(model)
   fit_model(model, run)
 }

@@ -185,14 +185,15 @@ inform_duplicated_runs <- function(sim, call = parent.frame()) {
   groups <- split(seq_len(nrow(X)), key)
   groups <- groups[lengths(groups) > 1L]
   groups <- groups[order(vapply(groups, min, numeric(1)))]
-  differ <- vapply(groups, function(g) length(unique(sim[g, 1])) > 1L, logical(1))
+  tol <- replicate_tolerance(sim[, 1])
+  differ <- vapply(groups, function(g) diff(range(sim[g, 1])) > tol, logical(1))
   shown <- paste(vapply(utils::head(groups, 5), function(g) paste(g, collapse = " and "), character(1)),
                  collapse = "; ")
   if (length(groups) > 5L) shown <- paste0(shown, "; ...")
   cli::cli_inform(c(
     i = "{.arg sim} has {sum(dup)} duplicated run{?s} (identical input rows): rows {shown}.",
     " " = if (any(differ)) {
-      "Their responses differ in {sum(differ)} group{?s}: FBC's emulator interpolates the runs (up to a tiny nugget), so a noisy simulator is outside its model."
+      "Their responses differ in {sum(differ)} group{?s}: with {.code simNoise = \"none\"} the emulator interpolates the runs (up to a tiny nugget); {.code simNoise = \"constant\"} models the simulator's own noise."
     } else {
       "They add no information; the nugget keeps the covariance invertible."
     }

@@ -5,12 +5,13 @@
 # length: the chains go to their first target (nMCMC sweeps, or, without
 # nMCMC, the end of their warm-up plus fbc_first_check sweeps), then, while
 # the draws do not meet the rule and the ceiling is not reached, further:
-# the retained-phase sweeps of each chain grow by `every`, or by half
-# (every = NULL), each chain continuing its own random stream. The checks
+# the retained-phase sweeps of each chain grow by `every`, or (every =
+# NULL) to where the draws so far predict the rule will be met
+# (next_check()), each chain continuing its own random stream. The checks
 # fall at sweep counts fixed by the chain's own state (its warm-up length)
-# and read only the draws up to that count, so a run resumed from a
-# checkpoint, or run on another plan, stops where the uninterrupted run
-# stops, with its draws.
+# and the draws up to the check before, and read only the draws up to that
+# count, so a run resumed from a checkpoint, or run on another plan, stops
+# where the uninterrupted run stops, with its draws.
 
 # Defaults of the run's length (see ?calibrate, "Run length"):
 # a warm-up of data-dependent length (nBurn = NULL) takes between `min` and
@@ -26,9 +27,14 @@
 # 0 would start the estimate afresh at 200, 400, 800, ... (RESULTS-defaults.md).
 fbc_warmup <- list(min = 200L, max = 5000L, ess = 10, forget = 0.5)
 fbc_first_check <- 500L
-# Without `every`, each check after the first comes when the retained
-# sweeps have grown by this factor (rounded up to a piece of 50 sweeps).
+# Without `every`, each check after the first comes where the draws so
+# far predict the rule will be met (next_check()): that length times
+# 1 + fbc_check_margin, at least fbc_check_step of the retained sweeps (and
+# one piece of 50 sweeps) further, at most fbc_check_growth times as many
+# (the geometric step of earlier versions), rounded up to a piece of 50.
 fbc_check_growth <- 1.5
+fbc_check_margin <- 0.02
+fbc_check_step <- 0.05
 fbc_fixed_nMCMC <- 8000L
 
 #' Stop a run when it has converged
@@ -40,15 +46,18 @@ fbc_fixed_nMCMC <- 8000L
 #' rank-normalised split R-hat below `rhat` and a bulk effective sample size
 #' of at least `ess` (Vehtari et al. 2021, as in the `estimates` table and
 #' [convergence_messages()]), or until a chain has run `maxMCMC` sweeps in
-#' all. Each further stretch adds half the sweeps each chain has retained so
-#' far (`every = NULL`; rounded up to 50: 500, 750, 1150, ... after
-#' warm-up), so the checks cost little and the run stops within about half
-#' again of the shortest run that meets the rule, or `every` sweeps (a
-#' number). The checks fall at sweep counts fixed by each chain's own warm-up
-#' and each reads the draws up to that point, so [set.seed()] reproduces the
-#' run on any [future::plan()] and a checkpointed run resumes to the same end
-#' with the same draws. Warm-up is not extended: the proposals stay as
-#' warm-up left them.
+#' all. Without `every`, each check predicts from the draws so far where the
+#' rule will be met (the smallest bulk ESS grows in proportion to the
+#' sweeps, R-hat's excess over 1 about as their inverse square) and
+#' puts the next check there, with a margin of 2%: at least 5% and at most
+#' 50% further (rounded up to 50 sweeps), so the run ends close to the
+#' shortest that meets the rule (on the ball drop a few percent past it,
+#' `bench/RESULTS-speed.md`); with `every` (a number) it checks every
+#' `every` sweeps. The checks fall at sweep counts fixed by each chain's
+#' own warm-up and the draws up to the check before, so [set.seed()]
+#' reproduces the run on any [future::plan()] and a checkpointed run
+#' resumes to the same end with the same draws. Warm-up is not extended:
+#' the proposals stay as warm-up left them.
 #'
 #' What R-hat cannot see: a mode that every chain visits too rarely. The
 #' chains agree, so the rule is met, while the mode's share of the draws is
@@ -73,9 +82,9 @@ fbc_fixed_nMCMC <- 8000L
 #'
 #' @param rhat Largest R-hat allowed (above 1).
 #' @param ess Smallest bulk ESS allowed (a whole number, at least 10).
-#' @param every `NULL` (the default: each stretch adds half the sweeps
-#'   retained so far, see above) or the sweeps per chain between two checks
-#'   (a whole number, at least 50).
+#' @param every `NULL` (the default: each check comes where the draws so
+#'   far predict the rule is met, see above) or the sweeps per chain between
+#'   two checks (a whole number, at least 50).
 #' @param maxMCMC Most sweeps a chain runs in all, counted from its start
 #'   (burn-in included; for [update.fbc()], the sweeps of the run it
 #'   continues too).
@@ -83,12 +92,12 @@ fbc_fixed_nMCMC <- 8000L
 #' @export
 #' @examples
 #' until_converged()
-#' # a first stretch of 600 sweeps, then 300 at a time until every R-hat
-#' # < 1.01 and bulk ESS >= 200, at most 2000 sweeps a chain
+#' # a first stretch of 600 sweeps, then checks where the draws predict
+#' # every R-hat < 1.02 and bulk ESS >= 100, at most 1200 sweeps a chain
 #' set.seed(1)
 #' fit <- calibrate(ballSim, ballField, nMCMC = 600, nBurn = 200, nChains = 2,
-#'                  converge = until_converged(ess = 200, every = 300, maxMCMC = 2000))
-#' fit$settings$converge$sweeps
+#'                  converge = until_converged(rhat = 1.02, ess = 100, maxMCMC = 1200))
+#' fit$settings$converge[c("converged", "checks", "sweeps")]
 until_converged <- function(rhat = 1.01, ess = 400, every = NULL, maxMCMC = 50000) {
   if (!is.numeric(rhat) || length(rhat) != 1L || is.na(rhat) || !(rhat > 1)) {
     cli::cli_abort("{.arg rhat} must be a number above 1 (got {format_value(rhat)}).")
@@ -122,7 +131,7 @@ check_converge <- function(converge, arg = "converge", call = parent.frame()) {
 
 # When a rule checks, in words.
 check_schedule <- function(rule) {
-  if (is.null(rule$every)) "as the retained sweeps grow by half" else sprintf("every %d sweeps", rule$every)
+  if (is.null(rule$every)) "where the draws predict it is met" else sprintf("every %d sweeps", rule$every)
 }
 
 # The run's length from calibrate()'s arguments (see ?calibrate, "Run
@@ -227,14 +236,31 @@ rule_met <- function(results, rule, cols) {
        rhat = max(est$rhat, na.rm = TRUE), ess = min(est$ess, na.rm = TRUE))
 }
 
-# Sweeps after warm-up of the next check, after one at `post`: half as many
-# again (rounded up to a piece of 50), or `every` more.
-next_check <- function(post, rule) {
-  if (is.null(rule$every)) {
-    as.integer(ceiling(fbc_check_growth * post / fbc_piece) * fbc_piece)
-  } else {
-    post + rule$every
+# Sweeps after warm-up of the next check, after one at `post` retained
+# sweeps a chain whose draws gave `check` (list(rhat, ess): the largest
+# R-hat and the smallest bulk ESS), or `every` more. Bulk ESS grows in
+# proportion to the draws, so the rule's ESS is met near post * ess /
+# check$ess. R-hat - 1 of chains whose means are apart shrinks about as
+# 1 / post^2 as later draws average the offsets out (as 1 / post once they
+# agree): the factor R-hat asks for is the square root of the ratio of
+# R-hat - 1 to the rule's (on the ball drop, seeds 1-20, the ratio itself
+# sent runs up to 2 times the first length that met the rule, median 1.07;
+# its root at most 1.42 times, median 1.05). The longer of the two
+# lengths, with a margin of fbc_check_margin, between a step of
+# fbc_check_step (a check after a near miss comes soon, but not at every
+# piece) and the geometric step fbc_check_growth (a far miss, where the
+# prediction is least sure, waits no longer than it did). Without a finite
+# check (no sampled parameter), the geometric step.
+next_check <- function(post, rule, check = NULL) {
+  if (!is.null(rule$every)) return(as.integer(post + rule$every))
+  up <- function(x) ceiling(x / fbc_piece - 1e-9) * fbc_piece
+  cap <- up(fbc_check_growth * post)
+  if (is.null(check) || !is.finite(check$rhat) || !is.finite(check$ess) || check$ess <= 0) {
+    return(as.integer(cap))
   }
+  grow <- max(rule$ess / check$ess, sqrt(max(check$rhat - 1, 0) / (rule$rhat - 1)))
+  least <- post + max(fbc_piece, up(fbc_check_step * post))
+  as.integer(min(cap, max(least, up(post * grow * (1 + fbc_check_margin)))))
 }
 
 # Runs the chains from `starts` to `target` (one per chain), then, under
@@ -295,7 +321,8 @@ run_rounds <- function(starts, seeds, target, rule, assemble, nBurn, thinning, s
     starts <- lapply(seq_along(results), function(k) start_from_result(results[[k]], iter0[k]))
     seeds <- lapply(results, `[[`, "seed")
     warm <- vapply(results, function(r) chain_burn(r$state, nBurn), numeric(1))
-    post <- vapply(seq_along(results), function(k) next_check(stops[k] - warm[k], rule), numeric(1))
+    post <- vapply(seq_along(results), function(k) next_check(stops[k] - warm[k], rule, check),
+                   numeric(1))
     target <- rep(as.integer(rule$maxMCMC), length(starts))
   }
   if (is.null(fit)) fit <- assemble(cut, ifelse(is.na(stops), target, stops))

@@ -227,7 +227,8 @@ fbc_spec_problems <- function(x) {
   if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
                                                    source_count(spec$model),
                                                    outputs = output_count(spec$model),
-                                                   emulator = is.null(spec$model$simulator)))) {
+                                                   emulator = is.null(spec$model$simulator),
+                                                   replicates = as.integer(!is.null(spec$model$replicates))))) {
     return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }

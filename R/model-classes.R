@@ -20,7 +20,9 @@
 #            partial correlations of the categorical inputs' levels,
 #            L (L - 1) / 2 per input with L levels), "sources" (the
 #            partial correlations between the field data sets' biases when
-#            each has its own: L (L - 1) / 2 for L data sets), "one"
+#            each has its own: L (L - 1) / 2 for L data sets),
+#            "replicates" (one when the simulator's own noise is modelled,
+#            R/sim_noise.R; else none), "one"
 #   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
 #   walk     the scale its random walk runs on: "identity", "log",
 #            "logit12" (logit of x - 1), "atanh" (Fisher's z)
@@ -41,16 +43,16 @@
 #            per output, output after output; kappa is shared and sigma2E
 #            is per measurement-error group (output x data set) already
 model_classes <- data.frame(
-  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB"),
-  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one"),
-  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real"),
-  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity"),
-  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1),
-  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs"),
-  joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
-  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE),
-  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", ""),
-  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE),
+  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB", "sigma2R"),
+  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one", "replicates"),
+  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real", "positive"),
+  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity", "log"),
+  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1, 0.1),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "single"),
+  joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE, TRUE),
+  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", "", ""),
+  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE),
   stringsAsFactors = FALSE
 )
 
@@ -139,11 +141,12 @@ discrepancy_having <- function(cls) {
 # measurement-error groups (named by class, in the table's order; the bias
 # classes have none without a bias), `outputs` independent outputs (the
 # perOutput classes have a copy per output) and, for a simulator given as
-# a function (`emulator` FALSE), no simulator-GP classes.
+# a function (`emulator` FALSE), no simulator-GP classes; `replicates` 1
+# when the simulator's own noise is modelled (sigma2R, R/sim_noise.R).
 class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
-                        outputs = 1L, emulator = TRUE) {
+                        outputs = 1L, emulator = TRUE, replicates = 0L) {
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
-         levels = levels, sources = sources)
+         levels = levels, sources = sources, replicates = replicates)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
   n[model_classes$perOutput] <- n[model_classes$perOutput] * as.integer(outputs)
@@ -160,9 +163,13 @@ emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
 param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                           sources = 0L, outputs = 1L, emulator = TRUE) {
+                           sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
   sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, outputs = outputs,
-                       emulator = emulator)
+                       emulator = emulator, replicates = replicates)
+  # the simulator's own noise is a class only of the models that have it:
+  # every other model's layout is the one it has always been (fits and
+  # checkpoints made before the class existed keep theirs)
+  if (!sizes[["sigma2R"]]) sizes <- sizes[names(sizes) != "sigma2R"]
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -173,14 +180,16 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # independent outputs (`outputs`: their labels, or a count) a perOutput
 # class's copies end in "[label]" (thetaS1[amount], sigma2S[amount]).
 param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                         sources = 0L, outputs = 1L, emulator = TRUE) {
+                         sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
   K <- if (is.character(outputs)) length(outputs) else as.integer(outputs)
   lab <- if (is.character(outputs)) outputs else as.character(seq_len(K))
-  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator = emulator)
+  sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator = emulator,
+                       replicates = replicates)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     one <- if (sizes[i] == 0L) character(0)
-    else if (model_classes$over[i] == "one" || (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
+    else if (model_classes$over[i] %in% c("one", "replicates") ||
+             (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
     if (K > 1L && model_classes$perOutput[i] && length(one)) {
       paste0(rep(one, K), "[", rep(lab, each = length(one)), "]")
@@ -190,9 +199,10 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 
 # The class of each parameter of phi.
 param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                            sources = 0L, outputs = 1L, emulator = TRUE) {
+                            sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
   rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources,
-                                       outputs = outputs, emulator = emulator))
+                                       outputs = outputs, emulator = emulator,
+                                       replicates = replicates))
 }
 
 # The output (1-based) each parameter of phi belongs to with `outputs`
@@ -214,11 +224,12 @@ absent_classes <- function(kernS, kernB) {
 }
 
 # The layout as the compiled core receives it (read_model() in src/posterior.cpp):
-# 0-based offsets and lengths named by class.
+# 0-based offsets and lengths named by class (sigma2R only when the
+# simulator's own noise is modelled: param_indices()).
 layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                          sources = 0L, outputs = 1L, emulator = TRUE) {
+                          sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
   idx <- param_indices(p, q, discrepancy, noise, levels, sources, outputs = outputs,
-                       emulator = emulator)
+                       emulator = emulator, replicates = replicates)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -237,16 +248,20 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # list(codes, L), 1-based codes; the bias classes take it only with a bias)
 # and, with independent outputs (outputs = "independent", R/outputs.R), the
 # output's indicator columns (`outputs`: list(col, ncol, L) as
-# model_levels() gives one input; `levels` then leaves the output out).
+# model_levels() gives one input; `levels` then leaves the output out) and,
+# with the simulator's own noise, the replicates' sufficient statistics
+# (`replicates`: list(count, ssw), R/sim_noise.R).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
                            vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
-                           outputs = NULL, simulator = NULL) {
+                           outputs = NULL, simulator = NULL, replicates = NULL) {
   if (discrepancy == "none") source <- NULL
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
     layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
                  source_count(source), outputs = output_count(outputs),
-                 emulator = is.null(simulator)),
+                 emulator = is.null(simulator), replicates = as.integer(!is.null(replicates))),
+    if (!is.null(replicates)) list(replicates = list(count = as.numeric(replicates$count),
+                                                     ssw = as.numeric(replicates$ssw))),
     if (!is.null(outputs)) list(outputs = lapply(outputs, as.integer)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),

@@ -62,20 +62,23 @@ NULL
 # `kappaDefault`: kappaP1 and kappaP2 were left at their defaults).
 build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, kernelS, kernelB,
                         sampler, blockSim, algebra, neighbours, output, source, sourceBias,
-                        outputs = "shared", failedRuns = "setAside", modelCall = NULL,
-                        call = parent.frame()) {
+                        outputs = "shared", failedRuns = "setAside", simNoise = "auto",
+                        modelCall = NULL, call = parent.frame()) {
   dd <- model_data(sim, field, output, source, failedRuns, call = call)
+  # replicate runs and the simulator's own noise (R/sim_noise.R)
+  noise <- sim_noise_model(simNoise, dd$sim, call = call)
   opt <- model_options(dd, discrepancy, sampler, blockSim, algebra, neighbours, hypers,
                        kernelS, kernelB, sourceBias, call = call)
   opt[c("output", "source")] <- list(output, source)
   opt$outputs <- check_outputs(outputs, dd, opt$algebra, call = call)
-  pr <- model_priors(dd, opt, kappa, kappaDefault, call = call)
+  pr <- model_priors(dd, opt, kappa, kappaDefault, noise, call = call)
   p <- dd$p
   dat <- pr$dat
   # independent outputs: the algebra of the largest output's block
   XsAlg <- largest_output_sim(dat, opt$outputs)
   alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf))
   if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
+  alg <- sim_noise_algebra(alg, noise, output, call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,
@@ -83,11 +86,12 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                vecchia = if (alg$name == "vecchia") {
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
-                               outputs = pr$outputs)
+                               outputs = pr$outputs, replicates = pr$replicates)
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource,
-                   fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes), failed = dd$failed))
+                   fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes), failed = dd$failed),
+              if (!is.null(noise$info)) list(simNoise = noise$info))
   new_fbc_model(data = dat, raw = list(sim = dd$sim, field = dd$field), scale = pr$scale,
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
                 discrepancy = opt$discrepancy, sampler = opt$sampler, algebra = alg,
@@ -102,7 +106,8 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                              blockSim = blockSim, algebra = algebra,
                                              neighbours = neighbours, output = output,
                                              source = source, sourceBias = sourceBias,
-                                             outputs = outputs, failedRuns = failedRuns))),
+                                             outputs = outputs, failedRuns = failedRuns,
+                                             simNoise = simNoise))),
                 call = modelCall)
 }
 
@@ -167,8 +172,10 @@ model_options <- function(dd, discrepancy, sampler, blockSim, algebra, neighbour
        hypers = hypers, kernelS = kernelS, kernelB = kernelB, sourceBias = sourceBias)
 }
 
-# The scaling, the scaled data and the priors expanded (build_priors()).
-model_priors <- function(dd, opt, kappa, kappaDefault, call) {
+# The scaling, the scaled data and the priors expanded (build_priors());
+# with the simulator's own noise (`noise`, sim_noise_model()) the data on
+# the unique inputs and the replicates' sufficient statistics.
+model_priors <- function(dd, opt, kappa, kappaDefault, noise = NULL, call) {
   fac <- dd$fac
   sim <- dd$sim
   field <- dd$field
@@ -184,17 +191,26 @@ model_priors <- function(dd, opt, kappa, kappaDefault, call) {
   scale[c("factors", "output", "source", "noiseLabels")] <-
     list(fac$factors, fac$output, fac$source[c("name", "levels")], fac$noiseLabels)
   if (opt$sourceBias == "own") scale$sourceBias <- TRUE
-  inform_duplicated_runs(sim, call = call)
+  modelled <- !is.null(noise) && noise$mode != "none"
+  if (!modelled) inform_duplicated_runs(sim, call = call)
   warn_wide_outputs(sim, p, named = dd$named, call = call)
   warn_field_outside(sim, field, scale, call = call)
   dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
+  replicates <- NULL
+  if (modelled) {
+    cr <- collapse_replicates(dat, noise$reps)
+    dat <- cr$dat
+    replicates <- cr$replicates
+    opt$hypers$sigma2R <- sim_noise_prior(opt$hypers$sigma2R, cr, call = call)
+  }
   noise <- length(fac$noiseLabels %||% 1L)
   kappaSpec <- check_class_spec(kappa, "kappa", q, call = call)
   check_kappa_design(kappaSpec, scale, call = call)
   spec <- build_priors(kappaSpec, opt$hypers, scale, p, q, opt$discrepancy, noise = noise,
-                       levels = levels, source = biasSource, outputs = lv$outputs, call = call)
+                       levels = levels, source = biasSource, outputs = lv$outputs,
+                       replicates = replicates, call = call)
   list(scale = scale, dat = dat, spec = spec, levels = levels, biasSource = biasSource,
-       outputs = lv$outputs)
+       outputs = lv$outputs, replicates = replicates)
 }
 
 # Each row's distinct row of X (1, 2, ... in order of first appearance):
@@ -258,7 +274,8 @@ fbc_model_problems <- function(x) {
   }
   if (length(out)) return(out)
   lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources,
-                      outputs = d$outputs %||% 1L, emulator = is.null(x$spec$model$simulator))
+                      outputs = d$outputs %||% 1L, emulator = is.null(x$spec$model$simulator),
+                      replicates = as.integer(!is.null(x$spec$model$replicates)))
   if (!identical(x$classes$length, unname(lay$length)) ||
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {
@@ -293,6 +310,8 @@ print.fbc_model <- function(x, ...) {
   } else {
     cat(sprintf("  Data:        %d simulator runs, %d field rows\n", d$m, d$n))
   }
+  noiseLine <- sim_noise_line(x)
+  if (!is.null(noiseLine)) cat(sprintf("  Replicates:  %s\n", noiseLine))
   cat(sprintf("  Inputs:      %s (experimental); %s (calibration)\n",
               paste(sc$names$inputs, collapse = ", "), paste(sc$names$calibration, collapse = ", ")))
   cat(if (is.null(x$simulator)) {
@@ -330,7 +349,7 @@ check_run <- function(nMCMC, nBurn, thinning, nChains, converge, showProgress, c
 # run's settings).
 model_args <- c("field", "kappaDist", "kappaInit", "kappaP1", "kappaP2", "hypers", "discrepancy",
                 "kernelS", "kernelB", "sampler", "blockSim", "algebra", "neighbours", "output",
-                "source", "sourceBias", "outputs", "nonFinite")
+                "source", "sourceBias", "outputs", "nonFinite", "simNoise")
 
 # calibrate(model, ...): the model, with the call that will be the fit's
 # (the model's call with this call's run settings). A model argument given
@@ -366,6 +385,7 @@ identity_settings <- function(model, run) {
   if (!is.null(o$source)) s$source <- o$source
   if (o$sourceBias == "own") s$sourceBias <- o$sourceBias
   if (identical(o$outputs, "independent")) s$outputs <- o$outputs
+  if (!is.null(model$spec$model$replicates)) s$simNoise <- "constant"
   # a simulator given as a function: its code and what a non-finite value does
   if (!is.null(model$simulator)) s$simulator <- function_identity(model$simulator)
   s

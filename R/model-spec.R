@@ -135,14 +135,17 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 # classes without parameters under `discrepancy` have no prior.
 # With independent outputs (`outputs`: the output's list(col, ncol, L),
 # `levels` without it) each perOutput class's priors are one output's,
-# repeated for every output.
+# repeated for every output. With the simulator's own noise (`replicates`:
+# list(count, ssw), R/sim_noise.R) sigma2R has a parameter.
 build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noise = 1L,
                          levels = NULL, source = NULL, outputs = NULL, emulator = TRUE,
-                         call = parent.frame()) {
+                         replicates = NULL, call = parent.frame()) {
   nLev <- level_count(levels)
   nSrc <- source_count(source)
   K <- output_count(outputs)
-  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator = emulator)
+  nRep <- as.integer(!is.null(replicates))
+  sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator = emulator,
+                       replicates = nRep)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -202,8 +205,10 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   }
   table <- do.call(rbind, rows)
   vars <- param_names(p, q, discrepancy, noise, nLev, nSrc,
-                      outputs = if (K > 1L) scale$output$levels else 1L, emulator = emulator)
-  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, outputs = K, emulator = emulator)
+                      outputs = if (K > 1L) scale$output$levels else 1L, emulator = emulator,
+                      replicates = nRep)
+  cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, outputs = K, emulator = emulator,
+                           replicates = nRep)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
@@ -211,7 +216,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
        model = compiled_model(p, q, discrepancy = discrepancy,
                               noise = if (noise > 1L) seq_len(noise), levels = levels,
                               source = source, outputs = outputs,
-                              simulator = if (!emulator) list()))
+                              simulator = if (!emulator) list(), replicates = replicates))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -113,7 +113,11 @@
 #'   as `lvl =` would otherwise be ignored silently).
 #' @return A list with `pred`, `se`, `lower` and `upper` (one value per row of
 #'   `newdata`, in the response's units) and, when `draws = TRUE`, `draws`: a
-#'   matrix with one row per new point and one column per draw used. The
+#'   matrix with one row per new point and one column per draw used. For
+#'   `type = "simulator"` with the simulator's own noise modelled
+#'   ([simulator_noise]), `noiseSd`: the sd of a run's noise about
+#'   \eqn{\eta} at each point (the root of the posterior mean of its
+#'   variance, constant over the inputs), in the response's units. The
 #'   attribute `draw_rows` gives the rows of `object$Phi` used. Its class,
 #'   `fbc_prediction`, prints the first 20 points as a table.
 #' @export
@@ -189,6 +193,10 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   })
   out <- list(pred = pred, se = se, lower = lower, upper = upper)
   if (draws) out$draws <- D
+  # a stochastic simulator's own noise (R/sim_noise.R), the same at every input
+  if (type == "simulator" && "sigma2R" %in% colnames(object$Phi)) {
+    out$noiseSd <- rep(sqrt(mean(object$Phi[rows, "sigma2R"])) * ysd, N)
+  }
   attr(out, "draw_rows") <- rows
   class(out) <- c("fbc_prediction", "list")
   out

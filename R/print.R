@@ -47,6 +47,8 @@ print.fbc <- function(x, digits = 3, ...) {
     cat(sprintf("  failed runs: %d of %d set aside (not evidence about kappa); where runs fail: predict(fit, newdata, type = \"failure\")\n",
                 length(failed$rows), failed$m))
   }
+  noiseLine <- sim_noise_line(mo, x$Phi, digits)
+  if (!is.null(noiseLine)) cat(sprintf("  replicates: %s\n", noiseLine))
   cat(sprintf("  response: %s; experimental input%s: %s\n", sc$names$response,
               if (sc$p > 1L) "s" else "", paste(sc$names$inputs, collapse = ", ")))
   print_design(mo, sc, fn)

@@ -296,6 +296,13 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #'   its canonical partial correlations, as for `rhoB` (one for two data
 #'   sets). Default uniform on `(-1, 1)`; `rhoDDist = "fixed", rhoDInit = 0`
 #'   makes the biases independent.
+#' @param sigma2RDist,sigma2RInit,sigma2RP1,sigma2RP2 The simulator's own
+#'   noise variance \eqn{r} of a stochastic simulator (`simNoise =
+#'   "constant"` in [calibrate()]; see [simulator_noise]). Default: a
+#'   half-Cauchy on its sd (`"halft_sd"`, 1 degree of freedom, scale 1, the
+#'   standardised response's sd), weakly informative, as for
+#'   \eqn{\sigma^2_E}: the replicates' spread sets it. Started at the pooled
+#'   within-replicate variance unless `sigma2RInit` is given.
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
@@ -314,7 +321,8 @@ set_hyperPriors <- function(
     lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5,
     rhoSDist = "uniform", rhoSInit = 0, rhoSP1 = -1, rhoSP2 = 1,
     rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1,
-    rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1) {
+    rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1,
+    sigma2RDist = "halft_sd", sigma2RInit = NA, sigma2RP1 = 1, sigma2RP2 = 1) {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()

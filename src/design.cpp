@@ -86,11 +86,6 @@ void prior_cov(const DesignSystems& sys, int s, const arma::mat& X, const arma::
   sys.post->runPrior(sys.phis.row(s).t(), X, Y, out);
 }
 
-// w_s = exp(L_s - mx) for s < S (L_s <= mx).
-void exp_weights(const double* L, double mx, int S, double* w) {
-  for (int s = 0; s < S; ++s) w[s] = std::exp(L[s] - mx);
-}
-
 // The greedy look-ahead's state: S draws, Nr runs of K values each (rows
 // r K .. r K + K - 1 of the Nc candidates), J fantasies. kap (S x q) kappa,
 // ksq |kappa_s|^2, base (S x J) the log-weights given the pending points'
@@ -117,13 +112,18 @@ double dot_sum(const double* a, const double* b, int S) {
   return out;
 }
 
+// The weights w_s = exp(L_s - mx) (L_s <= mx) into la.wbuf; returns their sum.
+double weights(LookAhead& la, const double* L, double mx) {
+  double* w = la.wbuf.memptr();
+  for (int s = 0; s < la.S; ++s) w[s] = std::exp(L[s] - mx);
+  return dot_sum(w, nullptr, la.S);
+}
+
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
 // sum_k (sum_s w_s k_sk)^2.
 double weighted_var(LookAhead& la, const double* L, double mx) {
-  double* w = la.wbuf.memptr();
-  exp_weights(L, mx, la.S, w);
-  const double sw = dot_sum(w, nullptr, la.S);
+  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
   double out = dot_sum(w, la.ksq.memptr(), la.S) / sw;
   for (arma::uword k = 0; k < la.kap.n_cols; ++k) {
     const double mk = dot_sum(w, la.kap.colptr(k), la.S) / sw;
@@ -138,10 +138,7 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
 double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   const int S = la.S;
-  double* w = la.wbuf.memptr();
-  exp_weights(L, mx, S, w);
-  double sw = 0.0;
-  for (int s = 0; s < S; ++s) sw += w[s];
+  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
   double out = 0.0;
   for (int t = 0; t < la.T; ++t) {
     const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
@@ -164,14 +161,10 @@ double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
 // kappa values (a grid or a uniform sample: up to a constant, kappa's):
 //   -sum_s p_s log p_s = log sum w - sum_s w_s (L_s - mx) / sum w.
 double weighted_entropy(LookAhead& la, const double* L, double mx) {
-  const int S = la.S;
-  double* w = la.wbuf.memptr();
-  exp_weights(L, mx, S, w);
-  double sw = 0.0, swl = 0.0;
-  for (int s = 0; s < S; ++s) {
-    sw += w[s];
-    if (w[s] > 0.0) swl += w[s] * (L[s] - mx);  // (exp_weights()' underflow: 0, not 0 x -inf)
-  }
+  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
+  double swl = 0.0;
+  for (int s = 0; s < la.S; ++s)
+    if (w[s] > 0.0) swl += w[s] * (L[s] - mx);  // (weights()' underflow: 0, not 0 x -inf)
   return std::log(sw) - swl / sw;
 }
 

@@ -130,6 +130,13 @@ struct Model {
   // and each output has its own simulator and bias GP (OutputsPosterior).
   LevelInput outputs = LevelInput{0, 0, 0};
   int nOutputs() const { return outputs.L > 1 && outputs.ncol > 0 ? outputs.L : 1; }
+  // a stochastic simulator's replicate runs (R/sim_noise.R): Xs and ys are
+  // then the unique inputs and their mean responses, repCount[i] the runs
+  // at input i, repSSW their within sum of squares and repDf =
+  // sum(repCount - 1); sigma2R, the simulator's own variance, has one
+  // parameter (empty: a deterministic simulator, no sigma2R)
+  std::vector<double> repCount;
+  double repSSW = 0.0, repDf = 0.0;
 };
 // Reads list(kernS, kernB, algebra, offset, length) (offset and length
 // integer vectors named by class) and checks that the layout tiles phi and
@@ -320,6 +327,15 @@ public:
   bool bias;                // the model has a bias GP (KOH or S-GaSP)
   bool biasMean;            // ... with a mean muB (KOH)
   bool sgasp;               // ... scaled (S-GaSP)
+  // the simulator's own noise (sigma2R has a parameter): the runs are the
+  // unique inputs' means, so D = sigma2S (Rs + nugget I) + sigma2R
+  // diag(repInv) and the log-likelihood has the replicates' within term
+  // noiseLoglik() (model.cpp)
+  bool simNoise = false;
+  int iSigma2R = 0;
+  arma::vec repInv;         // 1 / the runs at each unique input
+  double repSSW = 0.0, repDf = 0.0, repLogN = 0.0;  // repLogN: sum of log n_i
+  double noiseLoglik(double r) const;
   std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 

@@ -216,9 +216,7 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
     arma::mat K = corr_matrix(Xu_, Xnew, thetaB, alphaB, kernB_);
     arma::vec r0;
     biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, K, r0);
-    arma::mat H(n, b);
-    for (int c = 0; c < b; ++c)
-      for (int i = 0; i < n; ++i) H(i, c) = s2B * K(grp_[i], c);
+    arma::mat H = s2B * K.rows(arma::conv_to<arma::uvec>::from(grp_));
     solve_lower(LS_.cur(), H);
     arma::vec v = yf_ - muB - f_.cur();
     solve_lower(LS_.cur(), v);

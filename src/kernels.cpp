@@ -23,12 +23,13 @@
 // a smoothness alpha, and these steps; a new family is its struct and its
 // entry in `Kernels`.
 
-// The defaults: no smoothness, exp(-sum theta g).
+// The defaults: no smoothness, exp(-sum theta g) (w, the Matern product,
+// unused).
 struct KernelBase {
-  static constexpr bool alpha = false, poly = false;
+  static constexpr bool alpha = false;
   static double term(double g, double) { return g; }
   static double coef(double theta) { return theta; }
-  template <class T> static void accum(T, T, T&, T&) {}
+  static void accum(double c, double t, double& s, double&) { s += c * t; }
   static double finish(double s, double) { return std::exp(-s); }
 };
 struct PowExp : KernelBase {
@@ -44,10 +45,9 @@ struct Gaussian : KernelBase {
 // The Matern families: s the sum in the exponent, w the product of the
 // polynomials poly(a) (M::factor).
 template <class M> struct MaternBase : KernelBase {
-  static constexpr bool poly = true;
   static double dist(double d) { return std::fabs(d); }
-  template <class T> static void accum(T c, T t, T& s, T& w) {
-    const T a = c * t;
+  static void accum(double c, double t, double& s, double& w) {
+    const double a = c * t;
     s += a;
     w *= M::factor(a);
   }
@@ -60,12 +60,12 @@ template <class M> struct MaternBase : KernelBase {
 struct Matern32 : MaternBase<Matern32> {
   static constexpr int code = 3; static const char* name() { return "matern32"; }
   static double coef(double theta) { return std::sqrt(3.0 * theta); }
-  template <class T> static T factor(T a) { return 1.0 + a; }
+  static double factor(double a) { return 1.0 + a; }
 };
 struct Matern52 : MaternBase<Matern52> {
   static constexpr int code = 4; static const char* name() { return "matern52"; }
   static double coef(double theta) { return std::sqrt(5.0 * theta); }
-  template <class T> static T factor(T a) { return 1.0 + a + a * a / 3.0; }
+  static double factor(double a) { return 1.0 + a + a * a / 3.0; }
 };
 
 // The families, the one list.
@@ -103,16 +103,13 @@ template <class... Ks> static Rcpp::List kernel_table_of(KernelList<Ks...>) {
 }
 Rcpp::List kernel_table() { return kernel_table_of(Kernels()); }
 
-// P(i,j) = |a_i - b_j|^alpha (pow; exact squares and absolute values).
-static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma::mat& out) {
-  const arma::uword na = a.n_elem, nb = b.n_elem;
-  for (arma::uword j = 0; j < nb; ++j) {
+// out(i, j) = f(a_i - b_j) (lower: i >= j only).
+template <class Fn>
+static void outer_fill(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower, Fn f) {
+  for (arma::uword j = 0; j < b.n_elem; ++j) {
     double* col = out.colptr(j);
     const double bj = b[j];
-    for (arma::uword i = 0; i < na; ++i) {
-      const double d = std::fabs(a[i] - bj);
-      col[i] = (alpha == 2.0) ? d * d : (alpha == 1.0 ? d : std::pow(d, alpha));
-    }
+    for (arma::uword i = lower ? j : 0; i < a.n_elem; ++i) col[i] = f(a[i] - bj);
   }
 }
 
@@ -121,12 +118,7 @@ static void pow_dist(const arma::vec& a, const arma::vec& b, double alpha, arma:
 // alpha needs an exp per entry instead of a pow).
 template <class F>
 static void kernel_dist_t(const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
-  const arma::uword na = a.n_elem, nb = b.n_elem;
-  for (arma::uword j = 0; j < nb; ++j) {
-    double* col = out.colptr(j);
-    const double bj = b[j];
-    for (arma::uword i = lower ? j : 0; i < na; ++i) col[i] = F::dist(a[i] - bj);
-  }
+  outer_fill(a, b, out, lower, F::dist);
 }
 void kernel_dist(int kern, const arma::vec& a, const arma::vec& b, arma::mat& out, bool lower) {
   KERNEL_DISPATCH(kern, kernel_dist_t, a, b, out, lower);
@@ -148,30 +140,35 @@ void kernel_term(int kern, const arma::mat& G, double alpha, arma::mat& out, boo
   KERNEL_DISPATCH(kern, kernel_term_t, G, alpha, out, lower);
 }
 
-// The correlation from the terms: R(i,j) = finish(accumulate_k over
-// coef(theta_k) P_k(i,j)); power exponential: exp(-sum_k theta_k P_k(i,j)).
-// `w` is a workspace for the Matern products.
+// Column j of a correlation, rows i0 .. nr - 1:
+//   col_i = finish(accumulate_k over coef(theta_k) t_k(i))
+// (power exponential: exp(-sum_k theta_k t_k(i))), dim(k) giving dimension
+// k's terms t_k as a function of the row; w a workspace of nr doubles (the
+// Matern products). Every correlation below goes through it, so the cached
+// and on-the-fly paths give the same numbers.
+template <class F, class Dim>
+static void corr_column(double* col, double* w, arma::uword i0, arma::uword nr, int K,
+                        const double* theta, Dim dim) {
+  for (arma::uword i = i0; i < nr; ++i) { col[i] = 0.0; w[i] = 1.0; }
+  for (int k = 0; k < K; ++k) {
+    const double c = F::coef(theta[k]);
+    const auto t = dim(k);
+    for (arma::uword i = i0; i < nr; ++i) F::accum(c, t(i), col[i], w[i]);
+  }
+  for (arma::uword i = i0; i < nr; ++i) col[i] = F::finish(col[i], w[i]);
+}
+
+// The correlation from the cached terms P_k.
 template <class F>
 static void kernel_combine_t(const std::vector<const arma::mat*>& P, const arma::vec& theta,
                              arma::mat& out, bool lower) {
-  const arma::uword nr = out.n_rows, nc = out.n_cols, K = P.size();
-  std::vector<double> w(F::poly ? nr : 0);
-  for (arma::uword j = 0; j < nc; ++j) {
-    double* col = out.colptr(j);
-    const arma::uword i0 = lower ? j : 0;
-    for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
-    if (F::poly) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
-    for (arma::uword k = 0; k < K; ++k) {
-      const double* pk = P[k]->colptr(j);
-      const double c = F::coef(theta[k]);
-      if (F::poly) {
-        for (arma::uword i = i0; i < nr; ++i) F::accum(c, pk[i], col[i], w[i]);
-      } else {
-        for (arma::uword i = i0; i < nr; ++i) col[i] += c * pk[i];
-      }
-    }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
-  }
+  std::vector<double> w(out.n_rows);
+  for (arma::uword j = 0; j < out.n_cols; ++j)
+    corr_column<F>(out.colptr(j), w.data(), lower ? j : 0, out.n_rows, P.size(), theta.memptr(),
+                   [&](int k) {
+                     const double* pk = P[k]->colptr(j);
+                     return [=](arma::uword i) { return pk[i]; };
+                   });
 }
 void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
                     const arma::vec& theta, arma::mat& out, bool lower) {
@@ -180,29 +177,16 @@ void kernel_combine(int kern, const std::vector<const arma::mat*>& P,
 
 // kernel_combine(kernel_term(kernel_dist(...))) with no per-dimension
 // storage: the same operations in the same order, so the same numbers.
-// Power exponential: R(i,j) = exp(-sum_k theta_k exp(alpha_k log|X_ik - Y_jk|)).
 template <class F>
 static void kernel_corr_t(const arma::mat& X, const arma::mat& Y, int K, const double* theta,
                           const double* alpha, arma::mat& out, bool lower) {
-  const arma::uword nr = X.n_rows, nc = Y.n_rows;
-  std::vector<double> w(F::poly ? nr : 0);
-  for (arma::uword j = 0; j < nc; ++j) {
-    double* col = out.colptr(j);
-    const arma::uword i0 = lower ? j : 0;
-    for (arma::uword i = i0; i < nr; ++i) col[i] = 0.0;
-    if (F::poly) for (arma::uword i = i0; i < nr; ++i) w[i] = 1.0;
-    for (int k = 0; k < K; ++k) {
+  std::vector<double> w(X.n_rows);
+  for (arma::uword j = 0; j < Y.n_rows; ++j)
+    corr_column<F>(out.colptr(j), w.data(), lower ? j : 0, X.n_rows, K, theta, [&](int k) {
       const double* x = X.colptr(k);
-      const double yj = Y.at(j, k), c = F::coef(theta[k]), a = alpha[k];
-      if (F::poly) {
-        for (arma::uword i = i0; i < nr; ++i)
-          F::accum(c, F::term(F::dist(x[i] - yj), a), col[i], w[i]);
-      } else {
-        for (arma::uword i = i0; i < nr; ++i) col[i] += c * F::term(F::dist(x[i] - yj), a);
-      }
-    }
-    for (arma::uword i = i0; i < nr; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
-  }
+      const double yj = Y.at(j, k), a = alpha[k];
+      return [=](arma::uword i) { return F::term(F::dist(x[i] - yj), a); };
+    });
 }
 void kernel_corr(int kern, const arma::mat& X, const arma::mat& Y, int K, const double* theta,
                  const double* alpha, arma::mat& out, bool lower) {
@@ -228,16 +212,6 @@ void kernel_dist_tri(int kern, const arma::mat& X, int s, int K, double* G) {
   KERNEL_DISPATCH(kern, kernel_dist_tri_t, X, s, K, G);
 }
 
-// One dimension's share of ne flat entries: s_e += c t_e (Matern:
-// accum(c, t_e, s_e, w_e)) for t = g (the families without a smoothness,
-// whose term is the distance value itself).
-template <class F>
-static void flat_accum(const double* g, size_t ne, double c, double* s, double* w) {
-  for (size_t e = 0; e < ne; ++e) {
-    if (F::poly) F::accum(c, g[e], s[e], w[e]); else s[e] += c * g[e];
-  }
-}
-
 // The correlations of ne flat entries from their per-dimension values G:
 //   out_e = finish(accumulate_k coef(theta_k) term(G[k ne + e], alpha_k)),
 // each entry in the same operations and order as kernel_corr() (so the
@@ -246,84 +220,43 @@ static void flat_accum(const double* g, size_t ne, double c, double* s, double* 
 template <class F>
 static void kernel_corr_flat_t(const double* G, size_t ne, int K, const double* theta,
                                const double* alpha, double* out, double* w) {
-  for (size_t e = 0; e < ne; ++e) out[e] = 0.0;
-  if (F::poly) for (size_t e = 0; e < ne; ++e) w[e] = 1.0;
+  for (size_t e = 0; e < ne; ++e) { out[e] = 0.0; w[e] = 1.0; }
   for (int k = 0; k < K; ++k) {
     const double* g = G + (size_t) k * ne;
     const double c = F::coef(theta[k]), a = alpha[k];
-    if (F::alpha) {
-      for (size_t e = 0; e < ne; ++e) {
-        if (F::poly) F::accum(c, F::term(g[e], a), out[e], w[e]);
-        else out[e] += c * F::term(g[e], a);
-      }
-    } else {
-      flat_accum<F>(g, ne, c, out, w);
-    }
+    for (size_t e = 0; e < ne; ++e) F::accum(c, F::term(g[e], a), out[e], w[e]);
   }
   // finish(0, w) = w exp(-0) = w (the diagonal, coinciding inputs): no exp
-  for (size_t e = 0; e < ne; ++e) {
-    const double wf = F::poly ? w[e] : 1.0;
-    out[e] = out[e] == 0.0 ? wf : F::finish(out[e], wf);
-  }
+  for (size_t e = 0; e < ne; ++e) out[e] = out[e] == 0.0 ? w[e] : F::finish(out[e], w[e]);
 }
 void kernel_corr_flat(int kern, const double* G, size_t ne, int K, const double* theta,
                       const double* alpha, double* out, double* w) {
   KERNEL_DISPATCH(kern, kernel_corr_flat_t, G, ne, K, theta, alpha, out, w);
 }
 
-// Packed lower-triangle storage of a symmetric m x m quantity: entry (i, j),
-// i >= j, at packed_offset(j, m) + i - j.
 size_t packed_offset(size_t j, size_t m) { return j * m - j * (j - 1) / 2; }
 
-// kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles).
-template <class F>
-static void kernel_dist_packed_t(const arma::vec& a, std::vector<double>& G) {
-  const size_t m = a.n_elem;
-  G.resize(m * (m + 1) / 2);
-  for (size_t j = 0; j < m; ++j) {
-    double* g = G.data() + packed_offset(j, m);
-    const double aj = a[j];
-    for (size_t i = j; i < m; ++i) g[i - j] = F::dist(a[i] - aj);
-  }
-}
+// kernel_dist(a, a, lower) in packed storage (m (m + 1) / 2 doubles): the
+// flat entries of kernel_dist_tri() for one dimension are that layout.
 void kernel_dist_packed(int kern, const arma::vec& a, std::vector<double>& G) {
-  KERNEL_DISPATCH(kern, kernel_dist_packed_t, a, G);
+  G.resize(a.n_elem * (a.n_elem + 1) / 2);
+  kernel_dist_tri(kern, a, a.n_elem, 1, G.data());
 }
 
-// kernel_corr(X, X, lower) with the per-dimension packed kernel_dist()
-// caches G[k] where given (non-null), on the fly elsewhere: the same numbers.
 template <class F>
 static void kernel_corr_self_t(const arma::mat& X, int K, const double* theta,
                                const double* alpha, const std::vector<const double*>& G,
                                arma::mat& out) {
   const size_t m = X.n_rows;
-  std::vector<double> w(F::poly ? m : 0);
-  for (size_t j = 0; j < m; ++j) {
-    double* col = out.colptr(j);
-    for (size_t i = j; i < m; ++i) col[i] = 0.0;
-    if (F::poly) for (size_t i = j; i < m; ++i) w[i] = 1.0;
-    for (int k = 0; k < K; ++k) {
-      const double c = F::coef(theta[k]), a = alpha[k];
-      if (k < (int) G.size() && G[k]) {
-        const double* g = G[k] + packed_offset(j, m) - j;
-        if (F::poly) {
-          for (size_t i = j; i < m; ++i) F::accum(c, F::term(g[i], a), col[i], w[i]);
-        } else {
-          for (size_t i = j; i < m; ++i) col[i] += c * F::term(g[i], a);
-        }
-      } else {
-        const double* x = X.colptr(k);
-        const double xj = x[j];
-        if (F::poly) {
-          for (size_t i = j; i < m; ++i)
-            F::accum(c, F::term(F::dist(x[i] - xj), a), col[i], w[i]);
-        } else {
-          for (size_t i = j; i < m; ++i) col[i] += c * F::term(F::dist(x[i] - xj), a);
-        }
-      }
-    }
-    for (size_t i = j; i < m; ++i) col[i] = F::finish(col[i], F::poly ? w[i] : 1.0);
-  }
+  std::vector<double> w(m);
+  for (size_t j = 0; j < m; ++j)
+    corr_column<F>(out.colptr(j), w.data(), j, m, K, theta, [&](int k) {
+      // g: the cache's column j, indexed by row as a column of out is
+      const double* g = k < (int) G.size() && G[k] ? G[k] + packed_offset(j, m) - j : nullptr;
+      const double* x = X.colptr(k);
+      const double xj = x[j], a = alpha[k];
+      return [=](arma::uword i) { return F::term(g ? g[i] : F::dist(x[i] - xj), a); };
+    });
 }
 void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
                       const double* alpha, const std::vector<const double*>& G,
@@ -336,25 +269,21 @@ void kernel_corr_self(int kern, const arma::mat& X, int K, const double* theta,
 template <class F>
 static void kernel_corr_point_t(const arma::mat& X, int col0, int K, const double* point,
                                 const double* theta, const double* alpha, arma::vec& out) {
-  const int nr = X.n_rows;
-  out.zeros();
-  std::vector<double> w(F::poly ? nr : 0, 1.0);
-  for (int l = 0; l < K; ++l) {
-    const double kap = point[l], c = F::coef(theta[l]), al = alpha[l];
+  const arma::uword nr = X.n_rows;
+  std::vector<double> w(nr);
+  corr_column<F>(out.memptr(), w.data(), 0, nr, K, theta, [&](int l) {
+    const double kap = point[l], al = alpha[l];
     const double* xs = X.colptr(col0 + l);
-    for (int i = 0; i < nr; ++i) {
-      const double t = F::alpha ? std::pow(std::fabs(xs[i] - kap), al) : F::dist(xs[i] - kap);
-      if (F::poly) F::accum(c, t, out[i], w[i]); else out[i] += c * t;
-    }
-  }
-  for (int i = 0; i < nr; ++i) out[i] = F::finish(out[i], F::poly ? w[i] : 1.0);
+    return [=](arma::uword i) {
+      return F::alpha ? std::pow(std::fabs(xs[i] - kap), al) : F::dist(xs[i] - kap);
+    };
+  });
 }
 void kernel_corr_point(int kern, const arma::mat& X, int col0, int K, const double* point,
                        const double* theta, const double* alpha, arma::vec& out) {
   KERNEL_DISPATCH(kern, kernel_corr_point_t, X, col0, K, point, theta, alpha, out);
 }
 
-// R(X, Y)_{ij} = prod_k r(|X_ik - Y_jk|; theta_k, alpha_k).
 arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
                       const arma::vec& theta, const arma::vec& alpha, int kern) {
   check_kernel(kern);
@@ -362,7 +291,12 @@ arma::mat corr_matrix(const arma::mat& X, const arma::mat& Y,
     arma::mat out(X.n_rows, Y.n_rows, arma::fill::zeros);
     arma::mat P(X.n_rows, Y.n_rows);
     for (arma::uword k = 0; k < X.n_cols; ++k) {
-      pow_dist(X.col(k), Y.col(k), alpha[k], P);
+      // |x - y|^alpha, exact squares and absolute values
+      const double al = alpha[k];
+      outer_fill(X.col(k), Y.col(k), P, false, [al](double x) {
+        const double d = std::fabs(x);
+        return al == 2.0 ? d * d : (al == 1.0 ? d : std::pow(d, al));
+      });
       out += theta[k] * P;
     }
     return arma::exp(-out);

@@ -37,20 +37,43 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iMuB = lay.offset_of("muB"); iLambdaZ = lay.offset_of("lambdaZ");
   iRhoS = lay.offset_of("rhoS"); iRhoB = lay.offset_of("rhoB"); iRhoD = lay.offset_of("rhoD");
   levels = model.levels;
+  simNoise = lay.length_of("sigma2R") > 0;
+  iSigma2R = lay.offset_of("sigma2R");
+  if (simNoise) {
+    if ((int) model.repCount.size() != m_)
+      Rcpp::stop("the replicate counts must give one count per unique run (%d)", m_);
+    repInv.set_size(m_);
+    repLogN = 0.0;
+    for (int i = 0; i < m_; ++i) {
+      repInv[i] = 1.0 / model.repCount[i];
+      repLogN += std::log(model.repCount[i]);
+    }
+    repSSW = model.repSSW; repDf = model.repDf;
+  }
   scaled.clear();
-  for (const char* c : {"sigma2S", "sigma2B", "sigma2E"})
+  for (const char* c : {"sigma2S", "sigma2B", "sigma2E", "sigma2R"})
     for (int k = 0; k < lay.length_of(c); ++k) scaled.push_back(lay.offset_of(c) + k);
   phi.zeros(d);
+}
+
+// The replicates' within term: the runs at each unique input less their
+// mean, -0.5 [sum_i (n_i - 1) log(2 pi r) + SSW / r + sum_i log n_i] (the
+// means carry the rest: their noise variance r / n_i is in the simulator
+// block; the last sum is the Jacobian from the runs to their means and
+// deviations, so that the log-likelihood is that of every run).
+double Posterior::noiseLoglik(double r) const {
+  return -0.5 * (repDf * (LOG_2PI + std::log(r)) + repSSW / r + repLogN);
 }
 
 // What a move of a class touches (add_touch()), by the class's name; a class
 // not named here moves only the residual (muB).
 enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
-                 TK_FIELD };
+                 TK_FIELD, TK_SIMNOISE };
 static const std::pair<const char*, int> class_touch[] = {
     {"kappa", TK_KAPPA}, {"thetaS", TK_SIM}, {"alphaS", TK_SIMPOW}, {"rhoS", TK_SIMLEVELS},
     {"thetaB", TK_BIAS}, {"alphaB", TK_BIASPOW}, {"lambdaZ", TK_BIAS}, {"rhoB", TK_BIAS},
-    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD}};
+    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD},
+    {"sigma2R", TK_SIMNOISE}};
 
 void fill_layout(Layout& lay) {
   lay.d = 0;
@@ -119,19 +142,16 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
   }
   u_.zeros(n);
   ptrF_.resize(p); ptrB_.resize(p);
-  Gf_.resize(p);
-  for (int k = 0; k < p; ++k) {
-    Gf_[k].zeros(nu_, nu_);
-    kernel_dist(kernS_, Xu_.col(k), Xu_.col(k), Gf_[k], true);
-  }
-  // the bias GP's distance cache, when its family caches another g(d)
-  if (kernB_ != kernS_) {
-    Gfb_.resize(p);
+  auto dist_cache = [&](int kern, std::vector<arma::mat>& G) {
+    G.resize(p);
     for (int k = 0; k < p; ++k) {
-      Gfb_[k].zeros(nu_, nu_);
-      kernel_dist(kernB_, Xu_.col(k), Xu_.col(k), Gfb_[k], true);
+      G[k].zeros(nu_, nu_);
+      kernel_dist(kern, Xu_.col(k), Xu_.col(k), G[k], true);
     }
-  }
+  };
+  dist_cache(kernS_, Gf_);
+  // the bias GP's distance cache, when its family caches another g(d)
+  if (kernB_ != kernS_) dist_cache(kernB_, Gfb_);
 }
 
 // Add what a move of parameter j touches to t (by j's class in the layout).
@@ -159,6 +179,11 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
     break;
   case TK_FIELD:
     t.field = true;
+    // with the simulator's own noise, Ds holds sigma2R / sigma2S
+    if (simNoise && j == iSigma2S) t.simCorr = t.cross = true;
+    break;
+  case TK_SIMNOISE:
+    t.simCorr = t.cross = t.field = true;
     break;
   default:  // muB: only the residual moves
     break;
@@ -194,7 +219,8 @@ double SchurPosterior::proposeScale(double c) {
   const double ldDs = ldDs_.cur(), zz = zz_.cur();
   const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
   loglik_.alt() = ll;
   return ll;
 }
@@ -211,15 +237,28 @@ void SchurPosterior::reject() {
   restore();
 }
 
+// LS^-1 (yf - muB - wz), each field row's wz its distinct row's.
+static arma::vec field_residual(const arma::mat& LS, const arma::vec& yf, double muB,
+                                const arma::vec& wz, const std::vector<int>& grp) {
+  arma::vec v(yf.n_elem);
+  for (arma::uword i = 0; i < yf.n_elem; ++i) v[i] = yf[i] - muB - wz[grp[i]];
+  solve_lower(LS, v);
+  return v;
+}
+
+// LS^-1 K_F with K_F's rows those of K (a row per distinct field row) at
+// each field row's.
+static arma::mat field_rows(const arma::mat& LS, const arma::mat& K, const std::vector<int>& grp) {
+  arma::mat H = K.rows(arma::conv_to<arma::uvec>::from(grp));
+  solve_lower(LS, H);
+  return H;
+}
+
 void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
   arma::vec a(n, arma::fill::ones);
-  arma::vec b(n);
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) b[i] = yf_[i] - wz[grp_[i]];
   solve_lower(LS_.cur(), a);
-  solve_lower(LS_.cur(), b);
   aa = arma::dot(a, a);
-  ab = arma::dot(a, b);
+  ab = arma::dot(a, field_residual(LS_.cur(), yf_, 0.0, wz_.cur(), grp_));
 }
 
 // The S-GaSP correlation on the nu distinct field inputs (Gu and Wang 2018,
@@ -349,14 +388,8 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     Kf += s2B * Kb;
     v0 += s2B * rb;
   }
-  arma::vec v(n);
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
-  solve_lower(LS_.cur(), v);
-  arma::mat H(n, b);
-  for (int c = 0; c < b; ++c)
-    for (int i = 0; i < n; ++i) H(i, c) = Kf(grp_[i], c);
-  solve_lower(LS_.cur(), H);
+  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
+  const arma::mat H = field_rows(LS_.cur(), Kf, grp_);
   for (int c = 0; c < b; ++c) {
     const double* h = H.colptr(c);
     double hv = 0.0, hh = 0.0;
@@ -397,13 +430,27 @@ bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double
   return true;
 }
 
+// A correlation's per-dimension terms over the experimental inputs into P:
+// the distance cache G[k] itself for a family without a smoothness, else
+// the power matrix at alpha[k], recomputed (into pow[k].alt()) where redo[k].
+static void power_terms(int kern, const std::vector<arma::mat>& G, const double* alpha,
+                        const std::vector<char>& redo, std::vector<Buf2<arma::mat> >& pow,
+                        std::vector<const arma::mat*>& P) {
+  for (size_t k = 0; k < G.size(); ++k) {
+    if (!kernel_has_alpha(kern)) { P[k] = &G[k]; continue; }
+    if (redo[k]) kernel_term(kern, G[k], alpha[k], pow[k].alt(), true);
+    P[k] = redo[k] ? &pow[k].alt() : &pow[k].cur();
+  }
+}
+
 // Recompute the blocks `t` touches into the scratch buffers, reading the
 // current buffers for everything else; returns the new log-likelihood.
 double SchurPosterior::evaluate(const Touch& t) {
   const double s2S = phi[iSigma2S];
   const double s2B = bias ? phi[iSigma2B] : 0.0;
-  // D = sigma2S Ds is positive definite only for sigma2S > 0.
+  // D = sigma2S Ds is positive definite only for sigma2S > 0 (and sigma2R > 0).
   if (!(s2S > 0)) return R_NegInf;
+  if (simNoise && !(phi[iSigma2R] > 0)) return R_NegInf;
 
   // Simulator block (the algebra's).
   double ldDs = ldDs_.cur(), zz = zz_.cur();
@@ -412,15 +459,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   // Experimental-input part of Rs(Xk,Xk).
   const arma::mat* Rkk = &Rkk_.cur();
   if (t.expDim) {
-    const arma::vec alphaS = phi.subvec(iAlphaS, iAlphaS + p - 1);
-    std::vector<const arma::mat*>& Pf = ptrF_;
-    for (int k = 0; k < p; ++k) {
-      const bool redo = t.simPow[k];
-      if (!kernel_has_alpha(kernS_)) { Pf[k] = &Gf_[k]; continue; }
-      if (redo) kernel_term(kernS_, Gf_[k], alphaS[k], Pfs_[k].alt(), true);
-      Pf[k] = redo ? &Pfs_[k].alt() : &Pfs_[k].cur();
-    }
-    kernel_combine(kernS_, Pf, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
+    power_terms(kernS_, Gf_, phi.memptr() + iAlphaS, t.simPow, Pfs_, ptrF_);
+    kernel_combine(kernS_, ptrF_, phi.subvec(iThetaS, iThetaS + p - 1), Rkk_.alt(), true);
     level_scale(levels, phi.memptr() + iRhoS, Xu_, Xu_, Rkk_.alt(), true);
     Rkk = &Rkk_.alt();
   }
@@ -436,17 +476,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   // Bias correlation Rb over the experimental inputs (none without a bias).
   const arma::mat* Rb = &Rb_.cur();
   if (t.biasCorr && bias) {
-    const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
-    const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
-    std::vector<const arma::mat*>& P = ptrB_;
-    const std::vector<arma::mat>& Gb = Gfb_.empty() ? Gf_ : Gfb_;
-    for (int k = 0; k < p; ++k) {
-      const bool redo = t.biasPow[k];
-      if (!kernel_has_alpha(kernB_)) { P[k] = &Gb[k]; continue; }
-      if (redo) kernel_term(kernB_, Gb[k], alphaB[k], Pfb_[k].alt(), true);
-      P[k] = redo ? &Pfb_[k].alt() : &Pfb_[k].cur();
-    }
-    kernel_combine(kernB_, P, thetaB, Rb_.alt(), true);
+    power_terms(kernB_, Gfb_.empty() ? Gf_ : Gfb_, phi.memptr() + iAlphaB, t.biasPow, Pfb_, ptrB_);
+    kernel_combine(kernB_, ptrB_, phi.subvec(iThetaB, iThetaB + p - 1), Rb_.alt(), true);
     biasLevels(Xu_, srcU_.data(), Xu_, srcU_.data(), Rb_.alt(), true);
     if (!biasModel(Rb_.alt(), Bz_, Wz_)) return R_NegInf;
     Rb = &Rb_.alt();
@@ -467,7 +498,8 @@ double SchurPosterior::evaluate(const Touch& t) {
   const double vv = arma::dot(u_, u_);
 
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  const double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
+  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
   loglik_.alt() = ll;
   return ll;
 }
@@ -509,10 +541,8 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
   arma::mat Xk(nu_, p + q);
   Xk.cols(0, p - 1) = Xu_;
   for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
-  arma::vec v(n), wy;
-  const arma::vec& wz = wz_.cur();
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
-  solve_lower(LS_.cur(), v);
+  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
+  arma::vec wy;
   auto root = [&](const arma::mat& Z, const arma::mat* Kb, arma::mat& W, bool haveW,
                   arma::mat& A) {
     arma::mat G, R;
@@ -520,11 +550,7 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
     runPrior(phi, Xk, Z, R);
     R -= s2S * G;
     if (Kb) R += s2B * *Kb;
-    arma::mat H(n, Z.n_rows);
-    for (arma::uword c = 0; c < Z.n_rows; ++c)
-      for (int i = 0; i < n; ++i) H(i, c) = R(grp_[i], c);
-    solve_lower(LS_.cur(), H);
-    A = arma::join_cols(rs * W, H);
+    A = arma::join_cols(rs * W, field_rows(LS_.cur(), R, grp_));
   };
   // the runs' part at the candidates (runW_, runWy_) depends on the
   // simulator's correlation parameters alone: kept from the last call

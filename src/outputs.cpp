@@ -113,6 +113,14 @@ static arma::vec local_phi(const arma::vec& phi, const std::vector<int>& map) {
   return out;
 }
 
+// The rows of X in output o (read off its indicator columns `out`).
+static arma::uvec output_rows(const arma::mat& X, const LevelInput& out, int o) {
+  std::vector<arma::uword> r;
+  for (arma::uword i = 0; i < X.n_rows; ++i)
+    if (level_of(X, i, out) == o) r.push_back(i);
+  return arma::uvec(r);
+}
+
 bool OutputsPosterior::init(const arma::vec& phi0) {
   phi = phi0;
   ll_ = 0.0;
@@ -181,12 +189,10 @@ void OutputsPosterior::muBQuadratic(double& aa, double& ab) const {
 // its indicator columns; a field point's noise group must be its output's).
 void OutputsPosterior::condition(const arma::mat& Xnew, int type, double* mean, double* var,
                                  const int* noise, const int* source) {
-  std::vector<std::vector<int> > rows(K_);
-  for (arma::uword c = 0; c < Xnew.n_rows; ++c) rows[level_of(Xnew, c, out_)].push_back(c);
   for (int o = 0; o < K_; ++o) {
-    const std::vector<int>& r = rows[o];
-    if (r.empty()) continue;
-    const arma::mat Xo = Xnew.rows(arma::conv_to<arma::uvec>::from(r));
+    const arma::uvec r = output_rows(Xnew, out_, o);
+    if (r.is_empty()) continue;
+    const arma::mat Xo = Xnew.rows(r);
     std::vector<int> no(r.size()), so(r.size());
     for (size_t i = 0; i < r.size(); ++i) {
       if (noise && type == PT_FIELD) {
@@ -260,10 +266,7 @@ void OutputsPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
   std::vector<arma::uvec> uo(K_), to(K_);
   int N = 0;
   for (int o = 0; o < K_; ++o) {
-    std::vector<arma::uword> a, b;
-    for (arma::uword i = 0; i < U.n_rows; ++i) if (level_of(U, i, out_) == o) a.push_back(i);
-    for (arma::uword i = 0; i < XT.n_rows; ++i) if (level_of(XT, i, out_) == o) b.push_back(i);
-    uo[o] = arma::uvec(a); to[o] = arma::uvec(b);
+    uo[o] = output_rows(U, out_, o); to[o] = output_rows(XT, out_, o);
     sub_[o]->runConditional(U.rows(uo[o]), XT.rows(to[o]), rc[o]);
     N += rc[o].A.n_rows;
   }
@@ -292,14 +295,9 @@ void OutputsPosterior::runPrior(const arma::vec& ph, const arma::mat& X, const a
   K.zeros(X.n_rows, Y.n_rows);
   arma::mat Ko;
   for (int o = 0; o < K_; ++o) {
-    std::vector<arma::uword> a, b;
-    for (arma::uword i = 0; i < X.n_rows; ++i) if (level_of(X, i, out_) == o) a.push_back(i);
-    for (arma::uword j = 0; j < Y.n_rows; ++j) if (level_of(Y, j, out_) == o) b.push_back(j);
-    if (a.empty() || b.empty()) continue;
-    const arma::uvec ra(a), rb(b);
-    arma::vec po(map_[o].size());
-    for (size_t k = 0; k < map_[o].size(); ++k) po[k] = ph[map_[o][k]];
-    sub_[o]->runPrior(po, X.rows(ra), Y.rows(rb), Ko);
+    const arma::uvec ra = output_rows(X, out_, o), rb = output_rows(Y, out_, o);
+    if (ra.is_empty() || rb.is_empty()) continue;
+    sub_[o]->runPrior(local_phi(ph, map_[o]), X.rows(ra), Y.rows(rb), Ko);
     K.submat(ra, rb) = Ko;
   }
 }

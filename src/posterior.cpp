@@ -160,6 +160,22 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have,
                  c.length < 0 ? K * b : want);
   }
+  // a stochastic simulator's replicates (R/sim_noise.R): the dense algebra only
+  if (model.containsElementNamed("replicates")) {
+    const Rcpp::List rp = model["replicates"];
+    out.repCount = Rcpp::as<std::vector<double> >(rp["count"]);
+    out.repSSW = Rcpp::as<double>(rp["ssw"]);
+    out.repDf = 0.0;
+    for (double c : out.repCount) {
+      if (!(c >= 1)) Rcpp::stop("the replicate counts must be 1, 2, ...");
+      out.repDf += c - 1.0;
+    }
+    if (out.algebra == ALG_VECCHIA || K > 1 || !out.emulator)
+      Rcpp::stop("the simulator's own noise has the dense algebra only");
+  }
+  if ((lay.length_of("sigma2R") > 0) != !out.repCount.empty() || lay.length_of("sigma2R") > 1)
+    Rcpp::stop("the layout gives sigma2R %d entries where the data need %d",
+               lay.length_of("sigma2R"), out.repCount.empty() ? 0 : 1);
   if (out.algebra == ALG_VECCHIA) {
     if (!model.containsElementNamed("vecchia"))
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");
@@ -176,7 +192,8 @@ static std::unique_ptr<Posterior> make_block(const arma::mat& Xf, const arma::ve
   if (model.algebra == ALG_VECCHIA)
     return std::unique_ptr<Posterior>(new VecchiaPosterior(Xf, yf, Xs, ys, nugget, model));
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
-  if (model.algebra == ALG_AUTO) {
+  // (the simulator's own noise: the dense algebra, whatever the design)
+  if (model.algebra == ALG_AUTO && model.repCount.empty()) {
     ProductDesign pd;
     if (product_design(Xs, Xf.n_cols, pd) && kronecker_pays(pd))
       return std::unique_ptr<Posterior>(new KroneckerPosterior(Xf, yf, Xs, ys, nugget, model, pd));

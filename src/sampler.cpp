@@ -62,8 +62,7 @@
 // keeps the older epochs at falling weight, so the estimate changes
 // smoothly, leaves the drift from the start little weight, and its
 // effective draws keep growing. A reshaped block keeps its proposal's size
-// (log s absorbs the
-// change of log det(L)^(1/k)). The decision is part of the chain's state, so
+// (log s absorbs the change of log det(L)^(1/k)). The decision is part of the chain's state, so
 // a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
@@ -134,6 +133,28 @@ static double adapt_step(double logscale, double rate, double target, int batch)
 static double list_num(const Rcpp::List& s, const char* name, double dflt) {
   return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
 }
+static std::vector<int> list_ints(const Rcpp::List& s, const char* name) {
+  return s.containsElementNamed(name) ? Rcpp::as<std::vector<int> >(s[name]) : std::vector<int>();
+}
+// R's 1-based indices, 0-based.
+static std::vector<int> zero_based(const Rcpp::IntegerVector& ix) {
+  std::vector<int> out(ix.begin(), ix.end());
+  for (int& j : out) j -= 1;
+  return out;
+}
+static bool has(const std::vector<int>& v, int x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+// Welford update of a running mean and centred sums of squares M2 (lower
+// triangle) by w, the n-th draw (e: a workspace).
+static void welford(const arma::vec& w, int n, arma::vec& mean, arma::mat& M2, arma::vec& e) {
+  const int k = w.n_elem;
+  for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
+  mean += e / n;
+  for (int a = 0; a < k; ++a)
+    for (int b = 0; b <= a; ++b) M2(a, b) += e[a] * (w[b] - mean[b]);
+}
 
 // An adaptive joint random walk over some parameters (see the top).
 struct Block {
@@ -178,9 +199,7 @@ struct Block {
     curN = 0; curWin = -1; curMean.zeros(k); curM2.zeros(k, k);
   }
   void read(const Rcpp::List& s) {
-    const Rcpp::IntegerVector ix = s["index"];
-    idx.assign(ix.begin(), ix.end());
-    for (int& j : idx) j -= 1;
+    idx = zero_based(s["index"]);
     mean = Rcpp::as<arma::vec>(s["mean"]);
     cov = Rcpp::as<arma::mat>(s["cov"]);
     L = Rcpp::as<arma::mat>(s["chol"]);
@@ -233,25 +252,14 @@ struct Block {
   // Start the running mean and covariance afresh (L is kept).
   void forget_all() { n = 0; mean.zeros(); cov.zeros(); }
   // Welford update of the running mean and covariance of w.
-  void record() {
-    ++n;
-    const int k = idx.size();
-    for (int i = 0; i < k; ++i) e[i] = w[i] - mean[i];
-    mean += e / n;
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b <= a; ++b) cov(a, b) += e[a] * (w[b] - mean[b]);
-  }
+  void record() { welford(w, ++n, mean, cov, e); }
   // Warm-up of data-dependent length: w at sweep `it` joins its window
   // (Welford within the window).
   void record_window(int it) {
     const int j = (it - 1) / WINDOW;
     if (curN > 0 && j != curWin) close_window();
     curWin = j; ++curN; ++n;
-    const int k = idx.size();
-    for (int i = 0; i < k; ++i) e[i] = w[i] - curMean[i];
-    curMean += e / curN;
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b <= a; ++b) curM2(a, b) += e[a] * (w[b] - curMean[b]);
+    welford(w, curN, curMean, curM2, e);
   }
   // The open window joins the closed ones.
   void close_window() {
@@ -279,9 +287,8 @@ struct Block {
   // mu = sum a n m / S, covariance
   //   C = sum a (M2 + n (m - mu)(m - mu)') / S,  S = sum a n
   // (cov.wt(method = "ML") with the weights a per draw), over the closed
-  // windows and the open one (withOpen). `count` the draws weighed (a > 0);
-  // pi the closed windows' shares a n / S (withOpen false).
-  int pooled(bool withOpen, arma::vec& mu, arma::mat& C, arma::vec& pi) const {
+  // windows and the open one (withOpen); returns the draws weighed (a > 0).
+  int pooled(bool withOpen, arma::vec& mu, arma::mat& C) const {
     const int B = winCount.n_elem, k = idx.size();
     const int newest = withOpen && curN > 0 ? curWin : (B ? (int) winIndex[B - 1] : curWin);
     const int E = epoch(std::max(newest, 0));
@@ -295,7 +302,7 @@ struct Block {
     }
     const bool open = withOpen && curN > 0;
     if (open) { S += curN; count += curN; }
-    mu.zeros(k); C.zeros(k, k); pi.zeros(B);
+    mu.zeros(k); C.zeros(k, k);
     if (S <= 0) return 0;
     for (int b = 0; b < B; ++b) mu += a[b] * winCount[b] * winMeans.col(b) / S;
     if (open) mu += curN * curMean / S;
@@ -303,7 +310,6 @@ struct Block {
       if (a[b] == 0) continue;
       const arma::vec d = winMeans.col(b) - mu;
       C += a[b] * (winM2.cols(b * k, b * k + k - 1) + winCount[b] * d * d.t());
-      pi[b] = a[b] * winCount[b] / S;
     }
     if (open) {
       const arma::vec d = curMean - mu;
@@ -363,8 +369,8 @@ struct Block {
     logscale = adapt_step(logscale, rate, k == 1 ? 0.44 : 0.234, batch);
     bool enough = n >= 2 * BATCH;
     if (restart < 0) {
-      arma::vec mu, pi;
-      enough = pooled(true, mu, tmp, pi) >= 2 * BATCH;
+      arma::vec mu;
+      enough = pooled(true, mu, tmp) >= 2 * BATCH;
     } else if (enough) {
       tmp = cov / (n - 1);
     }
@@ -430,8 +436,10 @@ struct Move {
   virtual bool step(Chain& ch) = 0;
   // after repeat `rep` of sweep `it` (burn-in or not): what the move learns
   virtual void after(bool, int, int) {}
-  // acceptances / repeats in the current batch (the move's own count)
-  virtual double& batchCount() = 0;
+  // acceptances / repeats in the current batch (the move's own count; a
+  // block's is its Block's)
+  double accBatch = 0;
+  virtual double& batchCount() { return accBatch; }
   virtual void adapt(const Chain&) {}
   virtual double logScale() const { return NA_REAL; }
   // the log size of its proposal, whose drift a warm-up watches
@@ -457,12 +465,30 @@ static bool metropolis(Chain& ch, int j, double llNew, double lpNew, double extr
   return false;
 }
 
+// The same for a move of the parameters idx with log priors lpNew: accept
+// when log u < llNew - ll + the terms (the log prior, Jacobian and proposal
+// changes, added in their order).
+static bool metropolis(Chain& ch, const std::vector<int>& idx, const double* lpNew, double llNew,
+                       std::initializer_list<double> terms) {
+  double r = llNew - ch.ll;
+  for (double t : terms) r += t;
+  if (std::isfinite(llNew) && std::log(R::unif_rand()) < r) {
+    ch.post.accept();
+    ch.ll = llNew;
+    for (size_t i = 0; i < idx.size(); ++i) ch.lp[idx[i]] = lpNew[i];
+    return true;
+  }
+  ch.post.reject();
+  return false;
+}
+
 // Single-site random-walk Metropolis move of parameter j.
 struct SiteMove : Move {
   int j;
-  double logsd, accBatch;  // log SD of its walk, acceptances this batch
-  SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]), accBatch(ch.accBatch[j_]) {
+  double logsd;  // log SD of its walk
+  SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]) {
     idx = {j_};
+    accBatch = ch.accBatch[j_];
   }
   const char* kind() const override { return "single"; }
   bool step(Chain& ch) override {
@@ -476,7 +502,6 @@ struct SiteMove : Move {
     if (!std::isfinite(jac)) return false;
     return metropolis(ch, j, post.propose(j, xNew), lpNew, jac);
   }
-  double& batchCount() override { return accBatch; }
   void adapt(const Chain& ch) override {
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
   }
@@ -561,9 +586,9 @@ struct BlockMove : Move {
     const int kw = b.walk_count();
     if (!independent || b.restart >= 0 || ch.warmCapped || kw < WARM_ESS_K || kw > IND_MAX_K)
       return;
-    arma::vec mu, pi;
+    arma::vec mu;
     arma::mat C;
-    if (b.pooled(true, mu, C, pi) < 2 * BATCH) return;
+    if (b.pooled(true, mu, C) < 2 * BATCH) return;
     indMu = mu.head(kw);
     indL = C.submat(0, 0, kw - 1, kw - 1) * (IND_INFLATE * IND_INFLATE);
     if (!chol_lower(indL)) return;
@@ -620,15 +645,7 @@ struct BlockMove : Move {
     if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
     lpDiff += b.lpNew[kt] - ch.lp[js];
     const double lq = log_ig(s2, aq, bOld) - log_ig(s2New, aq, bNew);
-    const double llNew = post.propose(b.idx, b.vals);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac + lq) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) ch.lp[b.idx[i]] = b.lpNew[i];
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, b.idx, b.lpNew.memptr(), post.propose(b.idx, b.vals), {lpDiff, jac, lq});
   }
   // the walk's positions w of every parameter of the block (what a burn-in
   // records)
@@ -642,19 +659,12 @@ struct BlockMove : Move {
       position(ch);
       return acc;
     }
-    Posterior& post = ch.post;
-    const int k = b.idx.size();
     double lpDiff = 0, jac = 0;
-    if (!proposal(ch, k, lpDiff, jac)) return false;
-    const double llNew = post.propose(b.idx, b.vals);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + jac) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) { ch.lp[b.idx[i]] = b.lpNew[i]; b.w[i] = b.wNew[i]; }
-      return true;
-    }
-    post.reject();
-    return false;
+    if (!proposal(ch, b.idx.size(), lpDiff, jac)) return false;
+    if (!metropolis(ch, b.idx, b.lpNew.memptr(), ch.post.propose(b.idx, b.vals), {lpDiff, jac}))
+      return false;
+    b.w = b.wNew;
+    return true;
   }
   // burn-in: the walk's position joins the running covariance (afresh from
   // the restart sweep on)
@@ -674,10 +684,8 @@ struct BlockMove : Move {
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
 struct GibbsMuBMove : Move {
-  double accBatch;  // draws this batch (every one is accepted)
-  GibbsMuBMove(int j, const Chain& ch) : accBatch(ch.accBatch[j]) { idx = {j}; }
+  GibbsMuBMove(int j, const Chain& ch) { idx = {j}; accBatch = ch.accBatch[j]; }
   const char* kind() const override { return "gibbs"; }
-  double& batchCount() override { return accBatch; }
   void write(arma::vec&, arma::vec& acc, Rcpp::List&) const override { acc[idx[0]] = accBatch; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
@@ -699,7 +707,7 @@ struct GibbsMuBMove : Move {
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
 struct ScaleMove : Move {
   std::vector<double> lpNew;  // the proposal's log priors (workspace)
-  double logsd, accBatch;     // log SD of log c, acceptances this batch
+  double logsd;               // log SD of log c
   int batch;                  // its burn-in batches so far
   ScaleMove(const Posterior& post, const Rcpp::List& state) {
     idx = post.scaled;
@@ -721,17 +729,8 @@ struct ScaleMove : Move {
       lpDiff += lpNew[i] - ch.lp[j];
     }
     if (!std::isfinite(lpDiff)) return false;
-    const double llNew = post.proposeScale(c);
-    if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew - ch.ll + lpDiff + k * e) {
-      post.accept();
-      ch.ll = llNew;
-      for (int i = 0; i < k; ++i) ch.lp[idx[i]] = lpNew[i];
-      return true;
-    }
-    post.reject();
-    return false;
+    return metropolis(ch, idx, lpNew.data(), post.proposeScale(c), {lpDiff, k * e});
   }
-  double& batchCount() override { return accBatch; }
   void adapt(const Chain&) override {
     ++batch;
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, batch);
@@ -754,8 +753,8 @@ struct ScaleMove : Move {
 // algebra per step.
 struct JumpMove : Move {
   int j;
-  double lo, hi, accBatch;  // the interval on the sampler's scale; acceptances this batch
-  JumpMove(int j_, double lo_, double hi_, const Chain& ch) : j(j_), lo(lo_), hi(hi_), accBatch(0) {
+  double lo, hi;  // the interval on the sampler's scale
+  JumpMove(int j_, double lo_, double hi_, const Chain& ch) : j(j_), lo(lo_), hi(hi_) {
     if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi))
       Rcpp::stop("the jump move of %s needs a finite interval", ch.param_name(j_).c_str());
     idx = {j_};
@@ -773,7 +772,6 @@ struct JumpMove : Move {
     if (!std::isfinite(lpNew)) return false;
     return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
   }
-  double& batchCount() override { return accBatch; }
 };
 
 typedef std::vector<std::unique_ptr<Move> > Schedule;
@@ -824,15 +822,13 @@ static std::vector<Block> make_blocks(const Chain& ch, const Rcpp::List& blockSp
     if (haveBlocks) {
       blocks[b].read(Rcpp::as<Rcpp::List>(blockState[b]));
     } else {
-      std::vector<int> idx(ix.begin(), ix.end());
-      for (int& j : idx) j -= 1;
-      blocks[b].start(idx, ch.logsd);
+      blocks[b].start(zero_based(ix), ch.logsd);
     }
     if ((int) blocks[b].idx.size() != ix.size())
       Rcpp::stop("the block proposal to continue from has the wrong size");
     blocks[b].restart = restartAt;
     blocks[b].forget = ch.warmForget;
-    blocks[b].overlay = std::find(overlay.begin(), overlay.end(), b + 1) != overlay.end();
+    blocks[b].overlay = has(overlay, b + 1);
     for (int j : blocks[b].idx) {
       if (j < 0 || j >= d || ch.pr.family[j] == PF_FIXED || (inBlock[j] && !blocks[b].overlay))
         Rcpp::stop("a block holds a fixed, repeated or unknown parameter");
@@ -888,15 +884,12 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
   // the blocks (1-based) that overlay parameters with moves of their own:
   // a joint walk made after the per-parameter moves, before the jumps
-  const std::vector<int> overlay = moves.containsElementNamed("overlay") ?
-    Rcpp::as<std::vector<int> >(moves["overlay"]) : std::vector<int>();
+  const std::vector<int> overlay = list_ints(moves, "overlay");
   std::vector<Block> blocks = make_blocks(ch, blockSpec, overlay, state, nBurn);
   // the blocks (1-based) whose sigma2S is drawn from the runs' conditional
-  const std::vector<int> collapse = moves.containsElementNamed("collapse") ?
-    Rcpp::as<std::vector<int> >(moves["collapse"]) : std::vector<int>();
+  const std::vector<int> collapse = list_ints(moves, "collapse");
   // the blocks (1-based) that switch to the independence proposal after warm-up
-  const std::vector<int> independent = moves.containsElementNamed("independent") ?
-    Rcpp::as<std::vector<int> >(moves["independent"]) : std::vector<int>();
+  const std::vector<int> independent = list_ints(moves, "independent");
   std::vector<int> blockAt(d, -1);  // blockAt[j]: block starting at parameter j
   std::vector<char> inBlock(d, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
@@ -912,8 +905,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   auto add_block = [&](int b) {
     BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
     if (!mv->b.overlay) {
-      collapse_sigma2S(*mv, ch, std::find(collapse.begin(), collapse.end(), b + 1) != collapse.end());
-      mv->independent = std::find(independent.begin(), independent.end(), b + 1) != independent.end();
+      collapse_sigma2S(*mv, ch, has(collapse, b + 1));
+      mv->independent = has(independent, b + 1);
     }
     schedule.emplace_back(mv);
     ch.blocks[b] = &mv->b;
@@ -936,17 +929,15 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     if (blocks[b].overlay) add_block(b);
   // the jump moves (R's sampler_moves()$jump, 1-based, and $jumpRange, a
   // row per jump), after the walks
-  if (moves.containsElementNamed("jump")) {
-    const std::vector<int> jump = Rcpp::as<std::vector<int> >(moves["jump"]);
-    if (!jump.empty()) {
-      if (!moves.containsElementNamed("jumpRange"))
-        Rcpp::stop("the jump moves need their intervals (moves$jumpRange)");
-      const Rcpp::NumericMatrix range = moves["jumpRange"];
-      if (range.nrow() != (int) jump.size() || range.ncol() != 2)
-        Rcpp::stop("moves$jumpRange must have a row per jump move and 2 columns");
-      for (size_t r = 0; r < jump.size(); ++r)
-        schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
-    }
+  const std::vector<int> jump = list_ints(moves, "jump");
+  if (!jump.empty()) {
+    if (!moves.containsElementNamed("jumpRange"))
+      Rcpp::stop("the jump moves need their intervals (moves$jumpRange)");
+    const Rcpp::NumericMatrix range = moves["jumpRange"];
+    if (range.nrow() != (int) jump.size() || range.ncol() != 2)
+      Rcpp::stop("moves$jumpRange must have a row per jump move and 2 columns");
+    for (size_t r = 0; r < jump.size(); ++r)
+      schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
   }
   if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
@@ -1285,9 +1276,9 @@ Rcpp::List fbc_block_estimate(const arma::mat& W, double forget, int walked = 0)
     b.record_window(it);
     if (it % WINDOW == 0) ess = b.window_ess();
   }
-  arma::vec mu, pi;
+  arma::vec mu;
   arma::mat C;
-  const int count = b.pooled(true, mu, C, pi);
+  const int count = b.pooled(true, mu, C);
   return Rcpp::List::create(Rcpp::Named("mean") = mu, Rcpp::Named("cov") = C,
                             Rcpp::Named("count") = count, Rcpp::Named("ess") = ess);
 }

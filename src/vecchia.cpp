@@ -26,7 +26,6 @@
 // the field latents' neighbours among the runs follow kappa.
 #include "fbc.h"
 #include <algorithm>
-#include <numeric>
 
 // Squared scaled distance between row a of X and the point y (first K
 // columns).
@@ -40,26 +39,21 @@ static inline double scaled_d2(const arma::mat& X, arma::uword a, const double* 
   return s;
 }
 
-// The k nearest rows of X (among rows[0 .. nr - 1], or all when rows is
-// null) to the point y, scaled by w: into out (nearest first; fewer when
-// there are fewer rows). `d2` and `idx` are workspaces.
+// The k nearest rows of X (among rows[0 .. nr - 1], or the first nr when
+// rows is null) to the point y, scaled by w: into out (nearest first, ties
+// to the lower row; fewer when there are fewer rows). `cand` is a workspace.
 static void nearest(const arma::mat& X, const int* rows, int nr, const double* y,
-                    const arma::vec& w, int K, int k, std::vector<double>& d2,
-                    std::vector<int>& idx, std::vector<int>& out) {
-  d2.resize(nr); idx.resize(nr);
+                    const arma::vec& w, int K, int k,
+                    std::vector<std::pair<double, int> >& cand, std::vector<int>& out) {
+  cand.resize(nr);
   for (int r = 0; r < nr; ++r) {
     const int a = rows ? rows[r] : r;
-    idx[r] = a;
-    d2[r] = scaled_d2(X, a, y, w, K);
+    cand[r] = std::make_pair(scaled_d2(X, a, y, w, K), a);
   }
   const int kk = std::min(k, nr);
-  std::vector<int> pos(nr);
-  std::iota(pos.begin(), pos.end(), 0);
-  std::partial_sort(pos.begin(), pos.begin() + kk, pos.end(), [&](int a, int b) {
-    return d2[a] < d2[b] || (d2[a] == d2[b] && idx[a] < idx[b]);
-  });
+  std::partial_sort(cand.begin(), cand.begin() + kk, cand.end());
   out.resize(kk);
-  for (int r = 0; r < kk; ++r) out[r] = idx[pos[r]];
+  for (int r = 0; r < kk; ++r) out[r] = cand[r].second;
 }
 
 // Maximin ordering of the rows of X scaled by w (Guinness 2018): first the
@@ -111,12 +105,13 @@ Rcpp::IntegerMatrix vecchia_neighbours(const arma::mat& X, const Rcpp::IntegerVe
   Rcpp::IntegerMatrix out(m, k);
   std::vector<int> prev(m);
   for (int i = 0; i < m; ++i) prev[i] = ord[i] - 1;
-  std::vector<double> d2, y(K);
-  std::vector<int> idx, nb;
+  std::vector<double> y(K);
+  std::vector<std::pair<double, int> > cand;
+  std::vector<int> nb;
   for (int i = 1; i < m; ++i) {
     const int s = prev[i];
     for (int c = 0; c < K; ++c) y[c] = X.at(s, c);
-    nearest(X, prev.data(), i, y.data(), w, K, k, d2, idx, nb);
+    nearest(X, prev.data(), i, y.data(), w, K, k, cand, nb);
     for (size_t r = 0; r < nb.size(); ++r) out(i, r) = nb[r] + 1;
     if (i % 256 == 255) Rcpp::checkUserInterrupt();
   }
@@ -141,13 +136,11 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   // each field latent's earlier latents: the kf nearest in the scaled
   // experimental inputs (they share kappa)
   nbrL_.resize(nu_);
-  std::vector<double> d2;
-  std::vector<int> idx, rows(nu_);
-  std::iota(rows.begin(), rows.end(), 0);
+  std::vector<std::pair<double, int> > cand;
   const arma::vec wx = vd_.w.head(p);
   for (int j = 1; j < nu_; ++j) {
     const arma::rowvec y = Xu_.row(j);
-    nearest(Xu_, rows.data(), j, y.memptr(), wx, p, vd_.kf, d2, idx, nbrL_[j]);
+    nearest(Xu_, nullptr, j, y.memptr(), wx, p, vd_.kf, cand, nbrL_[j]);
   }
   // each latent's earlier latents by index: (latent, place in nbrL_[j])
   rowL_.resize(nu_);
@@ -497,15 +490,15 @@ void VecchiaPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::v
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p - 1);
   arma::mat Rx = corr_matrix(Xu_, Xnew, th, al, kernS_);
   level_scale(levels, phi.memptr() + iRhoS, Xu_, Xnew, Rx, false);
-  std::vector<double> y(K), d2, dl;
-  std::vector<int> idx, near, L, rows(nu_);
-  std::iota(rows.begin(), rows.end(), 0);
+  std::vector<double> y(K);
+  std::vector<std::pair<double, int> > cand;
+  std::vector<int> near, L;
   const arma::vec wx = vd_.w.head(p);
   for (int c = 0; c < nb; ++c) {
     for (int d = 0; d < p; ++d) y[d] = Xnew.at(c, d);
     for (int d = 0; d < q; ++d) y[p + d] = phi[iKappa + d];
-    nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, d2, idx, near);
-    nearest(Xu_, rows.data(), nu_, y.data(), wx, p, vd_.kf, dl, idx, L);
+    nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, cand, near);
+    nearest(Xu_, nullptr, nu_, y.data(), wx, p, vd_.kf, cand, L);
     const int cr = near.size();
     const int s = gather(near.data(), cr, L, y.data());
     double v = conditional(s, cr, true);

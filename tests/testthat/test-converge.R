@@ -130,6 +130,155 @@ test_that("update() continues under a rule as one longer update", {
   expect_null(plain$settings$converge)
 })
 
+test_that("next_check() puts the next check where the draws predict the rule is met", {
+  rule <- until_converged()  # R-hat < 1.01, bulk ESS >= 400
+  chk <- function(rhat, ess) list(rhat = rhat, ess = ess)
+  # ESS 380 at 1000 retained sweeps: 400 / 380 x 1000 x 1.02 (margin) =
+  # 1073.7, rounded up to 1100 (R-hat asks for sqrt(0.008 / 0.01) = 0.894
+  # times, less)
+  expect_identical(next_check(1000, rule, chk(1.008, 380)), 1100L)
+  # R-hat 1.015 at 800 with ESS 500: sqrt(0.015 / 0.01) x 800 x 1.02 = 999.4,
+  # so 1000 (ESS alone would have stopped at once)
+  expect_identical(next_check(800, rule, chk(1.015, 500)), 1000L)
+  # a near miss (ESS 399 at 2000: 2045.1, 2050) waits at least 5% more: 2100
+  expect_identical(next_check(2000, rule, chk(1.005, 399)), 2100L)
+  # and at least one piece of 50 sweeps: at 500, 5% is 25
+  expect_identical(next_check(500, rule, chk(1.005, 399)), 550L)
+  # a far miss (ESS 250 at 500: 816) waits no longer than the geometric
+  # step, 1.5 x 500 = 750; 1.5 x 750 = 1125 rounds up to 1150
+  expect_identical(next_check(500, rule, chk(1.005, 250)), 750L)
+  expect_identical(next_check(750, rule, chk(1.2, 20)), 1150L)
+  # without a finite check (no sampled parameter), the geometric step
+  expect_identical(next_check(750, rule), 1150L)
+  expect_identical(next_check(750, rule, chk(-Inf, Inf)), 1150L)
+  # the rule's own targets: R-hat < 1.05 and ESS >= 100 (ESS 80 at 400:
+  # 1.25 x 400 x 1.02 = 510, so 550; R-hat 1.03 asks for sqrt(0.6) = 0.77)
+  expect_identical(next_check(400, until_converged(rhat = 1.05, ess = 100), chk(1.03, 80)), 550L)
+  # `every` checks at fixed steps whatever the draws say
+  expect_identical(next_check(700, until_converged(every = 100), chk(1.5, 3)), 800L)
+})
+
+# The check points of a run under `rule` whose first check came `first`
+# retained sweeps a chain after the burn-in, replayed on the prefixes of
+# its chains' draws (the draws do not depend on when the rule checks): the
+# retained sweeps a chain at each check up to the first that meets it.
+replay_checks <- function(fit, rule, first) {
+  idx <- split(seq_along(fit$chain), fit$chain)
+  th <- fit$settings$thinning
+  posts <- first
+  repeat {
+    post <- posts[length(posts)]
+    r <- post / th
+    stopifnot(r <= min(lengths(idx)))
+    est <- chain_diagnostics(fit$Phi[unlist(lapply(idx, utils::head, r)), , drop = FALSE],
+                             rep(seq_along(idx), each = r))
+    check <- list(rhat = max(est$rhat, na.rm = TRUE), ess = min(est$ess, na.rm = TRUE))
+    if (check$rhat < rule$rhat && check$ess >= rule$ess) return(posts)
+    posts <- c(posts, next_check(post, rule, check))
+  }
+}
+
+# A run under the predicting schedule (every = NULL): burn-in 200, a first
+# check at 400 retained sweeps, then where next_check() puts them. With
+# seed 3 the checks at the time of writing fell at 400, 600 (the geometric
+# step), 750 (a prediction) and 800 (the least step); the tests check what
+# the replay gives, not these numbers.
+pr_args <- list(nMCMC = 600, nBurn = 200, nChains = 2, kernelS = "matern52",
+                kernelB = "matern52")
+pr_rule <- until_converged(rhat = 1.02, ess = 150, maxMCMC = 2000)
+pr_seed <- 3L
+pr_fit <- local({
+  fit <- NULL
+  function() {
+    if (is.null(fit)) {
+      set.seed(pr_seed)
+      fit <<- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule), pr_args))
+    }
+    fit
+  }
+})
+
+test_that("a run checks where the draws so far predict the rule is met, and stops at the first check that meets it", {
+  fit <- pr_fit()
+  cv <- fit$settings$converge
+  posts <- replay_checks(fit, pr_rule, 400L)
+  expect_true(cv$converged)
+  expect_identical(cv$checks, length(posts))
+  expect_identical(cv$sweeps, 200L + posts[length(posts)])
+  expect_identical(nrow(fit$Phi), 2L * posts[length(posts)] %/% 2L)
+  expect_gt(cv$checks, 2L)  # more than the first stretch and one step
+  # every step is one of the three: at most the geometric step, at least
+  # the least step
+  steps <- diff(posts)
+  expect_true(all(posts[-1] <= ceiling(1.5 * posts[-length(posts)] / 50) * 50))
+  expect_true(all(steps >= pmax(50, ceiling(0.05 * posts[-length(posts)] / 50) * 50)))
+  est <- fit$estimates
+  expect_true(all(est$rhat[!is.na(est$rhat)] < 1.02 & est$ess[!is.na(est$ess)] >= 150))
+})
+
+test_that("set.seed() reproduces a run of predicted length on sequential and multisession plans", {
+  skip_if_not_slow()
+  ref <- pr_fit()
+  set.seed(pr_seed)
+  again <- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule), pr_args))
+  expect_identical(again$Phi, ref$Phi)
+  expect_identical(again$settings$converge, ref$settings$converge)
+  skip_if_not_installed("future")
+  old <- future::plan(future::multisession, workers = 2)
+  on.exit(future::plan(old), add = TRUE)
+  set.seed(pr_seed)
+  multi <- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule), pr_args))
+  expect_same_draws(multi, ref)
+  expect_identical(multi$settings$converge, ref$settings$converge)
+})
+
+test_that("a run of predicted length interrupted after a predicted check resumes to the same end and draws", {
+  skip_if_not_slow()
+  ref <- pr_fit()
+  posts <- replay_checks(ref, pr_rule, 400L)
+  skip_if(length(posts) < 4L || posts[3] - posts[2] < 100L, "the run's third stretch is under 2 pieces")
+  # pieces of 50 sweeps on the sequential plan, chain 1 then chain 2 in
+  # each stretch: interrupt chain 1 in its second piece of the third
+  # stretch, which follows the check at posts[2], placed by the prediction
+  pieces <- c(200L + posts[1], diff(posts[1:2])) %/% 50L
+  call <- 2L * sum(pieces) + 2L
+  dir <- tempfile("cv-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  old <- options(FBC.sampler = interrupt_at_call(call))
+  set.seed(pr_seed)
+  expect_warning(
+    part <- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule, checkpoint = dir),
+                                 pr_args)),
+    "Resume it with the same"
+  )
+  options(old)
+  expect_true(part$state$interrupted)
+  expect_equal(ck_iter(dir, 1), 200 + posts[2] + 100)
+  expect_equal(ck_iter(dir, 2), 200 + posts[2])
+  set.seed(999)  # the streams are in the checkpoint
+  expect_message(
+    fit <- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule, checkpoint = dir),
+                                pr_args)),
+    "Resuming"
+  )
+  expect_same_draws(fit, ref)
+  expect_identical(fit$settings$converge, ref$settings$converge)
+})
+
+test_that("a far miss waits the geometric step, up to the ceiling", {
+  # ESS 1e6 is never near: from the first check at 100 retained sweeps
+  # (nMCMC 400, burn-in 300) each check comes at 1.5 times the sweeps,
+  # rounded up to 50: 150, 250 (225), 400 (375), then the ceiling's 500
+  # (800 sweeps in all, not 300 + 600)
+  set.seed(cv_seed)
+  rule <- until_converged(ess = 1e6, maxMCMC = 800)
+  fit <- do.call(calibrate, c(list(ballSim, ballField, converge = rule), cv_args))
+  expect_false(fit$settings$converge$converged)
+  expect_identical(fit$settings$converge$checks, 5L)  # at 400, 450, 550, 700, 800 sweeps
+  expect_identical(fit$settings$nMCMC, 800L)
+  expect_identical(nrow(fit$Phi), 2L * (800L - 300L) %/% 2L)
+})
+
 test_that("bad rules are refused, naming the argument", {
   expect_snapshot(error = TRUE, until_converged(rhat = 1))
   expect_snapshot(error = TRUE, until_converged(every = 10))
@@ -138,4 +287,5 @@ test_that("bad rules are refused, naming the argument", {
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, nMCMC = 2000, nBurn = 1000,
                                           converge = until_converged(maxMCMC = 1000)))
   expect_snapshot(until_converged())
+  expect_snapshot(until_converged(rhat = 1.05, ess = 100, every = 200, maxMCMC = 3000))
 })

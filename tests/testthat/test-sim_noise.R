@@ -1,0 +1,157 @@
+# Stochastic simulators (R/sim_noise.R): replicate runs found, the
+# simulator's own noise modelled by the replicates' sufficient statistics,
+# and every model without it unchanged to the bit.
+
+# A stochastic simulator, eta = 5 exp(-t x) plus N(0, sd^2) noise, on
+# `nx` x `nt` unique inputs (a product of x in [0, 3] and t in [0.5, 3])
+# with `reps` replicates each (a vector: one count per unique input), and
+# field data at t = 1.7 with measurement error sd 0.05.
+stochastic_problem <- function(nx = 5, nt = 5, reps = 10, sd = 0.2, nf = 10, seed = 1) {
+  set.seed(seed)
+  U <- expand.grid(x = seq(0, 3, length.out = nx), t = seq(0.5, 3, length.out = nt))
+  reps <- rep_len(reps, nrow(U))
+  X <- U[rep(seq_len(nrow(U)), reps), ]
+  sim <- cbind(y = 5 * exp(-X$t * X$x) + stats::rnorm(nrow(X), 0, sd), x = X$x, t = X$t)
+  xf <- seq(0.1, 2.9, length.out = nf)
+  field <- cbind(y = 5 * exp(-1.7 * xf) + stats::rnorm(nf, 0, 0.05), x = xf)
+  list(sim = unname_rows(sim), field = field)
+}
+unname_rows <- function(m) { rownames(m) <- NULL; m }
+
+test_that("replicates are grouped, and differ only beyond rounding", {
+  sim <- cbind(y = c(1, 2, 1 + 1e-14, 3, 2.5), x = c(0, 1, 0, 2, 1), t = c(1, 1, 1, 1, 1))
+  r <- FBC:::sim_replicates(sim)
+  expect_identical(r$group, c(1L, 2L, 1L, 3L, 2L))
+  expect_identical(r$count, c(2L, 2L, 1L))
+  expect_identical(r$first, c(1L, 2L, 4L))
+  # rows 1 and 3 differ by rounding, rows 2 and 5 by 0.5
+  expect_identical(r$differ, c(FALSE, TRUE, FALSE))
+  # the sufficient statistics: means and the within sum of squares
+  dat <- list(Xs = sim[, -1], ys = sim[, 1])
+  cr <- FBC:::collapse_replicates(dat, r)
+  expect_equal(cr$dat$ys, c(1 + 0.5e-14, 2.25, 3))
+  expect_equal(cr$replicates$ssw, 2 * 0.25^2 + 2 * (0.5e-14)^2)
+  expect_identical(cr$dat$Xs, sim[c(1, 2, 4), -1])
+  expect_equal(cr$pooled, cr$replicates$ssw / 2)
+})
+
+test_that("the sufficient-statistic likelihood is the likelihood of every run", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3, 2, 4), nf = 4, seed = 2)
+  for (disc in c("gp", "none")) {
+    model <- calibrate(pb$sim, pb$field, simNoise = "constant", discrepancy = disc, fit = FALSE)
+    d <- model$data
+    expect_identical(nrow(d$Xs), 12L)
+    reps <- FBC:::sim_replicates(pb$sim)
+    # every run on the scaled space, and phi with sigma2R last
+    ys <- (pb$sim[, 1] - model$scale$ymean) / model$scale$ysd
+    idx <- FBC:::param_indices(1, 1, disc, replicates = 1L)
+    expect_identical(idx$sigma2R, model$dims$d)
+    set.seed(3)
+    for (k in 1:3) {
+      phi <- random_phi(1, 1, disc)
+      r <- stats::rgamma(1, 2, 20)
+      full <- c(phi, r)
+      got <- FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, full, FBC:::fbc_nugget, model = model$spec$model)
+      # plain R: the unique inputs' covariance (the nugget on their eta),
+      # expanded to every run, plus r on each run
+      Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
+      n <- nrow(d$Xf)
+      E <- rbind(cbind(diag(n), matrix(0, n, 12)),
+                 cbind(matrix(0, length(ys), n), diag(12)[reps$group, ]))
+      C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), rep(r, length(ys))))
+      th <- unpack_phi(phi, 1, 1, disc)
+      res <- c(d$yf - if (disc == "gp") th$muB else 0, ys)
+      L <- chol(C)
+      a <- backsolve(L, res, transpose = TRUE)
+      ref <- -0.5 * (length(res) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+      expect_equal(got, ref, tolerance = 1e-8)
+    }
+  }
+})
+
+test_that("without replicates that differ, the model and draws are the deterministic ones", {
+  # deterministic duplicates: "auto" is "none", to the bit
+  s2 <- rbind(ballSim, ballSim[c(4, 9), ])
+  fit1 <- function(...) {
+    set.seed(7)
+    suppressMessages(calibrate(s2, ballField, nMCMC = 300, nBurn = 100, nChains = 2,
+                               converge = FALSE, ...))
+  }
+  auto <- fit1()
+  none <- fit1(simNoise = "none")
+  expect_identical(auto$Phi, none$Phi)
+  expect_identical(auto$logPost, none$logPost)
+  expect_false("sigma2R" %in% colnames(auto$Phi))
+  expect_null(auto$model$spec$model$replicates)
+  expect_false("sigma2R" %in% auto$model$classes$class)
+  # noisy replicates under "none": the deterministic model, the old message
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = 2, nf = 4)
+  expect_message(m0 <- calibrate(pb$sim, pb$field, simNoise = "none", fit = FALSE),
+                 "duplicated runs")
+  expect_identical(nrow(m0$data$Xs), 24L)
+  expect_false("sigma2R" %in% m0$spec$vars)
+  m1 <- calibrate(pb$sim, pb$field, fit = FALSE)
+  expect_identical(nrow(m1$data$Xs), 12L)
+  expect_identical(m1$spec$vars[m1$dims$d], "sigma2R")
+  # its algebra: the unique inputs are a product design, the dense one runs
+  expect_identical(m1$algebra$name, "dense")
+})
+
+test_that("the simulator's noise and t are recovered on a stochastic simulator", {
+  pb <- stochastic_problem(nx = 5, nt = 5, reps = 10, sd = 0.2)
+  set.seed(11)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 1500, nBurn = 500,
+                   nChains = 2, converge = FALSE)
+  sdR <- sqrt(fit$Phi[, "sigma2R"]) * fit$model$scale$ysd
+  ci <- stats::quantile(sdR, c(0.025, 0.975), names = FALSE)
+  expect_true(ci[1] < 0.2 && 0.2 < ci[2])
+  # 225 within degrees of freedom: the sd within about +-10%
+  expect_lt(diff(ci), 0.06)
+  t90 <- stats::quantile(fit$Phi[, fit$indices$kappa], c(0.05, 0.95), names = FALSE)
+  expect_true(t90[1] < 1.7 && 1.7 < t90[2])
+  # predict(): the noise sd beside the simulator's mean
+  pr <- predict(fit, c(0.5, 1.5), type = "simulator", ndraws = 50)
+  expect_equal(pr$noiseSd, rep(sqrt(mean(fit$Phi[attr(pr, "draw_rows"), "sigma2R"])) *
+                                 fit$model$scale$ysd, 2))
+  expect_equal(pr$pred, 5 * exp(-1.7 * c(0.5, 1.5)), tolerance = 0.05)
+  expect_null(predict(fit, c(0.5, 1.5), ndraws = 50)$noiseSd)
+  # set.seed() reproduces the run
+  set.seed(11)
+  again <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 1500, nBurn = 500,
+                     nChains = 2, converge = FALSE)
+  expect_identical(again$Phi, fit$Phi)
+})
+
+test_that("print() says what was found and modelled", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3), nf = 4)
+  set.seed(2)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 300, nBurn = 100,
+                   nChains = 1, converge = FALSE)
+  out <- capture.output(print(fit))
+  expect_snapshot(cat(grep("replicates:", out, value = TRUE), sep = "\n"))
+  expect_snapshot(print(calibrate(pb$sim, pb$field, fit = FALSE)))
+  expect_snapshot(FBC:::sim_noise_line(suppressMessages(
+    calibrate(pb$sim, pb$field, simNoise = "none", fit = FALSE))))
+})
+
+test_that("what the simulator's noise cannot do is refused, naming simNoise", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = 2, nf = 4)
+  same <- rbind(ballSim, ballSim[1:3, ])
+  two <- two_outputs(m = 12)
+  noisy <- two$sim[c(1:24, 1:3), ]
+  noisy$y[25:27] <- noisy$y[25:27] + 0.1
+  expect_snapshot(error = TRUE, {
+    calibrate(noisy, two$field, output = "out", fit = FALSE)
+    calibrate(pb$sim, pb$field, simNoise = "input")
+    calibrate(pb$sim, pb$field, simNoise = "noisy")
+    calibrate(pb$sim, pb$field, algebra = "vecchia", fit = FALSE)
+    calibrate(same, ballField, simNoise = "constant", fit = FALSE)
+    calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "constant")
+  })
+  # the compiled core refuses the noise with another algebra too
+  m <- calibrate(pb$sim, pb$field, fit = FALSE)
+  mc <- m$spec$model
+  mc$algebra <- 2L
+  expect_error(FBC:::.fbc_loglik(m$data$Xf, m$data$yf, m$data$Xs, m$data$ys, m$spec$init,
+                                 FBC:::fbc_nugget, model = mc), "dense algebra only")
+})
