@@ -13,8 +13,9 @@
 // so that V = E[mu^2] - f0^2, the first-order variance V_k = E[E(mu | z_k)^2]
 // - f0^2 and the total one VT_k = V - (E[E(mu | z_-k)^2] - f0^2): O(N^2 D)
 // per draw (N = m + distinct field rows) after the posterior's factors.
-// The one-dimensional integrals are exact for the Gaussian family (and the
-// power exponential at alpha = 2) against a uniform measure, and otherwise
+// The one-dimensional integrals are exact against a uniform measure for the
+// Gaussian family (and the power exponential at alpha = 2: error functions)
+// and the Matern families (exponentials times polynomials), and otherwise
 // Gauss-Legendre (or the user's) quadrature nodes and weights, the
 // correlations at the nodes from the kernel module (kernels.cpp).
 #include "fbc.h"
@@ -98,6 +99,109 @@ static void gauss_uniform(const arma::vec& c, double theta, double a, double b, 
   }
 }
 
+// h[k] = int_0^X v^k exp(-lam v) dv for k = 0..K (X >= 0): the finite sum
+// k! / lam^(k+1) [1 - exp(-lam X) sum_{i <= k} (lam X)^i / i!], or its
+// power series where lam X is small (the sum would cancel).
+static void exp_moments(double lam, double X, int K, double* h) {
+  const double z = lam * X;
+  if (z < 0.5) {
+    for (int k = 0; k <= K; ++k) {
+      double t = std::pow(X, k + 1), s = 0.0;
+      for (int i = 0; i < 30; ++i) {
+        s += t / (k + 1 + i);
+        t *= -z / (i + 1);
+      }
+      h[k] = s;
+    }
+    return;
+  }
+  const double e = std::exp(-z);
+  double term = 1.0, sum = 1.0, fact = 1.0, lp = lam;
+  for (int k = 0; k <= K; ++k) {
+    if (k > 0) {
+      term *= z / k;
+      sum += term;
+      fact *= k;
+      lp *= lam;
+    }
+    h[k] = fact / lp * (1.0 - e * sum);
+  }
+}
+
+// int_{u0}^{u1} c(s u) exp(-lam s u) du for the polynomial c (degree K) in
+// v = s u, 0 <= u0 <= u1.
+static double exp_poly(const double* c, int K, double s, double lam, double u0, double u1) {
+  double h1[5], h0[5];
+  exp_moments(lam, s * u1, K, h1);
+  exp_moments(lam, s * u0, K, h0);
+  double out = 0.0;
+  for (int k = 0; k <= K; ++k) out += c[k] * (h1[k] - h0[k]);
+  return out / s;
+}
+
+// The Matern families r(d) = P(s |d|) exp(-s |d|) (P(v) = 1 + v, s =
+// sqrt(3 theta); P(v) = 1 + v + v^2 / 3, s = sqrt(5 theta)) against the
+// uniform measure on [a, b]: I1 and I2 in closed form. Either side of a
+// centre the integrand is a polynomial times an exponential (exp_poly());
+// between two centres c1 <= c2 the exponentials multiply to the constant
+// exp(-s (c2 - c1)) and the polynomial (degree <= 4) is integrated exactly by
+// three Gauss-Legendre nodes.
+static void matern_uniform(const arma::vec& c, double theta, int kern, double a, double b,
+                           double* I1, arma::mat& I2) {
+  const arma::uword N = c.n_elem;
+  const int K = kern == 3 ? 1 : 2;
+  const double s = std::sqrt((kern == 3 ? 3.0 : 5.0) * theta);
+  if (!(s > 1e-150)) {
+    for (arma::uword j = 0; j < N; ++j) I1[j] = 1.0;
+    I2.ones(N, N);
+    return;
+  }
+  const double pc[3] = {1.0, 1.0, 1.0 / 3.0};
+  auto P = [&](double v) { return K == 1 ? 1.0 + v : 1.0 + v + v * v / 3.0; };
+  const double len = b - a;
+  for (arma::uword j = 0; j < N; ++j) {
+    double v = 0.0;
+    const double cj = c[j];
+    if (b > std::max(a, cj)) v += exp_poly(pc, K, s, 1.0, std::max(a, cj) - cj, b - cj);
+    if (std::min(b, cj) > a) v += exp_poly(pc, K, s, 1.0, cj - std::min(b, cj), cj - a);
+    I1[j] = v / len;
+  }
+  static const double gx[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
+  static const double gw[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+  I2.set_size(N, N);
+  for (arma::uword l = 0; l < N; ++l) {
+    for (arma::uword j = l; j < N; ++j) {
+      const double c1 = std::min(c[j], c[l]), c2 = std::max(c[j], c[l]);
+      const double e = s * (c2 - c1), E = std::exp(-e);
+      // Q(v) = P(v + e) P(v): P(v + e) = sh[0] + sh[1] v (+ sh[2] v^2)
+      double sh[3];
+      if (K == 1) {
+        sh[0] = 1.0 + e; sh[1] = 1.0; sh[2] = 0.0;
+      } else {
+        sh[0] = 1.0 + e + e * e / 3.0; sh[1] = 1.0 + 2.0 * e / 3.0; sh[2] = 1.0 / 3.0;
+      }
+      double Q[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+      for (int i = 0; i <= K; ++i)
+        for (int k = 0; k <= K; ++k) Q[i + k] += sh[i] * pc[k];
+      double v = 0.0;
+      if (b > std::max(a, c2)) v += E * exp_poly(Q, 2 * K, s, 2.0, std::max(a, c2) - c2, b - c2);
+      if (std::min(b, c1) > a) v += E * exp_poly(Q, 2 * K, s, 2.0, c1 - std::min(b, c1), c1 - a);
+      const double lo = std::max(a, c1), hi = std::min(b, c2);
+      if (hi > lo) {
+        const double h = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
+        double g = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          const double t = mid + h * gx[i];
+          g += gw[i] * P(s * (t - c1)) * P(s * (c2 - t));
+        }
+        v += E * h * g;
+      }
+      I2.at(j, l) = v / len;
+      I2.at(l, j) = v / len;
+    }
+  }
+}
+
 // Per draw (rows of phis): the Sobol variances of the simulator's posterior
 // mean over its D = p + q inputs, and its main effects at the grid values.
 // exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
@@ -133,6 +237,8 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
       const arma::vec c = Z.col(k);
       if (exact[k] && gauss) {
         gauss_uniform(c, theta, lower[k], upper[k], I1.colptr(k), I2[k]);
+      } else if (exact[k] && (kern == 3 || kern == 4)) {
+        matern_uniform(c, theta, kern, lower[k], upper[k], I1.colptr(k), I2[k]);
       } else {
         Rq.set_size(N, Q);
         kernel_corr(kern, arma::mat(c), arma::mat(nodes.col(k)), 1, &theta, &alpha, Rq, false);
