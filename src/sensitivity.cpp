@@ -99,24 +99,33 @@ static void gauss_uniform(const arma::vec& c, double theta, double a, double b, 
   }
 }
 
-// h[k] = int_0^X v^k exp(-lam v) dv for k = 0..K (X >= 0): the finite sum
-// k! / lam^(k+1) [1 - exp(-lam X) sum_{i <= k} (lam X)^i / i!], or its
-// power series where lam X is small (the sum would cancel).
-static void exp_moments(double lam, double X, int K, double* h) {
+// h[k] = int_0^X v^k exp(-lam v) dv for k = 0..K (X >= 0, K <= 4), given
+// e = exp(-lam X): k! / lam^(k+1) [1 - e sum_{i <= k} z^i / i!] (z = lam X),
+// where z is small the bracket as e sum_{i > k} z^i / i! (no cancellation).
+static void exp_moments(double lam, double X, int K, double e, double* h) {
   const double z = lam * X;
-  if (z < 0.5) {
+  double fact = 1.0, lp = lam;
+  if (z < 1.0) {
+    double t[24];
+    t[0] = 1.0;
+    for (int i = 1; i < 24; ++i) t[i] = t[i - 1] * z / i;
+    double tail = 0.0;
+    for (int i = 23; i > K; --i) tail += t[i];
+    double T[5];
+    for (int k = K; k >= 0; --k) {
+      T[k] = tail;
+      tail += t[k];
+    }
     for (int k = 0; k <= K; ++k) {
-      double t = std::pow(X, k + 1), s = 0.0;
-      for (int i = 0; i < 30; ++i) {
-        s += t / (k + 1 + i);
-        t *= -z / (i + 1);
+      if (k > 0) {
+        fact *= k;
+        lp *= lam;
       }
-      h[k] = s;
+      h[k] = fact / lp * e * T[k];
     }
     return;
   }
-  const double e = std::exp(-z);
-  double term = 1.0, sum = 1.0, fact = 1.0, lp = lam;
+  double term = 1.0, sum = 1.0;
   for (int k = 0; k <= K; ++k) {
     if (k > 0) {
       term *= z / k;
@@ -129,11 +138,12 @@ static void exp_moments(double lam, double X, int K, double* h) {
 }
 
 // int_{u0}^{u1} c(s u) exp(-lam s u) du for the polynomial c (degree K) in
-// v = s u, 0 <= u0 <= u1.
-static double exp_poly(const double* c, int K, double s, double lam, double u0, double u1) {
-  double h1[5], h0[5];
-  exp_moments(lam, s * u1, K, h1);
-  exp_moments(lam, s * u0, K, h0);
+// v = s u, 0 <= u0 <= u1; e1 = exp(-lam s u1) (and e0 at u0).
+static double exp_poly(const double* c, int K, double s, double lam, double u0, double u1,
+                       double e1) {
+  double h1[5], h0[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  exp_moments(lam, s * u1, K, e1, h1);
+  if (u0 > 0.0) exp_moments(lam, s * u0, K, std::exp(-lam * s * u0), h0);
   double out = 0.0;
   for (int k = 0; k <= K; ++k) out += c[k] * (h1[k] - h0[k]);
   return out / s;
@@ -145,7 +155,8 @@ static double exp_poly(const double* c, int K, double s, double lam, double u0, 
 // centre the integrand is a polynomial times an exponential (exp_poly());
 // between two centres c1 <= c2 the exponentials multiply to the constant
 // exp(-s (c2 - c1)) and the polynomial (degree <= 4) is integrated exactly by
-// three Gauss-Legendre nodes.
+// three Gauss-Legendre nodes. The exponentials come from each centre's
+// distances to a and b (one exp per centre) unless they could underflow.
 static void matern_uniform(const arma::vec& c, double theta, int kern, double a, double b,
                            double* I1, arma::mat& I2) {
   const arma::uword N = c.n_elem;
@@ -157,13 +168,17 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
     return;
   }
   const double pc[3] = {1.0, 1.0, 1.0 / 3.0};
-  auto P = [&](double v) { return K == 1 ? 1.0 + v : 1.0 + v + v * v / 3.0; };
   const double len = b - a;
+  // Ea[j] = exp(-s (c_j - a)) and Eb[j] = exp(-s (b - c_j)) for centres in [a, b]
+  const bool shared = s * (b - a) < 300.0;
+  std::vector<double> Ea(N), Eb(N);
   for (arma::uword j = 0; j < N; ++j) {
-    double v = 0.0;
     const double cj = c[j];
-    if (b > std::max(a, cj)) v += exp_poly(pc, K, s, 1.0, std::max(a, cj) - cj, b - cj);
-    if (std::min(b, cj) > a) v += exp_poly(pc, K, s, 1.0, cj - std::min(b, cj), cj - a);
+    Ea[j] = std::exp(-s * std::max(cj - a, 0.0));
+    Eb[j] = std::exp(-s * std::max(b - cj, 0.0));
+    double v = 0.0;
+    if (b > std::max(a, cj)) v += exp_poly(pc, K, s, 1.0, std::max(a, cj) - cj, b - cj, Eb[j]);
+    if (std::min(b, cj) > a) v += exp_poly(pc, K, s, 1.0, cj - std::min(b, cj), cj - a, Ea[j]);
     I1[j] = v / len;
   }
   static const double gx[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
@@ -171,8 +186,12 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
   I2.set_size(N, N);
   for (arma::uword l = 0; l < N; ++l) {
     for (arma::uword j = l; j < N; ++j) {
-      const double c1 = std::min(c[j], c[l]), c2 = std::max(c[j], c[l]);
-      const double e = s * (c2 - c1), E = std::exp(-e);
+      const bool jl = c[j] <= c[l];
+      const arma::uword i1 = jl ? j : l, i2 = jl ? l : j;
+      const double c1 = c[i1], c2 = c[i2];
+      const bool inside = shared && c1 >= a && c2 <= b;
+      const double e = s * (c2 - c1);
+      const double E = inside ? Eb[i1] / Eb[i2] : std::exp(-e);
       // Q(v) = P(v + e) P(v): P(v + e) = sh[0] + sh[1] v (+ sh[2] v^2)
       double sh[3];
       if (K == 1) {
@@ -184,15 +203,22 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
       for (int i = 0; i <= K; ++i)
         for (int k = 0; k <= K; ++k) Q[i + k] += sh[i] * pc[k];
       double v = 0.0;
-      if (b > std::max(a, c2)) v += E * exp_poly(Q, 2 * K, s, 2.0, std::max(a, c2) - c2, b - c2);
-      if (std::min(b, c1) > a) v += E * exp_poly(Q, 2 * K, s, 2.0, c1 - std::min(b, c1), c1 - a);
+      if (b > std::max(a, c2)) {
+        const double e1 = inside ? Eb[i2] * Eb[i2] : std::exp(-2.0 * s * (b - c2));
+        v += E * exp_poly(Q, 2 * K, s, 2.0, std::max(a, c2) - c2, b - c2, e1);
+      }
+      if (std::min(b, c1) > a) {
+        const double e1 = inside ? Ea[i1] * Ea[i1] : std::exp(-2.0 * s * (c1 - a));
+        v += E * exp_poly(Q, 2 * K, s, 2.0, c1 - std::min(b, c1), c1 - a, e1);
+      }
       const double lo = std::max(a, c1), hi = std::min(b, c2);
       if (hi > lo) {
         const double h = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
         double g = 0.0;
         for (int i = 0; i < 3; ++i) {
-          const double t = mid + h * gx[i];
-          g += gw[i] * P(s * (t - c1)) * P(s * (c2 - t));
+          const double u = s * (mid + h * gx[i] - c1), w = s * (c2 - mid - h * gx[i]);
+          g += gw[i] * (K == 1 ? (1.0 + u) * (1.0 + w)
+                               : (1.0 + u + u * u / 3.0) * (1.0 + w + w * w / 3.0));
         }
         v += E * h * g;
       }
