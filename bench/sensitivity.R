@@ -157,10 +157,12 @@ res <- if (file.exists(opt$out)) readRDS(opt$out) else NULL
 done <- function(p, m, seed) {
   !is.null(res) && any(res$problem == p & res$m == m & res$seed == seed)
 }
-for (pname in opt$problems) {
-  for (i in seq_along(opt$m)) {
-    for (seed in seq_len(opt$designs[i])) {
-      if (done(pname, opt$m[i], seed)) next
+# designs in rounds (seed 1 of every problem and m, then seed 2, ...), so an
+# interrupted study has a balanced count
+for (seed in seq_len(max(opt$designs))) {
+  for (pname in opt$problems) {
+    for (i in seq_along(opt$m)) {
+      if (seed > opt$designs[i] || done(pname, opt$m[i], seed)) next
       r <- one_design(pname, opt$m[i], seed)
       res <- rbind(res, r)
       saveRDS(res, opt$out)

@@ -103,37 +103,34 @@ static void gauss_uniform(const arma::vec& c, double theta, double a, double b, 
 // e = exp(-lam X): k! / lam^(k+1) [1 - e sum_{i <= k} z^i / i!] (z = lam X),
 // where z is small the bracket as e sum_{i > k} z^i / i! (no cancellation).
 static void exp_moments(double lam, double X, int K, double e, double* h) {
+  // k! / lam^(k+1) for lam = 1 and 2
+  static const double f1[5] = {1.0, 1.0, 2.0, 6.0, 24.0};
+  static const double f2[5] = {0.5, 0.25, 0.25, 0.375, 0.75};
+  const double* f = lam == 1.0 ? f1 : f2;
   const double z = lam * X;
-  double fact = 1.0, lp = lam;
   if (z < 1.0) {
+    // t_i = z^i / i!, the tails sum_{i > k} t_i from the smallest term up
+    static const double inv[24] = {0.0, 1.0, 1.0 / 2, 1.0 / 3, 1.0 / 4, 1.0 / 5, 1.0 / 6,
+                                   1.0 / 7, 1.0 / 8, 1.0 / 9, 1.0 / 10, 1.0 / 11, 1.0 / 12,
+                                   1.0 / 13, 1.0 / 14, 1.0 / 15, 1.0 / 16, 1.0 / 17, 1.0 / 18,
+                                   1.0 / 19, 1.0 / 20, 1.0 / 21, 1.0 / 22, 1.0 / 23};
     double t[24];
     t[0] = 1.0;
-    for (int i = 1; i < 24; ++i) t[i] = t[i - 1] * z / i;
+    for (int i = 1; i < 24; ++i) t[i] = t[i - 1] * z * inv[i];
     double tail = 0.0;
     for (int i = 23; i > K; --i) tail += t[i];
-    double T[5];
     for (int k = K; k >= 0; --k) {
-      T[k] = tail;
+      h[k] = f[k] * e * tail;
       tail += t[k];
-    }
-    for (int k = 0; k <= K; ++k) {
-      if (k > 0) {
-        fact *= k;
-        lp *= lam;
-      }
-      h[k] = fact / lp * e * T[k];
     }
     return;
   }
   double term = 1.0, sum = 1.0;
-  for (int k = 0; k <= K; ++k) {
-    if (k > 0) {
-      term *= z / k;
-      sum += term;
-      fact *= k;
-      lp *= lam;
-    }
-    h[k] = fact / lp * (1.0 - e * sum);
+  h[0] = f[0] * (1.0 - e);
+  for (int k = 1; k <= K; ++k) {
+    term *= z / k;
+    sum += term;
+    h[k] = f[k] * (1.0 - e * sum);
   }
 }
 
