@@ -14,12 +14,15 @@
 #' inputs. Its Sobol variances under a product measure of the inputs
 #' (uniform over the design's box by default) are computed in closed form
 #' from one-dimensional integrals of the correlation against each input's
-#' measure (Oakley and O'Hagan 2004): exact (error functions) for the
-#' Gaussian correlation against a uniform measure, and 64-node
-#' Gauss-Legendre quadrature otherwise (the Matern families, the power
-#' exponential, or a density given in `inputs`), at a cost of
-#' \eqn{O(N^2 (p + q))} per draw with \eqn{N} the runs plus the distinct
-#' field inputs.
+#' measure (Oakley and O'Hagan 2004): exact against a uniform measure for
+#' the Gaussian correlation (error functions) and the Matern families
+#' (exponentials times polynomials), and otherwise 64-node Gauss-Legendre
+#' quadrature (the power exponential, or a density given in `inputs`), at a
+#' cost of \eqn{O(N^2 (p + q))} per draw with \eqn{N} the runs plus the
+#' distinct field inputs. The quadrature is accurate to a few \eqn{10^{-6}}
+#' on the indices for the Gaussian and Matern families; the power exponential with
+#' \eqn{\alpha < 2} has a cusp at each run, where it is accurate to about
+#' \eqn{10^{-3}}.
 #'
 #' The indices are those of the emulator's *posterior mean* at each draw, so
 #' their spread over the draws carries the uncertainty in the GP's
@@ -88,7 +91,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, predicti
   check_level(level)
   check_flag(prediction, "prediction")
   nodes <- check_count(nodes, "nodes", min = 2)
-  sc <- fit$scale
+  sc <- fit$model$scale
   p <- sc$p
   q <- sc$q
   D <- p + q
@@ -126,14 +129,14 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, predicti
   }
   out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = nm, role = role,
                        measure = measure$label, nodes = nodes,
-                       kernel = kernels$label[match(fit$spec$model$kernS, kernels$code)])
+                       kernel = kernels$label[match(fit$model$spec$model$kernS, kernels$code)])
   class(out) <- "fbc_sensitivity"
   out
 }
 
 # The fits whose simulator's mean is one kernel expansion.
 check_sensitivity_fit <- function(fit, call = parent.frame()) {
-  mdl <- fit$spec$model
+  mdl <- fit$model$spec$model
   why <- c(
     if (!is.null(mdl$simulator)) "its simulator is an R function (there is no emulator)",
     if (!is.null(mdl$outputs)) "it has several independent outputs",
@@ -245,7 +248,8 @@ index_table <- function(draws, role, level) {
       median = apply(x, 2, stats::median),
       lower = apply(x, 2, stats::quantile, probs = a, names = FALSE),
       upper = apply(x, 2, stats::quantile, probs = 1 - a, names = FALSE),
-      mcse = apply(x, 2, function(v) posterior::mcse_median(v)),
+      # draws all equal (parameters fixed): no Monte Carlo error
+      mcse = apply(x, 2, function(v) if (all(v == v[1])) 0 else posterior::mcse_median(v)),
       stringsAsFactors = FALSE
     )
   })
@@ -274,7 +278,7 @@ main_effects <- function(main, grid, sc, nm, G, level) {
 # experimental box, the Sobol indices of the mean response and the shares
 # of the predictive variance.
 prediction_sensitivity <- function(fit, phis, nodes, level) {
-  sc <- fit$scale
+  sc <- fit$model$scale
   p <- sc$p
   M <- nrow(phis)
   gl <- gauss_legendre01(nodes)
@@ -286,10 +290,10 @@ prediction_sensitivity <- function(fit, phis, nodes, level) {
              noise = integer(0), source = integer(0))
   }
   mn <- cond(predict_type_codes[["mean"]])
-  has_bias <- fit$spec$model$length[["sigma2B"]] > 0L
+  has_bias <- fit$model$spec$model$length[["sigma2B"]] > 0L
   vs <- if (has_bias) cond(predict_type_codes[["simulator"]])$var else mn$var
   vb <- if (has_bias) cond(predict_type_codes[["bias"]])$var else 0 * mn$var
-  s2E <- phis[, fit$spec$model$offset[["sigma2E"]] + 1L]
+  s2E <- phis[, fit$model$spec$model$offset[["sigma2E"]] + 1L]
   # Sobol indices of each draw's mean response on the grid
   nm <- sim_input_names(sc, p + sc$q)[seq_len(p)]
   S <- array(NA_real_, c(M, p, 2), list(NULL, nm, c("first", "total")))

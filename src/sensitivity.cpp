@@ -13,8 +13,9 @@
 // so that V = E[mu^2] - f0^2, the first-order variance V_k = E[E(mu | z_k)^2]
 // - f0^2 and the total one VT_k = V - (E[E(mu | z_-k)^2] - f0^2): O(N^2 D)
 // per draw (N = m + distinct field rows) after the posterior's factors.
-// The one-dimensional integrals are exact for the Gaussian family (and the
-// power exponential at alpha = 2) against a uniform measure, and otherwise
+// The one-dimensional integrals are exact against a uniform measure for the
+// Gaussian family (and the power exponential at alpha = 2: error functions)
+// and the Matern families (exponentials times polynomials), and otherwise
 // Gauss-Legendre (or the user's) quadrature nodes and weights, the
 // correlations at the nodes from the kernel module (kernels.cpp).
 #include "fbc.h"
@@ -98,6 +99,132 @@ static void gauss_uniform(const arma::vec& c, double theta, double a, double b, 
   }
 }
 
+// h[k] = int_0^X v^k exp(-lam v) dv for k = 0..K (X >= 0, K <= 4), given
+// e = exp(-lam X): k! / lam^(k+1) [1 - e sum_{i <= k} z^i / i!] (z = lam X),
+// where z is small the bracket as e sum_{i > k} z^i / i! (no cancellation).
+static void exp_moments(double lam, double X, int K, double e, double* h) {
+  // k! / lam^(k+1) for lam = 1 and 2
+  static const double f1[5] = {1.0, 1.0, 2.0, 6.0, 24.0};
+  static const double f2[5] = {0.5, 0.25, 0.25, 0.375, 0.75};
+  const double* f = lam == 1.0 ? f1 : f2;
+  const double z = lam * X;
+  if (z < 1.0) {
+    // t_i = z^i / i!, the tails sum_{i > k} t_i from the smallest term up
+    static const double inv[24] = {0.0, 1.0, 1.0 / 2, 1.0 / 3, 1.0 / 4, 1.0 / 5, 1.0 / 6,
+                                   1.0 / 7, 1.0 / 8, 1.0 / 9, 1.0 / 10, 1.0 / 11, 1.0 / 12,
+                                   1.0 / 13, 1.0 / 14, 1.0 / 15, 1.0 / 16, 1.0 / 17, 1.0 / 18,
+                                   1.0 / 19, 1.0 / 20, 1.0 / 21, 1.0 / 22, 1.0 / 23};
+    double t[24];
+    t[0] = 1.0;
+    for (int i = 1; i < 24; ++i) t[i] = t[i - 1] * z * inv[i];
+    double tail = 0.0;
+    for (int i = 23; i > K; --i) tail += t[i];
+    for (int k = K; k >= 0; --k) {
+      h[k] = f[k] * e * tail;
+      tail += t[k];
+    }
+    return;
+  }
+  double term = 1.0, sum = 1.0;
+  h[0] = f[0] * (1.0 - e);
+  for (int k = 1; k <= K; ++k) {
+    term *= z / k;
+    sum += term;
+    h[k] = f[k] * (1.0 - e * sum);
+  }
+}
+
+// int_{u0}^{u1} c(s u) exp(-lam s u) du for the polynomial c (degree K) in
+// v = s u, 0 <= u0 <= u1; e1 = exp(-lam s u1) (and e0 at u0).
+static double exp_poly(const double* c, int K, double s, double lam, double u0, double u1,
+                       double e1) {
+  double h1[5], h0[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+  exp_moments(lam, s * u1, K, e1, h1);
+  if (u0 > 0.0) exp_moments(lam, s * u0, K, std::exp(-lam * s * u0), h0);
+  double out = 0.0;
+  for (int k = 0; k <= K; ++k) out += c[k] * (h1[k] - h0[k]);
+  return out / s;
+}
+
+// The Matern families r(d) = P(s |d|) exp(-s |d|) (P(v) = 1 + v, s =
+// sqrt(3 theta); P(v) = 1 + v + v^2 / 3, s = sqrt(5 theta)) against the
+// uniform measure on [a, b]: I1 and I2 in closed form. Either side of a
+// centre the integrand is a polynomial times an exponential (exp_poly());
+// between two centres c1 <= c2 the exponentials multiply to the constant
+// exp(-s (c2 - c1)) and the polynomial (degree <= 4) is integrated exactly by
+// three Gauss-Legendre nodes. The exponentials come from each centre's
+// distances to a and b (one exp per centre) unless they could underflow.
+static void matern_uniform(const arma::vec& c, double theta, int kern, double a, double b,
+                           double* I1, arma::mat& I2) {
+  const arma::uword N = c.n_elem;
+  const int K = kern == 3 ? 1 : 2;
+  const double s = std::sqrt((kern == 3 ? 3.0 : 5.0) * theta);
+  if (!(s > 1e-150)) {
+    for (arma::uword j = 0; j < N; ++j) I1[j] = 1.0;
+    I2.ones(N, N);
+    return;
+  }
+  const double pc[3] = {1.0, 1.0, 1.0 / 3.0};
+  const double len = b - a;
+  // Ea[j] = exp(-s (c_j - a)) and Eb[j] = exp(-s (b - c_j)) for centres in [a, b]
+  const bool shared = s * (b - a) < 300.0;
+  std::vector<double> Ea(N), Eb(N);
+  for (arma::uword j = 0; j < N; ++j) {
+    const double cj = c[j];
+    Ea[j] = std::exp(-s * std::max(cj - a, 0.0));
+    Eb[j] = std::exp(-s * std::max(b - cj, 0.0));
+    double v = 0.0;
+    if (b > std::max(a, cj)) v += exp_poly(pc, K, s, 1.0, std::max(a, cj) - cj, b - cj, Eb[j]);
+    if (std::min(b, cj) > a) v += exp_poly(pc, K, s, 1.0, cj - std::min(b, cj), cj - a, Ea[j]);
+    I1[j] = v / len;
+  }
+  static const double gx[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
+  static const double gw[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+  I2.set_size(N, N);
+  for (arma::uword l = 0; l < N; ++l) {
+    for (arma::uword j = l; j < N; ++j) {
+      const bool jl = c[j] <= c[l];
+      const arma::uword i1 = jl ? j : l, i2 = jl ? l : j;
+      const double c1 = c[i1], c2 = c[i2];
+      const bool inside = shared && c1 >= a && c2 <= b;
+      const double e = s * (c2 - c1);
+      const double E = inside ? Eb[i1] / Eb[i2] : std::exp(-e);
+      // Q(v) = P(v + e) P(v): P(v + e) = sh[0] + sh[1] v (+ sh[2] v^2)
+      double sh[3];
+      if (K == 1) {
+        sh[0] = 1.0 + e; sh[1] = 1.0; sh[2] = 0.0;
+      } else {
+        sh[0] = 1.0 + e + e * e / 3.0; sh[1] = 1.0 + 2.0 * e / 3.0; sh[2] = 1.0 / 3.0;
+      }
+      double Q[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+      for (int i = 0; i <= K; ++i)
+        for (int k = 0; k <= K; ++k) Q[i + k] += sh[i] * pc[k];
+      double v = 0.0;
+      if (b > std::max(a, c2)) {
+        const double e1 = inside ? Eb[i2] * Eb[i2] : std::exp(-2.0 * s * (b - c2));
+        v += E * exp_poly(Q, 2 * K, s, 2.0, std::max(a, c2) - c2, b - c2, e1);
+      }
+      if (std::min(b, c1) > a) {
+        const double e1 = inside ? Ea[i1] * Ea[i1] : std::exp(-2.0 * s * (c1 - a));
+        v += E * exp_poly(Q, 2 * K, s, 2.0, c1 - std::min(b, c1), c1 - a, e1);
+      }
+      const double lo = std::max(a, c1), hi = std::min(b, c2);
+      if (hi > lo) {
+        const double h = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
+        double g = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          const double u = s * (mid + h * gx[i] - c1), w = s * (c2 - mid - h * gx[i]);
+          g += gw[i] * (K == 1 ? (1.0 + u) * (1.0 + w)
+                               : (1.0 + u + u * u / 3.0) * (1.0 + w + w * w / 3.0));
+        }
+        v += E * h * g;
+      }
+      I2.at(j, l) = v / len;
+      I2.at(l, j) = v / len;
+    }
+  }
+}
+
 // Per draw (rows of phis): the Sobol variances of the simulator's posterior
 // mean over its D = p + q inputs, and its main effects at the grid values.
 // exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
@@ -133,6 +260,8 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
       const arma::vec c = Z.col(k);
       if (exact[k] && gauss) {
         gauss_uniform(c, theta, lower[k], upper[k], I1.colptr(k), I2[k]);
+      } else if (exact[k] && (kern == 3 || kern == 4)) {
+        matern_uniform(c, theta, kern, lower[k], upper[k], I1.colptr(k), I2[k]);
       } else {
         Rq.set_size(N, Q);
         kernel_corr(kern, arma::mat(c), arma::mat(nodes.col(k)), 1, &theta, &alpha, Rq, false);

@@ -1,0 +1,280 @@
+# Plain-R references for sensitivity(): the emulator's posterior mean at one
+# parameter draw written from the dense joint covariance (helper-dense.R),
+#   mu(z) = s2S R(z, X) C^-1 (yf - muB, ys),   X = ((Xf, kappa); Xs),
+# and its Sobol variances by a tensor product of composite Gauss-Legendre
+# rules on the inputs' ranges, split at every centre's coordinate (the
+# Matern and power exponential correlations are not smooth there), so that
+# the grid integrates mu, mu^2 and the conditional means to near machine
+# precision for the smooth families.
+
+# Every |actual - expected| below tol (an absolute error: indices near 0
+# are compared as strictly as large ones).
+expect_abs <- function(actual, expected, tol) {
+  expect_identical(length(actual), length(expected))
+  expect_lt(max(abs(actual - expected)), tol)
+}
+
+# The weights a and centres X of mu at the scaled-space draw phi.
+plain_sim_mean <- function(fit, phi, kernS) {
+  d <- fit$model$data
+  p <- ncol(d$Xf); q <- ncol(d$Xs) - p; n <- nrow(d$Xf)
+  th <- unpack_phi(phi, p, q)
+  C <- dense_cov(d$Xf, d$Xs, phi, fit$settings$nugget, kernS, "powexp")
+  list(a = th$sigma2S * solve(C, c(d$yf - th$muB, d$ys)),
+       X = rbind(cbind(d$Xf, matrix(th$kappa, n, q, byrow = TRUE)), d$Xs), th = th)
+}
+
+# Composite Gauss-Legendre nodes and weights (summing to one) on [lo, hi],
+# panels split at `breaks`; `dens`: a density to weight them by.
+composite_rule <- function(breaks, lo = 0, hi = 1, k = 10, dens = NULL) {
+  gl <- FBC:::gauss_legendre01(k)
+  b <- sort(unique(c(lo, breaks[breaks > lo & breaks < hi], hi)))
+  x <- unlist(lapply(seq_len(length(b) - 1), function(i) b[i] + (b[i + 1] - b[i]) * gl$x))
+  w <- unlist(lapply(seq_len(length(b) - 1), function(i) (b[i + 1] - b[i]) * gl$w))
+  if (!is.null(dens)) w <- w * dens(x)
+  list(x = x, w = w / sum(w))
+}
+
+# Sobol indices of mu (p + q = 3 inputs) on the tensor grid of `rules`
+# (one per input), and the main effects E[mu | z_k = t] at `at` (a matrix,
+# one column per input).
+plain_sobol <- function(mp, kernS, rules, at = NULL) {
+  X <- mp$X
+  D <- ncol(X)
+  R <- lapply(seq_len(D), function(j) {
+    dense_corr(rules[[j]]$x, X[, j], mp$th$thetaS[j], mp$th$alphaS[j], kernS)
+  })
+  G <- lengths(lapply(rules, `[[`, "x"))
+  f <- array(0, G)
+  for (i3 in seq_len(G[3])) f[, , i3] <- R[[1]] %*% (mp$a * R[[3]][i3, ] * t(R[[2]]))
+  w <- Reduce(`%o%`, lapply(rules, `[[`, "w"))
+  f0 <- sum(w * f)
+  V <- sum(w * f^2) - f0^2
+  V1 <- VT <- numeric(D)
+  for (j in seq_len(D)) {
+    wj <- rules[[j]]$w
+    e1 <- apply(w * f, j, sum) / wj
+    V1[j] <- sum(wj * e1^2) - f0^2
+    wk <- apply(w, seq_len(D)[-j], sum)
+    ek <- apply(w * f, seq_len(D)[-j], sum) / wk
+    VT[j] <- V - (sum(wk * ek^2) - f0^2)
+  }
+  main <- NULL
+  if (!is.null(at)) {
+    # E[mu | z_j = t] = sum_i a_i r(t - X_ij) prod_{k != j} E r(z_k - X_ik)
+    I1 <- sapply(seq_len(D), function(j) colSums(rules[[j]]$w * R[[j]]))
+    main <- sapply(seq_len(D), function(j) {
+      Rt <- dense_corr(at[, j], X[, j], mp$th$thetaS[j], mp$th$alphaS[j], kernS)
+      drop(Rt %*% (mp$a * apply(I1[, -j, drop = FALSE], 1, prod)))
+    })
+  }
+  list(S1 = V1 / V, ST = VT / V, main = main)
+}
+
+test_that("the closed-form indices are those of the emulator's mean integrated on a fine grid (Gaussian, Matern)", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)  # thetaS: a mean with structure on the box
+  for (kern in c("gaussian", "matern52", "matern32")) {
+    fit <- fixed_fit(phi, kernelS = kern)
+    sc <- fit$model$scale
+    mp <- plain_sim_mean(fit, phi, kern)
+    rules <- lapply(1:3, function(j) composite_rule(mp$X[, j]))
+    s <- sensitivity(fit, prediction = FALSE)
+    at <- sapply(s$main$simulator, function(me) me$x)
+    ref <- plain_sobol(mp, kern, rules, at = sweep(sweep(at, 2, sc$xmin), 2, sc$xmax - sc$xmin, "/"))
+    # every draw is phi: one value of each index
+    expect_equal(s$simulator$lower, s$simulator$upper, tolerance = 1e-12)
+    expect_abs(unname(s$draws$simulator[1, , "first"]), ref$S1, 1e-6)
+    expect_abs(unname(s$draws$simulator[1, , "total"]), ref$ST, 1e-6)
+    expect_abs(s$simulator$median, c(ref$S1, ref$ST), 1e-6)
+    # a non-additive mean: the total indices exceed the first-order ones
+    expect_true(all(ref$ST - ref$S1 > 0.01))
+    # the main effects in the response's units
+    me <- sapply(s$main$simulator, function(me) me$median)
+    expect_abs(unname(me), sc$ymean + sc$ysd * ref$main, 1e-6)
+  }
+})
+
+test_that("a range or a density given in `inputs` is the measure integrated against", {
+  set.seed(6)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(15, 30, 25)
+  for (kern in c("gaussian", "matern52")) {
+    fit <- fixed_fit(phi, kernelS = kern)
+    sc <- fit$model$scale
+    mp <- plain_sim_mean(fit, phi, kern)
+    # x1 uniform on a sub-range (native units, x1 = 10 x scaled); t by a
+    # density on the design's range (a beta(2, 3) on the scaled t)
+    lo <- (2.5 - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
+    hi <- (7 - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
+    dt <- function(x) stats::dbeta((x - sc$xmin[3]) / (sc$xmax[3] - sc$xmin[3]), 2, 3)
+    s <- sensitivity(fit, inputs = list(x1 = c(2.5, 7), t = dt), prediction = FALSE)
+    rules <- list(composite_rule(mp$X[, 1], lo, hi), composite_rule(mp$X[, 2]),
+                  composite_rule(mp$X[, 3], dens = function(x) stats::dbeta(x, 2, 3)))
+    ref <- plain_sobol(mp, kern, rules)
+    expect_abs(unname(s$draws$simulator[1, , "first"]), ref$S1, 1e-6)
+    expect_abs(unname(s$draws$simulator[1, , "total"]), ref$ST, 1e-6)
+    expect_identical(unname(s$settings$measure),
+                     c("uniform on [2.5, 7]", "uniform over the design's range",
+                       "the density given, over the design's range"))
+    # the main effect of x1 spans the range given
+    expect_equal(range(s$main$simulator$x1$x), c(2.5, 7))
+  }
+})
+
+test_that("the power exponential's quadrature is accurate to about 1e-3", {
+  # 64 Gauss-Legendre nodes against a correlation with a cusp at each centre
+  # (alpha < 2): the accuracy the help page states
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)
+  fit <- fixed_fit(phi)
+  mp <- plain_sim_mean(fit, phi, "powexp")
+  ref <- plain_sobol(mp, "powexp", lapply(1:3, function(j) composite_rule(mp$X[, j], k = 16)))
+  s <- sensitivity(fit, prediction = FALSE)
+  expect_abs(unname(s$draws$simulator[1, , "first"]), ref$S1, 1e-3)
+  expect_abs(unname(s$draws$simulator[1, , "total"]), ref$ST, 1e-3)
+})
+
+# A calibration problem with known indices: y = x1 + 2 x2 + t on the unit
+# cube (the simulator's S = ST = (1, 4, 1) / 6), the field at t = 0.5 with
+# small noise (the mean response x1 + 2 x2 + 0.5: S = ST = (1, 4) / 5).
+linear_fit <- function() {
+  set.seed(2)
+  m <- 40
+  Xs <- cbind(x1 = runif(m), x2 = runif(m), t = runif(m))
+  sim <- cbind(y = Xs[, 1] + 2 * Xs[, 2] + Xs[, 3], Xs)
+  Xf <- cbind(x1 = runif(8), x2 = runif(8))
+  field <- cbind(y = Xf[, 1] + 2 * Xf[, 2] + 0.5 + rnorm(8, 0, 0.02), Xf)
+  # the random field inputs may overhang the random design
+  suppressWarnings(calibrate(sim, field, nMCMC = 400, nBurn = 200, nChains = 1,
+                             kernelS = "gaussian"), classes = "fbc_extrapolation")
+}
+
+test_that("the indices of a linear simulator are recovered", {
+  fit <- linear_fit()
+  sc <- fit$model$scale
+  s <- sensitivity(fit, ndraws = 100)
+  # over the design's box (not exactly the unit cube): variances w_k^2 r_k^2 / 12
+  r <- (sc$xmax - sc$xmin) * c(1, 2, 1)
+  S <- r^2 / sum(r^2)
+  sim <- s$simulator
+  expect_abs(sim$median, c(S, S), 0.01)
+  expect_true(all(sim$lower <= sim$median & sim$median <= sim$upper))
+  expect_true(all(sim$mcse >= 0 & sim$mcse < 0.01))
+  # the prediction over x1, x2 (kappa's value adds a constant): (1, 4) / 5
+  # on the box of the experimental inputs
+  rp <- r[1:2]
+  Sp <- rp^2 / sum(rp^2)
+  expect_abs(s$prediction$median, c(Sp, Sp), 0.02)
+  expect_identical(s$prediction$role, rep("experimental", 4))
+  expect_identical(s$simulator$role, rep(c("experimental", "experimental", "calibration"), 2))
+})
+
+test_that("the variance shares sum to one and to predict()'s squared standard error over the box", {
+  fit <- linear_fit()
+  sc <- fit$model$scale
+  s <- sensitivity(fit, ndraws = 50, nodes = 6)
+  sh <- s$shares
+  expect_identical(sh$source, c("kappa", "bias", "emulator", "noise"))
+  expect_equal(sum(sh$share), 1, tolerance = 1e-12)
+  expect_equal(sh$share, sh$variance / sum(sh$variance), tolerance = 1e-12)
+  # predict()'s se^2 averaged over the same Gauss-Legendre grid of the box
+  gl <- FBC:::gauss_legendre01(6)
+  X <- as.matrix(expand.grid(x1 = sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * gl$x,
+                             x2 = sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * gl$x))
+  w <- as.vector(outer(gl$w, gl$w))
+  field <- predict(fit, X, type = "field", ndraws = 50)
+  mean <- predict(fit, X, type = "mean", ndraws = 50)
+  expect_equal(sum(sh$variance), sum(w * field$se^2), tolerance = 1e-8)
+  expect_equal(sum(sh$variance[sh$source != "noise"]), sum(w * mean$se^2), tolerance = 1e-8)
+  # the noise share: the draws' mean measurement error variance
+  expect_equal(sh$variance[sh$source == "noise"], mean(field$se^2 - mean$se^2), tolerance = 1e-8)
+})
+
+test_that("print() shows the indices, the intervals and the shares", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)
+  fit <- fixed_fit(phi, kernelS = "gaussian")
+  expect_snapshot(print(sensitivity(fit, nodes = 4)))
+  expect_snapshot(print(sensitivity(fit, prediction = FALSE, level = 0.5), digits = 5))
+})
+
+test_that("bad arguments and unsupported fits are errors naming the argument", {
+  set.seed(5)
+  fit <- fixed_fit(random_phi(2, 1))
+  expect_snapshot(error = TRUE, {
+    sensitivity(fit, ndraws = 1)
+    sensitivity(fit, ndraws = "all")
+    sensitivity(fit, level = 1.5)
+    sensitivity(fit, level = c(0.5, 0.9))
+    sensitivity(fit, prediction = NA)
+    sensitivity(fit, nodes = 1)
+    sensitivity(fit, draws = 10)
+    sensitivity(list(a = 1))
+    sensitivity(fit, inputs = list(1, 2))
+    sensitivity(fit, inputs = list(z = c(0, 1)))
+    sensitivity(fit, inputs = list(x1 = c(5, 1)))
+    sensitivity(fit, inputs = list(x1 = "wide"))
+    sensitivity(fit, inputs = list(t = function(x) -x))
+    plot(sensitivity(fit, prediction = FALSE), of = "prediction")
+  })
+  # the fits without one kernel expansion of the simulator's mean
+  set.seed(3)
+  field <- data.frame(y = rnorm(6), x = seq(0, 1, length.out = 6))
+  fun <- suppressWarnings(calibrate(function(x, kappa) kappa[["a"]] * x$x, field,
+                                    kappaDist = "uniform", kappaP1 = c(a = 0), kappaP2 = 2,
+                                    nMCMC = 6, nBurn = 2, nChains = 1))
+  expect_snapshot(error = TRUE, sensitivity(fun))
+  Xs <- cbind(x = runif(20), t = runif(20))
+  vec <- suppressWarnings(calibrate(cbind(y = Xs[, 1] + Xs[, 2], Xs), field, algebra = "vecchia",
+                                    neighbours = 5, nMCMC = 6, nBurn = 2, nChains = 1))
+  expect_snapshot(error = TRUE, sensitivity(vec))
+})
+
+test_that("sensitivity() is deterministic and leaves the fit as it was", {
+  fit <- linear_fit()
+  before <- fit
+  a <- sensitivity(fit, ndraws = 20, nodes = 4)
+  set.seed(99)
+  b <- sensitivity(fit, ndraws = 20, nodes = 4)
+  expect_identical(a, b)
+  expect_identical(fit, before)
+  # the draws used: evenly spaced, as predict() takes them
+  expect_identical(a$settings$draw_rows, FBC:::draw_rows(nrow(fit$Phi), 20))
+  expect_identical(a$settings$ndraws, 20L)
+  expect_identical(dim(a$draws$simulator), c(20L, 3L, 2L))
+  expect_identical(dim(a$draws$prediction), c(20L, 2L, 2L))
+  # a wider level: wider intervals about the same medians
+  w <- sensitivity(fit, ndraws = 20, nodes = 4, level = 0.99)
+  expect_identical(w$simulator$median, a$simulator$median)
+  expect_true(all(w$simulator$lower <= a$simulator$lower & w$simulator$upper >= a$simulator$upper))
+})
+
+test_that("as.data.frame() stacks the indices; plot() draws the main effects and the indices", {
+  fit <- linear_fit()
+  s <- sensitivity(fit, ndraws = 20, nodes = 4)
+  df <- as.data.frame(s)
+  expect_identical(names(df), c("of", "input", "role", "index", "median", "lower", "upper", "mcse"))
+  expect_identical(nrow(df), 2L * 3L + 2L * 2L)
+  expect_identical(df$of, rep(c("simulator", "prediction"), c(6, 4)))
+  expect_identical(df$input, c(rep(c("x1", "x2", "t"), 2), rep(c("x1", "x2"), 2)))
+  expect_equal(df$median, c(s$simulator$median, s$prediction$median))
+  s0 <- sensitivity(fit, ndraws = 20, prediction = FALSE)
+  expect_identical(nrow(as.data.frame(s0)), 6L)
+  for (what in c("main", "indices")) {
+    for (of in c("simulator", "prediction")) {
+      g <- plot(s, what = what, of = of)
+      expect_s3_class(g, "ggplot")
+      built <- ggplot2::ggplot_build(g)
+      n_in <- if (of == "simulator") 3L else 2L
+      if (what == "main") {
+        expect_identical(length(unique(built$data[[1]]$PANEL)), n_in)
+      } else {
+        expect_identical(nrow(built$data[[1]]), 2L * n_in)
+      }
+    }
+  }
+})
