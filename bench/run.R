@@ -30,7 +30,8 @@ benchmarks <- c(
   "design-warm" = "warm refits against fresh fits",
   sbc          = "simulation-based calibration of the sampler",
   peers        = "FBC beside RobustCalibration on the same data, same process",
-  "failed-runs" = "failed runs: spot weld as shipped; design around a failure region"
+  "failed-runs" = "failed runs: spot weld as shipped; design around a failure region",
+  "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior"
 )
 
 args <- commandArgs(trailingOnly = TRUE)
