@@ -148,6 +148,10 @@ test_that("what the simulator's noise cannot do is refused, naming simNoise", {
     calibrate(same, ballField, simNoise = "constant", fit = FALSE)
     calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "constant")
   })
+  set.seed(1)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 200, nBurn = 100,
+                   nChains = 1, converge = FALSE)
+  expect_snapshot(error = TRUE, propose_runs(fit))
   # the compiled core refuses the noise with another algebra too
   m <- calibrate(pb$sim, pb$field, fit = FALSE)
   mc <- m$spec$model
