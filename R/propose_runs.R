@@ -425,6 +425,7 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
+  check_no_sim_noise(model, "propose_runs", call = call)
   N <- design_rows(model)
   if (sum(N) > 3000) {
     each <- if (output_count(model$spec$model) > 1L) " (of one output: each has its own)" else ""

@@ -203,3 +203,14 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
   } else "none (the replicates agree)"
   sprintf("%s; simulator noise: %s", found, noise)
 }
+
+# What has no model of the simulator's own noise yet refuses a fit that has
+# it (`fn`: the function's name): the design of new runs scores a run as if
+# it were noiseless.
+check_no_sim_noise <- function(model, fn, call = parent.frame()) {
+  if (is.null(model$spec$model$replicates)) return(invisible(TRUE))
+  cli::cli_abort(c(
+    "{.fn {fn}} does not model the simulator's own noise yet, which this fit samples ({.code simNoise = \"constant\"}).",
+    i = "It would score new runs as if they were noiseless. Choose runs from a fit with {.code simNoise = \"none\"}, or by a design of your own."
+  ), call = call)
+}

@@ -31,7 +31,8 @@ benchmarks <- c(
   sbc          = "simulation-based calibration of the sampler",
   peers        = "FBC beside RobustCalibration on the same data, same process",
   "failed-runs" = "failed runs: spot weld as shipped; design around a failure region",
-  sensitivity  = "Sobol indices against known ones: coverage, widths, CPU s"
+  sensitivity  = "Sobol indices against known ones: coverage, widths, CPU s",
+  "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior"
 )
 
 args <- commandArgs(trailingOnly = TRUE)

@@ -148,10 +148,35 @@ test_that("what the simulator's noise cannot do is refused, naming simNoise", {
     calibrate(same, ballField, simNoise = "constant", fit = FALSE)
     calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "constant")
   })
+  set.seed(1)
+  fit <- calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 200, nBurn = 100,
+                   nChains = 1, converge = FALSE)
+  expect_snapshot(error = TRUE, propose_runs(fit))
   # the compiled core refuses the noise with another algebra too
   m <- calibrate(pb$sim, pb$field, fit = FALSE)
   mc <- m$spec$model
   mc$algebra <- 2L
   expect_error(FBC:::.fbc_loglik(m$data$Xf, m$data$yf, m$data$Xs, m$data$ys, m$spec$init,
                                  FBC:::fbc_nugget, model = mc), "dense algebra only")
+})
+
+test_that("a run with the simulator's noise resumes from its checkpoint, and takes new runs", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = 3, nf = 4)
+  dir <- withr::local_tempdir()
+  go <- function(...) {
+    set.seed(2)
+    calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 300, nBurn = 100, nChains = 1,
+              converge = FALSE, ...)
+  }
+  plain <- go()
+  first <- go(checkpoint = dir)
+  expect_identical(first$Phi, plain$Phi)
+  expect_message(again <- go(checkpoint = dir), "Resuming")
+  expect_identical(again$Phi, plain$Phi)
+  # new replicates of existing inputs: the model keeps its unique inputs
+  up <- update(plain, sim = pb$sim[1:12, ], nMCMC = 200, reweight = FALSE)
+  expect_identical(up$model$design$simNoise$runs, 48L)
+  expect_identical(up$model$dims$m, 12L)
+  # (rows 1 to 12: the first 4 inputs, 3 runs each)
+  expect_identical(up$model$spec$model$replicates$count, rep(c(6, 3), c(4, 8)))
 })

@@ -1,0 +1,130 @@
+# Stochastic simulators: replicate runs and the simulator's own noise.
+#
+# A simulator whose output law is known: eta(x, t) = 5 exp(-t x) on x in
+# [0, 3], t in [0.5, 3], run noise sd(x) = 0.1 + 0.1 x (0.1 to 0.4); the
+# field one realization at t = 1.7 (the same noise) plus measurement error
+# sd 0.05 at 10 inputs. The exact posterior of t with infinitely many
+# replicates (eta and the noise known) follows by quadrature on a grid of t:
+# prior (calibrate()'s Beta(1.1, 1.1) over the design's range of t) times
+# prod_j N(yf_j; eta(x_j, t), sd(x_j)^2 + 0.05^2).
+#
+# For unique inputs x replicates (a Latin hypercube of the unique inputs per
+# data set), `calibrate()` with the defaults but `discrepancy = "none"` (the
+# field has no bias, as in the exact posterior), until converged:
+#   constant  simNoise = "auto" (the replicates differ: one noise variance)
+#   none      simNoise = "none" (the runs as if deterministic; up to
+#             --maxNone runs, its cost grows with the rows)
+# Reported per cell: Hellinger distance of t's posterior (a kernel density
+# of the draws) to the exact one, beside the bound (Hbound: eta known, the
+# field's noise one unknown variance as in FBC's model), the share of data sets whose 90% interval
+# covers 1.7, the posterior median of the noise sd (the truth varies from
+# 0.1 to 0.4: a constant sd is the model's average), CPU seconds.
+#
+# Rscript bench/run.R sim-noise [--quick] [--unique=25,50] [--reps=5,20] [--sets=3]
+source("bench/options.R")
+opt <- bench_options(list(unique = c(25L, 50L), reps = c(5L, 20L), sets = 3L,
+                          maxNone = 250L))
+if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
+suppressPackageStartupMessages(library(FBC))
+cpu <- function(expr) {
+  t0 <- proc.time()
+  force(expr)
+  tm <- proc.time() - t0
+  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
+}
+
+eta <- function(x, t) 5 * exp(-t * x)
+sdRun <- function(x) 0.1 + 0.1 * x
+xf <- seq(0.15, 2.85, length.out = 10)
+
+# One data set: a Latin hypercube of k unique inputs, r replicates each.
+data_set <- function(k, r, seed) {
+  set.seed(seed)
+  x <- (sample(k) - stats::runif(k)) / k * 3
+  t <- 0.5 + (sample(k) - stats::runif(k)) / k * 2.5
+  X <- cbind(x = rep(x, r), t = rep(t, r))
+  sim <- cbind(y = eta(X[, "x"], X[, "t"]) + stats::rnorm(nrow(X), 0, sdRun(X[, "x"])), X)
+  field <- cbind(y = eta(xf, 1.7) + stats::rnorm(10, 0, sqrt(sdRun(xf)^2 + 0.05^2)), x = xf)
+  list(sim = sim, field = field)
+}
+
+# The exact posterior of t on a grid over the design's range.
+exact_posterior <- function(d) {
+  lo <- min(d$sim[, "t"]); hi <- max(d$sim[, "t"])
+  g <- seq(lo, hi, length.out = 2001)
+  v <- sdRun(xf)^2 + 0.05^2
+  lp <- vapply(g, function(t) sum(stats::dnorm(d$field[, "y"], eta(xf, t), sqrt(v), log = TRUE)),
+               numeric(1)) + stats::dbeta((g - lo) / (hi - lo), 1.1, 1.1, log = TRUE)
+  w <- exp(lp - max(lp))
+  list(t = g, dens = w / sum(w) / diff(g[1:2]))
+}
+
+# The bound: t's posterior with eta known but the field's noise FBC's model
+# of it, one unknown variance (calibrate()'s half-Cauchy prior on its sd,
+# scale the runs' sd), by quadrature over (t, sd); its Hellinger distance to
+# the exact posterior is what no emulator can remove.
+bound_posterior <- function(d, ex) {
+  s <- exp(seq(log(0.01), log(3), length.out = 400))
+  ysd <- stats::sd(d$sim[, "y"])
+  ls <- outer(ex$t, s, Vectorize(function(t, sd) {
+    sum(stats::dnorm(d$field[, "y"], eta(xf, t), sd, log = TRUE))
+  })) + rep(stats::dcauchy(s, 0, ysd, log = TRUE) + log(s), each = length(ex$t))
+  lo <- min(ex$t); hi <- max(ex$t)
+  ls <- ls + stats::dbeta((ex$t - lo) / (hi - lo), 1.1, 1.1, log = TRUE)
+  w <- rowSums(exp(ls - max(ls)))
+  w / sum(w) / diff(ex$t[1:2])
+}
+grid_hellinger <- function(p, q, dt) sqrt(max(0, 1 - sum(sqrt(p * q)) * dt))
+
+hellinger <- function(draws, ex) {
+  k <- stats::density(draws, from = min(ex$t), to = max(ex$t), n = length(ex$t))
+  q <- k$y / sum(k$y) / diff(ex$t[1:2])
+  dt <- diff(ex$t[1:2])
+  sqrt(max(0, 1 - sum(sqrt(q * ex$dens)) * dt))
+}
+
+one <- function(k, r, seed, simNoise) {
+  d <- data_set(k, r, seed)
+  ex <- exact_posterior(d)
+  set.seed(seed)
+  tm <- cpu(fit <- suppressMessages(suppressWarnings(
+    calibrate(d$sim, d$field, discrepancy = "none", simNoise = simNoise, showProgress = FALSE,
+              converge = if (opt$quick) until_converged(maxMCMC = 2000)))))
+  tt <- fit$Phi[, fit$indices$kappa]
+  ci <- stats::quantile(tt, c(0.05, 0.95), names = FALSE)
+  sdR <- if ("sigma2R" %in% colnames(fit$Phi)) {
+    stats::median(sqrt(fit$Phi[, "sigma2R"])) * fit$model$scale$ysd
+  } else NA_real_
+  bound <- grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2]))
+  data.frame(unique = k, reps = r, set = seed, model = simNoise, H = hellinger(tt, ex),
+             Hbound = bound,
+             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), noiseSd = sdR, cpu = tm)
+}
+
+res <- list()
+for (k in opt$unique) for (r in opt$reps) for (s in seq_len(opt$sets)) {
+  res[[length(res) + 1L]] <- one(k, r, s, "auto")
+  if (k * r <= opt$maxNone) res[[length(res) + 1L]] <- one(k, r, s, "none")
+}
+res <- do.call(rbind, res)
+res$model[res$model == "auto"] <- "constant"
+cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), drop = TRUE),
+                              function(d) {
+  data.frame(unique = d$unique[1], reps = d$reps[1], runs = d$unique[1] * d$reps[1],
+             model = d$model[1], sets = nrow(d),
+             H = sprintf("%.3f (%.3f-%.3f)", stats::median(d$H), min(d$H), max(d$H)),
+             Hbound = round(stats::median(d$Hbound), 3),
+             covers90 = sprintf("%d/%d", sum(d$covers), nrow(d)),
+             width90 = round(stats::median(d$width90), 3),
+             noiseSd = round(stats::median(d$noiseSd), 3),
+             cpu = sprintf("%.1f (%.1f-%.1f)", stats::median(d$cpu), min(d$cpu), max(d$cpu)))
+}))
+cell <- cell[order(cell$unique, cell$reps, cell$model), ]
+rownames(cell) <- NULL
+cat("\nt's posterior against the exact one (median and range over the data sets)\n\n")
+print(knitr::kable(cell))
+cat("\nEvery data set:\n\n")
+print(knitr::kable(res, digits = 3))
+cat(sprintf("\n%s, R %s, BLAS %s, commit %s\n", format(Sys.time(), "%Y-%m-%d"),
+            getRversion(), basename(La_library()),
+            tryCatch(system("git rev-parse --short HEAD", intern = TRUE), error = function(e) "?")))
