@@ -114,8 +114,8 @@ phi_indices <- function(spec) {
 
 # The prior table and classes of Phi's columns.
 phi_spec <- function(fit) {
-  cols <- phi_columns(fit$spec)
-  list(table = fit$spec$table[cols, , drop = FALSE], classes = fit$spec$classes[cols],
+  cols <- phi_columns(fit$model$spec)
+  list(table = fit$model$spec$table[cols, , drop = FALSE], classes = fit$model$spec$classes[cols],
        cols = cols)
 }
 
@@ -124,9 +124,9 @@ phi_spec <- function(fit) {
 # the compiled entry points take. Every path from draws to the compiled code
 # (predict(), the checks, the conflict check) goes through here.
 sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
-  spec <- fit$spec
+  spec <- fit$model$spec
   out <- matrix(spec$init, length(rows), length(spec$init), byrow = TRUE)
-  out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$scale)
+  out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$model$scale)
   out
 }
 

@@ -543,7 +543,7 @@ runs_by_output <- function(U, sc, out) {
 # (`prune`, a log ratio; 0 with !prune).
 design_particles <- function(fit, ndraws, method, prune = TRUE) {
   N <- nrow(fit$Phi)
-  q <- fit$scale$q
+  q <- fit$model$scale$q
   if (method == "joint") {
     # evenly over the distinct draws, each weighted by its repeats: a
     # reweighted fit's draws repeat (update_runs()), and picking among all
@@ -561,7 +561,7 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
   K <- if (q == 1L) matrix((seq_len(ndraws) - 0.5) / ndraws) else matrix(stats::runif(ndraws * q), ndraws, q)
   phi <- phi0[rep(1, ndraws), , drop = FALSE]
   phi[, seq_len(q)] <- K
-  tab <- fit$spec$table
+  tab <- fit$model$spec$table
   lp <- 0
   for (j in seq_len(q)) lp <- lp + log_prior_row(tab, j, K[, j])
   # a kappa whose weight is under 1e-10 of the largest adds nothing to the

@@ -55,9 +55,9 @@ test_that("a fresh fit carries the current version and its copies of the model d
   expect_identical(FBC:::upgrade_fbc(fit), fit)
   # the user-facing copies come from spec
   expect_identical(fit$vars, colnames(fit$Phi))
-  expect_identical(fit$indices, FBC:::phi_indices(fit$spec))
-  expect_identical(fit$priors, fit$spec$priors)
-  expect_identical(fit$priorFns, fit$spec$fns)
+  expect_identical(fit$indices, FBC:::phi_indices(fit$model$spec))
+  expect_identical(fit$priors, fit$model$spec$priors)
+  expect_identical(fit$priorFns, fit$model$spec$fns)
   # update() rebuilds it through the same constructor
   up <- update(fit, nMCMC = 20)
   expect_identical(up$version, fit$version)
@@ -73,7 +73,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   old$spec$model$discrepancy <- NULL
   up <- FBC:::upgrade_fbc(old)
   expect_identical(up$model$discrepancy, "gp")
-  expect_identical(up$spec$model, fit$spec$model)
+  expect_identical(up$model$spec$model, fit$model$spec$model)
   expect_identical(up$Phi, fit$Phi)
   expect_identical(up$version$format, 6L)
   # a fit without a bias validates; its layout is the "none" one
@@ -81,7 +81,7 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
                     discrepancy = "none")
   expect_identical(FBC:::validate_fbc(none), none)
-  expect_identical(none$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
+  expect_identical(none$model$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
   other <- none
   other$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
@@ -136,7 +136,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     expect_identical(fit$logLik, old$logLik)
     # the power exponential on both GPs, the design's algebra, and the one
     # layout of phi there was (the ball data: p = q = 1)
-    expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+    expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
     expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy")],
                      list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp"))
     expect_identical(fit$settings$nugget, 1e-6)
@@ -174,7 +174,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
   expect_identical(fit$version$format, 6L)
-  expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+  expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
                readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map, tolerance = 1e-10)
@@ -210,7 +210,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(names(fit$settings),
                    c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint"))
   expect_identical(fit$Phi, old$Phi)
-  expect_identical(fit$spec, old$spec)
+  expect_identical(fit$model$spec, old$spec)
   h <- c(1, 2.5, 4)
   ref <- readRDS(test_path("fixtures", "predict-3f92546.rds"))
   expect_equal(predict(old, h, method = "MAP"), ref$map, tolerance = 1e-10)

@@ -260,7 +260,7 @@ test_that("kappa draws on a product design match the grid posterior", {
   fit <- calibrate(sim, field, nMCMC = 8000, nBurn = 1000, thinning = 2, nChains = 2,
                    hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   expect_identical(fit$model$algebra$name, "kronecker")
-  d <- fit$data
+  d <- fit$model$data
   # 7000 draws of kappa (ESS a few thousand): quantile errors ~0.03 sd
   expect_kappa_grid(fit, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6),
                     u = seq(0, 1, length.out = 201), quantileTol = 0.12, ksTol = 0.05)

@@ -99,7 +99,7 @@ test_that("prior_conflicts() checks a correlation whose posterior sits in its pr
   Phi[, "rhoS1"] <- 0.985 + 0.004 * qnorm(ppoints(400))
   fit <- fit_with_draws(fit, Phi, rep(1:4, each = 100), -abs(seq_len(400) - 200.5))
   fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
-  col <- FBC:::phi_columns(fit$spec)[match("rhoS1", colnames(Phi))]
+  col <- FBC:::phi_columns(fit$model$spec)[match("rhoS1", colnames(Phi))]
   out <- FBC:::prior_conflicts(fit, loglik = function(fit, phi) 200 * phi[col])
   expect_identical(out$var, "rhoS1")
   # uniform(-1, 1): the CDF at the median 0.985 is 1.985 / 2
