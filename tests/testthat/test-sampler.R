@@ -5,7 +5,7 @@
 ball_spec <- function() {
   set.seed(1)
   calibrate(ballSim, ballField, nMCMC = 4, nBurn = 0, thinning = 1, nChains = 1,
-            kernelS = "powexp", kernelB = "powexp")$spec  # with the smoothness parameters
+            kernelS = "powexp", kernelB = "powexp")$model$spec  # with the smoothness parameters
 }
 
 test_that("the blocks schedule follows the model description's move column", {
@@ -61,6 +61,7 @@ test_that("kappa jumps over its prior's support, or its central 99.9% when unbou
   sp <- FBC:::build_priors(list(dist = c("gaussian", "fixed"), init = c(0.5, 0.5), p1 = c(0.5, NA),
                                 p2 = c(0.2, NA)), set_hyperPriors(),
                            list(xmin = rep(0, 3), xmax = rep(1, 3), p = 1, q = 2), 1, 2)
+  sp$model <- FBC:::compiled_model(1, 2)
   mv <- FBC:::sampler_moves("blocks", sp)
   expect_identical(mv$jump, 1L)
   expect_equal(mv$jumpRange, FBC:::jump_ranges(sp$table, 1L))
