@@ -22,8 +22,9 @@
 #   priors     the priors by class, families by name (what the user gave,
 #              completed)
 #   spec       the prior table, initial values and proposal scales, names
-#              and classes of phi, prior functions and the compiled model
-#              description (R/model-spec.R)
+#              and classes of phi, prior functions (R/model-spec.R) and
+#              `model`, the compiled model description (compiled_model(),
+#              built once by build_model())
 #   kernelS, kernelB, discrepancy, sampler   the choices, by name
 #   algebra    choose_algebra()'s choice, the one record of the algebra the
 #              compiled core runs (name, code, neighbours, dims, reason)

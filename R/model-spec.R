@@ -132,7 +132,9 @@ sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
 
 # Expands every class to one row per parameter: the C++ prior table, the
 # initial values on the sampler's scale and the initial proposal SDs. The
-# classes without parameters under `discrepancy` have no prior.
+# classes without parameters under `discrepancy` have no prior. The
+# compiled model description (`model`, compiled_model()) is the caller's to
+# add: it needs the kernels, the algebra and the data (build_model()).
 # With independent outputs (`outputs`: the output's list(col, ncol, L),
 # `levels` without it) each perOutput class's priors are one output's,
 # repeated for every output.
@@ -207,11 +209,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
-       priors = priors, fns = prior_functions(table, vars, cls_of, scale),
-       model = compiled_model(p, q, discrepancy = discrepancy,
-                              noise = if (noise > 1L) seq_len(noise), levels = levels,
-                              source = source, outputs = outputs,
-                              simulator = if (!emulator) list()))
+       priors = priors, fns = prior_functions(table, vars, cls_of, scale))
 }
 
 # One log-density function per parameter, in the units it is reported in.

@@ -233,6 +233,7 @@ test_that("large dense problems move each kappa and the simulator block once a s
   sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q),
                                 p2 = rep(1.1, q)), set_hyperPriors(),
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   small <- FBC:::sampler_moves("blocks", sp)
   large <- FBC:::sampler_moves("blocks", sp, large = TRUE)
   expect_identical(large$blocks, small$blocks)  # kappa1, kappa2, simulator, bias, kappa's joint walk

@@ -173,6 +173,7 @@ test_that("the sampler on a product design retains dense log-likelihoods", {
                                 p2 = rep(1.1, q)),
                            set_hyperPriors(),
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   for (sampler in c("single", "blocks")) {
     set.seed(3)
     res <- run_sampler(d, sp, sampler, 200L, 150L, 5L)
