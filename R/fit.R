@@ -219,15 +219,16 @@ fbc_spec_problems <- function(x) {
   # the layout the compiled core gets is the model description's for these
   # data (R/model-classes.R)
   sc <- x$model$scale
+  dm <- x$model$dims
   disc <- discrepancy_name(spec$model$discrepancy)
   if (length(disc) != 1L || is.na(disc)) {
     return(c(out, sprintf("`model$spec$model$discrepancy` must be a discrepancy code (%s).",
                           paste(sprintf("%d for %s", discrepancy_codes, names(discrepancy_codes)), collapse = ", "))))
   }
-  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
-                                                   source_count(spec$model),
-                                                   outputs = output_count(spec$model),
-                                                   emulator = is.null(spec$model$simulator)))) {
+  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, dm$noise, dm$levels,
+                                                   if (disc == "none") 0L else dm$sources,
+                                                   outputs = dm$outputs %||% 1L,
+                                                   emulator = x$model$algebra$name != "function"))) {
     return(c(out, sprintf("`model$spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }
@@ -388,7 +389,7 @@ model_of_fit <- function(x) {
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
-                 fieldRows = distinct_rows(x$data$Xf, bias$codes))
+                 outputs = mc$outputs, fieldRows = distinct_rows(x$data$Xf, bias$codes))
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
                 sampler = s$sampler %||% "single", algebra = algebra,
@@ -444,12 +445,14 @@ fit_to_6 <- function(x) {
 
 # Format 6 to 7: the fit holds its model only. The copies of the model's
 # data, scale and spec beside it go; a part the model lacks is the fit's
-# copy.
+# copy. The model's dims state the number of independent outputs.
 fit_to_7 <- function(x) {
   parts <- c("data", "scale", "spec")
   for (el in parts) {
     if (is.null(x$model[[el]])) x$model[el] <- list(x[[el]])
   }
+  # (the number of independent outputs joined the model's dims with them)
+  if (is.null(x$model$dims$outputs)) x$model$dims$outputs <- output_count(x$model$spec$model)
   x[parts] <- NULL
   x$version$format <- 7L
   x

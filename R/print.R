@@ -108,7 +108,7 @@ print_design <- function(mo, sc, fn) {
     k <- pos[[i]]
     cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
                 paste(f$levels, collapse = ", "),
-                if (output_count(mo$spec$model) > 1L) "rhoS (one per output)" else rho_list("rhoS", k, lev)))
+                if (mo$dims$outputs > 1L) "rhoS (one per output)" else rho_list("rhoS", k, lev)))
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n    %s\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", "),

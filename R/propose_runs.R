@@ -427,7 +427,7 @@ check_design_model <- function(model, call = parent.frame()) {
   }
   N <- design_rows(model)
   if (sum(N) > 3000) {
-    each <- if (output_count(model$spec$model) > 1L) " (of one output: each has its own)" else ""
+    each <- if (model$dims$outputs > 1L) " (of one output: each has its own)" else ""
     cli::cli_abort(c(
       "{.fn propose_runs} handles up to 3000 runs and distinct field inputs{each}; this fit has {N[1]} and {N[2]}.",
       i = "It conditions every candidate on all of them for every draw it scores, which is too slow beyond that."
@@ -579,7 +579,7 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"
-    if (output_count(model$spec$model) > 1L) what <- paste(what, "(the largest output's)")
+    if (model$dims$outputs > 1L) what <- paste(what, "(the largest output's)")
     K <- length(model$scale$output$levels)
     cand <- if (K > 1L) paste(nrow(U) / K, "candidates x", K, "outputs") else paste(nrow(U), "candidates")
     cli::cli_abort(c(

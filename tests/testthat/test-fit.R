@@ -408,6 +408,11 @@ test_that("a fit of format 6 upgrades to the fit holding its model only, with th
     expect_identical(whole$model[[el]], fit$model[[el]])
     expect_identical(predict(whole, h, method = "MAP"), predict(fit, h, method = "MAP"))
   }
+  # a model whose sizes do not state the number of independent outputs
+  # gets it
+  few <- old
+  few$model$dims$outputs <- NULL
+  expect_identical(FBC:::upgrade_fbc(few)$model$dims$outputs, 1L)
   # a broken copy is not read: the model's own parts are kept
   wrong <- old
   wrong$scale$ysd <- 2 * wrong$scale$ysd
