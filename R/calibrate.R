@@ -164,18 +164,19 @@
 #'   and without the bias's parameters under `discrepancy = "none"`),
 #'   `chain` (the chain of each row), `estimates` (posterior summaries with
 #'   `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars` (the names
-#'   of `Phi`'s columns), `data`, `scale`, `indices` (for each parameter
+#'   of `Phi`'s columns), `indices` (for each parameter
 #'   class, the columns of `Phi` holding it: `integer(0)` for a smoothness
 #'   that is not sampled), `priorFns`, `proposalSD`, `call`, `settings`
 #'   (the run's: MCMC sizes, nugget, run time, checkpoint directory, the
-#'   convergence rule), `model` (the [fbc_model] fitted: `kernelS`,
+#'   convergence rule), `model` (the [fbc_model] fitted: the scaled
+#'   `data`, their `scale`, `spec` (the model description the copies
+#'   `priors`, `vars`, `indices` and `priorFns` come from), `kernelS`,
 #'   `kernelB`, `discrepancy`, `sampler` and its `moves`, the `algebra`
 #'   that ran (`name`, `dims` of a product design, `neighbours`, `reason`),
 #'   ...), `state` (`chains`: where
 #'   each chain stopped, its adapted proposal scales and acceptance, over
-#'   the sampler's full parameter vector; `interrupted`), `spec` (the model
-#'   description the copies `priors`, `vars`, `indices` and `priorFns` come
-#'   from) and `version` (`fbc`: the version of FBC that made it; `format`:
+#'   the sampler's full parameter vector; `interrupted`) and `version`
+#'   (`fbc`: the version of FBC that made it; `format`:
 #'   the object's format). A fit saved by an earlier FBC is brought to the
 #'   current format by every function that takes one, and an
 #'   earlier version's checkpoint directory resumes.

@@ -147,9 +147,9 @@ warn_field_outside <- function(sim, field, scale, call = parent.frame()) {
 fbc_extrapolation_margin <- 0.1
 
 warn_newdata_outside <- function(X, object, call = parent.frame()) {
-  sc <- object$scale
+  sc <- object$model$scale
   p <- sc$p
-  Xf <- object$data$Xf  # scaled field inputs
+  Xf <- object$model$data$Xf  # scaled field inputs
   out <- character()
   for (k in seq_len(p)) {
     w <- sc$xmax[k] - sc$xmin[k]
@@ -434,7 +434,7 @@ check_kappa_design <- function(kappa, scale, call = parent.frame()) {
 # calibration parameters with more than `fbc_kappa_beyond_share` of their
 # draws there (lower, upper: the range of their draws; fixed: a fixed prior).
 kappa_beyond <- function(x, rows = seq_len(nrow(x$Phi))) {
-  des <- kappa_design(x$scale)
+  des <- kappa_design(x$model$scale)
   cols <- x$indices$kappa
   fixed <- phi_spec(x)$table$family[cols] == prior_families[["fixed"]]
   out <- list()

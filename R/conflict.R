@@ -27,9 +27,9 @@ fit_cache <- function() new.env(parent = emptyenv())
 # so that a reordered column differs), log posteriors, data, priors and
 # nugget.
 conflict_key <- function(fit) {
-  d <- fit$data
+  d <- fit$model$data
   list(dim(fit$Phi), sum(fit$Phi), sum(fit$Phi * seq_along(fit$Phi)), sum(fit$logPost),
-       sum(d$yf), sum(d$ys), sum(d$Xs), sum(d$Xf), fit$spec$table, fit$settings$nugget)
+       sum(d$yf), sum(d$ys), sum(d$Xs), sum(d$Xf), fit$model$spec$table, fit$settings$nugget)
 }
 
 # prior_conflicts() of the fit, from its cache when it has one and the fit
@@ -48,9 +48,9 @@ cached_conflicts <- function(fit) {
 
 # Log-likelihood of the fit's data at phi (the sampler's scale).
 fit_loglik <- function(fit, phi) {
-  d <- fit$data
+  d <- fit$model$data
   ll <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget,
-                    model = fit$spec$model)
+                    model = fit$model$spec$model)
   if (is.finite(ll)) ll else -Inf
 }
 
@@ -68,7 +68,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
                       rising = logical())
   if (nrow(fit$Phi) < 2L) return(empty)
   ps <- phi_spec(fit)
-  vars <- phi_vars(fit$spec)
+  vars <- phi_vars(fit$model$spec)
   tab <- ps$table
   fam <- prior_family_name(tab$family)
   full <- sampler_draws(fit)
@@ -112,7 +112,7 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
       value <- tab$a[j] + tab$b[j] * u
       reported <- if (ps$classes[j] == "kappa") {
         k <- match(vars[j], vars[ps$classes == "kappa"])
-        drop(unscale_inputs(matrix(u), fit$scale, fit$scale$p + k))
+        drop(unscale_inputs(matrix(u), fit$model$scale, fit$model$scale$p + k))
       } else value
       list(value = value, reported = reported)
     }
@@ -140,19 +140,19 @@ prior_conflicts <- function(fit, loglik = fit_loglik) {
 }
 
 # A looser prior for the flagged members `js` (positions in phi, as in
-# fit$spec$vars) of one class, each of the same
+# fit$model$spec$vars) of one class, each of the same
 # kind with the data's value (`values`, in the prior's units) near its
 # centre, or fixed at a bound the data press against (`bounds`, NA when
 # none); other members keep their priors. Returns the text of an R call, or
 # NA when there is no obvious one.
 suggest_prior <- function(fit, js, values, bounds = rep(NA_real_, length(js))) {
-  tab <- fit$spec$table
-  cls <- fit$spec$classes[js[1]]
-  members <- which(fit$spec$classes == cls)
+  tab <- fit$model$spec$table
+  cls <- fit$model$spec$classes[js[1]]
+  members <- which(fit$model$spec$classes == cls)
   fams <- prior_family_name(tab$family[members])
   p1 <- tab$p1[members]
   p2 <- tab$p2[members]
-  init <- fit$spec$priors[[cls]]$init
+  init <- fit$model$spec$priors[[cls]]$init
   for (i in seq_along(js)) {
     j <- js[i]
     k <- match(j, members)
@@ -209,11 +209,11 @@ format_num <- function(v) vapply(v, function(x) format(signif(x, 2), scientific 
 # The convergence_messages() text: one message per class of parameters
 # (`cf`: the rows of prior_conflicts()).
 conflict_messages <- function(fit, cf = cached_conflicts(fit)) {
-  tab <- fit$spec$table
+  tab <- fit$model$spec$table
   vapply(unique(cf$class), function(cls) {
     rows <- cf[cf$class == cls, , drop = FALSE]
     one <- nrow(rows) == 1L
-    j <- match(rows$var, fit$spec$vars)
+    j <- match(rows$var, fit$model$spec$vars)
     dist <- prior_family_name(tab$family[j])
     priors <- unique(sprintf("%s(%s, %s)", dist, format_num(tab$p1[j]), format_num(tab$p2[j])))
     prob <- ifelse(rows$side == "lower", rows$cdf, 1 - rows$cdf)
@@ -246,7 +246,7 @@ conflict_messages <- function(fit, cf = cached_conflicts(fit)) {
     } else {
       sprintf("the prior, not the data, sets %s", vars)
     }
-    sugg <- suggest_prior(fit, match(rows$var, fit$spec$vars), rows$priorValue,
+    sugg <- suggest_prior(fit, match(rows$var, fit$model$spec$vars), rows$priorValue,
                           ifelse(rows$atBound, rows$bound, NA_real_))
     advice <- if (cls == "kappa" && all(rows$atBound)) {
       " Widen the prior or the simulator design, or check for a discrepancy the model cannot absorb."

@@ -30,7 +30,7 @@ confounded_kappa <- function(x) {
   if (identical(x$model$discrepancy, "none")) return(NULL)
   Phi <- x$Phi
   noiseCols <- grep("^sigma2E[0-9]*$", colnames(Phi), value = TRUE)
-  labels <- x$scale$noiseLabels
+  labels <- x$model$scale$noiseLabels
   # each group's bias variance: sigma2B, or with independent outputs its
   # output's sigma2B[output] (the group's label starts with the output)
   biasCols <- if ("sigma2B" %in% colnames(Phi)) rep("sigma2B", length(noiseCols)) else
@@ -45,11 +45,11 @@ confounded_kappa <- function(x) {
   noise <- if (length(noiseCols) > 1L && length(labels) == length(noiseCols)) {
     sprintf("%s (%s)", noiseCols[g], labels[g])
   } else noiseCols[g]
-  des <- kappa_design(x$scale)
+  des <- kappa_design(x$model$scale)
   ps <- phi_spec(x)
   fam <- prior_family_name(ps$table$family)
   out <- NULL
-  for (j in seq_len(x$scale$q)) {
+  for (j in seq_len(x$model$scale$q)) {
     col <- which(ps$classes == "kappa")[j]
     if (fam[col] == "fixed") next
     k <- Phi[, col]

@@ -261,7 +261,7 @@ run_simulator <- function(f, X, xnames, cal, yname, output = NULL) {
 }
 
 loop_row <- function(fit, runs, tDesign, tFit) {
-  cal <- fit$scale$names$calibration
+  cal <- fit$model$scale$names$calibration
   row <- data.frame(runs = runs)
   for (j in seq_along(cal)) {
     k <- fit$Phi[, j]

@@ -54,7 +54,7 @@ chain_diagnostics <- function(Phi, chain) {
 param_support <- function(x) {
   ps <- phi_spec(x)
   tab <- ps$table
-  vars <- phi_vars(x$spec)
+  vars <- phi_vars(x$model$spec)
   fam <- prior_family_name(tab$family)
   d <- nrow(tab)
   lo <- hi <- numeric(d)
@@ -65,8 +65,8 @@ param_support <- function(x) {
     s <- c(max(s[1], dom[1]), min(s[2], dom[2]))
     if (cls == "kappa") {
       k <- match(vars[j], vars[ps$classes == "kappa"])
-      lo0 <- x$scale$xmin[x$scale$p + k]
-      rng <- x$scale$xmax[x$scale$p + k] - lo0
+      lo0 <- x$model$scale$xmin[x$model$scale$p + k]
+      rng <- x$model$scale$xmax[x$model$scale$p + k] - lo0
       # prior argument a + b * u, u = (kappa - lo0) / rng
       s <- lo0 + rng * (s - tab$a[j]) / tab$b[j]
     }
@@ -81,7 +81,7 @@ param_support <- function(x) {
 bound_piling <- function(x) {
   sup <- param_support(x)
   fixed <- phi_spec(x)$table$family == prior_families[["fixed"]]
-  vars <- phi_vars(x$spec)
+  vars <- phi_vars(x$model$spec)
   out <- list()
   for (j in seq_along(vars)) {
     if (fixed[j] || !all(is.finite(sup[j, ]))) next
@@ -106,7 +106,7 @@ bound_pressing <- function(x, piled = bound_piling(x)) {
   sup <- param_support(x)
   ps <- phi_spec(x)
   fixed <- ps$table$family == prior_families[["fixed"]]
-  vars <- phi_vars(x$spec)
+  vars <- phi_vars(x$model$spec)
   out <- list()
   for (j in seq_along(vars)) {
     v <- x$Phi[, j]
@@ -129,7 +129,7 @@ bound_pressing <- function(x, piled = bound_piling(x)) {
 # the parameter are equal. data.frame(var, chain, draws, value).
 stuck_chains <- function(x) {
   fixed <- phi_spec(x)$table$family == prior_families[["fixed"]]
-  vars <- phi_vars(x$spec)
+  vars <- phi_vars(x$model$spec)
   out <- list()
   for (k in sort(unique(x$chain))) {
     rows <- x$chain == k
@@ -383,7 +383,7 @@ bound_messages <- function(x) {
   pile <- bound_piling(x)
   msgs <- vapply(seq_len(nrow(pile)), function(i) {
     v <- pile$var[i]
-    cls <- x$spec$classes[match(v, x$spec$vars)]
+    cls <- x$model$spec$classes[match(v, x$model$spec$vars)]
     hint <- switch(cls,
       alphaS = , alphaB = paste0(
         "The data favour this smoothness; ",
@@ -400,7 +400,7 @@ bound_messages <- function(x) {
   press <- bound_pressing(x, pile)
   c(msgs, vapply(seq_len(nrow(press)), function(i) {
     v <- press$var[i]
-    cls <- x$spec$classes[match(v, x$spec$vars)]
+    cls <- x$model$spec$classes[match(v, x$model$spec$vars)]
     hint <- if (cls == "kappa") kappaHint else {
       sprintf("Widen its prior (`%sDist`, `%sP1`, `%sP2` in set_hyperPriors()) unless this bound is known.", cls, cls, cls)
     }
@@ -416,8 +416,8 @@ bound_messages <- function(x) {
 # mirror image) of the other. An answer about the data, not a prior whose
 # support is too narrow (it is the whole of (-1, 1)).
 rho_bound_hint <- function(x, v, cls, bound) {
-  pos <- match(v, x$spec$vars[x$spec$classes == cls])
-  src <- x$scale$source
+  pos <- match(v, x$model$spec$vars[x$model$spec$classes == cls])
+  src <- x$model$scale$source
   factors <- if (cls == "rhoD") list(list(name = src$name, levels = src$levels)) else level_factors(x$model)
   lab <- level_labels(factors)
   lab <- lab[(pos - 1L) %% length(lab) + 1L]  # independent outputs: a copy per output

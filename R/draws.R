@@ -7,9 +7,9 @@
 # the sampler's scale: sampler_draws()); `...` the entry's own arguments, by
 # name.
 at_draws <- function(fit, entry, phis, ...) {
-  d <- fit$data
+  d <- fit$model$data
   entry(Xf = d$Xf, yf = d$yf, Xs = d$Xs, ys = d$ys, phis = phis,
-        nugget = fit$settings$nugget, model = fit$spec$model, ...)
+        nugget = fit$settings$nugget, model = fit$model$spec$model, ...)
 }
 
 # `fun(idx)` for the indices 1..n in blocks of `size` (memory bounded

@@ -91,8 +91,8 @@ emulator_cv <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds =
   }
   method <- match_choice(method, c("Bayesian", "MAP"), "method")
   ndraws <- check_count(ndraws, "ndraws")
-  sc <- fit$scale
-  ys <- fit$data$ys
+  sc <- fit$model$scale
+  ys <- fit$model$data$ys
   m <- length(ys)
   fold <- emulator_folds(folds, m)
   rows <- check_rows(fit, method, ndraws)
@@ -108,11 +108,11 @@ emulator_cv <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds =
   pit <- rowMeans(stats::pnorm((ys - means) / sds))
   z <- (ys - mu) / sqrt(v)
 
-  X <- unscale_inputs(fit$data$Xs, sc, seq_len(ncol(fit$data$Xs)))
+  X <- unscale_inputs(fit$model$data$Xs, sc, seq_len(ncol(fit$model$data$Xs)))
   stat_cols <- c("fold", "observed", "mean", "sd", "z", "pit")
   inputs <- make.unique(c(stat_cols, sim_input_names(sc, ncol(X))))[-seq_along(stat_cols)]
   colnames(X) <- inputs
-  out <- fit$data$outS
+  out <- fit$model$data$outS
   runs <- data.frame(X, fold = fold %||% seq_len(m),
                      observed = y_mean(sc, out) + y_sd(sc, out) * ys,
                      mean = y_mean(sc, out) + y_sd(sc, out) * mu,

@@ -58,14 +58,14 @@ emulator_vs_direct <- function(emulated, direct, tolerance = 0.2) {
   if (!is.numeric(tolerance) || length(tolerance) != 1L || is.na(tolerance) || tolerance <= 0) {
     cli::cli_abort("{.arg tolerance} must be a positive number, not {format_choice(tolerance)}.")
   }
-  q <- direct$scale$q
-  same <- length(emulated$data$yf) == length(direct$data$yf) &&
-    isTRUE(all.equal(emulated$data$yf * emulated$scale$ysd + emulated$scale$ymean,
-                     direct$data$yf * direct$scale$ysd + direct$scale$ymean, tolerance = 1e-10))
-  if (emulated$scale$q != q || !same) {
+  q <- direct$model$scale$q
+  same <- length(emulated$model$data$yf) == length(direct$model$data$yf) &&
+    isTRUE(all.equal(emulated$model$data$yf * emulated$model$scale$ysd + emulated$model$scale$ymean,
+                     direct$model$data$yf * direct$model$scale$ysd + direct$model$scale$ymean, tolerance = 1e-10))
+  if (emulated$model$scale$q != q || !same) {
     cli::cli_abort(c(
       "{.arg emulated} and {.arg direct} must calibrate the same field data with the same number of calibration inputs.",
-      x = "They have {emulated$scale$q} and {q} calibration input{?s} and {length(emulated$data$yf)} and {length(direct$data$yf)} field rows."
+      x = "They have {emulated$model$scale$q} and {q} calibration input{?s} and {length(emulated$model$data$yf)} and {length(direct$model$data$yf)} field rows."
     ))
   }
   u <- (seq_len(200) - 0.5) / 200
@@ -75,7 +75,7 @@ emulator_vs_direct <- function(emulated, direct, tolerance = 0.2) {
     s <- stats::sd(f)
     qe <- stats::quantile(e, c(0.05, 0.5, 0.95), names = FALSE)
     qf <- stats::quantile(f, c(0.05, 0.5, 0.95), names = FALSE)
-    data.frame(kappa = paste0("kappa", j), name = direct$scale$names$calibration[j],
+    data.frame(kappa = paste0("kappa", j), name = direct$model$scale$names$calibration[j],
                distance = mean(abs(stats::quantile(e, u, names = FALSE) -
                                      stats::quantile(f, u, names = FALSE))) / s,
                shift = (qe[2] - qf[2]) / s, widthRatio = (qe[3] - qe[1]) / (qf[3] - qf[1]),

@@ -359,9 +359,9 @@ read_newdata_factors <- function(newdata, scale, type, call = parent.frame()) {
 level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   fit <- check_fbc(fit, "fit")
   gp <- match_choice(gp, c("simulator", "bias"), "gp")
-  fac <- fit$scale$factors
-  src <- fit$scale$source
-  own <- isTRUE(fit$scale$sourceBias)
+  fac <- fit$model$scale$factors
+  src <- fit$model$scale$source
+  own <- isTRUE(fit$model$scale$sourceBias)
   if (!length(fac) && !own) {
     cli::cli_abort(c(
       "{.arg fit} has no categorical input.",
@@ -378,7 +378,7 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   }
   input <- match_choice(input, c(names(fac), if (own) src$name), "input")
   if (identical(fit$model$options$outputs, "independent")) {
-    if (identical(input, fit$scale$output$name)) {
+    if (identical(input, fit$model$scale$output$name)) {
       cli::cli_abort(c(
         "The outputs ({.val {input}}) of {.arg fit} are modelled independently ({.code outputs = \"independent\"}): each has its own GPs, uncorrelated with the others'.",
         i = "{.code calibrate(..., outputs = \"shared\")} correlates them through one simulator GP, whose level correlation this shows."
@@ -394,12 +394,12 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
     if (gp != "bias") {
       cli::cli_abort("The field data sets {.val {input}} enter the bias only: use {.code gp = \"bias\"}.")
     }
-    draws <- sampler_draws(fit)[, fit$spec$classes == "rhoD", drop = FALSE]
-    warn_split_rho(draws, fit$spec$vars[fit$spec$classes == "rhoD"])
+    draws <- sampler_draws(fit)[, fit$model$spec$classes == "rhoD", drop = FALSE]
+    warn_split_rho(draws, fit$model$spec$vars[fit$model$spec$classes == "rhoD"])
     return(mean_level_corr(draws, src$levels))
   }
   cls <- if (gp == "simulator") "rhoS" else "rhoB"
-  if (!any(fit$spec$classes == cls)) {
+  if (!any(fit$model$spec$classes == cls)) {
     cli::cli_abort(c(
       "{.arg fit} has no level correlations ({.field {cls}}): it was made by a version of FBC that correlated levels through the indicators' {.field {if (gp == 'simulator') 'thetaS' else 'thetaB'}}.",
       i = "Refit it with this version to get the levels' correlation."
@@ -407,8 +407,8 @@ level_correlation <- function(fit, input, gp = c("simulator", "bias")) {
   }
   k <- match(input, names(fac))
   pos <- level_positions(fac)[[k]]
-  draws <- sampler_draws(fit)[, fit$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
-  warn_split_rho(draws, fit$spec$vars[fit$spec$classes == cls][pos])
+  draws <- sampler_draws(fit)[, fit$model$spec$classes == cls, drop = FALSE][, pos, drop = FALSE]
+  warn_split_rho(draws, fit$model$spec$vars[fit$model$spec$classes == cls][pos])
   mean_level_corr(draws, fac[[k]]$levels)
 }
 

@@ -24,11 +24,11 @@ field_pull <- function(x) {
   if (!is.null(x$model$simulator) || !nrow(x$Phi)) return(NULL)
   rows <- unique(round(seq(1, nrow(x$Phi), length.out = min(fbc_pull_draws, nrow(x$Phi)))))
   phis <- sampler_draws(x, rows)
-  noise <- which(x$spec$classes == "sigma2E")
+  noise <- which(x$model$spec$classes == "sigma2E")
   if (!length(noise)) return(NULL)
   runs <- phis
   runs[, noise] <- 1e10
-  Xn <- x$data$Xf
+  Xn <- x$model$data$Xf
   pred <- function(ph) at_draws(x, .fbc_predict, ph, Xnew = Xn, type = predict_type_codes[["simulator"]],
                                 block = 500L, noise = integer(), source = integer())
   res <- tryCatch(list(joint = pred(phis), runs = pred(runs)), error = function(e) NULL)

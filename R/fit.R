@@ -2,9 +2,11 @@
 #
 # new_fbc() is its one constructor: it takes the parts, derives the
 # user-facing copies of the model description (`priors`, `vars`, `indices`,
-# `priorFns`, documented in ?calibrate) from `spec`, stamps the format
-# version and validates. Package code reads `spec` (phi_vars(),
-# phi_indices(), spec$fns, spec$priors), not those copies.
+# `priorFns`, documented in ?calibrate) from the model's `spec`, stamps the
+# format version and validates. The fit holds its model (`model`, an
+# fbc_model: data, scale, spec, ...) and its run; package code reads the
+# model's parts (fit$model$spec: phi_vars(), phi_indices(), spec$fns,
+# spec$priors), not those copies.
 #
 # validate_fbc() checks the structure. upgrade_fbc() brings a fit or a
 # checkpoint file written by an earlier FBC to the current format; every
@@ -17,9 +19,11 @@
 # (the model's choices among the settings), format 4 fits with several
 # outputs no `outputs` choice (they were shared), format 5 fits the algebra
 # twice (model$algebra, chosen, beside model$simAlgebra, run, without the
-# product design's size); upgrade_fit() brings each to the current format by
-# the steps keyed by format in fit_upgrades.
-fbc_fit_format <- 6L
+# product design's size), format 6 fits copies of the model's data, scale
+# and spec beside the model (fit$data, fit$scale, fit$spec); upgrade_fit()
+# brings each to the current format by the steps keyed by format in
+# fit_upgrades.
+fbc_fit_format <- 7L
 
 # ------------------------------------------------------------ constructor ----
 
@@ -34,8 +38,6 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, model, 
     priors = spec$priors,
     acceptance = acceptance,
     vars = phi_vars(spec),
-    data = model$data,
-    scale = model$scale,
     indices = phi_indices(spec),
     priorFns = spec$fns,
     proposalSD = proposalSD,
@@ -43,7 +45,6 @@ new_fbc <- function(Phi, chain, logPost, logLik, acceptance, proposalSD, model, 
     settings = settings,
     logLik = logLik,
     state = state,
-    spec = spec,
     model = model,
     version = list(fbc = as.character(utils::packageVersion("FBC")), format = fbc_fit_format)
   ), class = "fbc", cache = fit_cache())
@@ -158,8 +159,8 @@ abort_problems <- function(bad, head, arg, call) {
 # once.
 fbc_problems <- function(x) {
   if (!inherits(x, "fbc") || !is.list(x)) return("It is not a list of class {.cls fbc}.")
-  need <- c("Phi", "chain", "estimates", "logPost", "acceptance", "data", "scale",
-            "proposalSD", "settings", "logLik", "state", "spec", "model", "version")
+  need <- c("Phi", "chain", "estimates", "logPost", "acceptance", "proposalSD", "settings",
+            "logLik", "state", "model", "version")
   miss <- setdiff(need, names(x))
   if (length(miss)) return(sprintf("`%s` is missing.", miss))
   out <- character()
@@ -196,40 +197,40 @@ fbc_problems <- function(x) {
 }
 
 # The problems of an fbc object's model and of what follows it: Phi's
-# columns and everything per parameter follow `spec`, and `spec` is the
-# model's.
+# columns and everything per parameter follow the model's `spec`.
 fbc_spec_problems <- function(x) {
   out <- character()
   Phi <- x$Phi
   chains <- x$state$chains
   K <- length(chains)
-  spec <- x$spec
-  miss <- setdiff(c("table", "init", "logsd", "vars", "classes", "priors", "fns", "model"), names(spec))
-  if (length(miss)) return(c(out, sprintf("`spec$%s` is missing.", miss)))
-  d <- length(spec$vars)
-  if (nrow(spec$table) != d || length(spec$init) != d || length(spec$classes) != d) {
-    return(c(out, sprintf("`spec$table`, `spec$init` and `spec$classes` must describe the %d parameters of `spec$vars`.", d)))
+  # the model (an fbc_model) first: its spec is the one everything follows
+  if (!inherits(x$model, "fbc_model") || !is.list(x$model)) {
+    return(c(out, paste("`model`:", fbc_model_problems(x$model))))
   }
-  # the model (an fbc_model) is the one `spec` copies
+  spec <- x$model$spec
+  miss <- setdiff(c("table", "init", "logsd", "vars", "classes", "priors", "fns", "model"), names(spec))
+  if (length(miss)) return(c(out, sprintf("`model$spec$%s` is missing.", miss)))
+  d <- length(spec$vars)
+  if (NROW(spec$table) != d || length(spec$init) != d || length(spec$classes) != d) {
+    return(c(out, sprintf("`model$spec$table`, `model$spec$init` and `model$spec$classes` must describe the %d parameters of `model$spec$vars`.", d)))
+  }
   mp <- fbc_model_problems(x$model)
   if (length(mp)) return(c(out, paste("`model`:", mp)))
-  if (!identical(x$model$spec[c("vars", "table", "init")], spec[c("vars", "table", "init")])) {
-    return(c(out, "`spec` must be the model's (`model$spec`)."))
-  }
   # the layout the compiled core gets is the model description's for these
   # data (R/model-classes.R)
-  sc <- x$scale
+  sc <- x$model$scale
+  dm <- x$model$dims
   disc <- discrepancy_name(spec$model$discrepancy)
   if (length(disc) != 1L || is.na(disc)) {
-    return(c(out, sprintf("`spec$model$discrepancy` must be a discrepancy code (%s).",
+    return(c(out, sprintf("`model$spec$model$discrepancy` must be a discrepancy code (%s).",
                           paste(sprintf("%d for %s", discrepancy_codes, names(discrepancy_codes)), collapse = ", "))))
   }
-  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, noise_count(spec$model), level_count(spec$model),
-                                                   source_count(spec$model),
-                                                   outputs = output_count(spec$model),
-                                                   emulator = is.null(spec$model$simulator),
+  if (!identical(spec$model[c("offset", "length")], layout_codes(sc$p, sc$q, disc, dm$noise, dm$levels,
+                                                   if (disc == "none") 0L else dm$sources,
+                                                   outputs = dm$outputs %||% 1L,
+                                                   emulator = x$model$algebra$name != "function",
                                                    replicates = as.integer(!is.null(spec$model$replicates))))) {
-    return(c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
+    return(c(out, sprintf("`model$spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }
   vars <- phi_vars(spec)
@@ -280,12 +281,13 @@ upgrade_fit <- function(x, call) {
       i = "Update FBC to use it."
     ), call = call)
   }
-  # one step after the other, each keyed by the format it starts from; the
-  # last one (fit_to_4()) constructs and validates the fit
+  # one step after the other, each keyed by the format it starts from
+  # (fit_to_4() constructs the fit anew); the result is validated
   while (format < fbc_fit_format) {
     x <- fit_upgrades[[as.character(format)]](x)
     format <- x$version$format
   }
+  validate_fbc(x, call = call)
   x
 }
 
@@ -372,7 +374,8 @@ fit_to_4 <- function(x) {
     settings = s[intersect(names(s), run)], state = x$state, call = x$call,
     estimates = x$estimates
   )
-  # format 4 (new_fbc() stamps the current one): the later steps follow
+  # format 4 (new_fbc() stamps the current one and keeps no copies of the
+  # model's parts beside it): the later steps follow
   out$version$format <- 4L
   out
 }
@@ -387,7 +390,7 @@ model_of_fit <- function(x) {
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
-                 fieldRows = distinct_rows(x$data$Xf, bias$codes))
+                 outputs = mc$outputs, fieldRows = distinct_rows(x$data$Xf, bias$codes))
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
                 sampler = s$sampler %||% "single", algebra = algebra,
@@ -441,8 +444,23 @@ fit_to_6 <- function(x) {
   x
 }
 
+# Format 6 to 7: the fit holds its model only. The copies of the model's
+# data, scale and spec beside it go; a part the model lacks is the fit's
+# copy. The model's dims state the number of independent outputs.
+fit_to_7 <- function(x) {
+  parts <- c("data", "scale", "spec")
+  for (el in parts) {
+    if (is.null(x$model[[el]])) x$model[el] <- list(x[[el]])
+  }
+  # (the number of independent outputs joined the model's dims with them)
+  if (is.null(x$model$dims$outputs)) x$model$dims$outputs <- output_count(x$model$spec$model)
+  x[parts] <- NULL
+  x$version$format <- 7L
+  x
+}
+
 fit_upgrades <- list(`0` = fit_to_3, `1` = fit_to_3, `2` = fit_to_3, `3` = fit_to_4,
-                     `4` = fit_to_5, `5` = fit_to_6)
+                     `4` = fit_to_5, `5` = fit_to_6, `6` = fit_to_7)
 
 # The contents of a checkpoint file of format `x$format` (at most
 # fbc_checkpoint_format: read_checkpoint_file() refuses newer ones). Format

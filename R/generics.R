@@ -102,11 +102,11 @@ log_lik.fbc <- function(object, unit = c("observation", "input"), ndraws = NULL,
   ndraws <- ndraws %||% draws
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
   rows <- loo_rows(object$chain, ndraws)
-  d <- object$data
-  group <- loo_groups(d$Xf, unit, loo_input_columns(object$scale))
+  d <- object$model$data
+  group <- loo_groups(d$Xf, unit, loo_input_columns(object$model$scale))
   ll <- at_draws(object, .fbc_loo, sampler_draws(object, rows$rows), group = group)
   # densities in the response's units (each row by its output's sd)
-  logsd <- log(y_sd(object$scale, d$outF))
+  logsd <- log(y_sd(object$model$scale, d$outF))
   if (length(logsd) == 1L) logsd <- rep(logsd, length(group))
   ll <- sweep(ll, 2, vapply(split(logsd, group), sum, numeric(1)))
   attr(ll, "draw_rows") <- rows$rows
@@ -143,7 +143,7 @@ NULL
 nobs.fbc <- function(object, ...) {
   check_dots_empty(..., fn = nobs.fbc, name = "nobs")
   object <- check_fbc(object, "object")
-  length(object$data$yf)
+  length(object$model$data$yf)
 }
 
 #' @rdname fbc-priors
@@ -152,7 +152,7 @@ nobs.fbc <- function(object, ...) {
 prior_summary.fbc <- function(object, ...) {
   check_dots_empty(..., fn = prior_summary.fbc, name = "prior_summary")
   object <- check_fbc(object, "object")
-  spec <- object$spec
+  spec <- object$model$spec
   cls <- spec$classes
   rows <- lapply(unique(cls), function(cl) {
     pr <- spec$priors[[cl]]
@@ -188,7 +188,7 @@ predictive_draws <- function(object, newdata, ndraws, type, call = parent.frame(
     fc <- field_conditionals(object, phis, code)
     return(list(mean = fc$mean, sd = fc$sd, rows = rows))
   }
-  sc <- object$scale
+  sc <- object$model$scale
   nf <- read_newdata_factors(newdata, sc, type, call = call)
   X <- check_newdata(nf$newdata, sc, call = call)
   warn_newdata_outside(X, object, call = call)

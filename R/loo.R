@@ -64,12 +64,12 @@ loo.fbc <- function(x, unit = c("input", "observation"), ndraws = 4000, ...) {
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
   check_loo_draws(x$chain, ndraws)
   rows <- loo_rows(x$chain, ndraws)
-  d <- x$data
-  group <- loo_groups(d$Xf, unit, loo_input_columns(x$scale))
+  d <- x$model$data
+  group <- loo_groups(d$Xf, unit, loo_input_columns(x$model$scale))
   ll <- at_draws(x, .fbc_loo, sampler_draws(x, rows$rows), group = group)
   # densities in the response's units: y = ymean + ysd * y_scaled (each
   # row by its output's sd)
-  logsd <- log(y_sd(x$scale, d$outF))
+  logsd <- log(y_sd(x$model$scale, d$outF))
   if (length(logsd) == 1L) logsd <- rep(logsd, length(group))
   ll <- sweep(ll, 2, vapply(split(logsd, group), sum, numeric(1)))
   r_eff <- loo::relative_eff(exp(ll), chain_id = rows$chain)

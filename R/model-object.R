@@ -22,8 +22,9 @@
 #   priors     the priors by class, families by name (what the user gave,
 #              completed)
 #   spec       the prior table, initial values and proposal scales, names
-#              and classes of phi, prior functions and the compiled model
-#              description (R/model-spec.R)
+#              and classes of phi, prior functions (R/model-spec.R) and
+#              `model`, the compiled model description (compiled_model(),
+#              built once by build_model())
 #   kernelS, kernelB, discrepancy, sampler   the choices, by name
 #   algebra    choose_algebra()'s choice, the one record of the algebra the
 #              compiled core runs (name, code, neighbours, dims, reason)
@@ -89,7 +90,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                outputs = pr$outputs, replicates = pr$replicates)
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
-              list(levels = pr$levels, biasSource = pr$biasSource,
+              list(levels = pr$levels, biasSource = pr$biasSource, outputs = pr$outputs,
                    fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes), failed = dd$failed),
               if (!is.null(noise$info)) list(simNoise = noise$info))
   new_fbc_model(data = dat, raw = list(sim = dd$sim, field = dd$field), scale = pr$scale,
@@ -225,14 +226,20 @@ distinct_rows <- function(X, group = NULL) {
 
 new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, discrepancy, sampler,
                           algebra, moves, options, call) {
-  mc <- spec$model
+  # the sizes and the layout of phi from the model's own parts (the compiled
+  # description, spec$model, is built from the same; the validator checks
+  # that it holds this layout)
+  dims <- list(p = scale$p, q = scale$q, m = nrow(data$Xs), n = nrow(data$Xf),
+               noise = if (is.null(design$noise)) 1L else as.integer(max(design$noise)),
+               levels = level_count(design$levels),
+               sources = if (discrepancy == "none") 0L else source_count(design$biasSource),
+               outputs = output_count(design$outputs), d = length(spec$vars))
+  lay <- layout_codes(dims$p, dims$q, discrepancy, dims$noise, dims$levels, dims$sources,
+                      outputs = dims$outputs, emulator = algebra$name != "function")
   x <- structure(list(
-    data = data, raw = raw, scale = scale, design = design,
-    dims = list(p = scale$p, q = scale$q, m = nrow(data$Xs), n = nrow(data$Xf),
-                noise = noise_count(mc), levels = level_count(mc), sources = source_count(mc),
-                outputs = output_count(mc), d = length(spec$vars)),
-    classes = data.frame(class = names(mc$offset), offset = unname(mc$offset),
-                         length = unname(mc$length), stringsAsFactors = FALSE),
+    data = data, raw = raw, scale = scale, design = design, dims = dims,
+    classes = data.frame(class = names(lay$offset), offset = unname(lay$offset),
+                         length = unname(lay$length), stringsAsFactors = FALSE),
     priors = spec$priors, spec = spec, kernelS = kernelS, kernelB = kernelB,
     discrepancy = discrepancy, sampler = sampler, algebra = algebra,
     moves = moves, options = options, call = call
@@ -280,6 +287,10 @@ fbc_model_problems <- function(x) {
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {
     out <- c(out, sprintf("`classes` must give the layout of phi for p = %d, q = %d and discrepancy \"%s\".",
+                          d$p, d$q, x$discrepancy))
+  } else if (!identical(unname(x$spec$model$offset), x$classes$offset) ||
+             !identical(unname(x$spec$model$length), x$classes$length)) {
+    out <- c(out, sprintf("`spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (`classes`).",
                           d$p, d$q, x$discrepancy))
   }
   if (sum(x$classes$length) != d$d || length(x$spec$vars) != d$d ||

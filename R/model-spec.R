@@ -114,8 +114,8 @@ phi_indices <- function(spec) {
 
 # The prior table and classes of Phi's columns.
 phi_spec <- function(fit) {
-  cols <- phi_columns(fit$spec)
-  list(table = fit$spec$table[cols, , drop = FALSE], classes = fit$spec$classes[cols],
+  cols <- phi_columns(fit$model$spec)
+  list(table = fit$model$spec$table[cols, , drop = FALSE], classes = fit$model$spec$classes[cols],
        cols = cols)
 }
 
@@ -124,15 +124,17 @@ phi_spec <- function(fit) {
 # the compiled entry points take. Every path from draws to the compiled code
 # (predict(), the checks, the conflict check) goes through here.
 sampler_draws <- function(fit, rows = seq_len(nrow(fit$Phi))) {
-  spec <- fit$spec
+  spec <- fit$model$spec
   out <- matrix(spec$init, length(rows), length(spec$init), byrow = TRUE)
-  out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$scale)
+  out[, phi_columns(spec)] <- sampler_scale(fit$Phi[rows, , drop = FALSE], fit$model$scale)
   out
 }
 
 # Expands every class to one row per parameter: the C++ prior table, the
 # initial values on the sampler's scale and the initial proposal SDs. The
-# classes without parameters under `discrepancy` have no prior.
+# classes without parameters under `discrepancy` have no prior. The
+# compiled model description (`model`, compiled_model()) is the caller's to
+# add: it needs the kernels, the algebra and the data (build_model()).
 # With independent outputs (`outputs`: the output's list(col, ncol, L),
 # `levels` without it) each perOutput class's priors are one output's,
 # repeated for every output. With the simulator's own noise (`replicates`:
@@ -212,11 +214,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
        classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
-       priors = priors, fns = prior_functions(table, vars, cls_of, scale),
-       model = compiled_model(p, q, discrepancy = discrepancy,
-                              noise = if (noise > 1L) seq_len(noise), levels = levels,
-                              source = source, outputs = outputs,
-                              simulator = if (!emulator) list(), replicates = replicates))
+       priors = priors, fns = prior_functions(table, vars, cls_of, scale))
 }
 
 # One log-density function per parameter, in the units it is reported in.

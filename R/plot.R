@@ -66,7 +66,7 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, inpu
     ))
   }
   if (!is.null(xlab)) xlab <- check_string(xlab, "xlab")
-  vars <- colnames(x$Phi)[phi_indices(x$spec)[[parameter]]]
+  vars <- colnames(x$Phi)[phi_indices(x$model$spec)[[parameter]]]
   if (!length(vars) && !class_in_model(x$model$discrepancy)[match(parameter, model_classes$class)]) {
     cli::cli_abort(c(
       "{.field {parameter}} is not a parameter of this fit: {.code discrepancy = \"{x$model$discrepancy}\"} {discrepancy_lacks(parameter, x$model$discrepancy)}.",
@@ -90,11 +90,11 @@ plot.fbc <- function(x, parameter = "kappa", type = "density", xlab = NULL, inpu
 # "thetaS2 (g)", "alphaB1 (h)"), a level correlation by its pair of levels
 # ("rhoS1 (out: rate~amount)"); the others by FBC's name ("sigma2E").
 param_labels <- function(x, vars) {
-  nm <- x$scale$names
-  p <- x$scale$p
-  q <- x$scale$q
+  nm <- x$model$scale$names
+  p <- x$model$scale$p
+  q <- x$model$scale$q
   inputs <- c(nm$inputs, nm$calibration)
-  cls <- x$spec$classes[match(vars, x$spec$vars)]
+  cls <- x$model$spec$classes[match(vars, x$model$spec$vars)]
   # (independent outputs: "thetaS1[amount]", the output in brackets)
   k <- suppressWarnings(as.integer(sub("^[A-Za-z]+([0-9]+)(\\[.*\\])?$", "\\1", vars)))
   out <- vars
@@ -110,7 +110,7 @@ param_labels <- function(x, vars) {
   lev <- level_labels(level_factors(x$model))
   rho <- ok & cls %in% c("rhoS", "rhoB") & k <= length(lev)
   out[rho] <- paste0(vars[rho], " (", lev[k[rho]], ")")
-  src <- level_labels(if (isTRUE(x$scale$sourceBias)) list(x$scale$source))
+  src <- level_labels(if (isTRUE(x$model$scale$sourceBias)) list(x$model$scale$source))
   rd <- ok & cls == "rhoD" & k <= length(src)
   out[rd] <- paste0(vars[rd], " (", src[k[rd]], ")")
   stats::setNames(out, vars)
@@ -119,10 +119,10 @@ param_labels <- function(x, vars) {
 # Axis title for the values of a class: the input's name for a single
 # calibration parameter, its units otherwise.
 value_label <- function(x, vars) {
-  cls <- x$spec$classes[match(vars[1], x$spec$vars)]
+  cls <- x$model$spec$classes[match(vars[1], x$model$spec$vars)]
   if (cls == "kappa") {
-    cal <- x$scale$names$calibration
-    if (length(vars) == 1L && length(cal) == x$scale$q) {
+    cal <- x$model$scale$names$calibration
+    if (length(vars) == 1L && length(cal) == x$model$scale$q) {
       return(cal[as.integer(sub("kappa", "", vars))])
     }
     return("value (each input's units)")
@@ -149,7 +149,7 @@ support_density <- function(draws, lo = -Inf, hi = Inf, n = 256L) {
 
 plot_density <- function(x, vars, labels, xlab) {
   sup <- param_support(x)
-  rownames(sup) <- phi_vars(x$spec)
+  rownames(sup) <- phi_vars(x$model$spec)
   fam <- prior_family_name(phi_spec(x)$table$family)
   names(fam) <- rownames(sup)
   fixed <- vars[fam[vars] == "fixed"]
@@ -165,7 +165,7 @@ plot_density <- function(x, vars, labels, xlab) {
     if (!v %in% improper) {
       grid <- seq(d$x[1], d$x[length(d$x)], length.out = 256)
       prior[[v]] <- data.frame(parameter = labels[[v]], value = grid,
-                               density = exp(x$spec$fns[[v]](grid)))
+                               density = exp(x$model$spec$fns[[v]](grid)))
     }
   }
   empty <- data.frame(parameter = character(), value = numeric(), density = numeric())
@@ -216,7 +216,7 @@ plot_trace <- function(x, vars, labels, xlab) {
 }
 
 plot_fits <- function(x, xlab) {
-  sc <- x$scale
+  sc <- x$model$scale
   p <- sc$p
   if (is.null(xlab)) {
     xlab <- sc$names$inputs
@@ -226,7 +226,7 @@ plot_fits <- function(x, xlab) {
       "{.arg xlab} must be a character vector with one name per experimental input ({p}); got {.obj_type_friendly {xlab}} of length {length(xlab)}."
     )
   }
-  X <- unscale_inputs(x$data$Xf, sc, seq_len(p))
+  X <- unscale_inputs(x$model$data$Xf, sc, seq_len(p))
   y <- field_response(x)
   fc <- field_conditionals(x, sampler_draws(x, which.max(x$logPost)), 1L)
   z <- stats::qnorm(0.975)
@@ -244,7 +244,7 @@ plot_fits <- function(x, xlab) {
                output = out %||% "")
   }))
   df$input <- factor(df$input, unique(xlab[axes]))
-  if (!is.null(out)) df$output <- factor(df$output, unique(out[order(x$spec$model$noise %||% 1L)]))
+  if (!is.null(out)) df$output <- factor(df$output, unique(out[order(x$model$spec$model$noise %||% 1L)]))
   facet <- if (is.null(out)) ggplot2::facet_wrap(ggplot2::vars(.data$input), scales = "free_x") else
     ggplot2::facet_grid(ggplot2::vars(.data$output), ggplot2::vars(.data$input), scales = "free")
   ggplot2::ggplot(df, ggplot2::aes(x = .data$x)) +
@@ -261,12 +261,12 @@ plot_fits <- function(x, xlab) {
 # The panel row of each field row in plot(type = "fits"): its output, its
 # field data set ("lab A") or both ("conc, lab A"); NULL with neither.
 fits_rows <- function(x) {
-  sc <- x$scale
-  out <- if (!is.null(sc$output)) sc$output$levels[x$data$outF]
+  sc <- x$model$scale
+  out <- if (!is.null(sc$output)) sc$output$levels[x$model$data$outF]
   if (is.null(sc$source) || is.null(sc$noiseLabels)) return(out)
   # the data set of each row, from its measurement-error group's label
   # ("output:source" or "source")
-  lab <- sc$noiseLabels[x$spec$model$noise]
+  lab <- sc$noiseLabels[x$model$spec$model$noise]
   src <- if (is.null(out)) lab else substring(lab, nchar(out) + 2L)
   src <- paste(sc$source$name, src)
   if (is.null(out)) src else paste(out, src, sep = ", ")

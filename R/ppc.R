@@ -54,8 +54,8 @@
 ppc_field <- function(fit, ndraws = 500) {
   fit <- check_fbc(fit)
   ndraws <- check_count(ndraws, "ndraws")
-  sc <- fit$scale
-  dat <- fit$data
+  sc <- fit$model$scale
+  dat <- fit$model$data
   rows <- check_rows(fit, "Bayesian", ndraws)
   phis <- sampler_draws(fit, rows)
   fc <- field_conditionals(fit, phis, 1L)
@@ -95,10 +95,10 @@ ppc_field <- function(fit, ndraws = 500) {
 ppc_noise <- function(fit, y, mu) {
   cols <- grep("^sigma2E[0-9]*$", colnames(fit$Phi), value = TRUE)
   if (!length(cols)) return(NULL)
-  codes <- fit$spec$model$noise %||% rep(1L, length(y))
-  sds <- y_sd(fit$scale, fit$data$outF)
+  codes <- fit$model$spec$model$noise %||% rep(1L, length(y))
+  sds <- y_sd(fit$model$scale, fit$model$data$outF)
   if (length(sds) == 1L) sds <- rep(sds, length(y))
-  labels <- fit$scale$noiseLabels %||% rep("", length(cols))
+  labels <- fit$model$scale$noiseLabels %||% rep("", length(cols))
   out <- lapply(seq_along(cols), function(g) {
     rows <- which(codes == g)
     s2 <- stats::median(fit$Phi[, cols[g]]) * sds[rows[1]]^2
@@ -261,11 +261,11 @@ pp_check.fbc <- function(object, type = "dens_overlay", ndraws = 50, ...) {
 # field row by its output's mean and sd); a field target has its row's
 # measurement error.
 field_conditionals <- function(fit, phis, code) {
-  dat <- fit$data
-  sc <- fit$scale
+  dat <- fit$model$data
+  sc <- fit$model$scale
   res <- at_draws(fit, .fbc_predict, phis, Xnew = dat$Xf, type = code, block = 500L,
-                  noise = if (code == 1L) fit$spec$model$noise %||% integer() else integer(),
-                  source = if (code != 3L) fit$spec$model$source %||% integer() else integer())
+                  noise = if (code == 1L) fit$model$spec$model$noise %||% integer() else integer(),
+                  source = if (code != 3L) fit$model$spec$model$source %||% integer() else integer())
   shift <- if (code == 4L) 0 else y_mean(sc, dat$outF)
   list(mean = shift + y_sd(sc, dat$outF) * res$mean,
        sd = y_sd(sc, dat$outF) * sqrt(pmax(res$var, 0)))
@@ -273,5 +273,5 @@ field_conditionals <- function(fit, phis, code) {
 
 # The field response in its units.
 field_response <- function(fit) {
-  y_mean(fit$scale, fit$data$outF) + y_sd(fit$scale, fit$data$outF) * fit$data$yf
+  y_mean(fit$model$scale, fit$model$data$outF) + y_sd(fit$model$scale, fit$model$data$outF) * fit$model$data$yf
 }

@@ -141,7 +141,7 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   }
   check_flag(draws, "draws")
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 1)
-  sc <- object$scale
+  sc <- object$model$scale
   nf <- read_newdata_factors(newdata, sc, type)
   X <- check_newdata(nf$newdata, sc)
   warn_newdata_outside(X, object)

@@ -35,12 +35,12 @@ print.fbc <- function(x, digits = 3, ...) {
   digits <- check_count(digits, "digits")
   s <- x$settings
   mo <- x$model
-  sc <- x$scale
+  sc <- x$model$scale
   gp <- mo$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
   cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", discrepancy_info(mo$discrepancy, "label")))
   fn <- !is.null(mo$simulator)  # the simulator is a function (R/simulator_function.R)
-  cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$data$yf),
-              if (fn) "the simulator a function" else sprintf("m = %d simulator runs", length(x$data$ys)),
+  cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$model$data$yf),
+              if (fn) "the simulator a function" else sprintf("m = %d simulator runs", length(x$model$data$ys)),
               sc$p, sc$q))
   failed <- mo$design$failed
   if (length(failed$rows)) {
@@ -110,7 +110,7 @@ print_design <- function(mo, sc, fn) {
     k <- pos[[i]]
     cat(sprintf("  categorical input %s: levels %s; level correlation %s\n", f$name,
                 paste(f$levels, collapse = ", "),
-                if (output_count(mo$spec$model) > 1L) "rhoS (one per output)" else rho_list("rhoS", k, lev)))
+                if (mo$dims$outputs > 1L) "rhoS (one per output)" else rho_list("rhoS", k, lev)))
   }
   if (!is.null(sc$output)) cat(sprintf("  outputs (%s): %s, each standardised on its own\n    %s\n",
                                        sc$output$name, paste(sc$output$levels, collapse = ", "),

@@ -428,7 +428,7 @@ check_design_model <- function(model, call = parent.frame()) {
   check_no_sim_noise(model, "propose_runs", call = call)
   N <- design_rows(model)
   if (sum(N) > 3000) {
-    each <- if (output_count(model$spec$model) > 1L) " (of one output: each has its own)" else ""
+    each <- if (model$dims$outputs > 1L) " (of one output: each has its own)" else ""
     cli::cli_abort(c(
       "{.fn propose_runs} handles up to 3000 runs and distinct field inputs{each}; this fit has {N[1]} and {N[2]}.",
       i = "It conditions every candidate on all of them for every draw it scores, which is too slow beyond that."
@@ -544,7 +544,7 @@ runs_by_output <- function(U, sc, out) {
 # (`prune`, a log ratio; 0 with !prune).
 design_particles <- function(fit, ndraws, method, prune = TRUE) {
   N <- nrow(fit$Phi)
-  q <- fit$scale$q
+  q <- fit$model$scale$q
   if (method == "joint") {
     # evenly over the distinct draws, each weighted by its repeats: a
     # reweighted fit's draws repeat (update_runs()), and picking among all
@@ -562,7 +562,7 @@ design_particles <- function(fit, ndraws, method, prune = TRUE) {
   K <- if (q == 1L) matrix((seq_len(ndraws) - 0.5) / ndraws) else matrix(stats::runif(ndraws * q), ndraws, q)
   phi <- phi0[rep(1, ndraws), , drop = FALSE]
   phi[, seq_len(q)] <- K
-  tab <- fit$spec$table
+  tab <- fit$model$spec$table
   lp <- 0
   for (j in seq_len(q)) lp <- lp + log_prior_row(tab, j, K[, j])
   # a kappa whose weight is under 1e-10 of the largest adds nothing to the
@@ -580,7 +580,7 @@ check_look_ahead_size <- function(ndraws, model, U, XT, call = parent.frame()) {
   size <- ndraws * rows * nrow(U)
   if (size > 5e7) {
     what <- if (nrow(XT)) "runs, field inputs and targets" else "runs and field inputs"
-    if (output_count(model$spec$model) > 1L) what <- paste(what, "(the largest output's)")
+    if (model$dims$outputs > 1L) what <- paste(what, "(the largest output's)")
     K <- length(model$scale$output$levels)
     cand <- if (K > 1L) paste(nrow(U) / K, "candidates x", K, "outputs") else paste(nrow(U), "candidates")
     cli::cli_abort(c(

@@ -28,7 +28,7 @@ summary.fbc <- function(object, ...) {
   object <- check_fbc(object, "object")
   # (several measurement-error groups: which variance is whose, for print())
   structure(object$estimates, class = c("summary.fbc", "data.frame"),
-            noiseLabels = object$scale$noiseLabels)
+            noiseLabels = object$model$scale$noiseLabels)
 }
 
 #' @rdname summary.fbc

@@ -84,7 +84,7 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
                  ncol(object$Phi), length(states), iters = as.numeric(s$nMCMC) + further,
                  args = if (is.null(converge)) "nMCMC" else "maxMCMC", thin = FALSE)
   t0 <- proc.time()[["elapsed"]]
-  d <- length(object$spec$vars)  # the sampler's parameters (see phi_columns())
+  d <- length(object$model$spec$vars)  # the sampler's parameters (see phi_columns())
   starts <- lapply(states, function(st) chain_start(st$sampler, d))
   target <- vapply(starts, function(st) st$iter0, integer(1)) + as.integer(nMCMC)
   here <- environment()
@@ -116,7 +116,7 @@ update.fbc <- function(object, nMCMC, showProgress = NULL, converge = FALSE, sim
   iter0 <- vapply(starts, function(st) st$iter0, integer(1))
   out <- run_rounds(starts, chain_seeds(length(starts)), target, converge, assemble,
                     nBurn = run_burn(s), thinning = s$thinning, showProgress = showProgress,
-                    dat = object$data, spec = object$spec, moves = object$model$moves, whole = TRUE)
+                    dat = object$model$data, spec = object$model$spec, moves = object$model$moves, whole = TRUE)
   if (isTRUE(s$reweight$used)) warn_stale(object, out, here)
   out
 }

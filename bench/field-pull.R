@@ -33,7 +33,7 @@ row_of <- function(name, fit) {
   msg <- convergence_messages(fit)
   k <- fit$Phi[, "kappa1"]
   q <- stats::quantile(k, c(0.05, 0.5, 0.95), names = FALSE)
-  data.frame(problem = name, m = nrow(fit$data$Xs), model = fit$model$discrepancy,
+  data.frame(problem = name, m = nrow(fit$model$data$Xs), model = fit$model$discrepancy,
              pull = stats::median(fp$pull), above3 = mean(fp$pull > 3),
              flagged = any(grepl("bend the emulator", msg)),
              median = q[2], lo90 = q[1], hi90 = q[3],

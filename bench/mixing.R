@@ -70,7 +70,7 @@ fbc_row <- function(pr, sampler, seed) {
 }
 
 stan_data <- function(fit) {
-  d <- fit$data; sc <- fit$scale
+  d <- fit$model$data; sc <- fit$model$scale
   cal <- sc$p + seq_len(sc$q)
   list(n = length(d$yf), m = length(d$ys), p = sc$p, q = sc$q, Xf = d$Xf, yf = d$yf,
        Xs = d$Xs, ys = d$ys, nugget = fit$settings$nugget,
@@ -84,7 +84,7 @@ check_stan_density <- function(model, sdata, fit) {
   sf <- rstan::sampling(model, data = sdata, chains = 1, iter = 1, refresh = 0,
                         algorithm = "Fixed_param", init = "0")
   rows <- round(seq(1, nrow(fit$Phi), length.out = 20))
-  sc <- fit$scale; q <- sc$q; cal <- sc$p + seq_len(q)
+  sc <- fit$model$scale; q <- sc$q; cal <- sc$p + seq_len(q)
   err <- vapply(rows, function(i) {
     phi <- fit$Phi[i, ]
     u <- (phi[seq_len(q)] - sc$xmin[cal]) / (sc$xmax[cal] - sc$xmin[cal])

@@ -67,6 +67,7 @@ scale <- list(xmin = c(0, 0), xmax = c(1, 1), ymean = 0, ysd = 1, p = p, q = q,
               names = list(response = "y", inputs = "x", calibration = "t"))
 kappaSpec <- FBC:::check_class_spec(list(dist = "beta", init = NA, p1 = 2, p2 = 2), "kappa", q)
 spec <- FBC:::build_priors(kappaSpec, hyp, scale, p, q)
+spec$model <- FBC:::compiled_model(p, q)
 stopifnot(identical(spec$vars, c("kappa1", names(priors)[-1])))
 
 Xf <- matrix(seq(0.05, 0.95, length.out = n), n, 1)

@@ -120,7 +120,7 @@ helpers <- function() {
     ms <- ch <- numeric(chunks)
     for (i in seq_len(chunks)) {
       t0 <- cpu()
-      res <- FBC:::sample_chain(fit$data, fit$spec, state, fit$model$moves, per, 0L, 1L, FALSE)
+      res <- FBC:::sample_chain(fit$model$data, fit$model$spec, state, fit$model$moves, per, 0L, 1L, FALSE)
       ms[i] <- 1000 * (cpu() - t0) / per
       state <- res$state
       ch[i] <- t_chol(n + m, budget = 0.5)

@@ -89,7 +89,7 @@ run_case <- function(prob, nAdapt, nSweep, chunks = 1, sampler = "single", floor
   set.seed(2)
   fit <- calibrate(prob$sim, prob$field, nMCMC = nAdapt + 2, nBurn = nAdapt, thinning = 1,
                    nChains = 1, sampler = sampler)
-  dat <- fit$data
+  dat <- fit$model$data
   state <- fit$state$chains[[1]]$sampler
   moves <- fit$model$moves
   invisible(gc())
@@ -99,7 +99,7 @@ run_case <- function(prob, nAdapt, nSweep, chunks = 1, sampler = "single", floor
   draws <- NULL
   for (i in seq_len(chunks)) {
     t0 <- cpu(); w0 <- proc.time()[[3]]
-    res <- FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(fit$spec$table), moves,
+    res <- FBC:::.fbc_sample(dat$Xf, dat$yf, dat$Xs, dat$ys, as.list(fit$model$spec$table), moves,
                              state, per, 0L, 1L, fit$settings$nugget, NULL)
     dt <- cpu() - t0
     el <- el + dt; wall <- wall + proc.time()[[3]] - w0

@@ -33,11 +33,11 @@ cpu_of <- function(expr) {
 # The former R-side held-out predictive at one draw (validate.R before the
 # algebra took it over): scaled space, list(mean, sd).
 old_heldout <- function(fit, phi) {
-  idx <- FBC:::param_indices(fit$scale$p, fit$scale$q)
-  Xs <- fit$data$Xs
-  y <- fit$data$ys
+  idx <- FBC:::param_indices(fit$model$scale$p, fit$model$scale$q)
+  Xs <- fit$model$data$Xs
+  y <- fit$model$data$ys
   K <- FBC:::.corr_matrix(Xs, Xs, phi[idx$thetaS], phi[idx$alphaS],
-                          FBC:::model_codes(fit$spec)$kernS)
+                          FBC:::model_codes(fit$model$spec)$kernS)
   diag(K) <- diag(K) + fit$settings$nugget
   Q <- chol2inv(chol(K))
   a <- drop(Q %*% y)
@@ -75,9 +75,9 @@ bench <- function(name, sim, field, nMCMC, nBurn) {
   new_s <- cpu_of(v <- emulator_cv(fit, method = "MAP"))
   phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))[1, ]
   old_s <- cpu_of(o <- old_heldout(fit, phi))
-  sc <- fit$scale
+  sc <- fit$model$scale
   diff <- max(abs(v$runs$mean - (sc$ymean + sc$ysd * o$mean)), abs(v$runs$sd - sc$ysd * o$sd)) / sc$ysd
-  data.frame(case = name, m = nrow(fit$data$Xs), algebra = fit$model$algebra$name,
+  data.frame(case = name, m = nrow(fit$model$data$Xs), algebra = fit$model$algebra$name,
              folds = v$nFolds, new_cpu_s = round(new_s, 2), old_cpu_s = round(old_s, 2),
              max_rel_diff = signif(diff, 2))
 }

@@ -90,6 +90,7 @@ sbc_ranks <- function(L, n = 5, m = 12, nDraws = 99, thin = 10, nBurn = 500, see
                 names = list(response = "y", inputs = "x", calibration = "t"))
   kappaSpec <- check_class_spec(list(dist = "beta", init = NA, p1 = 2, p2 = 2), "kappa", q)
   spec <- build_priors(kappaSpec, hyp, scale, p, q)
+  spec$model <- compiled_model(p, q)
   free <- c("kappa1", "sigma2S", "sigma2E", "muB", if (joint) c("thetaS1", "thetaS2", "sigma2B"))
   draw_prior <- function() {
     phi <- spec$init

@@ -28,8 +28,8 @@ expect_kappa_grid <- function(fit, loglik, u = seq(0, 1, length.out = 101), col 
     loglik(phi)
   }, numeric(1)) + stats::dbeta(u, 1.1, 1.1, log = TRUE)
   dens <- exp(lp - max(lp))
-  lo <- fit$scale$xmin[col]
-  kappa <- lo + (fit$scale$xmax[col] - lo) * u
+  lo <- fit$model$scale$xmin[col]
+  kappa <- lo + (fit$model$scale$xmax[col] - lo) * u
   probs <- c(0.05, 0.25, 0.5, 0.75, 0.95)
   ref <- grid_quantile(kappa, dens, probs)
   got <- stats::quantile(fit$Phi[, "kappa1"], probs, names = FALSE)

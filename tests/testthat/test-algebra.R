@@ -15,6 +15,7 @@ test_that("the projected dense sweep: the measured constants times what the defa
     sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q),
                                   p2 = rep(1.1, q)), set_hyperPriors(),
                              list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+    sp$model <- FBC:::compiled_model(p, q)
     sm <- FBC:::sampler_moves("blocks", sp, large = large)
     nm <- names(sm$blocks)
     kappaMoves <- sum(sm$repeats[startsWith(nm, "kappa")]) + length(sm$jump)

@@ -36,9 +36,9 @@ test_that("set.seed() reproduces a run, and the plan does not matter", {
 
 test_that("dispersed starts: chain 1 at the inits, the others inside the priors' central 80%", {
   fit <- small_fit(nChains = 1)
-  spec <- fit$spec
+  spec <- fit$model$spec
   set.seed(3)
-  inits <- dispersed_inits(40, fit$data, spec)
+  inits <- dispersed_inits(40, fit$model$data, spec)
   expect_equal(inits[[1]], spec$init)
   x <- do.call(rbind, inits[-1])
   # kappa: Beta(1.1, 1.1) on the sampler's [0, 1] scale

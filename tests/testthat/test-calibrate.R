@@ -88,20 +88,20 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
   keep <- c("kappa1", "thetaS1", "thetaS2", "sigma2S", "sigma2E")
   expect_identical(colnames(fit$Phi), keep)
   # the sampler's vector keeps the smoothness slots, held (the Matérn has none)
-  expect_identical(fit$spec$vars, c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S",
+  expect_identical(fit$model$spec$vars, c("kappa1", "thetaS1", "thetaS2", "alphaS1", "alphaS2", "sigma2S",
                                     "sigma2E"))
   expect_identical(rownames(fit$estimates), keep)
   expect_identical(names(fit$proposalSD), keep)
   for (cls in c("thetaB", "alphaB", "sigma2B", "muB")) expect_identical(fit$indices[[cls]], integer(0))
   expect_identical(fit$model$discrepancy, "none")
-  expect_identical(fit$spec$model$discrepancy, 1L)
+  expect_identical(fit$model$spec$model$discrepancy, 1L)
   # no bias moves; kappa's jump; the scale move multiplies sigma2S and sigma2E
   mv <- FBC:::move_report(fit)
   expect_identical(mv$move, c("kappa1", "sim", "sigma2E", "kappa1 jump", "scale"))
   expect_false(fit$model$moves$gibbsMuB)
   # the retained log-likelihoods are the plain-R ones without a bias block
   i <- 7
-  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+  ll <- dense_loglik(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys,
                      FBC:::sampler_draws(fit, i)[1, ], kernS = "matern52", discrepancy = "none")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
   # print, plots, checks
@@ -122,7 +122,7 @@ test_that("discrepancy = \"none\": no bias parameters anywhere, and every path f
                    fit$Phi[fit$chain == 1, ])
   last <- nrow(up$Phi)
   expect_equal(up$logLik[last],
-               dense_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
+               dense_loglik(up$model$data$Xf, up$model$data$yf, up$model$data$Xs, up$model$data$ys,
                             FBC:::sampler_draws(up, last)[1, ], kernS = "matern52",
                             discrepancy = "none"),
                tolerance = 1e-8)
@@ -168,7 +168,7 @@ test_that("logPost is the log-likelihood plus the log priors of the draw", {
   u <- FBC:::sampler_draws(fit, i)[1, ]
   lo <- min(ballSim[, "g"]); rng <- diff(range(ballSim[, "g"]))
   expect_equal(u[[1]], (phi[[1]] - lo) / rng)
-  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, unname(u),
+  ll <- dense_loglik(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, unname(u),
                      kernS = "matern52", kernB = "matern52")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
   expect_equal(fit$logPost[i], ll + lp, tolerance = 1e-8)
@@ -233,6 +233,7 @@ test_that("large dense problems move each kappa and the simulator block once a s
   sp <- FBC:::build_priors(list(dist = rep("beta", q), init = rep(NA, q), p1 = rep(1.1, q),
                                 p2 = rep(1.1, q)), set_hyperPriors(),
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   small <- FBC:::sampler_moves("blocks", sp)
   large <- FBC:::sampler_moves("blocks", sp, large = TRUE)
   expect_identical(large$blocks, small$blocks)  # kappa1, kappa2, simulator, bias, kappa's joint walk
@@ -269,14 +270,14 @@ test_that("a family without a smoothness: Phi, vars and indices leave alpha out,
   expect_identical(fit$indices$muB, 8L)
   expect_identical(fit$model[c("kernelS", "kernelB")], list(kernelS = "matern52", kernelB = "matern32"))
   # the sampler's vector keeps fixed alpha slots
-  expect_length(fit$spec$vars, 11)
+  expect_length(fit$model$spec$vars, 11)
   full <- FBC:::sampler_draws(fit, 1:3)
   expect_identical(dim(full), c(3L, 11L))
   expect_true(all(full[, c(4, 5, 7)] == 2))
   # the retained log-likelihoods are the plain-R Matern ones (the chains ran
   # with the families asked for), and logPost adds the priors of Phi's columns
   i <- 5
-  ll <- dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+  ll <- dense_loglik(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys,
                      FBC:::sampler_draws(fit, i)[1, ], kernS = "matern52", kernB = "matern32")
   expect_equal(fit$logLik[i], ll, tolerance = 1e-8)
   lp <- sum(vapply(fit$vars, function(v) fit$priorFns[[v]](fit$Phi[i, v]), 0))
@@ -296,7 +297,7 @@ test_that("a family without a smoothness: Phi, vars and indices leave alpha out,
   expect_identical(nrow(up$Phi), nrow(fit$Phi) + 40L)
   expect_identical(up$Phi[up$chain == 1, ][seq_len(sum(fit$chain == 1)), ],
                    fit$Phi[fit$chain == 1, ])
-  ll <- dense_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
+  ll <- dense_loglik(up$model$data$Xf, up$model$data$yf, up$model$data$Xs, up$model$data$ys,
                      FBC:::sampler_draws(up, nrow(up$Phi))[1, ], kernS = "matern52",
                      kernB = "matern32")
   expect_equal(up$logLik[nrow(up$Phi)], ll, tolerance = 1e-8)

@@ -18,20 +18,20 @@ test_that("a chain in pieces makes the draws of the uninterrupted chain", {
   expect_true(ck$start$finished)
   # its draws are chain 2's, on the sampler's scale (kappa in [0, 1]; the
   # columns of Phi: the Matérn has no smoothness column)
-  expect_identical(ck$start$draws[, FBC:::phi_columns(ref$spec), drop = FALSE][, -1],
+  expect_identical(ck$start$draws[, FBC:::phi_columns(ref$model$spec), drop = FALSE][, -1],
                    unname(ref$Phi[ref$chain == 2, -1]))
   # ...and the pieces are what makes it exact: the piece boundaries are
   # multiples of 50 sweeps from the chain's start, and a chain continued
   # from any boundary with its saved RNG state repeats the same sweeps
-  sp <- fit$spec
+  sp <- fit$model$spec
   moves <- fit$model$moves
   st0 <- FBC:::initial_state(sp$init, sp)
   set.seed(5)
-  one <- FBC:::sample_chain(fit$data, sp, st0, moves, 50L, 30L, 1L, FALSE)
+  one <- FBC:::sample_chain(fit$model$data, sp, st0, moves, 50L, 30L, 1L, FALSE)
   seed <- .Random.seed
-  two <- FBC:::sample_chain(fit$data, sp, one$state, moves, 50L, 30L, 1L, FALSE)
+  two <- FBC:::sample_chain(fit$model$data, sp, one$state, moves, 50L, 30L, 1L, FALSE)
   assign(".Random.seed", seed, envir = globalenv())
-  again <- FBC:::sample_chain(fit$data, sp, one$state, moves, 50L, 30L, 1L, FALSE)
+  again <- FBC:::sample_chain(fit$model$data, sp, one$state, moves, 50L, 30L, 1L, FALSE)
   expect_identical(again$draws, two$draws)
   expect_identical(again$state, two$state)
 })
@@ -418,7 +418,7 @@ test_that("a run with another correlation family checkpoints and comes back with
   expect_identical(again$model$kernelS, "matern32")
   # the default kernels are not written into the fingerprint, so
   # checkpoints written before the kernels existed still match
-  id <- FBC:::run_identity(ballSim, ballField, fit$spec,
+  id <- FBC:::run_identity(ballSim, ballField, fit$model$spec,
                            list(nMCMC = 1, kernelS = "powexp", kernelB = "powexp"))
   expect_named(id$settings, "nMCMC")
 })
@@ -436,10 +436,10 @@ test_that("a run without a discrepancy checkpoints, resumes, and is refused by a
   expect_identical(again$model$discrepancy, "none")
   # the identity holds the discrepancy model when it is not the default;
   # the default is left out, so checkpoints written before it still match
-  expect_identical(FBC:::run_identity(ballSim, ballField, fit$spec,
+  expect_identical(FBC:::run_identity(ballSim, ballField, fit$model$spec,
                                       list(nMCMC = 1, discrepancy = "none"))$settings,
                    list(nMCMC = 1, discrepancy = "none"))
-  expect_named(FBC:::run_identity(ballSim, ballField, fit$spec,
+  expect_named(FBC:::run_identity(ballSim, ballField, fit$model$spec,
                                   list(nMCMC = 1, discrepancy = "gp"))$settings, "nMCMC")
   args$discrepancy <- NULL
   expect_error(do.call(calibrate, args), "`discrepancy` differs: none in the checkpoint, gp now")

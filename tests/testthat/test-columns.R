@@ -28,12 +28,12 @@ test_that("field columns in another order calibrate exactly as in the documented
   d <- short_fit(field = as.data.frame(ballField[, c("h", "t")]))
   expect_identical(b$Phi, a$Phi)
   expect_identical(d$Phi, a$Phi)
-  expect_identical(b$data, a$data)
+  expect_identical(b$model$data, a$model$data)
   # sim with the calibration input first and the response last: same model
   e <- short_fit(sim = ballSim[, c("g", "h", "t")])
   expect_identical(e$Phi, a$Phi)
-  expect_identical(e$scale$names, list(response = "t", inputs = "h", calibration = "g"))
-  expect_true(e$scale$named)
+  expect_identical(e$model$scale$names, list(response = "t", inputs = "h", calibration = "g"))
+  expect_true(e$model$scale$named)
   expect_output(print(e), "response: t; experimental input: h", fixed = TRUE)
 })
 
@@ -51,7 +51,7 @@ test_that("a sim stored as inputs then output calibrates as in the documented or
   f2 <- field[, c("y", "x2", "x1")]
   expect_identical(fit2(as.data.frame(sim[, c("x2", "x1", "t", "y")]), f2)$Phi,
                    fit2(sim[, c("y", "x2", "x1", "t")], f2)$Phi)
-  expect_identical(b$scale$names, list(response = "y", inputs = c("x1", "x2"), calibration = "t"))
+  expect_identical(b$model$scale$names, list(response = "y", inputs = c("x1", "x2"), calibration = "t"))
 })
 
 test_that("a response the names cannot identify is refused, naming both candidates", {
@@ -81,12 +81,12 @@ test_that("unnamed matrices keep the positional contract", {
   a <- short_fit()
   b <- short_fit(sim = unname(ballSim), field = unname(ballField))
   expect_identical(unname(b$Phi), unname(a$Phi))
-  expect_false(b$scale$named)
-  expect_identical(b$scale$names, list(response = "y", inputs = "x1", calibration = "t1"))
+  expect_false(b$model$scale$named)
+  expect_identical(b$model$scale$names, list(response = "y", inputs = "x1", calibration = "t1"))
   # one side named, the other not: by position
   d <- short_fit(field = unname(ballField))
   expect_identical(d$Phi, a$Phi)
-  expect_false(d$scale$named)
+  expect_false(d$model$scale$named)
 })
 
 test_that("names that disagree, are missing or repeated are refused with the names", {

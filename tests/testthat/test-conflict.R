@@ -111,9 +111,9 @@ test_that("the conflict message, on draws built by hand", {
   cf <- FBC:::prior_conflicts(fit)
   expect_equal(cf$var, "sigma2E")
   # the peak of the likelihood in sigma2E, the others at the MAP row, by a grid
-  map <- FBC:::sampler_scale(Phi, fit$scale)[200, ]
+  map <- FBC:::sampler_scale(Phi, fit$model$scale)[200, ]
   grid <- exp(seq(log(1e-4), log(0.2), length.out = 2000))
-  ll <- sapply(grid, function(s) dense_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys,
+  ll <- sapply(grid, function(s) dense_loglik(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys,
                                               replace(map, 10, s)))
   expect_equal(log(cf$dataValue), log(grid[which.max(ll)]), tolerance = 0.05)
   # its suggestion: an inverse gamma with median at that value
@@ -163,7 +163,7 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   fit <- hand_built_fit("thetaB1", at = c(thetaB1 = 0.05))
   Phi <- fit$Phi
   expect_lt(pgamma(0.05, 1.1, rate = 0.1), 0.01)
-  j <- match("thetaB1", fit$spec$vars)
+  j <- match("thetaB1", fit$model$spec$vars)
   # a likelihood with no peak: -theta / 0.01, whose limit 0 at theta -> 0 it
   # comes within 1 of below theta = 0.01 (5 units above its value at 0.05)
   plateau <- function(fit, phi) -phi[[j]] / 0.01
@@ -184,7 +184,7 @@ test_that("a likelihood rising to a limit (a GP scale going to 0) is reported as
   Pb[, "thetaB1"] <- 0.05
   Pb[, "alphaB1"] <- 1 + plogis(qnorm(ppoints(400), qlogis(0.99), 0.3))
   fitB <- with_draws(fit, Pb)
-  ja <- match("alphaB1", fit$spec$vars)
+  ja <- match("alphaB1", fit$model$spec$vars)
   toBound <- function(fit, phi) -500 * (2 - phi[[ja]])
   cf <- FBC:::prior_conflicts(fitB, loglik = toBound)
   expect_equal(cf$var, "alphaB1")

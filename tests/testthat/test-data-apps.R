@@ -12,7 +12,7 @@ precise_hypers <- function() {
 
 # A Phi row (kappa native) on the sampler's scale (kappa on [0, 1]).
 to_sampler_scale <- function(fit, phi) {
-  drop(FBC:::sampler_scale(matrix(phi, 1), fit$scale))
+  drop(FBC:::sampler_scale(matrix(phi, 1), fit$model$scale))
 }
 
 test_that("analytic data follow the documented generating function and truth", {
@@ -101,7 +101,7 @@ test_that("spot weld calibration handles replicated field inputs", {
   expect_true(all(fit$Phi[, "sigma2E"] > 0))
   # the field block has exact duplicate rows, so Rb is singular; with
   # sigma2E > 0 the compiled log-likelihood still matches a dense Cholesky
-  d <- fit$data
+  d <- fit$model$data
   expect_lt(nrow(unique(d$Xf)), nrow(d$Xf))
   phi <- to_sampler_scale(fit, fit$Phi[nrow(fit$Phi), ])
   expect_equal(FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fit$settings$nugget),
@@ -117,7 +117,7 @@ test_that("kinetics: calibrated field mean falls within the field data's spread"
   # the convergence diagnostics are computed for every sampled parameter
   expect_true(all(is.finite(fit$estimates$rhat) & fit$estimates$rhat > 0.99))
   expect_true(all(is.finite(fit$estimates$ess) & fit$estimates$ess > 0))
-  d <- fit$data
+  d <- fit$model$data
   n <- length(d$yf)
   # KOH posterior mean of the true process at the field inputs, at the
   # highest-posterior draw, by plain-R conditioning of the joint Gaussian:
@@ -129,7 +129,7 @@ test_that("kinetics: calibrated field mean falls within the field data's spread"
   r <- c(d$yf - muB, d$ys)
   K <- C[seq_len(n), ]
   diag(K[, seq_len(n)]) <- diag(K[, seq_len(n)]) - fit$Phi[best, "sigma2E"]
-  zeta <- (muB + K %*% solve(C, r)) * fit$scale$ysd + fit$scale$ymean
+  zeta <- (muB + K %*% solve(C, r)) * fit$model$scale$ysd + fit$model$scale$ymean
   # at each time, within the range of the three replicates widened by twice
   # their sd. (Once their sd: that held for seed 13 only by chance. At
   # t = 0.754 the replicates, 1.97-2.27, lie below those at t = 1.077,

@@ -63,9 +63,9 @@ test_that("propose_runs() and design_loop() give runs of every output", {
     attr(p2, "time") <- attr(p1, "time")
     expect_identical(p2, p1)
   }
-  expect_equal(nrow(FBC:::design_target(data.frame(x = c(0.5, 0.8)), fit$scale)), 4)
+  expect_equal(nrow(FBC:::design_target(data.frame(x = c(0.5, 0.8)), fit$model$scale)), 4)
   # the size limit counts a run's rows, and says so
-  U <- FBC:::design_candidates(NULL, fit$scale, 300, fit$data$Xs, 1e-3)
+  U <- FBC:::design_candidates(NULL, fit$model$scale, 300, fit$model$data$Xs, 1e-3)
   expect_snapshot(error = TRUE, FBC:::check_look_ahead_size(1e4, fit$model, U, matrix(0, 0, 2)))
   # the runs go back in with update(), each as its two rows
   f1 <- function(x, t) 5 * exp(-t * x)

@@ -313,7 +313,7 @@ test_that("the field data's pull equals the plain-R conditionals at a draw", {
   fit <- small_fit(nChains = 1)
   fp <- FBC:::field_pull(fit)
   expect_length(fp$pull, 30L)
-  d <- fit$data
+  d <- fit$model$data
   p <- ncol(d$Xf); q <- ncol(d$Xs) - p
   i <- 7L
   phi <- FBC:::sampler_draws(fit, fp$rows[i])[1, ]

@@ -23,20 +23,20 @@ test_that("leave-one-out and k-fold predictions equal explicit refits", {
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
+  sc <- fit$model$scale
   th <- unpack_phi(phi, 2, 1)
-  m <- length(fit$data$ys)
+  m <- length(fit$model$data$ys)
   cases <- list(list(folds = NULL, labels = seq_len(m)),
                 list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1),
                 list(folds = rep(1:4, each = 3), labels = rep(1:4, each = 3)))
   for (cs in cases) {
-    ref <- refit_heldout(fit$data$Xs, fit$data$ys, th, cs$labels)
+    ref <- refit_heldout(fit$model$data$Xs, fit$model$data$ys, th, cs$labels)
     for (method in c("MAP", "Bayesian")) {
       v <- emulator_cv(fit, method = method, folds = cs$folds)
       expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
       expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
-      expect_equal(v$runs$observed, sc$ymean + sc$ysd * fit$data$ys)
-      z <- (fit$data$ys - ref$mean) / sqrt(ref$var)
+      expect_equal(v$runs$observed, sc$ymean + sc$ysd * fit$model$data$ys)
+      z <- (fit$model$data$ys - ref$mean) / sqrt(ref$var)
       expect_equal(v$runs$z, z, tolerance = 1e-7)
       expect_equal(v$runs$pit, pnorm(z), tolerance = 1e-7)
     }
@@ -45,22 +45,22 @@ test_that("leave-one-out and k-fold predictions equal explicit refits", {
   expect_equal(v$runs$fold, rep(1:4, each = 3))
   # inputs in their own units, with the data's names
   expect_equal(as.matrix(v$runs[, c("x1", "x2", "t")]),
-               FBC:::unscale_inputs(fit$data$Xs, sc, 1:3), ignore_attr = TRUE)
+               FBC:::unscale_inputs(fit$model$data$Xs, sc, 1:3), ignore_attr = TRUE)
 })
 
 test_that("several draws combine as a Gaussian mixture (total variance, mixture PIT)", {
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
+  sc <- fit$model$scale
   set.seed(8)
   phis <- rbind(phi, t(replicate(3, random_phi(2, 1))))
   Phi <- phis
   Phi[, 1] <- sc$xmin[3] + phis[, 1] * (sc$xmax[3] - sc$xmin[3])
   colnames(Phi) <- colnames(fit$Phi)
   fit <- fit_with_draws(fit, Phi, logPost = c(-3, -1, -7, -2))
-  m <- length(fit$data$ys)
-  refs <- lapply(1:4, function(i) refit_heldout(fit$data$Xs, fit$data$ys, unpack_phi(phis[i, ], 2, 1),
+  m <- length(fit$model$data$ys)
+  refs <- lapply(1:4, function(i) refit_heldout(fit$model$data$Xs, fit$model$data$ys, unpack_phi(phis[i, ], 2, 1),
                                                 seq_len(m)))
   mu <- sapply(refs, `[[`, "mean")
   s2 <- sapply(refs, `[[`, "var")
@@ -70,7 +70,7 @@ test_that("several draws combine as a Gaussian mixture (total variance, mixture 
   # law of total variance of the equal-weight mixture (divisor M)
   tv <- rowMeans(s2) + rowMeans((mu - rowMeans(mu))^2)
   expect_equal(v$runs$sd, sc$ysd * sqrt(tv), tolerance = 1e-8)
-  expect_equal(v$runs$pit, rowMeans(pnorm((fit$data$ys - mu) / sqrt(s2))), tolerance = 1e-7)
+  expect_equal(v$runs$pit, rowMeans(pnorm((fit$model$data$ys - mu) / sqrt(s2))), tolerance = 1e-7)
   # ndraws = 2: the first and the last draw
   v2 <- emulator_cv(fit, ndraws = 2)
   expect_equal(v2$runs$mean, sc$ymean + sc$ysd * rowMeans(mu[, c(1, 4)]), tolerance = 1e-8)
@@ -95,8 +95,9 @@ gp_truth_fit <- function(sigma2SFit, m = 400, seed = 21) {
   th <- c(2, 1, 3)
   al <- c(1.5, 1.5, 1.5)
   K <- dense_corr(Xs, Xs, th, al) + 1e-6 * diag(m)
-  fit$data$Xs <- Xs
-  fit$data$ys <- drop(crossprod(chol(K), rnorm(m)))  # sigma2S = 1
+  fit$model$data$Xs <- Xs
+  fit$model$data$ys <- drop(crossprod(chol(K), rnorm(m)))  # sigma2S = 1
+  fit$model$dims$m <- nrow(Xs)
   idx <- fit$indices
   fit$Phi[, idx$thetaS] <- matrix(th, nrow(fit$Phi), 3, byrow = TRUE)
   fit$Phi[, idx$alphaS] <- matrix(al, nrow(fit$Phi), 3, byrow = TRUE)
@@ -154,13 +155,13 @@ test_that("a Matern emulator: held-out predictions equal explicit refits in its 
   set.seed(5)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi, kernelS = "matern52", kernelB = "gaussian")
-  sc <- fit$scale
+  sc <- fit$model$scale
   th <- unpack_phi(phi, 2, 1)
-  m <- length(fit$data$ys)
-  X <- fit$data$Xs
+  m <- length(fit$model$data$ys)
+  X <- fit$model$data$Xs
   for (cs in list(list(folds = NULL, labels = seq_len(m)),
                   list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1))) {
-    ref <- refit_heldout(X, fit$data$ys, th, cs$labels, kernel = "matern52")
+    ref <- refit_heldout(X, fit$model$data$ys, th, cs$labels, kernel = "matern52")
     v <- emulator_cv(fit, method = "MAP", folds = cs$folds)
     expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
     expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
@@ -210,13 +211,13 @@ test_that("emulator_cv() on a product design goes through the Kronecker algebra"
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi, d = product_koh_data(5, 7, n = 7, seed = 11))
   expect_identical(fit$model$algebra[c("name", "dims")], list(name = "kronecker", dims = c(5L, 7L)))
-  sc <- fit$scale
+  sc <- fit$model$scale
   th <- unpack_phi(phi, 2, 1)
-  m <- length(fit$data$ys)
+  m <- length(fit$model$data$ys)
   for (cs in list(list(folds = NULL, labels = seq_len(m)),
                   list(folds = 3, labels = (seq_len(m) - 1) %% 3 + 1),
                   list(folds = rep(c("a", "b"), c(30, 5)), labels = rep(1:2, c(30, 5))))) {
-    ref <- refit_heldout(fit$data$Xs, fit$data$ys, th, cs$labels)
+    ref <- refit_heldout(fit$model$data$Xs, fit$model$data$ys, th, cs$labels)
     v <- emulator_cv(fit, method = "MAP", folds = cs$folds)
     expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
     expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
@@ -239,9 +240,9 @@ test_that("validation in blocks of draws equals one call, and shows progress whe
   set.seed(8)
   fit <- calibrate(ballSim, ballField, nMCMC = 120, nBurn = 20, thinning = 2, nChains = 1)
   phis <- FBC:::sampler_draws(fit, 1:23)
-  d <- fit$data
+  d <- fit$model$data
   one <- .fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, fit$settings$nugget, seq_along(d$ys),
-                      model = fit$spec$model)
+                      model = fit$model$spec$model)
   old <- options(FBC.progress = TRUE)
   on.exit(options(old), add = TRUE)
   blocks <- FBC:::heldout_draws(fit, phis, seq_along(d$ys))

@@ -24,7 +24,7 @@ all_fixed <- function(thetaS, alphaS = NULL, thetaB, alphaB = NULL, sigma2S, sig
 # of phi[cols] on the grid g x g, the other coordinates at the fit's last
 # state (they are fixed).
 grid_posterior_2d <- function(fit, cols, g, log_prior) {
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
   lp <- outer(g, g, Vectorize(function(a, b) {
     phi[cols] <- c(a, b)
@@ -48,7 +48,7 @@ marginal_quantile_error <- function(draws, dens, j, x, probs = c(0.1, 0.25, 0.5,
 # discrepancy model.
 expect_dense_kappa_grid <- function(fit, kernS = "powexp", kernB = "powexp",
                                     u = seq(0, 1, length.out = 101)) {
-  d <- fit$data
+  d <- fit$model$data
   expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, kernS, kernB,
                  discrepancy = fit$model$discrepancy)
@@ -129,9 +129,9 @@ test_that("under the S-GaSP, kappa and lambdaZ draws match their grid posteriors
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
                    hypers = hyp, discrepancy = "sgasp", kappaDist = "fixed", kappaInit = 8.5,
                    kernelS = "powexp", kernelB = "powexp")
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
-  j <- match("lambdaZ", fit$spec$vars)
+  j <- match("lambdaZ", fit$model$spec$vars)
   u <- seq(log(0.01), log(1e5), length.out = 801)
   lp <- vapply(u, function(v) {
     phi[j] <- exp(v)
@@ -165,7 +165,7 @@ test_that("kappa draws match the 2-D grid posterior on a q = 2 problem", {
   g <- seq(0, 1, length.out = 51)
   dens <- grid_posterior_2d(fit, 1:2, g, function(u) stats::dbeta(u, 1.1, 1.1, log = TRUE))
   for (j in 1:2) {
-    k <- fit$scale$xmin[1 + j] + (fit$scale$xmax[1 + j] - fit$scale$xmin[1 + j]) * g
+    k <- fit$model$scale$xmin[1 + j] + (fit$model$scale$xmax[1 + j] - fit$model$scale$xmin[1 + j]) * g
     err <- marginal_quantile_error(fit$Phi[, paste0("kappa", j)], dens, j, k)
     # 5 MC standard errors; grid spacing 1/50 adds ~0.02 of the range
     expect_lt(err, 0.2, label = paste("kappa", j))
@@ -244,7 +244,7 @@ test_that("the exact muB draw matches muB's closed-form Gaussian posterior", {
               kernelB = "powexp"),
     classes = "fbc_extrapolation")
   expect_identical(fit$acceptance[["muB"]], 1)
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
   lpost <- function(mu) {
     phi[length(phi)] <- mu
@@ -283,7 +283,7 @@ test_that("the scale move and single-site variance moves match the 3-D grid post
   expect_true(fit$model$moves$scale)
   sc <- fit$state$chains[[1]]$scaleAcceptance
   expect_true(sc > 0.1 && sc < 0.9)
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
   ix <- unlist(fit$indices[c("sigma2S", "sigma2B", "sigma2E")])
   # grids on the log scale, covering the posterior (exp(-4) .. exp(2.5))
@@ -329,7 +329,7 @@ test_that("without a discrepancy the scale move of (sigma2S, sigma2E) matches th
   expect_true(fit$model$moves$scale)
   expect_identical(FBC:::move_report(fit)$parameters[FBC:::move_report(fit)$move == "scale"],
                    "sigma2S,sigma2E")
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
   ix <- unlist(fit$indices[c("sigma2S", "sigma2E")])
   lg <- seq(-4.5, 2.5, length.out = 71)
@@ -366,7 +366,7 @@ test_that("the bias block (thetaB, sigma2B) matches the 2-D grid posterior", {
   ix <- c(fit$indices$thetaB, fit$indices$sigma2B)
   expect_identical(fit$model$moves$blocks, list(bias = ix))
   expect_equal(fit$acceptance[["thetaB1"]], fit$acceptance[["sigma2B"]])
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
   lg <- seq(-5, 3, length.out = 81)
   g <- exp(lg)
@@ -406,9 +406,9 @@ tuo_wu_fit <- function(seed, ...) {
 # kappa's grid posterior given the fit's fixed parameters: dense_loglik()
 # times the prior, exp(logPrior(kappa)), on the grid `kappa` (its units)
 tuo_wu_density <- function(fit, kappa, logPrior) {
-  d <- fit$data
+  d <- fit$model$data
   phi <- fit$state$chains[[1]]$last
-  g <- (kappa - fit$scale$xmin[2]) / (fit$scale$xmax[2] - fit$scale$xmin[2])
+  g <- (kappa - fit$model$scale$xmin[2]) / (fit$model$scale$xmax[2] - fit$model$scale$xmin[2])
   lp <- vapply(g, function(k) {
     phi[1] <- k
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget, "matern52", "matern52",
@@ -424,8 +424,8 @@ test_that("kappa's jump move finds both modes of a bimodal posterior in their gr
   # seeds 4-8); with it the share was 0.277-0.292 with 630-680 crossings.
   fit <- tuo_wu_fit(4)
   expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
-  lo <- fit$scale$xmin[2]
-  w <- fit$scale$xmax[2] - lo
+  lo <- fit$model$scale$xmin[2]
+  w <- fit$model$scale$xmax[2] - lo
   kappa <- lo + w * seq(0, 1, length.out = 1001)
   dens <- tuo_wu_density(fit, kappa, function(k) stats::dbeta((k - lo) / w, 1.1, 1.1, log = TRUE))
   upper <- sum(dens[kappa > 0]) / sum(dens)
@@ -447,7 +447,7 @@ test_that("with a gaussian prior kappa jumps over the prior's central 99.9%, and
   # 0.25, 0 and 0.41 on seeds 4-6).
   fit <- tuo_wu_fit(4, kappaDist = "gaussian", kappaP1 = 0, kappaP2 = 0.5)
   expect_identical(FBC:::move_report(fit)$move, c("kappa1", "kappa1 jump"))
-  rng <- fit$scale$xmin[2] + (fit$scale$xmax[2] - fit$scale$xmin[2]) * fit$model$moves$jumpRange
+  rng <- fit$model$scale$xmin[2] + (fit$model$scale$xmax[2] - fit$model$scale$xmin[2]) * fit$model$moves$jumpRange
   expect_equal(c(rng), stats::qnorm(c(0.0005, 0.9995), 0, 0.5))
   kappa <- seq(-2.5, 2.5, length.out = 2001)
   dens <- tuo_wu_density(fit, kappa, function(k) stats::dnorm(k, 0, 0.5, log = TRUE))

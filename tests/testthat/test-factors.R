@@ -53,7 +53,7 @@ test_that("a categorical input's level correlation is the plain-R one from its p
                                         "rhoS1", "rhoS2", "rhoS3", "thetaB4", "alphaB4",
                                         "rhoB1", "rhoB2", "rhoB3", "sigma2S", "sigma2B",
                                         "sigma2E", "muB"))
-  held <- FBC:::sampler_draws(fit)[, FBC:::indicator_positions(fit$spec$model)]
+  held <- FBC:::sampler_draws(fit)[, FBC:::indicator_positions(fit$model$spec$model)]
   expect_true(all(held == rep(c(0, 2, 0, 2), each = 3 * nrow(fit$Phi))))
   expect_true(all(abs(fit$Phi[, "rhoB2"]) < 1))
 })
@@ -199,11 +199,11 @@ test_that("two outputs: kappa draws match the grid posterior", {
   fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "shared", nMCMC = 9000, nBurn = 1000, thinning = 4,
                    nChains = 1, hypers = hyp, kernelS = "matern52", kernelB = "matern52")
   expect_identical(colnames(fit$Phi)[grepl("sigma2E", colnames(fit$Phi))], c("sigma2E1", "sigma2E2"))
-  d <- fit$data
+  d <- fit$model$data
   # kappa1 is the third scaled input (x, the output's indicator, t)
   expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, "matern52", "matern52",
-                 noise = fit$spec$model$noise, levels = fit$spec$model$levels)
+                 noise = fit$model$spec$model$noise, levels = fit$model$spec$model$levels)
   }, u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
 })
 
@@ -250,8 +250,8 @@ test_that("several field data sets: each its own noise; refusals name the column
   expect_equal(fit$logLik, ll, tolerance = 1e-6)
   pall <- predict(fit, data.frame(x = 0.3, out = "conc", lab = "A"), type = "field")
   expect_true(all(is.finite(pall$pred)))
-  expect_identical(fit$scale$noiseLabels, c("conc:A", "conc:B", "rate:A"))
-  expect_identical(fit$spec$model$noise, c(rep(1L, 10), rep(3L, 10), rep(2L, 10)))
+  expect_identical(fit$model$scale$noiseLabels, c("conc:A", "conc:B", "rate:A"))
+  expect_identical(fit$model$spec$model$noise, c(rep(1L, 10), rep(3L, 10), rep(2L, 10)))
   expect_output(print(fit), "sigma2E1 = conc:A, sigma2E2 = conc:B, sigma2E3 = rate:A")
   expect_s3_class(predict(fit, data.frame(x = 0.3, out = "conc", lab = "B")), "fbc_prediction")
   expect_snapshot(error = TRUE, predict(fit, data.frame(x = 0.3, out = "conc")))
@@ -334,7 +334,7 @@ test_that("sourceBias = \"own\": a fit, its predictions and its refusals", {
                    kernelB = "matern52")
   expect_true("rhoD1" %in% colnames(fit$Phi))
   expect_true(all(abs(fit$Phi[, "rhoD1"]) < 1))
-  expect_identical(fit$spec$model$source, c(rep(1L, 20), rep(2L, 10)))
+  expect_identical(fit$model$spec$model$source, c(rep(1L, 20), rep(2L, 10)))
   expect_output(print(fit), "a bias each, correlated by rhoD1 \\(B~A\\)")
   expect_output(print(fit), "categorical input out: levels conc, rate; level correlation rhoS1 \\(rate~conc\\)")
   C <- level_correlation(fit, "lab", "bias")

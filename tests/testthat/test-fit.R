@@ -31,10 +31,19 @@ old_sim_algebra <- function(a) {
          list(name = a$name, dims = NULL))
 }
 
+# A current fit as formats 3 to 6 wrote it: with copies of the model's
+# data, scale and spec beside the model.
+with_copies <- function(fit, format) {
+  fit[c("data", "scale", "spec")] <- fit$model[c("data", "scale", "spec")]
+  fit$version$format <- format
+  fit
+}
+
 # A current fit as format 3 wrote it: no model object, the model's choices
 # among the settings.
 as_format_3 <- function(fit) {
   m <- fit$model
+  fit <- with_copies(fit, 3L)
   fit$settings <- c(fit$settings[c("nMCMC", "nBurn", "thinning", "nChains", "nugget")],
                     list(sampler = m$sampler, moves = m$moves, time = fit$settings$time,
                          checkpoint = fit$settings$checkpoint, algebra = m$options$algebra,
@@ -49,15 +58,15 @@ as_format_3 <- function(fit) {
 test_that("a fresh fit carries the current version and its copies of the model description", {
   set.seed(2)
   fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
-  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 6L))
+  expect_identical(fit$version, list(fbc = as.character(packageVersion("FBC")), format = 7L))
   expect_identical(FBC:::validate_fbc(fit), fit)
   # a current fit passes the gate untouched
   expect_identical(FBC:::upgrade_fbc(fit), fit)
   # the user-facing copies come from spec
   expect_identical(fit$vars, colnames(fit$Phi))
-  expect_identical(fit$indices, FBC:::phi_indices(fit$spec))
-  expect_identical(fit$priors, fit$spec$priors)
-  expect_identical(fit$priorFns, fit$spec$fns)
+  expect_identical(fit$indices, FBC:::phi_indices(fit$model$spec))
+  expect_identical(fit$priors, fit$model$spec$priors)
+  expect_identical(fit$priorFns, fit$model$spec$fns)
   # update() rebuilds it through the same constructor
   up <- update(fit, nMCMC = 20)
   expect_identical(up$version, fit$version)
@@ -73,19 +82,19 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   old$spec$model$discrepancy <- NULL
   up <- FBC:::upgrade_fbc(old)
   expect_identical(up$model$discrepancy, "gp")
-  expect_identical(up$spec$model, fit$spec$model)
+  expect_identical(up$model$spec$model, fit$model$spec$model)
   expect_identical(up$Phi, fit$Phi)
-  expect_identical(up$version$format, 6L)
+  expect_identical(up$version$format, 7L)
   # a fit without a bias validates; its layout is the "none" one
   set.seed(2)
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
                     discrepancy = "none")
   expect_identical(FBC:::validate_fbc(none), none)
-  expect_identical(none$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
+  expect_identical(none$model$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
   other <- none
-  other$spec$model$discrepancy <- 0L
+  other$model$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
-  other$spec$model$discrepancy <- 5L
+  other$model$spec$model$discrepancy <- 5L
   expect_error(FBC:::validate_fbc(other), "must be a discrepancy code \\(0 for gp, 2 for sgasp, 1 for none\\)")
 })
 
@@ -104,7 +113,7 @@ test_that("validate_fbc() refuses broken objects, naming what is wrong", {
   cols$state$chains[[2]]$kept <- 3L
   expect_snapshot(error = TRUE, FBC:::validate_fbc(cols))
   nospec <- fit
-  nospec$spec$model <- NULL
+  nospec$model$spec$model <- NULL
   expect_snapshot(error = TRUE, FBC:::validate_fbc(nospec))
   state <- fit
   state$state$chains[[1]]$sampler$logsd <- 1
@@ -114,7 +123,7 @@ test_that("validate_fbc() refuses broken objects, naming what is wrong", {
   expect_snapshot(error = TRUE, FBC:::validate_fbc(renum))
   # a layout of phi other than the model description's for these data
   moved <- fit
-  moved$spec$model$offset[["muB"]] <- 0L
+  moved$model$spec$model$offset[["muB"]] <- 0L
   expect_error(FBC:::validate_fbc(moved), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
   # a fit from a newer FBC is refused by the gate of every entry point
   newer <- fit
@@ -129,14 +138,17 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     old <- old_fit(commit)
     expect_null(old$version)
     fit <- FBC:::upgrade_fbc(old)
-    expect_identical(fit$version$format, 6L)
+    expect_identical(fit$version$format, 7L)
     expect_identical(FBC:::validate_fbc(fit), fit)
+    # the fit holds its model only: the data are the model's
+    expect_false(any(c("data", "scale", "spec") %in% names(fit)))
+    expect_identical(fit$model$data, old$data)
     expect_identical(fit$Phi, old$Phi)
     expect_identical(fit$logPost, old$logPost)
     expect_identical(fit$logLik, old$logLik)
     # the power exponential on both GPs, the design's algebra, and the one
     # layout of phi there was (the ball data: p = q = 1)
-    expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+    expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
     expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy")],
                      list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp"))
     expect_identical(fit$settings$nugget, 1e-6)
@@ -173,8 +185,8 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_identical(old$version$format, 2L)
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 6L)
-  expect_identical(fit$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+  expect_identical(fit$version$format, 7L)
+  expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
                readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map, tolerance = 1e-10)
@@ -200,7 +212,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(old$version$format, 3L)
   expect_null(old$model)
   fit <- FBC:::upgrade_fbc(old)
-  expect_identical(fit$version$format, 6L)
+  expect_identical(fit$version$format, 7L)
   expect_s3_class(fit$model, "fbc_model")
   expect_identical(fit$model$moves, old$settings$moves)
   expect_identical(fit$model$algebra$dims, old$settings$simAlgebra$dims)
@@ -210,7 +222,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(names(fit$settings),
                    c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint"))
   expect_identical(fit$Phi, old$Phi)
-  expect_identical(fit$spec, old$spec)
+  expect_identical(fit$model$spec, old$spec)
   h <- c(1, 2.5, 4)
   ref <- readRDS(test_path("fixtures", "predict-3f92546.rds"))
   expect_equal(predict(old, h, method = "MAP"), ref$map, tolerance = 1e-10)
@@ -260,7 +272,7 @@ test_that("print, summary, predict, plot and update work on the fits of earlier 
     expect_equal(dim(ppc_field(old, ndraws = 5)$yrep), c(5L, nrow(ballField)))
     set.seed(3)
     up <- update(old, nMCMC = 100)
-    expect_identical(up$version$format, 6L)
+    expect_identical(up$version$format, 7L)
     K <- length(unique(up$chain))
     expect_equal(nrow(up$Phi), nrow(old$Phi) + 50 * K)
     expect_identical(up$settings$nMCMC, 400L)
@@ -317,7 +329,7 @@ test_that("a checkpoint written before the kernels resumes to the draws of an un
   expect_identical(fit$Phi[!one, ], now$Phi[now$chain == 2L, ])
   expect_identical(fit$logLik[!one], now$logLik[now$chain == 2L])
   expect_identical(fit$state$chains[[2]]$sampler, now$state$chains[[2]]$sampler)
-  expect_identical(fit$version$format, 6L)
+  expect_identical(fit$version$format, 7L)
   # a checkpoint file of a newer format is refused, nothing changed
   run <- readRDS(file.path(dir, "run.rds"))
   run$format <- FBC:::fbc_checkpoint_format + 1L
@@ -336,13 +348,13 @@ test_that("a fit of format 5 is upgraded to one algebra record, the model it was
   expect_identical(fit$model$algebra[c("name", "dims")], list(name = "kronecker", dims = c(5L, 5L)))
   expect_null(fit$model$simAlgebra)
   # format 5 kept the algebra twice: the choice without dims, and what ran
-  old <- fit
-  old$version$format <- 5L
+  old <- with_copies(fit, 5L)
   old$model$simAlgebra <- list(name = "Kronecker", dims = c(5L, 5L))
   old$model$algebra$dims <- NULL
   up <- FBC:::upgrade_fbc(old)
-  expect_identical(up$version$format, 6L)
+  expect_identical(up$version$format, 7L)
   expect_identical(up$model, fit$model)
+  expect_identical(unclass(up), unclass(fit))
   expect_output(print(up), "algebra: Kronecker, 5 x 5", fixed = TRUE)
 })
 
@@ -355,13 +367,54 @@ test_that("a multi-output fit of format 4 is upgraded as outputs = \"shared\", t
                  data.frame(y = 1.7 * (1:4) / 5, x = (1:4) / 5, out = "b"))
   fit <- calibrate(sim, field, output = "out", outputs = "shared", nMCMC = 60, nBurn = 20,
                    nChains = 1)
-  old <- fit
-  old$version$format <- 4L
+  old <- with_copies(fit, 4L)
   old$model$options$outputs <- NULL
   up <- FBC:::upgrade_fbc(old)
-  expect_identical(up$version$format, 6L)
+  expect_identical(up$version$format, 7L)
   expect_identical(up$model$options$outputs, "shared")
   expect_identical(up$call$outputs, "shared")
   expect_equal(predict(up, data.frame(x = 0.5, out = "a"))$pred,
                predict(fit, data.frame(x = 0.5, out = "a"))$pred)
+})
+
+test_that("a fit of format 6 upgrades to the fit holding its model only, with the same predictions", {
+  set.seed(2)
+  fit <- calibrate(ballSim, ballField, nMCMC = 60, nBurn = 20, nChains = 2)
+  expect_false(any(c("data", "scale", "spec") %in% names(fit)))
+  # format 6 kept copies of the model's data, scale and spec beside it
+  old <- with_copies(fit, 6L)
+  expect_identical(old$spec, fit$model$spec)
+  up <- FBC:::upgrade_fbc(old)
+  expect_identical(up$version$format, 7L)
+  expect_identical(unclass(up), unclass(fit))
+  # every function takes it through the gate: predictions and a
+  # continuation identical to the bit
+  h <- c(1, 2.5, 4)
+  expect_identical(predict(old, h), predict(fit, h))
+  expect_identical(predict(old, h, method = "MAP", type = "bias"),
+                   predict(fit, h, method = "MAP", type = "bias"))
+  set.seed(5)
+  a <- update(old, nMCMC = 20)
+  set.seed(5)
+  b <- update(fit, nMCMC = 20)
+  expect_identical(a$Phi, b$Phi)
+  expect_identical(a$version$format, 7L)
+  # a part the model lacks is taken from the fit's copy
+  for (el in c("data", "scale", "spec")) {
+    part <- old
+    part$model[el] <- NULL
+    whole <- FBC:::upgrade_fbc(part)
+    expect_false(any(c("data", "scale", "spec") %in% names(whole)))
+    expect_identical(whole$model[[el]], fit$model[[el]])
+    expect_identical(predict(whole, h, method = "MAP"), predict(fit, h, method = "MAP"))
+  }
+  # a model whose sizes do not state the number of independent outputs
+  # gets it
+  few <- old
+  few$model$dims$outputs <- NULL
+  expect_identical(FBC:::upgrade_fbc(few)$model$dims$outputs, 1L)
+  # a broken copy is not read: the model's own parts are kept
+  wrong <- old
+  wrong$scale$ysd <- 2 * wrong$scale$ysd
+  expect_identical(FBC:::upgrade_fbc(wrong)$model$scale, fit$model$scale)
 })

@@ -57,13 +57,13 @@ test_that("log_lik() gives the leave-one-out densities loo() uses", {
   set.seed(8)
   fit <- fixed_fit(random_phi(2, 1))
   ll <- log_lik(fit)
-  expect_identical(dim(ll), c(nrow(fit$Phi), length(fit$data$yf)))
+  expect_identical(dim(ll), c(nrow(fit$Phi), length(fit$model$data$yf)))
   # every draw is phi: loo()'s pointwise elpd is each draw's log density
   res <- suppressWarnings(loo::loo(fit, unit = "observation"))
   for (i in seq_len(nrow(ll))) {
     expect_equal(ll[i, ], res$pointwise[, "elpd_loo"], tolerance = 1e-8, ignore_attr = TRUE)
   }
-  expect_identical(ncol(log_lik(fit, unit = "input")), length(unique(fit$data$Xf[, 1])))
+  expect_identical(ncol(log_lik(fit, unit = "input")), length(unique(fit$model$data$Xf[, 1])))
   expect_error(log_lik(fit, unit = "row"), class = "rlang_error")
   expect_error(posterior_predict(fit, ndraws = 0), "ndraws")
 })
@@ -74,7 +74,7 @@ test_that("nobs() counts the field rows and prior_summary() lists every paramete
   fit <- fixed_fit(phi)
   expect_identical(nobs(fit), 7L)
   ps <- prior_summary(fit)
-  expect_identical(ps$parameter, fit$spec$vars)
+  expect_identical(ps$parameter, fit$model$spec$vars)
   expect_true(all(ps$fixed))
   th <- unpack_phi(phi, 2, 1)
   expect_equal(ps$init[ps$class == "thetaS"], th$thetaS)

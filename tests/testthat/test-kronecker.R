@@ -173,6 +173,7 @@ test_that("the sampler on a product design retains dense log-likelihoods", {
                                 p2 = rep(1.1, q)),
                            set_hyperPriors(),
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q), p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   for (sampler in c("single", "blocks")) {
     set.seed(3)
     res <- run_sampler(d, sp, sampler, 200L, 150L, 5L)
@@ -260,7 +261,7 @@ test_that("kappa draws on a product design match the grid posterior", {
   fit <- calibrate(sim, field, nMCMC = 8000, nBurn = 1000, thinning = 2, nChains = 2,
                    hypers = hyp, kernelS = "powexp", kernelB = "powexp")
   expect_identical(fit$model$algebra$name, "kronecker")
-  d <- fit$data
+  d <- fit$model$data
   # 7000 draws of kappa (ESS a few thousand): quantile errors ~0.03 sd
   expect_kappa_grid(fit, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6),
                     u = seq(0, 1, length.out = 201), quantileTol = 0.12, ksTol = 0.05)

@@ -52,12 +52,12 @@ test_that("loo() of a fit with every parameter fixed is the exact density in the
   set.seed(8)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  d <- fit$data
+  d <- fit$model$data
   # (4 equal draws: loo warns that it cannot fit Pareto tails, and uses none)
   res <- suppressWarnings(loo::loo(fit, unit = "observation"))
   expect_s3_class(res, "psis_loo")
   expect_identical(attr(res, "unit"), "observation")
-  ref <- dense_loo(d, phi, seq_along(d$yf), "gp") - log(fit$scale$ysd)
+  ref <- dense_loo(d, phi, seq_along(d$yf), "gp") - log(fit$model$scale$ysd)
   expect_equal(res$pointwise[, "elpd_loo"], ref, tolerance = 1e-8)
   expect_equal(res$estimates["elpd_loo", "Estimate"], sum(ref), tolerance = 1e-8)
 })
@@ -112,7 +112,7 @@ test_that("unit = \"input\" leaves out every output and data set observed at an 
   set.seed(6)
   fit <- calibrate(sim, field, output = "out", outputs = "shared", source = "lab", nMCMC = 200, nBurn = 100,
                    nChains = 2, kernelS = "matern52", kernelB = "matern52")
-  g <- FBC:::loo_groups(fit$data$Xf, "input", FBC:::loo_input_columns(fit$scale))
+  g <- FBC:::loo_groups(fit$model$data$Xf, "input", FBC:::loo_input_columns(fit$model$scale))
   expect_identical(g, match(field$x, xf))
   l <- suppressWarnings(loo::loo(fit, ndraws = 40))  # (Pareto k: 40 draws)
   expect_identical(nrow(l$pointwise), 6L)

@@ -94,6 +94,7 @@ test_that("the sampler's retained log-likelihoods (accept and reject paths) equa
                            defaults_010$hypers,  # (a prior whose every move accepts and rejects in 60 sweeps)
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
                            p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   set.seed(3)
   res <- run_sampler(dat, sp, "single", 60L, 20L, 4L)
   acc <- res$acceptance[!is.na(res$acceptance)]
@@ -149,6 +150,7 @@ test_that("a covariance that is not positive definite gives -Inf, not a crash", 
   sp <- FBC:::build_priors(list(dist = "beta", init = NA, p1 = 1.1, p2 = 1.1),
                            set_hyperPriors(),
                            list(xmin = c(0, 0), xmax = c(1, 1), p = p, q = q), p, q)
+  sp$model <- FBC:::compiled_model(p, q)
   tab <- as.list(sp$table)
   tab$family[idx$sigma2E] <- 2L  # PF_GAUSSIAN
   tab$p1[idx$sigma2E] <- 0
@@ -420,6 +422,7 @@ test_that("without a discrepancy the sampler retains dense log-likelihoods and h
   sp <- FBC:::build_priors(list(dist = "beta", init = NA, p1 = 1.1, p2 = 1.1), set_hyperPriors(),
                            list(xmin = rep(0, p + q), xmax = rep(1, p + q), p = p, q = q),
                            p, q, "none")
+  sp$model <- FBC:::compiled_model(p, q, discrepancy = "none")
   expect_identical(sp$vars, c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1", "alphaS2",
                               "alphaS3", "sigma2S", "sigma2E"))
   mv <- FBC:::sampler_moves("blocks", sp)

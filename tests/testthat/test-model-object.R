@@ -62,6 +62,43 @@ test_that("the validator names what is wrong", {
   expect_snapshot(error = TRUE, calibrate(bad))
 })
 
+test_that("the model's sizes and classes are its own, and the compiled description holds them", {
+  # two outputs, independent; two laboratories, B with its own bias
+  set.seed(5)
+  x <- runif(12); t <- runif(12, 0.5, 3)
+  sim <- rbind(data.frame(y = 5 * exp(-t * x), x = x, out = "conc", t = t),
+               data.frame(y = 2 * t * x, x = x, out = "rate", t = t))
+  xf <- seq(0.1, 0.9, length.out = 4)
+  field <- rbind(data.frame(y = 5 * exp(-1.7 * xf), x = xf, out = "conc", lab = "A"),
+                 data.frame(y = 3.4 * xf, x = xf, out = "rate", lab = "A"),
+                 data.frame(y = 5 * exp(-1.7 * xf) + 0.3, x = xf, out = "conc", lab = "B"))
+  q <- function(e) suppressWarnings(suppressMessages(e))
+  indep <- q(calibrate(sim, field[field$lab == "A", 1:3], output = "out", outputs = "independent",
+                       fit = FALSE))
+  own <- q(calibrate(sim, field, output = "out", outputs = "shared", source = "lab",
+                     sourceBias = "own", fit = FALSE))
+  ball <- calibrate(ballSim, ballField, fit = FALSE)
+  expect_identical(indep$dims[c("noise", "levels", "sources", "outputs")],
+                   list(noise = 2L, levels = 0L, sources = 0L, outputs = 2L))
+  # (the output's level correlation rhoS; conc:A, rate:A, conc:B measured apart;
+  # one correlation between the laboratories' biases)
+  expect_identical(own$dims[c("noise", "levels", "sources", "outputs")],
+                   list(noise = 3L, levels = 1L, sources = 1L, outputs = 1L))
+  for (m in list(indep, own, ball)) {
+    cl <- m$classes
+    expect_identical(sum(cl$length), m$dims$d)
+    expect_identical(cl$offset, c(0L, cumsum(cl$length)[-nrow(cl)]))
+    # each class's parameters are the spec's, in that order
+    expect_identical(rep(cl$class, cl$length), m$spec$classes)
+    expect_identical(m$spec$model$offset, stats::setNames(cl$offset, cl$class))
+    expect_identical(m$spec$model$length, stats::setNames(cl$length, cl$class))
+  }
+  # a compiled description that holds another layout is refused
+  bad <- ball
+  bad$spec$model$offset[["muB"]] <- 0L
+  expect_error(FBC:::validate_fbc_model(bad), "`spec\\$model` must hold the layout of phi")
+})
+
 test_that("distinct_rows() groups equal rows, by group when given", {
   X <- cbind(c(1, 2, 1, 2, 1), c(0, 0, 0, 1, 0))
   expect_identical(FBC:::distinct_rows(X), c(1L, 2L, 1L, 3L, 1L))
@@ -99,7 +136,7 @@ test_that("prior_conflicts() checks a correlation whose posterior sits in its pr
   Phi[, "rhoS1"] <- 0.985 + 0.004 * qnorm(ppoints(400))
   fit <- fit_with_draws(fit, Phi, rep(1:4, each = 100), -abs(seq_len(400) - 200.5))
   fit$estimates <- FBC:::estimate_table(Phi, fit$chain)
-  col <- FBC:::phi_columns(fit$spec)[match("rhoS1", colnames(Phi))]
+  col <- FBC:::phi_columns(fit$model$spec)[match("rhoS1", colnames(Phi))]
   out <- FBC:::prior_conflicts(fit, loglik = function(fit, phi) 200 * phi[col])
   expect_identical(out$var, "rhoS1")
   # uniform(-1, 1): the CDF at the median 0.985 is 1.985 / 2

@@ -109,8 +109,8 @@ test_that("two independent outputs: kappa draws match the grid posterior", {
   set.seed(9)
   fit <- calibrate(pr$sim, pr$field, output = "out", outputs = "independent", nMCMC = 9000,
                    nBurn = 1000, thinning = 4, nChains = 1, hypers = hyp)
-  d <- fit$data
-  expect_identical(fit$spec$vars[fit$spec$classes == "sigma2S"], c("sigma2S[conc]", "sigma2S[rate]"))
+  d <- fit$model$data
+  expect_identical(fit$model$spec$vars[fit$model$spec$classes == "sigma2S"], c("sigma2S[conc]", "sigma2S[rate]"))
   expect_kappa_grid(fit, function(phi) outputs_loglik_dense(d$Xf, d$yf, d$Xs, d$ys, phi, 2L),
                     u = seq(0, 1, length.out = 401), col = 3L, ksTol = NULL)
 })

@@ -6,8 +6,8 @@ test_that("with fixed parameters the check is the dense predictive at the field 
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
-  d <- fit$data
+  sc <- fit$model$scale
+  d <- fit$model$data
   ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phi, d$Xf, "field")
   mu <- sc$ymean + sc$ysd * ref$mean
   s <- sc$ysd * sqrt(ref$var)
@@ -38,8 +38,8 @@ test_that("a Matern fit: the check is the dense predictive in its families", {
   set.seed(4)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi, kernelS = "matern32", kernelB = "matern52")
-  sc <- fit$scale
-  d <- fit$data
+  sc <- fit$model$scale
+  d <- fit$model$data
   ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phi, d$Xf, "field", kernS = "matern32",
                        kernB = "matern52")
   pp <- ppc_field(fit, ndraws = 3)
@@ -51,8 +51,8 @@ test_that("several draws: the numbers come from the mixture of the draws' predic
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
-  d <- fit$data
+  sc <- fit$model$scale
+  d <- fit$model$data
   set.seed(8)
   phis <- rbind(phi, t(replicate(2, random_phi(2, 1))))
   Phi <- phis
@@ -84,7 +84,7 @@ test_that("a model that overstates the noise, or misplaces the mean, is caught",
   # times the response's variance) against the observations' mean squared
   # residual
   fit <- fixed_fit(noisy)
-  expect_equal(pp$noise$sigma2E, 50 * fit$scale$ysd^2)
+  expect_equal(pp$noise$sigma2E, 50 * fit$model$scale$ysd^2)
   expect_equal(pp$noise$residual, mean((pp$y - pp$obs$mean)^2))
   expect_gt(pp$noise$ratio, 4)
   expect_snapshot(print(pp))

@@ -9,10 +9,10 @@ test_that("with every parameter fixed, predict() is the dense GP conditional (al
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
+  sc <- fit$model$scale
   expect_true(all(apply(fit$Phi, 2, stats::var) == 0))
   for (type in c("field", "mean", "simulator", "bias")) {
-    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+    ref <- dense_predict(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, phi,
                          scaled_new(Xnew, sc), type)
     shift <- if (type == "bias") 0 else sc$ymean
     for (method in c("Bayesian", "MAP")) {
@@ -33,11 +33,11 @@ test_that("every correlation family: predict() is the dense GP conditional", {
   for (kk in list(c("gaussian", "matern32"), c("matern52", "gaussian"),
                   c("matern32", "matern52"))) {
     fit <- fixed_fit(phi, kernelS = kk[1], kernelB = kk[2])
-    sc <- fit$scale
+    sc <- fit$model$scale
     # the smoothness is not a parameter: no alpha columns
     expect_false(any(grepl("^alpha", colnames(fit$Phi))))
     for (type in c("field", "simulator", "bias")) {
-      ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+      ref <- dense_predict(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, phi,
                            scaled_new(Xnew, sc), type, kernS = kk[1], kernB = kk[2])
       shift <- if (type == "bias") 0 else sc$ymean
       pr <- predict(fit, Xnew, method = "MAP", type = type)
@@ -52,12 +52,12 @@ test_that("without a discrepancy predict() is the dense GP conditional; the bias
   set.seed(6)
   phi <- random_phi(2, 1, "none")
   fit <- fixed_fit(phi, discrepancy = "none")
-  sc <- fit$scale
+  sc <- fit$model$scale
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1",
                                         "alphaS2", "alphaS3", "sigma2S", "sigma2E"))
   out <- list()
   for (type in c("field", "mean", "simulator", "bias")) {
-    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+    ref <- dense_predict(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, phi,
                          scaled_new(Xnew, sc), type, discrepancy = "none")
     shift <- if (type == "bias") 0 else sc$ymean
     out[[type]] <- pr <- predict(fit, Xnew, method = "MAP", type = type)
@@ -77,13 +77,13 @@ test_that("under the S-GaSP predict() is the dense GP conditional with the discr
   set.seed(7)
   phi <- random_phi(2, 1, "sgasp")
   fit <- fixed_fit(phi, discrepancy = "sgasp")
-  sc <- fit$scale
+  sc <- fit$model$scale
   expect_identical(colnames(fit$Phi), c("kappa1", "thetaS1", "thetaS2", "thetaS3", "alphaS1",
                                         "alphaS2", "alphaS3", "thetaB1", "thetaB2", "alphaB1",
                                         "alphaB2", "lambdaZ", "sigma2S", "sigma2B", "sigma2E"))
-  Xn <- rbind(Xnew, c(10 * fit$data$Xf[1, 1], fit$data$Xf[1, 2] - 5))  # on a field input
+  Xn <- rbind(Xnew, c(10 * fit$model$data$Xf[1, 1], fit$model$data$Xf[1, 2] - 5))  # on a field input
   for (type in c("field", "mean", "simulator", "bias")) {
-    ref <- dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phi,
+    ref <- dense_predict(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, phi,
                          scaled_new(Xn, sc), type, discrepancy = "sgasp")
     shift <- if (type == "bias") 0 else sc$ymean
     for (method in c("Bayesian", "MAP")) {
@@ -98,7 +98,7 @@ test_that("the Bayesian method combines per-draw conditionals by total variance 
   set.seed(3)
   phi <- random_phi(2, 1)
   fit <- fixed_fit(phi)
-  sc <- fit$scale
+  sc <- fit$model$scale
   # replace the draws by 4 different parameter vectors (kappa in native units)
   set.seed(8)
   phis <- rbind(phi, t(replicate(3, random_phi(2, 1))))
@@ -110,7 +110,7 @@ test_that("the Bayesian method combines per-draw conditionals by total variance 
   for (type in c("field", "bias")) {
     shift <- if (type == "bias") 0 else sc$ymean
     refs <- lapply(seq_len(4), function(i) {
-      dense_predict(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, phis[i, ], Xn, type)
+      dense_predict(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, phis[i, ], Xn, type)
     })
     m <- shift + sc$ysd * sapply(refs, `[[`, "mean")
     s <- sc$ysd * sqrt(sapply(refs, `[[`, "var"))

@@ -77,7 +77,7 @@ test_that("print() names several experimental inputs and the calibration input's
   fit <- fixed_fit(random_phi(2, 1))  # columns y, x1, x2, t
   out <- capture.output(print(fit))
   expect_identical(out[3], "  response: y; experimental inputs: x1, x2")
-  t <- fit$scale$xmin[3] + c(0, fit$scale$xmax[3] - fit$scale$xmin[3])
+  t <- fit$model$scale$xmin[3] + c(0, fit$model$scale$xmax[3] - fit$model$scale$xmin[3])
   expect_identical(out[4], sprintf("  calibration input: kappa1 = t (design %s to %s)",
                                    signif(t[1], 4), signif(t[2], 4)))
 })
@@ -109,5 +109,5 @@ test_that("print() of independent outputs: the kernel's classes, one measurement
   sds <- vapply(split(pr$sim$y, pr$sim$out), sd, numeric(1))
   expect_true(any(grepl(sprintf("(response / its sd: conc %s, rate %s)", signif(sds[1], 4), signif(sds[2], 4)),
                         out, fixed = TRUE)))
-  expect_snapshot(cat(FBC:::scale_note_line(fit$scale)))
+  expect_snapshot(cat(FBC:::scale_note_line(fit$model$scale)))
 })

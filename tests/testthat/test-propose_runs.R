@@ -4,8 +4,8 @@
 test_that("the look-ahead weights give the posterior of a refit with the fantasised run", {
   pb <- sinus_problem()
   fit <- sinus_fit(pb, nMCMC = 6200)
-  d <- fit$data
-  sc <- fit$scale
+  d <- fit$model$data
+  sc <- fit$model$scale
   # a run at x = 0.48, u = 0.58 returning the simulator's value there
   run <- c(x = 0.48, u = 0.58)
   ystar <- sin(10 * run[["u"]] * run[["x"]])
@@ -13,7 +13,7 @@ test_that("the look-ahead weights give the posterior of a refit with the fantasi
   ys <- (ystar - sc$ymean) / sc$ysd
   phis <- FBC:::sampler_draws(fit)
   sys <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, cs, matrix(0, 0, 1), fbc_nugget,
-                                fit$spec$model)
+                                fit$model$spec$model)
   w <- stats::dnorm(ys, drop(sys$mu), sqrt(drop(sys$v)))
   w <- w / sum(w)
   k <- fit$Phi[, "kappa1"]
@@ -86,8 +86,8 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   for (v in c("x", "u")) {
     expect_true(all(pr[[v]] >= rng[1, v] & pr[[v]] <= rng[2, v]))
   }
-  U <- FBC:::scale_inputs(as.matrix(pr[c("x", "u")]), fit$scale, 1:2)
-  dist <- apply(U, 1, function(u) min(sqrt(colSums((t(fit$data$Xs) - u)^2))))
+  U <- FBC:::scale_inputs(as.matrix(pr[c("x", "u")]), fit$model$scale, 1:2)
+  dist <- apply(U, 1, function(u) min(sqrt(colSums((t(fit$model$data$Xs) - u)^2))))
   expect_true(all(dist > 1e-3))
   expect_true(all(pr$gain > 0))
   # the existing runs as candidates are left out
@@ -97,8 +97,8 @@ test_that("proposed runs lie in the design's ranges and away from the runs", {
   # a look-ahead over 5e7 numbers is refused, naming the sizes: 60 draws x
   # 17 rows (12 runs and the field's 5 inputs; its 10 rows are replicates,
   # which enter through their means) x 50,000 candidates; 40,000 pass
-  expect_equal(nrow(fit$data$Xs), 12)
-  expect_equal(sum(!duplicated(fit$data$Xf)), 5)
+  expect_equal(nrow(fit$model$data$Xs), 12)
+  expect_equal(sum(!duplicated(fit$model$data$Xf)), 5)
   set.seed(7)  # (the candidates within 1e-3 of a run are left out first)
   big <- data.frame(x = stats::runif(50000), u = stats::runif(50000))
   expect_snapshot(error = TRUE, propose_runs(fit, candidates = big, ndraws = 60))
@@ -113,7 +113,7 @@ test_that("the default candidates: half at kappa's posterior draws and the field
   kap <- FBC:::sampler_draws(fit)[, 1, drop = FALSE]
   held <- pmin(pmax(kap[, 1], 0), 1)
   set.seed(2)
-  U <- FBC:::design_candidates(NULL, fit$scale, 400, fit$data$Xs, 0, kappa = kap)
+  U <- FBC:::design_candidates(NULL, fit$model$scale, 400, fit$model$data$Xs, 0, kappa = kap)
   expect_equal(dim(U), c(400, 2))
   expect_true(all(U >= 0 & U <= 1))
   # the first half's kappa are draws (held to the design's range), spread as
@@ -128,8 +128,8 @@ test_that("the default candidates: half at kappa's posterior draws and the field
   expect_lt(suppressWarnings(stats::ks.test(U[201:400, 2], held))$p.value, 1e-6)
   # propose_runs()'s default candidates are these (the same seed, the same picks)
   set.seed(9)
-  U <- FBC:::design_candidates(NULL, fit$scale, 200, fit$data$Xs, 1e-3, kappa = kap, Xf = fit$data$Xf)
-  given <- stats::setNames(as.data.frame(FBC:::unscale_inputs(U, fit$scale, 1:2)), c("x", "u"))
+  U <- FBC:::design_candidates(NULL, fit$model$scale, 200, fit$model$data$Xs, 1e-3, kappa = kap, Xf = fit$model$data$Xf)
+  given <- stats::setNames(as.data.frame(FBC:::unscale_inputs(U, fit$model$scale, 1:2)), c("x", "u"))
   p2 <- propose_runs(fit, n = 2, candidates = given, ndraws = 60, nfantasy = 30)
   set.seed(9)
   p1 <- propose_runs(fit, n = 2, ndraws = 60, nfantasy = 30, ncandidates = 200)
@@ -142,9 +142,9 @@ test_that("the default candidates: half at kappa's posterior draws and the field
   narrow$sim$y <- sin(10 * narrow$sim$u * narrow$sim$x)
   fitN <- suppressWarnings(sinus_fit(narrow, nMCMC = 600))
   set.seed(3)
-  U <- FBC:::design_candidates(NULL, fitN$scale, 400, fitN$data$Xs, 0,
-                               kappa = FBC:::sampler_draws(fitN)[, 1, drop = FALSE], Xf = fitN$data$Xf)
-  X <- FBC:::unscale_inputs(U, fitN$scale, 1:2)
+  U <- FBC:::design_candidates(NULL, fitN$model$scale, 400, fitN$model$data$Xs, 0,
+                               kappa = FBC:::sampler_draws(fitN)[, 1, drop = FALSE], Xf = fitN$model$data$Xf)
+  X <- FBC:::unscale_inputs(U, fitN$model$scale, 1:2)
   expect_true(all(X[, 1] >= 0.1 - 1e-12 & X[, 1] <= 0.9 + 1e-12))
   # the first half at the field's inputs, the rest uniform over 0.1-0.9
   expect_equal(sort(unique(round(X[1:200, 1], 12))), seq(0.1, 0.9, length.out = 5))
@@ -177,7 +177,7 @@ test_that("a batch conditions on its pending points; single picks repeat", {
   expect_false(isTRUE(all.equal(unlist(two[2, c("x", "u")]), unlist(two[1, c("x", "u")]))))
   # a candidate at a pending point (row 2 is row 1 again), given that
   # point, has no variance left in any draw: it can gain nothing
-  U <- FBC:::scale_inputs(as.matrix(cand), fit$scale, 1:2)
+  U <- FBC:::scale_inputs(as.matrix(cand), fit$model$scale, 1:2)
   parts <- FBC:::design_particles(fit, 80, "joint")
   # (the plain-R reference, helper-design.R, which the C++ equals: below)
   sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U))
@@ -424,9 +424,9 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
       # shared by the plug-in's particles, the field's 10 rows reduced to
       # their 5 inputs' means): the log-likelihood of every row (with its
       # constant), the candidates' means and variances
-      d <- fit$data
+      d <- fit$model$data
       ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, XT, fbc_nugget,
-                                  fit$spec$model)
+                                  fit$model$spec$model)
       N <- nrow(d$Xs) + nrow(d$Xf)
       expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
       expect_equal(ds$mu, vapply(sys, `[[`, numeric(30), "mu"), tolerance = 1e-8)
@@ -440,8 +440,8 @@ test_that("the C++ look-ahead equals the plain-R one (helper-design.R)", {
     pr <- FBC:::at_draws(fit, FBC:::.fbc_predict, phis, Xnew = XT,
                          type = FBC:::predict_type_codes[["mean"]], block = 500L,
                          noise = integer(), source = integer())
-    d <- fit$data
-    ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, U, XT, fbc_nugget, fit$spec$model)
+    d <- fit$model$data
+    ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, U, XT, fbc_nugget, fit$model$spec$model)
     expect_equal(ds$mT, pr$mean, tolerance = 1e-8)
     expect_equal(ds$VT, pr$var, tolerance = 1e-8)
   }
@@ -458,9 +458,9 @@ test_that("the plug-in's entropy gain is the mutual information of kappa and the
   fit <- short_fit(pb)
   parts <- FBC:::design_particles(fit, 50, "plugin", prune = FALSE)
   U <- matrix(c(0.3, 0.55, 0.8, 0.6, 0.6, 0.2), 3, 2)  # (x, u) scaled
-  d <- fit$data
+  d <- fit$model$data
   ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, matrix(0, 0, 1), fbc_nugget,
-                              fit$spec$model)
+                              fit$model$spec$model)
   lw <- parts$lw0 + drop(ds$ll)
   p <- exp(lw - max(lw))
   p <- p / sum(p)
@@ -512,9 +512,9 @@ test_that("field data sets with noise variances of their own: the look-ahead is 
       # each draw's system against the dense Gaussian on every row, each
       # row's noise variance its data set's (helper-design.R)
       sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U))
-      d <- fit$data
+      d <- fit$model$data
       ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, matrix(0, 0, 1),
-                                  fbc_nugget, fit$spec$model)
+                                  fbc_nugget, fit$model$spec$model)
       N <- nrow(d$Xs) + nrow(d$Xf)
       expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
       expect_equal(ds$mu, vapply(sys, `[[`, numeric(30), "mu"), tolerance = 1e-8)
@@ -577,18 +577,18 @@ test_that("a categorical input: the look-ahead is the dense plain-R one, and run
     fit <- suppressWarnings(calibrate(sim, field, discrepancy = disc, nMCMC = 600, nBurn = 200,
                                       nChains = 1, showProgress = FALSE))
     expect_equal(fit$model$dims$levels, 3L)  # 3 levels: 3 partial correlations
-    nm <- c(fit$scale$names$inputs, fit$scale$names$calibration)
+    nm <- c(fit$model$scale$names$inputs, fit$model$scale$names$calibration)
     # candidates with every level (indicator columns, scaled units)
     set.seed(8)
-    U <- FBC:::design_candidates(NULL, fit$scale, 30, fit$data$Xs, 1e-3)
-    expect_setequal(FBC:::indicator_codes(U[, match(fit$scale$factors$type$columns, nm)]), 1:3)
-    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), type = c("b", "c")), fit$scale)
+    U <- FBC:::design_candidates(NULL, fit$model$scale, 30, fit$model$data$Xs, 1e-3)
+    expect_setequal(FBC:::indicator_codes(U[, match(fit$model$scale$factors$type$columns, nm)]), 1:3)
+    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), type = c("b", "c")), fit$model$scale)
     for (method in c("joint", "plugin")) {
       parts <- FBC:::design_particles(fit, 40, method)
       sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system(parts$phi[s, ], fit$model, U, XT))
-      d <- fit$data
+      d <- fit$model$data
       ds <- FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, parts$phi, U, XT, fbc_nugget,
-                                  fit$spec$model)
+                                  fit$model$spec$model)
       N <- nrow(d$Xs) + nrow(d$Xf)
       expect_equal(drop(ds$ll), vapply(sys, `[[`, 1, "ll") - N / 2 * log(2 * pi), tolerance = 1e-10)
       expect_equal(ds$mu, vapply(sys, `[[`, numeric(nrow(U)), "mu"), tolerance = 1e-8)
@@ -786,13 +786,13 @@ test_that("runs of several outputs: the C++ look-ahead equals the plain-R one", 
     fit <- calibrate(po$sim, po$field, output = "out", discrepancy = disc, nMCMC = 600,
                      nBurn = 200, nChains = 1, showProgress = FALSE)
     set.seed(8)
-    U <- FBC:::design_candidates(NULL, fit$scale, 10, fit$data$Xs, 1e-3)
+    U <- FBC:::design_candidates(NULL, fit$model$scale, 10, fit$model$data$Xs, 1e-3)
     # 10 runs of 2 rows, alike but for the output's indicator column
     expect_equal(nrow(U), 20)
-    j <- match(fit$scale$output$columns, c(fit$scale$names$inputs, fit$scale$names$calibration))
+    j <- match(fit$model$scale$output$columns, c(fit$model$scale$names$inputs, fit$model$scale$names$calibration))
     expect_equal(FBC:::indicator_codes(U[, j, drop = FALSE]), rep(1:2, 10))
     expect_equal(U[c(TRUE, FALSE), -j], U[c(FALSE, TRUE), -j])
-    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), out = c("conc", "rate")), fit$scale)
+    XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7), out = c("conc", "rate")), fit$model$scale)
     for (method in c("joint", "plugin")) {
       parts <- FBC:::design_particles(fit, 30, method)
       # kappa, the target XT and (the plug-in's criterion for kappa) kappa's
@@ -845,25 +845,25 @@ test_that("independent outputs: the C++ look-ahead equals the plain-R one, an ou
                      discrepancy = disc, nMCMC = 600, nBurn = 200, nChains = 1,
                      showProgress = FALSE)
     set.seed(8)
-    U <- FBC:::design_candidates(NULL, fit$scale, 10, fit$data$Xs, 1e-3)
+    U <- FBC:::design_candidates(NULL, fit$model$scale, 10, fit$model$data$Xs, 1e-3)
     expect_equal(nrow(U), 20)
     # a target at one output and one at the other (and two of one output)
     XT <- FBC:::design_target(data.frame(x = c(0.2, 0.7, 0.5), out = c("conc", "rate", "rate")),
-                              fit$scale)
+                              fit$model$scale)
     parts <- FBC:::design_particles(fit, 30, "joint")
     # the systems: the log-likelihood the sum of the outputs' (the fit's own,
     # .fbc_loglik()), the means and variances each output's
     sys <- lapply(seq_len(nrow(parts$phi)), function(s) draw_system_outputs(parts$phi[s, ], fit$model, U, XT))
-    cs <- FBC:::.design_systems(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, parts$phi, U,
+    cs <- FBC:::.design_systems(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, parts$phi, U,
                                 XT, FBC:::fbc_nugget, fit$model$spec$model)
     ll <- vapply(seq_len(nrow(parts$phi)), function(s) {
-      FBC:::.fbc_loglik(fit$data$Xf, fit$data$yf, fit$data$Xs, fit$data$ys, parts$phi[s, ],
+      FBC:::.fbc_loglik(fit$model$data$Xf, fit$model$data$yf, fit$model$data$Xs, fit$model$data$ys, parts$phi[s, ],
                         FBC:::fbc_nugget, model = fit$model$spec$model)
     }, 1)
     expect_equal(drop(cs$ll), ll, tolerance = 1e-8)
     # (draw_system()'s ll leaves out the normal's constant)
     expect_equal(drop(cs$ll) - vapply(sys, `[[`, 1, "ll"),
-                 rep(-0.5 * (nrow(fit$data$Xs) + nrow(fit$data$Xf)) * log(2 * pi), nrow(parts$phi)),
+                 rep(-0.5 * (nrow(fit$model$data$Xs) + nrow(fit$model$data$Xf)) * log(2 * pi), nrow(parts$phi)),
                  tolerance = 1e-10)
     expect_equal(cs$mu, sapply(sys, `[[`, "mu"), tolerance = 1e-8)
     expect_equal(cs$v, sapply(sys, `[[`, "v"), tolerance = 1e-8)
@@ -910,20 +910,20 @@ test_that("the look-ahead's conditionals are the model's own on every algebra", 
   set.seed(13)
   fit <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1, showProgress = FALSE)
   expect_identical(fit$model$algebra$name, "kronecker")
-  d <- fit$data
+  d <- fit$model$data
   phis <- FBC:::sampler_draws(fit, 1:5)
   U <- matrix(stats::runif(20), 10, 2)
   XT <- matrix(c(0.2, 0.7), 2, 1)
   sys <- function(model) FBC:::.design_systems(d$Xf, d$yf, d$Xs, d$ys, phis, U, XT, fbc_nugget, model)
-  dense_model <- fit$spec$model
+  dense_model <- fit$model$spec$model
   dense_model$algebra <- FBC:::.model_codes()$algebra[["dense"]]
-  kron <- sys(fit$spec$model)
+  kron <- sys(fit$model$spec$model)
   dense <- sys(dense_model)
   for (k in c("mu", "v", "ll", "mT", "VT")) expect_equal(kron[[k]], dense[[k]], tolerance = 1e-8)
   set.seed(13)
   near <- calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1, showProgress = FALSE,
                     algebra = "vecchia", neighbours = 20)
-  vec <- sys(near$spec$model)
+  vec <- sys(near$model$spec$model)
   spread <- diff(range(dense$mu))
   expect_lt(max(abs(vec$mu - dense$mu)) / spread, 0.05)
   expect_lt(max(abs(vec$mT - dense$mT)) / spread, 0.05)

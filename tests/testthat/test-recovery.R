@@ -94,7 +94,7 @@ test_that("precise field data: the noise sd's 90% interval covers the truth, gp 
   field <- cbind(y = eta(xf, 1.5) + stats::rnorm(10, 0, 0.01), x = xf)
   for (disc in c("gp", "none")) {
     fit <- fit_quiet(sim, field, discrepancy = disc)
-    noise_sd <- sqrt(fit$Phi[, "sigma2E"]) * fit$scale$ysd
+    noise_sd <- sqrt(fit$Phi[, "sigma2E"]) * fit$model$scale$ysd
     expect_true(covers(noise_sd, 0.01), label = paste(disc, "noise sd 90% interval",
                 paste(signif(stats::quantile(noise_sd, c(.05, .95)), 3), collapse = "-")))
     expect_true(covers(fit$Phi[, "kappa1"], 1.5), label = paste(disc, "kappa"))

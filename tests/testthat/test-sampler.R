@@ -5,7 +5,7 @@
 ball_spec <- function() {
   set.seed(1)
   calibrate(ballSim, ballField, nMCMC = 4, nBurn = 0, thinning = 1, nChains = 1,
-            kernelS = "powexp", kernelB = "powexp")$spec  # with the smoothness parameters
+            kernelS = "powexp", kernelB = "powexp")$model$spec  # with the smoothness parameters
 }
 
 test_that("the blocks schedule follows the model description's move column", {
@@ -61,6 +61,7 @@ test_that("kappa jumps over its prior's support, or its central 99.9% when unbou
   sp <- FBC:::build_priors(list(dist = c("gaussian", "fixed"), init = c(0.5, 0.5), p1 = c(0.5, NA),
                                 p2 = c(0.2, NA)), set_hyperPriors(),
                            list(xmin = rep(0, 3), xmax = rep(1, 3), p = 1, q = 2), 1, 2)
+  sp$model <- FBC:::compiled_model(1, 2)
   mv <- FBC:::sampler_moves("blocks", sp)
   expect_identical(mv$jump, 1L)
   expect_equal(mv$jumpRange, FBC:::jump_ranges(sp$table, 1L))
@@ -130,8 +131,8 @@ test_that("single-site and adapted moves follow the one adaptation rule", {
   # four steps of 0.5, so it sits on a 0.5 grid from its start
   set.seed(1)
   fit <- calibrate(ballSim, ballField, nMCMC = 4, nBurn = 0, thinning = 1, nChains = 1)
-  sp <- fit$spec
-  res <- run_sampler(fit$data, sp, "single", nIter = 250, nBurn = 200, thinning = 1)
+  sp <- fit$model$spec
+  res <- run_sampler(fit$model$data, sp, "single", nIter = 250, nBurn = 200, thinning = 1)
   moved <- res$state$logsd - sp$logsd
   free <- sp$table$family != FBC:::prior_families[["fixed"]]
   expect_equal(moved[free] / 0.5, round(moved[free] / 0.5))
@@ -160,18 +161,18 @@ test_that("the simulator block's sigma2S drawn from the runs' conditional target
   expect_identical(fit$model$moves$collapse, match("sim", names(fit$model$moves$blocks)))
   rep <- FBC:::move_report(fit)
   expect_identical(rep$parameters[rep$move == "sim"], "thetaS1,thetaS2,sigma2S")
-  tab <- fit$spec$table
-  cols <- match(c("thetaS1", "thetaS2", "sigma2S"), fit$spec$vars)
+  tab <- fit$model$spec$table
+  cols <- match(c("thetaS1", "thetaS2", "sigma2S"), fit$model$spec$vars)
   W <- log(FBC:::sampler_draws(fit)[, cols])
   phi <- fit$state$chains[[1]]$last
-  dat <- fit$data
+  dat <- fit$model$data
   g <- lapply(1:3, function(i) seq(mean(W[, i]) - 5 * sd(W[, i]), mean(W[, i]) + 5 * sd(W[, i]),
                                    length.out = 22))
   grid <- as.matrix(expand.grid(g))
   lp <- apply(grid, 1, function(w) {
     x <- exp(w)
     phi[cols] <- x
-    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$spec$model) +
+    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$model$spec$model) +
       sum(vapply(1:3, function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) + sum(w)
   })
   dens <- array(exp(lp - max(lp)), c(22, 22, 22))
@@ -214,17 +215,17 @@ test_that("after warm-up the simulator block proposes from its warm-up estimate 
   expect_length(fit$settings$warmupCapped, 0)
   expect_gt(rep$acceptance, 0.3)
   expect_true(is.na(rep$scale))
-  cols <- match(c("thetaS1", "thetaS2", "thetaS3", "sigma2S"), fit$spec$vars)
+  cols <- match(c("thetaS1", "thetaS2", "thetaS3", "sigma2S"), fit$model$spec$vars)
   W <- log(FBC:::sampler_draws(fit)[, cols])
-  tab <- fit$spec$table
+  tab <- fit$model$spec$table
   phi <- fit$state$chains[[1]]$last
-  dat <- fit$data
+  dat <- fit$model$data
   g <- lapply(1:4, function(i) seq(mean(W[, i]) - 5 * sd(W[, i]), mean(W[, i]) + 5 * sd(W[, i]),
                                    length.out = 11))
   lp <- apply(as.matrix(expand.grid(g)), 1, function(w) {
     x <- exp(w)
     phi[cols] <- x
-    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$spec$model) +
+    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$model$spec$model) +
       sum(vapply(1:4, function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) + sum(w)
   })
   dens <- array(exp(lp - max(lp)), rep(11, 4))

@@ -22,7 +22,7 @@ test_that("discrepancy none, sigma2E fixed: theta's draws match the grid posteri
   fit <- do.call(calibrate, c(list(fn_model, field, discrepancy = "none", hypers = hyp,
                                    nMCMC = 3000, nBurn = 500, nChains = 2), fn_kappa))
   expect_identical(colnames(fit$Phi), c("kappa1", "sigma2E"))
-  expect_equal(fit$scale$ysd, stats::sd(field$y))
+  expect_equal(fit$model$scale$ysd, stats::sd(field$y))
   # plain R: uniform prior on [0, 3], Gaussian likelihood of y - f(x, theta)
   th <- seq(0, 3, length.out = 6001)
   ll <- vapply(th, function(t) sum(stats::dnorm(field$y, fn_model(field, c(theta = t)), 0.3, log = TRUE)),
@@ -268,14 +268,14 @@ test_that("predict(): f at the new inputs plus the bias, against plain R at one 
   expect_equal(sim$se, rep(0, 3))
   # the mean: f plus the bias GP's conditional mean given the field
   # residual yf - f(xf), in plain R on the scaled space (matern52 bias)
-  sc <- fit$scale
-  Xf <- fit$data$Xf
+  sc <- fit$model$scale
+  Xf <- fit$model$data$Xf
   Xn <- (new$x - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
   fs <- (fn_model(field, c(theta = map[["kappa1"]])) - sc$ymean) / sc$ysd
   S <- map[["sigma2B"]] * dense_corr(Xf, Xf, map[["thetaB1"]], NA, "matern52") +
     map[["sigma2E"]] * diag(nrow(field))
   K <- map[["sigma2B"]] * dense_corr(Xn, Xf, map[["thetaB1"]], NA, "matern52")
-  r <- fit$data$yf - map[["muB"]] - fs
+  r <- fit$model$data$yf - map[["muB"]] - fs
   biasMean <- map[["muB"]] + K %*% solve(S, r)
   biasVar <- map[["sigma2B"]] - rowSums((K %*% solve(S)) * K)
   mean <- predict(fit, new, type = "mean", method = "MAP")
@@ -420,7 +420,7 @@ test_that("several field data sets (source): a noise variance each, one shared b
   pA <- predict(fit, data.frame(x = 2, lab = "A"), type = "field", method = "MAP")
   pB <- predict(fit, data.frame(x = 2, lab = "B"), type = "field", method = "MAP")
   map <- fit$Phi[which.max(fit$logPost), ]
-  expect_equal(pB$se^2 - pA$se^2, fit$scale$ysd^2 * (map[["sigma2E2"]] - map[["sigma2E1"]]),
+  expect_equal(pB$se^2 - pA$se^2, fit$model$scale$ysd^2 * (map[["sigma2E2"]] - map[["sigma2E1"]]),
                tolerance = 1e-8)
   expect_snapshot(error = TRUE, calibrate(f, field, source = "lab", sourceBias = "own",
                                           kappaDist = "uniform", kappaP1 = c(theta = 0),

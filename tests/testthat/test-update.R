@@ -33,7 +33,7 @@ test_that("update() continues each chain from where it stopped", {
     new1 <- up$Phi[up$chain == k, ][101, ]
     expect_equal(unname(new1[-1]), last[-1])
     # the stored state (sampler scale) is the last retained draw (native kappa)
-    kap <- fit$scale$xmin[2] + (fit$scale$xmax[2] - fit$scale$xmin[2]) * last[1]
+    kap <- fit$model$scale$xmin[2] + (fit$model$scale$xmax[2] - fit$model$scale$xmin[2]) * last[1]
     expect_equal(unname(fit$Phi[fit$chain == k, ][100, 1]), kap)
   }
 })
@@ -75,21 +75,21 @@ test_that("a run split by update() gives the same draws as one run", {
   st <- first$state$chains[[1]]$sampler
   moves <- first$model$moves
   set.seed(12)
-  a <- FBC:::sample_chain(first$data, first$spec, st, moves, 100L, 100L, 2L, FALSE)
+  a <- FBC:::sample_chain(first$model$data, first$model$spec, st, moves, 100L, 100L, 2L, FALSE)
   set.seed(12)
-  b1 <- FBC:::sample_chain(first$data, first$spec, st, moves, 40L, 100L, 2L, FALSE)
-  b2 <- FBC:::sample_chain(first$data, first$spec, b1$state, moves, 60L, 100L, 2L, FALSE)
+  b1 <- FBC:::sample_chain(first$model$data, first$model$spec, st, moves, 40L, 100L, 2L, FALSE)
+  b2 <- FBC:::sample_chain(first$model$data, first$model$spec, b1$state, moves, 60L, 100L, 2L, FALSE)
   expect_identical(rbind(b1$draws[seq_len(b1$kept), ], b2$draws[seq_len(b2$kept), ]),
                    a$draws[seq_len(a$kept), ])
   expect_identical(b2$state, a$state)
   # a burn-in split in two pieces adapts exactly as in one piece
-  sp <- first$spec
+  sp <- first$model$spec
   st0 <- FBC:::initial_state(sp$init, sp)
   set.seed(13)
-  a <- FBC:::sample_chain(first$data, sp, st0, moves, 160L, 120L, 1L, FALSE)
+  a <- FBC:::sample_chain(first$model$data, sp, st0, moves, 160L, 120L, 1L, FALSE)
   set.seed(13)
-  b1 <- FBC:::sample_chain(first$data, sp, st0, moves, 73L, 120L, 1L, FALSE)
-  b2 <- FBC:::sample_chain(first$data, sp, b1$state, moves, 87L, 120L, 1L, FALSE)
+  b1 <- FBC:::sample_chain(first$model$data, sp, st0, moves, 73L, 120L, 1L, FALSE)
+  b2 <- FBC:::sample_chain(first$model$data, sp, b1$state, moves, 87L, 120L, 1L, FALSE)
   expect_identical(b2$draws, a$draws)
   expect_identical(b2$state, a$state)
 })

@@ -19,7 +19,7 @@ test_that("update(fit, sim =) gives the posterior of a fit on all runs (grid)", 
   expect_equal(nrow(fit2$Phi), (4200 - w) / fit2$settings$thinning)
   # kappa's draws against the grid posterior on all 20 runs; 8 runs more
   # move it (the 12-run posterior is not the reference's)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_kappa_grid(fit2, sinus_loglik(fit2$model$data))
   expect_gt(abs(mean(fit2$Phi[, 1]) - mean(fit$Phi[, 1])) / sd(fit2$Phi[, 1]), 0.1)
 })
 
@@ -113,7 +113,7 @@ test_that("the reweighting's weights are the new posterior over the old (plain-R
   fit <- calibrate(pb$sim[1:12, ], pb$field, discrepancy = "none", kernelS = "powexp",
                    nMCMC = 400, nBurn = 200, nChains = 2, showProgress = FALSE)
   new <- calibrate(pb$sim, pb$field, discrepancy = "none", kernelS = "powexp", fit = FALSE)
-  expect_true(all(new$scale$xmax - new$scale$xmin != fit$scale$xmax - fit$scale$xmin))
+  expect_true(all(new$scale$xmax - new$scale$xmin != fit$model$scale$xmax - fit$model$scale$xmin))
   rows <- round(seq(3, nrow(fit$Phi), length.out = 6))
   lw <- FBC:::reweight_log_weights(fit, new, rows)
   # the reference: the new model's log posterior at T(phi) (plain-R dense
@@ -168,11 +168,11 @@ test_that("update(fit, sim =) reweights the old draws when they suffice (grid)",
   all <- calibrate(pb$sim, pb$field, discrepancy = "none", hypers = sinus_hypers(), fit = FALSE)
   expect_identical(fit2$model$data, all$data)
   expect_equal(nrow(fit2$Phi), 2000)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_kappa_grid(fit2, sinus_loglik(fit2$model$data))
   expect_equal(fit2$estimates["kappa1", "ess"], rw$ess)
   # the draws and their log densities are the new model's
   phi <- FBC:::sampler_draws(fit2, 1:3)
-  expect_equal(fit2$logLik[1:3], apply(phi, 1, sinus_loglik(fit2$data)), tolerance = 1e-8)
+  expect_equal(fit2$logLik[1:3], apply(phi, 1, sinus_loglik(fit2$model$data)), tolerance = 1e-8)
   expect_output(print(fit2), "reweighted")
   # the chains go on from the reweighted draws
   fit3 <- update(fit2, nMCMC = 200)
@@ -204,7 +204,7 @@ test_that("update(fit, sim =) continues reweighted draws short of the rule", {
   expect_equal(fit2$settings$nMCMC, fit$settings$nMCMC + rw$topUp)
   expect_true(fit2$settings$converge$converged)
   expect_gte(min(fit2$estimates$ess, na.rm = TRUE), 400)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data))
+  expect_kappa_grid(fit2, sinus_loglik(fit2$model$data))
   expect_output(print(fit2), "then continued")
   # chains with many sweeps since their last refit (a loop's reweighted
   # steps add up): the rule's ceiling (maxMCMC, 50,000) counts from here
@@ -302,7 +302,7 @@ test_that("update(fit, sim =) refits when the reweighted draws fall short", {
   expect_true(fit2$settings$warmStart)
   expect_true(fit2$settings$warmup >= 200)
   # (kappa's sd is 0.01 of its range: a grid finer than the default's)
-  expect_kappa_grid(fit2, sinus_loglik(fit2$data), u = seq(0.5, 0.75, length.out = 501))
+  expect_kappa_grid(fit2, sinus_loglik(fit2$model$data), u = seq(0.5, 0.75, length.out = 501))
 })
 
 test_that("update(fit, sim =) checks the new runs", {

@@ -100,10 +100,10 @@ test_that("with few neighbours the kappa draws match the approximation's own gri
   fit <- calibrate(ballSim, ballField, nMCMC = 9000, nBurn = 1000, thinning = 4, nChains = 1,
                    hypers = hyp, kernelS = "matern52", algebra = "vecchia", neighbours = 5)
   expect_identical(fit$model$algebra$name, "vecchia")
-  expect_identical(fit$spec$model$vecchia$k, 5L)
-  d <- fit$data
+  expect_identical(fit$model$spec$model$vecchia$k, 5L)
+  d <- fit$model$data
   expect_kappa_grid(fit, function(phi) {
-    .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = fit$spec$model)
+    .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = fit$model$spec$model)
   }, u = seq(0, 1, length.out = 501))
 })
 
@@ -128,12 +128,12 @@ test_that("a Vecchia run resumes from its checkpoint to the same draws, and upda
   set.seed(3)
   up <- update(fit, nMCMC = 100)
   expect_identical(up$Phi[up$chain == 1, ][1:100, ], fit$Phi[fit$chain == 1, ])
-  expect_identical(up$spec$model$vecchia, fit$spec$model$vecchia)
+  expect_identical(up$model$spec$model$vecchia, fit$model$spec$model$vecchia)
   # the last draw's stored log-likelihood is the approximation's, from scratch
   last <- nrow(up$Phi)
   expect_equal(up$logLik[last],
-               .fbc_loglik(up$data$Xf, up$data$yf, up$data$Xs, up$data$ys,
-                           FBC:::sampler_draws(up, last)[1, ], 1e-6, model = up$spec$model),
+               .fbc_loglik(up$model$data$Xf, up$model$data$yf, up$model$data$Xs, up$model$data$ys,
+                           FBC:::sampler_draws(up, last)[1, ], 1e-6, model = up$model$spec$model),
                tolerance = 1e-8)
 })
 

@@ -18,7 +18,7 @@ kappa_only <- function(sigma2E = 0.15) {
 }
 
 expect_grid_kappa <- function(fit, u = seq(0, 1, length.out = 101), ...) {
-  d <- fit$data
+  d <- fit$model$data
   expect_kappa_grid(fit, function(phi) {
     dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, fbc_nugget)
   }, u, ...)
@@ -62,7 +62,7 @@ test_that("warm-up goes on while a proposal is badly scaled, and the draws are t
   # points the grid's own error gave KS 0.070-0.073 on seeds 32-35, with
   # 2001 points 0.011-0.019. Without the jump, on those seeds two chains
   # kept different modes: bulk ESS 7-8 after 99,000 draws)
-  sc <- fit$scale
+  sc <- fit$model$scale
   u <- (fit$Phi[, "kappa1"] - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2])
   w <- diff(range(u))
   expect_grid_kappa(fit, seq(max(0, min(u) - w), min(1, max(u) + w), length.out = 2001))
