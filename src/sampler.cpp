@@ -492,6 +492,7 @@ struct SiteMove : Move {
   SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]) {
     idx = {j_};
     accBatch = ch.accBatch[j_];
+    name = ch.param_name(j_);
   }
   const char* kind() const override { return "single"; }
   bool step(Chain& ch) override {
@@ -687,7 +688,9 @@ struct BlockMove : Move {
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
 struct GibbsMuBMove : Move {
-  GibbsMuBMove(int j, const Chain& ch) { idx = {j}; accBatch = ch.accBatch[j]; }
+  GibbsMuBMove(int j, const Chain& ch) {
+    idx = {j}; accBatch = ch.accBatch[j]; name = ch.param_name(j);
+  }
   const char* kind() const override { return "gibbs"; }
   void write(arma::vec&, arma::vec& acc, Rcpp::List&) const override { acc[idx[0]] = accBatch; }
   bool step(Chain& ch) override {
@@ -921,10 +924,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       if (blockAt[j] >= 0) add_block(blockAt[j]);
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j, ch));
-      schedule.back()->name = ch.param_name(j);
     } else {
       schedule.emplace_back(new SiteMove(j, ch));
-      schedule.back()->name = ch.param_name(j);
     }
   }
   for (size_t b = 0; b < blocks.size(); ++b)
