@@ -62,8 +62,8 @@
 // keeps the older epochs at falling weight, so the estimate changes
 // smoothly, leaves the drift from the start little weight, and its
 // effective draws keep growing. A reshaped block keeps its proposal's size
-// (log s absorbs the change of log det(L)^(1/k)). The decision is part of the chain's state, so
-// a run split into pieces ends warm-up at the same sweep.
+// (log s absorbs the change of log det(L)^(1/k)). The decision is part of
+// the chain's state, so a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
 // the model: its proposal scale (a block its shape too), its batch counts,
