@@ -142,14 +142,10 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   const double* alphaS = phi.memptr() + iAlphaS;
   const int I = dz_.I, J = dz_.J;
   const bool xMove = t.simCorr && t.expDim, tMove = t.simCorr && t.calDim;
-  // Rs(A, B) over the experimental inputs, the levels' correlations included
-  auto corrX = [&](const arma::mat& A, const arma::mat& B, arma::mat& out) {
-    kernel_corr(kernS_, A, B, p, thetaS, alphaS, out, false);
-    level_scale(levels, phi.memptr() + iRhoS, A, B, out, false);
-  };
   if (xMove && split_) {
     // Rx = Ct (x) Rn in Xg's order (split_levels())
-    corrX(Xt_, Xt_, Ct_);
+    kernel_corr(kernS_, Xt_, Xt_, p, thetaS, alphaS, Ct_, false);
+    level_scale(levels, phi.memptr() + iRhoS, Xt_, Xt_, Ct_, false);
     kernel_corr(kernS_, Xn_, Xn_, p, thetaS, alphaS, Rn_, false);
     if (!arma::eig_sym(lc_, Uc_, Ct_) || !arma::eig_sym(ln_, Un_, Rn_)) return false;
     const int T = Ct_.n_rows, R = Rn_.n_rows;
@@ -163,11 +159,13 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
         for (int k = 0; k < I; ++k) u[k] = Uc_.at(tk_[k], a) * Un_.at(rk_[k], b);
       }
   } else if (xMove) {
-    corrX(dz_.Xg, dz_.Xg, Rx_);
+    kernel_corr(kernS_, dz_.Xg, dz_.Xg, p, thetaS, alphaS, Rx_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, dz_.Xg, Rx_, false);
     if (!arma::eig_sym(lx_.alt(), Ux_.alt(), Rx_)) return false;
   }
   if (xMove) {
-    corrX(dz_.Xg, Xu_, Rxf_);
+    kernel_corr(kernS_, dz_.Xg, Xu_, p, thetaS, alphaS, Rxf_, false);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xu_, Rxf_, false);
     Ax_.alt() = Ux_.alt().t() * Rxf_;
   }
   if (tMove) {

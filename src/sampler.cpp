@@ -62,8 +62,8 @@
 // keeps the older epochs at falling weight, so the estimate changes
 // smoothly, leaves the drift from the start little weight, and its
 // effective draws keep growing. A reshaped block keeps its proposal's size
-// (log s absorbs the change of log det(L)^(1/k)). The decision is part of the chain's state, so
-// a run split into pieces ends warm-up at the same sweep.
+// (log s absorbs the change of log det(L)^(1/k)). The decision is part of
+// the chain's state, so a run split into pieces ends warm-up at the same sweep.
 // Every move has one shape (Move: step() proposes and accepts or rejects,
 // adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
 // the model: its proposal scale (a block its shape too), its batch counts,
@@ -132,6 +132,10 @@ static double adapt_step(double logscale, double rate, double target, int batch)
 
 static double list_num(const Rcpp::List& s, const char* name, double dflt) {
   return s.containsElementNamed(name) ? Rcpp::as<double>(s[name]) : dflt;
+}
+// An R vector (no dim attribute) of x's values.
+static Rcpp::NumericVector num(const arma::vec& x) {
+  return Rcpp::NumericVector(x.begin(), x.end());
 }
 static std::vector<int> list_ints(const Rcpp::List& s, const char* name) {
   return s.containsElementNamed(name) ? Rcpp::as<std::vector<int> >(s[name]) : std::vector<int>();
@@ -223,22 +227,21 @@ struct Block {
   // (the windows only under a warm-up of data-dependent length: a fixed
   // burn-in's state is as it was before them)
   Rcpp::List write() const {
+    using Rcpp::_;
     Rcpp::IntegerVector ix(idx.size());
     for (size_t i = 0; i < idx.size(); ++i) ix[i] = idx[i] + 1;
     Rcpp::List out = Rcpp::List::create(
-      Rcpp::Named("index") = ix, Rcpp::Named("logscale") = logscale,
-      Rcpp::Named("chol") = L, Rcpp::Named("shaped") = shaped,
-      Rcpp::Named("mean") = mean, Rcpp::Named("cov") = cov, Rcpp::Named("n") = n,
-      Rcpp::Named("batch") = batch, Rcpp::Named("accBatch") = accBatch);
+      _["index"] = ix, _["logscale"] = logscale, _["chol"] = L, _["shaped"] = shaped,
+      _["mean"] = mean, _["cov"] = cov, _["n"] = n, _["batch"] = batch, _["accBatch"] = accBatch);
     if (overlay) out.push_back(true, "overlay");
     if (restart >= 0) return out;
-    out.push_back(Rcpp::NumericVector(winCount.begin(), winCount.end()), "winCount");
-    out.push_back(Rcpp::NumericVector(winIndex.begin(), winIndex.end()), "winIndex");
+    out.push_back(num(winCount), "winCount");
+    out.push_back(num(winIndex), "winIndex");
     out.push_back(Rcpp::wrap(winMeans), "winMeans");
     out.push_back(Rcpp::wrap(winM2), "winM2");
     out.push_back(curN, "curN");
     out.push_back(curWin, "curWin");
-    out.push_back(Rcpp::NumericVector(curMean.begin(), curMean.end()), "curMean");
+    out.push_back(num(curMean), "curMean");
     out.push_back(Rcpp::wrap(curM2), "curM2");
     return out;
   }
@@ -489,6 +492,7 @@ struct SiteMove : Move {
   SiteMove(int j_, const Chain& ch) : j(j_), logsd(ch.logsd[j_]) {
     idx = {j_};
     accBatch = ch.accBatch[j_];
+    name = ch.param_name(j_);
   }
   const char* kind() const override { return "single"; }
   bool step(Chain& ch) override {
@@ -684,7 +688,9 @@ struct BlockMove : Move {
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
 struct GibbsMuBMove : Move {
-  GibbsMuBMove(int j, const Chain& ch) { idx = {j}; accBatch = ch.accBatch[j]; }
+  GibbsMuBMove(int j, const Chain& ch) {
+    idx = {j}; accBatch = ch.accBatch[j]; name = ch.param_name(j);
+  }
   const char* kind() const override { return "gibbs"; }
   void write(arma::vec&, arma::vec& acc, Rcpp::List&) const override { acc[idx[0]] = accBatch; }
   bool step(Chain& ch) override {
@@ -880,8 +886,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
         Rcpp::stop("the scale move needs the variances (sigma2S, sigma2B, sigma2E) all sampled");
 
   const Rcpp::List blockSpec = moves["blocks"];
-  const Rcpp::IntegerVector repeats = moves.containsElementNamed("repeats") ?
-    Rcpp::as<Rcpp::IntegerVector>(moves["repeats"]) : Rcpp::IntegerVector(0);
+  const std::vector<int> repeats = list_ints(moves, "repeats");
   // the blocks (1-based) that overlay parameters with moves of their own:
   // a joint walk made after the per-parameter moves, before the jumps
   const std::vector<int> overlay = list_ints(moves, "overlay");
@@ -903,7 +908,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   Schedule schedule;
   ch.blocks.assign(blocks.size(), nullptr);
   auto add_block = [&](int b) {
-    BlockMove* mv = new BlockMove(std::move(blocks[b]), repeats.size() > b ? std::max(1, repeats[b]) : 1);
+    BlockMove* mv = new BlockMove(std::move(blocks[b]), (int) repeats.size() > b ? std::max(1, repeats[b]) : 1);
     if (!mv->b.overlay) {
       collapse_sigma2S(*mv, ch, has(collapse, b + 1));
       mv->independent = has(independent, b + 1);
@@ -919,10 +924,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
       if (blockAt[j] >= 0) add_block(blockAt[j]);
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j, ch));
-      schedule.back()->name = ch.param_name(j);
     } else {
       schedule.emplace_back(new SiteMove(j, ch));
-      schedule.back()->name = ch.param_name(j);
     }
   }
   for (size_t b = 0; b < blocks.size(); ++b)
@@ -1067,10 +1070,10 @@ static Rcpp::List move_report(const Chain& ch, const Schedule& schedule) {
     const double ls = mv.logScale();
     scale[i] = ISNA(ls) ? NA_REAL : std::exp(ls);
   }
-  return Rcpp::List::create(
-    Rcpp::Named("name") = name, Rcpp::Named("kind") = kind, Rcpp::Named("params") = params,
-    Rcpp::Named("repeats") = repeats, Rcpp::Named("accepted") = accepted,
-    Rcpp::Named("tries") = tries, Rcpp::Named("scale") = scale);
+  using Rcpp::_;
+  return Rcpp::List::create(_["name"] = name, _["kind"] = kind, _["params"] = params,
+                            _["repeats"] = repeats, _["accepted"] = accepted, _["tries"] = tries,
+                            _["scale"] = scale);
 }
 
 // The chain's whole state, for the next piece (read_chain(), make_schedule()):
@@ -1081,30 +1084,22 @@ static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule,
                               const Rcpp::List& state) {
   Rcpp::List blocks(ch.blocks.size());
   for (size_t b = 0; b < ch.blocks.size(); ++b) blocks[b] = ch.blocks[b]->write();
-  const arma::vec& phi = ch.post.phi;
+  using Rcpp::_;
   arma::vec logsd = ch.logsd, accBatch = ch.accBatch;
   Rcpp::List scale = Rcpp::List::create(
-    Rcpp::Named("scaleLogsd") = list_num(state, "scaleLogsd", std::log(0.1)),
-    Rcpp::Named("scaleAccBatch") = list_num(state, "scaleAccBatch", 0),
-    Rcpp::Named("scaleBatch") = (int) list_num(state, "scaleBatch", 0));
+    _["scaleLogsd"] = list_num(state, "scaleLogsd", std::log(0.1)),
+    _["scaleAccBatch"] = list_num(state, "scaleAccBatch", 0),
+    _["scaleBatch"] = (int) list_num(state, "scaleBatch", 0));
   for (const auto& mv : schedule) mv->write(logsd, accBatch, scale);
   Rcpp::List out = Rcpp::List::create(
-    Rcpp::Named("phi") = Rcpp::NumericVector(phi.begin(), phi.end()),
-    Rcpp::Named("logsd") = Rcpp::NumericVector(logsd.begin(), logsd.end()),
-    Rcpp::Named("iter") = ch.iter, Rcpp::Named("batch") = ch.batch,
-    Rcpp::Named("accBatch") = Rcpp::NumericVector(accBatch.begin(), accBatch.end()),
-    Rcpp::Named("blocks") = blocks,
-    Rcpp::Named("scaleLogsd") = scale["scaleLogsd"],
-    Rcpp::Named("scaleAccBatch") = scale["scaleAccBatch"],
-    Rcpp::Named("scaleBatch") = scale["scaleBatch"],
-    Rcpp::Named("moves") = move_report(ch, schedule),
-    Rcpp::Named("warmup") = ch.warmup, Rcpp::Named("warmMin") = ch.warmMin,
-    Rcpp::Named("warmMax") = ch.warmMax, Rcpp::Named("warmESS") = ch.warmESS,
-    Rcpp::Named("warmCapped") = ch.warmCapped,
-    Rcpp::Named("settled") = ch.settled, Rcpp::Named("windows") = ch.windows,
-    Rcpp::Named("winAcc") = Rcpp::NumericVector(ch.winAcc.begin(), ch.winAcc.end()),
-    Rcpp::Named("winScale") = Rcpp::wrap(ch.winScale),
-    Rcpp::Named("winShape") = Rcpp::NumericVector(ch.winShape.begin(), ch.winShape.end()));
+    _["phi"] = num(ch.post.phi), _["logsd"] = num(logsd), _["iter"] = ch.iter,
+    _["batch"] = ch.batch, _["accBatch"] = num(accBatch), _["blocks"] = blocks,
+    _["scaleLogsd"] = scale["scaleLogsd"], _["scaleAccBatch"] = scale["scaleAccBatch"],
+    _["scaleBatch"] = scale["scaleBatch"], _["moves"] = move_report(ch, schedule),
+    _["warmup"] = ch.warmup, _["warmMin"] = ch.warmMin, _["warmMax"] = ch.warmMax,
+    _["warmESS"] = ch.warmESS, _["warmCapped"] = ch.warmCapped, _["settled"] = ch.settled,
+    _["windows"] = ch.windows, _["winAcc"] = num(ch.winAcc),
+    _["winScale"] = Rcpp::wrap(ch.winScale), _["winShape"] = num(ch.winShape));
   out.push_back(ch.warmForget, "warmForget");
   return out;
 }
@@ -1153,11 +1148,11 @@ static Rcpp::List piece_result(const Chain& ch, const Schedule& schedule,
     logPost = Rcpp::NumericVector(logPost.begin(), logPost.begin() + kept);
     logLik = Rcpp::NumericVector(logLik.begin(), logLik.begin() + kept);
   }
-  return Rcpp::List::create(
-    Rcpp::Named("draws") = draws, Rcpp::Named("logPost") = logPost,
-    Rcpp::Named("logLik") = logLik, Rcpp::Named("kept") = kept,
-    Rcpp::Named("done") = done, Rcpp::Named("nPost") = nPost,
-    Rcpp::Named("interrupted") = interrupted, Rcpp::Named("state") = write_chain(ch, schedule, state));
+  using Rcpp::_;
+  return Rcpp::List::create(_["draws"] = draws, _["logPost"] = logPost, _["logLik"] = logLik,
+                            _["kept"] = kept, _["done"] = done, _["nPost"] = nPost,
+                            _["interrupted"] = interrupted,
+                            _["state"] = write_chain(ch, schedule, state));
 }
 
 // [[Rcpp::export(.fbc_sample_c)]]

@@ -156,14 +156,13 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   xOrd_.resize((size_t) m * nu_);
   xD2_.resize((size_t) m * nu_);
   std::vector<double> xj(p);
-  std::vector<std::pair<double, int> > v(m);
+  std::vector<int> all;
   for (int j = 0; j < nu_; ++j) {
     for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-    for (int i = 0; i < m; ++i) v[i] = std::make_pair(scaled_d2(Xs_, i, xj.data(), vd_.w, p), i);
-    std::sort(v.begin(), v.end());
+    nearest(Xs_, nullptr, m, xj.data(), vd_.w, p, m, cand, all);  // all m, sorted (cand)
     for (int r = 0; r < m; ++r) {
-      xD2_[(size_t) j * m + r] = v[r].first;
-      xOrd_[(size_t) j * m + r] = v[r].second;
+      xD2_[(size_t) j * m + r] = cand[r].first;
+      xOrd_[(size_t) j * m + r] = cand[r].second;
     }
   }
   dt_.set_size(m, q);
