@@ -27,13 +27,13 @@
 # 0 would start the estimate afresh at 200, 400, 800, ... (RESULTS-defaults.md).
 fbc_warmup <- list(min = 200L, max = 5000L, ess = 10, forget = 0.5)
 fbc_first_check <- 500L
-# Without `every`, each check after the first comes where the draws so
-# far predict the rule will be met (next_check()): that length times
-# 1 + fbc_check_margin, at least fbc_check_step of the retained sweeps (and
-# one piece of 50 sweeps) further, at most fbc_check_growth times as many
-# (the geometric step of earlier versions), rounded up to a piece of 50.
+# Without `every`, each check after the first comes fbc_check_approach of
+# the way to where the draws so far predict the rule will be met
+# (next_check()), at least fbc_check_step of the retained sweeps (and one
+# piece of 50 sweeps) further, at most fbc_check_growth times as many (the
+# geometric step of earlier versions), rounded up to a piece of 50.
 fbc_check_growth <- 1.5
-fbc_check_margin <- 0.02
+fbc_check_approach <- 0.7
 fbc_check_step <- 0.05
 fbc_fixed_nMCMC <- 8000L
 
@@ -48,9 +48,10 @@ fbc_fixed_nMCMC <- 8000L
 #' [convergence_messages()]), or until a chain has run `maxMCMC` sweeps in
 #' all. Without `every`, each check predicts from the draws so far where the
 #' rule will be met (the smallest bulk ESS grows in proportion to the
-#' sweeps, R-hat's excess over 1 about as their inverse square) and
-#' puts the next check there, with a margin of 2%: at least 5% and at most
-#' 50% further (rounded up to 50 sweeps), so the run ends close to the
+#' sweeps, R-hat's excess over 1 about as their inverse square) and puts
+#' the next check 70% of the way there (a check costs little, sweeps past
+#' the end do not), at least 5% and at most 50% further (rounded up to 50
+#' sweeps), so the run ends close to the
 #' shortest that meets the rule (on the ball drop a few percent past it,
 #' `bench/RESULTS-speed.md`); with `every` (a number) it checks every
 #' `every` sweeps. The checks fall at sweep counts fixed by each chain's
@@ -243,14 +244,17 @@ rule_met <- function(results, rule, cols) {
 # check$ess. R-hat - 1 of chains whose means are apart shrinks about as
 # 1 / post^2 as later draws average the offsets out (as 1 / post once they
 # agree): the factor R-hat asks for is the square root of the ratio of
-# R-hat - 1 to the rule's (on the ball drop, seeds 1-20, the ratio itself
-# sent runs up to 2 times the first length that met the rule, median 1.07;
-# its root at most 1.42 times, median 1.05). The longer of the two
-# lengths, with a margin of fbc_check_margin, between a step of
-# fbc_check_step (a check after a near miss comes soon, but not at every
-# piece) and the geometric step fbc_check_growth (a far miss, where the
-# prediction is least sure, waits no longer than it did). Without a finite
-# check (no sampled parameter), the geometric step.
+# R-hat - 1 to the rule's. The check comes fbc_check_approach of the way
+# to the longer of the two lengths: a check costs little (tens of ms),
+# sweeps past the end do not, and the prediction is noisy (on the ball
+# drop, seeds 1-40, checking at the predicted length ended runs a median
+# of 5% and up to 42% past the first length that met the rule, 70% of the
+# way a median of 0% and up to 32%, for 8% more checks; R-hat's ratio
+# itself instead of its root, up to 2 times that length). At least a step
+# of fbc_check_step (a check after a near miss comes soon, but not at
+# every piece), at most the geometric step fbc_check_growth (a far miss,
+# where the prediction is least sure, waits no longer than it did).
+# Without a finite check (no sampled parameter), the geometric step.
 next_check <- function(post, rule, check = NULL) {
   if (!is.null(rule$every)) return(as.integer(post + rule$every))
   up <- function(x) ceiling(x / fbc_piece - 1e-9) * fbc_piece
@@ -258,9 +262,9 @@ next_check <- function(post, rule, check = NULL) {
   if (is.null(check) || !is.finite(check$rhat) || !is.finite(check$ess) || check$ess <= 0) {
     return(as.integer(cap))
   }
-  grow <- max(rule$ess / check$ess, sqrt(max(check$rhat - 1, 0) / (rule$rhat - 1)))
+  need <- post * max(rule$ess / check$ess, sqrt(max(check$rhat - 1, 0) / (rule$rhat - 1)))
   least <- post + max(fbc_piece, up(fbc_check_step * post))
-  as.integer(min(cap, max(least, up(post * grow * (1 + fbc_check_margin)))))
+  as.integer(min(cap, max(least, up(post + fbc_check_approach * (need - post)))))
 }
 
 # Runs the chains from `starts` to `target` (one per chain), then, under
