@@ -235,7 +235,8 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
                sources = if (discrepancy == "none") 0L else source_count(design$biasSource),
                outputs = output_count(design$outputs), d = length(spec$vars))
   lay <- layout_codes(dims$p, dims$q, discrepancy, dims$noise, dims$levels, dims$sources,
-                      outputs = dims$outputs, emulator = algebra$name != "function")
+                      outputs = dims$outputs, emulator = algebra$name != "function",
+                      replicates = as.integer(!is.null(spec$model$replicates)))
   x <- structure(list(
     data = data, raw = raw, scale = scale, design = design, dims = dims,
     classes = data.frame(class = names(lay$offset), offset = unname(lay$offset),
