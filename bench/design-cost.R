@@ -29,12 +29,6 @@ part <- opt$part
 eta <- function(x, u) sin(10 * u * x)
 xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
 d <- 2
-cpu <- function(expr) {
-  t0 <- proc.time()
-  force(expr)
-  tm <- proc.time() - t0
-  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
-}
 runs_at <- function(X) data.frame(y = eta(X[, 1], X[, 2]), x = X[, 1], u1 = X[, 2])
 cand <- function() stats::setNames(as.data.frame(matrix(runif(100 * d * d), ncol = d)), c("x", "u1"))
 fit_runs <- function(sim, field) {

@@ -211,12 +211,6 @@ uwidth <- (pb$upper[-1] - pb$lower[-1]) / pb$ngrid
 xpred <- seq(min(pb$xf), max(pb$xf), length.out = 50)
 truePred <- unlist(lapply(seq_len(nOut), function(k) pb$truth(xpred, k)))
 
-cpu <- function(expr) {
-  t0 <- proc.time()
-  force(expr)
-  tm <- proc.time() - t0
-  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
-}
 to_natural <- function(U) {
   U <- matrix(U, ncol = d)
   sweep(sweep(U, 2, pb$upper - pb$lower, "*"), 2, pb$lower, "+")

@@ -13,12 +13,6 @@ source("bench/options.R")
 opt <- bench_options(list(reps = 10L, budget = 12L, seeds = 1L))
 if (opt$quick) { opt$reps <- 2L; opt$budget <- 4L }
 suppressPackageStartupMessages(library(FBC))
-cpu <- function(expr) {
-  t0 <- proc.time()
-  force(expr)
-  tm <- proc.time() - t0
-  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
-}
 
 # ---- 1. spot weld
 s <- utils::read.table("data-raw/spotweld/sw_sim.txt", header = TRUE)

@@ -46,3 +46,12 @@ bench_options <- function(defaults = list(), args = bench_args()) {
   }
   opt
 }
+
+# CPU seconds of evaluating `expr`, the process's and its finished children's
+# (user + system), for the benchmarks' tables.
+cpu <- function(expr) {
+  t0 <- proc.time()
+  force(expr)
+  tm <- proc.time() - t0
+  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
+}

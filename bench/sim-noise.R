@@ -26,12 +26,6 @@ opt <- bench_options(list(unique = c(25L, 50L), reps = c(5L, 20L), sets = 3L,
                           maxNone = 250L))
 if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
 suppressPackageStartupMessages(library(FBC))
-cpu <- function(expr) {
-  t0 <- proc.time()
-  force(expr)
-  tm <- proc.time() - t0
-  sum(tm[c(1, 2)]) + sum(tm[c(4, 5)], na.rm = TRUE)
-}
 
 eta <- function(x, t) 5 * exp(-t * x)
 sdRun <- function(x) 0.1 + 0.1 * x
