@@ -8,16 +8,20 @@ cv_args <- list(nMCMC = 400, nBurn = 300, nChains = 2, kernelS = "matern52",
                 kernelB = "matern52")
 cv_rule <- until_converged(rhat = 1.05, ess = 100, every = 100, maxMCMC = 1500)
 cv_seed <- 5L
-cv_fit <- local({
+# The ball fit under `rule` with `args` after set.seed(seed), made at the
+# first call and kept for the tests that share it.
+cached_fit <- function(seed, rule, args) {
+  force(seed); force(rule); force(args)
   fit <- NULL
   function() {
     if (is.null(fit)) {
-      set.seed(cv_seed)
-      fit <<- do.call(calibrate, c(list(ballSim, ballField, converge = cv_rule), cv_args))
+      set.seed(seed)
+      fit <<- do.call(calibrate, c(list(ballSim, ballField, converge = rule), args))
     }
     fit
   }
-})
+}
+cv_fit <- cached_fit(cv_seed, cv_rule, cv_args)
 
 test_that("a run under a rule stops at the first check that meets it", {
   skip_if_not_slow()
@@ -189,16 +193,7 @@ pr_args <- list(nMCMC = 600, nBurn = 200, nChains = 2, kernelS = "matern52",
                 kernelB = "matern52")
 pr_rule <- until_converged(rhat = 1.02, ess = 150, maxMCMC = 2000)
 pr_seed <- 3L
-pr_fit <- local({
-  fit <- NULL
-  function() {
-    if (is.null(fit)) {
-      set.seed(pr_seed)
-      fit <<- do.call(calibrate, c(list(ballSim, ballField, converge = pr_rule), pr_args))
-    }
-    fit
-  }
-})
+pr_fit <- cached_fit(pr_seed, pr_rule, pr_args)
 
 test_that("a run checks where the draws so far predict the rule is met, and stops at the first check that meets it", {
   fit <- pr_fit()
