@@ -246,11 +246,10 @@ rule_met <- function(results, rule, cols) {
 # agree): the factor R-hat asks for is the square root of the ratio of
 # R-hat - 1 to the rule's. The check comes fbc_check_approach of the way
 # to the longer of the two lengths: a check costs little (tens of ms),
-# sweeps past the end do not, and the prediction is noisy (on the ball
-# drop, seeds 1-40, checking at the predicted length ended runs a median
-# of 5% and up to 42% past the first length that met the rule, 70% of the
-# way a median of 0% and up to 32%, for 8% more checks; R-hat's ratio
-# itself instead of its root, up to 2 times that length). At least a step
+# sweeps past the end do not, and the prediction is noisy (measured on the
+# ball drop against checking at the predicted length and against R-hat's
+# ratio itself instead of its root: bench/check-schedule.R, its figures in
+# bench/RESULTS-speed.md). At least a step
 # of fbc_check_step (a check after a near miss comes soon, but not at
 # every piece), at most the geometric step fbc_check_growth (a far miss,
 # where the prediction is least sure, waits no longer than it did).

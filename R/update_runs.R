@@ -291,8 +291,8 @@ top_up <- function(fit, rule, showProgress) {
   start <- chain_sweeps(fit)
   cap <- as.integer(min(.Machine$integer.max, start + min(rule$maxMCMC, fbc_topup_max)))
   # update()'s first stretch (fbc_first_check sweeps), then checks every
-  # as many: not as the retained sweeps grow by half, since the chains'
-  # sweeps since the last refit can be many (a chain at 50,000 took 25,650
+  # as many: not by the default schedule (steps of up to half the retained
+  # sweeps), since the chains' sweeps since the last refit can be many (a chain at 50,000 took 25,650
   # more at its second check). A first stretch sized to the shortfall at
   # the old chains' ESS rate was measured dearer (sinusoid loop, 10
   # replicates: the loop's fits 0.51 of fresh fits' CPU against 0.35): the
