@@ -34,9 +34,9 @@ test_that("the default ball calibration covers g = 9.81", {
   acc <- acc[names(acc) != "muB"]
   expect_true(all(acc > 0.15 & acc < 0.75))
   expect_s3_class(fit, "fbc")
-  expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars", "data",
-                      "scale", "indices", "priorFns", "proposalSD", "call", "settings",
-                      "logLik", "state", "spec", "model", "version"))
+  expect_named(fit, c("Phi", "chain", "estimates", "logPost", "priors", "acceptance", "vars",
+                      "indices", "priorFns", "proposalSD", "call", "settings",
+                      "logLik", "state", "model", "version"))
   expect_equal(rownames(fit$estimates), fit$vars)
   expect_equal(fit$estimates["kappa1", "median"], median(fit$Phi[, "kappa1"]))
   expect_equal(fit$estimates["kappa1", "lwr80"], unname(quantile(fit$Phi[, "kappa1"], 0.1)))
