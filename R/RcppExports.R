@@ -29,8 +29,8 @@
     .Call(`_FBC_corr_matrix_r`, X, Y, theta, alpha, kernel)
 }
 
-.sim_algebra <- function(Xs, p, algebra = 0L) {
-    .Call(`_FBC_sim_algebra`, Xs, p, algebra)
+.sim_algebra <- function(Xs, p, algebra = 0L, general = FALSE) {
+    .Call(`_FBC_sim_algebra`, Xs, p, algebra, general)
 }
 
 .level_corr <- function(L, z) {

@@ -3,7 +3,11 @@
 # projected cost and measured accuracy.
 #
 # The rule (see "Simulator algebra" in ?calibrate):
-# - a product design of the runs: the Kronecker algebra (exact and cheap);
+# - a product design of the runs: the Kronecker algebra (exact and cheap),
+#   on the experimental x calibration split when the runs are one, else on
+#   the cheapest split of the input columns into two groups whose
+#   combinations are the runs (an output index crossed with scattered run
+#   settings; numeric inputs only);
 # - else the dense algebra (exact) while a sweep of it is projected to cost
 #   under fbc_dense_sweep_max seconds;
 # - else the nearest-neighbour (Vecchia) approximation with
@@ -79,12 +83,15 @@ dense_sweep_cost <- function(m, n, p, q, large = m >= fbc_large_m, bias = TRUE) 
 # compiled core takes (0 auto: Kronecker or dense, 1 dense, 2 Vecchia);
 # neighbours = the count for Vecchia, else NULL; reason = one sentence for
 # print(); forced = whether the user named the algebra; dims = c(I, J), the
-# product design's experimental x calibration settings, for Kronecker, else
-# NULL). The model records this one choice (model$algebra): the product
-# design is detected here only (the compiled core finds the same one from
+# product design's settings of its two groups, for Kronecker, else NULL;
+# split, only on a product design of another split than experimental x
+# calibration: its first group's columns, 1-based). `general`: other splits
+# than experimental x calibration may be used (numeric inputs only). The
+# model records this one choice (model$algebra): the product design is
+# detected here only (the compiled core finds the same one from
 # the same code, src/kronecker.cpp). Says so when
 # `neighbours` is given for an algebra that does not use it.
-choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
+choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FALSE) {
   m <- nrow(Xs)
   # the sweep the dense algebra would run (the large-problem schedule from
   # fbc_large_m runs), and the rule's yardstick: the sweep of the
@@ -95,7 +102,10 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   rule <- dense_sweep_cost(m, n, p, ncol(Xs) - p, large = FALSE)
   txt <- function(x) sprintf("about %s s a sweep", format(signif(x, 2), scientific = FALSE))
   costTxt <- txt(cost)
-  dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]]) else integer(0)
+  dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]], general) else integer(0)
+  split <- attr(dims, "a")
+  if (identical(split, seq_len(p))) split <- NULL
+  dims <- as.vector(dims)
   out <- if (algebra == "vecchia") {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
     list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = TRUE,
@@ -106,7 +116,7 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
   } else if (length(dims)) {
     list(name = "kronecker", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = "exact; the runs are a product design, so no m x m matrix is formed",
-         dims = dims)
+         dims = dims, split = split)
   } else if (rule < fbc_dense_sweep_max) {
     list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = sprintf("exact; projected at %s (m = %d, n = %d, %d inputs; under %g s)", costTxt,
@@ -126,5 +136,5 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n) {
     ))
   }
   out["dims"] <- list(out$dims)
-  out[c("name", "code", "neighbours", "reason", "forced", "dims")]
+  out[c("name", "code", "neighbours", "reason", "forced", "dims", if (!is.null(out$split)) "split")]
 }

@@ -77,7 +77,8 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   dat <- pr$dat
   # independent outputs: the algebra of the largest output's block
   XsAlg <- largest_output_sim(dat, opt$outputs)
-  alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf))
+  alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
+                        general = length(pr$levels) == 0L)
   if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
   alg <- sim_noise_algebra(alg, noise, output, call = call)
   kS <- kernel_codes[[opt$kernelS]]

@@ -186,10 +186,21 @@ print_algebra <- function(x, gp) {
     sprintf(" (chosen for more than %d scattered runs; `algebra = \"dense\"` is exact)", fbc_vecchia_m)
   } else ""
   cat(sprintf("  algebra: %s%s\n", switch(alg$name,
-    kronecker = sprintf("Kronecker, %d x %d (experimental x calibration settings)",
-                        alg$dims[1], alg$dims[2]),
+    kronecker = kronecker_label(alg, mo$scale$names$inputs, mo$scale$names$calibration),
     vecchia = sprintf("Vecchia nearest-neighbour approximation, k = %d", alg$neighbours),
     "dense"), why))
+}
+
+# "Kronecker, 6 x 5 (experimental x calibration settings)", or for another
+# split of the inputs "Kronecker: height (16) x R, C (25)".
+kronecker_label <- function(alg, inputs, calibration) {
+  a <- alg$split
+  if (is.null(a) || identical(as.integer(a), seq_along(inputs))) {
+    return(sprintf("Kronecker, %d x %d (experimental x calibration settings)", alg$dims[1], alg$dims[2]))
+  }
+  nm <- c(inputs, calibration)
+  sprintf("Kronecker: %s (%d) x %s (%d)", paste(nm[a], collapse = ", "), alg$dims[1],
+          paste(nm[-a], collapse = ", "), alg$dims[2])
 }
 
 # "rhoS1 (b~a), rhoS2 (c~a)": the parameters cls k with what each

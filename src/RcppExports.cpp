@@ -126,15 +126,16 @@ BEGIN_RCPP
 END_RCPP
 }
 // sim_algebra
-Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra);
-RcppExport SEXP _FBC_sim_algebra(SEXP XsSEXP, SEXP pSEXP, SEXP algebraSEXP) {
+Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra, bool general);
+RcppExport SEXP _FBC_sim_algebra(SEXP XsSEXP, SEXP pSEXP, SEXP algebraSEXP, SEXP generalSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
     Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
     Rcpp::traits::input_parameter< int >::type p(pSEXP);
     Rcpp::traits::input_parameter< int >::type algebra(algebraSEXP);
-    rcpp_result_gen = Rcpp::wrap(sim_algebra(Xs, p, algebra));
+    Rcpp::traits::input_parameter< bool >::type general(generalSEXP);
+    rcpp_result_gen = Rcpp::wrap(sim_algebra(Xs, p, algebra, general));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -389,7 +390,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_design_look_ahead_release", (DL_FUNC) &_FBC_design_look_ahead_release, 1},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},
     {"_FBC_corr_matrix_r", (DL_FUNC) &_FBC_corr_matrix_r, 5},
-    {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 3},
+    {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 4},
     {"_FBC_level_corr_r", (DL_FUNC) &_FBC_level_corr_r, 2},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
     {"_FBC_model_codes", (DL_FUNC) &_FBC_model_codes, 0},

@@ -612,17 +612,22 @@ private:
   arma::mat K_;  // prediction workspace
 };
 
-// A simulator design that is every combination of I experimental settings
-// and J calibration settings: row r of Xs is (Xg[ix[r]], Tg[jt[r]]).
+// A simulator design that is every combination of I settings of one group
+// of input columns (ca) and J settings of the others (cb): row r of Xs is
+// Xg[ix[r]] in columns ca and Tg[jt[r]] in columns cb. `classic`: ca the p
+// experimental columns, cb the q calibration ones.
 struct ProductDesign {
   int I = 0, J = 0;
   arma::mat Xg, Tg;
   std::vector<int> ix, jt;
+  arma::uvec ca, cb;
+  bool classic = true;
 };
 // True (and the design filled in) when Xs (m x (p + q)) is such a design,
-// rows compared exactly, in any row order.
-bool product_design(const arma::mat& Xs, int p, ProductDesign& out);
-// ... and its eigendecompositions cost less than one m x m Cholesky factor.
+// rows compared exactly, in any row order, and its eigendecompositions cost
+// less than one m x m Cholesky factor: the experimental x calibration split
+// when it is one, else (`general`) the cheapest other split of the columns.
+bool product_design(const arma::mat& Xs, int p, ProductDesign& out, bool general = false);
 bool kronecker_pays(const ProductDesign& pd);
 
 // The Kronecker algebra on a product design (kronecker.cpp):
@@ -646,7 +651,19 @@ protected:
 
 private:
   void split_levels();
+  // the general split: group g's correlation between its grid and the rows
+  // of Zg (g's columns); which buffers a move touches
+  arma::mat groupCorr(int g, const arma::mat& Zg) const;
+  bool moved(const Touch& t, int g) const {
+    return t.simCorr && ((t.expDim && hasExp_[g]) || (t.calDim && hasCal_[g]));
+  }
+  bool fieldMoved(const Touch& t, int g) const {
+    return moved(t, g) || (t.cChange && hasCal_[g]);
+  }
   ProductDesign dz_;
+  bool hasExp_[2], hasCal_[2];
+  Buf2<arma::mat> Bf_;               // general split: Ut' Rs_B(Tg, field rows)
+  arma::mat Wg_;
   arma::mat Y_;                      // ys as an I x J matrix
   // When the experimental settings Xg are themselves every combination of
   // T level tuples of the categorical inputs and R numeric settings, Rx =

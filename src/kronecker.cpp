@@ -16,13 +16,27 @@
 // a kappa move costs O(J^2 + I J + I nu^2), a move of an experimental-input
 // correlation parameter one I x I eigendecomposition, a calibration-input
 // one a J x J eigendecomposition; nothing of size m x m is ever formed.
+//
+// Any other split of the d = p + q columns into groups A (I settings Xg)
+// and B (J settings Tg) whose combinations are the runs (an output index A
+// crossed with scattered run settings B that mix experimental and
+// calibration inputs): Ds = Ra (x) Rb + nugget I the same way (Ux, lx of Ra,
+// Ut, lt of Rb). Field row u is z_u = (x_u, kappa); by separability
+// Rs(Xs, z_u) = Ra(Xg, z_u[A]) (x) Rb(Tg, z_u[B]), both factors varying with
+// u when a group holds experimental and calibration columns. With
+// Ax = Ux' Ra(Xg, Z[A]) (I x nu) and Bf = Ut' Rb(Tg, Z[B]) (J x nu),
+//   W_(ij),u = Ax_iu Bf_ju / sqrt(lam_ij),  wy_ij = Yt_ij / sqrt(lam_ij),
+//   Bs' Ds^-1 Bs = W'W,  Bs' Ds^-1 ys = W'wy:
+// O(m nu^2) a cross update; a kappa move recomputes the factor of each
+// group that holds calibration columns (O(J^2 nu) for B), a correlation
+// move the eigendecomposition of its group.
 #include "fbc.h"
 #include <map>
 
-// Exact-equality key of a row segment.
-static std::vector<double> row_key(const arma::mat& X, arma::uword r, int c0, int K) {
-  std::vector<double> key(K);
-  for (int k = 0; k < K; ++k) key[k] = X.at(r, c0 + k);
+// Exact-equality key of row r over columns c.
+static std::vector<double> row_key(const arma::mat& X, arma::uword r, const arma::uvec& c) {
+  std::vector<double> key(c.n_elem);
+  for (arma::uword k = 0; k < c.n_elem; ++k) key[k] = X.at(r, c[k]);
   return key;
 }
 
@@ -40,26 +54,52 @@ static bool full_grid(const std::vector<int>& a, int A, const std::vector<int>& 
   return true;
 }
 
-bool product_design(const arma::mat& Xs, int p, ProductDesign& out) {
-  const int m = Xs.n_rows, q = Xs.n_cols - p;
-  if (p < 1 || q < 1 || m < 4) return false;
+// Is Xs every combination of its distinct rows over columns ca and over cb?
+static bool grid_split(const arma::mat& Xs, const arma::uvec& ca, const arma::uvec& cb,
+                       ProductDesign& out) {
+  const int m = Xs.n_rows;
   std::map<std::vector<double>, int> xs, ts;
   std::vector<int> ix(m), jt(m);
   for (int r = 0; r < m; ++r) {
-    auto a = xs.emplace(row_key(Xs, r, 0, p), (int) xs.size());
-    auto b = ts.emplace(row_key(Xs, r, p, q), (int) ts.size());
-    ix[r] = a.first->second;
-    jt[r] = b.first->second;
+    ix[r] = xs.emplace(row_key(Xs, r, ca), (int) xs.size()).first->second;
+    jt[r] = ts.emplace(row_key(Xs, r, cb), (int) ts.size()).first->second;
   }
   const int I = xs.size(), J = ts.size();
   if (!full_grid(ix, I, jt, J)) return false;
-  out.I = I; out.J = J; out.ix = ix; out.jt = jt;
-  out.Xg.set_size(I, p); out.Tg.set_size(J, q);
+  out.I = I; out.J = J; out.ix = ix; out.jt = jt; out.ca = ca; out.cb = cb;
+  out.Xg.set_size(I, ca.n_elem); out.Tg.set_size(J, cb.n_elem);
   for (int r = 0; r < m; ++r) {
-    out.Xg.row(ix[r]) = Xs(r, arma::span(0, p - 1));
-    out.Tg.row(jt[r]) = Xs(r, arma::span(p, p + q - 1));
+    const arma::uvec row = {(arma::uword) r};
+    out.Xg.row(ix[r]) = Xs.submat(row, ca);
+    out.Tg.row(jt[r]) = Xs.submat(row, cb);
   }
   return true;
+}
+
+// The experimental x calibration split first (the cheapest kappa moves:
+// kappa sits in one group alone); else, with `general`, every split of the
+// d <= 12 columns into two groups, the one of the cheapest
+// eigendecompositions (I^3 + J^3) among those that pay.
+bool product_design(const arma::mat& Xs, int p, ProductDesign& out, bool general) {
+  const int m = Xs.n_rows, d = Xs.n_cols, q = d - p;
+  if (p < 1 || q < 1 || m < 4) return false;
+  const arma::uvec all = arma::regspace<arma::uvec>(0, d - 1);
+  if (grid_split(Xs, all.head(p), all.tail(q), out) && kronecker_pays(out)) {
+    out.classic = true;
+    return true;
+  }
+  if (!general || d > 12) return false;
+  double best = arma::datum::inf;
+  ProductDesign pd;
+  for (unsigned mask = 1; mask < (1u << d) - 1; mask += 2) {  // column 0 in group A
+    if (mask == (1u << p) - 1) continue;
+    std::vector<arma::uword> a, b;
+    for (int k = 0; k < d; ++k) ((mask >> k) & 1u ? a : b).push_back(k);
+    if (!grid_split(Xs, arma::uvec(a), arma::uvec(b), pd) || !kronecker_pays(pd)) continue;
+    const double cost = std::pow((double) pd.I, 3) + std::pow((double) pd.J, 3);
+    if (cost < best) { best = cost; out = pd; out.classic = false; }
+  }
+  return best < arma::datum::inf;
 }
 
 // The Kronecker algebra pays when its two eigendecompositions (about
@@ -71,13 +111,16 @@ bool kronecker_pays(const ProductDesign& pd) {
 }
 
 // The product design of Xs when the Kronecker algebra would be used
-// (algebra 0, auto): c(I, J); otherwise integer(0).
+// (algebra 0, auto): c(I, J), with `general` its group A's columns
+// (1-based) as attribute "a"; otherwise integer(0).
 // [[Rcpp::export(.sim_algebra)]]
-Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0) {
+Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0,
+                                bool general = false) {
   ProductDesign pd;
-  if (algebra == ALG_AUTO && product_design(Xs, p, pd) && kronecker_pays(pd))
-    return Rcpp::IntegerVector::create(pd.I, pd.J);
-  return Rcpp::IntegerVector(0);
+  if (algebra != ALG_AUTO || !product_design(Xs, p, pd, general)) return Rcpp::IntegerVector(0);
+  Rcpp::IntegerVector out = Rcpp::IntegerVector::create(pd.I, pd.J);
+  if (general) out.attr("a") = Rcpp::IntegerVector(pd.ca.begin(), pd.ca.end()) + 1;
+  return out;
 }
 
 KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
@@ -93,6 +136,17 @@ KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
     w_.b[b].zeros(I); g_.b[b].zeros(I);
   }
   Rx_.zeros(I, I); Rt_.zeros(J, J); Rxf_.zeros(I, nu_);
+  for (int g = 0; g < 2; ++g) {
+    const arma::uvec& c = g ? dz_.cb : dz_.ca;
+    hasExp_[g] = arma::any(c < (arma::uword) p);
+    hasCal_[g] = arma::any(c >= (arma::uword) p);
+  }
+  if (!dz_.classic) {
+    if (!levels.empty()) Rcpp::stop("the general Kronecker split takes numeric inputs only");
+    for (int b = 0; b < 2; ++b) Bf_.b[b].zeros(J, nu_);
+    Wg_.zeros(m, nu_);
+    return;
+  }
   split_levels();
 }
 
@@ -133,6 +187,12 @@ void KroneckerPosterior::split_levels() {
   split_ = true;
 }
 
+arma::mat KroneckerPosterior::groupCorr(int g, const arma::mat& Zg) const {
+  const arma::uvec& c = g ? dz_.cb : dz_.ca;
+  const arma::uvec th = c + (arma::uword) iThetaS, al = c + (arma::uword) iAlphaS;
+  return corr_matrix(g ? dz_.Tg : dz_.Xg, Zg, phi.elem(th), phi.elem(al), kernS_);
+}
+
 std::string KroneckerPosterior::algebra() const {
   return "Kronecker " + std::to_string(dz_.I) + " x " + std::to_string(dz_.J);
 }
@@ -141,8 +201,10 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   const double* thetaS = phi.memptr() + iThetaS;
   const double* alphaS = phi.memptr() + iAlphaS;
   const int I = dz_.I, J = dz_.J;
-  const bool xMove = t.simCorr && t.expDim, tMove = t.simCorr && t.calDim;
-  if (xMove && split_) {
+  const bool xMove = moved(t, 0), tMove = moved(t, 1);
+  if (xMove && !dz_.classic) {
+    if (!arma::eig_sym(lx_.alt(), Ux_.alt(), groupCorr(0, dz_.Xg))) return false;
+  } else if (xMove && split_) {
     // Rx = Ct (x) Rn in Xg's order (split_levels())
     kernel_corr(kernS_, Xt_, Xt_, p, thetaS, alphaS, Ct_, false);
     level_scale(levels, phi.memptr() + iRhoS, Xt_, Xt_, Ct_, false);
@@ -163,12 +225,14 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
     level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, dz_.Xg, Rx_, false);
     if (!arma::eig_sym(lx_.alt(), Ux_.alt(), Rx_)) return false;
   }
-  if (xMove) {
+  if (xMove && dz_.classic) {
     kernel_corr(kernS_, dz_.Xg, Xu_, p, thetaS, alphaS, Rxf_, false);
     level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xu_, Rxf_, false);
     Ax_.alt() = Ux_.alt().t() * Rxf_;
   }
-  if (tMove) {
+  if (tMove && !dz_.classic) {
+    if (!arma::eig_sym(lt_.alt(), Ut_.alt(), groupCorr(1, dz_.Tg))) return false;
+  } else if (tMove) {
     kernel_corr(kernS_, dz_.Tg, dz_.Tg, q, thetaS + p, alphaS + p, Rt_, false);
     if (!arma::eig_sym(lt_.alt(), Ut_.alt(), Rt_)) return false;
   }
@@ -192,6 +256,15 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
       for (int i = 0; i < I; ++i) s += y[i] * y[i] / (lx[i] * lt[j] + nugget_);
     }
     ldDs = ld; zz = s;
+  }
+  if (!dz_.classic) {
+    // the field rows' factors of each group (kappa in the calibration columns)
+    arma::mat Z(nu_, p + q);
+    Z.cols(0, p - 1) = Xu_.cols(0, p - 1);
+    for (int k = 0; k < q; ++k) Z.col(p + k).fill(phi[iKappa + k]);
+    if (fieldMoved(t, 0)) Ax_.alt() = Ux.t() * groupCorr(0, Z.cols(dz_.ca));
+    if (fieldMoved(t, 1)) Bf_.alt() = Ut.t() * groupCorr(1, Z.cols(dz_.cb));
+    return true;
   }
   if (t.cChange) {
     kernel_corr_point(kernS_, dz_.Tg, 0, q, phi.memptr() + iKappa, thetaS + p, alphaS + p,
@@ -220,6 +293,27 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
 // Q = Rkk - Ax' diag(w) Ax (lower), wz = Ax' g.
 void KroneckerPosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
                                   arma::vec& wz) {
+  if (!dz_.classic) {
+    const arma::vec& lx = moved(t, 0) ? lx_.alt() : lx_.cur();
+    const arma::vec& lt = moved(t, 1) ? lt_.alt() : lt_.cur();
+    const arma::mat& A = fieldMoved(t, 0) ? Ax_.alt() : Ax_.cur();
+    const arma::mat& B = fieldMoved(t, 1) ? Bf_.alt() : Bf_.cur();
+    const arma::mat& Yt = t.simCorr ? Yt_.alt() : Yt_.cur();
+    const int I = dz_.I, J = dz_.J;
+    wz.zeros(nu_);
+    for (int j = 0; j < J; ++j)
+      for (int i = 0; i < I; ++i) {
+        const int r = i + I * j;
+        const double is = 1.0 / std::sqrt(lx[i] * lt[j] + nugget_), wy = Yt(i, j) * is;
+        for (int u = 0; u < nu_; ++u) {
+          Wg_(r, u) = A(i, u) * B(j, u) * is;
+          wz[u] += Wg_(r, u) * wy;
+        }
+      }
+    Q = Rkk;
+    syrk_lower(Wg_, -1.0, 1.0, Q);
+    return;
+  }
   const arma::mat& Ax = (t.simCorr && t.expDim) ? Ax_.alt() : Ax_.cur();
   const arma::vec& w = w_.alt();
   const arma::vec& g = g_.alt();
@@ -231,9 +325,14 @@ void KroneckerPosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::ma
 }
 
 void KroneckerPosterior::simFlip(const Touch& t) {
-  if (t.simCorr && t.expDim) { Ux_.flip(); lx_.flip(); Ax_.flip(); }
-  if (t.simCorr && t.calDim) { Ut_.flip(); lt_.flip(); }
+  if (moved(t, 0)) { Ux_.flip(); lx_.flip(); }
+  if (moved(t, 1)) { Ut_.flip(); lt_.flip(); }
+  if (fieldMoved(t, 0)) Ax_.flip();
   if (t.simCorr) Yt_.flip();
+  if (!dz_.classic) {
+    if (fieldMoved(t, 1)) Bf_.flip();
+    return;
+  }
   if (t.cChange) { c_.flip(); ct_.flip(); }
   if (t.cross) { w_.flip(); g_.flip(); }
 }
@@ -242,6 +341,23 @@ void KroneckerPosterior::simFlip(const Touch& t) {
 //   a_c = an_c' g,  b_c = sum_i an_ic^2 w_i,  G = Ax' diag(w) An.
 void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
                                       arma::mat& G) {
+  if (!dz_.classic) {
+    // general split, with an = Ux' Ra(Xg, z[A]), bn = Ut' Rb(Tg, z[B]) and
+    // Li = 1 / lam: a_c = an_c' (Yt % Li) bn_c, b_c = (an_c^2)' Li bn_c^2,
+    // G_uc = an_c' (Li % Ax_u Bf_u') bn_c
+    arma::mat Z(Xnew.n_rows, p + q);
+    Z.cols(0, p - 1) = Xnew.cols(0, p - 1);
+    for (int k = 0; k < q; ++k) Z.col(p + k).fill(phi[iKappa + k]);
+    const arma::mat an = Ux_.cur().t() * groupCorr(0, Z.cols(dz_.ca));
+    const arma::mat bn = Ut_.cur().t() * groupCorr(1, Z.cols(dz_.cb));
+    const arma::mat Li = 1.0 / (lx_.cur() * lt_.cur().t() + nugget_);
+    a = arma::sum(an % ((Yt_.cur() % Li) * bn), 0).t();
+    b = arma::sum(arma::square(an) % (Li * arma::square(bn)), 0).t();
+    G.set_size(nu_, Xnew.n_rows);
+    for (int u = 0; u < nu_; ++u)
+      G.row(u) = arma::sum(an % ((Li % (Ax_.cur().col(u) * Bf_.cur().col(u).t())) * bn), 0);
+    return;
+  }
   const arma::vec& w = w_.cur();
   const arma::vec& g = g_.cur();
   arma::mat rx = corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
@@ -302,10 +418,16 @@ void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& 
   const int I = dz_.I, J = dz_.J, nz = Z.n_rows;
   const arma::vec th = phi.subvec(iThetaS, iThetaS + p + q - 1);
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p + q - 1);
-  const arma::mat Zx = Z.cols(0, p - 1);
-  arma::mat rx = corr_matrix(dz_.Xg, Zx, th.head(p), al.head(p), kernS_);
-  level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Zx, rx, false);
-  const arma::mat rt = corr_matrix(dz_.Tg, Z.cols(p, p + q - 1), th.tail(q), al.tail(q), kernS_);
+  arma::mat rx, rt;
+  if (dz_.classic) {
+    const arma::mat Zx = Z.cols(0, p - 1);
+    rx = corr_matrix(dz_.Xg, Zx, th.head(p), al.head(p), kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Zx, rx, false);
+    rt = corr_matrix(dz_.Tg, Z.cols(p, p + q - 1), th.tail(q), al.tail(q), kernS_);
+  } else {
+    rx = groupCorr(0, Z.cols(dz_.ca));
+    rt = groupCorr(1, Z.cols(dz_.cb));
+  }
   const arma::mat ax = Ux_.cur().t() * rx, at = Ut_.cur().t() * rt;
   const arma::vec& lx = lx_.cur();
   const arma::vec& lt = lt_.cur();
@@ -318,7 +440,8 @@ void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& 
     for (int i = 0; i < I; ++i) {
       const int r = i + I * j;
       const double is = 1.0 / std::sqrt(lx[i] * lt[j] + nugget_);
-      for (int u = 0; u < nu_; ++u) WB(r, u) = Ax(i, u) * ct[j] * is;
+      for (int u = 0; u < nu_; ++u)
+        WB(r, u) = Ax(i, u) * (dz_.classic ? ct[j] : Bf_.cur()(j, u)) * is;
       if (haveW) continue;
       for (int c = 0; c < nz; ++c) W(r, c) = ax(i, c) * at(j, c) * is;
       wy[r] = Yt(i, j) * is;

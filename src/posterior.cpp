@@ -195,7 +195,7 @@ static std::unique_ptr<Posterior> make_block(const arma::mat& Xf, const arma::ve
   // (the simulator's own noise: the dense algebra, whatever the design)
   if (model.algebra == ALG_AUTO && model.repCount.empty()) {
     ProductDesign pd;
-    if (product_design(Xs, Xf.n_cols, pd) && kronecker_pays(pd))
+    if (product_design(Xs, Xf.n_cols, pd, model.levels.empty() && model.outputs.L == 0))
       return std::unique_ptr<Posterior>(new KroneckerPosterior(Xf, yf, Xs, ys, nugget, model, pd));
   }
   return std::unique_ptr<Posterior>(new DensePosterior(Xf, yf, Xs, ys, nugget, model));
