@@ -32,7 +32,8 @@ benchmarks <- c(
   peers        = "FBC beside RobustCalibration on the same data, same process",
   "failed-runs" = "failed runs: spot weld as shipped; design around a failure region",
   sensitivity  = "Sobol indices against known ones: coverage, widths, CPU s",
-  "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior"
+  "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior",
+  "sepia-ball" = "SEPIA's ball drop 1: height x (R, C) on the Kronecker algebra"
 )
 
 args <- commandArgs(trailingOnly = TRUE)
