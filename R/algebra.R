@@ -7,7 +7,9 @@
 #   on the experimental x calibration split when the runs are one, else on
 #   the cheapest split of the input columns into two groups whose
 #   combinations are the runs (an output index crossed with scattered run
-#   settings; numeric inputs only);
+#   settings; numeric inputs only), also when some combinations have no
+#   run (missing cells, left out exactly: see src/kronecker.cpp) while that
+#   is projected cheaper than a Cholesky factor of the runs' block;
 # - else the dense algebra (exact) while a sweep of it is projected to cost
 #   under fbc_dense_sweep_max seconds;
 # - else the nearest-neighbour (Vecchia) approximation with
@@ -85,7 +87,8 @@ dense_sweep_cost <- function(m, n, p, q, large = m >= fbc_large_m, bias = TRUE) 
 # print(); forced = whether the user named the algebra; dims = c(I, J), the
 # product design's settings of its two groups, for Kronecker, else NULL;
 # split, only on a product design of another split than experimental x
-# calibration: its first group's columns, 1-based). `general`: other splits
+# calibration: its first group's columns, 1-based; missing, only when some
+# combinations have no run: their number). `general`: other splits
 # than experimental x calibration may be used (numeric inputs only). The
 # model records this one choice (model$algebra): the product design is
 # detected here only (the compiled core finds the same one from
@@ -105,6 +108,7 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
   dims <- if (algebra == "auto") .sim_algebra(Xs, p, algebra_codes[["auto"]], general) else integer(0)
   split <- attr(dims, "a")
   if (identical(split, seq_len(p))) split <- NULL
+  missing <- attr(dims, "missing")
   dims <- as.vector(dims)
   out <- if (algebra == "vecchia") {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
@@ -115,8 +119,10 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
          reason = sprintf("as asked (`algebra = \"dense\"`); exact, projected at %s", costTxt))
   } else if (length(dims)) {
     list(name = "kronecker", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
-         reason = "exact; the runs are a product design, so no m x m matrix is formed",
-         dims = dims, split = split)
+         reason = if (is.null(missing)) "exact; the runs are a product design, so no m x m matrix is formed" else
+           sprintf("exact; the runs are a product design but for %d of its %d cells, which the algebra leaves out exactly, so no m x m matrix is formed",
+                   missing, prod(dims)),
+         dims = dims, split = split, missing = missing)
   } else if (rule < fbc_dense_sweep_max) {
     list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
          reason = sprintf("exact; projected at %s (m = %d, n = %d, %d inputs; under %g s)", costTxt,
@@ -136,5 +142,6 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
     ))
   }
   out["dims"] <- list(out$dims)
-  out[c("name", "code", "neighbours", "reason", "forced", "dims", if (!is.null(out$split)) "split")]
+  out[c("name", "code", "neighbours", "reason", "forced", "dims",
+        if (!is.null(out$split)) "split", if (!is.null(out$missing)) "missing")]
 }

@@ -615,13 +615,15 @@ private:
 // A simulator design that is every combination of I settings of one group
 // of input columns (ca) and J settings of the others (cb): row r of Xs is
 // Xg[ix[r]] in columns ca and Tg[jt[r]] in columns cb. `classic`: ca the p
-// experimental columns, cb the q calibration ones.
+// experimental columns, cb the q calibration ones. Some combinations may
+// have no run (missing cells, at most as many as the runs).
 struct ProductDesign {
   int I = 0, J = 0;
   arma::mat Xg, Tg;
   std::vector<int> ix, jt;
   arma::uvec ca, cb;
   bool classic = true;
+  std::vector<int> mi, mj;  // the missing cells (Xg[mi[s]], Tg[mj[s]]): no run
 };
 // True (and the design filled in) when Xs (m x (p + q)) is such a design,
 // rows compared exactly, in any row order, and its eigendecompositions cost
@@ -650,6 +652,18 @@ protected:
                  bool haveW) override;
 
 private:
+  // the algebra of the full grid (ys zero at the missing cells); the
+  // sim*() hooks add the missing cells' corrections to it
+  bool gridUpdate(const Touch& t, double& ldDs, double& zz);
+  void gridCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q, arma::vec& wz);
+  void gridCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b, arma::mat& G);
+  arma::vec atMissing(const arma::mat& Ux, const arma::mat& Ut, const arma::mat& Li,
+                      const arma::mat& X) const;
+  arma::mat missSolve(const arma::mat& Ux, const arma::mat& Ut, const arma::mat& Li,
+                      const arma::mat& L, const arma::mat& A, const arma::mat& B) const;
+  void targetFactors(const arma::mat& Xnew, arma::mat& an, arma::mat& bn);
+  Buf2<arma::mat> Lm_;  // the factor of (Ds^-1)_mm over the missing cells
+  Buf2<arma::vec> hv_;  // Lm^-1 (Ds^-1 y0)_m
   void split_levels();
   // the general split: group g's correlation between its grid and the rows
   // of Zg (g's columns); which buffers a move touches

@@ -40,23 +40,35 @@ static std::vector<double> row_key(const arma::mat& X, arma::uword r, const arma
   return key;
 }
 
-// Are the pairs (a[r], b[r]), a in 0 .. A-1 and b in 0 .. B-1, every one of
-// the A B combinations exactly once (A, B >= 2)? Rows, A B of them, none
-// twice.
-static bool full_grid(const std::vector<int>& a, int A, const std::vector<int>& b, int B) {
-  if (A < 2 || B < 2 || (double) A * B != (double) a.size()) return false;
+// Are the pairs (a[r], b[r]), a in 0 .. A-1 and b in 0 .. B-1, distinct
+// (A, B >= 2)? Without `mi`: and every one of the A B combinations; with
+// it: the combinations no row takes (the missing cells) into mi, mj.
+static bool grid_cells(const std::vector<int>& a, int A, const std::vector<int>& b, int B,
+                       std::vector<int>* mi = nullptr, std::vector<int>* mj = nullptr) {
+  if (A < 2 || B < 2 || (!mi && (double) A * B != (double) a.size())) return false;
   std::vector<char> seen((size_t) A * B, 0);
   for (size_t r = 0; r < a.size(); ++r) {
     char& s = seen[(size_t) b[r] * A + a[r]];
     if (s) return false;
     s = 1;
   }
+  if (mi) {
+    mi->clear(); mj->clear();
+    for (int j = 0; j < B; ++j)
+      for (int i = 0; i < A; ++i)
+        if (!seen[(size_t) j * A + i]) { mi->push_back(i); mj->push_back(j); }
+  }
   return true;
 }
+static bool full_grid(const std::vector<int>& a, int A, const std::vector<int>& b, int B) {
+  return grid_cells(a, A, b, B);
+}
 
-// Is Xs every combination of its distinct rows over columns ca and over cb?
+// Is Xs every combination of its distinct rows over columns ca and over cb
+// (with `missing`: but for the cells out.mi, out.mj, at most as many as its
+// rows)?
 static bool grid_split(const arma::mat& Xs, const arma::uvec& ca, const arma::uvec& cb,
-                       ProductDesign& out) {
+                       ProductDesign& out, bool missing = false) {
   const int m = Xs.n_rows;
   std::map<std::vector<double>, int> xs, ts;
   std::vector<int> ix(m), jt(m);
@@ -65,7 +77,10 @@ static bool grid_split(const arma::mat& Xs, const arma::uvec& ca, const arma::uv
     jt[r] = ts.emplace(row_key(Xs, r, cb), (int) ts.size()).first->second;
   }
   const int I = xs.size(), J = ts.size();
-  if (!full_grid(ix, I, jt, J)) return false;
+  if ((double) I * J > 2.0 * m) return false;
+  if (missing ? !grid_cells(ix, I, jt, J, &out.mi, &out.mj) : !full_grid(ix, I, jt, J))
+    return false;
+  if (!missing) { out.mi.clear(); out.mj.clear(); }
   out.I = I; out.J = J; out.ix = ix; out.jt = jt; out.ca = ca; out.cb = cb;
   out.Xg.set_size(I, ca.n_elem); out.Tg.set_size(J, cb.n_elem);
   for (int r = 0; r < m; ++r) {
@@ -76,10 +91,21 @@ static bool grid_split(const arma::mat& Xs, const arma::uvec& ca, const arma::uv
   return true;
 }
 
-// The experimental x calibration split first (the cheapest kappa moves:
-// kappa sits in one group alone); else, with `general`, every split of the
-// d <= 12 columns into two groups, the one of the cheapest
-// eigendecompositions (I^3 + J^3) among those that pay.
+// Relative flops of a move of the simulator block: the two
+// eigendecompositions (9 (I^3 + J^3)), with k missing cells their k x k
+// system (2 k I J (I + J) to form, k^3 / 3 to factor), against one
+// Cholesky factor of the m x m block of the runs (m^3 / 3), all times 3.
+static double kron_cost(const ProductDesign& pd) {
+  const double I = pd.I, J = pd.J, k = pd.mi.size();
+  return 27.0 * (I * I * I + J * J * J) + 6.0 * k * I * J * (I + J) + k * k * k;
+}
+
+// The experimental x calibration split when it is a complete grid (the
+// cheapest kappa moves: kappa sits in one group alone); else the cheapest
+// split that pays among the experimental x calibration one with missing
+// cells and, with `general`, every split of the d <= 12 columns into two
+// groups (complete or not; a split is skipped at once when its columns'
+// distinct values alone make more than 2 m cells).
 bool product_design(const arma::mat& Xs, int p, ProductDesign& out, bool general) {
   const int m = Xs.n_rows, d = Xs.n_cols, q = d - p;
   if (p < 1 || q < 1 || m < 4) return false;
@@ -88,31 +114,49 @@ bool product_design(const arma::mat& Xs, int p, ProductDesign& out, bool general
     out.classic = true;
     return true;
   }
-  if (!general || d > 12) return false;
+  if (d > 12) general = false;
+  if (!general && d > 30) return false;
+  std::vector<double> nv(d);
+  for (int k = 0; k < d; ++k) nv[k] = arma::vec(arma::unique(Xs.col(k))).n_elem;
   double best = arma::datum::inf;
   ProductDesign pd;
-  for (unsigned mask = 1; mask < (1u << d) - 1; mask += 2) {  // column 0 in group A
-    if (mask == (1u << p) - 1) continue;
+  const unsigned exc = (1u << std::min(p, 30)) - 1;
+  std::vector<unsigned> masks(1, exc);
+  if (general)
+    for (unsigned mask = 1; mask < (1u << d) - 1; mask += 2)  // column 0 in group A
+      if (mask != exc) masks.push_back(mask);
+  for (unsigned mask : masks) {
     std::vector<arma::uword> a, b;
-    for (int k = 0; k < d; ++k) ((mask >> k) & 1u ? a : b).push_back(k);
-    if (!grid_split(Xs, arma::uvec(a), arma::uvec(b), pd) || !kronecker_pays(pd)) continue;
-    const double cost = std::pow((double) pd.I, 3) + std::pow((double) pd.J, 3);
-    if (cost < best) { best = cost; out = pd; out.classic = false; }
+    double na = 0, nb = 0;
+    for (int k = 0; k < d; ++k) {
+      const bool inA = (mask >> k) & 1u;
+      (inA ? a : b).push_back(k);
+      double& n = inA ? na : nb;
+      n = std::max(n, nv[k]);
+    }
+    if (na * nb > 2.0 * m) continue;
+    if (!grid_split(Xs, arma::uvec(a), arma::uvec(b), pd, true) || !kronecker_pays(pd)) continue;
+    const double cost = kron_cost(pd);
+    if (cost < best) { best = cost; out = pd; out.classic = mask == exc; }
   }
   return best < arma::datum::inf;
 }
 
 // The Kronecker algebra pays when its two eigendecompositions (about
-// 9 (I^3 + J^3) flops) cost less than one Cholesky factor of the m x m
-// block (m^3 / 3): from 4 settings of each on.
+// 9 (I^3 + J^3) flops), and the system of its missing cells, cost less
+// than one Cholesky factor of the m x m block (m^3 / 3): from 4 settings
+// of each on for a complete grid.
 bool kronecker_pays(const ProductDesign& pd) {
   const double I = pd.I, J = pd.J;
-  return 27.0 * (I * I * I + J * J * J) <= I * I * I * J * J * J;
+  if (pd.mi.empty()) return 27.0 * (I * I * I + J * J * J) <= I * I * I * J * J * J;
+  const double m = I * J - pd.mi.size();
+  return kron_cost(pd) <= m * m * m;
 }
 
 // The product design of Xs when the Kronecker algebra would be used
 // (algebra 0, auto): c(I, J), with `general` its group A's columns
-// (1-based) as attribute "a"; otherwise integer(0).
+// (1-based) as attribute "a", with missing cells their number as attribute
+// "missing"; otherwise integer(0).
 // [[Rcpp::export(.sim_algebra)]]
 Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0,
                                 bool general = false) {
@@ -120,6 +164,7 @@ Rcpp::IntegerVector sim_algebra(const arma::mat& Xs, int p, int algebra = 0,
   if (algebra != ALG_AUTO || !product_design(Xs, p, pd, general)) return Rcpp::IntegerVector(0);
   Rcpp::IntegerVector out = Rcpp::IntegerVector::create(pd.I, pd.J);
   if (general) out.attr("a") = Rcpp::IntegerVector(pd.ca.begin(), pd.ca.end()) + 1;
+  if (!pd.mi.empty()) out.attr("missing") = (int) pd.mi.size();
   return out;
 }
 
@@ -144,7 +189,7 @@ KroneckerPosterior::KroneckerPosterior(const arma::mat& Xf, const arma::vec& yf,
   if (!dz_.classic) {
     if (!levels.empty()) Rcpp::stop("the general Kronecker split takes numeric inputs only");
     for (int b = 0; b < 2; ++b) Bf_.b[b].zeros(J, nu_);
-    Wg_.zeros(m, nu_);
+    Wg_.zeros(I * J, nu_);
     return;
   }
   split_levels();
@@ -194,10 +239,11 @@ arma::mat KroneckerPosterior::groupCorr(int g, const arma::mat& Zg) const {
 }
 
 std::string KroneckerPosterior::algebra() const {
-  return "Kronecker " + std::to_string(dz_.I) + " x " + std::to_string(dz_.J);
+  return "Kronecker " + std::to_string(dz_.I) + " x " + std::to_string(dz_.J) +
+         (dz_.mi.empty() ? "" : ", " + std::to_string(dz_.mi.size()) + " cells missing");
 }
 
-bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
+bool KroneckerPosterior::gridUpdate(const Touch& t, double& ldDs, double& zz) {
   const double* thetaS = phi.memptr() + iThetaS;
   const double* alphaS = phi.memptr() + iAlphaS;
   const int I = dz_.I, J = dz_.J;
@@ -291,7 +337,7 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
 }
 
 // Q = Rkk - Ax' diag(w) Ax (lower), wz = Ax' g.
-void KroneckerPosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
+void KroneckerPosterior::gridCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
                                   arma::vec& wz) {
   if (!dz_.classic) {
     const arma::vec& lx = moved(t, 0) ? lx_.alt() : lx_.cur();
@@ -328,7 +374,7 @@ void KroneckerPosterior::simFlip(const Touch& t) {
   if (moved(t, 0)) { Ux_.flip(); lx_.flip(); }
   if (moved(t, 1)) { Ut_.flip(); lt_.flip(); }
   if (fieldMoved(t, 0)) Ax_.flip();
-  if (t.simCorr) Yt_.flip();
+  if (t.simCorr) { Yt_.flip(); Lm_.flip(); hv_.flip(); }
   if (!dz_.classic) {
     if (fieldMoved(t, 1)) Bf_.flip();
     return;
@@ -337,19 +383,119 @@ void KroneckerPosterior::simFlip(const Touch& t) {
   if (t.cross) { w_.flip(); g_.flip(); }
 }
 
+// Missing cells (runs absent from the grid): the runs' block is Ds_oo, the
+// observed rows and columns of the full grid's Ds. With E the missing
+// cells' columns of the identity, M = E' Ds^-1 E = Lm Lm' (k x k) and
+//   Ds^-1 - Ds^-1 E M^-1 E' Ds^-1 = Ds_oo^-1 on the observed rows, 0 elsewhere,
+// any full-grid vectors a, b (whatever their values at the missing cells)
+// give a_o' Ds_oo^-1 b_o = a' Ds^-1 b - h_a' M^-1 h_b, h_a = E' Ds^-1 a, and
+//   log|Ds_oo| = log|Ds| + log|M|:
+// the full grid's Kronecker algebra (ys zero at the missing cells) less a
+// rank-k correction; exact, the posterior of the observed runs. Forming M
+// costs k (I^2 J + I J^2) (a column a missing cell), factoring it k^3 / 3,
+// every move of the simulator's correlation; a kappa move adds nu such
+// columns and k^2 nu. (Entries of Ux (X % Li) Ut' at the missing cells,
+// Li = 1 / lam: of Ds^-1 x for X = Ux' x Ut.)
+arma::vec KroneckerPosterior::atMissing(const arma::mat& Ux, const arma::mat& Ut,
+                                        const arma::mat& Li, const arma::mat& X) const {
+  const arma::mat P = (Ux * (X % Li)) * Ut.t();
+  arma::vec h(dz_.mi.size());
+  for (arma::uword s = 0; s < h.n_elem; ++s) h[s] = P(dz_.mi[s], dz_.mj[s]);
+  return h;
+}
+
+// Lm^-1 E' Ds^-1 K for Kronecker columns K_c whose factors in the
+// eigenbases are A.col(c) (I) and B.col(c) (J; B one column: shared).
+arma::mat KroneckerPosterior::missSolve(const arma::mat& Ux, const arma::mat& Ut,
+                                        const arma::mat& Li, const arma::mat& L,
+                                        const arma::mat& A, const arma::mat& B) const {
+  arma::mat H(dz_.mi.size(), A.n_cols);
+  for (arma::uword c = 0; c < A.n_cols; ++c)
+    H.col(c) = atMissing(Ux, Ut, Li, A.col(c) * B.col(B.n_cols == 1 ? 0 : c).t());
+  return arma::solve(arma::trimatl(L), H);
+}
+
+bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
+  if (!gridUpdate(t, ldDs, zz)) return false;
+  const int k = dz_.mi.size();
+  if (!k || !t.simCorr) return true;
+  const arma::mat& Ux = moved(t, 0) ? Ux_.alt() : Ux_.cur();
+  const arma::mat& Ut = moved(t, 1) ? Ut_.alt() : Ut_.cur();
+  const arma::mat Li = 1.0 / ((moved(t, 0) ? lx_.alt() : lx_.cur()) *
+                              (moved(t, 1) ? lt_.alt() : lt_.cur()).t() + nugget_);
+  arma::mat M(k, k);
+  for (int s = 0; s < k; ++s)
+    M.col(s) = atMissing(Ux, Ut, Li, Ux.row(dz_.mi[s]).t() * Ut.row(dz_.mj[s]));
+  arma::mat& L = Lm_.alt();
+  if (!arma::chol(L, M, "lower")) return false;
+  hv_.alt() = arma::solve(arma::trimatl(L), atMissing(Ux, Ut, Li, Yt_.alt()));
+  ldDs += 2.0 * arma::sum(arma::log(L.diag()));
+  zz -= arma::dot(hv_.alt(), hv_.alt());
+  return true;
+}
+
+// Q = Rkk - Bs_o' Ds_oo^-1 Bs_o = (the full grid's) + C'C, wz = (the full
+// grid's) - C' hv, C = Lm^-1 E' Ds^-1 Bs.
+void KroneckerPosterior::simCross(const Touch& t, const arma::mat& Rkk, arma::mat& Q,
+                                  arma::vec& wz) {
+  gridCross(t, Rkk, Q, wz);
+  if (dz_.mi.empty()) return;
+  const arma::mat& Ux = moved(t, 0) ? Ux_.alt() : Ux_.cur();
+  const arma::mat& Ut = moved(t, 1) ? Ut_.alt() : Ut_.cur();
+  const arma::mat Li = 1.0 / ((moved(t, 0) ? lx_.alt() : lx_.cur()) *
+                              (moved(t, 1) ? lt_.alt() : lt_.cur()).t() + nugget_);
+  const arma::mat& B = dz_.classic ? (t.cChange ? ct_.alt() : ct_.cur())
+                                   : (fieldMoved(t, 1) ? Bf_.alt() : Bf_.cur());
+  const arma::mat C = missSolve(Ux, Ut, Li, t.simCorr ? Lm_.alt() : Lm_.cur(),
+                                fieldMoved(t, 0) ? Ax_.alt() : Ax_.cur(), B);
+  syrk_lower(C, 1.0, 1.0, Q);
+  wz -= C.t() * (t.simCorr ? hv_.alt() : hv_.cur());
+}
+
+// The targets' factors in the eigenbases: Ux' Rs_A(Xg, z[A]) and
+// Ut' Rs_B(Tg, z[B]) at z = (Xnew, kappa) (experimental x calibration: the
+// second one column, kappa's).
+void KroneckerPosterior::targetFactors(const arma::mat& Xnew, arma::mat& an, arma::mat& bn) {
+  if (dz_.classic) {
+    arma::mat rx = corr_matrix(dz_.Xg, Xnew, phi.subvec(iThetaS, iThetaS + p - 1),
+                               phi.subvec(iAlphaS, iAlphaS + p - 1), kernS_);
+    level_scale(levels, phi.memptr() + iRhoS, dz_.Xg, Xnew, rx, false);
+    an = Ux_.cur().t() * rx;
+    bn = ct_.cur();
+    return;
+  }
+  arma::mat Z(Xnew.n_rows, p + q);
+  Z.cols(0, p - 1) = Xnew.cols(0, p - 1);
+  for (int k = 0; k < q; ++k) Z.col(p + k).fill(phi[iKappa + k]);
+  an = Ux_.cur().t() * groupCorr(0, Z.cols(dz_.ca));
+  bn = Ut_.cur().t() * groupCorr(1, Z.cols(dz_.cb));
+}
+
+void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+                                      arma::mat& G) {
+  gridCondition(Xnew, a, b, G);
+  if (dz_.mi.empty()) return;
+  arma::mat an, bn;
+  targetFactors(Xnew, an, bn);
+  const arma::mat Li = 1.0 / (lx_.cur() * lt_.cur().t() + nugget_);
+  const arma::mat Cc = missSolve(Ux_.cur(), Ut_.cur(), Li, Lm_.cur(), an, bn);
+  const arma::mat Cb = missSolve(Ux_.cur(), Ut_.cur(), Li, Lm_.cur(), Ax_.cur(),
+                                 dz_.classic ? arma::mat(ct_.cur()) : Bf_.cur());
+  a -= Cc.t() * hv_.cur();
+  b -= arma::sum(arma::square(Cc), 0).t();
+  G -= Cb.t() * Cc;
+}
+
 // k_c = rx_c (x) c with rx_c = Rs(Xg, Xnew_c) and an_c = Ux' rx_c:
 //   a_c = an_c' g,  b_c = sum_i an_ic^2 w_i,  G = Ax' diag(w) An.
-void KroneckerPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
+void KroneckerPosterior::gridCondition(const arma::mat& Xnew, arma::vec& a, arma::vec& b,
                                       arma::mat& G) {
   if (!dz_.classic) {
     // general split, with an = Ux' Ra(Xg, z[A]), bn = Ut' Rb(Tg, z[B]) and
     // Li = 1 / lam: a_c = an_c' (Yt % Li) bn_c, b_c = (an_c^2)' Li bn_c^2,
     // G_uc = an_c' (Li % Ax_u Bf_u') bn_c
-    arma::mat Z(Xnew.n_rows, p + q);
-    Z.cols(0, p - 1) = Xnew.cols(0, p - 1);
-    for (int k = 0; k < q; ++k) Z.col(p + k).fill(phi[iKappa + k]);
-    const arma::mat an = Ux_.cur().t() * groupCorr(0, Z.cols(dz_.ca));
-    const arma::mat bn = Ut_.cur().t() * groupCorr(1, Z.cols(dz_.cb));
+    arma::mat an, bn;
+    targetFactors(Xnew, an, bn);
     const arma::mat Li = 1.0 / (lx_.cur() * lt_.cur().t() + nugget_);
     a = arma::sum(an % ((Yt_.cur() % Li) * bn), 0).t();
     b = arma::sum(arma::square(an) % (Li * arma::square(bn)), 0).t();
@@ -385,6 +531,33 @@ void KroneckerPosterior::simHeldout(const std::vector<std::vector<int> >& folds,
   const arma::vec& lt = lt_.cur();
   const std::vector<int>& ix = dz_.ix;
   const std::vector<int>& jt = dz_.jt;
+  if (!dz_.mi.empty()) {
+    // missing cells: a = [Ds^-1 (y0 - E M^-1 h_y)]_o and (Ds_oo^-1)_BB =
+    // (Ds^-1)_BB - C_B' C_B, C_B = Lm^-1 E' Ds^-1 E_B (see atMissing())
+    const arma::mat Li = 1.0 / (lx * lt.t() + nugget_);
+    const arma::mat& L = Lm_.cur();
+    const arma::vec w = arma::solve(arma::trimatu(L.t()), hv_.cur());
+    arma::mat Ew(dz_.I, dz_.J, arma::fill::zeros);
+    for (size_t s = 0; s < dz_.mi.size(); ++s) Ew(dz_.mi[s], dz_.mj[s]) = w[s];
+    const arma::mat A = (Ux * ((Yt_.cur() - Ux.t() * Ew * Ut) % Li)) * Ut.t();
+    a.set_size(m);
+    for (int r = 0; r < m; ++r) a[r] = A(ix[r], jt[r]);
+    QBB.resize(folds.size());
+    for (size_t k = 0; k < folds.size(); ++k) {
+      const std::vector<int>& B = folds[k];
+      const int nb = B.size();
+      arma::mat D(nb, nb), H(dz_.mi.size(), nb);
+      for (int c = 0; c < nb; ++c) {
+        const arma::mat X = Ux.row(ix[B[c]]).t() * Ut.row(jt[B[c]]);
+        const arma::mat P = (Ux * (X % Li)) * Ut.t();
+        for (int b = 0; b < nb; ++b) D(b, c) = P(ix[B[b]], jt[B[b]]);
+        H.col(c) = atMissing(Ux, Ut, Li, X);
+      }
+      const arma::mat C = arma::solve(arma::trimatl(L), H);
+      QBB[k] = D - C.t() * C;
+    }
+    return;
+  }
   arma::mat Li(dz_.I, dz_.J);
   for (int j = 0; j < dz_.J; ++j)
     for (int i = 0; i < dz_.I; ++i) Li(i, j) = 1.0 / (lx[i] * lt[j] + nugget_);
@@ -415,6 +588,8 @@ void KroneckerPosterior::simHeldout(const std::vector<std::vector<int> >& folds,
 // (Ax, ct) the same way.
 void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy,
                                    arma::mat& G, bool haveW) {
+  if (!dz_.mi.empty())
+    Rcpp::stop("the design of new runs on a product design with missing cells needs `algebra = \"dense\"`");
   const int I = dz_.I, J = dz_.J, nz = Z.n_rows;
   const arma::vec th = phi.subvec(iThetaS, iThetaS + p + q - 1);
   const arma::vec al = phi.subvec(iAlphaS, iAlphaS + p + q - 1);

@@ -53,8 +53,12 @@ test_that("auto: dense while cheap, Vecchia above, Kronecker on a product design
   kron <- ca("auto", NULL, grid, 1, "powexp", 30)
   expect_identical(kron[c("name", "code", "neighbours", "forced")],
                    list(name = "kronecker", code = 0L, neighbours = NULL, forced = FALSE))
-  # one run missing: no longer a product design, and large: Vecchia
-  expect_identical(ca("auto", NULL, grid[-1, ], 1, "powexp", 30)$name, "vecchia")
+  # one run missing: Kronecker with a missing cell (exact); half the runs
+  # missing: the 2000 x 2000 system of the missing cells costs more than a
+  # Cholesky factor of the 2000 runs, and large: Vecchia
+  expect_identical(ca("auto", NULL, grid[-1, ], 1, "powexp", 30)[c("name", "missing")],
+                   list(name = "kronecker", missing = 1L))
+  expect_identical(ca("auto", NULL, grid[sort(sample(4000, 2000)), ], 1, "powexp", 30)$name, "vecchia")
   expect_snapshot({
     writeLines(small$reason)
     writeLines(large$reason)

@@ -32,7 +32,9 @@ test_that("product designs of any two groups of columns are recognised, and only
     expect_identical(attr(got, "a"), s$a)
     # not experimental x calibration settings: none without `general`
     expect_identical(.sim_algebra(d$Xs, s$p), integer(0))
-    expect_identical(.sim_algebra(d$Xs[-3, ], s$p, 0L, TRUE), integer(0))
+    # a run missing: a missing cell; a run twice: no product
+    expect_identical(attr(.sim_algebra(d$Xs[-3, ], s$p, 0L, TRUE), "missing"), 1L)
+    expect_identical(.sim_algebra(d$Xs[c(1, seq_len(nrow(d$Xs))), ], s$p, 0L, TRUE), integer(0))
   }
   # experimental x calibration first, with `general` as without it
   e <- split_data(6, 5, 1:2, 3, 2, 4, seed = 2)

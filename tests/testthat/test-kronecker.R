@@ -25,12 +25,14 @@ test_that("product designs are recognised in any row order, and only they", {
   expect_identical(.sim_algebra(d$Xs, 2L), c(6L, 5L))
   expect_identical(.sim_algebra(d$Xs[rev(seq_len(30)), ], 2L), c(6L, 5L))
   expect_identical(.sim_algebra(d$Xs, 2L, 1L), integer(0))  # algebra = "dense"
-  # one run missing, one run twice, one input nudged: no product
-  expect_identical(.sim_algebra(d$Xs[-7, ], 2L), integer(0))
+  # one run missing: a missing cell; one input nudged: a 7th setting of
+  # one run, 5 cells missing (test-kronecker-missing.R); one run twice: no
+  # product
+  expect_identical(.sim_algebra(d$Xs[-7, ], 2L), structure(c(6L, 5L), missing = 1L))
   expect_identical(.sim_algebra(d$Xs[c(1:29, 1), ], 2L), integer(0))
   nudged <- d$Xs
   nudged[3, 1] <- nudged[3, 1] + 1e-12
-  expect_identical(.sim_algebra(nudged, 2L), integer(0))
+  expect_identical(.sim_algebra(nudged, 2L), structure(c(7L, 5L), missing = 5L))
   # the split between experimental and calibration columns matters: the
   # first three columns do not take 6 values against 5 of the last
   expect_identical(.sim_algebra(d$Xs, 3L), integer(0))
@@ -200,10 +202,10 @@ test_that("calibrate() uses the Kronecker algebra on a product design and says s
   expect_equal(dense$Phi, fit$Phi, tolerance = 1e-6)
   # prediction goes through the fit's algebra
   expect_equal(predict(dense, c(0.2, 0.5))$pred, predict(fit, c(0.2, 0.5))$pred, tolerance = 1e-6)
-  # a near-product design (one run missing) falls back to the dense algebra
+  # a near-product design (one run missing): Kronecker with a missing cell
   set.seed(13)
   near <- calibrate(sim[-4, ], field, nMCMC = 60, nBurn = 20, nChains = 1)
-  expect_identical(near$model$algebra$name, "dense")
+  expect_identical(near$model$algebra[c("name", "missing")], list(name = "kronecker", missing = 1L))
 })
 
 test_that("kappa draws on a product design match the grid posterior", {
