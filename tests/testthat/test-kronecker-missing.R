@@ -100,8 +100,19 @@ test_that("calibrate() keeps the Kronecker algebra when runs of a product design
                                       algebra = "dense"))
   expect_equal(dense$Phi, fit$Phi, tolerance = 1e-6)
   expect_equal(predict(dense, c(0.2, 0.5))$pred, predict(fit, c(0.2, 0.5))$pred, tolerance = 1e-6)
-  # set.seed() reproduces the run
+  # set.seed() reproduces the run, and a checkpointed run (the chain in
+  # pieces of 50 sweeps, each resumed from its checkpoint) makes its draws:
+  # the missing cells add no state to the chain
   set.seed(13)
   again <- suppressMessages(calibrate(sim, field, nMCMC = 60, nBurn = 20, nChains = 1))
   expect_identical(again$Phi, fit$Phi)
+  dir <- tempfile("ck-")
+  on.exit(unlink(dir, recursive = TRUE), add = TRUE)
+  set.seed(14)
+  plain <- suppressMessages(calibrate(sim, field, nMCMC = 160, nBurn = 40, nChains = 1))
+  set.seed(14)
+  ck <- suppressMessages(calibrate(sim, field, nMCMC = 160, nBurn = 40, nChains = 1,
+                                   checkpoint = dir, checkpointEvery = 0))
+  expect_identical(ck$Phi, plain$Phi)
+  expect_true(file.exists(file.path(dir, "chain-1.rds")))
 })
