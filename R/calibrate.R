@@ -157,6 +157,11 @@
 #'   the rest, the replicates entering by their sufficient statistics) or
 #'   `"input"` (not available yet). The field is the system's mean
 #'   behaviour: its noise is measurement error only.
+#' @param threads Threads inside each chain (OpenMP), for the
+#'   nearest-neighbour algebra's conditionals: the draws are the same for
+#'   any number. `1` (the default) uses one core per chain; chains times
+#'   threads should not exceed the cores (see `vignette("clusters")`). A
+#'   build without OpenMP runs one thread.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -211,10 +216,10 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE, nonFinite = c("error", "reject"),
                       failedRuns = c("setAside", "error"),
-                      simNoise = c("auto", "none", "constant", "input")) {
+                      simNoise = c("auto", "none", "constant", "input"), threads = 1L) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
-                   checkpointEvery)
+                   checkpointEvery, threads)
   if (inherits(sim, "fbc_model")) return(fit_model(model_to_fit(sim, call), run))
   check_flag(fit, "fit")
   failedRuns <- match_choice(failedRuns, c("setAside", "error"), "failedRuns")
