@@ -193,14 +193,18 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   // by it (O(nu m) memory: the cross terms' share, 12 bytes each)
   xOrd_.resize((size_t) m * nu_);
   xD2_.resize((size_t) m * nu_);
-  std::vector<double> xj(p);
-  std::vector<int> all;
+  const int nt = nt_;
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(static) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
-    for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-    nearest(Xs_, nullptr, m, xj.data(), vd_.w, p, m, cand, all);  // all m, sorted (cand)
+    Work& w = ws_[thread_id()];
+    std::vector<int> all;
+    for (int d = 0; d < p; ++d) w.x[d] = Xu_.at(j, d);
+    nearest(Xs_, nullptr, m, w.x.data(), vd_.w, p, m, w.cand, all);  // all m, sorted (cand)
     for (int r = 0; r < m; ++r) {
-      xD2_[(size_t) j * m + r] = cand[r].first;
-      xOrd_[(size_t) j * m + r] = cand[r].second;
+      xD2_[(size_t) j * m + r] = w.cand[r].first;
+      xOrd_[(size_t) j * m + r] = w.cand[r].second;
     }
   }
   dt_.set_size(m, q);
@@ -495,9 +499,14 @@ void VecchiaPosterior::simCross(const Touch& t, const arma::mat&, arma::mat& Q, 
 //   Mi[i, j] = 0 - sum_{l in L_i, l >= j, ascending} Mi[l, j] M[i, l]  (i > j),
 //   wz[i] = 0 + sum_{j <= i} h[j] Mi[i, j],
 //   Q[i, j] = 0 + sum_{l <= j} Mi[j, l] (Mi[i, l] g[l])  (i >= j).
-// O(nu^2 kf + nu^3 / 6) instead of O(nu^3 4 / 3) with dense M.
+// O(nu^2 kf + nu^3 / 6) instead of O(nu^3 4 / 3) with dense M. The columns
+// of Mi and of Q are independent: in parallel.
 void VecchiaPosterior::latentSolve(arma::mat& Q, arma::vec& wz) {
+  const int nt = nt_;
   Mi_.zeros(nu_, nu_);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 4) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
     Mi_.at(j, j) = 1.0;
     for (int i = j + 1; i < nu_; ++i) {
@@ -520,6 +529,9 @@ void VecchiaPosterior::latentSolve(arma::mat& Q, arma::vec& wz) {
   for (int l = 0; l < nu_; ++l)
     for (int i = l; i < nu_; ++i) Ag_.at(i, l) = Mi_.at(i, l) * gL_[l];
   Q.set_size(nu_, nu_);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 4) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
     double* qj = Q.colptr(j);
     for (int i = j; i < nu_; ++i) qj[i] = 0.0;
