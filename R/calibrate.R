@@ -157,11 +157,12 @@
 #'   the rest, the replicates entering by their sufficient statistics) or
 #'   `"input"` (not available yet). The field is the system's mean
 #'   behaviour: its noise is measurement error only.
-#' @param threads Threads inside each chain (OpenMP), for the
-#'   nearest-neighbour algebra's conditionals: the draws are the same for
-#'   any number. `1` (the default) uses one core per chain; chains times
-#'   threads should not exceed the cores (see `vignette("clusters")`). A
-#'   build without OpenMP runs one thread.
+#' @param threads Threads inside each chain (OpenMP) for the
+#'   nearest-neighbour algebra's conditionals (the other algebras run one):
+#'   the draws are the same for any number. `1` (the default) is one core
+#'   per chain; keep chains running at once times `threads` within the
+#'   cores, and see `vignette("clusters")` for that and for
+#'   `OPENBLAS_NUM_THREADS`. A build without OpenMP runs one thread.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
