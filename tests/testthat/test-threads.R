@@ -29,7 +29,7 @@ test_that("the Vecchia log-likelihood along the sampler's moves is the same for 
 })
 
 test_that("a Vecchia fit with 2 threads has the draws of one thread, and update() keeps its threads", {
-  skip_if_not(FBC:::.has_openmp(), "built without OpenMP")
+  # (without OpenMP: the same, on one thread)
   args <- list(ballSim, ballField, nMCMC = 60, nBurn = 40, nChains = 1, converge = FALSE,
                algebra = "vecchia", neighbours = 8)
   set.seed(11)
