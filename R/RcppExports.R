@@ -85,6 +85,10 @@
     .Call(`_FBC_fbc_sim_mean`, Xf, yf, Xs, ys, phis, nugget, model)
 }
 
+.has_openmp <- function() {
+    .Call(`_FBC_has_openmp`)
+}
+
 .vecchia_order <- function(X, w) {
     .Call(`_FBC_vecchia_order`, X, w)
 }

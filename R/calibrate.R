@@ -169,6 +169,12 @@
 #'   the rest, the replicates entering by their sufficient statistics) or
 #'   `"input"` (not available yet). The field is the system's mean
 #'   behaviour: its noise is measurement error only.
+#' @param threads Threads inside each chain (OpenMP) for the
+#'   nearest-neighbour algebra's conditionals (the other algebras run one):
+#'   the draws are the same for any number. `1` (the default) is one core
+#'   per chain; keep chains running at once times `threads` within the
+#'   cores, and see `vignette("clusters")` for that and for
+#'   `OPENBLAS_NUM_THREADS`. A build without OpenMP runs one thread.
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
@@ -223,10 +229,10 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE, nonFinite = c("error", "reject"),
                       failedRuns = c("setAside", "error"),
-                      simNoise = c("auto", "none", "constant", "input")) {
+                      simNoise = c("auto", "none", "constant", "input"), threads = 1L) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
-                   checkpointEvery)
+                   checkpointEvery, threads)
   if (inherits(sim, "fbc_model")) return(fit_model(model_to_fit(sim, call), run))
   check_flag(fit, "fit")
   failedRuns <- match_choice(failedRuns, c("setAside", "error"), "failedRuns")

@@ -346,16 +346,23 @@ print.fbc_model <- function(x, ...) {
 
 # The run's settings of calibrate(), checked.
 check_run <- function(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
-                      checkpointEvery, call = parent.frame()) {
+                      checkpointEvery, threads = 1L, call = parent.frame()) {
   # nMCMC, nBurn, thinning and the rule (check_run_length(): NULL nBurn is
   # the adaptive warm-up's bounds, NULL nMCMC a run until converged)
   len <- check_run_length(nMCMC, nBurn, thinning, converge, call = call)
   nChains <- check_count(nChains, "nChains", min = 1, call = call)
   showProgress <- default_progress(showProgress, call = call)
   check_checkpoint(checkpoint, checkpointEvery, call = call)
+  threads <- check_threads(threads, call = call)
   list(nMCMC = len$nMCMC, nBurn = len$nBurn, thinning = len$thinning, nChains = nChains,
        converge = len$converge, showProgress = showProgress, checkpoint = checkpoint,
-       every = checkpointEvery)
+       every = checkpointEvery, threads = threads)
+}
+
+# Checks `threads`: a whole number, at least 1 (the draws do not depend on
+# it, so it is no part of a run's identity).
+check_threads <- function(threads, call = parent.frame()) {
+  check_count(threads, "threads", min = 1, call = call)
 }
 
 # The arguments of calibrate() that describe the model (the others are the
@@ -407,6 +414,9 @@ identity_settings <- function(model, run) {
 # Runs the chains of `model` with the run's settings `run` (check_run())
 # and returns the fit.
 fit_model <- function(model, run, call = model$call) {
+  # the compiled core reads the threads from the model description (absent:
+  # one); the fit keeps them there, so update() runs with the same
+  model$spec$model$threads <- if (run$threads > 1L) run$threads
   spec <- model$spec
   dat <- model$data
   d <- model$dims

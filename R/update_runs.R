@@ -113,6 +113,7 @@ update_runs <- function(fit, sim, nMCMC = NULL, nBurn = NULL, converge = NULL,
   model <- muffle_wide_outputs(do.call(build_model, c(list(sim = allSim), rest,
                                                      list(call = environment()))))
   model$call <- fit$call
+  model$spec$model$threads <- old$spec$model$threads
   if (!identical(model$spec$vars, old$spec$vars)) {
     cli::cli_abort(c(
       "With the new runs the model has other parameters ({format_names(setdiff(union(model$spec$vars, old$spec$vars), intersect(model$spec$vars, old$spec$vars)))}), so the chains cannot go on from where they stopped.",

@@ -15,6 +15,7 @@ benchmarks <- c(
   applications = "the shipped applications with the defaults",
   scale        = "functional output (Kronecker) and large dense designs",
   vecchia      = "the nearest-neighbour algebra, m = 1000 ... 100,000",
+  threads      = "threads inside a chain: the nearest-neighbour sweep with 1 and 2 threads",
   outputs      = "several outputs on a product design",
   "outputs-study" = "several outputs, known truth: pooled against one output",
   discrepancy  = "the discrepancy models against a known L2 projection",

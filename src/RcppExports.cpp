@@ -355,6 +355,16 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// has_openmp
+bool has_openmp();
+RcppExport SEXP _FBC_has_openmp() {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    rcpp_result_gen = Rcpp::wrap(has_openmp());
+    return rcpp_result_gen;
+END_RCPP
+}
 // vecchia_order
 Rcpp::IntegerVector vecchia_order(const arma::mat& X, const arma::vec& w);
 RcppExport SEXP _FBC_vecchia_order(SEXP XSEXP, SEXP wSEXP) {
@@ -404,6 +414,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
     {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 13},
     {"_FBC_fbc_sim_mean", (DL_FUNC) &_FBC_fbc_sim_mean, 7},
+    {"_FBC_has_openmp", (DL_FUNC) &_FBC_has_openmp, 0},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
     {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},
     {NULL, NULL, 0}

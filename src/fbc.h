@@ -121,6 +121,7 @@ struct Model {
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
   VecchiaDesign vecchia;  // with algebra ALG_VECCHIA
+  int threads = 1;        // OpenMP threads inside a chain (calibrate(threads =))
   // the simulator is a user's R function (function.cpp): no simulator GP,
   // so thetaS, alphaS, rhoS and sigma2S have length 0 in the layout
   bool emulator = true;
@@ -729,22 +730,30 @@ private:
   VecchiaDesign vd_;
   std::vector<std::vector<int> > nbrL_;  // each field latent's earlier latents
   Buf2<std::vector<int> > nbrF_;         // the field latents' runs (nu x k) at kappa
-  arma::mat Kw_, Xg_;                    // one conditional's system
+  // one conditional's system, one per thread: rows Xg, factor Kw, rhs; the
+  // distances, correlations, products (Gw, Cw, Ww); fieldNeighbours()'
+  // (d2, run) of the runs that may be among a latent's k nearest
+  struct Work {
+    arma::mat Kw, Xg;
+    arma::vec rhs;
+    std::vector<double> Gw, Cw, Ww, x;
+    std::vector<std::pair<double, int> > cand;
+  };
+  std::vector<Work> ws_;
+  int nt_ = 1;                           // threads
+  std::vector<double> runLd_, runZz_;    // runsPass()'s per-run terms, summed in order
   arma::vec levelZ_;                     // rhoS the level correlations levelC_ are of
   std::vector<arma::mat> levelC_;
-  arma::vec rhs_;
+  void syncLevels();
   std::vector<int> xOrd_;                // per field input the runs by their scaled
   std::vector<double> xD2_;              // squared distance's experimental part (m x nu)
   arma::mat dt_;                         // m x q workspace: (w (t - kappa))^2
-  std::vector<std::pair<double, int> > cand_;  // fieldNeighbours(): (d2, run) of the runs
-                                               // that may be among a latent's k nearest
   // the runs' conditioning sets' distance values (cacheRuns()): run i's
   // c_i = runC_[i] neighbours, its values from runOff_[i] in runG_ (empty:
   // not cached)
   std::vector<int> runC_;
   std::vector<size_t> runOff_;
   std::vector<double> runG_;
-  std::vector<double> Gw_, Cw_, Ww_;     // one system's distances, correlations, products
   void cacheRuns();
   // simCross()'s latent algebra: each latent's earlier latents by index
   // (latent, place in nbrL_), M's entries of each row, g and h, Mi and Mi
@@ -755,11 +764,11 @@ private:
   arma::mat Mi_, Ag_;
   void latentSolve(arma::mat& Q, arma::vec& wz);
   const double* runDist(int i) const { return runG_.empty() ? nullptr : runG_.data() + runOff_[i]; }
-  double conditional(int s, int runs, bool coef, const double* G = nullptr,
-                     const double* y = nullptr);
+  double conditional(Work& w, int s, int runs, bool coef, const double* G = nullptr,
+                     const double* y = nullptr) const;
   void fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev);
-  int gather(const int* nb, int c, const std::vector<int>& L, const double* x);
-  int gatherRun(int i);
+  int gather(Work& w, const int* nb, int c, const std::vector<int>& L, const double* x) const;
+  int gatherRun(Work& w, int i) const;
 };
 
 // Independent outputs (outputs.cpp): the covariance of (yf, ys) is block

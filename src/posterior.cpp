@@ -141,6 +141,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   out.kernS = Rcpp::as<int>(model["kernS"]);
   out.kernB = Rcpp::as<int>(model["kernB"]);
   out.algebra = Rcpp::as<int>(model["algebra"]);
+  if (model.containsElementNamed("threads")) out.threads = Rcpp::as<int>(model["threads"]);
   read_groups(model, p, out);
   // a simulator given as a function (function.cpp) has no simulator GP
   out.emulator = !model.containsElementNamed("simulator");

@@ -24,8 +24,37 @@
 // Ordering and the runs' neighbours are computed once (in R, through
 // .vecchia_order() and .vecchia_neighbours()) and handed over with the model;
 // the field latents' neighbours among the runs follow kappa.
+//
+// Threads (Model::threads, OpenMP): the runs' and the field latents'
+// conditionals are independent, so each thread computes some of them in its
+// own workspace (Work) into per-node slots, which one thread then sums in
+// node order: the same operations in the same order as one thread, so the
+// same numbers for any number of threads. No R API, R RNG or BLAS call
+// inside a parallel region (the conditionals' factors are small_chol()).
 #include "fbc.h"
 #include <algorithm>
+#include <limits>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+static inline int thread_id() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+// Whether this build has OpenMP (else calibrate(threads =) runs one thread).
+// [[Rcpp::export(.has_openmp)]]
+bool has_openmp() {
+#ifdef _OPENMP
+  return true;
+#else
+  return false;
+#endif
+}
 
 // Squared scaled distance between row a of X and the point y (first K
 // columns).
@@ -125,13 +154,22 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   if ((int) vd_.ord.size() != m || (int) vd_.nbr.size() != m * vd_.k || (int) vd_.w.n_elem != K)
     Rcpp::stop("the Vecchia design does not fit the simulator runs");
   const int smax = vd_.k + vd_.kf + 1;
-  Kw_.set_size(smax + 1, smax);  // a row more: runsPass()'s L^-1 y
-  Xg_.set_size(smax, K);
-  rhs_.set_size(smax);
+#ifdef _OPENMP
+  nt_ = std::max(1, model.threads);
+#endif
+  ws_.resize(nt_);
   const size_t nemax = (size_t) smax * (smax + 1) / 2;
-  Gw_.resize(nemax * K);
-  Cw_.resize(nemax);
-  Ww_.resize(nemax);
+  for (Work& w : ws_) {
+    w.Kw.set_size(smax + 1, smax);  // a row more: runsPass()'s L^-1 y
+    w.Xg.set_size(smax, K);
+    w.rhs.set_size(smax);
+    w.Gw.resize(nemax * K);
+    w.Cw.resize(nemax);
+    w.Ww.resize(nemax);
+    w.x.resize(K);
+  }
+  runLd_.resize(m);
+  runZz_.resize(m);
   cacheRuns();
   // each field latent's earlier latents: the kf nearest in the scaled
   // experimental inputs (they share kappa)
@@ -155,14 +193,18 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   // by it (O(nu m) memory: the cross terms' share, 12 bytes each)
   xOrd_.resize((size_t) m * nu_);
   xD2_.resize((size_t) m * nu_);
-  std::vector<double> xj(p);
-  std::vector<int> all;
+  const int nt = nt_;
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(static) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
-    for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-    nearest(Xs_, nullptr, m, xj.data(), vd_.w, p, m, cand, all);  // all m, sorted (cand)
+    Work& w = ws_[thread_id()];
+    std::vector<int> all;
+    for (int d = 0; d < p; ++d) w.x[d] = Xu_.at(j, d);
+    nearest(Xs_, nullptr, m, w.x.data(), vd_.w, p, m, w.cand, all);  // all m, sorted (cand)
     for (int r = 0; r < m; ++r) {
-      xD2_[(size_t) j * m + r] = cand[r].first;
-      xOrd_[(size_t) j * m + r] = cand[r].second;
+      xD2_[(size_t) j * m + r] = w.cand[r].first;
+      xOrd_[(size_t) j * m + r] = w.cand[r].second;
     }
   }
   dt_.set_size(m, q);
@@ -201,54 +243,59 @@ void VecchiaPosterior::cacheRuns() {
   if (!(runOff_[m] * sizeof(double) <= mb * 1048576.0)) return;
   runG_.resize(runOff_[m]);
   for (int i = 0; i < m; ++i) {
-    const int c = gatherRun(i);
-    kernel_dist_tri(kernS_, Xg_, c + 1, K, runG_.data() + runOff_[i]);
+    const int c = gatherRun(ws_[0], i);
+    kernel_dist_tri(kernS_, ws_[0].Xg, c + 1, K, runG_.data() + runOff_[i]);
   }
 }
 
-// The conditional of the node in the last of the s rows of Xg_ given the
-// others (the first `runs` of them simulator runs, with the nugget): the
-// factor of their joint correlation in Kw_, coefficients into rhs_[0 .. s-2]
-// (when `coef`), returns the conditional variance (NaN when the factor
-// fails even with a jitter on the latents). G: the rows' per-dimension
-// distance values (kernel_dist_tri(); null: computed here from Xg_). y (s
-// values, or null): L^-1 y into row s of Kw_.
-double VecchiaPosterior::conditional(int s, int runs, bool coef, const double* G,
-                                     const double* y) {
-  const int K = p + q, lda = Kw_.n_rows;
-  const double* thetaS = phi.memptr() + iThetaS;
-  const double* alphaS = phi.memptr() + iAlphaS;
-  // the levels' correlations, recomputed only when their rhoS moved
+// The levels' correlations levelC_ at phi's rhoS, recomputed only when
+// they moved; before the conditionals (which read levelC_) of a pass.
+void VecchiaPosterior::syncLevels() {
   const int nz = level_count(levels);
   if (nz && (levelZ_.n_elem != (arma::uword) nz ||
              arma::any(levelZ_ != phi.subvec(iRhoS, iRhoS + nz - 1)))) {
     levelZ_ = phi.subvec(iRhoS, iRhoS + nz - 1);
     level_corr(levels, levelZ_.memptr(), levelC_);
   }
+}
+
+// The conditional of the node in the last of the s rows of w.Xg given the
+// others (the first `runs` of them simulator runs, with the nugget): the
+// factor of their joint correlation in w.Kw, coefficients into w.rhs[0 ..
+// s-2] (when `coef`), returns the conditional variance (NaN when the factor
+// fails even with a jitter on the latents). G: the rows' per-dimension
+// distance values (kernel_dist_tri(); null: computed here from w.Xg). y (s
+// values, or null): L^-1 y into row s of w.Kw. Reads only phi and levelC_
+// (syncLevels()), so threads may call it, each with its own w.
+double VecchiaPosterior::conditional(Work& w, int s, int runs, bool coef, const double* G,
+                                     const double* y) const {
+  const int K = p + q, lda = w.Kw.n_rows;
+  const double* thetaS = phi.memptr() + iThetaS;
+  const double* alphaS = phi.memptr() + iAlphaS;
   const size_t ne = (size_t) s * (s + 1) / 2;
   if (!G) {
-    kernel_dist_tri(kernS_, Xg_, s, K, Gw_.data());
-    G = Gw_.data();
+    kernel_dist_tri(kernS_, w.Xg, s, K, w.Gw.data());
+    G = w.Gw.data();
   }
-  kernel_corr_flat(kernS_, G, ne, K, thetaS, alphaS, Cw_.data(), Ww_.data());
+  kernel_corr_flat(kernS_, G, ne, K, thetaS, alphaS, w.Cw.data(), w.Ww.data());
   for (double jitter = 0.0; jitter < 1e-3; jitter = jitter == 0.0 ? 1e-10 : 100 * jitter) {
-    const double* r = Cw_.data();
+    const double* r = w.Cw.data();
     for (int j = 0; j < s; ++j) {
-      std::memcpy(Kw_.colptr(j) + j, r, (s - j) * sizeof(double));
+      std::memcpy(w.Kw.colptr(j) + j, r, (s - j) * sizeof(double));
       r += s - j;
     }
-    level_scale(levels, levelC_, Xg_, Xg_, Kw_, true, s);
-    for (int i = 0; i < s; ++i) Kw_.at(i, i) += i < runs ? nugget_ : jitter;
-    if (y) for (int j = 0; j < s; ++j) Kw_.at(s, j) = y[j];
-    if (!small_chol(Kw_.memptr(), s, lda, y ? s + 1 : s)) continue;
+    level_scale(levels, levelC_, w.Xg, w.Xg, w.Kw, true, s);
+    for (int i = 0; i < s; ++i) w.Kw.at(i, i) += i < runs ? nugget_ : jitter;
+    if (y) for (int j = 0; j < s; ++j) w.Kw.at(s, j) = y[j];
+    if (!small_chol(w.Kw.memptr(), s, lda, y ? s + 1 : s)) continue;
     if (coef) {
-      for (int l = 0; l < s - 1; ++l) rhs_[l] = Kw_.at(s - 1, l);
-      small_back(Kw_.memptr(), s - 1, lda, rhs_.memptr());
+      for (int l = 0; l < s - 1; ++l) w.rhs[l] = w.Kw.at(s - 1, l);
+      small_back(w.Kw.memptr(), s - 1, lda, w.rhs.memptr());
     }
-    const double d = Kw_.at(s - 1, s - 1);
+    const double d = w.Kw.at(s - 1, s - 1);
     return d * d;
   }
-  return R_NaN;
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 // log|Ds| and ys' Ds^-1 ys over the runs' conditionals (those of the last
@@ -291,38 +338,48 @@ bool VecchiaPosterior::simPreview(const std::vector<int>& idx, const arma::vec& 
   return true;
 }
 
-// The runs' conditionals at phi: log|Ds| ~ sum log d_i, zz ~ sum e_i^2 / d_i.
+// The runs' conditionals at phi: log|Ds| ~ sum log d_i, zz ~ sum e_i^2 / d_i
+// (the terms in parallel, the sums in run order).
 bool VecchiaPosterior::runsPass(double& ldDs, double& zz) {
-  const int k = vd_.k;
+  const int k = vd_.k, nt = nt_;
   const bool gather = runG_.empty() || !levels.empty();
+  syncLevels();
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(static) if (nt > 1)
+#endif
+  for (int i = 0; i < m; ++i) {
+    Work& w = ws_[thread_id()];
+    const int* nb = vd_.nbr.data() + (size_t) i * k;
+    const int c = gather ? gatherRun(w, i) : runC_[i];
+    for (int r = 0; r < c; ++r) w.rhs[r] = ys_[nb[r]];
+    w.rhs[c] = ys_[vd_.ord[i]];
+    // z = L^-1 [ys_N; ys_s] in row c + 1 of Kw: its last entry is e / sqrt(d)
+    const double v = conditional(w, c + 1, c + 1, false, runDist(i), w.rhs.memptr());
+    const double z = w.Kw.at(c + 1, c);
+    runLd_[i] = v > 0 ? std::log(v) : std::numeric_limits<double>::quiet_NaN();
+    runZz_[i] = z * z;
+  }
   double ld = 0.0, qq = 0.0;
   for (int i = 0; i < m; ++i) {
-    const int* nb = vd_.nbr.data() + (size_t) i * k;
-    const int c = gather ? gatherRun(i) : runC_[i];
-    for (int r = 0; r < c; ++r) rhs_[r] = ys_[nb[r]];
-    rhs_[c] = ys_[vd_.ord[i]];
-    // z = L^-1 [ys_N; ys_s] in row c + 1 of Kw_: its last entry is e / sqrt(d)
-    const double v = conditional(c + 1, c + 1, false, runDist(i), rhs_.memptr());
-    if (!(v > 0)) return false;
-    const double z = Kw_.at(c + 1, c);
-    ld += std::log(v);
-    qq += z * z;
+    if (std::isnan(runLd_[i])) return false;
+    ld += runLd_[i];
+    qq += runZz_[i];
   }
   ldDs = ld; zz = qq;
   return true;
 }
 
-// Gathers run i's conditioning system into Xg_: its earlier neighbours,
+// Gathers run i's conditioning system into w.Xg: its earlier neighbours,
 // then the run itself (the i-th in the maximin order); returns the number
 // of neighbours c (c + 1 rows).
-int VecchiaPosterior::gatherRun(int i) {
+int VecchiaPosterior::gatherRun(Work& w, int i) const {
   const int K = p + q, k = vd_.k;
   const int* nb = vd_.nbr.data() + (size_t) i * k;
   int c = 0;
   for (; c < k && nb[c] >= 0; ++c)
-    for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(nb[c], d);
+    for (int d = 0; d < K; ++d) w.Xg.at(c, d) = Xs_.at(nb[c], d);
   const int s = vd_.ord[i];
-  for (int d = 0; d < K; ++d) Xg_.at(c, d) = Xs_.at(s, d);
+  for (int d = 0; d < K; ++d) w.Xg.at(c, d) = Xs_.at(s, d);
   return c;
 }
 
@@ -337,9 +394,9 @@ int VecchiaPosterior::gatherRun(int i) {
 // k-th smallest d2 at the new one by the largest of their new d2, T: only
 // runs with dx2 <= T can have d2 <= T (the kappa part is >= 0), so the
 // scan of the sorted dx2 stops there and only runs with d2 <= T are sorted
-// (every run when prev has none).
+// (every run when prev has none). Latents in parallel.
 void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev) {
-  const int k = vd_.k, kk = std::min(k, m);
+  const int k = vd_.k, kk = std::min(k, m), nt = nt_;
   for (int d = 0; d < q; ++d) {
     const double wd = vd_.w[p + d], kap = phi[iKappa + d];
     double* out = dt_.colptr(d);
@@ -349,75 +406,86 @@ void VecchiaPosterior::fieldNeighbours(std::vector<int>& nbrF, const std::vector
     for (int d = 0; d < q; ++d) s2 += dt_.at(i, d);
     return s2;
   };
-  std::vector<double> xj(p);
+  const double inf = std::numeric_limits<double>::infinity();
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(static) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
+    Work& w = ws_[thread_id()];
+    std::vector<std::pair<double, int> >& cand = w.cand;
     const int* oj = xOrd_.data() + (size_t) j * m;
     const double* vj = xD2_.data() + (size_t) j * m;
     const int* pj = prev.data() + (size_t) j * k;
-    double T = R_PosInf;
+    double T = inf;
     if (kk > 0 && pj[kk - 1] >= 0) {
-      for (int d = 0; d < p; ++d) xj[d] = Xu_.at(j, d);
-      T = R_NegInf;
+      for (int d = 0; d < p; ++d) w.x[d] = Xu_.at(j, d);
+      T = -inf;
       for (int r = 0; r < kk; ++r)
-        T = std::max(T, d2(scaled_d2(Xs_, pj[r], xj.data(), vd_.w, p), pj[r]));
+        T = std::max(T, d2(scaled_d2(Xs_, pj[r], w.x.data(), vd_.w, p), pj[r]));
     }
-    cand_.clear();
+    cand.clear();
     for (int r = 0; r < m && !(vj[r] > T); ++r) {
       const double s2 = d2(vj[r], oj[r]);
-      if (!(s2 > T)) cand_.emplace_back(s2, oj[r]);
+      if (!(s2 > T)) cand.emplace_back(s2, oj[r]);
     }
-    if ((int) cand_.size() < kk) {  // NaN distances: every run
-      cand_.clear();
-      for (int r = 0; r < m; ++r) cand_.emplace_back(d2(vj[r], oj[r]), oj[r]);
+    if ((int) cand.size() < kk) {  // NaN distances: every run
+      cand.clear();
+      for (int r = 0; r < m; ++r) cand.emplace_back(d2(vj[r], oj[r]), oj[r]);
     }
-    std::partial_sort(cand_.begin(), cand_.begin() + kk, cand_.end());
-    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? cand_[r].second : -1;
+    std::partial_sort(cand.begin(), cand.begin() + kk, cand.end());
+    for (int r = 0; r < k; ++r) nbrF[(size_t) j * k + r] = r < kk ? cand[r].second : -1;
   }
 }
 
-// Gathers [runs nb (its first c entries); latents L; the point x] into Xg_
+// Gathers [runs nb (its first c entries); latents L; the point x] into w.Xg
 // (latents and the point at kappa); returns the number of rows.
-int VecchiaPosterior::gather(const int* nb, int c, const std::vector<int>& L, const double* x) {
+int VecchiaPosterior::gather(Work& w, const int* nb, int c, const std::vector<int>& L,
+                             const double* x) const {
   const int K = p + q;
+  arma::mat& Xg = w.Xg;
   int r = 0;
   for (int a = 0; a < c; ++a, ++r)
-    for (int d = 0; d < K; ++d) Xg_.at(r, d) = Xs_.at(nb[a], d);
+    for (int d = 0; d < K; ++d) Xg.at(r, d) = Xs_.at(nb[a], d);
   for (int l : L) {
-    for (int d = 0; d < p; ++d) Xg_.at(r, d) = Xu_.at(l, d);
-    for (int d = 0; d < q; ++d) Xg_.at(r, p + d) = phi[iKappa + d];
+    for (int d = 0; d < p; ++d) Xg.at(r, d) = Xu_.at(l, d);
+    for (int d = 0; d < q; ++d) Xg.at(r, p + d) = phi[iKappa + d];
     ++r;
   }
-  for (int d = 0; d < p; ++d) Xg_.at(r, d) = x[d];
-  for (int d = 0; d < q; ++d) Xg_.at(r, p + d) = phi[iKappa + d];
+  for (int d = 0; d < p; ++d) Xg.at(r, d) = x[d];
+  for (int d = 0; d < q; ++d) Xg.at(r, p + d) = phi[iKappa + d];
   return r + 1;
 }
 
 // wz = M^-1 h and Q = M^-1 diag(g) M^-T (lower) from the latents'
-// conditionals at the current state (see the top); latentSolve() does the
-// algebra.
+// conditionals at the current state (see the top), in parallel;
+// latentSolve() does the algebra.
 void VecchiaPosterior::simCross(const Touch& t, const arma::mat&, arma::mat& Q, arma::vec& wz) {
   std::vector<int>& nbrF = t.cChange ? nbrF_.alt() : nbrF_.cur();
   if (t.cChange) fieldNeighbours(nbrF, nbrF_.cur());
-  const int k = vd_.k;
+  const int k = vd_.k, nt = nt_;
   hL_.set_size(nu_);
   gL_.set_size(nu_);
   cL_.resize(nbrL_.size());
-  std::vector<double> x(p);
+  syncLevels();
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(static) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
+    Work& w = ws_[thread_id()];
     const int* nb = nbrF.data() + (size_t) j * k;
     int c = 0;
     while (c < k && nb[c] >= 0) ++c;
     const std::vector<int>& L = nbrL_[j];
-    for (int d = 0; d < p; ++d) x[d] = Xu_.at(j, d);
-    const int s = gather(nb, c, L, x.data());
-    double v = conditional(s, c, true);
+    for (int d = 0; d < p; ++d) w.x[d] = Xu_.at(j, d);
+    const int s = gather(w, nb, c, L, w.x.data());
+    double v = conditional(w, s, c, true);
     if (!(v >= 0)) v = 0.0;
     gL_[j] = v;
     double hj = 0.0;
-    for (int a = 0; a < c; ++a) hj += rhs_[a] * ys_[nb[a]];
+    for (int a = 0; a < c; ++a) hj += w.rhs[a] * ys_[nb[a]];
     hL_[j] = hj;
     cL_[j].resize(L.size());
-    for (size_t l = 0; l < L.size(); ++l) cL_[j][l] = -rhs_[c + l];  // M[j, L[l]]
+    for (size_t l = 0; l < L.size(); ++l) cL_[j][l] = -w.rhs[c + l];  // M[j, L[l]]
   }
   latentSolve(Q, wz);
 }
@@ -431,9 +499,14 @@ void VecchiaPosterior::simCross(const Touch& t, const arma::mat&, arma::mat& Q, 
 //   Mi[i, j] = 0 - sum_{l in L_i, l >= j, ascending} Mi[l, j] M[i, l]  (i > j),
 //   wz[i] = 0 + sum_{j <= i} h[j] Mi[i, j],
 //   Q[i, j] = 0 + sum_{l <= j} Mi[j, l] (Mi[i, l] g[l])  (i >= j).
-// O(nu^2 kf + nu^3 / 6) instead of O(nu^3 4 / 3) with dense M.
+// O(nu^2 kf + nu^3 / 6) instead of O(nu^3 4 / 3) with dense M. The columns
+// of Mi and of Q are independent: in parallel.
 void VecchiaPosterior::latentSolve(arma::mat& Q, arma::vec& wz) {
+  const int nt = nt_;
   Mi_.zeros(nu_, nu_);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 4) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
     Mi_.at(j, j) = 1.0;
     for (int i = j + 1; i < nu_; ++i) {
@@ -456,6 +529,9 @@ void VecchiaPosterior::latentSolve(arma::mat& Q, arma::vec& wz) {
   for (int l = 0; l < nu_; ++l)
     for (int i = l; i < nu_; ++i) Ag_.at(i, l) = Mi_.at(i, l) * gL_[l];
   Q.set_size(nu_, nu_);
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 4) if (nt > 1)
+#endif
   for (int j = 0; j < nu_; ++j) {
     double* qj = Q.colptr(j);
     for (int i = j; i < nu_; ++i) qj[i] = 0.0;
@@ -493,19 +569,21 @@ void VecchiaPosterior::simCondition(const arma::mat& Xnew, arma::vec& a, arma::v
   std::vector<std::pair<double, int> > cand;
   std::vector<int> near, L;
   const arma::vec wx = vd_.w.head(p);
+  Work& w = ws_[0];
+  syncLevels();
   for (int c = 0; c < nb; ++c) {
     for (int d = 0; d < p; ++d) y[d] = Xnew.at(c, d);
     for (int d = 0; d < q; ++d) y[p + d] = phi[iKappa + d];
     nearest(Xs_, nullptr, m, y.data(), vd_.w, K, k, cand, near);
     nearest(Xu_, nullptr, nu_, y.data(), wx, p, vd_.kf, cand, L);
     const int cr = near.size();
-    const int s = gather(near.data(), cr, L, y.data());
-    double v = conditional(s, cr, true);
+    const int s = gather(w, near.data(), cr, L, y.data());
+    double v = conditional(w, s, cr, true);
     if (!(v >= 0)) v = 0.0;
     double mean = 0.0;
-    for (int r = 0; r < cr; ++r) mean += rhs_[r] * ys_[near[r]];
+    for (int r = 0; r < cr; ++r) mean += w.rhs[r] * ys_[near[r]];
     arma::vec cf(L.size());
-    for (size_t l = 0; l < L.size(); ++l) { cf[l] = rhs_[cr + l]; mean += cf[l] * wz[L[l]]; }
+    for (size_t l = 0; l < L.size(); ++l) { cf[l] = w.rhs[cr + l]; mean += cf[l] * wz[L[l]]; }
     const arma::uvec F = arma::conv_to<arma::uvec>::from(L);
     const arma::vec cov = Qf.cols(F) * cf;
     const double var = arma::dot(cf, Qf.submat(F, F) * cf) + v;
@@ -529,14 +607,16 @@ void VecchiaPosterior::simHeldout(const std::vector<std::vector<int> >& folds, a
   }
   arma::vec Uty(m, arma::fill::zeros);  // U' ys
   std::vector<std::vector<std::pair<int, double> > > cols(m);
+  Work& w = ws_[0];
+  syncLevels();
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
-    const int c = gatherRun(i), s = vd_.ord[i];
-    const double v = conditional(c + 1, c + 1, true, runDist(i));
+    const int c = gatherRun(w, i), s = vd_.ord[i];
+    const double v = conditional(w, c + 1, c + 1, true, runDist(i));
     const double sd = std::sqrt(v);
     std::vector<std::pair<int, double> >& col = cols[i];
     col.emplace_back(s, 1.0 / sd);
-    for (int r = 0; r < c; ++r) col.emplace_back(nb[r], -rhs_[r] / sd);
+    for (int r = 0; r < c; ++r) col.emplace_back(nb[r], -w.rhs[r] / sd);
     double u = 0.0;
     for (const auto& e : col) u += e.second * ys_[e.first];
     Uty[i] = u;
@@ -570,14 +650,16 @@ void VecchiaPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy
   arma::mat KB = corr_matrix(Xs_, Xk, th, al, kernS_);
   level_scale(levels, phi.memptr() + iRhoS, Xs_, Xk, KB, false);
   arma::mat WB(m, nu_, arma::fill::zeros);
+  Work& w = ws_[0];
+  syncLevels();
   for (int i = 0; i < m; ++i) {
     const int* nb = vd_.nbr.data() + (size_t) i * k;
-    const int c = gatherRun(i), s = vd_.ord[i];
-    const double sd = std::sqrt(conditional(c + 1, c + 1, true, runDist(i)));
+    const int c = gatherRun(w, i), s = vd_.ord[i];
+    const double sd = std::sqrt(conditional(w, c + 1, c + 1, true, runDist(i)));
     WB.row(i) = KB.row(s) / sd;
     if (!haveW) { W.row(i) = K.row(s) / sd; wy[i] = ys_[s] / sd; }
     for (int r = 0; r < c; ++r) {
-      const double b = rhs_[r] / sd;
+      const double b = w.rhs[r] / sd;
       WB.row(i) -= b * KB.row(nb[r]);
       if (!haveW) { W.row(i) -= b * K.row(nb[r]); wy[i] -= b * ys_[nb[r]]; }
     }
