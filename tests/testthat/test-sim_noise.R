@@ -318,3 +318,52 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
   expect_message(again <- tiny_latent(300, checkpoint = dir), "Resuming")
   expect_identical(again$Phi, fit$Phi)
 })
+
+# The exact leave-one-out log density of each field row given the others
+# and every run (plain R, the full-row covariance: run r at unique input i
+# with noise variance v_i), from the inverse covariance.
+loo_plain <- function(model, sim, phi, v, disc) {
+  d <- model$data
+  reps <- FBC:::sim_replicates(sim)
+  ys <- (sim[, 1] - model$scale$ymean) / model$scale$ysd
+  m <- nrow(d$Xs); n <- nrow(d$Xf)
+  Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
+  E <- rbind(cbind(diag(n), matrix(0, n, m)),
+             cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
+  C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), v[reps$group]))
+  th <- unpack_phi(phi, 1, 1, disc)
+  Q <- solve(C)
+  a <- drop(Q %*% c(d$yf - if (disc == "gp") th$muB else 0, ys))[1:n]
+  q <- diag(Q)[1:n]
+  -0.5 * log(2 * pi) + 0.5 * log(q) - 0.5 * a^2 / q
+}
+
+test_that("loo() compares simNoise choices on the same field data", {
+  skip_if_not_installed("loo")
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(2, 3), nf = 5, seed = 5)
+  # each model's pointwise density is that of the field row given the other
+  # field rows and every run (the means carry all the runs say of eta)
+  set.seed(6)
+  for (mode in c("constant", "input")) {
+    model <- calibrate(pb$sim, pb$field, simNoise = mode, fit = FALSE)
+    d <- model$data
+    phi <- random_phi(1, 1, "gp")
+    noise <- if (mode == "constant") stats::rgamma(1, 2, 20) else
+      c(stats::rnorm(12, -3, 0.5), -3, 0.5, 1, 2)
+    v <- if (mode == "constant") rep(noise, 12) else exp(noise[1:12])
+    got <- FBC:::.fbc_loo(d$Xf, d$yf, d$Xs, d$ys, rbind(c(phi, noise)), FBC:::fbc_nugget,
+                          group = seq_len(nrow(d$Xf)), model = model$spec$model)
+    expect_equal(drop(got), loo_plain(model, pb$sim, phi, v, "gp"), tolerance = 1e-8)
+  }
+  # fits under each choice: loo objects over the same 5 field observations
+  fits <- lapply(c(none = "none", constant = "constant", input = "input"), function(mode) {
+    set.seed(8)
+    suppressMessages(calibrate(pb$sim, pb$field, simNoise = mode, nMCMC = 300, nBurn = 200,
+                               nChains = 2, converge = FALSE))
+  })
+  loos <- lapply(fits, function(f) suppressWarnings(loo::loo(f, ndraws = 200)))
+  expect_true(all(vapply(loos, function(l) nrow(l$pointwise), integer(1)) == 5L))
+  cmp <- suppressWarnings(loo::loo_compare(loos))
+  expect_setequal(rownames(cmp), names(fits))
+  expect_equal(unname(cmp[, "elpd_diff"][1]), 0)
+})
