@@ -11,7 +11,11 @@
 #' refitting. These non-factorized densities are what PSIS needs for a
 #' Gaussian model with correlated errors (Bürkner, Gabry and Vehtari 2021).
 #' [loo::loo_compare()] then compares fits of the same data: discrepancy
-#' models (`calibrate(discrepancy =)`), correlation families, priors.
+#' models (`calibrate(discrepancy =)`), correlation families, priors, and
+#' the models of a stochastic simulator's noise (`calibrate(simNoise =)`,
+#' [simulator_noise]): each density conditions on every simulator run (with
+#' the noise modelled, the unique inputs' means carry all the runs say of
+#' \eqn{\eta}), so the elements are the same field observations.
 #'
 #' @section What is left out:
 #' With `unit = "input"` (the default) every observation made at one field

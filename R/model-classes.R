@@ -21,13 +21,19 @@
 #            L (L - 1) / 2 per input with L levels), "sources" (the
 #            partial correlations between the field data sets' biases when
 #            each has its own: L (L - 1) / 2 for L data sets),
-#            "replicates" (one when the simulator's own noise is modelled,
-#            R/sim_noise.R; else none), "one"
+#            "replicates" (one when the simulator's own noise is modelled
+#            as constant, R/sim_noise.R; else none), "unique" (one per unique
+#            simulator input with an input-dependent noise: its latent
+#            log-variances; else none), "latent" (one with an
+#            input-dependent noise, else none), "latentInputs" (p + q with
+#            an input-dependent noise, else none), "one"
 #   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
 #   walk     the scale its random walk runs on: "identity", "log",
 #            "logit12" (logit of x - 1), "atanh" (Fisher's z)
 #   sd0      initial proposal SD on that scale
-#   move     the move of sampler = "blocks" it belongs to: "each" (one move
+#   move     the move of sampler = "blocks" it belongs to: "slice" (the
+#            class's parameters all at once by elliptical slice sampling,
+#            src/latent_noise.cpp), "each" (one move
 #            per parameter, repeated), "sim", "bias" (joint moves of the
 #            simulator and bias GPs), "single" (single site), "gibbs" (an
 #            exact draw when its prior allows, else single site)
@@ -43,16 +49,16 @@
 #            per output, output after output; kappa is shared and sigma2E
 #            is per measurement-error group (output x data set) already
 model_classes <- data.frame(
-  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB", "sigma2R"),
-  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one", "replicates"),
-  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real", "positive"),
-  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity", "log"),
-  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1, 0.1),
-  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "single"),
-  joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
-  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE, TRUE),
-  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", "", ""),
-  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE),
+  class  = c("kappa", "thetaS", "alphaS", "rhoS", "thetaB", "alphaB", "rhoB", "rhoD", "lambdaZ", "sigma2S", "sigma2B", "sigma2E", "muB", "sigma2R", "gR", "muG", "sigma2G", "thetaG"),
+  over   = c("calibration", "inputs", "inputs", "levels", "experimental", "experimental", "levels", "sources", "one", "one", "one", "noise", "one", "replicates", "unique", "latent", "latent", "latentInputs"),
+  domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real", "positive", "real", "real", "positive", "positive"),
+  walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity", "log", "identity", "identity", "log", "log"),
+  sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1, 0.1, 0.1, 0.3, 0.3, 0.3),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "single", "slice", "single", "single", "single"),
+  joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
+  scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE, FALSE, FALSE, FALSE),
+  smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", "", "", "", "", "", ""),
+  perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE, FALSE, FALSE, FALSE, FALSE),
   stringsAsFactors = FALSE
 )
 
@@ -141,12 +147,16 @@ discrepancy_having <- function(cls) {
 # measurement-error groups (named by class, in the table's order; the bias
 # classes have none without a bias), `outputs` independent outputs (the
 # perOutput classes have a copy per output) and, for a simulator given as
-# a function (`emulator` FALSE), no simulator-GP classes; `replicates` 1
-# when the simulator's own noise is modelled (sigma2R, R/sim_noise.R).
+# a function (`emulator` FALSE), no simulator-GP classes; `replicates`
+# the noise classes' sizes (noise_sizes(), R/sim_noise.R): 1 for a
+# constant noise (sigma2R), c(0, m) for an input-dependent one over m
+# unique inputs (gR, muG, sigma2G, thetaG).
 class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
                         outputs = 1L, emulator = TRUE, replicates = 0L) {
+  rp <- c(as.integer(replicates), 0L)[1:2]
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
-         levels = levels, sources = sources, replicates = replicates)
+         levels = levels, sources = sources, replicates = rp[1], unique = rp[2],
+         latent = as.integer(rp[2] > 0L), latentInputs = if (rp[2] > 0L) p + q else 0L)
   n <- as.integer(n[model_classes$over])
   n[!class_in_model(discrepancy)] <- 0L
   n[model_classes$perOutput] <- n[model_classes$perOutput] * as.integer(outputs)
@@ -166,10 +176,10 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
                            sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
   sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, outputs = outputs,
                        emulator = emulator, replicates = replicates)
-  # the simulator's own noise is a class only of the models that have it:
+  # the simulator's own noise has classes only in the models that have it:
   # every other model's layout is the one it has always been (fits and
-  # checkpoints made before the class existed keep theirs)
-  if (!sizes[["sigma2R"]]) sizes <- sizes[names(sizes) != "sigma2R"]
+  # checkpoints made before the classes existed keep theirs)
+  sizes <- sizes[!(names(sizes) %in% sim_noise_classes & sizes == 0L)]
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -188,7 +198,7 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     one <- if (sizes[i] == 0L) character(0)
-    else if (model_classes$over[i] %in% c("one", "replicates") ||
+    else if (model_classes$over[i] %in% c("one", "replicates", "latent") ||
              (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
     if (K > 1L && model_classes$perOutput[i] && length(one)) {
@@ -250,7 +260,8 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # output's indicator columns (`outputs`: list(col, ncol, L) as
 # model_levels() gives one input; `levels` then leaves the output out) and,
 # with the simulator's own noise, the replicates' sufficient statistics
-# (`replicates`: list(count, ssw), R/sim_noise.R).
+# (`replicates`: list(count, ssw), R/sim_noise.R; with an input-dependent
+# noise `latent` TRUE and ssw one per unique input).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
                            vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
                            outputs = NULL, simulator = NULL, replicates = NULL) {
@@ -259,9 +270,10 @@ compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepan
          discrepancy = discrepancy_codes[[discrepancy]]),
     layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
                  source_count(source), outputs = output_count(outputs),
-                 emulator = is.null(simulator), replicates = as.integer(!is.null(replicates))),
-    if (!is.null(replicates)) list(replicates = list(count = as.numeric(replicates$count),
-                                                     ssw = as.numeric(replicates$ssw))),
+                 emulator = is.null(simulator), replicates = noise_sizes(replicates)),
+    if (!is.null(replicates)) list(replicates = c(list(count = as.numeric(replicates$count),
+                                                       ssw = as.numeric(replicates$ssw)),
+                                                  if (isTRUE(replicates$latent)) list(latent = TRUE))),
     if (!is.null(outputs)) list(outputs = lapply(outputs, as.integer)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),

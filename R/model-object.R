@@ -200,10 +200,10 @@ model_priors <- function(dd, opt, kappa, kappaDefault, noise = NULL, call) {
   dat <- scale_data(sim, field, scale, fac$outS, fac$outF)
   replicates <- NULL
   if (modelled) {
-    cr <- collapse_replicates(dat, noise$reps)
+    cr <- collapse_replicates(dat, noise$reps, latent = noise$mode == "input")
     dat <- cr$dat
     replicates <- cr$replicates
-    opt$hypers$sigma2R <- sim_noise_prior(opt$hypers$sigma2R, cr, call = call)
+    opt$hypers <- sim_noise_priors(opt$hypers, cr, noise$mode, call = call)
   }
   noise <- length(fac$noiseLabels %||% 1L)
   kappaSpec <- check_class_spec(kappa, "kappa", q, call = call)
@@ -237,7 +237,7 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
                outputs = output_count(design$outputs), d = length(spec$vars))
   lay <- layout_codes(dims$p, dims$q, discrepancy, dims$noise, dims$levels, dims$sources,
                       outputs = dims$outputs, emulator = algebra$name != "function",
-                      replicates = as.integer(!is.null(spec$model$replicates)))
+                      replicates = noise_sizes(spec$model$replicates))
   x <- structure(list(
     data = data, raw = raw, scale = scale, design = design, dims = dims,
     classes = data.frame(class = names(lay$offset), offset = unname(lay$offset),
@@ -284,7 +284,7 @@ fbc_model_problems <- function(x) {
   if (length(out)) return(out)
   lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources,
                       outputs = d$outputs %||% 1L, emulator = is.null(x$spec$model$simulator),
-                      replicates = as.integer(!is.null(x$spec$model$replicates)))
+                      replicates = noise_sizes(x$spec$model$replicates))
   if (!identical(x$classes$length, unname(lay$length)) ||
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {
@@ -405,7 +405,8 @@ identity_settings <- function(model, run) {
   if (!is.null(o$source)) s$source <- o$source
   if (o$sourceBias == "own") s$sourceBias <- o$sourceBias
   if (identical(o$outputs, "independent")) s$outputs <- o$outputs
-  if (!is.null(model$spec$model$replicates)) s$simNoise <- "constant"
+  if (!is.null(model$spec$model$replicates))
+    s$simNoise <- if (isTRUE(model$spec$model$replicates$latent)) "input" else "constant"
   # a simulator given as a function: its code and what a non-finite value does
   if (!is.null(model$simulator)) s$simulator <- function_identity(model$simulator)
   s

@@ -145,7 +145,7 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   nLev <- level_count(levels)
   nSrc <- source_count(source)
   K <- output_count(outputs)
-  nRep <- as.integer(!is.null(replicates))
+  nRep <- noise_sizes(replicates)
   sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator = emulator,
                        replicates = nRep)
   classes <- param_classes[sizes > 0L]

@@ -193,9 +193,12 @@ predict.fbc <- function(object, newdata, method = c("Bayesian", "MAP"),
   })
   out <- list(pred = pred, se = se, lower = lower, upper = upper)
   if (draws) out$draws <- D
-  # a stochastic simulator's own noise (R/sim_noise.R), the same at every input
+  # a stochastic simulator's own noise (R/sim_noise.R): constant, or from
+  # the latent log-variances' GP at each point
   if (type == "simulator" && "sigma2R" %in% colnames(object$Phi)) {
     out$noiseSd <- rep(sqrt(mean(object$Phi[rows, "sigma2R"])) * ysd, N)
+  } else if (type == "simulator" && "gR1" %in% colnames(object$Phi)) {
+    out$noiseSd <- latent_noise_sd(object$model, phis, Xn) * ysd
   }
   attr(out, "draw_rows") <- rows
   class(out) <- c("fbc_prediction", "list")

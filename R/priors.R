@@ -303,6 +303,17 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #'   standardised response's sd), weakly informative, as for
 #'   \eqn{\sigma^2_E}: the replicates' spread sets it. Started at the pooled
 #'   within-replicate variance unless `sigma2RInit` is given.
+#' @param muGDist,muGInit,muGP1,muGP2,sigma2GDist,sigma2GInit,sigma2GP1,sigma2GP2,thetaGDist,thetaGInit,thetaGP1,thetaGP2
+#'   An input-dependent simulator noise (`simNoise = "input"`; see
+#'   [simulator_noise]): its log-variance on the standardised response's
+#'   scale is a GP with mean \eqn{\mu_g} (default gaussian, mean -3, sd 3:
+#'   noise sds from 0.001 to 20 times the response's sd within two prior
+#'   sds; started at the mean of the unique inputs' log within-replicate
+#'   variances), variance \eqn{\sigma^2_g} (half-Cauchy on its sd, scale 1:
+#'   the log-variance varying by a factor of about e over the inputs) and
+#'   the Gaussian correlation \eqn{\exp(-\sum_k \theta_{g,k} d_k^2)} over
+#'   the inputs scaled to \eqn{[0, 1]} (default gamma, shape 2, rate 1: mean
+#'   2, a noise that changes smoothly over each input's range).
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
@@ -322,11 +333,16 @@ set_hyperPriors <- function(
     rhoSDist = "uniform", rhoSInit = 0, rhoSP1 = -1, rhoSP2 = 1,
     rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1,
     rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1,
-    sigma2RDist = "halft_sd", sigma2RInit = NA, sigma2RP1 = 1, sigma2RP2 = 1) {
+    sigma2RDist = "halft_sd", sigma2RInit = NA, sigma2RP1 = 1, sigma2RP2 = 1,
+    muGDist = "gaussian", muGInit = NA, muGP1 = -3, muGP2 = 3,
+    sigma2GDist = "halft_sd", sigma2GInit = 1, sigma2GP1 = 1, sigma2GP2 = 1,
+    thetaGDist = "gamma", thetaGInit = 1, thetaGP1 = 2, thetaGP2 = 1) {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()
-  for (cls in param_classes[-1]) {
+  # (gR, the latent log-variances, has the GP of muG, sigma2G, thetaG as
+  # its prior: sim_noise_priors())
+  for (cls in setdiff(param_classes[-1], "gR")) {
     is_missing <- function(arg) eval(call("missing", as.name(paste0(cls, arg))), env)
     dist <- get(paste0(cls, "Dist"), env)
     # a family that cannot fit the class is the first thing to say

@@ -30,15 +30,36 @@
 #' \eqn{\epsilon} describe; the simulator's noise says how well each run
 #' measures \eqn{\eta}.
 #'
+#' With `simNoise = "input"` the noise variance depends on the inputs,
+#' \eqn{r(x, t) = \exp(g(x, t))}, and the log-variance is a GP,
+#' \deqn{g \sim GP(\mu_g, \sigma^2_g \exp(-\textstyle\sum_k \theta_{g,k} d_k^2)),}
+#' over the inputs scaled to \eqn{[0, 1]} (experimental and calibration),
+#' with its own ranges (`thetaG`): a noise level is a property of the
+#' simulator's randomness, not of its mean, so it need not vary on the
+#' emulator's length-scales, and the Gaussian kernel makes it smooth (a
+#' noise level that jumps is rare, and the replicates at each input pin
+#' down what the smooth surface misses). Its values `gR` at the \eqn{m}
+#' unique inputs are sampled with every other unknown, by elliptical slice
+#' sampling on the whitened GP (an exact move of all of them at once, with
+#' no scale to tune), and \eqn{\mu_g}, \eqn{\sigma^2_g}, \eqn{\theta_g}
+#' (`muG`, `sigma2G`, `thetaG`, priors in [set_hyperPriors()]) by
+#' Metropolis walks. Input \eqn{i}'s mean has noise variance
+#' \eqn{e^{g_i} / n_i} and the within term is
+#' \eqn{-\tfrac12 \sum_i (n_i - 1)(\log 2\pi + g_i) - \tfrac12 \sum_i
+#' \mathrm{SSW}_i e^{-g_i}}; the GP's log density is part of the fit's
+#' log-likelihood. `predict(fit, newdata, type = "simulator")` gives the
+#' noise sd at new inputs from the GP given \eqn{g} at each draw,
+#' integrated over its conditional (log-normal) law: `noiseSd` is the root
+#' of the posterior mean of the noise variance.
+#'
 #' `simNoise = "none"` treats the simulator as deterministic (the emulator
 #' interpolates the runs, up to a tiny nugget; a message says when
-#' replicates differ). `"input"` (an input-dependent \eqn{\log r \sim GP})
-#' is not available yet. The simulator's noise runs on the exact dense
+#' replicates differ). The simulator's noise runs on the exact dense
 #' algebra: with several outputs or the nearest-neighbour algebra
 #' `calibrate()` refuses it, and on a product design of the unique inputs
 #' the dense algebra runs in place of the Kronecker one. `print()` says what
 #' was found and modelled; `predict(fit, newdata, type = "simulator")`
-#' predicts \eqn{\eta}, the simulator's mean.
+#' predicts \eqn{\eta}, the simulator's mean, and the noise sd.
 #'
 #' @name simulator_noise
 #' @seealso [calibrate()], [set_hyperPriors()]
@@ -56,26 +77,36 @@ NULL
 
 # The choices of calibrate(simNoise =).
 sim_noise_choices <- c("auto", "none", "constant", "input")
+# What simNoise = "auto" models when replicates differ (see ?simulator_noise).
+sim_noise_auto <- "constant"
 
-# simNoise, checked: one of the choices; "input" is refused (not built).
+# The classes of the simulator's noise: constant (sigma2R) or
+# input-dependent (the latent log-variances gR and their GP's muG, sigma2G,
+# thetaG); a model without that noise has none of them.
+sim_noise_classes <- c("sigma2R", "gR", "muG", "sigma2G", "thetaG")
+
+# The sizes of the noise classes (class_sizes()'s `replicates`) from the
+# replicates' sufficient statistics (collapse_replicates(), or a compiled
+# model's): 0 without noise, 1 for a constant one, c(0, m) for an
+# input-dependent one over m unique inputs.
+noise_sizes <- function(replicates) {
+  if (is.null(replicates)) 0L
+  else if (isTRUE(replicates$latent)) c(0L, length(replicates$count))
+  else 1L
+}
+
+# simNoise, checked: one of the choices.
 check_sim_noise <- function(simNoise, call = parent.frame()) {
-  simNoise <- match_choice(simNoise, sim_noise_choices, "simNoise", call = call)
-  if (simNoise == "input") {
-    cli::cli_abort(c(
-      "{.code simNoise = \"input\"} (an input-dependent simulator noise) is not available yet.",
-      i = "Use {.code simNoise = \"constant\"} (one noise variance for every input) or {.code \"none\"} (a deterministic simulator)."
-    ), call = call)
-  }
-  simNoise
+  match_choice(simNoise, sim_noise_choices, "simNoise", call = call)
 }
 
 # With a simulator given as a function there are no runs: only "auto" and
 # "none" mean anything.
 check_sim_noise_function <- function(simNoise, call = parent.frame()) {
   simNoise <- check_sim_noise(simNoise, call = call)
-  if (simNoise == "constant") {
+  if (simNoise %in% c("constant", "input")) {
     cli::cli_abort(c(
-      "{.code simNoise = \"constant\"} models the noise of simulator runs, but {.arg sim} is a function.",
+      "{.code simNoise = \"{simNoise}\"} models the noise of simulator runs, but {.arg sim} is a function.",
       i = "A simulator function is called as it is: leave {.arg simNoise} at {.val auto}."
     ), call = call)
   }
@@ -106,14 +137,15 @@ replicate_tolerance <- function(y) {
   sqrt(.Machine$double.eps) * spread
 }
 
-# The simulator noise the model has: "none" or "constant" (simNoise "auto":
-# "constant" when replicates differ beyond rounding), with the replicates
+# The simulator noise the model has: "none", "constant" or "input"
+# (simNoise "auto": sim_noise_auto when replicates differ beyond
+# rounding), with the replicates
 # found (`reps`) and what print() says of them (`info`, NULL without
 # replicates and noise).
 sim_noise_model <- function(simNoise, sim, call = parent.frame()) {
   simNoise <- check_sim_noise(simNoise, call = call)
   reps <- sim_replicates(sim)
-  mode <- if (simNoise == "auto") if (any(reps$differ)) "constant" else "none" else simNoise
+  mode <- if (simNoise == "auto") if (any(reps$differ)) sim_noise_auto else "none" else simNoise
   info <- if (mode != "none" || any(reps$count > 1L)) {
     list(mode = mode, asked = simNoise, runs = length(reps$group), unique = length(reps$count),
          replicated = sum(reps$count > 1L), differ = sum(reps$differ))
@@ -123,15 +155,20 @@ sim_noise_model <- function(simNoise, sim, call = parent.frame()) {
 
 # The scaled data on the unique inputs: Xs their rows, ys their mean
 # responses, and the sufficient statistics the compiled model takes (count
-# per unique input, the within sum of squares).
-collapse_replicates <- function(dat, reps) {
+# per unique input, the within sum of squares: one, or with an
+# input-dependent noise (`latent`) one per unique input).
+collapse_replicates <- function(dat, reps, latent = FALSE) {
   g <- reps$group
   mean <- as.vector(rowsum(dat$ys, g, reorder = FALSE)) / reps$count
+  sswi <- as.vector(rowsum((dat$ys - mean[g])^2, g, reorder = FALSE))
   ssw <- sum((dat$ys - mean[g])^2)
   dat$Xs <- dat$Xs[reps$first, , drop = FALSE]
   dat$ys <- mean
-  list(dat = dat, replicates = list(count = reps$count, ssw = ssw),
-       pooled = if (sum(reps$count - 1L) > 0) ssw / sum(reps$count - 1L))
+  list(dat = dat,
+       replicates = if (latent) list(count = reps$count, ssw = sswi, latent = TRUE)
+                    else list(count = reps$count, ssw = ssw),
+       pooled = if (sum(reps$count - 1L) > 0) ssw / sum(reps$count - 1L),
+       sswi = sswi, count = reps$count)
 }
 
 # The simulator's noise runs on the dense algebra: several outputs and the
@@ -142,7 +179,7 @@ sim_noise_algebra <- function(alg, noise, outputs, call = parent.frame()) {
   asked <- noise$info$asked
   why <- if (asked == "auto") {
     sprintf("The replicate runs differ at %d input%s, so {.code simNoise = \"auto\"} models the simulator's own noise", noise$info$differ, if (noise$info$differ == 1L) "" else "s")
-  } else "{.code simNoise = \"constant\"} models the simulator's own noise"
+  } else "{.code simNoise = \"{asked}\"} models the simulator's own noise"
   if (!is.null(outputs)) {
     cli::cli_abort(c(
       paste0(why, ", which is not available with several outputs."),
@@ -169,16 +206,40 @@ sim_noise_algebra <- function(alg, noise, outputs, call = parent.frame()) {
 # standardised response's sd). Replicates that all agree leave nothing to
 # estimate r from but the emulator's fit, and the within term grows without
 # bound as r goes to 0: refused.
-sim_noise_prior <- function(h, cr, call = parent.frame()) {
+sim_noise_prior <- function(h, cr, mode = "constant", call = parent.frame()) {
   h <- h %||% set_hyperPriors()$sigma2R
   if (identical(cr$pooled, 0) && h$dist != "fixed") {
     cli::cli_abort(c(
-      "{.code simNoise = \"constant\"} models the simulator's own noise, but its replicate runs all agree.",
+      "{.code simNoise = \"{mode}\"} models the simulator's own noise, but its replicate runs all agree.",
       i = "Their spread is the evidence about the noise: with none, its posterior piles up at 0. Use {.code simNoise = \"none\"} (or {.val auto}) for a deterministic simulator."
     ), call = call)
   }
   if (is.na(h$init)) h$init <- cr$pooled %||% 0.01
   h
+}
+
+# The priors of the simulator's noise classes in `hypers` (an fbc_hypers)
+# for noise `mode`: sigma2R's (sim_noise_prior()) for a constant noise; for
+# an input-dependent one the latent GP's (muG, sigma2G, thetaG: those of
+# set_hyperPriors(), the defaults for an fbc_hypers made before the classes
+# existed) and gR's own, flat on [-50, 50] (the GP is its prior: the
+# compiled core adds its density), gR started at each unique input's
+# log within-replicate variance (the pooled one where it has no spread)
+# and muG at their mean.
+sim_noise_priors <- function(hypers, cr, mode, call = parent.frame()) {
+  pr <- sim_noise_prior(hypers$sigma2R, cr, mode, call = call)
+  if (mode == "constant") {
+    hypers$sigma2R <- pr
+    return(hypers)
+  }
+  df <- cr$count - 1L
+  v <- ifelse(df > 0 & cr$sswi > 0, cr$sswi / pmax(df, 1L), pr$init)
+  g0 <- log(v)
+  dflt <- set_hyperPriors()
+  for (cls in c("muG", "sigma2G", "thetaG")) hypers[[cls]] <- hypers[[cls]] %||% dflt[[cls]]
+  if (all(is.na(hypers$muG$init))) hypers$muG$init <- mean(g0)
+  hypers$gR <- list(dist = "uniform", init = g0, p1 = -50, p2 = 50)
+  hypers
 }
 
 # print()'s line on the replicates and the noise modelled (NULL without
@@ -191,12 +252,21 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
     sprintf("%d of %d unique inputs with replicates (%d runs)", info$replicated, info$unique,
             info$runs)
   } else sprintf("no replicates (%d runs)", info$runs)
+  ysd <- model$scale$ysd[1]
   noise <- if (info$mode == "constant") {
     sd <- if (!is.null(Phi) && "sigma2R" %in% colnames(Phi)) {
       sprintf(", sd %s (posterior median, response units)",
-              format(signif(sqrt(stats::median(Phi[, "sigma2R"])) * model$scale$ysd[1], digits)))
+              format(signif(sqrt(stats::median(Phi[, "sigma2R"])) * ysd, digits)))
     } else ""
     paste0("constant", sd)
+  } else if (info$mode == "input") {
+    g <- if (!is.null(Phi)) Phi[, startsWith(colnames(Phi), "gR"), drop = FALSE]
+    sd <- if (length(g)) {
+      r <- range(exp(apply(g, 2, stats::median) / 2) * ysd)
+      sprintf(", sd %s to %s over the unique inputs (posterior medians, response units)",
+              format(signif(r[1], digits)), format(signif(r[2], digits)))
+    } else ""
+    paste0("input-dependent (log-variance a GP)", sd)
   } else if (info$differ) {
     sprintf("none (their responses differ at %d input%s; the emulator interpolates them)",
             info$differ, if (info$differ == 1L) "" else "s")
@@ -210,7 +280,36 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
 check_no_sim_noise <- function(model, fn, call = parent.frame()) {
   if (is.null(model$spec$model$replicates)) return(invisible(TRUE))
   cli::cli_abort(c(
-    "{.fn {fn}} does not model the simulator's own noise yet, which this fit samples ({.code simNoise = \"constant\"}).",
+    "{.fn {fn}} does not model the simulator's own noise yet, which this fit samples ({.code simNoise = \"{model$design$simNoise$mode}\"}).",
     i = "It would score new runs as if they were noiseless. Choose runs from a fit with {.code simNoise = \"none\"}, or by a design of your own."
   ), call = call)
+}
+
+# The noise sd of a run at new experimental inputs Xn (scaled) and each
+# draw's kappa, from the latent log-variances' GP (standardised units): at
+# a draw, log r(x*) given g at the unique inputs is normal with mean
+# muG + k' Kg^-1 (g - muG) and variance sigma2G (1 + jitter) - sigma2G k' Kg^-1 k
+# (Kg = Rg + jitter I, k = Rg(X, x*)), so E r(x*) = exp(mean + var / 2);
+# returns the root of its mean over the draws (phis, on the sampler's
+# scale), the posterior mean of the noise variance.
+latent_noise_sd <- function(model, phis, Xn) {
+  cls <- model$spec$classes
+  Xs <- model$data$Xs
+  m <- nrow(Xs)
+  jitter <- 1e-6  # as src/latent_noise.cpp
+  kap <- which(cls == "kappa")
+  r <- matrix(0, nrow(Xn), nrow(phis))
+  for (i in seq_len(nrow(phis))) {
+    ph <- phis[i, ]
+    th <- ph[cls == "thetaG"]
+    two <- rep(2, ncol(Xs))
+    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 2L) + jitter * diag(m)))
+    Z <- cbind(Xn, matrix(ph[kap], nrow(Xn), length(kap), byrow = TRUE))
+    A <- forwardsolve(L, .corr_matrix(Xs, Z, th, two, 2L))
+    muG <- ph[cls == "muG"]
+    s2G <- ph[cls == "sigma2G"]
+    w <- forwardsolve(L, ph[cls == "gR"] - muG)
+    r[, i] <- exp(muG + drop(crossprod(A, w)) + 0.5 * s2G * (1 + jitter - colSums(A^2)))
+  }
+  sqrt(rowMeans(r))
 }

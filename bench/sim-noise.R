@@ -9,21 +9,24 @@
 # prod_j N(yf_j; eta(x_j, t), sd(x_j)^2 + 0.05^2).
 #
 # For unique inputs x replicates (a Latin hypercube of the unique inputs per
-# data set), `calibrate()` with the defaults but `discrepancy = "none"` (the
-# field has no bias, as in the exact posterior), until converged:
-#   constant  simNoise = "auto" (the replicates differ: one noise variance)
+# data set), `calibrate()` with the defaults (the default discrepancy too),
+# until converged:
+#   constant  simNoise = "constant" (one noise variance)
+#   input     simNoise = "input" (log-variance a GP over the inputs)
 #   none      simNoise = "none" (the runs as if deterministic; up to
 #             --maxNone runs, its cost grows with the rows)
 # Reported per cell: Hellinger distance of t's posterior (a kernel density
 # of the draws) to the exact one, beside the bound (Hbound: eta known, the
-# field's noise one unknown variance as in FBC's model), the share of data sets whose 90% interval
-# covers 1.7, the posterior median of the noise sd (the truth varies from
-# 0.1 to 0.4: a constant sd is the model's average), CPU seconds.
+# field's noise one unknown variance as in FBC's model), the share of data
+# sets whose 90% interval covers 1.7, the noise sd's error (the mean over
+# the unique inputs of |posterior median sd - true sd| / true sd; the truth
+# varies from 0.1 to 0.4: a constant sd is the model's average), CPU
+# seconds and retained draws per chain.
 #
-# Rscript bench/run.R sim-noise [--quick] [--unique=25,50] [--reps=5,20] [--sets=3]
+# Rscript bench/run.R sim-noise [--quick] [--unique=50,200] [--reps=20] [--sets=2] [--maxNone=0]
 source("bench/options.R")
-opt <- bench_options(list(unique = c(25L, 50L), reps = c(5L, 20L), sets = 3L,
-                          maxNone = 250L))
+opt <- bench_options(list(unique = c(50L, 200L), reps = 20L, sets = 2L,
+                          maxNone = 0L))
 if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
 suppressPackageStartupMessages(library(FBC))
 
@@ -82,26 +85,34 @@ one <- function(k, r, seed, simNoise) {
   ex <- exact_posterior(d)
   set.seed(seed)
   tm <- cpu(fit <- suppressMessages(suppressWarnings(
-    calibrate(d$sim, d$field, discrepancy = "none", simNoise = simNoise, showProgress = FALSE,
+    calibrate(d$sim, d$field, simNoise = simNoise, showProgress = FALSE,
               converge = if (opt$quick) until_converged(maxMCMC = 2000)))))
   tt <- fit$Phi[, fit$indices$kappa]
   ci <- stats::quantile(tt, c(0.05, 0.95), names = FALSE)
-  sdR <- if ("sigma2R" %in% colnames(fit$Phi)) {
-    stats::median(sqrt(fit$Phi[, "sigma2R"])) * fit$model$scale$ysd
-  } else NA_real_
+  # the noise sd at the unique inputs against the truth
+  ysd <- fit$model$scale$ysd
+  xu <- fit$model$scale$xmin[1] + fit$model$data$Xs[, 1] *
+    (fit$model$scale$xmax[1] - fit$model$scale$xmin[1])
+  sdU <- if ("sigma2R" %in% colnames(fit$Phi)) {
+    rep(stats::median(sqrt(fit$Phi[, "sigma2R"])) * ysd, length(xu))
+  } else if ("gR1" %in% colnames(fit$Phi)) {
+    apply(exp(fit$Phi[, startsWith(colnames(fit$Phi), "gR"), drop = FALSE] / 2), 2,
+          stats::median) * ysd
+  }
+  sdErr <- if (is.null(sdU)) NA_real_ else mean(abs(sdU - sdRun(xu)) / sdRun(xu))
   bound <- grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2]))
   data.frame(unique = k, reps = r, set = seed, model = simNoise, H = hellinger(tt, ex),
              Hbound = bound,
-             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), noiseSd = sdR, cpu = tm)
+             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = sdErr, cpu = tm,
+             draws = nrow(fit$Phi) / length(unique(fit$chain)))
 }
 
 res <- list()
 for (k in opt$unique) for (r in opt$reps) for (s in seq_len(opt$sets)) {
-  res[[length(res) + 1L]] <- one(k, r, s, "auto")
+  for (mode in c("constant", "input")) res[[length(res) + 1L]] <- one(k, r, s, mode)
   if (k * r <= opt$maxNone) res[[length(res) + 1L]] <- one(k, r, s, "none")
 }
 res <- do.call(rbind, res)
-res$model[res$model == "auto"] <- "constant"
 cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), drop = TRUE),
                               function(d) {
   data.frame(unique = d$unique[1], reps = d$reps[1], runs = d$unique[1] * d$reps[1],
@@ -110,7 +121,7 @@ cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), 
              Hbound = round(stats::median(d$Hbound), 3),
              covers90 = sprintf("%d/%d", sum(d$covers), nrow(d)),
              width90 = round(stats::median(d$width90), 3),
-             noiseSd = round(stats::median(d$noiseSd), 3),
+             sdErr = round(stats::median(d$sdErr), 3),
              cpu = sprintf("%.1f (%.1f-%.1f)", stats::median(d$cpu), min(d$cpu), max(d$cpu)))
 }))
 cell <- cell[order(cell$unique, cell$reps, cell$model), ]

@@ -82,7 +82,11 @@ bool DensePosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
       kernel_corr_self(kernS_, Xs_, p + q, thetaS.memptr(), alphaS.memptr(), ptrG_, L);
     }
     level_scale(levels, phi.memptr() + iRhoS, Xs_, Xs_, L, true);
-    if (simNoise) {
+    if (latent) {
+      // ... exp(gR_i) / n_i with an input-dependent noise
+      const double s2S = phi[iSigma2S];
+      for (int i = 0; i < m; ++i) L.at(i, i) += nugget_ + meanNoise(i) / s2S;
+    } else if (simNoise) {
       // the unique runs' means: their noise variance sigma2R / n_i, in
       // units of sigma2S
       const double ratio = phi[iSigma2R] / phi[iSigma2S];

@@ -138,6 +138,9 @@ struct Model {
   // parameter (empty: a deterministic simulator, no sigma2R)
   std::vector<double> repCount;
   double repSSW = 0.0, repDf = 0.0;
+  // with an input-dependent noise (class gR, one per unique input): each
+  // unique input's within sum of squares (they add up to repSSW)
+  std::vector<double> repSSWi;
 };
 // Reads list(kernS, kernB, algebra, offset, length) (offset and length
 // integer vectors named by class) and checks that the layout tiles phi and
@@ -279,13 +282,17 @@ struct Touch {
   bool cross = false;     // Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk) and Rs(Xs,Xk)' Ds^-1 ys
   bool field = false;     // the Schur complement S and its factor
   bool scale = false;     // the variances multiplied by one factor
+  bool latentK = false;   // thetaG moved: the latent log-variances' prior factor
+  bool latentLp = false;  // gR, muG, sigma2G or thetaG moved: their GP prior
   void reset(int nSim, int nBias) {
     simPow.assign(nSim, 0); biasPow.assign(nBias, 0);
     simCorr = expDim = calDim = cChange = biasCorr = cross = field = scale = false;
+    latentK = latentLp = false;
   }
   void everything(int nSim, int nBias) {
     simPow.assign(nSim, 1); biasPow.assign(nBias, 1);
     simCorr = expDim = calDim = cChange = biasCorr = cross = field = true;
+    latentK = latentLp = true;
     scale = false;
   }
 };
@@ -336,7 +343,22 @@ public:
   int iSigma2R = 0;
   arma::vec repInv;         // 1 / the runs at each unique input
   double repSSW = 0.0, repDf = 0.0, repLogN = 0.0;  // repLogN: sum of log n_i
-  double noiseLoglik(double r) const;
+  double noiseLoglik() const;
+  // an input-dependent noise (latent_noise.cpp): input i's variance is
+  // exp(gR_i), gR ~ GP(muG, sigma2G Rg(thetaG)); the GP's log density is
+  // part of logLik() (latentLogPrior())
+  bool latent = false;
+  int iG = 0, iMuG = 0, iSigma2G = 0, iThetaG = 0;
+  arma::vec repSSWi, repDfi;  // per unique input: within sum of squares, n_i - 1
+  // the noise variance of unique input i's mean, r_i / n_i
+  double meanNoise(int i) const {
+    return (latent ? std::exp(phi[iG + i]) : phi[iSigma2R]) * repInv[i];
+  }
+  // the latent GP's log density at the current state and the lower
+  // Cholesky factor of sigma2G Rg (what elliptical slice sampling draws
+  // from), and that of the pending proposal's
+  virtual double latentLogPrior(bool pending) const { return 0.0; }
+  virtual const arma::mat& latentFactor() const { Rcpp::stop("no latent noise"); }
   std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 
@@ -466,6 +488,13 @@ void for_each_draw(Posterior& post, const arma::mat& phis, F f) {
   }
 }
 
+// latent_noise.cpp: one elliptical slice sampling update of the latent
+// log-variances gR (the chain's log-likelihood ll and log priors lp
+// updated; lpOf(j, x): parameter j's log prior at x); the proposals made,
+// 0 when none was accepted.
+int latent_ess(Posterior& post, double& ll, arma::vec& lp,
+               const std::function<double(int, double)>& lpOf);
+
 // Everything but the simulator block: the field block, its Schur
 // complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a
 // bias) with
@@ -550,6 +579,17 @@ private:
   Buf2<arma::vec> wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;
+  // the latent noise's GP prior (latent_noise.cpp): chol(Rg + jitter I),
+  // its log determinant, the log density; latentK_ the factor times
+  // sqrt(sigma2G), built when asked (latentFactor())
+  Buf2<arma::mat> Lg_;
+  Buf2<double> ldG_, lpG_;
+  mutable arma::mat latentK_;
+  bool latentPrior(const Touch& t, double& lp);
+public:
+  double latentLogPrior(bool pending) const override { return pending ? lpG_.b[1 - lpG_.c] : lpG_.cur(); }
+  const arma::mat& latentFactor() const override;
+private:
   // runConditional()'s runs' part at the candidates, kept while the
   // simulator's correlation parameters (runKey_) and the candidates stay
   arma::vec runKey_, runWy_;

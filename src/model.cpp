@@ -37,8 +37,17 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   iMuB = lay.offset_of("muB"); iLambdaZ = lay.offset_of("lambdaZ");
   iRhoS = lay.offset_of("rhoS"); iRhoB = lay.offset_of("rhoB"); iRhoD = lay.offset_of("rhoD");
   levels = model.levels;
-  simNoise = lay.length_of("sigma2R") > 0;
+  latent = lay.length_of("gR") > 0;
+  simNoise = lay.length_of("sigma2R") > 0 || latent;
   iSigma2R = lay.offset_of("sigma2R");
+  iG = lay.offset_of("gR"); iMuG = lay.offset_of("muG");
+  iSigma2G = lay.offset_of("sigma2G"); iThetaG = lay.offset_of("thetaG");
+  if (latent) {
+    if ((int) model.repSSWi.size() != m_)
+      Rcpp::stop("the input-dependent noise needs a within sum of squares per unique run (%d)", m_);
+    repSSWi = arma::vec(model.repSSWi);
+    repDfi = arma::vec(model.repCount) - 1.0;
+  }
   if (simNoise) {
     if ((int) model.repCount.size() != m_)
       Rcpp::stop("the replicate counts must give one count per unique run (%d)", m_);
@@ -61,19 +70,31 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
 // means carry the rest: their noise variance r / n_i is in the simulator
 // block; the last sum is the Jacobian from the runs to their means and
 // deviations, so that the log-likelihood is that of every run).
-double Posterior::noiseLoglik(double r) const {
-  return -0.5 * (repDf * (LOG_2PI + std::log(r)) + repSSW / r + repLogN);
+// With an input-dependent noise r_i = exp(g_i):
+// -0.5 [sum_i (n_i - 1)(log 2 pi + g_i) + sum_i SSW_i exp(-g_i) + sum_i log n_i].
+double Posterior::noiseLoglik() const {
+  if (!latent) {
+    const double r = phi[iSigma2R];
+    return -0.5 * (repDf * (LOG_2PI + std::log(r)) + repSSW / r + repLogN);
+  }
+  double s = repLogN;
+  for (int i = 0; i < m; ++i) {
+    const double g = phi[iG + i];
+    s += repDfi[i] * (LOG_2PI + g) + repSSWi[i] * std::exp(-g);
+  }
+  return -0.5 * s;
 }
 
 // What a move of a class touches (add_touch()), by the class's name; a class
 // not named here moves only the residual (muB).
 enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
-                 TK_FIELD, TK_SIMNOISE };
+                 TK_FIELD, TK_SIMNOISE, TK_LATENT, TK_LATENTHYPER, TK_LATENTK };
 static const std::pair<const char*, int> class_touch[] = {
     {"kappa", TK_KAPPA}, {"thetaS", TK_SIM}, {"alphaS", TK_SIMPOW}, {"rhoS", TK_SIMLEVELS},
     {"thetaB", TK_BIAS}, {"alphaB", TK_BIASPOW}, {"lambdaZ", TK_BIAS}, {"rhoB", TK_BIAS},
     {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD},
-    {"sigma2R", TK_SIMNOISE}};
+    {"sigma2R", TK_SIMNOISE}, {"gR", TK_LATENT}, {"muG", TK_LATENTHYPER},
+    {"sigma2G", TK_LATENTHYPER}, {"thetaG", TK_LATENTK}};
 
 void fill_layout(Layout& lay) {
   lay.d = 0;
@@ -185,6 +206,15 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
   case TK_SIMNOISE:
     t.simCorr = t.cross = t.field = true;
     break;
+  case TK_LATENT:  // the noise variances of the means and their GP prior
+    t.simCorr = t.cross = t.field = t.latentLp = true;
+    break;
+  case TK_LATENTK:
+    t.latentK = true;
+    // fall through
+  case TK_LATENTHYPER:
+    t.latentLp = true;
+    break;
   default:  // muB: only the residual moves
     break;
   }
@@ -215,13 +245,15 @@ double SchurPosterior::proposeScale(double c) {
   touch_.reset(p + q, p);
   touch_.scale = true;
   const double s2S = phi[iSigma2S];
-  if (!(s2S > 0) || !std::isfinite(c)) return R_NegInf;
+  // (an input-dependent noise does not scale with the variances)
+  if (!(s2S > 0) || !std::isfinite(c) || latent) return R_NegInf;
   const double ldDs = ldDs_.cur(), zz = zz_.cur();
   const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
   double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
-  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
+  if (simNoise) ll += noiseLoglik();
   loglik_.alt() = ll;
+  lpG_.alt() = lpG_.cur();
   return ll;
 }
 
@@ -450,7 +482,10 @@ double SchurPosterior::evaluate(const Touch& t) {
   const double s2B = bias ? phi[iSigma2B] : 0.0;
   // D = sigma2S Ds is positive definite only for sigma2S > 0 (and sigma2R > 0).
   if (!(s2S > 0)) return R_NegInf;
-  if (simNoise && !(phi[iSigma2R] > 0)) return R_NegInf;
+  if (simNoise && !latent && !(phi[iSigma2R] > 0)) return R_NegInf;
+  // the latent noise's GP prior
+  double lpG = latent ? lpG_.cur() : 0.0;
+  if (latent && t.latentLp && !latentPrior(t, lpG)) return R_NegInf;
 
   // Simulator block (the algebra's).
   double ldDs = ldDs_.cur(), zz = zz_.cur();
@@ -499,8 +534,8 @@ double SchurPosterior::evaluate(const Touch& t) {
 
   ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
   double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
-  if (simNoise) ll += noiseLoglik(phi[iSigma2R]);
-  loglik_.alt() = ll;
+  if (simNoise) ll += noiseLoglik() + lpG;
+  loglik_.alt() = ll; lpG_.alt() = lpG;
   return ll;
 }
 
@@ -515,7 +550,8 @@ void SchurPosterior::flip(const Touch& t) {
   if (t.cross) { Q_.flip(); wz_.flip(); }
   if (t.biasCorr) Rb_.flip();
   if (t.field || t.scale) LS_.flip();
-  ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip();
+  if (t.latentK) { Lg_.flip(); ldG_.flip(); }
+  ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip(); lpG_.flip();
 }
 
 // s2S Rs(X, Y) over the p + q inputs at ph (the levels' correlations too).

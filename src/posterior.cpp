@@ -165,7 +165,12 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   if (model.containsElementNamed("replicates")) {
     const Rcpp::List rp = model["replicates"];
     out.repCount = Rcpp::as<std::vector<double> >(rp["count"]);
-    out.repSSW = Rcpp::as<double>(rp["ssw"]);
+    // (one within sum of squares, or one per unique input with an
+    // input-dependent noise)
+    const std::vector<double> ssw = Rcpp::as<std::vector<double> >(rp["ssw"]);
+    out.repSSW = 0.0;
+    for (double v : ssw) out.repSSW += v;
+    if (lay.length_of("gR") > 0) out.repSSWi = ssw;
     out.repDf = 0.0;
     for (double c : out.repCount) {
       if (!(c >= 1)) Rcpp::stop("the replicate counts must be 1, 2, ...");
@@ -174,9 +179,16 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     if (out.algebra == ALG_VECCHIA || K > 1 || !out.emulator)
       Rcpp::stop("the simulator's own noise has the dense algebra only");
   }
-  if ((lay.length_of("sigma2R") > 0) != !out.repCount.empty() || lay.length_of("sigma2R") > 1)
-    Rcpp::stop("the layout gives sigma2R %d entries where the data need %d",
-               lay.length_of("sigma2R"), out.repCount.empty() ? 0 : 1);
+  // the noise: sigma2R (constant) or gR, one per unique input, with its GP's
+  // muG, sigma2G and thetaG (input-dependent)
+  const int nR = lay.length_of("sigma2R"), nG = lay.length_of("gR");
+  const bool lat = nG > 0;
+  if ((nR > 0 || lat) != !out.repCount.empty() || nR > 1 || (nR && lat) ||
+      (lat && (nG != (int) out.repCount.size() || lay.length_of("muG") != 1 ||
+               lay.length_of("sigma2G") != 1 || lay.length_of("thetaG") != p + q)) ||
+      (!lat && lay.length_of("muG") + lay.length_of("sigma2G") + lay.length_of("thetaG") > 0))
+    Rcpp::stop("the layout's noise classes (sigma2R %d, gR %d entries) do not fit the %d unique runs",
+               nR, nG, (int) out.repCount.size());
   if (out.algebra == ALG_VECCHIA) {
     if (!model.containsElementNamed("vecchia"))
       Rcpp::stop("the Vecchia algebra needs its design (model$vecchia)");

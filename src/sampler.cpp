@@ -780,6 +780,19 @@ struct JumpMove : Move {
   }
 };
 
+// Elliptical slice sampling of a stochastic simulator's latent
+// log-variances gR, all at once (latent_noise.cpp); not adapted.
+struct LatentMove : Move {
+  explicit LatentMove(const Chain& ch) {
+    for (int i = 0; i < ch.post.m; ++i) idx.push_back(ch.post.iG + i);
+    name = "gR";
+  }
+  const char* kind() const override { return "slice"; }
+  bool step(Chain& ch) override {
+    return latent_ess(ch.post, ch.ll, ch.lp, [&](int j, double x) { return ch.pr(j, x); }) > 0;
+  }
+};
+
 typedef std::vector<std::unique_ptr<Move> > Schedule;
 
 // The chain's adapted state from `state` (an earlier piece's, or the
@@ -920,7 +933,9 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   };
   for (int j = 0; j < d; ++j) {
     if (pr.family[j] == PF_FIXED) continue;
-    if (inBlock[j]) {
+    if (post.latent && j >= post.iG && j < post.iG + post.m) {
+      if (j == post.iG) schedule.emplace_back(new LatentMove(ch));
+    } else if (inBlock[j]) {
       if (blockAt[j] >= 0) add_block(blockAt[j]);
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
       schedule.emplace_back(new GibbsMuBMove(j, ch));
@@ -942,7 +957,8 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     for (size_t r = 0; r < jump.size(); ++r)
       schedule.emplace_back(new JumpMove(jump[r] - 1, range(r, 0), range(r, 1), ch));
   }
-  if (scaleMove) schedule.emplace_back(new ScaleMove(post, state));
+  // (an input-dependent noise does not scale with the variances: no scale move)
+  if (scaleMove && !post.latent) schedule.emplace_back(new ScaleMove(post, state));
   if (state.containsElementNamed("moves") && !Rf_isNull(state["moves"])) {
     const Rcpp::List old = state["moves"];
     const Rcpp::CharacterVector nm = old["name"];

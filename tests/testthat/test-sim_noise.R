@@ -142,7 +142,8 @@ test_that("what the simulator's noise cannot do is refused, naming simNoise", {
   noisy$y[25:27] <- noisy$y[25:27] + 0.1
   expect_snapshot(error = TRUE, {
     calibrate(noisy, two$field, output = "out", fit = FALSE)
-    calibrate(pb$sim, pb$field, simNoise = "input")
+    calibrate(pb$sim, pb$field, simNoise = "input", algebra = "vecchia", fit = FALSE)
+    calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "input")
     calibrate(pb$sim, pb$field, simNoise = "noisy")
     calibrate(pb$sim, pb$field, algebra = "vecchia", fit = FALSE)
     calibrate(same, ballField, simNoise = "constant", fit = FALSE)
@@ -179,4 +180,190 @@ test_that("a run with the simulator's noise resumes from its checkpoint, and tak
   expect_identical(up$model$dims$m, 12L)
   # (rows 1 to 12: the first 4 inputs, 3 runs each)
   expect_identical(up$model$spec$model$replicates$count, rep(c(6, 3), c(4, 8)))
+})
+
+# The latent GP's log density of g (plain R): N(muG, sigma2G (Rg + 1e-6 I)),
+# Rg the Gaussian correlation over the scaled inputs Xs.
+latent_prior_plain <- function(g, Xs, muG, s2G, thetaG) {
+  K <- s2G * (dense_corr(Xs, Xs, thetaG, rep(2, ncol(Xs)), "gaussian") + 1e-6 * diag(nrow(Xs)))
+  L <- chol(K)
+  a <- backsolve(L, g - muG, transpose = TRUE)
+  -0.5 * (length(g) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+}
+
+# The log-likelihood of every run (plain R, dense): run r at unique input i
+# has variance exp(g_i) on top of the emulator's covariance.
+input_noise_full <- function(model, sim, phi, g, disc) {
+  d <- model$data
+  reps <- FBC:::sim_replicates(sim)
+  ys <- (sim[, 1] - model$scale$ymean) / model$scale$ysd
+  m <- nrow(d$Xs); n <- nrow(d$Xf)
+  Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
+  E <- rbind(cbind(diag(n), matrix(0, n, m)),
+             cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
+  C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), exp(g)[reps$group]))
+  th <- unpack_phi(phi, 1, 1, disc)
+  res <- c(d$yf - if (disc == "gp") th$muB else 0, ys)
+  L <- chol(C)
+  a <- backsolve(L, res, transpose = TRUE)
+  -0.5 * (length(res) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+}
+
+test_that("the input-dependent noise's likelihood is that of every run, plus the latent GP", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3, 2, 4), nf = 4, seed = 2)
+  for (disc in c("gp", "none")) {
+    model <- calibrate(pb$sim, pb$field, simNoise = "input", discrepancy = disc, fit = FALSE)
+    d <- model$data
+    m <- nrow(d$Xs)
+    expect_identical(m, 12L)
+    idx <- FBC:::param_indices(1, 1, disc, replicates = c(0L, m))
+    expect_identical(names(idx)[length(idx) - 3:0], c("gR", "muG", "sigma2G", "thetaG"))
+    expect_identical(lengths(idx[c("gR", "muG", "sigma2G", "thetaG")]),
+                     c(gR = 12L, muG = 1L, sigma2G = 1L, thetaG = 2L))
+    expect_identical(model$spec$vars[idx$gR], paste0("gR", 1:12))
+    set.seed(3)
+    for (k in 1:3) {
+      phi <- random_phi(1, 1, disc)
+      g <- stats::rnorm(m, -3, 0.7)
+      muG <- stats::rnorm(1, -3); s2G <- stats::rgamma(1, 2, 2); thG <- stats::rgamma(2, 2, 1)
+      got <- FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, c(phi, g, muG, s2G, thG), FBC:::fbc_nugget,
+                               model = model$spec$model)
+      ref <- input_noise_full(model, pb$sim, phi, g, disc) +
+        latent_prior_plain(g, d$Xs, muG, s2G, thG)
+      expect_equal(got, ref, tolerance = 1e-8)
+    }
+  }
+  # the starting values: each input's log within variance, the pooled one
+  # where it has one run
+  model <- calibrate(pb$sim, pb$field, simNoise = "input", fit = FALSE)
+  init <- model$spec$init[model$spec$classes == "gR"]
+  ys <- (pb$sim[, 1] - model$scale$ymean) / model$scale$ysd
+  grp <- FBC:::sim_replicates(pb$sim)$group
+  v <- tapply(ys, grp, stats::var)
+  pooled <- sum(tapply(ys, grp, function(y) sum((y - mean(y))^2))) / (nrow(pb$sim) - 12)
+  expect_equal(init, log(ifelse(is.na(v), pooled, v)), ignore_attr = TRUE)
+  expect_equal(model$spec$init[model$spec$classes == "muG"], mean(init))
+})
+
+# A tiny problem whose only unknowns are the latent log-variances at 5
+# unique inputs (x and t crossed): everything else fixed at values near the truth.
+tiny_latent <- function(nMCMC, seed = 4, ...) {
+  set.seed(1)
+  x <- c(0.2, 1.5, 2.8, 0.2, 2.8)
+  X <- cbind(x = rep(x, c(3, 4, 3, 2, 3)), t = rep(c(1.2, 1.7, 1.2, 2.2, 2.2), c(3, 4, 3, 2, 3)))
+  sim <- cbind(y = 5 * exp(-X[, "t"] * X[, "x"]) + stats::rnorm(nrow(X), 0, 0.1 + 0.1 * X[, "x"]), X)
+  field <- cbind(y = 5 * exp(-1.7 * c(0.5, 2)) + c(0.03, -0.02), x = c(0.5, 2))
+  h <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.5, 1),
+                       sigma2SDist = "fixed", sigma2SInit = 1, sigma2EDist = "fixed",
+                       sigma2EInit = 0.01, muGDist = "fixed", muGInit = -3,
+                       sigma2GDist = "fixed", sigma2GInit = 1, thetaGDist = "fixed",
+                       thetaGInit = c(1, 1))
+  set.seed(seed)
+  calibrate(sim, field, simNoise = "input", discrepancy = "none", hypers = h,
+            kappaDist = "fixed", kappaInit = 1.7, nMCMC = nMCMC, nBurn = 200, nChains = 1,
+            converge = FALSE, ...)
+}
+
+test_that("elliptical slice sampling gives the latent log-variances' posterior", {
+  fit <- tiny_latent(4000)
+  mo <- fit$model
+  d <- mo$data
+  G <- fit$Phi[, paste0("gR", 1:5)]
+  # the exact posterior by importance sampling from the GP prior (plain R):
+  # weights the likelihood of every run
+  phi0 <- mo$spec$init[!mo$spec$classes %in% FBC:::sim_noise_classes]
+  set.seed(9)
+  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
+  Z <- matrix(stats::rnorm(5 * 20000), ncol = 5) %*% chol(K) - 3
+  ll <- apply(Z, 1, function(g) input_noise_full(mo, mo$raw$sim, phi0, g, "none"))
+  w <- exp(ll - max(ll)); w <- w / sum(w)
+  mu <- colSums(w * Z)
+  sdv <- sqrt(colSums(w * (Z - rep(mu, each = nrow(Z)))^2))
+  expect_gt(1 / sum(w^2), 2000)  # enough importance draws
+  # the chain's means within 4 Monte Carlo sds (its effective draws from
+  # batch means), its sds within 15%
+  bm <- apply(G, 2, function(v) stats::sd(colMeans(matrix(v, 100))) / sqrt(ncol(matrix(v, 100))))
+  expect_true(all(abs(colMeans(G) - mu) < 4 * bm + 0.02))
+  expect_equal(apply(G, 2, stats::sd), sdv, tolerance = 0.15, ignore_attr = TRUE)
+  # set.seed() reproduces the run
+  expect_identical(tiny_latent(300)$Phi, tiny_latent(300)$Phi)
+})
+
+test_that("an input-dependent noise predicts its sd, prints, and resumes from a checkpoint", {
+  fit <- tiny_latent(300)
+  # at a unique input (x = 1.5, t = kappa = 1.7) the latent GP gives that
+  # input's own log-variance (up to the jitter)
+  pr <- predict(fit, c(1.5, 0.2), type = "simulator", ndraws = 100)
+  rows <- attr(pr, "draw_rows")
+  expect_equal(pr$noiseSd[1], sqrt(mean(exp(fit$Phi[rows, "gR2"]))) * fit$model$scale$ysd,
+               tolerance = 1e-4)
+  # elsewhere, the conditional log-normal mean (plain R, one draw)
+  one <- predict(fit, c(1, 2.5), type = "simulator", method = "MAP")
+  ph <- fit$Phi[which.max(fit$logPost), ]
+  Xs <- fit$model$data$Xs
+  sc <- fit$model$scale
+  Z <- cbind((c(1, 2.5) - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1]),
+             (1.7 - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2]))
+  K <- dense_corr(Xs, Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
+  k <- dense_corr(Xs, Z, c(1, 1), c(2, 2), "gaussian")
+  g <- ph[paste0("gR", 1:5)]
+  mu <- -3 + drop(t(k) %*% solve(K, g + 3))
+  v <- 1 + 1e-6 - colSums(k * solve(K, k))
+  expect_equal(one$noiseSd, sqrt(exp(mu + v / 2)) * fit$model$scale$ysd, tolerance = 1e-6)
+  expect_match(capture.output(print(fit)), "input-dependent", all = FALSE)
+  # a checkpointed run is the same run, and resumes
+  dir <- withr::local_tempdir()
+  first <- tiny_latent(300, checkpoint = dir)
+  expect_identical(first$Phi, fit$Phi)
+  expect_message(again <- tiny_latent(300, checkpoint = dir), "Resuming")
+  expect_identical(again$Phi, fit$Phi)
+})
+
+# The exact leave-one-out log density of each field row given the others
+# and every run (plain R, the full-row covariance: run r at unique input i
+# with noise variance v_i), from the inverse covariance.
+loo_plain <- function(model, sim, phi, v, disc) {
+  d <- model$data
+  reps <- FBC:::sim_replicates(sim)
+  ys <- (sim[, 1] - model$scale$ymean) / model$scale$ysd
+  m <- nrow(d$Xs); n <- nrow(d$Xf)
+  Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
+  E <- rbind(cbind(diag(n), matrix(0, n, m)),
+             cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
+  C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), v[reps$group]))
+  th <- unpack_phi(phi, 1, 1, disc)
+  Q <- solve(C)
+  a <- drop(Q %*% c(d$yf - if (disc == "gp") th$muB else 0, ys))[1:n]
+  q <- diag(Q)[1:n]
+  -0.5 * log(2 * pi) + 0.5 * log(q) - 0.5 * a^2 / q
+}
+
+test_that("loo() compares simNoise choices on the same field data", {
+  skip_if_not_installed("loo")
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(2, 3), nf = 5, seed = 5)
+  # each model's pointwise density is that of the field row given the other
+  # field rows and every run (the means carry all the runs say of eta)
+  set.seed(6)
+  for (mode in c("constant", "input")) {
+    model <- calibrate(pb$sim, pb$field, simNoise = mode, fit = FALSE)
+    d <- model$data
+    phi <- random_phi(1, 1, "gp")
+    noise <- if (mode == "constant") stats::rgamma(1, 2, 20) else
+      c(stats::rnorm(12, -3, 0.5), -3, 0.5, 1, 2)
+    v <- if (mode == "constant") rep(noise, 12) else exp(noise[1:12])
+    got <- FBC:::.fbc_loo(d$Xf, d$yf, d$Xs, d$ys, rbind(c(phi, noise)), FBC:::fbc_nugget,
+                          group = seq_len(nrow(d$Xf)), model = model$spec$model)
+    expect_equal(drop(got), loo_plain(model, pb$sim, phi, v, "gp"), tolerance = 1e-8)
+  }
+  # fits under each choice: loo objects over the same 5 field observations
+  fits <- lapply(c(none = "none", constant = "constant", input = "input"), function(mode) {
+    set.seed(8)
+    suppressMessages(calibrate(pb$sim, pb$field, simNoise = mode, nMCMC = 300, nBurn = 200,
+                               nChains = 2, converge = FALSE))
+  })
+  loos <- lapply(fits, function(f) suppressWarnings(loo::loo(f, ndraws = 200)))
+  expect_true(all(vapply(loos, function(l) nrow(l$pointwise), integer(1)) == 5L))
+  cmp <- suppressWarnings(loo::loo_compare(loos))
+  expect_setequal(rownames(cmp), names(fits))
+  expect_equal(unname(cmp[, "elpd_diff"][1]), 0)
 })
