@@ -77,8 +77,8 @@
     .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }
 
-.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid) {
-    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid)
+.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support) {
+    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support)
 }
 
 .fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model) {

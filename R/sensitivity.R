@@ -85,13 +85,15 @@
 #' s <- sensitivity(fit, ndraws = 100)
 #' s
 #' as.data.frame(s)
-sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, prediction = TRUE,
-                        nodes = 12, ...) {
+sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, paths = 128,
+                        prediction = TRUE, nodes = 12, ...) {
   check_dots_empty(..., fn = sensitivity, name = "sensitivity")
   fit <- check_fbc(fit, "fit")
   check_sensitivity_fit(fit)
   if (!is.null(ndraws)) ndraws <- check_count(ndraws, "ndraws", min = 2)
   check_level(level)
+  paths <- check_count(paths, "paths", min = 0)
+  if (paths == 1L) cli::cli_abort("{.arg paths} must be 0 (no sample paths) or at least 2, not 1.")
   check_flag(prediction, "prediction")
   nodes <- check_count(nodes, "nodes", min = 2)
   sc <- fit$model$scale
@@ -109,7 +111,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, predicti
   for (k in seq_len(D)) grid[, k] <- seq(measure$lower[k], measure$upper[k], length.out = G)
   res <- at_draws(fit, .fbc_sobol_c, phis, exact = measure$exact, lower = measure$lower,
                   upper = measure$upper, nodes = measure$nodes, weights = measure$weights,
-                  grid = grid)
+                  grid = grid, support = support_points(paths, M, measure))
   V <- pmax(as.vector(res$V), .Machine$double.xmin)
   S1 <- t(res$V1) / V
   ST <- t(res$VT) / V
@@ -131,7 +133,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, predicti
     out$main$prediction <- pr$main
   }
   out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = nm, role = role,
-                       measure = measure$label, nodes = nodes,
+                       measure = measure$label, paths = paths, nodes = nodes,
                        kernel = kernels$label[match(fit$model$spec$model$kernS, kernels$code)])
   class(out) <- "fbc_sensitivity"
   out
@@ -160,6 +162,55 @@ check_level <- function(level, arg = "level", call = parent.frame()) {
     cli::cli_abort("{.arg {arg}} must be a single number strictly between 0 and 1.", call = call)
   }
   invisible(level)
+}
+
+# The first n points of the Halton sequence in d dimensions (radical inverses
+# in the first d primes), skipping the point at the origin.
+halton <- function(n, d) {
+  primes <- c(2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73,
+              79, 83, 89, 97, 101, 103, 107, 109, 113)
+  if (d > length(primes)) {
+    primes <- c(primes, Filter(function(k) all(k %% 2:floor(sqrt(k)) != 0), 114:(20 * d)))
+  }
+  i <- seq_len(n)
+  vapply(primes[seq_len(d)], function(b) {
+    x <- numeric(n)
+    f <- 1 / b
+    k <- i
+    while (any(k > 0)) {
+      x <- x + f * (k %% b)
+      k <- k %/% b
+      f <- f / b
+    }
+    x
+  }, numeric(n))
+}
+
+# Per draw, N support points of the sample path (stacked, N rows per draw):
+# the Halton points shifted by a uniform draw modulo one (a randomised
+# quasi-Monte Carlo design, fresh for every draw), mapped to each input's
+# measure (uniform on its range, or the inverse of the quadrature's
+# distribution function for a density). N = 0: none (the mean's indices).
+support_points <- function(N, M, measure) {
+  D <- length(measure$lower)
+  if (N == 0L) return(matrix(0, 0, D))
+  H <- halton(N, D)
+  out <- matrix(0, N * M, D)
+  for (d in seq_len(M)) {
+    rows <- (d - 1L) * N + seq_len(N)
+    out[rows, ] <- (H + rep(stats::runif(D), each = N)) %% 1
+  }
+  for (k in seq_len(D)) {
+    u <- out[, k]
+    out[, k] <- if (measure$exact[k]) {
+      measure$lower[k] + (measure$upper[k] - measure$lower[k]) * u
+    } else {
+      cw <- cumsum(measure$weights[, k])
+      stats::approx(c(0, cw), c(measure$lower[k], measure$nodes[, k]), u, rule = 2,
+                    ties = "ordered")$y
+    }
+  }
+  out
 }
 
 # Gauss-Legendre nodes and weights on [0, 1] (Golub-Welsch), weights summing to one.
@@ -252,13 +303,21 @@ index_table <- function(draws, role, level) {
       lower = apply(x, 2, stats::quantile, probs = a, names = FALSE),
       upper = apply(x, 2, stats::quantile, probs = 1 - a, names = FALSE),
       # draws all equal (parameters fixed): no Monte Carlo error
-      mcse = apply(x, 2, function(v) if (all(v == v[1])) 0 else posterior::mcse_median(v)),
+      mcse = apply(x, 2, function(v) if (all(v == v[1])) 0 else mcse_median_quiet(v)),
       stringsAsFactors = FALSE
     )
   })
   out <- do.call(rbind, rows)
   rownames(out) <- NULL
   out
+}
+
+# posterior::mcse_median() without its note that independent draws' ESS is
+# capped (each draw's sample path makes the draws nearly independent).
+mcse_median_quiet <- function(v) {
+  withCallingHandlers(posterior::mcse_median(v), warning = function(w) {
+    if (grepl("ESS has been capped", conditionMessage(w), fixed = TRUE)) invokeRestart("muffleWarning")
+  })
 }
 
 # Main effects (G grid values x inputs, stacked, per draw) as one data frame
