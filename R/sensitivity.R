@@ -86,7 +86,7 @@
 #' s
 #' as.data.frame(s)
 sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, paths = 128,
-                        prediction = TRUE, nodes = 12, ...) {
+                        prediction = TRUE, points = 256, ...) {
   check_dots_empty(..., fn = sensitivity, name = "sensitivity")
   fit <- check_fbc(fit, "fit")
   check_sensitivity_fit(fit)
@@ -95,7 +95,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, paths = 
   paths <- check_count(paths, "paths", min = 0)
   if (paths == 1L) cli::cli_abort("{.arg paths} must be 0 (no sample paths) or at least 2, not 1.")
   check_flag(prediction, "prediction")
-  nodes <- check_count(nodes, "nodes", min = 2)
+  points <- check_count(points, "points", min = 2)
   sc <- fit$model$scale
   p <- sc$p
   q <- sc$q
@@ -126,14 +126,15 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, paths = 
     main = list(simulator = main_effects(res$main, grid, sc, nm, G, level))
   )
   if (prediction) {
-    pr <- prediction_sensitivity(fit, phis, nodes, level)
+    pr <- prediction_sensitivity(fit, phis, points, level)
     out$prediction <- pr$table
     out$shares <- pr$shares
     out$draws$prediction <- pr$draws
     out$main$prediction <- pr$main
+    out$points <- pr$points
   }
   out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = nm, role = role,
-                       measure = measure$label, paths = paths, nodes = nodes,
+                       measure = measure$label, paths = paths, points = points,
                        kernel = kernels$label[match(fit$model$spec$model$kernS, kernels$code)])
   class(out) <- "fbc_sensitivity"
   out
@@ -335,75 +336,97 @@ main_effects <- function(main, grid, sc, nm, G, level) {
   })
 }
 
-# The calibrated prediction over the experimental inputs: per draw the
-# conditional means and variances on a tensor Gauss-Legendre grid over the
-# experimental box, the Sobol indices of the mean response and the shares
-# of the predictive variance.
-prediction_sensitivity <- function(fit, phis, nodes, level) {
+# The calibrated prediction over the experimental inputs, by a randomised
+# quasi-Monte Carlo pick-freeze design (Halton points shifted by one uniform
+# draw modulo one) of `points` base points A and B on the experimental box:
+# per draw the conditional means at A, B and A_B^k (A with column k from B),
+# the Saltelli (2010) first-order and Jansen (1999) total estimators,
+#   V_k ~ mean(f_B (f_{A_B^k} - f_A)),   VT_k ~ mean((f_A - f_{A_B^k})^2) / 2,
+# V from (f_A, f_B); the shares of the predictive variance averaged over A
+# and B; the main effects E[f | x_k = t] over the first rows of B. Cost
+# points (p + 2) + main-effect points per draw: linear in p.
+prediction_sensitivity <- function(fit, phis, points, level) {
   sc <- fit$model$scale
   p <- sc$p
   M <- nrow(phis)
-  gl <- gauss_legendre01(nodes)
-  X <- as.matrix(expand.grid(rep(list(gl$x), p)))
-  wt <- Reduce(`%o%`, rep(list(gl$w), p))
-  w <- as.vector(wt)
-  cond <- function(type) {
+  N <- points
+  U <- (halton(N, 2L * p) + rep(stats::runif(2L * p), each = N)) %% 1
+  A <- U[, seq_len(p), drop = FALSE]
+  B <- U[, p + seq_len(p), drop = FALSE]
+  G <- 12L
+  tg <- (seq_len(G) - 0.5) / G
+  Nm <- min(N, 32L)
+  X <- rbind(A, B, do.call(rbind, lapply(seq_len(p), function(k) {
+    C <- A
+    C[, k] <- B[, k]
+    C
+  })), do.call(rbind, lapply(seq_len(p), function(k) {
+    C <- B[rep(seq_len(Nm), G), , drop = FALSE]
+    C[, k] <- rep(tg, each = Nm)
+    C
+  })))
+  cond <- function(type, X) {
     at_draws(fit, .fbc_predict_c, phis, Xnew = X, type = type, block = 500L,
              noise = integer(0), source = integer(0))
   }
-  mn <- cond(predict_type_codes[["mean"]])
+  mn <- cond(predict_type_codes[["mean"]], X)
+  AB <- seq_len(2L * N)
   has_bias <- fit$model$spec$model$length[["sigma2B"]] > 0L
-  vs <- if (has_bias) cond(predict_type_codes[["simulator"]])$var else mn$var
-  vb <- if (has_bias) cond(predict_type_codes[["bias"]])$var else 0 * mn$var
+  XAB <- X[AB, , drop = FALSE]
+  vs <- if (has_bias) cond(predict_type_codes[["simulator"]], XAB)$var else mn$var[AB, , drop = FALSE]
+  vb <- if (has_bias) cond(predict_type_codes[["bias"]], XAB)$var else 0 * vs
   s2E <- phis[, fit$model$spec$model$offset[["sigma2E"]] + 1L]
-  # Sobol indices of each draw's mean response on the grid
   nm <- sim_input_names(sc, p + sc$q)[seq_len(p)]
   S <- array(NA_real_, c(M, p, 2), list(NULL, nm, c("first", "total")))
-  dims <- rep(nodes, p)
-  for (d in seq_len(M)) {
-    f <- array(mn$mean[, d], dims)
-    f0 <- sum(w * f)
-    V <- max(sum(w * f^2) - f0^2, .Machine$double.xmin)
-    for (k in seq_len(p)) {
-      # E[f | x_k] and E[f | x_-k] by summing the grid's weights out
-      e1 <- apply(array(w * f, dims), k, sum) / gl$w
-      S[d, k, "first"] <- (sum(gl$w * e1^2) - f0^2) / V
-      if (p == 1L) {
-        S[d, k, "total"] <- 1
-      } else {
-        ek <- apply(sweep(f, k, gl$w, "*"), seq_len(p)[-k], sum)
-        wk <- apply(wt, seq_len(p)[-k], sum)
-        S[d, k, "total"] <- 1 - (sum(wk * ek^2) - f0^2) / V
-      }
-    }
+  # the per-draw estimators' standard errors (independent-sampling formula:
+  # an upper bound for the randomised quasi-Monte Carlo design)
+  se <- array(NA_real_, c(M, p, 2))
+  f <- mn$mean
+  fa <- f[seq_len(N), , drop = FALSE]
+  fb <- f[N + seq_len(N), , drop = FALSE]
+  V <- pmax(apply(f[AB, , drop = FALSE], 2, stats::var), .Machine$double.xmin)
+  for (k in seq_len(p)) {
+    fc <- f[(k + 1L) * N + seq_len(N), , drop = FALSE]
+    g1 <- fb * (fc - fa)
+    gT <- (fa - fc)^2 / 2
+    S[, k, "first"] <- colMeans(g1) / V
+    S[, k, "total"] <- colMeans(gT) / V
+    se[, k, 1] <- apply(g1, 2, stats::sd) / sqrt(N) / V
+    se[, k, 2] <- apply(gT, 2, stats::sd) / sqrt(N) / V
   }
   # variance shares over the box: each draw's conditional variances and the
   # spread of the conditional means over the draws (predict()'s se^2)
   ysd2 <- y_sd(sc)^2
-  spread <- if (M > 1L) rowSums((mn$mean - rowMeans(mn$mean))^2) / (M - 1L) else 0 * w
+  mAB <- f[AB, , drop = FALSE]
+  spread <- if (M > 1L) rowSums((mAB - rowMeans(mAB))^2) / (M - 1L) else 0 * AB
   comp <- c(
-    kappa = sum(w * spread),
-    bias = sum(w * rowMeans((mn$var + vb - vs) / 2)),
-    emulator = sum(w * rowMeans((mn$var + vs - vb) / 2)),
+    kappa = mean(spread),
+    bias = mean(rowMeans((mn$var[AB, , drop = FALSE] + vb - vs) / 2)),
+    emulator = mean(rowMeans((mn$var[AB, , drop = FALSE] + vs - vb) / 2)),
     noise = mean(s2E)
   )
   shares <- data.frame(source = names(comp), variance = ysd2 * comp, share = comp / sum(comp),
                        stringsAsFactors = FALSE)
   rownames(shares) <- NULL
-  # main effects of the averaged prediction: E[f | x_k] per draw at the nodes
+  # main effects of the averaged prediction: E[f | x_k = t] per draw
+  off <- (p + 2L) * N
+  a <- (1 - level) / 2
   main <- lapply(stats::setNames(seq_len(p), nm), function(k) {
-    e <- vapply(seq_len(M), function(d) {
-      apply(array(w * mn$mean[, d], dims), k, sum) / gl$w
-    }, numeric(nodes))
-    e <- y_mean(sc) + y_sd(sc) * matrix(e, nodes)
-    a <- (1 - level) / 2
-    data.frame(x = sc$xmin[k] + (sc$xmax[k] - sc$xmin[k]) * gl$x,
+    rows <- off + (k - 1L) * Nm * G + seq_len(Nm * G)
+    e <- apply(array(f[rows, , drop = FALSE], c(Nm, G, M)), c(2, 3), mean)
+    e <- y_mean(sc) + y_sd(sc) * e
+    data.frame(x = sc$xmin[k] + (sc$xmax[k] - sc$xmin[k]) * tg,
                median = apply(e, 1, stats::median),
                lower = apply(e, 1, stats::quantile, probs = a, names = FALSE),
                upper = apply(e, 1, stats::quantile, probs = 1 - a, names = FALSE))
   })
-  list(table = index_table(S, rep("experimental", p), level), shares = shares, draws = S,
-       main = main)
+  tab <- index_table(S, rep("experimental", p), level)
+  # the design's error is shared by the draws: added to the median's
+  tab$mcse <- sqrt(tab$mcse^2 + as.vector(apply(se, 2:3, stats::median))^2)
+  pts <- sweep(sweep(XAB, 2, sc$xmax[seq_len(p)] - sc$xmin[seq_len(p)], "*"), 2,
+               sc$xmin[seq_len(p)], "+")
+  colnames(pts) <- nm
+  list(table = tab, shares = shares, draws = S, main = main, points = pts)
 }
 
 #' @export
@@ -424,8 +447,8 @@ print.fbc_sensitivity <- function(x, digits = 3, ...) {
   }
   show(x$simulator)
   if (!is.null(x$prediction)) {
-    cat(sprintf("Calibrated prediction, over the experimental inputs (kappa over its posterior; %d^p quadrature nodes):\n",
-                s$nodes))
+    cat(sprintf("Calibrated prediction, over the experimental inputs (kappa over its posterior; %d x (p + 2) quasi-random points):\n",
+                s$points))
     show(x$prediction)
     cat("Shares of the predictive variance over the experimental inputs:\n")
     sh <- x$shares

@@ -175,16 +175,16 @@ test_that("the indices of a linear simulator are recovered", {
 test_that("the variance shares sum to one and to predict()'s squared standard error over the box", {
   fit <- linear_fit()
   sc <- fit$model$scale
-  s <- sensitivity(fit, ndraws = 50, nodes = 6)
+  s <- sensitivity(fit, ndraws = 50, points = 64)
   sh <- s$shares
   expect_identical(sh$source, c("kappa", "bias", "emulator", "noise"))
   expect_equal(sum(sh$share), 1, tolerance = 1e-12)
   expect_equal(sh$share, sh$variance / sum(sh$variance), tolerance = 1e-12)
-  # predict()'s se^2 averaged over the same Gauss-Legendre grid of the box
-  gl <- FBC:::gauss_legendre01(6)
-  X <- as.matrix(expand.grid(x1 = sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * gl$x,
-                             x2 = sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * gl$x))
-  w <- as.vector(outer(gl$w, gl$w))
+  # predict()'s se^2 averaged over the same quasi-random points of the box
+  X <- s$points
+  expect_identical(dim(X), c(128L, 2L))
+  expect_true(all(X[, 1] >= sc$xmin[1] & X[, 1] <= sc$xmax[1]))
+  w <- rep(1 / nrow(X), nrow(X))
   field <- predict(fit, X, type = "field", ndraws = 50)
   mean <- predict(fit, X, type = "mean", ndraws = 50)
   expect_equal(sum(sh$variance), sum(w * field$se^2), tolerance = 1e-8)
@@ -198,7 +198,7 @@ test_that("print() shows the indices, the intervals and the shares", {
   phi <- random_phi(2, 1)
   phi[2:4] <- c(20, 60, 40)
   fit <- fixed_fit(phi, kernelS = "gaussian")
-  expect_snapshot(print(sensitivity(fit, nodes = 4)))
+  expect_snapshot(print(sensitivity(fit, points = 64)))
   expect_snapshot(print(sensitivity(fit, prediction = FALSE, level = 0.5), digits = 5))
 })
 
@@ -211,7 +211,7 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
     sensitivity(fit, level = 1.5)
     sensitivity(fit, level = c(0.5, 0.9))
     sensitivity(fit, prediction = NA)
-    sensitivity(fit, nodes = 1)
+    sensitivity(fit, points = 1)
     sensitivity(fit, draws = 10)
     sensitivity(list(a = 1))
     sensitivity(fit, inputs = list(1, 2))
@@ -238,9 +238,9 @@ test_that("set.seed() reproduces sensitivity(), which leaves the fit as it was",
   fit <- linear_fit()
   before <- fit
   set.seed(99)
-  a <- sensitivity(fit, ndraws = 20, nodes = 4)
+  a <- sensitivity(fit, ndraws = 20, points = 64)
   set.seed(99)
-  b <- sensitivity(fit, ndraws = 20, nodes = 4)
+  b <- sensitivity(fit, ndraws = 20, points = 64)
   expect_identical(a, b)
   expect_identical(fit, before)
   # the draws used: evenly spaced, as predict() takes them
@@ -250,14 +250,14 @@ test_that("set.seed() reproduces sensitivity(), which leaves the fit as it was",
   expect_identical(dim(a$draws$prediction), c(20L, 2L, 2L))
   # a wider level: wider intervals about the same medians
   set.seed(99)
-  w <- sensitivity(fit, ndraws = 20, nodes = 4, level = 0.99)
+  w <- sensitivity(fit, ndraws = 20, points = 64, level = 0.99)
   expect_identical(w$simulator$median, a$simulator$median)
   expect_true(all(w$simulator$lower <= a$simulator$lower & w$simulator$upper >= a$simulator$upper))
 })
 
 test_that("as.data.frame() stacks the indices; plot() draws the main effects and the indices", {
   fit <- linear_fit()
-  s <- sensitivity(fit, ndraws = 20, nodes = 4)
+  s <- sensitivity(fit, ndraws = 20, points = 64)
   df <- as.data.frame(s)
   expect_identical(names(df), c("of", "input", "role", "index", "median", "lower", "upper", "mcse"))
   expect_identical(nrow(df), 2L * 3L + 2L * 2L)
