@@ -24,22 +24,34 @@
 #' \eqn{\alpha < 2} has a cusp at each run, where it is accurate to about
 #' \eqn{10^{-3}}.
 #'
-#' The indices are those of the emulator's *posterior mean* at each draw, so
-#' their spread over the draws carries the uncertainty in the GP's
-#' hyperparameters and in \eqn{\kappa}; the emulator's own uncertainty given
-#' them (the spread of GP sample paths about their mean, which Marrel et al.
-#' 2009 propagate by conditional simulation) is not in it. The intervals
-#' therefore narrow as the hyperparameters' posterior concentrates, faster
-#' than the emulator's error shrinks: on simulators with known indices
-#' (Ishigami, Sobol's g-function, 50 to 200 runs) they cover the true
-#' indices far less often than their level says. Read them as the spread
-#' due to the parameters, not as a bound on the error of the indices.
+#' By default each draw's indices are those of a *conditional sample path*
+#' of the emulator rather than of its mean, so that their spread carries the
+#' emulator's own error given the parameters (Marrel et al. 2009) as well as
+#' the uncertainty in the GP's hyperparameters and in \eqn{\kappa}: the
+#' path's values at `paths` support points (a randomised Halton design over
+#' the measure, fresh for every draw) are drawn jointly given the data, and
+#' the path is the emulator's mean given the data and those values, one
+#' more kernel expansion whose indices are again in closed form, with no
+#' Monte Carlo error of their own. Between the support points the path is
+#' its conditional mean, so the spread is slightly understated when `paths`
+#' is small against the inputs' dimension. `paths = 0` gives the indices of
+#' the emulator's posterior mean at each draw: they carry the parameters'
+#' uncertainty only, and their intervals narrow faster than the emulator's
+#' error shrinks (on Ishigami's function with 100 to 200 runs they cover the
+#' true indices far less often than their level says).
+#'
+#' An index that is exactly zero (an input without effect) lies on the
+#' boundary: a path's first-order variance is positive, so no equal-tailed
+#' interval holds zero; read a small upper limit as "no effect".
 #'
 #' The calibrated prediction's indices are those of the mean field response
 #' \eqn{E[\eta(x, \kappa) + \delta(x)]} at each draw over the experimental
 #' inputs alone (uniform over their box), \eqn{\kappa} integrated over its
-#' posterior by the draws: computed by tensor Gauss-Legendre quadrature of
-#' [predict()]'s conditional means (`nodes` per input). The predictive
+#' posterior by the draws: estimated from [predict()]'s conditional means on
+#' a randomised quasi-Monte Carlo pick-freeze design (Saltelli 2010 for the
+#' first-order, Jansen 1999 for the total indices) of `points` \eqn{(p + 2)}
+#' points, whose error (bounded by the independent-sampling formula) is
+#' added to `mcse`. The predictive
 #' variance averaged over the same box is split into shares (summing to
 #' one): the measurement error (`noise`); the emulator and the bias, which
 #' split the conditional variance of the mean response by their covariances
@@ -47,7 +59,8 @@
 #' \eta + \delta)}); and the spread of the conditional mean over the draws
 #' (`kappa`: the uncertainty in \eqn{\kappa}, with that of the GP parameters
 #' it comes with). Their sum is the squared standard error [predict()]
-#' gives.
+#' gives, averaged over the design's `2 points` base points (`points` in the
+#' result).
 #'
 #' @param fit An `fbc` object from [calibrate()], with an emulated simulator,
 #'   one output, numeric inputs and the dense or Kronecker algebra.
@@ -59,15 +72,19 @@
 #' @param ndraws The number of posterior draws used (evenly spaced over all
 #'   retained draws, as in [predict()]); `NULL` uses them all.
 #' @param level Probability of the intervals.
+#' @param paths Support points of each draw's conditional sample path of the
+#'   emulator (the closed form's cost grows as the square of the runs plus
+#'   `paths`); `0` gives the indices of the emulator's mean at each draw.
 #' @param prediction If `TRUE`, also the calibrated prediction's indices and
 #'   the variance shares (the slower part).
-#' @param nodes Gauss-Legendre nodes per experimental input for the
-#'   prediction's quadrature (a tensor grid of `nodes^p` points).
+#' @param points Base points of the prediction's pick-freeze design
+#'   (`points` \eqn{(p + 2)} conditional means per draw).
 #' @param ... Not used: an argument given here is an error.
 #' @return An object of class `fbc_sensitivity`: `simulator` and
 #'   `prediction` (data frames with one row per input and index: `median`,
 #'   `lower`, `upper`, `mcse` the Monte Carlo standard error of the median),
-#'   `shares` (the prediction's variance shares), `draws` (per-draw indices:
+#'   `shares` (the prediction's variance shares), `points` (the base points
+#'   the shares average over), `draws` (per-draw indices:
 #'   arrays draws x inputs x index), `main` (main effects: for each input a
 #'   data frame of the conditional mean over a grid, in the response's units,
 #'   with its median and interval over the draws) and `settings`.
@@ -77,7 +94,9 @@
 #'   sensitivity analysis of complex models: a Bayesian approach. JRSS B 66,
 #'   751-769. Marrel, A., Iooss, B., Laurent, B. and Roustant, O. (2009).
 #'   Calculations of Sobol indices for the Gaussian process metamodel.
-#'   Reliability Engineering & System Safety 94, 742-751.
+#'   Reliability Engineering & System Safety 94, 742-751. Saltelli, A. et al.
+#'   (2010). Variance based sensitivity analysis of model output. Computer
+#'   Physics Communications 181, 259-270.
 #' @export
 #' @examples
 #' set.seed(1)
@@ -85,7 +104,7 @@
 #' s <- sensitivity(fit, ndraws = 100)
 #' s
 #' as.data.frame(s)
-sensitivity <- function(fit, inputs = NULL, ndraws = 1000, level = 0.9, paths = 128,
+sensitivity <- function(fit, inputs = NULL, ndraws = 300, level = 0.9, paths = 128,
                         prediction = TRUE, points = 256, ...) {
   check_dots_empty(..., fn = sensitivity, name = "sensitivity")
   fit <- check_fbc(fit, "fit")
@@ -336,6 +355,44 @@ main_effects <- function(main, grid, sc, nm, G, level) {
   })
 }
 
+# The pick-freeze points A, B, A_B^1, ..., A_B^p (N rows each; A_B^k is A
+# with column k from B) on [0, 1]^p, A and B from the Halton points in 2 p
+# dimensions shifted by one uniform draw modulo one.
+pick_freeze_design <- function(N, p) {
+  U <- (halton(N, 2L * p) + rep(stats::runif(2L * p), each = N)) %% 1
+  A <- U[, seq_len(p), drop = FALSE]
+  B <- U[, p + seq_len(p), drop = FALSE]
+  rbind(A, B, do.call(rbind, lapply(seq_len(p), function(k) {
+    C <- A
+    C[, k] <- B[, k]
+    C
+  })))
+}
+
+# Sobol indices of the columns of f (one function per column) from their
+# values at the pick-freeze points A, B, A_B^1, ..., A_B^p (N rows each, in
+# that order): the Saltelli (2010) first-order and Jansen (1999) total
+# estimators, V from (f_A, f_B), with their standard errors by the
+# independent-sampling formula (a bound for a quasi-Monte Carlo design):
+# S1, ST, se1, seT (columns x p).
+pick_freeze <- function(f, N, p) {
+  f <- as.matrix(f)
+  fa <- f[seq_len(N), , drop = FALSE]
+  fb <- f[N + seq_len(N), , drop = FALSE]
+  V <- pmax(apply(f[seq_len(2L * N), , drop = FALSE], 2, stats::var), .Machine$double.xmin)
+  out <- list(S1 = NULL, ST = NULL, se1 = NULL, seT = NULL)
+  for (k in seq_len(p)) {
+    fc <- f[(k + 1L) * N + seq_len(N), , drop = FALSE]
+    g1 <- fb * (fc - fa)
+    gT <- (fa - fc)^2 / 2
+    out$S1 <- cbind(out$S1, colMeans(g1) / V)
+    out$ST <- cbind(out$ST, colMeans(gT) / V)
+    out$se1 <- cbind(out$se1, apply(g1, 2, stats::sd) / sqrt(N) / V)
+    out$seT <- cbind(out$seT, apply(gT, 2, stats::sd) / sqrt(N) / V)
+  }
+  out
+}
+
 # The calibrated prediction over the experimental inputs, by a randomised
 # quasi-Monte Carlo pick-freeze design (Halton points shifted by one uniform
 # draw modulo one) of `points` base points A and B on the experimental box:
@@ -350,17 +407,12 @@ prediction_sensitivity <- function(fit, phis, points, level) {
   p <- sc$p
   M <- nrow(phis)
   N <- points
-  U <- (halton(N, 2L * p) + rep(stats::runif(2L * p), each = N)) %% 1
-  A <- U[, seq_len(p), drop = FALSE]
-  B <- U[, p + seq_len(p), drop = FALSE]
+  X <- pick_freeze_design(N, p)
+  B <- X[N + seq_len(N), , drop = FALSE]
   G <- 12L
   tg <- (seq_len(G) - 0.5) / G
   Nm <- min(N, 32L)
-  X <- rbind(A, B, do.call(rbind, lapply(seq_len(p), function(k) {
-    C <- A
-    C[, k] <- B[, k]
-    C
-  })), do.call(rbind, lapply(seq_len(p), function(k) {
+  X <- rbind(X, do.call(rbind, lapply(seq_len(p), function(k) {
     C <- B[rep(seq_len(Nm), G), , drop = FALSE]
     C[, k] <- rep(tg, each = Nm)
     C
@@ -377,23 +429,10 @@ prediction_sensitivity <- function(fit, phis, points, level) {
   vb <- if (has_bias) cond(predict_type_codes[["bias"]], XAB)$var else 0 * vs
   s2E <- phis[, fit$model$spec$model$offset[["sigma2E"]] + 1L]
   nm <- sim_input_names(sc, p + sc$q)[seq_len(p)]
-  S <- array(NA_real_, c(M, p, 2), list(NULL, nm, c("first", "total")))
-  # the per-draw estimators' standard errors (independent-sampling formula:
-  # an upper bound for the randomised quasi-Monte Carlo design)
-  se <- array(NA_real_, c(M, p, 2))
   f <- mn$mean
-  fa <- f[seq_len(N), , drop = FALSE]
-  fb <- f[N + seq_len(N), , drop = FALSE]
-  V <- pmax(apply(f[AB, , drop = FALSE], 2, stats::var), .Machine$double.xmin)
-  for (k in seq_len(p)) {
-    fc <- f[(k + 1L) * N + seq_len(N), , drop = FALSE]
-    g1 <- fb * (fc - fa)
-    gT <- (fa - fc)^2 / 2
-    S[, k, "first"] <- colMeans(g1) / V
-    S[, k, "total"] <- colMeans(gT) / V
-    se[, k, 1] <- apply(g1, 2, stats::sd) / sqrt(N) / V
-    se[, k, 2] <- apply(gT, 2, stats::sd) / sqrt(N) / V
-  }
+  pf <- pick_freeze(f, N, p)
+  S <- array(c(pf$S1, pf$ST), c(M, p, 2), list(NULL, nm, c("first", "total")))
+  se <- array(c(pf$se1, pf$seT), c(M, p, 2))
   # variance shares over the box: each draw's conditional variances and the
   # spread of the conditional means over the draws (predict()'s se^2)
   ysd2 <- y_sd(sc)^2

@@ -344,23 +344,26 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
                             Rcpp::Named("main") = main);
 }
 
-// The simulator's posterior mean per draw as a kernel expansion (for tests
-// and the sampling estimator): the centres Z and weights w of each draw.
+// The simulator's posterior mean per draw as a kernel expansion (for tests):
+// the centres Z and weights w of each draw; with support points (S rows per
+// draw, as in fbc_sobol()) those of a conditional sample path.
 // [[Rcpp::export(.fbc_sim_mean_c)]]
 Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                         const arma::vec& ys, const arma::mat& phis, double nugget,
-                        const Rcpp::List& model) {
+                        const Rcpp::List& model, const arma::mat& support) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
   if (!sp) Rcpp::stop("the simulator's mean needs one simulator GP");
-  Rcpp::List out(phis.n_rows);
+  const int M = phis.n_rows, S = support.n_rows / std::max(M, 1);
+  Rcpp::List out(M);
+  arma::mat Pd;
   for_each_draw(*pp, phis, [&](arma::uword d) {
     arma::mat Z;
     arma::vec w;
-    sp->simMean(Z, w);
+    if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
+    sp->simMean(Z, w, S > 0 ? &Pd : nullptr);
     out[d] = Rcpp::List::create(Rcpp::Named("Z") = Z, Rcpp::Named("w") = w);
     return true;
   });
   return out;
 }
-

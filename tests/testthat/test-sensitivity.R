@@ -280,3 +280,66 @@ test_that("as.data.frame() stacks the indices; plot() draws the main effects and
     }
   }
 })
+
+test_that("the pick-freeze estimator recovers Ishigami's indices within its stated error", {
+  # Ishigami (a = 7, b = 0.1) on U(-pi, pi)^3: S = (0.3139, 0.4424, 0),
+  # ST = (0.5576, 0.4424, 0.2437)
+  ish <- function(U) {
+    X <- -pi + 2 * pi * U
+    sin(X[, 1]) + 7 * sin(X[, 2])^2 + 0.1 * X[, 3]^4 * sin(X[, 1])
+  }
+  S <- c(0.3139, 0.4424, 0)
+  ST <- c(0.5576, 0.4424, 0.2437)
+  set.seed(8)
+  N <- 2048L
+  reps <- replicate(20, {
+    X <- FBC:::pick_freeze_design(N, 3)
+    expect_identical(dim(X), c(5L * N, 3L))
+    pf <- FBC:::pick_freeze(ish(X), N, 3)
+    c(pf$S1, pf$ST, pf$se1, pf$seT)
+  })
+  est <- reps[1:6, ]
+  se <- reps[7:12, ]
+  # each estimate within 4 of its standard errors of the truth
+  expect_true(all(abs(est - c(S, ST)) < 4 * se))
+  # the standard error is a bound for the randomised Halton design: the
+  # estimates' spread over 20 random shifts is below it, and not zero
+  spread <- apply(est, 1, stats::sd)
+  expect_true(all(spread < 1.2 * rowMeans(se)))
+  expect_true(all(spread > 0))
+  # the mean of the 20 estimates: within 4 standard errors of that mean
+  expect_true(all(abs(rowMeans(est) - c(S, ST)) < 4 * spread / sqrt(20) + 1e-3))
+})
+
+test_that("a draw's sample path has the emulator's conditional mean and covariance at its support points", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)
+  fit <- fixed_fit(phi, kernelS = "gaussian")
+  mp <- plain_sim_mean(fit, phi, "gaussian")
+  th <- mp$th
+  P <- matrix(c(0.2, 0.5, 0.8, 0.7, 0.1, 0.4, 0.3, 0.9, 0.6), 3, 3)
+  corr <- function(A, B) {
+    Reduce(`*`, lapply(1:3, function(j) dense_corr(A[, j], B[, j], th$thetaS[j], th$alphaS[j], "gaussian")))
+  }
+  d <- fit$model$data
+  C <- dense_cov(d$Xf, d$Xs, phi, fit$settings$nugget, "gaussian", "powexp")
+  K <- th$sigma2S * corr(P, mp$X)
+  mu <- drop(K %*% (mp$a / th$sigma2S))
+  Sig <- th$sigma2S * corr(P, P) - K %*% solve(C, t(K))
+  n <- 3000
+  phis <- FBC:::sampler_draws(fit, rep(1L, n))
+  sup <- P[rep(seq_len(3), n), ]
+  set.seed(9)
+  paths <- FBC:::at_draws(fit, FBC:::.fbc_sim_mean_c, phis, support = sup)
+  g <- t(vapply(paths, function(e) drop(corr(P, e$Z) %*% e$w), numeric(3)))
+  # the paths' values at P: mean mu, covariance Sig (Monte Carlo: n draws)
+  sds <- sqrt(diag(Sig))
+  expect_true(all(abs(colMeans(g) - mu) < 4 * sds / sqrt(n)))
+  expect_lt(max(abs(stats::cov(g) - Sig)) / max(diag(Sig)), 0.1)
+  expect_gt(min(sds), 1e-3)
+  # without support points the expansion is the mean itself
+  m0 <- FBC:::at_draws(fit, FBC:::.fbc_sim_mean_c, phis[1, , drop = FALSE],
+                       support = matrix(0, 0, 3))[[1]]
+  expect_equal(drop(corr(P, m0$Z) %*% m0$w), mu, tolerance = 1e-8)
+})
