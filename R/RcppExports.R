@@ -77,12 +77,12 @@
     .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }
 
-.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid) {
-    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid)
+.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support) {
+    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support)
 }
 
-.fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model) {
-    .Call(`_FBC_fbc_sim_mean`, Xf, yf, Xs, ys, phis, nugget, model)
+.fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model, support) {
+    .Call(`_FBC_fbc_sim_mean`, Xf, yf, Xs, ys, phis, nugget, model, support)
 }
 
 .has_openmp <- function() {

@@ -17,25 +17,32 @@
 #             experimental, x2 and x6 the calibration inputs. Field: 20
 #             points at the true (x2, x6) = (0.3, 0.6), noise sd 0.02.
 #             True indices from V_i = 1 / (3 (1 + a_i)^2).
-# Each design: calibrate() with the default arguments (kernelS = "matern52",
-# a GP discrepancy) and nMCMC/nBurn/nChains as given, then
-# sensitivity(fit, prediction = FALSE) with 1000 draws (the default), the
-# measure the problem's box (inputs = the true ranges). Columns per problem and m:
+# Each design: calibrate() with the default kernels (kernelS = "matern52",
+# a GP discrepancy) and nMCMC/nBurn/nChains as given (a fixed run length),
+# then sensitivity(fit, prediction = FALSE) with its defaults (300 draws,
+# each with a conditional sample path through 128 support points; method
+# "FBC") and with paths = 0 (the indices of the emulator's mean; "FBC
+# (mean)"), the measure the problem's box (inputs = the true ranges).
+# Columns per method, problem and m:
 # designs run; coverage of the true first-order (S) and total (ST) indices
-# by the 90% intervals, over designs and inputs; mean interval widths; the
+# by the 90% intervals, over designs and inputs (cover_S_nz: over the
+# inputs whose true S is not zero, which no interval of a positive index
+# holds); mean interval widths; the
 # largest |median - truth|'s mean over designs; CPU seconds of
 # calibrate() and of sensitivity(fit, prediction = FALSE) (median and range
 # over designs), and of sensitivity(fit) with every default on the first
 # design of each m.
-# sensitivity::sobolGP (plug-in kriging, hyperparameters fixed) is run on
-# the same runs where the sensitivity and DiceKriging packages are
-# installed. Results accumulate in --out, one row per design, so an
+# sensitivity::sobolGP (plug-in kriging, hyperparameters fixed, fitted by
+# DiceKriging::km with the Matern 5/2 kernel; 100 conditional simulations
+# on two Monte Carlo samples of --peer_n points) is run on the same runs
+# where the sensitivity and DiceKriging packages are installed. Results accumulate in --out, one row per design, so an
 # interrupted study resumes.
 library(FBC)
 source("bench/options.R")
 opt <- bench_options(list(m = c(50L, 100L, 200L), designs = c(20L, 20L, 10L),
                           problems = c("ishigami", "gfun"), nMCMC = 3000L, nBurn = 1000L,
-                          nChains = 2L, out = "sensitivity-study.rds"))
+                          nChains = 2L, peer_n = 300L,
+                          out = "sensitivity-study.rds"))
 if (opt$quick) {
   opt$m <- 50L
   opt$designs <- 2L
@@ -123,20 +130,27 @@ one_design <- function(pname, m, seed) {
     sensitivity(fit, inputs = inputs)
     t_default <- cpu() - t0
   }
-  tab <- s$simulator
+  # the indices of the emulator's mean alone (paths = 0), for comparison
+  t0 <- cpu()
+  s0 <- sensitivity(fit, inputs = inputs, paths = 0, prediction = FALSE)
+  t_mean <- cpu() - t0
   truth <- c(pr$S[dat$ord], pr$ST[dat$ord])
-  row <- data.frame(problem = pname, m = m, seed = seed, input = tab$input, index = tab$index,
-                    truth = truth, median = tab$median, lower = tab$lower, upper = tab$upper,
-                    cpu_fit = t_fit, cpu_sens = t_sens, cpu_default = t_default, peer = "FBC",
-                    stringsAsFactors = FALSE)
+  rows <- function(tab, t, peer) {
+    data.frame(problem = pname, m = m, seed = seed, input = tab$input, index = tab$index,
+               truth = truth, median = tab$median, lower = tab$lower, upper = tab$upper,
+               cpu_fit = t_fit, cpu_sens = t, cpu_default = t_default, peer = peer,
+               stringsAsFactors = FALSE)
+  }
+  row <- rbind(rows(s$simulator, t_sens, "FBC"), rows(s0$simulator, t_mean, "FBC (mean)"))
   if (have_sobolgp) {
     # plug-in kriging on the same runs (all inputs as one space)
     t0 <- cpu()
     km <- DiceKriging::km(design = as.data.frame(dat$X), response = dat$y,
                           covtype = "matern5_2", control = list(trace = FALSE))
+    nx <- opt$peer_n
     sg <- sensitivity::sobolGP(km, type = "SK", MCmethod = "sobol", X1 = as.data.frame(
-      matrix(stats::runif(1000 * pr$d, pr$lower, pr$upper), 1000, pr$d, byrow = TRUE)),
-      X2 = as.data.frame(matrix(stats::runif(1000 * pr$d, pr$lower, pr$upper), 1000, pr$d,
+      matrix(stats::runif(nx * pr$d, pr$lower, pr$upper), nx, pr$d, byrow = TRUE)),
+      X2 = as.data.frame(matrix(stats::runif(nx * pr$d, pr$lower, pr$upper), nx, pr$d,
                                 byrow = TRUE)), nsim = 100, nboot = 1)
     t_peer <- cpu() - t0
     ci <- function(x) x$ci
@@ -166,8 +180,9 @@ for (seed in seq_len(max(opt$designs))) {
       r <- one_design(pname, opt$m[i], seed)
       res <- rbind(res, r)
       saveRDS(res, opt$out)
-      cat(sprintf("%s m = %d design %d: fit %.1f s, sensitivity() %.1f s, covered %d/%d\n",
+      cat(sprintf("%s m = %d design %d: fit %.1f s, sensitivity() %.1f s, peer %.1f s, covered %d/%d\n",
                   pname, opt$m[i], seed, r$cpu_fit[1], r$cpu_sens[1],
+                  sum(r$cpu_sens[r$peer == "sobolGP"][1], na.rm = TRUE),
                   sum(r$lower <= r$truth & r$truth <= r$upper & r$peer == "FBC"),
                   sum(r$peer == "FBC")))
     }
@@ -185,7 +200,9 @@ summ <- do.call(rbind, lapply(split(res, list(res$peer, res$problem, res$m), dro
   fitc <- tapply(d$cpu_fit, d$seed, `[`, 1)
   data.frame(method = d$peer[1], problem = d$problem[1], m = d$m[1],
              designs = length(unique(d$seed)),
-             cover_S = per("first", "covered"), cover_ST = per("total", "covered"),
+             cover_S = per("first", "covered"),
+             cover_S_nz = mean(d$covered[d$index == "first" & d$truth > 0]),
+             cover_ST = per("total", "covered"),
              width_S = per("first", "width"), width_ST = per("total", "width"),
              max_err = mean(tapply(d$err, d$seed, max)),
              cpu_fit = if (all(is.na(fitc))) NA_character_ else
@@ -199,7 +216,7 @@ cat("\nCoverage of the true indices by the 90% intervals, over designs and input
     "widths: mean 90% interval width; max_err: mean over designs of the largest\n",
     "|median - truth|; CPU s: median [range] over designs.\n", sep = "")
 print(format(summ, digits = 3), row.names = FALSE)
-cat("\nCPU s of sensitivity(fit) with its defaults (1000 draws, with the prediction's part),\n",
+cat("\nCPU s of sensitivity(fit) with its defaults (with the prediction's part),\n",
     "first design of each m:\n", sep = "")
 dflt <- res[res$peer == "FBC" & !is.na(res$cpu_default), ]
 print(unique(dflt[c("problem", "m", "cpu_default")]), row.names = FALSE, digits = 3)

@@ -316,8 +316,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_sobol
-Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid);
-RcppExport SEXP _FBC_fbc_sobol(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP) {
+Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& support);
+RcppExport SEXP _FBC_fbc_sobol(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP supportSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -334,13 +334,14 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type nodes(nodesSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type weights(weightsSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type grid(gridSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sobol(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid));
+    Rcpp::traits::input_parameter< const arma::mat& >::type support(supportSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sobol(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_sim_mean
-Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model);
-RcppExport SEXP _FBC_fbc_sim_mean(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP) {
+Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const arma::mat& support);
+RcppExport SEXP _FBC_fbc_sim_mean(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP supportSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -351,7 +352,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
     Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
     Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sim_mean(Xf, yf, Xs, ys, phis, nugget, model));
+    Rcpp::traits::input_parameter< const arma::mat& >::type support(supportSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sim_mean(Xf, yf, Xs, ys, phis, nugget, model, support));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -412,8 +414,8 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_loglik_draws", (DL_FUNC) &_FBC_fbc_loglik_draws, 7},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
-    {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 13},
-    {"_FBC_fbc_sim_mean", (DL_FUNC) &_FBC_fbc_sim_mean, 7},
+    {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 14},
+    {"_FBC_fbc_sim_mean", (DL_FUNC) &_FBC_fbc_sim_mean, 8},
     {"_FBC_has_openmp", (DL_FUNC) &_FBC_has_openmp, 0},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},
     {"_FBC_vecchia_neighbours", (DL_FUNC) &_FBC_vecchia_neighbours, 4},

@@ -46,25 +46,60 @@ void DensePosterior::simSolve(arma::vec& x) {
 // (r = yf - muB - Rs(Xk, Xs) Ds^-1 ys, replicates summed onto their distinct
 // row): with beta = s2S S^-1 r summed by distinct row, the weights are
 // Ds^-1 (ys - Rs(Xs, Xk) beta) on the runs and beta on the field rows.
-void SchurPosterior::simMean(arma::mat& Z, arma::vec& w) {
+// With support points P, a conditional sample path instead: its values at P
+// are drawn given y, f_P = mu_P + L u (L L' = Cov(eta(P) | y), u standard
+// normal, R's generator), and the path is E[eta(z) | y, eta(P) = f_P]
+//   = mu*(z) + s2S Rs(z, P) c,   c = Cov(eta(P) | y)^-1 (f_P - mu_P) = L^-T u,
+// where mu* is the mean above given y* = y - Cov(y, eta(P)) c: one more
+// kernel expansion, with the centres P added.
+void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P) {
   const double s2S = phi[iSigma2S], muB = biasMean ? phi[iMuB] : 0.0;
-  const arma::vec& wz = wz_.cur();
-  arma::vec v(n);
-  for (int i = 0; i < n; ++i) v[i] = yf_[i] - muB - wz[grp_[i]];
-  const arma::mat& LS = LS_.cur();
-  solve_lower(LS, v);
-  v = arma::solve(arma::trimatu(arma::trimatl(LS).t()), v);
-  arma::vec beta(nu_, arma::fill::zeros);
-  for (int i = 0; i < n; ++i) beta[grp_[i]] += s2S * v[i];
   arma::mat Xk(nu_, p + q);
   if (p > 0) Xk.cols(0, p - 1) = Xu_;
   for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
   arma::mat K;
   runPrior(phi, Xs_, Xk, K);  // s2S Rs(Xs, Xk)
-  arma::vec c = ys_ - K * beta / s2S;
+  arma::vec ys = ys_, yf = yf_, wz = wz_.cur(), cP;
+  if (P) {
+    RunConditional rc;
+    runConditional(*P, arma::mat(0, p), rc);
+    arma::mat C, L, KP;
+    runPrior(phi, *P, *P, C);
+    C -= rc.A.t() * rc.A;
+    // a jitter relative to the prior variance, raised until C factors
+    bool ok = false;
+    for (double jit = 1e-10; !ok && jit < 1e-2; jit *= 100) {
+      C.diag() += jit * s2S;
+      ok = arma::chol(L, C, "lower");
+    }
+    if (!ok) Rcpp::stop("the conditional covariance at the support points does not factor");
+    cP.set_size(P->n_rows);
+    for (arma::uword i = 0; i < cP.n_elem; ++i) cP[i] = R::norm_rand();
+    cP = arma::solve(arma::trimatu(L.t()), cP);
+    runPrior(phi, Xs_, *P, KP);
+    ys -= KP * cP;
+    runPrior(phi, Xk, *P, KP);
+    const arma::vec u = KP * cP;
+    for (int i = 0; i < n; ++i) yf[i] -= u[grp_[i]];
+    arma::vec t = ys;
+    simSolve(t);
+    wz = K.t() * t / s2S;
+  }
+  arma::vec v(n);
+  for (int i = 0; i < n; ++i) v[i] = yf[i] - muB - wz[grp_[i]];
+  const arma::mat& LS = LS_.cur();
+  solve_lower(LS, v);
+  v = arma::solve(arma::trimatu(arma::trimatl(LS).t()), v);
+  arma::vec beta(nu_, arma::fill::zeros);
+  for (int i = 0; i < n; ++i) beta[grp_[i]] += s2S * v[i];
+  arma::vec c = ys - K * beta / s2S;
   simSolve(c);
   Z = arma::join_cols(Xs_, Xk);
   w = arma::join_cols(c, beta);
+  if (P) {
+    Z = arma::join_cols(Z, *P);
+    w = arma::join_cols(w, s2S * cP);
+  }
 }
 
 // erf(x) - erf(y) for x >= y without cancellation in the tails.
@@ -226,7 +261,9 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
 }
 
 // Per draw (rows of phis): the Sobol variances of the simulator's posterior
-// mean over its D = p + q inputs, and its main effects at the grid values.
+// mean over its D = p + q inputs, and its main effects at the grid values;
+// with support points (S rows per draw: rows d S .. d S + S - 1 of
+// `support`, scaled) those of a conditional sample path through them.
 // exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
 // form where the family allows); otherwise nodes[, k] and weights[, k]
 // (weights summing to one). grid: G x D values (scaled) for the main effects.
@@ -235,7 +272,8 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
                      const arma::vec& ys, const arma::mat& phis, double nugget,
                      const Rcpp::List& model, const Rcpp::LogicalVector& exact,
                      const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes,
-                     const arma::mat& weights, const arma::mat& grid) {
+                     const arma::mat& weights, const arma::mat& grid,
+                     const arma::mat& support) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
   if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
@@ -250,8 +288,13 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   arma::mat Z, I1, Rq, Rg;
   arma::vec w;
   std::vector<arma::mat> I2(D), pre(D + 1);
+  const int S = support.n_rows / std::max(M, 1);
+  if (S > 0 && ((int) support.n_rows != S * M || (int) support.n_cols != D))
+    Rcpp::stop("the support points must be %d draws x S rows and %d columns", M, D);
+  arma::mat Pd;
   for_each_draw(post, phis, [&](arma::uword d) {
-    sp->simMean(Z, w);
+    if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
+    sp->simMean(Z, w, S > 0 ? &Pd : nullptr);
     const arma::uword N = Z.n_rows;
     I1.set_size(N, D);
     for (int k = 0; k < D; ++k) {
@@ -301,20 +344,24 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
                             Rcpp::Named("main") = main);
 }
 
-// The simulator's posterior mean per draw as a kernel expansion (for tests
-// and the sampling estimator): the centres Z and weights w of each draw.
+// The simulator's posterior mean per draw as a kernel expansion (for tests):
+// the centres Z and weights w of each draw; with support points (S rows per
+// draw, as in fbc_sobol()) those of a conditional sample path.
 // [[Rcpp::export(.fbc_sim_mean_c)]]
 Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                         const arma::vec& ys, const arma::mat& phis, double nugget,
-                        const Rcpp::List& model) {
+                        const Rcpp::List& model, const arma::mat& support) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
   if (!sp) Rcpp::stop("the simulator's mean needs one simulator GP");
-  Rcpp::List out(phis.n_rows);
+  const int M = phis.n_rows, S = support.n_rows / std::max(M, 1);
+  Rcpp::List out(M);
+  arma::mat Pd;
   for_each_draw(*pp, phis, [&](arma::uword d) {
     arma::mat Z;
     arma::vec w;
-    sp->simMean(Z, w);
+    if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
+    sp->simMean(Z, w, S > 0 ? &Pd : nullptr);
     out[d] = Rcpp::List::create(Rcpp::Named("Z") = Z, Rcpp::Named("w") = w);
     return true;
   });

@@ -80,7 +80,7 @@ test_that("the closed-form indices are those of the emulator's mean integrated o
     sc <- fit$model$scale
     mp <- plain_sim_mean(fit, phi, kern)
     rules <- lapply(1:3, function(j) composite_rule(mp$X[, j]))
-    s <- sensitivity(fit, prediction = FALSE)
+    s <- sensitivity(fit, paths = 0, prediction = FALSE)
     at <- sapply(s$main$simulator, function(me) me$x)
     ref <- plain_sobol(mp, kern, rules, at = sweep(sweep(at, 2, sc$xmin), 2, sc$xmax - sc$xmin, "/"))
     # every draw is phi: one value of each index
@@ -109,7 +109,7 @@ test_that("a range or a density given in `inputs` is the measure integrated agai
     lo <- (2.5 - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
     hi <- (7 - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1])
     dt <- function(x) stats::dbeta((x - sc$xmin[3]) / (sc$xmax[3] - sc$xmin[3]), 2, 3)
-    s <- sensitivity(fit, inputs = list(x1 = c(2.5, 7), t = dt), prediction = FALSE)
+    s <- sensitivity(fit, inputs = list(x1 = c(2.5, 7), t = dt), paths = 0, prediction = FALSE)
     rules <- list(composite_rule(mp$X[, 1], lo, hi), composite_rule(mp$X[, 2]),
                   composite_rule(mp$X[, 3], dens = function(x) stats::dbeta(x, 2, 3)))
     ref <- plain_sobol(mp, kern, rules)
@@ -132,7 +132,7 @@ test_that("the power exponential's quadrature is accurate to about 1e-3", {
   fit <- fixed_fit(phi)
   mp <- plain_sim_mean(fit, phi, "powexp")
   ref <- plain_sobol(mp, "powexp", lapply(1:3, function(j) composite_rule(mp$X[, j], k = 16)))
-  s <- sensitivity(fit, prediction = FALSE)
+  s <- sensitivity(fit, paths = 0, prediction = FALSE)
   expect_abs(unname(s$draws$simulator[1, , "first"]), ref$S1, 1e-3)
   expect_abs(unname(s$draws$simulator[1, , "total"]), ref$ST, 1e-3)
 })
@@ -175,16 +175,16 @@ test_that("the indices of a linear simulator are recovered", {
 test_that("the variance shares sum to one and to predict()'s squared standard error over the box", {
   fit <- linear_fit()
   sc <- fit$model$scale
-  s <- sensitivity(fit, ndraws = 50, nodes = 6)
+  s <- sensitivity(fit, ndraws = 50, points = 64)
   sh <- s$shares
   expect_identical(sh$source, c("kappa", "bias", "emulator", "noise"))
   expect_equal(sum(sh$share), 1, tolerance = 1e-12)
   expect_equal(sh$share, sh$variance / sum(sh$variance), tolerance = 1e-12)
-  # predict()'s se^2 averaged over the same Gauss-Legendre grid of the box
-  gl <- FBC:::gauss_legendre01(6)
-  X <- as.matrix(expand.grid(x1 = sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * gl$x,
-                             x2 = sc$xmin[2] + (sc$xmax[2] - sc$xmin[2]) * gl$x))
-  w <- as.vector(outer(gl$w, gl$w))
+  # predict()'s se^2 averaged over the same quasi-random points of the box
+  X <- s$points
+  expect_identical(dim(X), c(128L, 2L))
+  expect_true(all(X[, 1] >= sc$xmin[1] & X[, 1] <= sc$xmax[1]))
+  w <- rep(1 / nrow(X), nrow(X))
   field <- predict(fit, X, type = "field", ndraws = 50)
   mean <- predict(fit, X, type = "mean", ndraws = 50)
   expect_equal(sum(sh$variance), sum(w * field$se^2), tolerance = 1e-8)
@@ -198,7 +198,7 @@ test_that("print() shows the indices, the intervals and the shares", {
   phi <- random_phi(2, 1)
   phi[2:4] <- c(20, 60, 40)
   fit <- fixed_fit(phi, kernelS = "gaussian")
-  expect_snapshot(print(sensitivity(fit, nodes = 4)))
+  expect_snapshot(print(sensitivity(fit, points = 64)))
   expect_snapshot(print(sensitivity(fit, prediction = FALSE, level = 0.5), digits = 5))
 })
 
@@ -211,7 +211,7 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
     sensitivity(fit, level = 1.5)
     sensitivity(fit, level = c(0.5, 0.9))
     sensitivity(fit, prediction = NA)
-    sensitivity(fit, nodes = 1)
+    sensitivity(fit, points = 1)
     sensitivity(fit, draws = 10)
     sensitivity(list(a = 1))
     sensitivity(fit, inputs = list(1, 2))
@@ -234,12 +234,13 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
   expect_snapshot(error = TRUE, sensitivity(vec))
 })
 
-test_that("sensitivity() is deterministic and leaves the fit as it was", {
+test_that("set.seed() reproduces sensitivity(), which leaves the fit as it was", {
   fit <- linear_fit()
   before <- fit
-  a <- sensitivity(fit, ndraws = 20, nodes = 4)
   set.seed(99)
-  b <- sensitivity(fit, ndraws = 20, nodes = 4)
+  a <- sensitivity(fit, ndraws = 20, points = 64)
+  set.seed(99)
+  b <- sensitivity(fit, ndraws = 20, points = 64)
   expect_identical(a, b)
   expect_identical(fit, before)
   # the draws used: evenly spaced, as predict() takes them
@@ -248,14 +249,15 @@ test_that("sensitivity() is deterministic and leaves the fit as it was", {
   expect_identical(dim(a$draws$simulator), c(20L, 3L, 2L))
   expect_identical(dim(a$draws$prediction), c(20L, 2L, 2L))
   # a wider level: wider intervals about the same medians
-  w <- sensitivity(fit, ndraws = 20, nodes = 4, level = 0.99)
+  set.seed(99)
+  w <- sensitivity(fit, ndraws = 20, points = 64, level = 0.99)
   expect_identical(w$simulator$median, a$simulator$median)
   expect_true(all(w$simulator$lower <= a$simulator$lower & w$simulator$upper >= a$simulator$upper))
 })
 
 test_that("as.data.frame() stacks the indices; plot() draws the main effects and the indices", {
   fit <- linear_fit()
-  s <- sensitivity(fit, ndraws = 20, nodes = 4)
+  s <- sensitivity(fit, ndraws = 20, points = 64)
   df <- as.data.frame(s)
   expect_identical(names(df), c("of", "input", "role", "index", "median", "lower", "upper", "mcse"))
   expect_identical(nrow(df), 2L * 3L + 2L * 2L)
@@ -277,4 +279,67 @@ test_that("as.data.frame() stacks the indices; plot() draws the main effects and
       }
     }
   }
+})
+
+test_that("the pick-freeze estimator recovers Ishigami's indices within its stated error", {
+  # Ishigami (a = 7, b = 0.1) on U(-pi, pi)^3: S = (0.3139, 0.4424, 0),
+  # ST = (0.5576, 0.4424, 0.2437)
+  ish <- function(U) {
+    X <- -pi + 2 * pi * U
+    sin(X[, 1]) + 7 * sin(X[, 2])^2 + 0.1 * X[, 3]^4 * sin(X[, 1])
+  }
+  S <- c(0.3139, 0.4424, 0)
+  ST <- c(0.5576, 0.4424, 0.2437)
+  set.seed(8)
+  N <- 2048L
+  reps <- replicate(20, {
+    X <- FBC:::pick_freeze_design(N, 3)
+    expect_identical(dim(X), c(5L * N, 3L))
+    pf <- FBC:::pick_freeze(ish(X), N, 3)
+    c(pf$S1, pf$ST, pf$se1, pf$seT)
+  })
+  est <- reps[1:6, ]
+  se <- reps[7:12, ]
+  # each estimate within 4 of its standard errors of the truth
+  expect_true(all(abs(est - c(S, ST)) < 4 * se))
+  # the standard error is a bound for the randomised Halton design: the
+  # estimates' spread over 20 random shifts is below it, and not zero
+  spread <- apply(est, 1, stats::sd)
+  expect_true(all(spread < 1.2 * rowMeans(se)))
+  expect_true(all(spread > 0))
+  # the mean of the 20 estimates: within 4 standard errors of that mean
+  expect_true(all(abs(rowMeans(est) - c(S, ST)) < 4 * spread / sqrt(20) + 1e-3))
+})
+
+test_that("a draw's sample path has the emulator's conditional mean and covariance at its support points", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)
+  fit <- fixed_fit(phi, kernelS = "gaussian")
+  mp <- plain_sim_mean(fit, phi, "gaussian")
+  th <- mp$th
+  P <- matrix(c(0.2, 0.5, 0.8, 0.7, 0.1, 0.4, 0.3, 0.9, 0.6), 3, 3)
+  corr <- function(A, B) {
+    Reduce(`*`, lapply(1:3, function(j) dense_corr(A[, j], B[, j], th$thetaS[j], th$alphaS[j], "gaussian")))
+  }
+  d <- fit$model$data
+  C <- dense_cov(d$Xf, d$Xs, phi, fit$settings$nugget, "gaussian", "powexp")
+  K <- th$sigma2S * corr(P, mp$X)
+  mu <- drop(K %*% (mp$a / th$sigma2S))
+  Sig <- th$sigma2S * corr(P, P) - K %*% solve(C, t(K))
+  n <- 3000
+  phis <- FBC:::sampler_draws(fit, rep(1L, n))
+  sup <- P[rep(seq_len(3), n), ]
+  set.seed(9)
+  paths <- FBC:::at_draws(fit, FBC:::.fbc_sim_mean_c, phis, support = sup)
+  g <- t(vapply(paths, function(e) drop(corr(P, e$Z) %*% e$w), numeric(3)))
+  # the paths' values at P: mean mu, covariance Sig (Monte Carlo: n draws)
+  sds <- sqrt(diag(Sig))
+  expect_true(all(abs(colMeans(g) - mu) < 4 * sds / sqrt(n)))
+  expect_lt(max(abs(stats::cov(g) - Sig)) / max(diag(Sig)), 0.1)
+  expect_gt(min(sds), 1e-3)
+  # without support points the expansion is the mean itself
+  m0 <- FBC:::at_draws(fit, FBC:::.fbc_sim_mean_c, phis[1, , drop = FALSE],
+                       support = matrix(0, 0, 3))[[1]]
+  expect_equal(drop(corr(P, m0$Z) %*% m0$w), mu, tolerance = 1e-8)
 })
