@@ -9,7 +9,8 @@
 # FBC: calibrate(sim, field) with every argument at its default (4 chains on
 # the sequential plan, run until every R-hat < 1.01 and bulk ESS >= 400).
 # RobustCalibration (when installed; never a dependency of FBC):
-# rcalibration() with its defaults (S-GaSP discrepancy, one chain of 10,000
+# rcalibration() with its defaults (S-GaSP discrepancy; and again with
+# discrepancy_type = "GaSP", its other model), one chain of 10,000
 # sweeps with 2000 burn-in, the emulator's hyperparameters plugged in at
 # their estimates). The runs alternate, FBC then the peer, seed by seed, so
 # the machine's load falls on both alike. Prints each run, then the median
@@ -56,19 +57,22 @@ for (name in opt$problem) {
     print(rows[[length(rows)]], row.names = FALSE)
     if (!peer) next
     rng <- apply(sim[, -seq_len(pr$p + 1L), drop = FALSE], 2, range)
-    set.seed(seed)
-    t0 <- cpu()
-    invisible(utils::capture.output(rc <- suppressWarnings(RobustCalibration::rcalibration(
-      design = field[, -1, drop = FALSE], observations = field[, 1], p_theta = q,
-      simul_type = 0, input_simul = sim[, -1, drop = FALSE], output_simul = sim[, 1],
-      theta_range = t(rng),
-      S = if (opt$quick) 500 else 10000, S_0 = if (opt$quick) 100 else 2000))))
-    t <- cpu() - t0
-    th <- rc@post_sample[, 1]
-    rows[[length(rows) + 1L]] <- data.frame(
-      problem = name, m = nrow(sim), package = "RobustCalibration", seed = seed,
-      cpu.s = round(t, 2), max.rhat = NA, min.ess = round(posterior::ess_bulk(matrix(th, ncol = 1))),
-      kappa1.90 = sprintf("[%.3g, %.3g]", stats::quantile(th, 0.05), stats::quantile(th, 0.95)))
+    for (type in c("S-GaSP", "GaSP")) {
+      set.seed(seed)
+      t0 <- cpu()
+      invisible(utils::capture.output(rc <- suppressWarnings(RobustCalibration::rcalibration(
+        design = field[, -1, drop = FALSE], observations = field[, 1], p_theta = q,
+        simul_type = 0, input_simul = sim[, -1, drop = FALSE], output_simul = sim[, 1],
+        theta_range = t(rng), discrepancy_type = type,
+        S = if (opt$quick) 500 else 10000, S_0 = if (opt$quick) 100 else 2000))))
+      t <- cpu() - t0
+      th <- rc@post_sample[, 1]
+      rows[[length(rows) + 1L]] <- data.frame(
+        problem = name, m = nrow(sim), package = paste("RobustCalibration", type), seed = seed,
+        cpu.s = round(t, 2), max.rhat = NA, min.ess = round(posterior::ess_bulk(matrix(th, ncol = 1))),
+        kappa1.90 = sprintf("[%.3g, %.3g]", stats::quantile(th, 0.05), stats::quantile(th, 0.95)))
+      print(rows[[length(rows)]], row.names = FALSE)
+    }
     print(rows[[length(rows)]], row.names = FALSE)
   }
 }
@@ -84,5 +88,15 @@ for (name in unique(all$problem)) {
     med[pk] <- stats::median(x)
     cat(sprintf("  %-6s %-18s %8.2f [%.2f, %.2f]\n", name, pk, med[pk], min(x), max(x)))
   }
-  if (length(med) == 2L) cat(sprintf("  %-6s peer / FBC (medians): %.2f\n", name, med[2] / med[1]))
+  for (pk in setdiff(names(med), "FBC")) {
+    cat(sprintf("  %-6s %s / FBC (medians): %.2f\n", name, pk, med[[pk]] / med[["FBC"]]))
+  }
+  # seed by seed: FBC's CPU s over the GaSP peer's in the same process
+  f <- all[all$problem == name & all$package == "FBC", c("seed", "cpu.s")]
+  g <- all[all$problem == name & all$package == "RobustCalibration GaSP", c("seed", "cpu.s")]
+  if (nrow(g)) {
+    r <- merge(f, g, by = "seed")
+    cat(sprintf("  %-6s FBC / GaSP seed by seed: %s\n", name,
+                paste(sprintf("%.2f", r$cpu.s.x / r$cpu.s.y), collapse = ", ")))
+  }
 }
