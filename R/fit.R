@@ -390,7 +390,7 @@ model_of_fit <- function(x) {
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
-                 outputs = mc$outputs, fieldRows = distinct_rows(x$data$Xf, bias$codes))
+                 outputs = mc$outputs)
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
                 sampler = s$sampler %||% "single", algebra = algebra,
@@ -454,6 +454,8 @@ fit_to_7 <- function(x) {
   }
   # (the number of independent outputs joined the model's dims with them)
   if (is.null(x$model$dims$outputs)) x$model$dims$outputs <- output_count(x$model$spec$model)
+  # (and the compiled model the classes' roles and the field rows' grouping)
+  x$model$spec$model <- complete_compiled_model(x$model$spec$model, x$model$data$Xf)
   x[parts] <- NULL
   x$version$format <- 7L
   x
