@@ -23,6 +23,10 @@ algebra_codes <- c(auto = 0L, dense = 1L, vecchia = 2L)
 # The types of predict.fbc() (enum PredictType).
 predict_type_codes <- c(field = 1L, mean = 2L, simulator = 3L, bias = 4L)
 
+# What a move of a class touches (model_classes$touch; enum TouchKind).
+touch_codes <- c(residual = 0L, kappa = 1L, sim = 2L, simPow = 3L, simLevels = 4L, bias = 5L,
+                 biasPow = 6L, field = 7L, runs = 8L, latent = 9L, latentHyper = 10L, latentK = 11L)
+
 # R's code tables, as .model_codes() gives the compiled core's (the
 # discrepancy models' codes stay in R: the compiled core reads the model off
 # the layout). The classes are handed over by name: every class the
@@ -30,7 +34,7 @@ predict_type_codes <- c(field = 1L, mean = 2L, simulator = 3L, bias = 4L)
 # of them it names).
 model_code_tables <- function(compiled = NULL) {
   list(walk = walk_codes, kernel = kernel_codes, kernelAlpha = kernels$name[kernels$alpha],
-       algebra = algebra_codes, type = predict_type_codes,
+       algebra = algebra_codes, type = predict_type_codes, touch = touch_codes,
        class = sort(intersect(compiled$class, model_classes$class)))
 }
 
@@ -58,19 +62,22 @@ check_model_codes <- function(compiled = .model_codes()) {
 # first arguments are the scaled data; kernS, kernB and algebra give the
 # model codes, or `model` a whole compiled_model().
 .fbc_loglik <- function(Xf, yf, Xs, ys, phi, nugget, kernS = 1L, kernB = 1L, algebra = 0L,
-                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra,
+                                               Xf = Xf)) {
   .fbc_loglik_c(Xf, yf, Xs, ys, phi, nugget, model)
 }
 
 .fbc_sample <- function(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget,
                         progress, kernS = 1L, kernB = 1L, algebra = 0L,
-                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+                        model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra,
+                                               Xf = Xf)) {
   .fbc_sample_c(Xf, yf, Xs, ys, prior, moves, state, nIter, nBurn, thinning, nugget, progress, model)
 }
 
 .fbc_predict <- function(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, kernS = 1L, kernB = 1L,
                          algebra = 0L,
-                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra),
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra,
+                                               Xf = Xf),
                          noise = integer(), source = integer()) {
   .fbc_predict_c(Xf, yf, Xs, ys, phis, Xnew, type, nugget, block, model, as.integer(noise),
                  as.integer(source))
@@ -78,16 +85,18 @@ check_model_codes <- function(compiled = .model_codes()) {
 
 .loglik_path <- function(Xf, yf, Xs, ys, phis, nugget, groups = NULL, decoys = FALSE,
                          scale = FALSE, kernS = 1L, kernB = 1L, algebra = 0L,
-                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra,
+                                               Xf = Xf)) {
   .loglik_path_c(Xf, yf, Xs, ys, phis, nugget, groups, decoys, scale, model)
 }
 
 .fbc_loo <- function(Xf, yf, Xs, ys, phis, nugget, group,
-                     model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf))) {
+                     model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), Xf = Xf)) {
   .fbc_loo_c(Xf, yf, Xs, ys, phis, nugget, group, model)
 }
 
 .fbc_heldout <- function(Xf, yf, Xs, ys, phis, nugget, fold, kernS = 1L, kernB = 1L, algebra = 0L,
-                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra)) {
+                         model = compiled_model(ncol(Xf), ncol(Xs) - ncol(Xf), kernS, kernB, algebra,
+                                               Xf = Xf)) {
   .fbc_heldout_c(Xf, yf, Xs, ys, phis, nugget, fold, model)
 }

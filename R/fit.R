@@ -274,7 +274,12 @@ upgrade_fbc <- function(x, call = parent.frame()) {
 
 upgrade_fit <- function(x, call) {
   format <- if (is.null(x$version)) 0L else x$version$format
-  if (identical(format, fbc_fit_format)) return(x)
+  if (identical(format, fbc_fit_format)) {
+    # (fits of this format written before the compiled model held the
+    # classes' roles and the field rows' grouping get them)
+    x$model$spec$model <- complete_compiled_model(x$model$spec$model, x$model$data$Xf)
+    return(x)
+  }
   if (!is_count(format) || format > fbc_fit_format) {
     cli::cli_abort(c(
       "This {.cls fbc} object was made by a newer FBC ({x$version$fbc}, format {format}); this is FBC {utils::packageVersion('FBC')} (format {fbc_fit_format}).",
@@ -390,7 +395,7 @@ model_of_fit <- function(x) {
   bias <- if (!is.null(mc$source)) list(codes = mc$source, L = mc$sourceLevels)
   design <- list(factors = sc$factors, output = sc$output, source = sc$source, noise = mc$noise,
                  noiseLabels = sc$noiseLabels, levels = mc$levels, biasSource = bias,
-                 outputs = mc$outputs, fieldRows = distinct_rows(x$data$Xf, bias$codes))
+                 outputs = mc$outputs)
   new_fbc_model(data = x$data, raw = NULL, scale = sc, design = design, spec = x$spec,
                 kernelS = s$kernelS, kernelB = s$kernelB, discrepancy = s$discrepancy,
                 sampler = s$sampler %||% "single", algebra = algebra,
@@ -454,6 +459,8 @@ fit_to_7 <- function(x) {
   }
   # (the number of independent outputs joined the model's dims with them)
   if (is.null(x$model$dims$outputs)) x$model$dims$outputs <- output_count(x$model$spec$model)
+  # (and the compiled model the classes' roles and the field rows' grouping)
+  x$model$spec$model <- complete_compiled_model(x$model$spec$model, x$model$data$Xf)
   x[parts] <- NULL
   x$version$format <- 7L
   x

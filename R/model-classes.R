@@ -42,6 +42,13 @@
 #            two: calibration inputs that trade off move along their ridge
 #            (sampler_moves(), "overlay")
 #   scaled   multiplied by the common-scale move (see vignette("sampler"))
+#   touch    what a move of it touches in the compiled core's cached
+#            factors (touch_codes, R/boundary.R): "kappa", "sim" (the
+#            simulator GP's correlation), "simPow" (... and the input's
+#            power matrix: a smoothness), "simLevels" (... as an
+#            experimental input's), "bias", "biasPow" (the bias GP's,
+#            likewise), "field" (the field block's variances), "runs" (the
+#            simulator block's values), "residual" (the residual only)
 #   smooth   the GP ("S" or "B") whose family decides whether the class is
 #            a parameter at all (a smoothness), "" when it always is
 #   perOutput  with outputs = "independent" (several outputs, each its own
@@ -57,6 +64,7 @@ model_classes <- data.frame(
   move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "single", "slice", "single", "single", "single"),
   joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE, FALSE, FALSE, FALSE),
+  touch  = c("kappa", "sim", "simPow", "simLevels", "bias", "biasPow", "bias", "bias", "bias", "field", "field", "field", "residual", "runs", "latent", "latentHyper", "latentHyper", "latentK"),
   smooth = c("", "", "S", "", "", "B", "", "", "", "", "", "", "", "", "", "", "", ""),
   perOutput = c(FALSE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE, FALSE, FALSE, FALSE, FALSE),
   stringsAsFactors = FALSE
@@ -261,28 +269,50 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # model_levels() gives one input; `levels` then leaves the output out) and,
 # with the simulator's own noise, the replicates' sufficient statistics
 # (`replicates`: list(count, ssw), R/sim_noise.R; with an input-dependent
-# noise `latent` TRUE and ssw one per unique input).
+# noise `latent` TRUE and ssw one per unique input) and, given the scaled
+# field inputs Xf, each field row's distinct row (`fieldRows`,
+# distinct_rows(): by input and, with a bias per data set, data set; the
+# compiled core computes the field's correlations once per distinct row,
+# and finds them itself without it).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
                            vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
-                           outputs = NULL, simulator = NULL, replicates = NULL) {
+                           outputs = NULL, simulator = NULL, replicates = NULL, Xf = NULL) {
   if (discrepancy == "none") source <- NULL
+  lay <- layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
+                      source_count(source), outputs = output_count(outputs),
+                      emulator = is.null(simulator), replicates = noise_sizes(replicates))
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
-    layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
-                 source_count(source), outputs = output_count(outputs),
-                 emulator = is.null(simulator), replicates = noise_sizes(replicates)),
+    lay, class_roles(names(lay$offset)),
     if (!is.null(replicates)) list(replicates = c(list(count = as.numeric(replicates$count),
                                                        ssw = as.numeric(replicates$ssw)),
                                                   if (isTRUE(replicates$latent)) list(latent = TRUE))),
     if (!is.null(outputs)) list(outputs = lapply(outputs, as.integer)),
     if (!is.null(vecchia)) list(vecchia = vecchia),
     if (!is.null(noise)) list(noise = as.integer(noise)),
+    if (!is.null(Xf)) list(fieldRows = distinct_rows(Xf, source$codes)),
     if (!is.null(levels)) list(levels = levels),
     if (!is.null(source)) list(source = as.integer(source$codes),
                                sourceLevels = as.integer(source$L)),
     # a simulator given as a function: the closures the compiled core calls
     # (function_closures(), R/simulator_function.R)
     if (!is.null(simulator)) list(simulator = simulator))
+}
+
+# Each class's role in the compiled core, named by class: what a move of it
+# touches (touch_codes) and whether the scale move multiplies it.
+class_roles <- function(classes) {
+  row <- match(classes, model_classes$class)
+  list(touch = stats::setNames(touch_codes[model_classes$touch[row]], classes),
+       scaled = stats::setNames(model_classes$scaled[row], classes))
+}
+
+# A fit's compiled model written before it held the classes' roles and the
+# field rows' grouping (format 6 and before), with them.
+complete_compiled_model <- function(mc, Xf) {
+  if (is.null(mc$touch)) mc <- append(mc, class_roles(names(mc$offset)), match("length", names(mc)))
+  if (is.null(mc$fieldRows)) mc$fieldRows <- distinct_rows(Xf, mc$source)
+  mc
 }
 
 # The number of partial correlations between the field data sets' biases

@@ -12,9 +12,7 @@
 #   design     factors, output, source, noise (each field row's
 #              measurement-error group, NULL for one), noiseLabels, levels
 #              (model_levels()), biasSource (list(codes, L) with a bias per
-#              data set), fieldRows (each field row's distinct row: rows
-#              with the same inputs, and data set when each has its own
-#              bias, share one)
+#              data set)
 #   dims       p, q, m (runs), n (field rows), noise (groups), levels and
 #              sources (partial correlations), d (parameters of phi)
 #   classes    the classes of this model: class, offset (0-based, in phi),
@@ -88,11 +86,11 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                vecchia = if (alg$name == "vecchia") {
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
-                               outputs = pr$outputs, replicates = pr$replicates)
+                               outputs = pr$outputs, replicates = pr$replicates, Xf = dat$Xf)
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource, outputs = pr$outputs,
-                   fieldRows = distinct_rows(dat$Xf, pr$biasSource$codes), failed = dd$failed),
+                   failed = dd$failed),
               if (!is.null(noise$info)) list(simNoise = noise$info))
   new_fbc_model(data = dat, raw = list(sim = dd$sim, field = dd$field), scale = pr$scale,
                 design = design, spec = spec, kernelS = opt$kernelS, kernelB = opt$kernelB,
@@ -216,11 +214,19 @@ model_priors <- function(dd, opt, kappa, kappaDefault, noise = NULL, call) {
 }
 
 # Each row's distinct row of X (1, 2, ... in order of first appearance):
-# rows equal in every column (and in `group`, when given) share one, as in
-# the compiled core's distinct field rows (SchurPosterior).
+# rows equal in every column (and in `group`, when given) share one. Rows
+# are compared exactly (==, as numbers, not as their printed digits): the
+# rows in order, each against the next. The compiled core takes this
+# grouping (compiled_model()'s fieldRows) and checks it.
 distinct_rows <- function(X, group = NULL) {
-  key <- row_keys(cbind(X, group))
-  match(key, unique(key))
+  X <- unname(cbind(as.matrix(X), group))
+  n <- nrow(X)
+  if (n < 2L || ncol(X) == 0L) return(rep(1L, n))
+  o <- do.call(order, lapply(seq_len(ncol(X)), function(k) X[, k]))
+  Xo <- X[o, , drop = FALSE]
+  run <- cumsum(c(TRUE, rowSums(Xo[-1L, , drop = FALSE] != Xo[-n, , drop = FALSE]) > 0))
+  run <- run[order(o)]
+  match(run, unique(run))
 }
 
 # --------------------------------------------------------- constructor ----

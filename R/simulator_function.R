@@ -69,13 +69,13 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
                        noise = length(ng$labels %||% 1L), emulator = FALSE, call = call)
   spec$model <- compiled_model(p, q, kernel_codes[["matern52"]], kernel_codes[[kernelB]],
                                algebra = algebra_codes[["dense"]], discrepancy, noise = ng$noise,
-                               simulator = function_closures(f, x, scale, nonFinite, out$codes))
+                               simulator = function_closures(f, x, scale, nonFinite, out$codes),
+                               Xf = dat$Xf)
   alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
               forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)",
               dims = NULL)
   design <- list(factors = scale$factors, output = out$output, source = src$source,
-                 noise = ng$noise, noiseLabels = ng$labels, levels = NULL, biasSource = NULL,
-                 fieldRows = distinct_rows(dat$Xf))
+                 noise = ng$noise, noiseLabels = ng$labels, levels = NULL, biasSource = NULL)
   model <- new_fbc_model(
     data = dat, raw = list(sim = NULL, field = fm), scale = scale, design = design, spec = spec,
     kernelS = "matern52", kernelB = kernelB, discrepancy = discrepancy, sampler = sampler,

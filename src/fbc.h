@@ -34,10 +34,6 @@ enum PriorFamily {
 // Transformation on which a parameter's random walk runs.
 enum Transform { TR_IDENTITY = 0, TR_LOG = 1, TR_LOGIT12 = 2, TR_ATANH = 3 };
 
-// Correlation family codes, one per GP: each family's struct in kernels.cpp
-// holds its code (R/correlation.R's `kernels` table, checked at load by
-// kernel_table()); 1 is the power exponential.
-
 // Which algebra make_posterior() uses: the product-design (Kronecker) one
 // whenever the simulator design allows it, or always the dense one.
 // ALG_VECCHIA: the nearest-neighbour approximation (vecchia.cpp), with the
@@ -54,33 +50,37 @@ struct VecchiaDesign {
   arma::vec w;
 };
 
-// The discrepancy model (R/model-classes.R, discrepancy_models) reaches the compiled
-// core only through the layout: a bias GP when sigma2B has parameters, with
-// a mean when muB has, scaled (the S-GaSP of Gu and Wang 2018: the bias
-// GP's correlation R on the nu distinct field inputs replaced by
-// Rz = R - R (R + (nu / lambdaZ) I)^-1 R) when lambdaZ has
-// (Posterior::set_sizes()).
-
 // What a prediction is of (R/predict.R, type): a new field observation
 // (eta + delta + eps), the mean of the field (eta + delta), the simulator
 // (eta), the bias (delta).
 enum PredictType { PT_FIELD = 1, PT_MEAN = 2, PT_SIMULATOR = 3, PT_BIAS = 4 };
 
+// What a move of a class's parameter touches (R/model-classes.R's `touch`
+// column, handed over by class; R/boundary.R's touch_codes): only the
+// residual (muB), kappa, the simulator GP's correlation (per input; its
+// smoothness: also that input's power matrix; the levels' correlation: as
+// an experimental input's), the bias GP's (likewise), the field block's
+// variances, the simulator block's values (the simulator's own noise).
+enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
+                 TK_FIELD, TK_RUNS, TK_LATENT, TK_LATENTHYPER, TK_LATENTK };
+
 // Parameter classes of the model. C++ keeps no list of them: R's model
-// description (R/model-classes.R, model_classes) owns the classes and the layout,
-// and hands each class's offset and length over by name (read_model()).
+// description (R/model-classes.R, model_classes) owns the classes and the
+// layout, and hands each class's offset, length, what a move of it touches
+// and whether the scale move multiplies it over by name (read_model()).
 // Code that computes with a class looks it up by name, once, when a
 // posterior is built (Layout::offset_of(), Posterior::set_sizes()); a class
 // the layout does not name has no parameters.
 //
 // Where each class lives in phi: names[c], offset[c], length[c] (0-based, in
-// R's table order), and for every position j of phi its class cls[j] (an
-// index into names) and its place within the class pos[j] (thetaS and
-// alphaS: the p experimental inputs, then the q calibration inputs; thetaB,
-// alphaB: the p experimental inputs).
+// R's table order), touch[c] (TouchKind), scaled[c], and for every position
+// j of phi its class cls[j] (an index into names) and its place within the
+// class pos[j] (thetaS and alphaS: the p experimental inputs, then the q
+// calibration inputs; thetaB, alphaB: the p experimental inputs).
 struct Layout {
   std::vector<std::string> names;
-  std::vector<int> offset, length;
+  std::vector<int> offset, length, touch;
+  std::vector<char> scaled;
   int d = 0;
   std::vector<int> cls, pos;
   // The index of class `name` (-1: the layout has no such class).
@@ -120,6 +120,12 @@ struct Model {
   // the measurement-error group of each field row (0-based; empty: one
   // group), e.g. outputs x sources: sigma2E has one entry per group
   std::vector<int> noise;
+  // each field row's distinct row (0-based, numbered in order of first
+  // appearance; R groups them exactly, rows equal in every input and in
+  // their data set with a bias per data set): replicates share eta, the
+  // bias and their correlations. Empty: found by set_field() (a call
+  // without a fit's model).
+  std::vector<int> fieldRows;
   VecchiaDesign vecchia;  // with algebra ALG_VECCHIA
   int threads = 1;        // OpenMP threads inside a chain (calibrate(threads =))
   // the simulator is a user's R function (function.cpp): no simulator GP,
@@ -150,16 +156,6 @@ Model read_model(const Rcpp::List& model, int p, int q);
 // Fills lay.d, lay.cls and lay.pos from lay.offset and lay.length (and
 // checks that the classes tile phi).
 void fill_layout(Layout& lay);
-// For each class of `lay`, the kind `table` gives its name (0 for a class
-// the table does not name): how code that computes with classes looks them
-// up, once, when it is built.
-template <size_t N>
-std::vector<int> class_kinds(const Layout& lay, const std::pair<const char*, int> (&table)[N]) {
-  std::vector<int> kind(lay.names.size(), 0);
-  for (size_t c = 0; c < lay.names.size(); ++c)
-    for (size_t t = 0; t < N; ++t) if (lay.names[c] == table[t].first) kind[c] = table[t].second;
-  return kind;
-}
 
 // priors.cpp -----------------------------------------------------------------
 double log_prior(int family, double x, double p1, double p2);
@@ -251,12 +247,6 @@ void solve_lower(const arma::mat& L, arma::mat& X);
 void syrk_lower(const arma::mat& A, double alpha, double beta, arma::mat& C);
 // log(2 pi), for Gaussian log-densities.
 const double LOG_2PI = 1.837877066409345483560659472811;
-// The rows of X grouped by value (and by key[i] too when key is not empty):
-// grp[i] is row i's group, the groups numbered in order of first
-// appearance; returns each group's first row. The field's distinct inputs
-// (replicates share eta, the bias and their correlations).
-std::vector<int> group_rows(const arma::mat& X, const std::vector<int>& key,
-                            std::vector<int>& grp);
 
 // Two buffers for one cached quantity: the current one and a scratch one a
 // proposal is written into; accepting a proposal flips them (no copy).
@@ -316,14 +306,14 @@ struct RunConditional {
 // recomputes only the blocks it touches. This is the one interface the
 // sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
 // it is chosen by make_posterior().
-// Parameter vector phi (scaled space, kappa on [0,1]) holds the classes
-// kappa[q], thetaS[p+q], alphaS[p+q], thetaB[p], alphaB[p], sigma2S,
-// sigma2B, sigma2E, muB, lambdaZ and the level correlations rhoS, rhoB,
-// rhoD at the offsets of `layout` (iKappa ... iRhoD, looked up by name in
-// set_sizes()). The discrepancy model is read off the layout: a bias GP
-// (`bias`) when sigma2B has parameters (else thetaB, alphaB, muB ... have
-// none), with a mean (`biasMean`) when muB has, scaled (`sgasp`) when
-// lambdaZ has: the offsets of empty classes are never read.
+// Parameter vector phi (scaled space, kappa on [0,1]) holds the classes at
+// the offsets of `layout` (iKappa ... iRhoD, looked up by name in
+// set_sizes()). The discrepancy model (R/model-classes.R,
+// discrepancy_models) is read off the layout: a bias GP (`bias`) when
+// sigma2B has parameters (else thetaB, alphaB, muB ... have none), with a
+// mean (`biasMean`) when muB has, scaled (`sgasp`, the S-GaSP of Gu and
+// Wang 2018: Posterior::biasModel()) when lambdaZ has: the offsets of
+// empty classes are never read.
 class Posterior {
 public:
   virtual ~Posterior() {}
@@ -439,6 +429,21 @@ public:
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
+  // The field rows' groups (model.fieldRows, checked against Xf, or found
+  // here by exact equality without it): field row i is distinct row
+  // grp_[i] of Xu_ (nu_ x p), in measurement-error group noise_[i]; srcU_
+  // the data set of each distinct row (sourceL_ data sets with a bias each,
+  // 0: one bias).
+  void set_field(const arma::mat& Xf, const Model& model);
+  int nu_ = 0, sourceL_ = 0;
+  arma::mat Xu_;
+  std::vector<int> grp_, noise_, srcU_;
+  // log p(y_G | the rest) per group G from the field block's factor LS and
+  // residual r (loo.cpp); a'a and a'b with a = LS^-1 1, b = LS^-1 r (the
+  // exact muB draw's quadratic).
+  static void gaussian_loo(const arma::mat& LS, const arma::vec& r,
+                           const std::vector<std::vector<int> >& groups, arma::vec& logdens);
+  static void mub_quadratic(const arma::mat& LS, arma::vec r, double& aa, double& ab);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 
@@ -536,12 +541,6 @@ protected:
   double nugget_;
   bool scratch_ = false;   // init(): S factored from scratch, no pivot floor (see evaluate())
   int kernS_, kernB_;
-  int nu_;                 // distinct field input rows
-  arma::mat Xu_;           // ... and their values (nu x p)
-  std::vector<int> grp_;   // field row i is distinct row grp_[i]
-  std::vector<int> noise_; // ... and in measurement-error group noise_[i]
-  int sourceL_ = 0;        // data sets with a bias each (0: one bias)
-  std::vector<int> srcU_;  // ... and the data set of each distinct row
 
   // The simulator algebra, at the proposal (scratch buffers):
   // update what t touches, setting ldDs = log|Ds| and zz = ys' Ds^-1 ys
@@ -571,7 +570,6 @@ protected:
 
 private:
   Touch touch_;
-  std::vector<int> touchKind_;  // by class: what a move of it touches (add_touch())
   std::vector<Buf2<arma::mat> > Pfs_, Pfb_;
   std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
   std::vector<arma::mat> Gfb_; // ... for the bias GP's family when it differs
@@ -596,6 +594,7 @@ private:
   arma::vec runKey_, runWy_;
   arma::mat runU_, runW_;
   double evaluate(const Touch& t);
+  double loglik(double ldDs, double zz, double ldS, double vv, double lpG);
   bool fieldFactor(const arma::mat& Q, const arma::mat* Rb, double s2S, double s2B, double& ldS);
   void flip(const Touch& t);
   void add_touch(int j, Touch& t) const;
@@ -852,7 +851,6 @@ private:
   std::vector<std::vector<int> > rowsF_, rowsS_;  // their rows in the whole data
   std::vector<int> localF_, localS_;              // a row's place in its output's
   std::vector<int> outF_, outS_;                  // ... and its output
-  std::vector<int> noise_;                        // each field row's noise group
   std::vector<std::vector<int> > map_;            // output o's parameter k: phi[map_[o][k]]
   std::vector<int> owner_, local_;                // phi[j]: its output (-1 kappa), place
   std::vector<std::vector<int> > groupLocal_;     // output o: global noise group -> its own

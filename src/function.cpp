@@ -11,14 +11,6 @@
 // rows (replicates share their bias).
 #include "fbc.h"
 
-// What a move of a class touches, by the class's name: kappa calls f, the
-// bias GP's correlation moves S, the variances S's factor; a class not named
-// here (muB) moves only the residual.
-enum FunctionTouch { FK_RESIDUAL = 0, FK_KAPPA, FK_BIAS, FK_FIELD };
-static const std::pair<const char*, int> class_touch[] = {
-    {"kappa", FK_KAPPA}, {"thetaB", FK_BIAS}, {"alphaB", FK_BIAS}, {"lambdaZ", FK_BIAS},
-    {"sigma2B", FK_FIELD}, {"sigma2E", FK_FIELD}};
-
 class FunctionPosterior : public Posterior {
 public:
   FunctionPosterior(const arma::mat& Xf, const arma::vec& yf, const Model& model,
@@ -28,14 +20,7 @@ public:
     if (!model.levels.empty() || model.sourceL)
       Rcpp::stop("a function simulator takes no categorical inputs or bias per data set");
     set_sizes(Xf.n_rows, 0, Xf.n_cols, model.layout.length_of("kappa"), model);
-    kind_ = class_kinds(layout, class_touch);
-    noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
-    if ((int) noise_.size() != n) Rcpp::stop("the noise groups must give one group per field row");
-    // distinct field rows (as SchurPosterior's)
-    const std::vector<int> first = group_rows(Xf, std::vector<int>(), grp_);
-    nu_ = first.size();
-    Xu_.set_size(nu_, p);
-    for (int u = 0; u < nu_; ++u) Xu_.row(u) = Xf.row(first[u]);
+    set_field(Xf, model);  // the distinct field rows, as SchurPosterior's
     for (int b = 0; b < 2; ++b) {
       f_.b[b].zeros(n); Rb_.b[b].zeros(nu_, nu_); LS_.b[b].zeros(n, n);
     }
@@ -55,11 +40,13 @@ public:
     saveSet(idx, values);
     tk_ = tb_ = tf_ = sc_ = false;
     for (size_t i = 0; i < idx.size(); ++i) {
-      switch (kind_[layout.cls[idx[i]]]) {
-      case FK_KAPPA: tk_ = true; break;
-      case FK_BIAS: tb_ = tf_ = true; break;
-      case FK_FIELD: tf_ = true; break;
-      default: break;  // muB: the residual only
+      // (the layout's touch: kappa calls f, the bias GP's correlation moves
+      // S, the variances S's factor, muB only the residual)
+      switch (layout.touch[layout.cls[idx[i]]]) {
+      case TK_KAPPA: tk_ = true; break;
+      case TK_BIAS: case TK_BIASPOW: tb_ = tf_ = true; break;
+      case TK_FIELD: tf_ = true; break;
+      default: break;
       }
     }
     return evaluate();
@@ -83,15 +70,9 @@ public:
   }
   void reject() override { restore(); }
 
-  // a = LS^-1 1, b = LS^-1 (yf - fs): the log-likelihood is
-  // -0.5 |b - muB a|^2 + const.
+  // the log-likelihood is -0.5 |b - muB a|^2 + const, b = LS^-1 (yf - fs)
   void muBQuadratic(double& aa, double& ab) const override {
-    arma::vec a(n, arma::fill::ones);
-    arma::vec b = yf_ - f_.cur();
-    solve_lower(LS_.cur(), a);
-    solve_lower(LS_.cur(), b);
-    aa = arma::dot(a, a);
-    ab = arma::dot(a, b);
+    mub_quadratic(LS_.cur(), yf_ - f_.cur(), aa, ab);
   }
 
   void condition(const arma::mat& Xnew, int type, double* mean, double* var,
@@ -103,19 +84,7 @@ public:
 
   // As SchurPosterior::fieldLoo (loo.cpp) with r = yf - muB - fs.
   void fieldLoo(const std::vector<std::vector<int> >& groups, arma::vec& logdens) const override {
-    const arma::mat Li = arma::inv(arma::trimatl(LS_.cur()));
-    const arma::mat Sinv = Li.t() * Li;
-    const double muB = biasMean ? phi[iMuB] : 0.0;
-    const arma::vec a = Sinv * (yf_ - muB - f_.cur());
-    logdens.set_size(groups.size());
-    for (size_t g = 0; g < groups.size(); ++g) {
-      const arma::uvec G = arma::conv_to<arma::uvec>::from(groups[g]);
-      arma::mat P = Sinv.submat(G, G);
-      arma::vec z = a.elem(G);
-      if (!chol_lower(P)) Rcpp::stop("the leave-one-out precision is not positive definite");
-      solve_lower(P, z);
-      logdens[g] = -0.5 * (G.n_elem * LOG_2PI - logdet_chol(P) + arma::dot(z, z));
-    }
+    gaussian_loo(LS_.cur(), yf_ - (biasMean ? phi[iMuB] : 0.0) - f_.cur(), groups, logdens);
   }
 
   std::string algebra() const override { return "function"; }
@@ -123,12 +92,9 @@ public:
 private:
   const arma::mat& Xf_;
   const arma::vec& yf_;
-  int kernB_, nu_ = 0;
-  arma::mat Xu_;
-  std::vector<int> grp_, noise_;
+  int kernB_;
   Rcpp::Function fieldFn_, atFn_;
   bool tk_ = false, tb_ = false, tf_ = false, sc_ = false;
-  std::vector<int> kind_;  // by class: what a move of it touches (class_touch)
   Buf2<arma::vec> f_;
   Buf2<arma::mat> Rb_, LS_;
   Buf2<double> ldS_, vv_, loglik_;

@@ -10,26 +10,28 @@
 //   log p(y_G | rest) = -0.5 (|G| log 2 pi - log|P| + a_G' P^-1 a_G).
 #include "fbc.h"
 
-void SchurPosterior::fieldLoo(const std::vector<std::vector<int> >& groups,
-                              arma::vec& logdens) const {
-  const arma::mat& LS = LS_.cur();
+void Posterior::gaussian_loo(const arma::mat& LS, const arma::vec& r,
+                             const std::vector<std::vector<int> >& groups, arma::vec& logdens) {
   const arma::mat Li = arma::inv(arma::trimatl(LS));
   const arma::mat Sinv = Li.t() * Li;
-  const double muB = biasMean ? phi[iMuB] : 0.0;
-  const arma::vec& wz = wz_.cur();
-  arma::vec r(n);
-  for (int i = 0; i < n; ++i) r[i] = yf_[i] - muB - wz[grp_[i]];
   const arma::vec a = Sinv * r;
   logdens.set_size(groups.size());
   for (size_t g = 0; g < groups.size(); ++g) {
     const arma::uvec G = arma::conv_to<arma::uvec>::from(groups[g]);
     arma::mat P = Sinv.submat(G, G);
-    const arma::vec aG = a.elem(G);
+    arma::vec z = a.elem(G);
     if (!chol_lower(P)) Rcpp::stop("the leave-one-out precision is not positive definite");
-    arma::vec z = aG;
     solve_lower(P, z);  // z'z = a_G' P^-1 a_G
     logdens[g] = -0.5 * (G.n_elem * LOG_2PI - logdet_chol(P) + arma::dot(z, z));
   }
+}
+
+void SchurPosterior::fieldLoo(const std::vector<std::vector<int> >& groups,
+                              arma::vec& logdens) const {
+  const double muB = biasMean ? phi[iMuB] : 0.0;
+  arma::vec r(n);
+  for (int i = 0; i < n; ++i) r[i] = yf_[i] - muB - wz_.cur()[grp_[i]];
+  gaussian_loo(LS_.cur(), r, groups, logdens);
 }
 
 // Log leave-one-out predictive densities (scaled space) of the field data,

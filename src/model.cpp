@@ -14,10 +14,15 @@
 // involves the experimental inputs only.
 #include "fbc.h"
 
-// The log-likelihood from its pieces (the formula above), for every move.
-static double koh_loglik(int n, int m, double s2S, double ldDs, double ldS, double zz,
-                         double vv) {
-  return -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS + zz / s2S + vv);
+// The log-likelihood from its pieces (the formula above), for every move,
+// the pieces kept in the scratch buffers.
+// lpG: the latent log noise variances' GP log prior (0 without them).
+double SchurPosterior::loglik(double ldDs, double zz, double ldS, double vv, double lpG) {
+  const double s2S = phi[iSigma2S];
+  ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv; lpG_.alt() = lpG;
+  double ll = -0.5 * ((n + m) * LOG_2PI + m * std::log(s2S) + ldDs + ldS + zz / s2S + vv);
+  if (simNoise) ll += noiseLoglik() + lpG;
+  return loglik_.alt() = ll;
 }
 
 // Sizes, the layout and the offsets of the classes computed with, looked up
@@ -60,8 +65,8 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
     repSSW = model.repSSW; repDf = model.repDf;
   }
   scaled.clear();
-  for (const char* c : {"sigma2S", "sigma2B", "sigma2E", "sigma2R"})
-    for (int k = 0; k < lay.length_of(c); ++k) scaled.push_back(lay.offset_of(c) + k);
+  for (size_t c = 0; c < lay.names.size(); ++c)
+    for (int k = 0; lay.scaled[c] && k < lay.length[c]; ++k) scaled.push_back(lay.offset[c] + k);
   phi.zeros(d);
 }
 
@@ -85,17 +90,6 @@ double Posterior::noiseLoglik() const {
   return -0.5 * s;
 }
 
-// What a move of a class touches (add_touch()), by the class's name; a class
-// not named here moves only the residual (muB).
-enum TouchKind { TK_RESIDUAL = 0, TK_KAPPA, TK_SIM, TK_SIMPOW, TK_SIMLEVELS, TK_BIAS, TK_BIASPOW,
-                 TK_FIELD, TK_SIMNOISE, TK_LATENT, TK_LATENTHYPER, TK_LATENTK };
-static const std::pair<const char*, int> class_touch[] = {
-    {"kappa", TK_KAPPA}, {"thetaS", TK_SIM}, {"alphaS", TK_SIMPOW}, {"rhoS", TK_SIMLEVELS},
-    {"thetaB", TK_BIAS}, {"alphaB", TK_BIASPOW}, {"lambdaZ", TK_BIAS}, {"rhoB", TK_BIAS},
-    {"rhoD", TK_BIAS}, {"sigma2S", TK_FIELD}, {"sigma2B", TK_FIELD}, {"sigma2E", TK_FIELD},
-    {"sigma2R", TK_SIMNOISE}, {"gR", TK_LATENT}, {"muG", TK_LATENTHYPER},
-    {"sigma2G", TK_LATENTHYPER}, {"thetaG", TK_LATENTK}};
-
 void fill_layout(Layout& lay) {
   lay.d = 0;
   const int C = lay.names.size();
@@ -111,30 +105,7 @@ void fill_layout(Layout& lay) {
     }
 }
 
-std::vector<int> group_rows(const arma::mat& X, const std::vector<int>& key,
-                            std::vector<int>& grp) {
-  const int n = X.n_rows;
-  grp.resize(n);
-  std::vector<int> first;
-  for (int i = 0; i < n; ++i) {
-    int g = -1;
-    for (size_t u = 0; u < first.size() && g < 0; ++u)
-      if ((key.empty() || key[i] == key[first[u]]) && arma::all(X.row(i) == X.row(first[u])))
-        g = u;
-    if (g < 0) { g = first.size(); first.push_back(i); }
-    grp[i] = g;
-  }
-  return first;
-}
-
-
-SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
-                               const arma::vec& ys, double nugget, const Model& model)
-  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(model.kernS),
-    kernB_(model.kernB) {
-  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
-  touchKind_ = class_kinds(layout, class_touch);
-  touch_.reset(p + q, p);
+void Posterior::set_field(const arma::mat& Xf, const Model& model) {
   if (!model.noise.empty() && (int) model.noise.size() != n)
     Rcpp::stop("the noise groups must give one group per field row (%d)", n);
   noise_ = model.noise.empty() ? std::vector<int>(n, 0) : model.noise;
@@ -142,14 +113,37 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
     Rcpp::stop("the field data sets must give one per field row (%d)", n);
   sourceL_ = model.sourceL;
   const std::vector<int> src = model.source.empty() ? std::vector<int>(n, 0) : model.source;
-  // Distinct field input rows: replicates share their columns of Rs(Xs,Xk),
-  // Rs(Xk,Xk) and Rb, so those are computed for the nu distinct rows only
-  // (row i of Xf is row grp_[i] of Xu_).
-  const std::vector<int> first = group_rows(Xf, src, grp_);
+  if (!model.fieldRows.empty() && (int) model.fieldRows.size() != n)
+    Rcpp::stop("the field rows' groups must give one group per field row (%d)", n);
+  grp_.resize(n);
+  std::vector<int> first;  // each group's first row
+  for (int i = 0; i < n; ++i) {
+    int g = (int) first.size();
+    if (!model.fieldRows.empty()) g = model.fieldRows[i];
+    else  // (no grouping handed over: equal rows found here)
+      for (size_t u = 0; u < first.size() && g == (int) first.size(); ++u)
+        if (src[i] == src[first[u]] && arma::all(Xf.row(i) == Xf.row(first[u]))) g = u;
+    grp_[i] = g;
+    if (g == (int) first.size()) first.push_back(i);
+    else if (g < 0 || g > (int) first.size() || src[i] != src[first[g]] ||
+             arma::any(Xf.row(i) != Xf.row(first[g])))
+      Rcpp::stop("the field rows' groups must be numbered in order and group equal rows");
+  }
   nu_ = first.size();
   Xu_.set_size(nu_, p);
   srcU_.resize(nu_);
   for (int u = 0; u < nu_; ++u) { Xu_.row(u) = Xf.row(first[u]); srcU_[u] = src[first[u]]; }
+}
+
+SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                               const arma::vec& ys, double nugget, const Model& model)
+  : Xf_(Xf), yf_(yf), Xs_(Xs), ys_(ys), nugget_(nugget), kernS_(model.kernS),
+    kernB_(model.kernB) {
+  set_sizes(Xf.n_rows, Xs.n_rows, Xf.n_cols, Xs.n_cols - Xf.n_cols, model);
+  touch_.reset(p + q, p);
+  // replicates share their columns of Rs(Xs,Xk), Rs(Xk,Xk) and Rb: those
+  // are computed for the nu distinct rows only
+  set_field(Xf, model);
   Pfs_.resize(p); Pfb_.resize(p);
   for (int b = 0; b < 2; ++b) {
     for (int k = 0; k < p; ++k) {
@@ -178,7 +172,7 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
 // Add what a move of parameter j touches to t (by j's class in the layout).
 void SchurPosterior::add_touch(int j, Touch& t) const {
   const int k = layout.pos[j];
-  switch (touchKind_[layout.cls[j]]) {
+  switch (layout.touch[layout.cls[j]]) {
   case TK_KAPPA:
     t.cChange = t.cross = t.field = true;
     break;
@@ -203,7 +197,7 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
     // with the simulator's own noise, Ds holds sigma2R / sigma2S
     if (simNoise && j == iSigma2S) t.simCorr = t.cross = true;
     break;
-  case TK_SIMNOISE:
+  case TK_RUNS:
     t.simCorr = t.cross = t.field = true;
     break;
   case TK_LATENT:  // the noise variances of the means and their GP prior
@@ -247,14 +241,7 @@ double SchurPosterior::proposeScale(double c) {
   const double s2S = phi[iSigma2S];
   // (an input-dependent noise does not scale with the variances)
   if (!(s2S > 0) || !std::isfinite(c) || latent) return R_NegInf;
-  const double ldDs = ldDs_.cur(), zz = zz_.cur();
-  const double ldS = ldS_.cur() + n * std::log(c), vv = vv_.cur() / c;
-  ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
-  if (simNoise) ll += noiseLoglik();
-  loglik_.alt() = ll;
-  lpG_.alt() = lpG_.cur();
-  return ll;
+  return loglik(ldDs_.cur(), zz_.cur(), ldS_.cur() + n * std::log(c), vv_.cur() / c, lpG_.cur());
 }
 
 void SchurPosterior::accept() {
@@ -286,11 +273,18 @@ static arma::mat field_rows(const arma::mat& LS, const arma::mat& K, const std::
   return H;
 }
 
-void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
-  arma::vec a(n, arma::fill::ones);
-  solve_lower(LS_.cur(), a);
+void Posterior::mub_quadratic(const arma::mat& LS, arma::vec r, double& aa, double& ab) {
+  arma::vec a(r.n_elem, arma::fill::ones);
+  solve_lower(LS, a);
+  solve_lower(LS, r);
   aa = arma::dot(a, a);
-  ab = arma::dot(a, field_residual(LS_.cur(), yf_, 0.0, wz_.cur(), grp_));
+  ab = arma::dot(a, r);
+}
+
+void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
+  arma::vec r(n);
+  for (int i = 0; i < n; ++i) r[i] = yf_[i] - 0.0 - wz_.cur()[grp_[i]];
+  mub_quadratic(LS_.cur(), r, aa, ab);
 }
 
 // The S-GaSP correlation on the nu distinct field inputs (Gu and Wang 2018,
@@ -530,13 +524,7 @@ double SchurPosterior::evaluate(const Touch& t) {
   const double muB = biasMean ? phi[iMuB] : 0.0;
   for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[grp_[j]];
   solve_lower(*LS, u_);
-  const double vv = arma::dot(u_, u_);
-
-  ldDs_.alt() = ldDs; zz_.alt() = zz; ldS_.alt() = ldS; vv_.alt() = vv;
-  double ll = koh_loglik(n, m, s2S, ldDs, ldS, zz, vv);
-  if (simNoise) ll += noiseLoglik() + lpG;
-  loglik_.alt() = ll; lpG_.alt() = lpG;
-  return ll;
+  return loglik(ldDs, zz, ldS, arma::dot(u_, u_), lpG);
 }
 
 // Make the scratch buffers written by evaluate(t) current.

@@ -35,6 +35,19 @@ void OutputsPosterior::sub_model(const Model& model, int o, Model& sub) {
     sub.source.resize(rowsF_[o].size());
     for (size_t i = 0; i < rowsF_[o].size(); ++i) sub.source[i] = model.source[rowsF_[o][i]];
   }
+  // its rows' distinct rows, renumbered in order of first appearance
+  if (!model.fieldRows.empty()) {
+    std::vector<int> local(n, -1);
+    int nu = 0;
+    sub.fieldRows.resize(rowsF_[o].size());
+    for (size_t i = 0; i < rowsF_[o].size(); ++i) {
+      const int u = model.fieldRows[rowsF_[o][i]];
+      if (u >= n) Rcpp::stop("the field rows' groups must be numbered in order");
+      int& g = local[u];
+      if (g < 0) g = nu++;
+      sub.fieldRows[i] = g;
+    }
+  }
   Layout& lay = sub.layout;
   map_[o].clear();
   int at = 0;

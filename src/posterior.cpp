@@ -20,9 +20,10 @@ static std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int
 }
 
 // The compiled core's code tables by name (walks, kernels, algebras,
-// prediction types) and the names of the classes it computes with: R's
-// tables (R/boundary.R) must agree and R's model_classes name every such
-// class, which the package checks when it loads (check_model_codes()).
+// prediction types, what a move touches) and the names of the classes it
+// computes with: R's tables (R/boundary.R) must agree and R's model_classes
+// name every such class, which the package checks when it loads
+// (check_model_codes()).
 // [[Rcpp::export(.model_codes)]]
 Rcpp::List model_codes() {
   using Rcpp::_;
@@ -38,6 +39,10 @@ Rcpp::List model_codes() {
                                                  _["vecchia"] = ALG_VECCHIA),
       _["type"] = Rcpp::IntegerVector::create(_["field"] = PT_FIELD, _["mean"] = PT_MEAN,
                                               _["simulator"] = PT_SIMULATOR, _["bias"] = PT_BIAS),
+      _["touch"] = Rcpp::IntegerVector::create(
+          _["residual"] = TK_RESIDUAL, _["kappa"] = TK_KAPPA, _["sim"] = TK_SIM,
+          _["simPow"] = TK_SIMPOW, _["simLevels"] = TK_SIMLEVELS, _["bias"] = TK_BIAS,
+          _["biasPow"] = TK_BIASPOW, _["field"] = TK_FIELD, _["runs"] = TK_RUNS),
       _["class"] = cls);
 }
 
@@ -63,21 +68,28 @@ static void read_vecchia(const Rcpp::List& v, VecchiaDesign& vd) {
   }
 }
 
-// The field rows' groups and the categorical inputs of `model` into `out`:
-// each row's measurement-error group (`noise`, 1-based in R), the
-// categorical inputs' indicator columns and levels (`levels`), and with a
-// bias per data set each row's data set (`source`, `sourceLevels`).
-static void read_groups(const Rcpp::List& model, int p, Model& out) {
-  // sigma2E: one per measurement-error group of the field rows
-  if (model.containsElementNamed("noise")) {
-    const Rcpp::IntegerVector g = model["noise"];
-    out.noise.resize(g.size());
-    for (int i = 0; i < g.size(); ++i) {
-      if (g[i] == NA_INTEGER || g[i] < 1) Rcpp::stop("noise groups must be 1, 2, ...");
-      out.noise[i] = g[i] - 1;
-    }
+// model[name], 1-based codes 1 .. hi (hi < 0: no bound), 0-based; empty
+// when the model has none.
+static std::vector<int> read_codes(const Rcpp::List& model, const char* name, int hi,
+                                   const char* what) {
+  std::vector<int> out;
+  if (!model.containsElementNamed(name)) return out;
+  const Rcpp::IntegerVector g = model[name];
+  for (int v : g) {
+    if (v == NA_INTEGER || v < 1 || (hi >= 0 && v > hi)) Rcpp::stop("%s must be 1, 2, ...", what);
+    out.push_back(v - 1);
   }
-  // the categorical inputs: their indicator columns and levels
+  return out;
+}
+
+// The field rows' groups and the categorical inputs of `model` into `out`:
+// each row's measurement-error group (`noise`), its distinct row
+// (`fieldRows`), the categorical inputs' indicator columns and levels
+// (`levels`), and with a bias per data set each row's data set (`source`,
+// `sourceLevels`).
+static void read_groups(const Rcpp::List& model, int p, Model& out) {
+  out.noise = read_codes(model, "noise", -1, "noise groups");
+  out.fieldRows = read_codes(model, "fieldRows", -1, "the field rows' groups");
   if (model.containsElementNamed("levels")) {
     const Rcpp::List lv = model["levels"];
     const Rcpp::IntegerVector col = lv["col"], ncol = lv["ncol"], L = lv["L"];
@@ -92,31 +104,34 @@ static void read_groups(const Rcpp::List& model, int p, Model& out) {
       out.levels.push_back(in);
     }
   }
-  // a bias per field data set: the data set of each field row
   if (model.containsElementNamed("source")) {
-    const Rcpp::IntegerVector s = model["source"];
     out.sourceL = Rcpp::as<int>(model["sourceLevels"]);
-    out.source.resize(s.size());
-    for (int i = 0; i < s.size(); ++i) {
-      if (s[i] == NA_INTEGER || s[i] < 1 || s[i] > out.sourceL)
-        Rcpp::stop("the field data sets must be 1, ..., %d", out.sourceL);
-      out.source[i] = s[i] - 1;
-    }
+    out.source = read_codes(model, "source", out.sourceL, "the field data sets");
   }
 }
 
 // The layout of `model` (offset and length named by class, R's table order).
 static Layout read_layout(const Rcpp::List& model) {
-  const Rcpp::IntegerVector off = model["offset"], len = model["length"];
-  const Rcpp::CharacterVector nm = off.names(), nl = len.names();
-  if (off.size() != len.size() || Rf_isNull(off.names()))
-    Rcpp::stop("the layout needs an offset and a length named by class");
+  if (!model.containsElementNamed("touch") || !model.containsElementNamed("scaled"))
+    Rcpp::stop("the layout needs what a move of each class touches and which the scale move scales");
+  const Rcpp::IntegerVector off = model["offset"], len = model["length"], touch = model["touch"];
+  const Rcpp::LogicalVector scaled = model["scaled"];
+  if (off.size() != len.size() || off.size() != touch.size() || off.size() != scaled.size() ||
+      Rf_isNull(off.names()))
+    Rcpp::stop("the layout needs an offset, a length, a touch and a scaled named by class");
+  const Rcpp::CharacterVector nm = off.names(), nl = len.names(), nt = touch.names(),
+                              ns = scaled.names();
   Layout lay;
   for (int c = 0; c < off.size(); ++c) {
-    if (nm[c] != nl[c]) Rcpp::stop("the layout's offsets and lengths name different classes");
+    if (nm[c] != nl[c] || nm[c] != nt[c] || nm[c] != ns[c])
+      Rcpp::stop("the layout's offsets, lengths, touches and scales name different classes");
+    if (touch[c] < TK_RESIDUAL || touch[c] > TK_RUNS || scaled[c] == NA_LOGICAL)
+      Rcpp::stop("class %s: unknown touch code %d", Rcpp::as<std::string>(nm[c]).c_str(), touch[c]);
     lay.names.push_back(Rcpp::as<std::string>(nm[c]));
     lay.offset.push_back(off[c]);
     lay.length.push_back(len[c]);
+    lay.touch.push_back(touch[c]);
+    lay.scaled.push_back(scaled[c]);
   }
   fill_layout(lay);
   return lay;

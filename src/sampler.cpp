@@ -37,45 +37,29 @@
 // acceptance rate is above the move's target, by -min(0.5, 1/sqrt(b))
 // otherwise (adapt_step()).
 // Warm-up of data-dependent length (nBurn < 0, R's nBurn = NULL): the
-// same adaptation, in windows of WINDOW sweeps. At the end of a window the
-// proposals have settled when every adapted move's acceptance over the
-// window is within WARM_BAND of its target, the log size of its proposal
-// (log s, plus log det(L)^(1/k) for a block) has moved by at most
-// WARM_DRIFT adaptation steps over the last two windows (over the second
-// alone at the second window's end: the first explores; the rule's +-steps
-// cancel around the right scale and add up while it is still walking), and
-// every block is shaped, the SD its shape gives each parameter relative to
-// the shape's size within a factor exp(WARM_SHAPE) of the previous
-// window's, and learnt from enough draws: a joint block of at least
-// WARM_ESS_K parameters must hold in its covariance estimate at least
-// warmESS effective draws per parameter (R's fbc_warmup$ess, carried in the
-// state; 0 in a state written before the rule, which resumes as it began;
-// Block::window_ess()). Warm-up ends at the end of the second settled
-// window in a row, at the earliest after warmMin sweeps, and at warmMax
-// sweeps in any case (warmCapped). The joint proposals' covariance estimate
-// is kept by window of 100 sweeps, the windows grouped in epochs that
-// double (sweeps 1-200, 201-400, 401-800, ...); each earlier epoch's draws
-// weigh `forget` times the next one's (R's fbc_warmup$forget, in the state
-// as warmForget; Block::pooled()). forget = 0 is an estimate started afresh
-// at 200, 400, 800, ... (as a fixed burn-in's leaves out its first half),
-// whose effective draws had to be earned again after every restart; 0.5
-// keeps the older epochs at falling weight, so the estimate changes
-// smoothly, leaves the drift from the start little weight, and its
-// effective draws keep growing. A reshaped block keeps its proposal's size
-// (log s absorbs the change of log det(L)^(1/k)). The decision is part of
-// the chain's state, so a run split into pieces ends warm-up at the same sweep.
-// Every move has one shape (Move: step() proposes and accepts or rejects,
-// adapt() ends a burn-in batch) and owns its state, NIMBLE's samplers being
-// the model: its proposal scale (a block its shape too), its batch counts,
-// its adaptation and its retained counts; the chain keeps only the sweep
-// clock, the log densities and the warm-up's decision. The schedule is the
-// list of moves in sweep order, and each move's acceptance and adapted
-// scale is reported by name.
+// same adaptation, in windows of WINDOW sweeps. A window is settled when
+// every adapted move's acceptance over it is within WARM_BAND of its
+// target, the log size of its proposal (log s, plus log det(L)^(1/k) for a
+// block) has moved by at most WARM_DRIFT adaptation steps over the last two
+// windows (the rule's +-steps cancel around the right scale and add up
+// while it is still walking), every block is shaped, its shape within
+// exp(WARM_SHAPE) of the previous window's, and a joint block of at least
+// WARM_ESS_K walked parameters holds warmESS effective draws per parameter
+// (Block::window_ess()). Warm-up ends at the end of the second settled
+// window in a row, at the earliest after warmMin sweeps, at warmMax in any
+// case (warmCapped). The joint proposals' covariance estimate is kept by
+// window, in epochs that double, each earlier epoch weighted `forget`
+// times the next (Block::pooled()): 0 restarts the estimate at 200, 400,
+// 800, ..., whose effective draws had to be earned again after every
+// restart; 0.5 changes it smoothly and leaves the drift from the start
+// little weight. The decision is part of the chain's state, so a run split
+// into pieces ends warm-up at the same sweep.
+// Every move owns its state (Move; NIMBLE's samplers the model); the chain
+// keeps only the sweep clock, the log densities and the warm-up's decision.
 // Every adapted scale is frozen after burn-in, so the retained draws come
-// from one valid kernel. The sampler's whole state (parameters, proposals,
-// adaptation sums, batch counters) goes in and comes out as a list: a run
-// split into pieces (update(), checkpoints) is the same run, given R's RNG
-// state.
+// from one valid kernel. The sampler's whole state goes in and comes out as
+// a list: a run split into pieces (update(), checkpoints) is the same run,
+// given R's RNG state.
 #include "fbc.h"
 #include <cli/progress.h>
 #include <climits>

@@ -90,7 +90,8 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   none <- calibrate(ballSim, ballField, nMCMC = 100, nBurn = 40, nChains = 2,
                     discrepancy = "none")
   expect_identical(FBC:::validate_fbc(none), none)
-  expect_identical(none$model$spec$model, FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none"))  # Matérn 5/2
+  expect_identical(none$model$spec$model,  # Matérn 5/2
+                   FBC:::compiled_model(1, 1, 4L, 4L, discrepancy = "none", Xf = none$model$data$Xf))
   other <- none
   other$model$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
@@ -148,7 +149,7 @@ test_that("fits of earlier versions upgrade, validate and keep their draws", {
     expect_identical(fit$logLik, old$logLik)
     # the power exponential on both GPs, the design's algebra, and the one
     # layout of phi there was (the ball data: p = q = 1)
-    expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+    expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L, Xf = old$data$Xf))
     expect_identical(fit$model[c("kernelS", "kernelB", "discrepancy")],
                      list(kernelS = "powexp", kernelB = "powexp", discrepancy = "gp"))
     expect_identical(fit$settings$nugget, 1e-6)
@@ -186,7 +187,7 @@ test_that("a format 2 fit (before the S-GaSP class) upgrades, and the KOH draws 
   expect_false("lambdaZ" %in% names(old$spec$model$offset))
   fit <- FBC:::upgrade_fbc(old)
   expect_identical(fit$version$format, 7L)
-  expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L))
+  expect_identical(fit$model$spec$model, FBC:::compiled_model(1, 1, 1L, 1L, 0L, Xf = old$data$Xf))
   expect_identical(fit$Phi, old$Phi)
   expect_equal(predict(fit, c(1, 2.5, 4), method = "MAP"),
                readRDS(test_path("fixtures", "predict-1150ae6.rds"))$map, tolerance = 1e-10)
@@ -222,7 +223,10 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
   expect_identical(names(fit$settings),
                    c("nMCMC", "nBurn", "thinning", "nChains", "nugget", "time", "checkpoint"))
   expect_identical(fit$Phi, old$Phi)
-  expect_identical(fit$model$spec, old$spec)
+  # the spec as it was, its compiled model completed (the classes' roles,
+  # the field rows' grouping)
+  expect_identical(fit$model$spec[names(fit$model$spec) != "model"], old$spec[names(old$spec) != "model"])
+  expect_identical(fit$model$spec$model, FBC:::complete_compiled_model(old$spec$model, old$data$Xf))
   h <- c(1, 2.5, 4)
   ref <- readRDS(test_path("fixtures", "predict-3f92546.rds"))
   expect_equal(predict(old, h, method = "MAP"), ref$map, tolerance = 1e-10)
@@ -241,7 +245,7 @@ test_that("a format 3 fit (before the model object) upgrades, predicts, resumes,
                    now$model[c("spec", "moves", "kernelS", "discrepancy", "dims", "classes")])
   keep <- c("name", "code", "neighbours", "dims")
   expect_identical(back$model$algebra[keep], now$model$algebra[keep])
-  expect_identical(back$model$design$fieldRows, now$model$design$fieldRows)
+  expect_identical(back$model$spec$model$fieldRows, now$model$spec$model$fieldRows)
   # the same call and seed today: the same draws, to the bit (on the BLAS
   # the fixture was made with)
   skip_if_not_reference_blas()

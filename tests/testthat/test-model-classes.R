@@ -383,6 +383,10 @@ test_that("the compiled core reads the discrepancy model off the layout and refu
   lay <- function(model, len) {
     model$offset <- stats::setNames(as.integer(cumsum(len) - len), names(len))
     model$length <- stats::setNames(as.integer(len), names(len))
+    # (a class not in the table: its moves touch the residual only)
+    roles <- FBC:::class_roles(names(len))
+    model$touch <- replace(roles$touch, is.na(roles$touch), 0L)
+    model$scaled <- replace(roles$scaled, is.na(roles$scaled), FALSE)
     model
   }
   gp <- FBC:::compiled_model(1, 1)

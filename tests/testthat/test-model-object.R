@@ -17,7 +17,7 @@ test_that("calibrate(fit = FALSE) returns the model, and fitting it gives calibr
   # rows at 21 heights (3 replicates each)
   d <- model$dims
   expect_identical(d[c("p", "q", "m", "n", "noise")], list(p = 1L, q = 1L, m = 100L, n = 63L, noise = 1L))
-  expect_identical(max(model$design$fieldRows), length(unique(ballField[, "h"])))
+  expect_identical(max(model$spec$model$fieldRows), length(unique(ballField[, "h"])))
   expect_identical(model$classes$length[model$classes$class == "thetaS"], 2L)
   expect_identical(sum(model$classes$length), d$d)
   expect_identical(model$algebra$name, "dense")
@@ -103,6 +103,30 @@ test_that("distinct_rows() groups equal rows, by group when given", {
   X <- cbind(c(1, 2, 1, 2, 1), c(0, 0, 0, 1, 0))
   expect_identical(FBC:::distinct_rows(X), c(1L, 2L, 1L, 3L, 1L))
   expect_identical(FBC:::distinct_rows(X, c(1L, 1L, 2L, 1L, 1L)), c(1L, 2L, 3L, 4L, 1L))
+  # exactly: rows that differ in the 16th significant digit (one unit in
+  # the last place) stay apart, whatever their order
+  a <- 0.1 + 0.2
+  b <- 0.3
+  expect_false(a == b)
+  expect_identical(format(a, digits = 15), format(b, digits = 15))
+  expect_identical(FBC:::distinct_rows(cbind(c(a, b, a, b), 1)), c(1L, 2L, 1L, 2L))
+  expect_identical(FBC:::distinct_rows(cbind(c(b, a, b), c(2, 2, 2))), c(1L, 2L, 1L))
+  # the compiled core takes the grouping as given and refuses one that
+  # joins rows that differ; its own grouping (none handed over) is the same
+  # one
+  Xf <- cbind(c(a, b, a, 0.7))
+  yf <- c(0.2, -0.1, 0.3, 0.5)
+  set.seed(3)
+  Xs <- cbind(runif(8), runif(8))
+  ys <- sin(3 * Xs[, 1] + Xs[, 2])
+  mc <- FBC:::compiled_model(1, 1, algebra = 1L)
+  phi <- c(0.4, 2, 1, 1.5, 1.5, 1.2, 1.5, 0.8, 0.3, 0.05, 0)
+  grouped <- FBC:::.fbc_loglik_c(Xf, yf, Xs, ys, phi, 1e-6, c(mc, list(fieldRows = c(1L, 2L, 1L, 3L))))
+  alone <- FBC:::.fbc_loglik_c(Xf, yf, Xs, ys, phi, 1e-6, mc)
+  expect_true(is.finite(grouped))
+  expect_identical(grouped, alone)
+  expect_error(FBC:::.fbc_loglik_c(Xf, yf, Xs, ys, phi, 1e-6, c(mc, list(fieldRows = c(1L, 1L, 1L, 2L)))),
+               "group equal rows")
 })
 
 test_that("every walk of the model description maps to its scale and back", {
