@@ -436,6 +436,11 @@ prediction_sensitivity <- function(fit, phis, points, level) {
   pf <- pick_freeze(f, N, p)
   S <- array(c(pf$S1, pf$ST), c(M, p, 2), list(NULL, nm, c("first", "total")))
   se <- array(c(pf$se1, pf$seT), c(M, p, 2))
+  if (p == 1L) {
+    # one input: both indices are one by definition, not estimates
+    S[] <- 1
+    se[] <- 0
+  }
   # variance shares over the box: each draw's conditional variances and the
   # spread of the conditional means over the draws (predict()'s se^2)
   ysd2 <- y_sd(sc)^2
