@@ -70,7 +70,10 @@
 #'   units) or a density function of the input in its units (say kappa's
 #'   prior), integrated over the design's range of that input by quadrature.
 #' @param ndraws The number of posterior draws used (evenly spaced over all
-#'   retained draws, as in [predict()]); `NULL` uses them all.
+#'   retained draws, as in [predict()]); `NULL` uses them all. Each draw
+#'   brings its own sample path, so that the draws are nearly independent:
+#'   with 200 the Monte Carlo error of a median is about 3% of a 90%
+#'   interval's width (independent draws of a normal posterior).
 #' @param level Probability of the intervals.
 #' @param paths Support points of each draw's conditional sample path of the
 #'   emulator (the closed form's cost grows as the square of the runs plus
@@ -104,7 +107,7 @@
 #' s <- sensitivity(fit, ndraws = 100)
 #' s
 #' as.data.frame(s)
-sensitivity <- function(fit, inputs = NULL, ndraws = 300, level = 0.9, paths = 128,
+sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 128,
                         prediction = TRUE, points = 256, ...) {
   check_dots_empty(..., fn = sensitivity, name = "sensitivity")
   fit <- check_fbc(fit, "fit")
@@ -433,6 +436,11 @@ prediction_sensitivity <- function(fit, phis, points, level) {
   pf <- pick_freeze(f, N, p)
   S <- array(c(pf$S1, pf$ST), c(M, p, 2), list(NULL, nm, c("first", "total")))
   se <- array(c(pf$se1, pf$seT), c(M, p, 2))
+  if (p == 1L) {
+    # one input: both indices are one by definition, not estimates
+    S[] <- 1
+    se[] <- 0
+  }
   # variance shares over the box: each draw's conditional variances and the
   # spread of the conditional means over the draws (predict()'s se^2)
   ysd2 <- y_sd(sc)^2

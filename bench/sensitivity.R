@@ -19,7 +19,7 @@
 #             True indices from V_i = 1 / (3 (1 + a_i)^2).
 # Each design: calibrate() with the default kernels (kernelS = "matern52",
 # a GP discrepancy) and nMCMC/nBurn/nChains as given (a fixed run length),
-# then sensitivity(fit, prediction = FALSE) with its defaults (300 draws,
+# then sensitivity(fit, prediction = FALSE) with its defaults (200 draws,
 # each with a conditional sample path through 128 support points; method
 # "FBC") and with paths = 0 (the indices of the emulator's mean; "FBC
 # (mean)"), the measure the problem's box (inputs = the true ranges).
