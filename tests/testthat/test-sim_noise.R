@@ -183,9 +183,9 @@ test_that("a run with the simulator's noise resumes from its checkpoint, and tak
 })
 
 # The latent GP's log density of g (plain R): N(muG, sigma2G (Rg + 1e-6 I)),
-# Rg the Gaussian correlation over the scaled inputs Xs.
+# Rg the Matern 5/2 correlation over the scaled inputs Xs.
 latent_prior_plain <- function(g, Xs, muG, s2G, thetaG) {
-  K <- s2G * (dense_corr(Xs, Xs, thetaG, rep(2, ncol(Xs)), "gaussian") + 1e-6 * diag(nrow(Xs)))
+  K <- s2G * (dense_corr(Xs, Xs, thetaG, rep(2, ncol(Xs)), "matern52") + 1e-6 * diag(nrow(Xs)))
   L <- chol(K)
   a <- backsolve(L, g - muG, transpose = TRUE)
   -0.5 * (length(g) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
@@ -273,7 +273,7 @@ test_that("elliptical slice sampling gives the latent log-variances' posterior",
   # weights the likelihood of every run
   phi0 <- mo$spec$init[!mo$spec$classes %in% FBC:::sim_noise_classes]
   set.seed(9)
-  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
+  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "matern52") + 1e-6 * diag(5)
   Z <- matrix(stats::rnorm(5 * 20000), ncol = 5) %*% chol(K) - 3
   ll <- apply(Z, 1, function(g) input_noise_full(mo, mo$raw$sim, phi0, g, "none"))
   w <- exp(ll - max(ll)); w <- w / sum(w)
@@ -304,8 +304,8 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
   sc <- fit$model$scale
   Z <- cbind((c(1, 2.5) - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1]),
              (1.7 - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2]))
-  K <- dense_corr(Xs, Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
-  k <- dense_corr(Xs, Z, c(1, 1), c(2, 2), "gaussian")
+  K <- dense_corr(Xs, Xs, c(1, 1), c(2, 2), "matern52") + 1e-6 * diag(5)
+  k <- dense_corr(Xs, Z, c(1, 1), c(2, 2), "matern52")
   g <- ph[paste0("gR", 1:5)]
   mu <- -3 + drop(t(k) %*% solve(K, g + 3))
   v <- 1 + 1e-6 - colSums(k * solve(K, k))
