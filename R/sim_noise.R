@@ -55,6 +55,18 @@
 #' integrated over its conditional (log-normal) law: `noiseSd` is the root
 #' of the posterior mean of the noise variance.
 #'
+#' With replicates that differ, `simNoise = "auto"` models a constant
+#' noise. On a simulator whose noise sd varies fourfold over its inputs
+#' (`bench/sim-noise.R`, 50 unique inputs x 20 replicates, the defaults
+#' otherwise), \eqn{\kappa}'s posterior was the same under `"constant"` and
+#' `"input"` (the field is the system's mean behaviour, so the noise model
+#' reaches \eqn{\kappa} only through the emulator's mean, which the
+#' replicates pin down either way), while `"input"` took about 110 times the
+#' CPU to converge (its latent values and their GP's hyperparameters mix
+#' slowly). Choose `"input"` when the noise itself matters: its sd at each
+#' input (within 7% there, a constant one off by 40%), predictions of a
+#' single run.
+#'
 #' `simNoise = "none"` treats the simulator as deterministic (the emulator
 #' interpolates the runs, up to a tiny nugget; a message says when
 #' replicates differ). The simulator's noise runs on the exact dense
