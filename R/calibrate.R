@@ -167,7 +167,8 @@
 #'   differ beyond rounding, else `"none"`), `"none"` (a deterministic
 #'   simulator), `"constant"` (one noise variance `sigma2R`, sampled with
 #'   the rest, the replicates entering by their sufficient statistics) or
-#'   `"input"` (not available yet). The field is the system's mean
+#'   `"input"` (a noise variance that varies with the inputs: its log a GP,
+#'   its values at the unique inputs sampled with the rest). The field is the system's mean
 #'   behaviour: its noise is measurement error only.
 #' @param threads Threads inside each chain (OpenMP) for the
 #'   nearest-neighbour algebra's conditionals (the other algebras run one):

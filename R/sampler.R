@@ -46,7 +46,7 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   each <- stats::setNames(as.list(each), spec$vars[each])
   # with independent outputs (spec$outputOf) a joint block per output
   outOf <- spec$outputOf %||% integer(length(spec$vars))
-  joint <- do.call(c, lapply(c("sim", "bias"), function(m) {
+  joint <- do.call(c, lapply(c("sim", "bias", "noise"), function(m) {
     idx <- which(move == m & free)
     by <- split(idx, outOf[idx])
     stats::setNames(by, if (length(by) > 1L) paste0(m, names(by)) else rep(m, length(by)))

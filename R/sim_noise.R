@@ -32,13 +32,16 @@
 #'
 #' With `simNoise = "input"` the noise variance depends on the inputs,
 #' \eqn{r(x, t) = \exp(g(x, t))}, and the log-variance is a GP,
-#' \deqn{g \sim GP(\mu_g, \sigma^2_g \exp(-\textstyle\sum_k \theta_{g,k} d_k^2)),}
-#' over the inputs scaled to \eqn{[0, 1]} (experimental and calibration),
-#' with its own ranges (`thetaG`): a noise level is a property of the
-#' simulator's randomness, not of its mean, so it need not vary on the
-#' emulator's length-scales, and the Gaussian kernel makes it smooth (a
-#' noise level that jumps is rare, and the replicates at each input pin
-#' down what the smooth surface misses). Its values `gR` at the \eqn{m}
+#' \deqn{g \sim GP(\mu_g, \sigma^2_g R_g),}
+#' \eqn{R_g} the Matérn 5/2 correlation (as in [correlation], with
+#' \eqn{h_k = \sqrt{\theta_{g,k}} d_k}) over the inputs scaled to
+#' \eqn{[0, 1]} (experimental and calibration), with its own ranges
+#' (`thetaG`): a noise level is a property of the simulator's randomness,
+#' not of its mean, so it need not vary on the emulator's length-scales; the
+#' Matérn 5/2 makes it smooth (twice differentiable) without the Gaussian
+#' kernel's near-singular correlations, under which the latent values'
+#' roughness (each input's replicates measure its own) drove
+#' \eqn{\sigma^2_g} to absurd values. Its values `gR` at the \eqn{m}
 #' unique inputs are sampled with every other unknown, by elliptical slice
 #' sampling on the whitened GP (an exact move of all of them at once, with
 #' no scale to tune), and \eqn{\mu_g}, \eqn{\sigma^2_g}, \eqn{\theta_g}
@@ -51,6 +54,18 @@
 #' noise sd at new inputs from the GP given \eqn{g} at each draw,
 #' integrated over its conditional (log-normal) law: `noiseSd` is the root
 #' of the posterior mean of the noise variance.
+#'
+#' With replicates that differ, `simNoise = "auto"` models a constant
+#' noise. On a simulator whose noise sd varies fourfold over its inputs
+#' (`bench/sim-noise.R`, 50 unique inputs x 20 replicates, the defaults
+#' otherwise), \eqn{\kappa}'s posterior was the same under `"constant"` and
+#' `"input"` (the field is the system's mean behaviour, so the noise model
+#' reaches \eqn{\kappa} only through the emulator's mean, which the
+#' replicates pin down either way), while `"input"` took about 110 times the
+#' CPU to converge (its latent values and their GP's hyperparameters mix
+#' slowly). Choose `"input"` when the noise itself matters: its sd at each
+#' input (within 7% there, a constant one off by 40%), predictions of a
+#' single run.
 #'
 #' `simNoise = "none"` treats the simulator as deterministic (the emulator
 #' interpolates the runs, up to a tiny nugget; a message says when
@@ -303,9 +318,9 @@ latent_noise_sd <- function(model, phis, Xn) {
     ph <- phis[i, ]
     th <- ph[cls == "thetaG"]
     two <- rep(2, ncol(Xs))
-    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 2L) + jitter * diag(m)))
+    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 4L) + jitter * diag(m)))
     Z <- cbind(Xn, matrix(ph[kap], nrow(Xn), length(kap), byrow = TRUE))
-    A <- forwardsolve(L, .corr_matrix(Xs, Z, th, two, 2L))
+    A <- forwardsolve(L, .corr_matrix(Xs, Z, th, two, 4L))
     muG <- ph[cls == "muG"]
     s2G <- ph[cls == "sigma2G"]
     w <- forwardsolve(L, ph[cls == "gR"] - muG)

@@ -24,9 +24,10 @@
 # seconds and retained draws per chain.
 #
 # Rscript bench/run.R sim-noise [--quick] [--unique=50,200] [--reps=20] [--sets=2] [--maxNone=0]
+#   [--models=constant,input]
 source("bench/options.R")
 opt <- bench_options(list(unique = c(50L, 200L), reps = 20L, sets = 2L,
-                          maxNone = 0L))
+                          maxNone = 0L, models = c("constant", "input")))
 if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
 suppressPackageStartupMessages(library(FBC))
 
@@ -109,7 +110,7 @@ one <- function(k, r, seed, simNoise) {
 
 res <- list()
 for (k in opt$unique) for (r in opt$reps) for (s in seq_len(opt$sets)) {
-  for (mode in c("constant", "input")) res[[length(res) + 1L]] <- one(k, r, s, mode)
+  for (mode in opt$models) res[[length(res) + 1L]] <- one(k, r, s, mode)
   if (k * r <= opt$maxNone) res[[length(res) + 1L]] <- one(k, r, s, "none")
 }
 res <- do.call(rbind, res)

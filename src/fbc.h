@@ -349,6 +349,8 @@ public:
   // from), and that of the pending proposal's
   virtual double latentLogPrior(bool pending) const { return 0.0; }
   virtual const arma::mat& latentFactor() const { Rcpp::stop("no latent noise"); }
+  // ... and at the hyperparameters of ph (false: not positive definite)
+  virtual bool latentFactorAt(const arma::vec&, arma::mat&) const { return false; }
   std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 
@@ -499,6 +501,12 @@ void for_each_draw(Posterior& post, const arma::mat& phis, F f) {
 // 0 when none was accepted.
 int latent_ess(Posterior& post, double& ll, arma::vec& lp,
                const std::function<double(int, double)>& lpOf);
+// ... and one joint walk of the latent GP's hyperparameters hyp (walks tr,
+// step s on their scale) with the whitened latent values held fixed (true:
+// accepted)
+bool latent_shift(Posterior& post, double& ll, arma::vec& lp, const std::vector<int>& hyp,
+                  const std::vector<int>& tr, double s,
+                  const std::function<double(int, double)>& lpOf);
 
 // Everything but the simulator block: the field block, its Schur
 // complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a
@@ -588,6 +596,7 @@ private:
 public:
   double latentLogPrior(bool pending) const override { return pending ? lpG_.b[1 - lpG_.c] : lpG_.cur(); }
   const arma::mat& latentFactor() const override;
+  bool latentFactorAt(const arma::vec& ph, arma::mat& C) const override;
 private:
   // runConditional()'s runs' part at the candidates, kept while the
   // simulator's correlation parameters (runKey_) and the candidates stay

@@ -777,6 +777,41 @@ struct LatentMove : Move {
   }
 };
 
+// The latent GP's free hyperparameters moved with the whitened latent
+// values held fixed (latent_noise.cpp); its step adapts towards acceptance
+// 0.234 like the scale move's.
+struct LatentShiftMove : Move {
+  std::vector<int> tr;
+  double logsd;
+  int batch;
+  LatentShiftMove(const Chain& ch, const Rcpp::List& state) {
+    const Posterior& post = ch.post;
+    for (const char* c : {"muG", "sigma2G", "thetaG"})
+      for (int k = 0; k < post.layout.length_of(c); ++k) {
+        const int j = post.layout.offset_of(c) + k;
+        if (ch.pr.family[j] != PF_FIXED) { idx.push_back(j); tr.push_back(ch.pr.transform[j]); }
+      }
+    name = "latent shift";
+    logsd = list_num(state, "shiftLogsd", std::log(0.1));
+    accBatch = list_num(state, "shiftAccBatch", 0);
+    batch = (int) list_num(state, "shiftBatch", 0);
+  }
+  const char* kind() const override { return "shift"; }
+  bool step(Chain& ch) override {
+    return latent_shift(ch.post, ch.ll, ch.lp, idx, tr, std::exp(logsd),
+                        [&](int j, double x) { return ch.pr(j, x); });
+  }
+  void adapt(const Chain&) override {
+    ++batch;
+    logsd = adapt_step(logsd, accBatch / BATCH, 0.234, batch);
+  }
+  double logScale() const override { return logsd; }
+  double target() const override { return 0.234; }
+  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
+    out["shiftLogsd"] = logsd; out["shiftAccBatch"] = accBatch; out["shiftBatch"] = batch;
+  }
+};
+
 typedef std::vector<std::unique_ptr<Move> > Schedule;
 
 // The chain's adapted state from `state` (an earlier piece's, or the
@@ -918,7 +953,11 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
   for (int j = 0; j < d; ++j) {
     if (pr.family[j] == PF_FIXED) continue;
     if (post.latent && j >= post.iG && j < post.iG + post.m) {
-      if (j == post.iG) schedule.emplace_back(new LatentMove(ch));
+      if (j == post.iG) {
+        schedule.emplace_back(new LatentMove(ch));
+        std::unique_ptr<LatentShiftMove> sh(new LatentShiftMove(ch, state));
+        if (!sh->idx.empty()) schedule.emplace_back(std::move(sh));
+      }
     } else if (inBlock[j]) {
       if (blockAt[j] >= 0) add_block(blockAt[j]);
     } else if (post.biasMean && j == post.iMuB && gibbsMuB) {
@@ -1101,6 +1140,9 @@ static Rcpp::List write_chain(const Chain& ch, const Schedule& schedule,
     _["windows"] = ch.windows, _["winAcc"] = num(ch.winAcc),
     _["winScale"] = Rcpp::wrap(ch.winScale), _["winShape"] = num(ch.winShape));
   out.push_back(ch.warmForget, "warmForget");
+  // (the latent noise's shift move's, when it has one)
+  for (const char* nm : {"shiftLogsd", "shiftAccBatch", "shiftBatch"})
+    if (scale.containsElementNamed(nm)) out.push_back(scale[nm], nm);
   return out;
 }
 

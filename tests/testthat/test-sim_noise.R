@@ -183,9 +183,9 @@ test_that("a run with the simulator's noise resumes from its checkpoint, and tak
 })
 
 # The latent GP's log density of g (plain R): N(muG, sigma2G (Rg + 1e-6 I)),
-# Rg the Gaussian correlation over the scaled inputs Xs.
+# Rg the Matern 5/2 correlation over the scaled inputs Xs.
 latent_prior_plain <- function(g, Xs, muG, s2G, thetaG) {
-  K <- s2G * (dense_corr(Xs, Xs, thetaG, rep(2, ncol(Xs)), "gaussian") + 1e-6 * diag(nrow(Xs)))
+  K <- s2G * (dense_corr(Xs, Xs, thetaG, rep(2, ncol(Xs)), "matern52") + 1e-6 * diag(nrow(Xs)))
   L <- chol(K)
   a <- backsolve(L, g - muG, transpose = TRUE)
   -0.5 * (length(g) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
@@ -247,7 +247,7 @@ test_that("the input-dependent noise's likelihood is that of every run, plus the
 
 # A tiny problem whose only unknowns are the latent log-variances at 5
 # unique inputs (x and t crossed): everything else fixed at values near the truth.
-tiny_latent <- function(nMCMC, seed = 4, ...) {
+tiny_latent <- function(nMCMC, seed = 4, s2G = "fixed", ...) {
   set.seed(1)
   x <- c(0.2, 1.5, 2.8, 0.2, 2.8)
   X <- cbind(x = rep(x, c(3, 4, 3, 2, 3)), t = rep(c(1.2, 1.7, 1.2, 2.2, 2.2), c(3, 4, 3, 2, 3)))
@@ -256,7 +256,7 @@ tiny_latent <- function(nMCMC, seed = 4, ...) {
   h <- set_hyperPriors(thetaSDist = "fixed", thetaSInit = c(0.5, 1),
                        sigma2SDist = "fixed", sigma2SInit = 1, sigma2EDist = "fixed",
                        sigma2EInit = 0.01, muGDist = "fixed", muGInit = -3,
-                       sigma2GDist = "fixed", sigma2GInit = 1, thetaGDist = "fixed",
+                       sigma2GDist = s2G, sigma2GInit = 1, thetaGDist = "fixed",
                        thetaGInit = c(1, 1))
   set.seed(seed)
   calibrate(sim, field, simNoise = "input", discrepancy = "none", hypers = h,
@@ -273,7 +273,7 @@ test_that("elliptical slice sampling gives the latent log-variances' posterior",
   # weights the likelihood of every run
   phi0 <- mo$spec$init[!mo$spec$classes %in% FBC:::sim_noise_classes]
   set.seed(9)
-  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
+  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "matern52") + 1e-6 * diag(5)
   Z <- matrix(stats::rnorm(5 * 20000), ncol = 5) %*% chol(K) - 3
   ll <- apply(Z, 1, function(g) input_noise_full(mo, mo$raw$sim, phi0, g, "none"))
   w <- exp(ll - max(ll)); w <- w / sum(w)
@@ -287,6 +287,32 @@ test_that("elliptical slice sampling gives the latent log-variances' posterior",
   expect_equal(apply(G, 2, stats::sd), sdv, tolerance = 0.15, ignore_attr = TRUE)
   # set.seed() reproduces the run
   expect_identical(tiny_latent(300)$Phi, tiny_latent(300)$Phi)
+})
+
+test_that("with sigma2G sampled too, the moves give the joint posterior", {
+  skip_if_not_slow()
+  # the slice move of g, the walk of sigma2G given g and the move of both
+  # with the whitened g fixed, against importance sampling from the prior
+  fit <- tiny_latent(6000, s2G = "halft_sd")
+  mo <- fit$model
+  d <- mo$data
+  expect_true("latent shift" %in% FBC:::move_report(fit)$move)
+  phi0 <- mo$spec$init[!mo$spec$classes %in% FBC:::sim_noise_classes]
+  set.seed(10)
+  N <- 40000
+  sdG <- abs(stats::rcauchy(N))
+  K <- dense_corr(d$Xs, d$Xs, c(1, 1), c(2, 2), "matern52") + 1e-6 * diag(5)
+  Z <- sdG * (matrix(stats::rnorm(5 * N), ncol = 5) %*% chol(K)) - 3
+  # (gR's own prior: flat on [-50, 50]; far out the runs' likelihood is nil)
+  ll <- apply(Z, 1, function(g) if (all(abs(g) < 50) && all(g > -15)) {
+    input_noise_full(mo, mo$raw$sim, phi0, g, "none")
+  } else -Inf)
+  w <- exp(ll - max(ll)); w <- w / sum(w)
+  expect_gt(1 / sum(w^2), 1000)
+  ref <- c(colSums(w * Z), sum(w * log(sdG^2)))
+  got <- cbind(fit$Phi[, paste0("gR", 1:5)], log(fit$Phi[, "sigma2G"]))
+  bm <- apply(got, 2, function(v) stats::sd(colMeans(matrix(v, 100))) / sqrt(ncol(matrix(v, 100))))
+  expect_true(all(abs(colMeans(got) - ref) < 4 * bm + 0.03))
 })
 
 test_that("an input-dependent noise predicts its sd, prints, and resumes from a checkpoint", {
@@ -304,8 +330,8 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
   sc <- fit$model$scale
   Z <- cbind((c(1, 2.5) - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1]),
              (1.7 - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2]))
-  K <- dense_corr(Xs, Xs, c(1, 1), c(2, 2), "gaussian") + 1e-6 * diag(5)
-  k <- dense_corr(Xs, Z, c(1, 1), c(2, 2), "gaussian")
+  K <- dense_corr(Xs, Xs, c(1, 1), c(2, 2), "matern52") + 1e-6 * diag(5)
+  k <- dense_corr(Xs, Z, c(1, 1), c(2, 2), "matern52")
   g <- ph[paste0("gR", 1:5)]
   mu <- -3 + drop(t(k) %*% solve(K, g + 3))
   v <- 1 + 1e-6 - colSums(k * solve(K, k))
