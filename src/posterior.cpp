@@ -42,7 +42,8 @@ Rcpp::List model_codes() {
       _["touch"] = Rcpp::IntegerVector::create(
           _["residual"] = TK_RESIDUAL, _["kappa"] = TK_KAPPA, _["sim"] = TK_SIM,
           _["simPow"] = TK_SIMPOW, _["simLevels"] = TK_SIMLEVELS, _["bias"] = TK_BIAS,
-          _["biasPow"] = TK_BIASPOW, _["field"] = TK_FIELD, _["runs"] = TK_RUNS),
+          _["biasPow"] = TK_BIASPOW, _["field"] = TK_FIELD, _["runs"] = TK_RUNS,
+          _["latent"] = TK_LATENT, _["latentHyper"] = TK_LATENTHYPER, _["latentK"] = TK_LATENTK),
       _["class"] = cls);
 }
 
@@ -125,7 +126,7 @@ static Layout read_layout(const Rcpp::List& model) {
   for (int c = 0; c < off.size(); ++c) {
     if (nm[c] != nl[c] || nm[c] != nt[c] || nm[c] != ns[c])
       Rcpp::stop("the layout's offsets, lengths, touches and scales name different classes");
-    if (touch[c] < TK_RESIDUAL || touch[c] > TK_RUNS || scaled[c] == NA_LOGICAL)
+    if (touch[c] < TK_RESIDUAL || touch[c] > TK_LATENTK || scaled[c] == NA_LOGICAL)
       Rcpp::stop("class %s: unknown touch code %d", Rcpp::as<std::string>(nm[c]).c_str(), touch[c]);
     lay.names.push_back(Rcpp::as<std::string>(nm[c]));
     lay.offset.push_back(off[c]);
