@@ -61,7 +61,9 @@ summ <- do.call(rbind, lapply(split(res, res$m), function(d) {
   e1 <- d$elapsed.ms[d$threads == 1]
   e2 <- d$elapsed.ms[d$threads == 2]
   ratio <- stats::median(e2) / stats::median(e1)
-  s <- max(0, min(1, 2 * ratio - 1))  # Amdahl: ratio = s + (1 - s) / 2
+  # Amdahl: ratio = s + (1 - s) / 2; no fraction when 2 threads were no
+  # faster (a machine without a free core measures the load, not the code)
+  s <- if (ratio < 1) max(0, 2 * ratio - 1) else NA_real_
   data.frame(m = d$m[1], k = d$k[1],
              one.thread = sprintf("%.1f-%.1f", min(e1), max(e1)),
              two.threads = sprintf("%.1f-%.1f", min(e2), max(e2)),

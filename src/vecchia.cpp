@@ -37,6 +37,15 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+#if defined(_OPENMP) && !defined(_WIN32)
+#include <pthread.h>
+// GCC's OpenMP runtime cannot start threads in a process forked from one
+// that ran threads (the child waits for threads it does not have): such a
+// child (future's multicore plan, parallel::mclapply()) runs one thread.
+static bool teamRan = false, forkedAfterTeam = false;
+static void on_fork_child() { forkedAfterTeam = forkedAfterTeam || teamRan; }
+static const int atforkSet = pthread_atfork(nullptr, nullptr, on_fork_child);
+#endif
 
 static inline int thread_id() {
 #ifdef _OPENMP
@@ -156,6 +165,10 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
   const int smax = vd_.k + vd_.kf + 1;
 #ifdef _OPENMP
   nt_ = std::max(1, model.threads);
+#ifndef _WIN32
+  if (forkedAfterTeam) nt_ = 1;
+  if (nt_ > 1) teamRan = true;
+#endif
 #endif
   ws_.resize(nt_);
   const size_t nemax = (size_t) smax * (smax + 1) / 2;

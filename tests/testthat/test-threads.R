@@ -52,3 +52,20 @@ test_that("bad thread counts are refused", {
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, threads = 1.5))
   expect_snapshot(error = TRUE, calibrate(ballSim, ballField, threads = NA))
 })
+
+test_that("a process forked after threads ran runs one thread, with the same draws", {
+  # (GCC's OpenMP runtime hangs in such a child if it starts threads)
+  skip_on_os("windows")
+  skip_if_not(FBC:::.has_openmp(), "built without OpenMP")
+  args <- list(ballSim, ballField, nMCMC = 40, nBurn = 20, nChains = 1, converge = FALSE,
+               algebra = "vecchia", neighbours = 8, threads = 2L)
+  set.seed(1)
+  ref <- do.call(calibrate, args)
+  job <- parallel::mcparallel({
+    set.seed(1)
+    do.call(calibrate, args)$Phi
+  })
+  res <- parallel::mccollect(job, wait = FALSE, timeout = 60)
+  if (is.null(res)) tools::pskill(job$pid)
+  expect_identical(res[[1]], ref$Phi)
+})
