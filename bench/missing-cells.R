@@ -10,12 +10,37 @@
 # algebra on the same observed cells, `--dense`) as the largest gap over
 # kappa's quantiles in posterior sd, against the complete design (ratio of
 # CPU), and against dropping every run with a missing cell (`--drop`).
+# --moves: instead, the mean CPU ms of a likelihood evaluation along a path
+# of moves (every class and dimension in turn) on random data, grids of
+# 80 x 50 and 30 x 20 runs with `share` of the cells missing at random.
 #   Rscript bench/run.R missing-cells [--quick] [--grid=30x20] [--share=0.1,0.2,0.4]
-#     [--pattern=mcar,mnar] [--dense] [--drop] [--seed=1]
+#     [--pattern=mcar,mnar] [--dense] [--drop] [--seed=1] [--moves]
 suppressPackageStartupMessages(library(FBC))
 source("bench/options.R")
 opt <- bench_options(list(grid = "30x20", share = c(0.1, 0.2, 0.4), pattern = c("mcar", "mnar"),
-                          dense = FALSE, drop = FALSE, seed = 1L))
+                          dense = FALSE, drop = FALSE, seed = 1L, moves = FALSE))
+if (opt$moves) {
+  out <- NULL
+  for (sz in list(c(50L, 80L), c(20L, 30L))) for (share in c(0, opt$share)) {
+    set.seed(opt$seed)
+    I <- sz[1]; J <- sz[2]
+    g <- expand.grid(i = seq_len(I), j = seq_len(J))
+    Xs <- cbind(seq(0, 1, length.out = I)[g$i], matrix(runif(2 * J), J)[g$j, ])
+    keep <- setdiff(seq_len(I * J), sample(I * J, round(share * I * J)))
+    Xs <- Xs[keep, ]
+    alg <- FBC:::.sim_algebra(Xs, 1L, 0L, TRUE)
+    phi0 <- c(0.5, 0.5, 2, 2, 2, 1.9, 1.9, 1.9, 2, 1.9, 1, 0.1, 0.01, 0)
+    phis <- rbind(phi0, replace(phi0, 3, 3), replace(phi0, 4, 1), replace(phi0, 5, 1.5),
+                  replace(phi0, 1, 0.3), replace(phi0, 2, 0.6), phi0)
+    t <- cpu(FBC:::.loglik_path(matrix(runif(10), 10), rnorm(10), Xs, rnorm(nrow(Xs)), phis, 1e-6))
+    out <- rbind(out, data.frame(grid = sprintf("%d x %d", J, I), missing = share,
+                                 cells = I * J - nrow(Xs),
+                                 algebra = if (length(alg)) "kronecker" else "dense",
+                                 ms.per.move = round(1000 * t / (nrow(phis) - 1), 1)))
+  }
+  print(out, row.names = FALSE)
+  quit(save = "no")
+}
 sz <- as.integer(strsplit(opt$grid, "x", fixed = TRUE)[[1]])
 J <- sz[1]; I <- sz[2]  # J run settings x I output points
 set.seed(opt$seed)
@@ -59,6 +84,8 @@ run <- function(sim, label, share, pattern, algebra = "auto") {
 
 complete <- run(full, "complete", 0, "-")
 rows <- list(cbind(complete$row, gap.sd = NA, cpu.ratio = 1))
+show <- function(r) { print(r, row.names = FALSE); utils::flush.console() }  # as they come
+show(rows[[1]])
 for (pattern in opt$pattern) for (share in opt$share) {
   miss <- missing_cells(share, pattern)
   # the missing cells as absent rows (as NA rows they are the same cells,
@@ -74,6 +101,7 @@ for (pattern in opt$pattern) for (share in opt$share) {
   }
   rows[[length(rows) + 1]] <- cbind(kr$row, gap.sd = round(gap, 3),
                                     cpu.ratio = round(kr$row$cpu.s / complete$row$cpu.s, 2))
+  show(rows[[length(rows)]])
   if (opt$drop) {
     keep <- !g$j %in% unique(g$j[miss])  # every run setting with a missing cell dropped
     if (length(unique(g$j[keep])) >= 4L) {
@@ -83,5 +111,5 @@ for (pattern in opt$pattern) for (share in opt$share) {
     }
   }
 }
-res <- do.call(rbind, rows)
-print(res, row.names = FALSE)
+cat("\n")
+print(do.call(rbind, rows), row.names = FALSE)
