@@ -57,9 +57,9 @@
 #' of the size of the missing cells), so the posterior is still that of the
 #' successful runs, at the cost of a system of the missing cells each time
 #' the simulator's correlation moves. This is chosen while it is projected
-#' cheaper than a Cholesky factor of the successful runs' block (up to 44%
-#' of the cells missing on an 80 x 50 grid, 37% on 30 x 20); `print()` says
-#' how many cells are missing and which algebra ran.
+#' cheaper than a Cholesky factor of the successful runs' block (up to
+#' about half of the cells missing); `print()` says how many cells are
+#' missing and which algebra ran.
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs

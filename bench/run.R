@@ -34,7 +34,8 @@ benchmarks <- c(
   "failed-runs" = "failed runs: spot weld as shipped; design around a failure region",
   sensitivity  = "Sobol indices against known ones: coverage, widths, CPU s",
   "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior",
-  "sepia-ball" = "SEPIA's ball drop 1: height x (R, C) on the Kronecker algebra"
+  "sepia-ball" = "SEPIA's ball drop 1: height x (R, C) on the Kronecker algebra",
+  "missing-cells" = "functional output on a product design with missing cells"
 )
 
 args <- commandArgs(trailingOnly = TRUE)

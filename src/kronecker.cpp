@@ -32,6 +32,7 @@
 // move the eigendecomposition of its group.
 #include "fbc.h"
 #include <map>
+#include <set>
 
 // Exact-equality key of row r over columns c.
 static std::vector<double> row_key(const arma::mat& X, arma::uword r, const arma::uvec& c) {
@@ -93,11 +94,17 @@ static bool grid_split(const arma::mat& Xs, const arma::uvec& ca, const arma::uv
 
 // Relative flops of a move of the simulator block: the two
 // eigendecompositions (9 (I^3 + J^3)), with k missing cells their k x k
-// system (2 k I J (I + J) to form, k^3 / 3 to factor), against one
-// Cholesky factor of the m x m block of the runs (m^3 / 3), all times 3.
+// system (missing_system(): K^2 I J + k^2 min(I, J) / 2 to form, K the
+// distinct settings of the larger group among them; k^3 / 3 to factor),
+// against one Cholesky factor of the m x m block of the runs (m^3 / 3),
+// all times 3.
 static double kron_cost(const ProductDesign& pd) {
   const double I = pd.I, J = pd.J, k = pd.mi.size();
-  return 27.0 * (I * I * I + J * J * J) + 6.0 * k * I * J * (I + J) + k * k * k;
+  if (!k) return 27.0 * (I * I * I + J * J * J);
+  const std::vector<int>& c = I <= J ? pd.mj : pd.mi;
+  const double K = std::set<int>(c.begin(), c.end()).size();
+  return 27.0 * (I * I * I + J * J * J) + 3.0 * K * K * I * J +
+         1.5 * k * k * std::min(I, J) + k * k * k;
 }
 
 // The experimental x calibration split when it is a complete grid (the
@@ -392,9 +399,10 @@ void KroneckerPosterior::simFlip(const Touch& t) {
 //   log|Ds_oo| = log|Ds| + log|M|:
 // the full grid's Kronecker algebra (ys zero at the missing cells) less a
 // rank-k correction; exact, the posterior of the observed runs. Forming M
-// costs k (I^2 J + I J^2) (a column a missing cell), factoring it k^3 / 3,
-// every move of the simulator's correlation; a kappa move adds nu such
-// columns and k^2 nu. (Entries of Ux (X % Li) Ut' at the missing cells,
+// costs K^2 I J + k^2 min(I, J) / 2 (missing_system(), K <= max(I, J)
+// distinct settings of the larger group among the missing cells),
+// factoring it k^3 / 3, every move of the simulator's correlation; a move
+// of the field rows' cross block adds nu columns of I J (I + J) and k^2 nu. (Entries of Ux (X % Li) Ut' at the missing cells,
 // Li = 1 / lam: of Ds^-1 x for X = Ux' x Ut.)
 arma::vec KroneckerPosterior::atMissing(const arma::mat& Ux, const arma::mat& Ut,
                                         const arma::mat& Li, const arma::mat& X) const {
@@ -415,6 +423,34 @@ arma::mat KroneckerPosterior::missSolve(const arma::mat& Ux, const arma::mat& Ut
   return arma::solve(arma::trimatl(L), H);
 }
 
+// M = E' Ds^-1 E, cell s at (r_s, c_s) of the grid (rows of P, rows of
+// Q; Li's rows index P's columns a, its columns Q's columns b):
+//   M_st = sum_a P[r_s,a] P[r_t,a] D_a(c_s, c_t),
+//   D_a(c, c') = sum_b Li[a,b] Q[c,b] Q[c',b],
+// D for every pair of the K distinct c's in one product Li W (W: the
+// pairs' Q[c,.] % Q[c',.]): K^2 I J + k^2 I / 2 flops, with P the smaller
+// group's eigenvectors, instead of k (I^2 J + I J^2) column by column.
+static arma::mat missing_system(const arma::mat& P, const std::vector<int>& r,
+                                const arma::mat& Q, const std::vector<int>& c,
+                                const arma::mat& Li) {
+  const int k = r.size();
+  std::vector<int> id(Q.n_rows, -1), cs;
+  for (int s = 0; s < k; ++s)
+    if (id[c[s]] < 0) { id[c[s]] = cs.size(); cs.push_back(c[s]); }
+  const int K = cs.size();
+  arma::mat W(Q.n_cols, K * K);
+  for (int u = 0; u < K; ++u)
+    for (int v = 0; v < K; ++v) W.col(u * K + v) = (Q.row(cs[u]) % Q.row(cs[v])).t();
+  const arma::mat D = Li * W;
+  arma::mat Pr(P.n_cols, k);
+  for (int s = 0; s < k; ++s) Pr.col(s) = P.row(r[s]).t();
+  arma::mat M(k, k);
+  for (int t = 0; t < k; ++t)
+    for (int s = t; s < k; ++s)
+      M(s, t) = M(t, s) = arma::dot(Pr.col(s) % Pr.col(t), D.col(id[c[s]] * K + id[c[t]]));
+  return M;
+}
+
 bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   if (!gridUpdate(t, ldDs, zz)) return false;
   const int k = dz_.mi.size();
@@ -423,9 +459,8 @@ bool KroneckerPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   const arma::mat& Ut = moved(t, 1) ? Ut_.alt() : Ut_.cur();
   const arma::mat Li = 1.0 / ((moved(t, 0) ? lx_.alt() : lx_.cur()) *
                               (moved(t, 1) ? lt_.alt() : lt_.cur()).t() + nugget_);
-  arma::mat M(k, k);
-  for (int s = 0; s < k; ++s)
-    M.col(s) = atMissing(Ux, Ut, Li, Ux.row(dz_.mi[s]).t() * Ut.row(dz_.mj[s]));
+  const arma::mat M = dz_.I <= dz_.J ? missing_system(Ux, dz_.mi, Ut, dz_.mj, Li)
+                                     : missing_system(Ut, dz_.mj, Ux, dz_.mi, Li.t());
   arma::mat& L = Lm_.alt();
   if (!arma::chol(L, M, "lower")) return false;
   hv_.alt() = arma::solve(arma::trimatl(L), atMissing(Ux, Ut, Li, Yt_.alt()));
