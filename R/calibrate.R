@@ -19,11 +19,9 @@
 #'
 #' The details are in the articles: `vignette("model", package = "FBC")`
 #' (discrepancy models, correlation families, scaling, categorical inputs,
-#' several outputs and field data sets, the simulator as an R function, how
-#' columns are matched, the checks on the data) and
-#' `vignette("sampler", package = "FBC")` (the dense, Kronecker and
-#' nearest-neighbour algebras, the moves, the warm-up and stopping rule,
-#' the defaults, several chains, interrupting and checkpoints).
+#' outputs and data sets, the simulator as a function, the data checks) and
+#' `vignette("sampler", package = "FBC")` (the algebras, the moves, warm-up
+#' and stopping, chains, interrupting and checkpoints).
 #'
 #' @section Defaults:
 #' Four chains, each warming up until its proposals have settled, then
@@ -50,16 +48,9 @@
 #' and [propose_runs()] weighs its candidates by it. Field data in long
 #' format may miss an output at some field inputs.
 #'
-#' On a product design (functional output), a failed run, or a combination
-#' of the two groups of settings with no row in `sim`, is a missing cell of
-#' the grid. It is not dropped from the Kronecker algebra: the algebra runs
-#' on the whole grid and leaves the missing cells out exactly (a correction
-#' of the size of the missing cells), so the posterior is still that of the
-#' successful runs, at the cost of a system of the missing cells each time
-#' the simulator's correlation moves. This is chosen while it is projected
-#' cheaper than a Cholesky factor of the successful runs' block (up to
-#' about half of the cells missing); `print()` says how many cells are
-#' missing and which algebra ran.
+#' On a product design, a failed run (or a combination with no row) is a
+#' missing cell: the Kronecker algebra leaves it out exactly, while that is
+#' projected cheaper than the dense algebra; `print()` says how many cells.
 #'
 #' @param sim Simulator runs: a numeric matrix or data frame with the
 #'   response, the `p` experimental inputs and the `q` calibration inputs
@@ -103,11 +94,9 @@
 #'   interactive session, and prints nothing in scripts (`Rscript`) or
 #'   while \pkg{knitr} renders a document; `TRUE` or `FALSE` decide.
 #' @param sampler `"blocks"` (the default: joint and exact moves) or `"single"` (the vignette's one-at-a-time sampler).
-#' @param algebra `"auto"` (the default: the Kronecker algebra on a product
-#'   design, that is runs that are every combination of two groups of input
-#'   columns, experimental x calibration settings or, with numeric inputs,
-#'   any other two groups such as an output index on a grid x scattered run
-#'   settings, also with some cells missing; else the exact dense one while a sweep of it is projected to
+#' @param algebra `"auto"` (the default: the Kronecker algebra when the runs
+#'   are every combination of two groups of input columns, such as an output
+#'   index x run settings; else the exact dense one while a sweep of it is projected to
 #'   cost under 0.1 s, else the nearest-neighbour approximation), `"dense"`
 #'   (always the exact dense one) or `"vecchia"` (the nearest-neighbour
 #'   approximation). `print()` says which ran and why.
@@ -167,15 +156,10 @@
 #'   differ beyond rounding, else `"none"`), `"none"` (a deterministic
 #'   simulator), `"constant"` (one noise variance `sigma2R`, sampled with
 #'   the rest, the replicates entering by their sufficient statistics) or
-#'   `"input"` (a noise variance that varies with the inputs: its log a GP,
-#'   its values at the unique inputs sampled with the rest). The field is the system's mean
-#'   behaviour: its noise is measurement error only.
+#'   `"input"` (its log a GP over the inputs; see [simulator_noise]).
 #' @param threads Threads inside each chain (OpenMP) for the
-#'   nearest-neighbour algebra's conditionals (the other algebras run one):
-#'   the draws are the same for any number. `1` (the default) is one core
-#'   per chain; keep chains running at once times `threads` within the
-#'   cores, and see `vignette("clusters")` for that and for
-#'   `OPENBLAS_NUM_THREADS`. A build without OpenMP runs one thread.
+#'   nearest-neighbour algebra, with the same draws for any number; `1` (the
+#'   default) is one core per chain (`vignette("clusters")`).
 #' @return An object of class `fbc`: a list with `Phi` (one row per retained
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
