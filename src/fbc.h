@@ -251,7 +251,7 @@ const double LOG_2PI = 1.837877066409345483560659472811;
 // Two buffers for one cached quantity: the current one and a scratch one a
 // proposal is written into; accepting a proposal flips them (no copy).
 template <class T> struct Buf2 {
-  T b[2];
+  T b[2]{};  // value-initialised: a double buffer read before its first write is 0
   int c = 0;
   T& cur() { return b[c]; }
   T& alt() { return b[1 - c]; }
