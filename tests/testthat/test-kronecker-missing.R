@@ -41,18 +41,7 @@ test_that("with missing cells, log-likelihoods and moves are the dense ones of t
   for (s in cases) {
     p <- s$p; q <- s$d - p
     d <- missing_data(s$I, s$J, s$a, s$d, p, n = 5, seed = 10 + s$I, drop = s$drop)
-    d$Xf <- d$Xf[c(1:5, 2), , drop = FALSE]
-    d$yf <- c(d$yf, rnorm(1))
-    for (r in 1:4) {
-      phi <- random_phi(p, q)
-      kron <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6)
-      expect_equal(kron, dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6), tolerance = 1e-8)
-    }
-    phis <- kron_path(random_phi(p, q), p, q)
-    dense <- apply(phis, 1, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6))
-    path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE)
-    expect_equal(path, dense, tolerance = 1e-8)
-    expect_joint_moves_dense(d, phis, p, q)
+    expect_kron_loglik_dense(d, p, q)
   }
 })
 
@@ -62,15 +51,7 @@ test_that("with missing cells, predictions and held-out predictives are the dens
     d <- missing_data(s$I, s$J, s$a, s$d, p, n = 5, seed = 30 + s$I, drop = s$drop)
     phis <- rbind(random_phi(p, q), random_phi(p, q))
     Xn <- matrix(runif(3 * p), 3, p)
-    for (t in 1:4) {
-      type <- c("field", "mean", "simulator", "bias")[t]
-      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis, Xn, t, 1e-6, 2L)
-      for (i in 1:2) {
-        ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn, type)
-        expect_equal(kron$mean[, i], ref$mean, tolerance = 1e-8)
-        expect_equal(kron$var[, i], ref$var, tolerance = 1e-8)
-      }
-    }
+    expect_kron_predict_dense(d, phis, Xn)
     fold <- rep(1:4, length.out = nrow(d$Xs))
     fold[1] <- 5L  # a fold of one run
     expect_equal(.fbc_heldout(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, fold),

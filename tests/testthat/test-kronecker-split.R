@@ -46,18 +46,7 @@ test_that("the general Kronecker log-likelihood and moves equal the dense ones",
   for (s in splits) {
     p <- s$p; q <- s$d - p
     d <- split_data(s$I, s$J, s$a, s$d, p, n = 5, seed = 10 + s$I)
-    d$Xf <- d$Xf[c(1:5, 2), , drop = FALSE]  # a replicated field input
-    d$yf <- c(d$yf, rnorm(1))
-    for (r in 1:4) {
-      phi <- random_phi(p, q)
-      kron <- .fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6)
-      expect_equal(kron, dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6), tolerance = 1e-8)
-    }
-    phis <- kron_path(random_phi(p, q), p, q)
-    dense <- apply(phis, 1, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6))
-    path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE)
-    expect_equal(path, dense, tolerance = 1e-8)
-    expect_joint_moves_dense(d, phis, p, q)
+    expect_kron_loglik_dense(d, p, q)
   }
 })
 
@@ -67,15 +56,7 @@ test_that("general Kronecker predictions equal the dense GP conditional (every t
     d <- split_data(s$I, s$J, s$a, s$d, p, n = 5, seed = 30 + s$I)
     phis <- rbind(random_phi(p, q), random_phi(p, q))
     Xn <- matrix(runif(4 * p), 4, p)
-    for (t in 1:4) {
-      type <- c("field", "mean", "simulator", "bias")[t]
-      kron <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis, Xn, t, 1e-6, 2L)
-      for (i in 1:2) {
-        ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn, type)
-        expect_equal(kron$mean[, i], ref$mean, tolerance = 1e-8)
-        expect_equal(kron$var[, i], ref$var, tolerance = 1e-8)
-      }
-    }
+    expect_kron_predict_dense(d, phis, Xn)
   }
 })
 

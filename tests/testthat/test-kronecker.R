@@ -66,7 +66,7 @@ test_that("Kronecker moves (single, joint, scale, rejected decoys) keep the dens
     d <- product_data(s[["I"]], s[["J"]], p, q, n = 5, seed = 40 + sum(s))
     d$Xf <- d$Xf[c(1:5, 2, 4), , drop = FALSE]  # replicated field inputs
     d$yf <- c(d$yf, rnorm(2))
-    phis <- kron_path(random_phi(p, q), p, q)
+    phis <- one_move_path(random_phi(p, q), p, q)
     dense <- apply(phis, 1, function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6))
     path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE)
     expect_equal(path, dense, tolerance = 1e-8)
@@ -89,7 +89,7 @@ test_that("without a discrepancy: Kronecker log-likelihoods, moves and predictio
       expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, model = none), dense_none(phi),
                    tolerance = 1e-8)
     }
-    phis <- kron_path(random_phi(p, q, "none"), p, q, "none")
+    phis <- one_move_path(random_phi(p, q, "none"), p, q, "none")
     path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = none)
     expect_equal(path, apply(phis, 1, dense_none), tolerance = 1e-8)
     expect_joint_moves_dense(d, phis, p, q, discrepancy = "none")
@@ -117,7 +117,7 @@ test_that("under the S-GaSP: Kronecker log-likelihoods, moves and predictions eq
     d$Xf <- d$Xf[c(1:5, 3), , drop = FALSE]  # a replicated field input
     d$yf <- c(d$yf, rnorm(1))
     dense_sg <- function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = "sgasp")
-    phis <- kron_path(random_phi(p, q, "sgasp"), p, q, "sgasp")
+    phis <- one_move_path(random_phi(p, q, "sgasp"), p, q, "sgasp")
     expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, model = sg), dense_sg(phis[1, ]),
                  tolerance = 1e-8)
     path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = sg)
@@ -250,7 +250,7 @@ test_that("the dense algebra's on-the-fly correlation gives the cached path's nu
     p <- s[["p"]]; q <- s[["q"]]
     d <- random_koh_data(s[["n"]], s[["m"]], p, q, seed = 90 + sum(s))
     set.seed(91)
-    phis <- kron_path(random_phi(p, q), p, q)
+    phis <- one_move_path(random_phi(p, q), p, q)
     cached <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE)
     .fbc_cache_budget(0)
     fly <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE)
@@ -278,7 +278,7 @@ test_that("every correlation family: Kronecker log-likelihoods and moves equal t
     idx <- FBC:::param_indices(p, q)
     for (kk in pairs) {
       kS <- kernel_code(kk[1]); kB <- kernel_code(kk[2])
-      phis <- kron_path(random_phi(p, q), p, q)
+      phis <- one_move_path(random_phi(p, q), p, q)
       dense <- apply(phis, 1, function(phi)
         dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, kk[1], kk[2]))
       expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[1, ], 1e-6, kS, kB), dense[1],

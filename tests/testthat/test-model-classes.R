@@ -17,38 +17,6 @@ test_that("the block log-likelihood from scratch equals the dense one", {
   }
 })
 
-# A path from phi0 on which each row changes one parameter (and a few rows
-# change several), visiting every class and every dimension: kappa,
-# thetaS/alphaS in the experimental and the calibration dimensions,
-# thetaB/alphaB, each variance and muB, then back to the start.
-one_move_path <- function(phi0, p, q, discrepancy = "gp") {
-  idx <- FBC:::param_indices(p, q, discrepancy)
-  rows <- list(phi0)
-  move <- function(j, value) {
-    phi <- rows[[length(rows)]]
-    phi[j] <- value
-    rows[[length(rows) + 1]] <<- phi
-  }
-  for (j in idx$kappa) move(j, runif(1))
-  for (k in seq_len(p + q)) {
-    move(idx$thetaS[k], rgamma(1, 2, 2))
-    move(idx$alphaS[k], runif(1, 1.1, 1.95))
-    move(idx$kappa[1], runif(1))  # kappa after each simulator change
-  }
-  for (k in seq_len(length(idx$thetaB))) {  # p with a bias, else none
-    move(idx$thetaB[k], rgamma(1, 2, 2))
-    move(idx$alphaB[k], runif(1, 1.1, 1.95))
-  }
-  for (j in c(idx$sigma2S, idx$sigma2B, idx$sigma2E)) move(j, rgamma(1, 2, 2) + 0.05)
-  for (j in idx$muB) move(j, rnorm(1))
-  for (j in idx$lambdaZ) move(j, 20 * rgamma(1, 2, 2))  # S-GaSP only
-  move(idx$alphaS[p + q], 2)  # alpha = 2 and 1 take special branches
-  for (j in idx$alphaB[1]) move(j, 1)
-  rows[[length(rows) + 1]] <- random_phi(p, q, discrepancy)  # every coordinate at once
-  rows[[length(rows) + 1]] <- phi0
-  do.call(rbind, rows)
-}
-
 test_that("the cached one-move path equals the dense log-likelihood at every row", {
   for (s in sizes) {
     p <- s[["p"]]; q <- s[["q"]]
