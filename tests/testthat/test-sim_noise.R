@@ -191,9 +191,10 @@ latent_prior_plain <- function(g, Xs, muG, s2G, thetaG) {
   -0.5 * (length(g) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
 }
 
-# The log-likelihood of every run (plain R, dense): run r at unique input i
-# has variance exp(g_i) on top of the emulator's covariance.
-input_noise_full <- function(model, sim, phi, g, disc) {
+# The covariance of the field rows and every run (plain R, dense: run r at
+# unique input i has variance v_i on top of the emulator's covariance) and
+# the residuals, standardised as the model's data.
+full_row_system <- function(model, sim, phi, v, disc) {
   d <- model$data
   reps <- FBC:::sim_replicates(sim)
   ys <- (sim[, 1] - model$scale$ymean) / model$scale$ysd
@@ -201,9 +202,15 @@ input_noise_full <- function(model, sim, phi, g, disc) {
   Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
   E <- rbind(cbind(diag(n), matrix(0, n, m)),
              cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
-  C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), exp(g)[reps$group]))
   th <- unpack_phi(phi, 1, 1, disc)
-  res <- c(d$yf - if (disc == "gp") th$muB else 0, ys)
+  list(C = E %*% Cu %*% t(E) + diag(c(rep(0, n), v[reps$group])),
+       res = c(d$yf - if (disc == "gp") th$muB else 0, ys), n = n)
+}
+
+# The log-likelihood of every run (plain R, dense), noise variance exp(g_i).
+input_noise_full <- function(model, sim, phi, g, disc) {
+  sys <- full_row_system(model, sim, phi, exp(g), disc)
+  C <- sys$C; res <- sys$res
   L <- chol(C)
   a <- backsolve(L, res, transpose = TRUE)
   -0.5 * (length(res) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
@@ -349,17 +356,10 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
 # and every run (plain R, the full-row covariance: run r at unique input i
 # with noise variance v_i), from the inverse covariance.
 loo_plain <- function(model, sim, phi, v, disc) {
-  d <- model$data
-  reps <- FBC:::sim_replicates(sim)
-  ys <- (sim[, 1] - model$scale$ymean) / model$scale$ysd
-  m <- nrow(d$Xs); n <- nrow(d$Xf)
-  Cu <- dense_cov(d$Xf, d$Xs, phi, FBC:::fbc_nugget, "matern52", "matern52", disc)
-  E <- rbind(cbind(diag(n), matrix(0, n, m)),
-             cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
-  C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), v[reps$group]))
-  th <- unpack_phi(phi, 1, 1, disc)
-  Q <- solve(C)
-  a <- drop(Q %*% c(d$yf - if (disc == "gp") th$muB else 0, ys))[1:n]
+  sys <- full_row_system(model, sim, phi, v, disc)
+  n <- sys$n
+  Q <- solve(sys$C)
+  a <- drop(Q %*% sys$res)[1:n]
   q <- diag(Q)[1:n]
   -0.5 * log(2 * pi) + 0.5 * log(q) - 0.5 * a^2 / q
 }
