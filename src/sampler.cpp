@@ -16,8 +16,8 @@
 //   sweeps, becomes the Cholesky factor of the running covariance of w over
 //   burn-in (refreshed every 50 sweeps, Haario et al. 2001); s adapts towards
 //   acceptance 0.234 (0.44 for one parameter). After a warm-up of
-//   data-dependent length a simulator or bias block of 2 to 4 walked
-//   parameters proposes instead w* ~ t_7(mu, C) (mu, C its warm-up
+//   data-dependent length a simulator block of 2 to 4 walked parameters
+//   proposes instead w* ~ t_7(mu, C) (mu, C its warm-up
 //   estimate; independence Metropolis-Hastings, log r adding log q(w) -
 //   log q(w*));
 // * overlay block (after the per-parameter moves, before the jumps): a
