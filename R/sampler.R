@@ -88,9 +88,13 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
     # simulator GP's parameters down to a nearly Gaussian posterior on the
     # walk's scale, which a walk crosses slowly (at m = 1000 the length-
     # scales' bulk ESS was 0.03-0.05 a sweep, within 2x of what an optimally
-    # scaled 4-parameter walk can do). Only blocks of 4 walked parameters,
-    # whose estimate the warm-up's effective-draws rule held and where it
-    # was measured to pay (not at 5: see IND_MAX_K in src/sampler.cpp)
+    # scaled 4-parameter walk can do). Blocks of 2 to 4 walked parameters
+    # (not at 5: see IND_MAX_K in src/sampler.cpp): on the ball drop (3)
+    # the walk's thetaS1 set the run's length; proposing from the warm-up's
+    # estimate, the default run took 2.8-4.6 CPU s over seeds 1-5 against
+    # 4.6-7.4. The bias blocks walk: proposing so there too cut the ball
+    # further (2.8-3.8 s) but ran m = 1000 (seed 1) to 5950 sweeps against
+    # 4200
     independent = unname(which(startsWith(as.character(names(blocks)), "sim"))),
     params = spec$vars
   )

@@ -16,9 +16,10 @@
 //   sweeps, becomes the Cholesky factor of the running covariance of w over
 //   burn-in (refreshed every 50 sweeps, Haario et al. 2001); s adapts towards
 //   acceptance 0.234 (0.44 for one parameter). After a warm-up of
-//   data-dependent length a simulator block of 4 walked parameters proposes
-//   instead w* ~ t_7(mu, C) (mu, C its warm-up estimate; independence
-//   Metropolis-Hastings, log r adding log q(w) - log q(w*));
+//   data-dependent length a simulator block of 2 to 4 walked parameters
+//   proposes instead w* ~ t_7(mu, C) (mu, C its warm-up
+//   estimate; independence Metropolis-Hastings, log r adding log q(w) -
+//   log q(w*));
 // * overlay block (after the per-parameter moves, before the jumps): a
 //   block, as above, over parameters that also have moves of their own
 //   (kappa's joint walk beside each kappa's walk and jump: calibration
@@ -566,13 +567,16 @@ struct BlockMove : Move {
   arma::vec indMu, indU;
   arma::mat indL;
   // Builds it when the block qualifies: a warm-up of data-dependent length
-  // that was not cut at its maximum, WARM_ESS_K to IND_MAX_K walked
-  // parameters (whose estimate the effective-draws rule held), a
-  // positive-definite estimate. Otherwise the walk goes on.
+  // that was not cut at its maximum, 2 to IND_MAX_K walked parameters, a
+  // positive-definite estimate. Otherwise the walk goes on. (A block of
+  // fewer than WARM_ESS_K is not held by the effective-draws rule; its
+  // estimate comes from a settled warm-up's windows, and the t's tails
+  // keep the kernel exact and its acceptance visible in the move report
+  // whatever the estimate's error.)
   void build_independent(const Chain& ch) {
     indTried = true;
     const int kw = b.walk_count();
-    if (!independent || b.restart >= 0 || ch.warmCapped || kw < WARM_ESS_K || kw > IND_MAX_K)
+    if (!independent || b.restart >= 0 || ch.warmCapped || kw < 2 || kw > IND_MAX_K)
       return;
     arma::vec mu;
     arma::mat C;

@@ -244,6 +244,54 @@ test_that("after warm-up the simulator block proposes from its warm-up estimate 
   expect_identical(FBC:::move_report(fixed)$kind, "joint")
 })
 
+test_that("a simulator block of three parameters proposes from its warm-up estimate and targets the grid posterior", {
+  skip_if_not_slow()
+  # 30 runs (p = q = 1), 15 field rows; every parameter fixed but thetaS1,
+  # thetaS2 and sigma2S: a block of three walked parameters, fewer than the
+  # warm-up's effective-draws rule holds, which after a warm-up of
+  # data-dependent length proposes from a multivariate t fitted to its
+  # warm-up draws. Reference: the compiled log-likelihood times the priors
+  # on a 21-point grid a side of the walk's scales (+-5 sd).
+  set.seed(11)
+  Xs <- matrix(runif(30 * 2), 30, 2)
+  f <- function(x, t) sin(4 * x) + t * x
+  sim <- data.frame(y = f(Xs[, 1], Xs[, 2]), x = Xs[, 1], t = Xs[, 2])
+  xf <- runif(15)
+  field <- data.frame(y = f(xf, 0.5) + rnorm(15, sd = 0.05), x = xf)
+  hyp <- set_hyperPriors(thetaBDist = "fixed", thetaBInit = 1, sigma2BDist = "fixed",
+                         sigma2BInit = 0.1, sigma2EDist = "fixed", sigma2EInit = 0.0025,
+                         muBDist = "fixed", muBInit = 0)
+  args <- list(sim, field, kappaDist = "fixed", kappaInit = 0.5, hypers = hyp, nChains = 1)
+  set.seed(5)
+  fit <- do.call(calibrate, c(args, list(nMCMC = 6000, converge = FALSE)))
+  rep <- FBC:::move_report(fit)
+  expect_identical(rep$kind, "independent")
+  expect_identical(rep$parameters, "thetaS1,thetaS2,sigma2S")
+  expect_gt(rep$acceptance, 0.3)
+  cols <- match(c("thetaS1", "thetaS2", "sigma2S"), fit$model$spec$vars)
+  W <- log(FBC:::sampler_draws(fit)[, cols])
+  tab <- fit$model$spec$table
+  phi <- fit$state$chains[[1]]$last
+  dat <- fit$model$data
+  g <- lapply(1:3, function(i) seq(mean(W[, i]) - 5 * sd(W[, i]), mean(W[, i]) + 5 * sd(W[, i]),
+                                   length.out = 21))
+  lp <- apply(as.matrix(expand.grid(g)), 1, function(w) {
+    x <- exp(w)
+    phi[cols] <- x
+    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$model$spec$model) +
+      sum(vapply(1:3, function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) + sum(w)
+  })
+  dens <- array(exp(lp - max(lp)), rep(21, 3))
+  for (i in 1:3) {
+    marg <- apply(dens, i, sum)
+    marg <- marg / sum(marg)
+    mu <- sum(g[[i]] * marg)
+    s <- sqrt(sum((g[[i]] - mu)^2 * marg))
+    expect_lt(abs(mean(W[, i]) - mu) / s, 0.1)
+    expect_lt(abs(sd(W[, i]) / s - 1), 0.08)
+  }
+})
+
 test_that("kappa's joint walk: an overlay block of the free kappas beside their own moves", {
   # q = 2 (the ball data's kappa with a second, made-up calibration input)
   sp <- function(q, fixed = FALSE) {
