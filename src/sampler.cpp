@@ -693,21 +693,39 @@ struct GibbsMuBMove : Move {
   }
 };
 
+// A move with one adapted proposal scale of its own (log SD logsd, towards
+// acceptance `goal`, its own count of burn-in batches), kept in the chain's
+// state as <key>Logsd, <key>AccBatch and <key>Batch; its kind is the key.
+struct ScalarMove : Move {
+  std::string key;
+  double logsd, goal;
+  int batch;
+  ScalarMove(const char* key_, double goal_, const Rcpp::List& state) : key(key_), goal(goal_) {
+    logsd = list_num(state, (key + "Logsd").c_str(), std::log(0.1));
+    accBatch = list_num(state, (key + "AccBatch").c_str(), 0);
+    batch = (int) list_num(state, (key + "Batch").c_str(), 0);
+  }
+  void adapt(const Chain&) override {
+    ++batch;
+    logsd = adapt_step(logsd, accBatch / BATCH, goal, batch);
+  }
+  double logScale() const override { return logsd; }
+  double target() const override { return goal; }
+  const char* kind() const override { return key.c_str(); }
+  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
+    out[key + "Logsd"] = logsd; out[key + "AccBatch"] = accBatch; out[key + "Batch"] = batch;
+  }
+};
+
 // The variances that exist (sigma2S, sigma2B with a bias, sigma2E)
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
-struct ScaleMove : Move {
+struct ScaleMove : ScalarMove {
   std::vector<double> lpNew;  // the proposal's log priors (workspace)
-  double logsd;               // log SD of log c
-  int batch;                  // its burn-in batches so far
-  ScaleMove(const Posterior& post, const Rcpp::List& state) {
+  ScaleMove(const Posterior& post, const Rcpp::List& state) : ScalarMove("scale", 0.44, state) {
     idx = post.scaled;
     lpNew.resize(idx.size());
     name = "scale";
-    logsd = list_num(state, "scaleLogsd", std::log(0.1));
-    accBatch = list_num(state, "scaleAccBatch", 0);
-    batch = (int) list_num(state, "scaleBatch", 0);
   }
-  const char* kind() const override { return "scale"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const double e = std::exp(logsd) * R::norm_rand(), c = std::exp(e);
@@ -720,15 +738,6 @@ struct ScaleMove : Move {
     }
     if (!std::isfinite(lpDiff)) return false;
     return metropolis(ch, idx, lpNew.data(), post.proposeScale(c), {lpDiff, k * e});
-  }
-  void adapt(const Chain&) override {
-    ++batch;
-    logsd = adapt_step(logsd, accBatch / BATCH, 0.44, batch);
-  }
-  double logScale() const override { return logsd; }
-  double target() const override { return 0.44; }
-  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
-    out["scaleLogsd"] = logsd; out["scaleAccBatch"] = accBatch; out["scaleBatch"] = batch;
   }
 };
 
@@ -780,11 +789,9 @@ struct LatentMove : Move {
 // The latent GP's free hyperparameters moved with the whitened latent
 // values held fixed (latent_noise.cpp); its step adapts towards acceptance
 // 0.234 like the scale move's.
-struct LatentShiftMove : Move {
+struct LatentShiftMove : ScalarMove {
   std::vector<int> tr;
-  double logsd;
-  int batch;
-  LatentShiftMove(const Chain& ch, const Rcpp::List& state) {
+  LatentShiftMove(const Chain& ch, const Rcpp::List& state) : ScalarMove("shift", 0.234, state) {
     const Posterior& post = ch.post;
     for (const char* c : {"muG", "sigma2G", "thetaG"})
       for (int k = 0; k < post.layout.length_of(c); ++k) {
@@ -792,23 +799,10 @@ struct LatentShiftMove : Move {
         if (ch.pr.family[j] != PF_FIXED) { idx.push_back(j); tr.push_back(ch.pr.transform[j]); }
       }
     name = "latent shift";
-    logsd = list_num(state, "shiftLogsd", std::log(0.1));
-    accBatch = list_num(state, "shiftAccBatch", 0);
-    batch = (int) list_num(state, "shiftBatch", 0);
   }
-  const char* kind() const override { return "shift"; }
   bool step(Chain& ch) override {
     return latent_shift(ch.post, ch.ll, ch.lp, idx, tr, std::exp(logsd),
                         [&](int j, double x) { return ch.pr(j, x); });
-  }
-  void adapt(const Chain&) override {
-    ++batch;
-    logsd = adapt_step(logsd, accBatch / BATCH, 0.234, batch);
-  }
-  double logScale() const override { return logsd; }
-  double target() const override { return 0.234; }
-  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
-    out["shiftLogsd"] = logsd; out["shiftAccBatch"] = accBatch; out["shiftBatch"] = batch;
   }
 };
 
