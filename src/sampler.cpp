@@ -438,23 +438,10 @@ struct Move {
   virtual const char* kind() const = 0;
 };
 
-// The Metropolis decision of a move of parameter j whose proposal gave the
-// log-likelihood llNew and log prior lpNew: accept when
-// log u < llNew + lpNew - ll - lp_j + extra (extra: a Jacobian term, 0 for
-// a symmetric or prior proposal); keeps or restores the posterior's state.
-static bool metropolis(Chain& ch, int j, double llNew, double lpNew, double extra) {
-  if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j] + extra) {
-    ch.post.accept();
-    ch.ll = llNew; ch.lp[j] = lpNew;
-    return true;
-  }
-  ch.post.reject();
-  return false;
-}
-
-// The same for a move of the parameters idx with log priors lpNew: accept
-// when log u < llNew - ll + the terms (the log prior, Jacobian and proposal
-// changes, added in their order).
+// The Metropolis decision of a move of the parameters idx whose proposal
+// gave the log-likelihood llNew and log priors lpNew: accept when
+// log u < llNew - ll + the terms (the log prior, Jacobian and proposal
+// changes, added in their order); keeps or restores the posterior's state.
 static bool metropolis(Chain& ch, const std::vector<int>& idx, const double* lpNew, double llNew,
                        std::initializer_list<double> terms) {
   double r = llNew - ch.ll;
@@ -488,7 +475,7 @@ struct SiteMove : Move {
     if (!std::isfinite(lpNew)) return false;
     const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
     if (!std::isfinite(jac)) return false;
-    return metropolis(ch, j, post.propose(j, xNew), lpNew, jac);
+    return metropolis(ch, idx, &lpNew, post.propose(j, xNew), {lpNew - ch.lp[j], jac});
   }
   void adapt(const Chain& ch) override {
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
@@ -769,7 +756,7 @@ struct JumpMove : Move {
     if (x < lo || x > hi) return false;
     const double lpNew = ch.pr(j, xNew);
     if (!std::isfinite(lpNew)) return false;
-    return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
+    return metropolis(ch, idx, &lpNew, post.propose(j, xNew), {lpNew - ch.lp[j]});
   }
 };
 
