@@ -274,17 +274,14 @@ struct Touch {
   bool scale = false;     // the variances multiplied by one factor
   bool latentK = false;   // thetaG moved: the latent log-variances' prior factor
   bool latentLp = false;  // gR, muG, sigma2G or thetaG moved: their GP prior
-  void reset(int nSim, int nBias) {
-    simPow.assign(nSim, 0); biasPow.assign(nBias, 0);
-    simCorr = expDim = calDim = cChange = biasCorr = cross = field = scale = false;
-    latentK = latentLp = false;
-  }
-  void everything(int nSim, int nBias) {
-    simPow.assign(nSim, 1); biasPow.assign(nBias, 1);
-    simCorr = expDim = calDim = cChange = biasCorr = cross = field = true;
-    latentK = latentLp = true;
+  // nothing touched, or everything but the scale move's variances
+  void all(int nSim, int nBias, bool v) {
+    simPow.assign(nSim, v); biasPow.assign(nBias, v);
+    simCorr = expDim = calDim = cChange = biasCorr = cross = field = latentK = latentLp = v;
     scale = false;
   }
+  void reset(int nSim, int nBias) { all(nSim, nBias, false); }
+  void everything(int nSim, int nBias) { all(nSim, nBias, true); }
 };
 
 // The simulator's conditional at candidate inputs for the design of new
@@ -465,12 +462,9 @@ protected:
   }
   // phi[scaled] *= c, the old values saved.
   void saveScale(double c) {
-    oldIdx_ = scaled;
-    oldVal_.set_size(scaled.size());
-    for (size_t i = 0; i < scaled.size(); ++i) {
-      oldVal_[i] = phi[scaled[i]];
-      phi[scaled[i]] *= c;
-    }
+    arma::vec v(scaled.size());
+    for (size_t i = 0; i < scaled.size(); ++i) v[i] = phi[scaled[i]] * c;
+    saveSet(scaled, v);
   }
   // The factor c of the pending scale move: new / old of its first variance.
   double pendingScale() const { return phi[oldIdx_[0]] / oldVal_[0]; }

@@ -439,23 +439,10 @@ struct Move {
   virtual const char* kind() const = 0;
 };
 
-// The Metropolis decision of a move of parameter j whose proposal gave the
-// log-likelihood llNew and log prior lpNew: accept when
-// log u < llNew + lpNew - ll - lp_j + extra (extra: a Jacobian term, 0 for
-// a symmetric or prior proposal); keeps or restores the posterior's state.
-static bool metropolis(Chain& ch, int j, double llNew, double lpNew, double extra) {
-  if (std::isfinite(llNew) && std::log(R::unif_rand()) < llNew + lpNew - ch.ll - ch.lp[j] + extra) {
-    ch.post.accept();
-    ch.ll = llNew; ch.lp[j] = lpNew;
-    return true;
-  }
-  ch.post.reject();
-  return false;
-}
-
-// The same for a move of the parameters idx with log priors lpNew: accept
-// when log u < llNew - ll + the terms (the log prior, Jacobian and proposal
-// changes, added in their order).
+// The Metropolis decision of a move of the parameters idx whose proposal
+// gave the log-likelihood llNew and log priors lpNew: accept when
+// log u < llNew - ll + the terms (the log prior, Jacobian and proposal
+// changes, added in their order); keeps or restores the posterior's state.
 static bool metropolis(Chain& ch, const std::vector<int>& idx, const double* lpNew, double llNew,
                        std::initializer_list<double> terms) {
   double r = llNew - ch.ll;
@@ -489,7 +476,7 @@ struct SiteMove : Move {
     if (!std::isfinite(lpNew)) return false;
     const double jac = log_jacobian(tr, xNew) - log_jacobian(tr, x);
     if (!std::isfinite(jac)) return false;
-    return metropolis(ch, j, post.propose(j, xNew), lpNew, jac);
+    return metropolis(ch, idx, &lpNew, post.propose(j, xNew), {lpNew - ch.lp[j], jac});
   }
   void adapt(const Chain& ch) override {
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
@@ -697,21 +684,39 @@ struct GibbsMuBMove : Move {
   }
 };
 
+// A move with one adapted proposal scale of its own (log SD logsd, towards
+// acceptance `goal`, its own count of burn-in batches), kept in the chain's
+// state as <key>Logsd, <key>AccBatch and <key>Batch; its kind is the key.
+struct ScalarMove : Move {
+  std::string key;
+  double logsd, goal;
+  int batch;
+  ScalarMove(const char* key_, double goal_, const Rcpp::List& state) : key(key_), goal(goal_) {
+    logsd = list_num(state, (key + "Logsd").c_str(), std::log(0.1));
+    accBatch = list_num(state, (key + "AccBatch").c_str(), 0);
+    batch = (int) list_num(state, (key + "Batch").c_str(), 0);
+  }
+  void adapt(const Chain&) override {
+    ++batch;
+    logsd = adapt_step(logsd, accBatch / BATCH, goal, batch);
+  }
+  double logScale() const override { return logsd; }
+  double target() const override { return goal; }
+  const char* kind() const override { return key.c_str(); }
+  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
+    out[key + "Logsd"] = logsd; out[key + "AccBatch"] = accBatch; out[key + "Batch"] = batch;
+  }
+};
+
 // The variances that exist (sigma2S, sigma2B with a bias, sigma2E)
 // multiplied by one factor c = exp(e): Jacobian c^k for k variances.
-struct ScaleMove : Move {
+struct ScaleMove : ScalarMove {
   std::vector<double> lpNew;  // the proposal's log priors (workspace)
-  double logsd;               // log SD of log c
-  int batch;                  // its burn-in batches so far
-  ScaleMove(const Posterior& post, const Rcpp::List& state) {
+  ScaleMove(const Posterior& post, const Rcpp::List& state) : ScalarMove("scale", 0.44, state) {
     idx = post.scaled;
     lpNew.resize(idx.size());
     name = "scale";
-    logsd = list_num(state, "scaleLogsd", std::log(0.1));
-    accBatch = list_num(state, "scaleAccBatch", 0);
-    batch = (int) list_num(state, "scaleBatch", 0);
   }
-  const char* kind() const override { return "scale"; }
   bool step(Chain& ch) override {
     Posterior& post = ch.post;
     const double e = std::exp(logsd) * R::norm_rand(), c = std::exp(e);
@@ -724,15 +729,6 @@ struct ScaleMove : Move {
     }
     if (!std::isfinite(lpDiff)) return false;
     return metropolis(ch, idx, lpNew.data(), post.proposeScale(c), {lpDiff, k * e});
-  }
-  void adapt(const Chain&) override {
-    ++batch;
-    logsd = adapt_step(logsd, accBatch / BATCH, 0.44, batch);
-  }
-  double logScale() const override { return logsd; }
-  double target() const override { return 0.44; }
-  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
-    out["scaleLogsd"] = logsd; out["scaleAccBatch"] = accBatch; out["scaleBatch"] = batch;
   }
 };
 
@@ -764,7 +760,7 @@ struct JumpMove : Move {
     if (x < lo || x > hi) return false;
     const double lpNew = ch.pr(j, xNew);
     if (!std::isfinite(lpNew)) return false;
-    return metropolis(ch, j, post.propose(j, xNew), lpNew, 0.0);
+    return metropolis(ch, idx, &lpNew, post.propose(j, xNew), {lpNew - ch.lp[j]});
   }
 };
 
@@ -784,11 +780,9 @@ struct LatentMove : Move {
 // The latent GP's free hyperparameters moved with the whitened latent
 // values held fixed (latent_noise.cpp); its step adapts towards acceptance
 // 0.234 like the scale move's.
-struct LatentShiftMove : Move {
+struct LatentShiftMove : ScalarMove {
   std::vector<int> tr;
-  double logsd;
-  int batch;
-  LatentShiftMove(const Chain& ch, const Rcpp::List& state) {
+  LatentShiftMove(const Chain& ch, const Rcpp::List& state) : ScalarMove("shift", 0.234, state) {
     const Posterior& post = ch.post;
     for (const char* c : {"muG", "sigma2G", "thetaG"})
       for (int k = 0; k < post.layout.length_of(c); ++k) {
@@ -796,23 +790,10 @@ struct LatentShiftMove : Move {
         if (ch.pr.family[j] != PF_FIXED) { idx.push_back(j); tr.push_back(ch.pr.transform[j]); }
       }
     name = "latent shift";
-    logsd = list_num(state, "shiftLogsd", std::log(0.1));
-    accBatch = list_num(state, "shiftAccBatch", 0);
-    batch = (int) list_num(state, "shiftBatch", 0);
   }
-  const char* kind() const override { return "shift"; }
   bool step(Chain& ch) override {
     return latent_shift(ch.post, ch.ll, ch.lp, idx, tr, std::exp(logsd),
                         [&](int j, double x) { return ch.pr(j, x); });
-  }
-  void adapt(const Chain&) override {
-    ++batch;
-    logsd = adapt_step(logsd, accBatch / BATCH, 0.234, batch);
-  }
-  double logScale() const override { return logsd; }
-  double target() const override { return 0.234; }
-  void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
-    out["shiftLogsd"] = logsd; out["shiftAccBatch"] = accBatch; out["shiftBatch"] = batch;
   }
 };
 
