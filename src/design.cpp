@@ -121,13 +121,29 @@ double weights(LookAhead& la, const double* L, double mx) {
 
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
-// sum_k (sum_s w_s k_sk)^2.
+// sum_k (sum_s w_s k_sk)^2 (the weights and every sum in one pass over
+// the draws, each sum in the draws' order).
 double weighted_var(LookAhead& la, const double* L, double mx) {
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double out = dot_sum(w, la.ksq.memptr(), la.S) / sw;
-  for (arma::uword k = 0; k < la.kap.n_cols; ++k) {
-    const double mk = dot_sum(w, la.kap.colptr(k), la.S) / sw;
-    out -= mk * mk;
+  const int S = la.S, q = la.kap.n_cols;
+  const double* ksq = la.ksq.memptr();
+  double sw = 0.0, swk = 0.0, mk[16] = {0.0};  // q <= 16 (design_look_ahead())
+  if (q == 1) {
+    const double* k0 = la.kap.colptr(0);
+    for (int s = 0; s < S; ++s) {
+      const double w = std::exp(L[s] - mx);
+      sw += w; swk += w * ksq[s]; mk[0] += w * k0[s];
+    }
+  } else {
+    for (int s = 0; s < S; ++s) {
+      const double w = std::exp(L[s] - mx);
+      sw += w; swk += w * ksq[s];
+      for (int k = 0; k < q; ++k) mk[k] += w * la.kap(s, k);
+    }
+  }
+  double out = swk / sw;
+  for (int k = 0; k < q; ++k) {
+    const double m = mk[k] / sw;
+    out -= m * m;
   }
   return out;
 }
@@ -161,10 +177,12 @@ double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
 // kappa values (a grid or a uniform sample: up to a constant, kappa's):
 //   -sum_s p_s log p_s = log sum w - sum_s w_s (L_s - mx) / sum w.
 double weighted_entropy(LookAhead& la, const double* L, double mx) {
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double swl = 0.0;
-  for (int s = 0; s < la.S; ++s)
-    if (w[s] > 0.0) swl += w[s] * (L[s] - mx);  // (weights()' underflow: 0, not 0 x -inf)
+  double sw = 0.0, swl = 0.0;
+  for (int s = 0; s < la.S; ++s) {
+    const double l = L[s] - mx, w = std::exp(l);
+    sw += w;
+    if (w > 0.0) swl += w * l;  // (an underflowed weight: 0, not 0 x -inf)
+  }
   return std::log(sw) - swl / sw;
 }
 
@@ -520,8 +538,9 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
         if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
     }
   }
-  if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows)
-    Rcpp::stop("kappa and lw0 must have a row per draw, and phis a draw");
+  if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows ||
+      kappa.n_cols < 1 || kappa.n_cols > 16)
+    Rcpp::stop("kappa (1 to 16 columns) and lw0 must have a row per draw, and phis a draw");
   if ((int)usrc.n_elem != (int)Z.n_rows) Rcpp::stop("usrc must have %d uniforms", (int)Z.n_rows);
   Rcpp::XPtr<LookAheadRun> xp(new LookAheadRun, true);  // (R's now: freed if interrupted)
   LookAheadRun& run = *xp;
