@@ -23,7 +23,7 @@ namespace {
 // x S); post and phis: the pending points' priors (prior_cov()).
 struct DesignSystems {
   std::unique_ptr<Posterior> post;
-  arma::mat phis;
+  arma::mat phis, noise;  // noise: each candidate's run noise variance per draw (or empty)
   arma::cube A, CTU;
   arma::mat mu, muT, v, mT, VT;
   arma::vec ll, floor;
@@ -288,6 +288,8 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double n
       const arma::mat AP = As.cols(Pu);
       prior_cov(sys, s, UP, UP, SPP);
       SPP.diag() *= 1.0 + nugget;
+      if (!sys.noise.is_empty())  // a pending run's value: its own noise too
+        for (int i = 0; i < k; ++i) SPP(i, i) += sys.noise(la.P[i], s);
       SPP -= AP.t() * AP;
       prior_cov(sys, s, U, UP, ScP);
       ScP -= As.t() * AP;
@@ -510,7 +512,9 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // (scores, Nr x n) and the draws scored (kept, 1-based); with `steps` < n only the first steps,
 // and the look-ahead in progress (`state`, for design_look_ahead_resume(): the same results as
 // all n at once). `success` (empty, or each run's probability of not failing) multiplies the
-// gains.
+// gains. `noise` (empty, or candidates x draws): a stochastic simulator's noise variance of a
+// run at each candidate under each draw, added to its value's variance (a replicate at a run's
+// input is then a candidate like any other).
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
@@ -518,13 +522,16 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
                              const Rcpp::IntegerVector& order, double prune, int outputs,
-                             bool entropy, int steps, const arma::vec& success) {
+                             bool entropy, int steps, const arma::vec& success,
+                             const arma::mat& noise) {
   const int K = outputs;
   if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
     Rcpp::stop("outputs must be 1 to 16, dividing U's rows and Z's columns");
   const int n = Z.n_cols / K, Nr = U.n_rows / K;
   if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr))
     Rcpp::stop("steps must be 1 or more, and success empty or one per run");
+  if (!noise.is_empty() && (noise.n_rows != U.n_rows || noise.n_cols != phis.n_rows || K > 1))
+    Rcpp::stop("noise must be empty or one row per candidate and a column per draw (one output)");
   // a run's rows differ as the first run's do (run_covariances())
   for (int r = 1; r < Nr && K > 1; ++r)
     for (int i = 1; i < K; ++i)
@@ -562,6 +569,12 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   const arma::mat ph = phis.rows(run.kept), kap = kappa.rows(run.kept);
   const arma::vec lwk = lw0.elem(run.kept);
   run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, n > 1 || K > 1);
+  if (!noise.is_empty()) {
+    // a stochastic simulator: a run's value is eta plus its own noise, of
+    // variance noise(c, s) at candidate c under draw s
+    run.sys.noise = noise.cols(run.kept);
+    run.sys.v += run.sys.noise;
+  }
   LookAhead& la = run.la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = run.sys.T; la.K = K; la.Nr = Nr;
   la.entropy = entropy; la.kap = kap; la.ksq = arma::sum(arma::square(kap), 1);
