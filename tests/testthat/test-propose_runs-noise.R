@@ -110,3 +110,36 @@ test_that("design_loop() calls a stochastic f as it is and records its replicate
   expect_false(out$sim$y[rep1] == out$sim$y[match(key[rep1], key)])
   expect_equal(out$fit$model$design$simNoise$replicated, length(unique(key[seen])))
 })
+
+test_that("an input-dependent noise: a run's noise variance is its input's exp(gR), a new input's the GP's mean", {
+  set.seed(4)
+  X <- cbind(x = rep(c(0.3, 0.9, 1.5, 0.3, 0.9, 1.5), 3), t = rep(c(1, 1, 1, 2.4, 2.4, 2.4), 3))
+  sim <- cbind(y = 5 * exp(-X[, "t"] * X[, "x"]) + stats::rnorm(nrow(X), 0, 0.1 + 0.2 * X[, "x"]), X)
+  xf <- c(0.3, 0.9, 1.5)
+  field <- cbind(y = 5 * exp(-1.7 * xf) + stats::rnorm(3, 0, 0.05), x = xf)
+  fit <- suppressWarnings(calibrate(sim, field, discrepancy = "none", simNoise = "input",
+                                    nMCMC = 300, nBurn = 100, nChains = 1, converge = FALSE,
+                                    showProgress = FALSE))
+  model <- fit$model
+  cls <- model$spec$classes
+  phis <- FBC:::design_particles(fit, 10, "joint")$phi
+  # at the runs' inputs: exp(gR) (up to the GP's jitter, 1e-6 of sigma2G)
+  r <- FBC:::run_noise(model, phis, model$data$Xs)
+  expect_equal(r, t(exp(phis[, cls == "gR"])), tolerance = 1e-4)
+  # at a new input: exp(mean + var / 2) of g's conditional, in plain R
+  u <- matrix(c(0.4, 0.7), 1)
+  ph <- phis[3, ]
+  th <- ph[cls == "thetaG"]
+  Xs <- model$data$Xs
+  Kg <- FBC:::.corr_matrix(Xs, Xs, th, c(2, 2), 4L) + 1e-6 * diag(nrow(Xs))
+  k <- drop(FBC:::.corr_matrix(Xs, u, th, c(2, 2), 4L))
+  muG <- ph[cls == "muG"]
+  s2G <- ph[cls == "sigma2G"]
+  m <- muG + sum(k * solve(Kg, ph[cls == "gR"] - muG))
+  v <- s2G * (1 + 1e-6 - sum(k * solve(Kg, k)))
+  expect_equal(FBC:::run_noise(model, phis, u)[1, 3], exp(m + v / 2), tolerance = 1e-8)
+  set.seed(5)
+  pr <- suppressMessages(propose_runs(fit, n = 2, ndraws = 20))
+  expect_type(pr$replicate, "logical")
+  expect_length(pr$replicate, 2)
+})
