@@ -105,18 +105,11 @@ struct LookAhead {
   std::vector<int> P;
 };
 
-// The sum over s of a_s b_s (b null: of a_s).
+// The sum over s of a_s b_s.
 double dot_sum(const double* a, const double* b, int S) {
   double out = 0.0;
-  for (int s = 0; s < S; ++s) out += b ? a[s] * b[s] : a[s];
+  for (int s = 0; s < S; ++s) out += a[s] * b[s];
   return out;
-}
-
-// The weights w_s = exp(L_s - mx) (L_s <= mx) into la.wbuf; returns their sum.
-double weights(LookAhead& la, const double* L, double mx) {
-  double* w = la.wbuf.memptr();
-  for (int s = 0; s < la.S; ++s) w[s] = std::exp(L[s] - mx);
-  return dot_sum(w, nullptr, la.S);
 }
 
 // Sum over kappa's columns of its variance under the weights
@@ -125,20 +118,11 @@ double weights(LookAhead& la, const double* L, double mx) {
 // the draws, each sum in the draws' order).
 double weighted_var(LookAhead& la, const double* L, double mx) {
   const int S = la.S, q = la.kap.n_cols;
-  const double* ksq = la.ksq.memptr();
   double sw = 0.0, swk = 0.0, mk[16] = {0.0};  // q <= 16 (design_look_ahead())
-  if (q == 1) {
-    const double* k0 = la.kap.colptr(0);
-    for (int s = 0; s < S; ++s) {
-      const double w = std::exp(L[s] - mx);
-      sw += w; swk += w * ksq[s]; mk[0] += w * k0[s];
-    }
-  } else {
-    for (int s = 0; s < S; ++s) {
-      const double w = std::exp(L[s] - mx);
-      sw += w; swk += w * ksq[s];
-      for (int k = 0; k < q; ++k) mk[k] += w * la.kap(s, k);
-    }
+  for (int s = 0; s < S; ++s) {
+    const double w = std::exp(L[s] - mx);
+    sw += w; swk += w * la.ksq[s];
+    for (int k = 0; k < q; ++k) mk[k] += w * la.kap(s, k);
   }
   double out = swk / sw;
   for (int k = 0; k < q; ++k) {
@@ -154,8 +138,8 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
 double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   const int S = la.S;
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double out = 0.0;
+  double* w = la.wbuf.memptr(), sw = 0.0, out = 0.0;
+  for (int s = 0; s < S; ++s) sw += (w[s] = std::exp(L[s] - mx));
   for (int t = 0; t < la.T; ++t) {
     const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
     const double* v = run ? la.vK.data() + (size_t)S * t : la.VTP.colptr(t);
@@ -171,7 +155,6 @@ double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   }
   return out / la.T;
 }
-
 
 // Kappa's entropy under the weights w_s = exp(L_s - mx) of the plug-in's
 // kappa values (a grid or a uniform sample: up to a constant, kappa's):
@@ -328,7 +311,6 @@ inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, i
   }
   return buf;
 }
-
 
 // Run r's K rows' conditional means in fantasy j (cond_means(), S each,
 // into la.mbuf's K slices): mus[i] for row r K + i.
@@ -528,10 +510,9 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
     Rcpp::stop("outputs must be 1 to 16, dividing U's rows and Z's columns");
   const int n = Z.n_cols / K, Nr = U.n_rows / K;
-  if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr))
-    Rcpp::stop("steps must be 1 or more, and success empty or one per run");
-  if (!noise.is_empty() && (noise.n_rows != U.n_rows || noise.n_cols != phis.n_rows || K > 1))
-    Rcpp::stop("noise must be empty or one row per candidate and a column per draw (one output)");
+  if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr) ||
+      (!noise.is_empty() && (noise.n_rows != U.n_rows || noise.n_cols != phis.n_rows || K > 1)))
+    Rcpp::stop("steps must be 1 or more, success and noise empty or one per run (noise: x draws)");
   // a run's rows differ as the first run's do (run_covariances())
   for (int r = 1; r < Nr && K > 1; ++r)
     for (int i = 1; i < K; ++i)
@@ -569,12 +550,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   const arma::mat ph = phis.rows(run.kept), kap = kappa.rows(run.kept);
   const arma::vec lwk = lw0.elem(run.kept);
   run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, n > 1 || K > 1);
-  if (!noise.is_empty()) {
-    // a stochastic simulator: a run's value is eta plus its own noise, of
-    // variance noise(c, s) at candidate c under draw s
-    run.sys.noise = noise.cols(run.kept);
-    run.sys.v += run.sys.noise;
-  }
+  if (!noise.is_empty()) run.sys.v += (run.sys.noise = noise.cols(run.kept));  // (a run's value: eta + noise)
   LookAhead& la = run.la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = run.sys.T; la.K = K; la.Nr = Nr;
   la.entropy = entropy; la.kap = kap; la.ksq = arma::sum(arma::square(kap), 1);
