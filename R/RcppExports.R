@@ -9,8 +9,8 @@
     .Call(`_FBC_design_systems_r`, Xf, yf, Xs, ys, phis, U, XT, nugget, model)
 }
 
-.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success) {
-    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success)
+.design_look_ahead <- function(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success, noise) {
+    .Call(`_FBC_design_look_ahead`, Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success, noise)
 }
 
 .design_look_ahead_resume <- function(state) {

@@ -18,7 +18,11 @@
 #'   With several outputs (`output = "<column>"` among `...`, the field in
 #'   long format as for [calibrate()]) a run gives every output: `x` holds
 #'   the run's inputs once per output, its output column a factor, and `f`
-#'   returns each row's output (one call per run).
+#'   returns each row's output (one call per run). A stochastic `f`
+#'   (another value at each call) is called as it is: with `simNoise =
+#'   "constant"` or `"input"` among `...` the fits model its noise and
+#'   [propose_runs()] weighs replicates at the runs' inputs beside new
+#'   inputs.
 #' @param field The field data (response first, as in [calibrate()]; with
 #'   several data sets, `source =` among `...` names their column, which is
 #'   not an input).
@@ -44,7 +48,10 @@
 #'   data frame per step: `runs`, each calibration input's posterior mean,
 #'   sd and 90% interval width, the design step's and the fit's CPU
 #'   seconds, and `reweighted`: whether the step's posterior is the last
-#'   fit's draws reweighted, see [update_runs()]), and `failed`: the runs
+#'   fit's draws reweighted, see [update_runs()]; `replicates`: how many of
+#'   the step's runs repeat an earlier run's inputs, which
+#'   [propose_runs()] proposes for a stochastic simulator, see
+#'   [simulator_noise]), and `failed`: the runs
 #'   where `f` failed (an error, or `NA`, `NaN` or an infinite value), as
 #'   `run` (the row of `sim`) and `condition` (the error's message). A
 #'   failed run is kept in `sim` with an `NA` response and set aside by the
@@ -109,7 +116,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
   }
   t0 <- proc.time()
   fit <- keep_extrapolation(muffle_wide_outputs(calibrate(sim, field, showProgress = FALSE, ...)))
-  history <- loop_row(fit, runs, 0, cpu_since(t0))
+  history <- loop_row(fit, runs, 0, cpu_since(t0), 0L)
   limited <- FALSE
   while (runs - n0 < budget && !loop_done(fit, width, cal)) {
     t0 <- proc.time()
@@ -131,7 +138,7 @@ design_loop <- function(f, field, lower, upper, n0 = 10, batch = 1, budget = 40,
     t0 <- proc.time()
     fit <- keep_extrapolation(update_runs(fit, new, nMCMC = dots$nMCMC, converge = dots$converge,
                                           showProgress = FALSE))
-    history <- rbind(history, loop_row(fit, runs, tDesign, cpu_since(t0)))
+    history <- rbind(history, loop_row(fit, runs, tDesign, cpu_since(t0), sum(pr$replicate)))
     if (showProgress) {
       h <- history[nrow(history), ]
       cli::cli_inform("{runs} runs: 90% width {.val {signif(unlist(h[paste0(cal, '.width')]), 3)}} (design {round(tDesign, 1)} s, {if (h$reweighted) 'last fit reweighted' else 'fit'} {round(h$fitTime, 1)} s).")
@@ -260,7 +267,7 @@ run_simulator <- function(f, X, xnames, cal, yname, output = NULL) {
   out
 }
 
-loop_row <- function(fit, runs, tDesign, tFit) {
+loop_row <- function(fit, runs, tDesign, tFit, replicates) {
   cal <- fit$model$scale$names$calibration
   row <- data.frame(runs = runs)
   for (j in seq_along(cal)) {
@@ -273,6 +280,7 @@ loop_row <- function(fit, runs, tDesign, tFit) {
   row$designTime <- tDesign
   row$fitTime <- tFit
   row$reweighted <- isTRUE(fit$settings$reweight$used)
+  row$replicates <- as.integer(replicates)
   row
 }
 

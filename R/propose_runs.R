@@ -146,6 +146,15 @@
 #' a draw, each Gaussian given its own output's runs, field data and
 #' pending runs; the draws are reweighted by the product of their
 #' densities.
+#'
+#' A stochastic simulator (a fit with `simNoise = "constant"` or
+#' `"input"`, see [simulator_noise]): a run's value is \eqn{\eta(u)} plus
+#' the simulator's own noise, so per draw its variance is the emulator's
+#' plus \eqn{r(u)} (the draw's `sigma2R`, or with an input-dependent noise
+#' the mean of \eqn{e^{g(u)}} given its log-variances). Each run's input
+#' is a candidate too: a replicate there averages down that input's noise,
+#' and it is scored beside the new inputs by the same criterion, so either
+#' may be proposed (column `replicate`).
 #' The look-ahead holds draws x (m + the field's distinct inputs) x
 #' candidates (x outputs) numbers (with independent outputs m and the
 #' field's inputs of the output with the most); beyond 5e7 (400 MB) it is
@@ -191,7 +200,9 @@
 #'   the prediction's integrated variance, as a fraction of the current,
 #'   given the points above it; the look-ahead's Monte Carlo estimate,
 #'   which can fall below 0 where the true gain is about 0, is clipped at
-#'   0 and kept unclipped in attribute `gainEstimate`).
+#'   0 and kept unclipped in attribute `gainEstimate`); for a stochastic
+#'   simulator also `replicate`: whether the point repeats a run's inputs
+#'   (exactly those of the run).
 #'   Attributes `variance` (current, scaled), `time` (CPU seconds),
 #'   `method` (the criterion that picked: `"joint"` also where the plug-in
 #'   and the joint look-ahead disagreed about the plug-in's pick, see
@@ -229,6 +240,12 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
     ))
   }
   U <- fit_candidates(fit, candidates, ncandidates, tol)
+  # a stochastic simulator: a replicate at each run's input is a candidate
+  # too (it halves, thirds ... that input's noise), scored beside the new
+  # inputs by the same criterion
+  nNew <- nrow(U)
+  noisy <- !is.null(model$spec$model$replicates)
+  if (noisy) U <- rbind(U, model$data$Xs)
   if (nrow(U) < n * K) {
     cli::cli_abort("Only {nrow(U) / K} candidate{?s} are distinct from the existing runs; {.arg n} = {n} needs at least {n}.")
   }
@@ -246,6 +263,18 @@ propose_runs <- function(fit, n = 1, candidates = NULL, target = "kappa", ndraws
     sc$factors[[out1$name]] <- NULL
   }
   out <- indicators_to_levels(out, sc)
+  if (noisy) {
+    # a replicate's inputs exactly those of its run (not unscaled: a
+    # rounding would make it a new input)
+    rep <- crit$chosen > nNew
+    if (any(rep)) {
+      raw <- model$raw$sim
+      first <- sim_replicates(raw)$first[crit$chosen[rep] - nNew]
+      cols <- intersect(names(out), colnames(raw))
+      for (j in cols) out[rep, j] <- raw[first, j]
+    }
+    out$replicate <- rep
+  }
   # an expected variance reduction cannot be negative: an estimate below
   # 0 is the look-ahead's Monte Carlo error about 0, reported as 0 (the
   # estimates themselves are kept in attribute gainEstimate)
@@ -425,7 +454,6 @@ check_design_model <- function(model, call = parent.frame()) {
       i = "{.fn design_loop} builds a fit of runs of a function and chooses its runs."
     ), call = call)
   }
-  check_no_sim_noise(model, "propose_runs", call = call)
   N <- design_rows(model)
   if (sum(N) > 3000) {
     each <- if (model$dims$outputs > 1L) " (of one output: each has its own)" else ""
@@ -611,7 +639,36 @@ look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(mode
   .design_look_ahead(dat$Xf, dat$yf, dat$Xs, dat$ys, parts$phi, U, parts$kappa, parts$lw0,
                      isTRUE(parts$plugin), random$usrc, random$Z, XT, fbc_nugget, model$spec$model,
                      as.integer(order), parts$prune %||% 0, as.integer(K), entropy,
-                     as.integer(steps), run_success(model, U, K))
+                     as.integer(steps), run_success(model, U, K), run_noise(model, parts$phi, U))
+}
+
+# A stochastic simulator's noise variance of a run at each candidate (rows
+# of U, scaled) under each draw (rows of phis, the sampler's scale), as a
+# matrix candidates x draws; 0 x 0 for a deterministic simulator. A
+# constant noise is the draw's sigma2R; an input-dependent one the mean of
+# exp(g(u)) given the draw's log-variances gR at the unique inputs (their
+# GP's conditional, log-normal: exp(mean + var / 2)), which at a run's own
+# input is exp(gR_i) up to the GP's jitter.
+run_noise <- function(model, phis, U) {
+  reps <- model$spec$model$replicates
+  if (is.null(reps) || !nrow(U)) return(matrix(0, 0, 0))
+  cls <- model$spec$classes
+  if (!isTRUE(reps$latent)) {
+    return(matrix(phis[, cls == "sigma2R"], nrow(U), nrow(phis), byrow = TRUE))
+  }
+  Xs <- model$data$Xs
+  jitter <- 1e-6  # as src/latent_noise.cpp
+  two <- rep(2, ncol(Xs))
+  r <- vapply(seq_len(nrow(phis)), function(i) {
+    ph <- phis[i, ]
+    th <- ph[cls == "thetaG"]
+    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 4L) + jitter * diag(nrow(Xs))))
+    A <- forwardsolve(L, .corr_matrix(Xs, U, th, two, 4L))
+    muG <- ph[cls == "muG"]
+    w <- forwardsolve(L, ph[cls == "gR"] - muG)
+    exp(muG + drop(crossprod(A, w)) + 0.5 * ph[cls == "sigma2G"] * (1 + jitter - colSums(A^2)))
+  }, numeric(nrow(U)))
+  matrix(r, nrow(U))
 }
 
 # Each candidate run's probability of succeeding, by the model of where the

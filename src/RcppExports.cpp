@@ -42,8 +42,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // design_look_ahead
-Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs, bool entropy, int steps, const arma::vec& success);
-RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP, SEXP entropySEXP, SEXP stepsSEXP, SEXP successSEXP) {
+Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, const arma::mat& U, const arma::mat& kappa, const arma::vec& lw0, bool plugin, const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT, double nugget, const Rcpp::List& model, const Rcpp::IntegerVector& order, double prune, int outputs, bool entropy, int steps, const arma::vec& success, const arma::mat& noise);
+RcppExport SEXP _FBC_design_look_ahead(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP USEXP, SEXP kappaSEXP, SEXP lw0SEXP, SEXP pluginSEXP, SEXP usrcSEXP, SEXP ZSEXP, SEXP XTSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP orderSEXP, SEXP pruneSEXP, SEXP outputsSEXP, SEXP entropySEXP, SEXP stepsSEXP, SEXP successSEXP, SEXP noiseSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -67,7 +67,8 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< bool >::type entropy(entropySEXP);
     Rcpp::traits::input_parameter< int >::type steps(stepsSEXP);
     Rcpp::traits::input_parameter< const arma::vec& >::type success(successSEXP);
-    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success));
+    Rcpp::traits::input_parameter< const arma::mat& >::type noise(noiseSEXP);
+    rcpp_result_gen = Rcpp::wrap(design_look_ahead(Xf, yf, Xs, ys, phis, U, kappa, lw0, plugin, usrc, Z, XT, nugget, model, order, prune, outputs, entropy, steps, success, noise));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -397,7 +398,7 @@ END_RCPP
 static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_cache_budget_r", (DL_FUNC) &_FBC_fbc_cache_budget_r, 1},
     {"_FBC_design_systems_r", (DL_FUNC) &_FBC_design_systems_r, 9},
-    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 20},
+    {"_FBC_design_look_ahead", (DL_FUNC) &_FBC_design_look_ahead, 21},
     {"_FBC_design_look_ahead_resume", (DL_FUNC) &_FBC_design_look_ahead_resume, 1},
     {"_FBC_design_look_ahead_release", (DL_FUNC) &_FBC_design_look_ahead_release, 1},
     {"_FBC_fbc_heldout", (DL_FUNC) &_FBC_fbc_heldout, 8},

@@ -23,7 +23,7 @@ namespace {
 // x S); post and phis: the pending points' priors (prior_cov()).
 struct DesignSystems {
   std::unique_ptr<Posterior> post;
-  arma::mat phis;
+  arma::mat phis, noise;  // noise: each candidate's run noise variance per draw (or empty)
   arma::cube A, CTU;
   arma::mat mu, muT, v, mT, VT;
   arma::vec ll, floor;
@@ -105,29 +105,29 @@ struct LookAhead {
   std::vector<int> P;
 };
 
-// The sum over s of a_s b_s (b null: of a_s).
+// The sum over s of a_s b_s.
 double dot_sum(const double* a, const double* b, int S) {
   double out = 0.0;
-  for (int s = 0; s < S; ++s) out += b ? a[s] * b[s] : a[s];
+  for (int s = 0; s < S; ++s) out += a[s] * b[s];
   return out;
-}
-
-// The weights w_s = exp(L_s - mx) (L_s <= mx) into la.wbuf; returns their sum.
-double weights(LookAhead& la, const double* L, double mx) {
-  double* w = la.wbuf.memptr();
-  for (int s = 0; s < la.S; ++s) w[s] = std::exp(L[s] - mx);
-  return dot_sum(w, nullptr, la.S);
 }
 
 // Sum over kappa's columns of its variance under the weights
 // w_s = exp(L_s - mx) / sum (mx = max L): sum_s w_s |k_s|^2 -
-// sum_k (sum_s w_s k_sk)^2.
+// sum_k (sum_s w_s k_sk)^2 (the weights and every sum in one pass over
+// the draws, each sum in the draws' order).
 double weighted_var(LookAhead& la, const double* L, double mx) {
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double out = dot_sum(w, la.ksq.memptr(), la.S) / sw;
-  for (arma::uword k = 0; k < la.kap.n_cols; ++k) {
-    const double mk = dot_sum(w, la.kap.colptr(k), la.S) / sw;
-    out -= mk * mk;
+  const int S = la.S, q = la.kap.n_cols;
+  double sw = 0.0, swk = 0.0, mk[16] = {0.0};  // q <= 16 (design_look_ahead())
+  for (int s = 0; s < S; ++s) {
+    const double w = std::exp(L[s] - mx);
+    sw += w; swk += w * la.ksq[s];
+    for (int k = 0; k < q; ++k) mk[k] += w * la.kap(s, k);
+  }
+  double out = swk / sw;
+  for (int k = 0; k < q; ++k) {
+    const double m = mk[k] / sw;
+    out -= m * m;
   }
   return out;
 }
@@ -138,8 +138,8 @@ double weighted_var(LookAhead& la, const double* L, double mx) {
 //   (1 / T) sum_t [sum_s w_s (v_st + m_st^2) / sum w - (sum_s w_s m_st / sum w)^2].
 double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   const int S = la.S;
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double out = 0.0;
+  double* w = la.wbuf.memptr(), sw = 0.0, out = 0.0;
+  for (int s = 0; s < S; ++s) sw += (w[s] = std::exp(L[s] - mx));
   for (int t = 0; t < la.T; ++t) {
     const double* mt = la.MT.data() + (size_t)S * (t + (size_t)la.T * j);
     const double* v = run ? la.vK.data() + (size_t)S * t : la.VTP.colptr(t);
@@ -156,15 +156,16 @@ double target_var(LookAhead& la, const double* L, double mx, int j, bool run) {
   return out / la.T;
 }
 
-
 // Kappa's entropy under the weights w_s = exp(L_s - mx) of the plug-in's
 // kappa values (a grid or a uniform sample: up to a constant, kappa's):
 //   -sum_s p_s log p_s = log sum w - sum_s w_s (L_s - mx) / sum w.
 double weighted_entropy(LookAhead& la, const double* L, double mx) {
-  const double sw = weights(la, L, mx), *w = la.wbuf.memptr();
-  double swl = 0.0;
-  for (int s = 0; s < la.S; ++s)
-    if (w[s] > 0.0) swl += w[s] * (L[s] - mx);  // (weights()' underflow: 0, not 0 x -inf)
+  double sw = 0.0, swl = 0.0;
+  for (int s = 0; s < la.S; ++s) {
+    const double l = L[s] - mx, w = std::exp(l);
+    sw += w;
+    if (w > 0.0) swl += w * l;  // (an underflowed weight: 0, not 0 x -inf)
+  }
   return std::log(sw) - swl / sw;
 }
 
@@ -270,6 +271,8 @@ void pending_conditionals(const DesignSystems& sys, const arma::mat& U, double n
       const arma::mat AP = As.cols(Pu);
       prior_cov(sys, s, UP, UP, SPP);
       SPP.diag() *= 1.0 + nugget;
+      if (!sys.noise.is_empty())  // a pending run's value: its own noise too
+        for (int i = 0; i < k; ++i) SPP(i, i) += sys.noise(la.P[i], s);
       SPP -= AP.t() * AP;
       prior_cov(sys, s, U, UP, ScP);
       ScP -= As.t() * AP;
@@ -308,7 +311,6 @@ inline const double* cond_means(const DesignSystems& sys, const LookAhead& la, i
   }
   return buf;
 }
-
 
 // Run r's K rows' conditional means in fantasy j (cond_means(), S each,
 // into la.mbuf's K slices): mus[i] for row r K + i.
@@ -492,7 +494,9 @@ Rcpp::List design_systems_r(const arma::mat& Xf, const arma::vec& yf, const arma
 // (scores, Nr x n) and the draws scored (kept, 1-based); with `steps` < n only the first steps,
 // and the look-ahead in progress (`state`, for design_look_ahead_resume(): the same results as
 // all n at once). `success` (empty, or each run's probability of not failing) multiplies the
-// gains.
+// gains. `noise` (empty, or candidates x draws): a stochastic simulator's noise variance of a
+// run at each candidate under each draw, added to its value's variance (a replicate at a run's
+// input is then a candidate like any other).
 // [[Rcpp::export(.design_look_ahead)]]
 Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                              const arma::vec& ys, const arma::mat& phis, const arma::mat& U,
@@ -500,13 +504,15 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
                              const arma::vec& usrc, const arma::mat& Z, const arma::mat& XT,
                              double nugget, const Rcpp::List& model,
                              const Rcpp::IntegerVector& order, double prune, int outputs,
-                             bool entropy, int steps, const arma::vec& success) {
+                             bool entropy, int steps, const arma::vec& success,
+                             const arma::mat& noise) {
   const int K = outputs;
   if (K < 1 || K > 16 || U.n_rows % K != 0 || Z.n_cols % K != 0)
     Rcpp::stop("outputs must be 1 to 16, dividing U's rows and Z's columns");
   const int n = Z.n_cols / K, Nr = U.n_rows / K;
-  if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr))
-    Rcpp::stop("steps must be 1 or more, and success empty or one per run");
+  if (steps < 1 || (success.n_elem && (int)success.n_elem != Nr) ||
+      (!noise.is_empty() && (noise.n_rows != U.n_rows || noise.n_cols != phis.n_rows || K > 1)))
+    Rcpp::stop("steps must be 1 or more, success and noise empty or one per run (noise: x draws)");
   // a run's rows differ as the first run's do (run_covariances())
   for (int r = 1; r < Nr && K > 1; ++r)
     for (int i = 1; i < K; ++i)
@@ -520,8 +526,9 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
         if (order[i] == order[k]) Rcpp::stop("order must not repeat a candidate");
     }
   }
-  if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows)
-    Rcpp::stop("kappa and lw0 must have a row per draw, and phis a draw");
+  if (phis.n_rows < 1 || kappa.n_rows != phis.n_rows || lw0.n_elem != phis.n_rows ||
+      kappa.n_cols < 1 || kappa.n_cols > 16)
+    Rcpp::stop("kappa (1 to 16 columns) and lw0 must have a row per draw, and phis a draw");
   if ((int)usrc.n_elem != (int)Z.n_rows) Rcpp::stop("usrc must have %d uniforms", (int)Z.n_rows);
   Rcpp::XPtr<LookAheadRun> xp(new LookAheadRun, true);  // (R's now: freed if interrupted)
   LookAheadRun& run = *xp;
@@ -543,6 +550,7 @@ Rcpp::List design_look_ahead(const arma::mat& Xf, const arma::vec& yf, const arm
   const arma::mat ph = phis.rows(run.kept), kap = kappa.rows(run.kept);
   const arma::vec lwk = lw0.elem(run.kept);
   run.sys = design_systems(Xf, yf, Xs, ys, ph, U, XT, nugget, model, n > 1 || K > 1);
+  if (!noise.is_empty()) run.sys.v += (run.sys.noise = noise.cols(run.kept));  // (a run's value: eta + noise)
   LookAhead& la = run.la;
   la.S = ph.n_rows; la.Nc = U.n_rows; la.J = Z.n_rows; la.T = run.sys.T; la.K = K; la.Nr = Nr;
   la.entropy = entropy; la.kap = kap; la.ksq = arma::sum(arma::square(kap), 1);

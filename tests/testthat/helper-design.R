@@ -70,6 +70,12 @@ draw_system <- function(phi, model, U, XT = NULL) {
   sim <- seq_len(d$m)
   fld <- d$m + seq_len(d$n)
   C[cbind(sim, sim)] <- C[cbind(sim, sim)] * (1 + FBC:::fbc_nugget)
+  # a stochastic simulator (constant noise): each unique input's mean has
+  # the noise variance sigma2R / n_i
+  reps <- model$spec$model$replicates
+  if (!is.null(reps)) {
+    C[cbind(sim, sim)] <- C[cbind(sim, sim)] + phi[model$spec$classes == "sigma2R"] / reps$count
+  }
   mu0 <- rep(0, d$m + d$n)
   bias <- model$discrepancy != "none"
   if (bias) {
@@ -204,7 +210,7 @@ draw_system_outputs <- function(phi, model, U, XT = NULL) {
 # (Y, one column per pending point, nfantasy rows) conditioned on per draw.
 # With targets (sys from draw_system(XT =)) the criterion is the calibrated
 # prediction's variance averaged over them (target_var()).
-look_ahead_r <- function(sys, parts, U, model, n, nfantasy, entropy = FALSE) {
+look_ahead_r <- function(sys, parts, U, model, n, nfantasy, entropy = FALSE, noise = NULL) {
   S <- length(sys)
   lw0 <- parts$lw0 + if (isTRUE(parts$plugin)) vapply(sys, `[[`, numeric(1), "ll") else 0
   kap <- parts$kappa
@@ -228,7 +234,7 @@ look_ahead_r <- function(sys, parts, U, model, n, nfantasy, entropy = FALSE) {
   YP <- matrix(0, nfantasy, 0)
   base <- matrix(lw0, S, nfantasy)  # log-weights given the pending fantasies
   for (step in seq_len(n)) {
-    cond <- pending_conditionals(sys, U, chosen, YP)
+    cond <- pending_conditionals(sys, U, chosen, YP, noise)
     sc <- score_candidates(cond, src, matrix(zs, nfantasy)[, step], base, kap, entropy)
     sc$gain[chosen] <- -Inf
     scores[, step] <- sc$gain
@@ -267,7 +273,7 @@ target_var <- function(w, MT, VT) {
 # nfantasy, as S x (Nc nfantasy)) and variances cv (S x Nc). With targets
 # also their means MT (S x T x J), variances VTP (S x T) and covariances with
 # the candidates CP (S x T x Nc), given the pending points.
-pending_conditionals <- function(sys, U, P, YP) {
+pending_conditionals <- function(sys, U, P, YP, noise = NULL) {
   S <- length(sys)
   Nc <- nrow(U)
   J <- nrow(YP)
@@ -279,6 +285,8 @@ pending_conditionals <- function(sys, U, P, YP) {
   CP <- array(0, c(S, nT, Nc))
   for (s in seq_len(S)) {
     y <- sys[[s]]
+    # a run's value: eta plus the simulator's noise (S x Nc, noise[s, c])
+    if (!is.null(noise)) y$v <- y$v + noise[s, ]
     if (nT) {
       MT[s, , ] <- y$mT
       VTP[s, ] <- y$VT
@@ -287,7 +295,7 @@ pending_conditionals <- function(sys, U, P, YP) {
     if (length(P)) {
       AP <- y$A[, P, drop = FALSE]
       SPP <- y$s2S * y$corr(U[P, , drop = FALSE], U[P, , drop = FALSE])
-      diag(SPP) <- diag(SPP) * (1 + FBC:::fbc_nugget)
+      diag(SPP) <- diag(SPP) * (1 + FBC:::fbc_nugget) + if (is.null(noise)) 0 else noise[s, P]
       SPP <- SPP - crossprod(AP)
       ScP <- y$s2S * y$corr(U, U[P, , drop = FALSE]) - crossprod(y$A, AP)
       ScP[P, ] <- SPP  # a candidate at a pending point: its own covariance
