@@ -328,3 +328,54 @@ latent_noise_sd <- function(model, phis, Xn) {
   }
   sqrt(rowMeans(r))
 }
+
+# emulator_cv() of a fit with the simulator's own noise: the runs' unique
+# inputs (sim_replicates() of the runs the model was built from), NULL for
+# a fit without that noise.
+noise_cv_groups <- function(model) {
+  if (is.null(model$spec$model$replicates)) return(NULL)
+  sim_replicates(model$raw$sim)
+}
+
+# emulator_cv()'s folds over the m unique inputs of a fit with the
+# simulator's noise (NULL: leave-one-out): `folds` NULL or a number of folds
+# as for a deterministic fit, but over the unique inputs; a vector has one
+# label per run and must keep each input's replicates in one fold (a
+# replicate left in the training set would predict its own input).
+noise_cv_folds <- function(folds, reps, m, call = parent.frame()) {
+  n <- length(reps$group)
+  if (length(folds) <= 1L) return(emulator_folds(folds, m, call = call))
+  if (length(folds) != n || anyNA(folds)) {
+    cli::cli_abort(c(
+      "{.arg folds} must be a number of folds or one fold label per simulator run ({n}).",
+      x = "It has length {length(folds)}{if (anyNA(folds)) ' and missing values' else ''}."
+    ), call = call)
+  }
+  split_at <- which(vapply(split(folds, reps$group), function(f) length(unique(f)) > 1L,
+                           logical(1)))
+  if (length(split_at)) {
+    cli::cli_abort(c(
+      "{.arg folds} splits the replicates of {length(split_at)} unique input{?s} over several folds (the first: the runs of input {split_at[1]}).",
+      i = "A held-out run's replicates would stay in the training set and predict it: give each input's replicates one fold."
+    ), call = call)
+  }
+  emulator_folds(folds[reps$first], m, call = call)
+}
+
+# The simulator's noise variance at each unique input for each draw (rows
+# of phis, the sampler's scale: standardised units): m x draws.
+noise_variances <- function(model, phis) {
+  cls <- model$spec$classes
+  m <- nrow(model$data$Xs)
+  if (isTRUE(model$spec$model$replicates$latent)) {
+    exp(t(phis[, cls == "gR", drop = FALSE]))
+  } else {
+    matrix(phis[, cls == "sigma2R"], m, nrow(phis), byrow = TRUE)
+  }
+}
+
+# Every run's response on the standardised scale (the model holds the
+# unique inputs' means).
+run_responses <- function(model) {
+  (model$raw$sim[, 1] - model$scale$ymean[1]) / model$scale$ysd[1]
+}

@@ -11,6 +11,7 @@
 # For unique inputs x replicates (a Latin hypercube of the unique inputs per
 # data set), `calibrate()` with the defaults (the default discrepancy too),
 # until converged:
+#   auto      simNoise = "auto" (the default: "constant" when replicates differ)
 #   constant  simNoise = "constant" (one noise variance)
 #   input     simNoise = "input" (log-variance a GP over the inputs)
 #   none      simNoise = "none" (the runs as if deterministic; up to
@@ -23,11 +24,18 @@
 # varies from 0.1 to 0.4: a constant sd is the model's average), CPU
 # seconds and retained draws per chain.
 #
+# Coverage over many data sets: --bound=FALSE skips the bound's quadrature
+# (Hbound NA), --noneSets=k runs "none" on the first k data sets only, and
+# --save=file keeps every data set's row as it comes (an RDS), so a long run
+# that is stopped still has its rows; a line per fit shows how far it got.
+#
 # Rscript bench/run.R sim-noise [--quick] [--unique=50,200] [--reps=20] [--sets=2] [--maxNone=0]
-#   [--models=constant,input]
+#   [--models=constant,input] [--bound=TRUE] [--noneSets=0] [--save=file] [--first=1]
+# (--first: the first data set's seed, to continue a stopped run)
 source("bench/options.R")
 opt <- bench_options(list(unique = c(50L, 200L), reps = 20L, sets = 2L,
-                          maxNone = 0L, models = c("constant", "input")))
+                          maxNone = 0L, models = c("constant", "input"), bound = TRUE,
+                          noneSets = 0L, save = "", first = 1L))
 if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
 suppressPackageStartupMessages(library(FBC))
 
@@ -101,7 +109,7 @@ one <- function(k, r, seed, simNoise) {
           stats::median) * ysd
   }
   sdErr <- if (is.null(sdU)) NA_real_ else mean(abs(sdU - sdRun(xu)) / sdRun(xu))
-  bound <- grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2]))
+  bound <- if (opt$bound) grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2])) else NA_real_
   data.frame(unique = k, reps = r, set = seed, model = simNoise, H = hellinger(tt, ex),
              Hbound = bound,
              covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = sdErr, cpu = tm,
@@ -109,9 +117,14 @@ one <- function(k, r, seed, simNoise) {
 }
 
 res <- list()
-for (k in opt$unique) for (r in opt$reps) for (s in seq_len(opt$sets)) {
-  for (mode in opt$models) res[[length(res) + 1L]] <- one(k, r, s, mode)
-  if (k * r <= opt$maxNone) res[[length(res) + 1L]] <- one(k, r, s, "none")
+for (k in opt$unique) for (r in opt$reps) for (s in opt$first - 1L + seq_len(opt$sets)) {
+  runs <- c(opt$models, if (k * r <= opt$maxNone && (opt$noneSets == 0L || s <= opt$noneSets)) "none")
+  for (mode in runs) {
+    res[[length(res) + 1L]] <- row <- one(k, r, s, mode)
+    cat(sprintf("%d x %d set %d %s: t 90%% %s, %.1f CPU s\n", k, r, s, mode,
+                if (row$covers) "covers" else "misses", row$cpu))
+    if (nzchar(opt$save)) saveRDS(do.call(rbind, res), opt$save)
+  }
 }
 res <- do.call(rbind, res)
 cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), drop = TRUE),
@@ -121,6 +134,8 @@ cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), 
              H = sprintf("%.3f (%.3f-%.3f)", stats::median(d$H), min(d$H), max(d$H)),
              Hbound = round(stats::median(d$Hbound), 3),
              covers90 = sprintf("%d/%d", sum(d$covers), nrow(d)),
+             # the binomial standard error of the share
+             coverSE = round(sqrt(mean(d$covers) * (1 - mean(d$covers)) / nrow(d)), 3),
              width90 = round(stats::median(d$width90), 3),
              sdErr = round(stats::median(d$sdErr), 3),
              cpu = sprintf("%.1f (%.1f-%.1f)", stats::median(d$cpu), min(d$cpu), max(d$cpu)))
