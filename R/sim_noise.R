@@ -23,12 +23,19 @@
 #' \eqn{-\tfrac12 \sum_i \log n_i}: the likelihood is that of every run,
 #' at the cost of the unique inputs.
 #'
-#' The field is reality's mean behaviour: \eqn{y_f = \eta(x, \kappa) +
-#' \delta(x) + \epsilon}, its noise measurement error only. A physical system
-#' is one system, not a draw of the simulator's randomness, and its
-#' departures from the simulator's mean are what \eqn{\delta} and
-#' \eqn{\epsilon} describe; the simulator's noise says how well each run
-#' measures \eqn{\eta}.
+#' By default (`calibrate(fieldLink = "mean")`) the field is reality's mean
+#' behaviour: \eqn{y_f = \eta(x, \kappa) + \delta(x) + \epsilon}, its noise
+#' measurement error only. A physical system is one system, not a draw of
+#' the simulator's randomness, and its departures from the simulator's mean
+#' are what \eqn{\delta} and \eqn{\epsilon} describe; the simulator's noise
+#' says how well each run measures \eqn{\eta}. With `fieldLink =
+#' "realization"` the field is one realization of the same stochastic
+#' process (an epidemic that happened once, one queue's day): its noise
+#' variance is \eqn{\sigma^2_E + r}, the simulator's own variance added to
+#' the measurement error's (a constant noise only; with `simNoise =
+#' "input"` it would need the latent log-variance at every \eqn{\kappa},
+#' and is refused). [loo()][loo.fbc] compares the two links on the same
+#' field data.
 #'
 #' With `simNoise = "input"` the noise variance depends on the inputs,
 #' \eqn{r(x, t) = \exp(g(x, t))}, and the log-variance is a GP,
@@ -157,15 +164,48 @@ replicate_tolerance <- function(y) {
 # rounding), with the replicates
 # found (`reps`) and what print() says of them (`info`, NULL without
 # replicates and noise).
-sim_noise_model <- function(simNoise, sim, call = parent.frame()) {
+sim_noise_model <- function(simNoise, sim, fieldLink = "mean", call = parent.frame()) {
   simNoise <- check_sim_noise(simNoise, call = call)
+  link <- match_choice(fieldLink, field_link_choices, "fieldLink", call = call)
   reps <- sim_replicates(sim)
   mode <- if (simNoise == "auto") if (any(reps$differ)) sim_noise_auto else "none" else simNoise
+  check_field_link(link, mode, call = call)
   info <- if (mode != "none" || any(reps$count > 1L)) {
     list(mode = mode, asked = simNoise, runs = length(reps$group), unique = length(reps$count),
-         replicated = sum(reps$count > 1L), differ = sum(reps$differ))
+         replicated = sum(reps$count > 1L), differ = sum(reps$differ), link = link)
   }
-  list(mode = mode, reps = reps, info = info)
+  list(mode = mode, reps = reps, info = info, link = link)
+}
+
+# The choices of calibrate(fieldLink =): the field is the system's mean
+# behaviour, or one realization of the stochastic simulator.
+field_link_choices <- c("mean", "realization")
+
+# A field that is one realization carries the simulator's noise at
+# (x, kappa): a constant noise adds sigma2R to the field's variance; an
+# input-dependent one would need the latent GP at the field's inputs and
+# kappa, which the sampler does not carry: refused, as is a realization of
+# a simulator without noise.
+check_field_link <- function(link, mode, call = parent.frame()) {
+  if (link == "mean" || mode == "constant") return(invisible(link))
+  cli::cli_abort(c(
+    if (mode == "input") "{.code fieldLink = \"realization\"} is available with a constant simulator noise only, not with {.code simNoise = \"input\"}."
+    else "{.code fieldLink = \"realization\"} needs the simulator's own noise, which this model does not have ({.code simNoise} gives {.val none}).",
+    i = if (mode == "input") "The field's variance would need the latent log-variance at every kappa. Use {.code simNoise = \"constant\"}, or {.code fieldLink = \"mean\"}."
+        else "Give replicate runs that differ, with {.code simNoise = \"auto\"} or {.val constant}, or leave {.arg fieldLink} at {.val mean}."
+  ), call = call)
+}
+
+# With a simulator function there is no noise model: only "mean".
+check_field_link_function <- function(fieldLink, call = parent.frame()) {
+  link <- match_choice(fieldLink, field_link_choices, "fieldLink", call = call)
+  if (link != "mean") {
+    cli::cli_abort(c(
+      "{.code fieldLink = \"realization\"} needs the noise of simulator runs, but {.arg sim} is a function.",
+      i = "Leave {.arg fieldLink} at {.val mean}."
+    ), call = call)
+  }
+  link
 }
 
 # The scaled data on the unique inputs: Xs their rows, ys their mean
@@ -286,7 +326,8 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
     sprintf("none (their responses differ at %d input%s; the emulator interpolates them)",
             info$differ, if (info$differ == 1L) "" else "s")
   } else "none (the replicates agree)"
-  sprintf("%s; simulator noise: %s", found, noise)
+  link <- if (identical(info$link, "realization")) "; the field one realization (its variance carries the noise)" else ""
+  sprintf("%s; simulator noise: %s%s", found, noise, link)
 }
 
 # What has no model of the simulator's own noise yet refuses a fit that has

@@ -14,6 +14,8 @@
 #   auto      simNoise = "auto" (the default: "constant" when replicates differ)
 #   constant  simNoise = "constant" (one noise variance)
 #   input     simNoise = "input" (log-variance a GP over the inputs)
+#   hetgp     the plug-in: hetGP's fitted mean and noise as a fixed emulator
+#             (where hetGP is installed; not a dependency), t by quadrature
 #   none      simNoise = "none" (the runs as if deterministic; up to
 #             --maxNone runs, its cost grows with the rows)
 # Reported per cell: Hellinger distance of t's posterior (a kernel density
@@ -89,7 +91,41 @@ hellinger <- function(draws, ex) {
   sqrt(max(0, 1 - sum(sqrt(q * ex$dens)) * dt))
 }
 
+# The plug-in: hetGP's mleHetGP (Matern 5/2) fitted to the runs, its mean
+# and emulator variance (sd2) at (x_j, t) a fixed emulator, the field
+# N(yf_j; mean, sd2 + s^2) with s the field's noise sd (the model's
+# half-Cauchy prior, scale the runs' sd) and t's prior as calibrate()'s;
+# t's posterior by quadrature over (t, s).
+plugin_posterior <- function(d, ex) {
+  lo <- min(d$sim[, "t"]); hi <- max(d$sim[, "t"])
+  het <- hetGP::mleHetGP(d$sim[, c("x", "t")], d$sim[, "y"], covtype = "Matern5_2")
+  pr <- predict(het, cbind(rep(xf, length(ex$t)), rep(ex$t, each = length(xf))))
+  mu <- matrix(pr$mean, length(xf)); v <- matrix(pr$sd2, length(xf))
+  s <- exp(seq(log(0.01), log(3), length.out = 200))
+  ysd <- stats::sd(d$sim[, "y"])
+  ls <- vapply(s, function(sd) colSums(stats::dnorm(d$field[, "y"], mu, sqrt(v + sd^2), log = TRUE)),
+               numeric(length(ex$t))) +
+    rep(stats::dcauchy(s, 0, ysd, log = TRUE) + log(s), each = length(ex$t))
+  ls <- ls + stats::dbeta((ex$t - lo) / (hi - lo), 1.1, 1.1, log = TRUE)
+  w <- rowSums(exp(ls - max(ls)))
+  w / sum(w) / diff(ex$t[1:2])
+}
+
+# A row of the table for the plug-in (its quantiles from the grid).
+one_plugin <- function(k, r, seed) {
+  d <- data_set(k, r, seed)
+  ex <- exact_posterior(d)
+  tm <- cpu(dens <- plugin_posterior(d, ex))
+  cdf <- cumsum(dens) * diff(ex$t[1:2])
+  ci <- stats::approx(cdf, ex$t, c(0.05, 0.95), ties = "ordered", rule = 2)$y
+  data.frame(unique = k, reps = r, set = seed, model = "hetGP plug-in",
+             H = grid_hellinger(dens, ex$dens, diff(ex$t[1:2])), Hbound = NA_real_,
+             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = NA_real_, cpu = tm,
+             draws = NA_real_)
+}
+
 one <- function(k, r, seed, simNoise) {
+  if (simNoise == "hetgp") return(one_plugin(k, r, seed))
   d <- data_set(k, r, seed)
   ex <- exact_posterior(d)
   set.seed(seed)
