@@ -420,3 +420,21 @@ noise_variances <- function(model, phis) {
 run_responses <- function(model) {
   (model$raw$sim[, 1] - model$scale$ymean[1]) / model$scale$ysd[1]
 }
+
+# print() of a fit: the summary table without the latent log-variances gR
+# (one per unique input, hundreds of them), and a line that summarises
+# them (count, range of the medians, worst R-hat and bulk ESS); NULL line
+# without them.
+latent_summary <- function(sm, digits = 3) {
+  rows <- grepl("^gR[0-9]+$", attr(sm, "row.names"))
+  if (!any(rows)) return(list(table = sm, line = NULL))
+  g <- as.data.frame(unclass(sm), stringsAsFactors = FALSE)[rows, , drop = FALSE]
+  lab <- attr(sm, "noiseLabels")
+  table <- sm[!rows, , drop = FALSE]
+  attr(table, "noiseLabels") <- lab
+  f <- function(v) format(signif(v, digits))
+  line <- sprintf("gR: %d latent log-variances (one per unique input), posterior medians %s to %s; largest R-hat %s, smallest bulk ESS %s (all in summary(fit))",
+                  sum(rows), f(min(g$median)), f(max(g$median)), f(max(g$rhat)),
+                  format(round(min(g$ess))))
+  list(table = table, line = line)
+}

@@ -343,7 +343,16 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
   mu <- -3 + drop(t(k) %*% solve(K, g + 3))
   v <- 1 + 1e-6 - colSums(k * solve(K, k))
   expect_equal(one$noiseSd, sqrt(exp(mu + v / 2)) * fit$model$scale$ysd, tolerance = 1e-6)
-  expect_match(capture.output(print(fit)), "input-dependent", all = FALSE)
+  out <- capture.output(print(fit))
+  expect_match(out, "input-dependent", all = FALSE)
+  # print() summarises the latent log-variances in one line: their count
+  # and the range of their medians, none of them as a row of the table
+  expect_false(any(grepl("^gR[0-9]+ ", out)))
+  med <- apply(fit$Phi[, paste0("gR", 1:5)], 2, stats::median)
+  line <- grep("^gR: ", out, value = TRUE)
+  expect_match(line, sprintf("5 latent log-variances .* medians %s to %s;",
+                             format(signif(min(med), 3)), format(signif(max(med), 3))))
+  expect_true(all(paste0("gR", 1:5) %in% attr(summary(fit), "row.names")))
   # a checkpointed run is the same run, and resumes
   dir <- withr::local_tempdir()
   first <- tiny_latent(300, checkpoint = dir)
