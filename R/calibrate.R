@@ -157,6 +157,13 @@
 #'   simulator), `"constant"` (one noise variance `sigma2R`, sampled with
 #'   the rest, the replicates entering by their sufficient statistics) or
 #'   `"input"` (its log a GP over the inputs; see [simulator_noise]).
+#' @param fieldLink What the field is, with the simulator's noise modelled:
+#'   `"mean"` (the default) the system's mean behaviour, its noise
+#'   measurement error only; `"realization"` one realization of the
+#'   stochastic process, its noise variance also carrying the simulator's
+#'   (`"constant"` noise only). The default holds when the simulator's
+#'   randomness stands for what is unknown, not for the system's own
+#'   variability (see [simulator_noise]).
 #' @param threads Threads inside each chain (OpenMP) for the
 #'   nearest-neighbour algebra, with the same draws for any number; `1` (the
 #'   default) is one core per chain (`vignette("clusters")`).
@@ -214,7 +221,8 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                       sourceBias = c("shared", "own"), outputs = c("shared", "independent"),
                       fit = TRUE, nonFinite = c("error", "reject"),
                       failedRuns = c("setAside", "error"),
-                      simNoise = c("auto", "none", "constant", "input"), threads = 1L) {
+                      simNoise = c("auto", "none", "constant", "input"), threads = 1L,
+                      fieldLink = c("mean", "realization")) {
   call <- match.call()
   run <- check_run(nMCMC, nBurn, thinning, nChains, converge, showProgress, checkpoint,
                    checkpointEvery, threads)
@@ -223,6 +231,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
   failedRuns <- match_choice(failedRuns, c("setAside", "error"), "failedRuns")
   if (is.function(sim)) {
     check_sim_noise_function(simNoise)
+    check_field_link_function(fieldLink)
     # the simulator as an R function (R/simulator_function.R)
     model <- build_function_model(sim, field,
       kappa = list(dist = kappaDist, init = kappaInit, p1 = kappaP1, p2 = kappaP2),
@@ -238,7 +247,7 @@ calibrate <- function(sim, field, nMCMC = NULL, nBurn = NULL, thinning = 2,
                        sampler = sampler, blockSim = blockSim, algebra = algebra,
                        neighbours = neighbours, output = output, source = source,
                        sourceBias = sourceBias, outputs = outputs, failedRuns = failedRuns,
-                       simNoise = simNoise, modelCall = call)
+                       simNoise = simNoise, fieldLink = fieldLink, modelCall = call)
   if (!fit) return(model)
   fit_model(model, run)
 }

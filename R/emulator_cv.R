@@ -29,6 +29,16 @@
 #' variances plus the variance of the means (law of total variance).
 #' Results are in the response's units.
 #'
+#' @section Stochastic simulators:
+#' With the simulator's own noise modelled ([simulator_noise]) the emulator
+#' holds the unique inputs with their mean responses; an input is held out
+#' with all its replicates (a replicate left in would predict its own
+#' input), and each run is predicted as a run: the held-out predictive of
+#' \eqn{\eta} at its input plus the noise variance \eqn{r(x, t)} of that
+#' draw. `runs` has one row per run, `fold` its input's fold; `folds`
+#' counts or labels the unique inputs (a vector: one label per run, the
+#' same for an input's replicates).
+#'
 #' @section Folds:
 #' `folds = NULL` uses leave-one-out when there are at most 2000 runs and
 #' 10 folds otherwise. A number `k` asks for `k` folds (`k` = the number of
@@ -94,13 +104,29 @@ emulator_cv <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds =
   sc <- fit$model$scale
   ys <- fit$model$data$ys
   m <- length(ys)
-  fold <- emulator_folds(folds, m)
+  # with the simulator's own noise the model holds the unique inputs: their
+  # folds hold each input's replicates out together
+  reps <- noise_cv_groups(fit$model)
+  fold <- if (is.null(reps)) emulator_folds(folds, m) else noise_cv_folds(folds, reps, m)
   rows <- check_rows(fit, method, ndraws)
   phis <- sampler_draws(fit, rows)
   labels <- if (is.null(fold)) seq_len(m) else match(fold, unique(fold))
   cv <- heldout_draws(fit, phis, labels)
   means <- cv$mean
   vars <- cv$var
+  Xs <- fit$model$data$Xs
+  if (!is.null(reps)) {
+    # every run: its input's held-out mean, and a run's variance (the
+    # mean's less its noise r / n, plus r)
+    r <- noise_variances(fit$model, phis)
+    g <- reps$group
+    vars <- (vars - r / reps$count + r)[g, , drop = FALSE]
+    means <- means[g, , drop = FALSE]
+    ys <- run_responses(fit$model)
+    Xs <- Xs[g, , drop = FALSE]
+    fold <- if (is.null(fold)) g else fold[g]
+    m <- length(ys)
+  }
   D <- nrow(phis)
   mu <- rowMeans(means)
   v <- rowMeans(vars) + rowMeans((means - mu)^2)
@@ -108,7 +134,7 @@ emulator_cv <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds =
   pit <- rowMeans(stats::pnorm((ys - means) / sds))
   z <- (ys - mu) / sqrt(v)
 
-  X <- unscale_inputs(fit$model$data$Xs, sc, seq_len(ncol(fit$model$data$Xs)))
+  X <- unscale_inputs(Xs, sc, seq_len(ncol(Xs)))
   stat_cols <- c("fold", "observed", "mean", "sd", "z", "pit")
   inputs <- make.unique(c(stat_cols, sim_input_names(sc, ncol(X))))[-seq_along(stat_cols)]
   colnames(X) <- inputs
@@ -134,7 +160,8 @@ emulator_cv <- function(fit, method = c("Bayesian", "MAP"), ndraws = 50, folds =
     rmseRel = sqrt(mean(((runs$observed - runs$mean) / y_sd(sc, out))^2)),
     shareZ3 = mean(abs(z) > 3), method = method, ndraws = D,
     nFolds = if (is.null(fold)) m else length(unique(fold)), inputs = inputs,
-    response = sc$names$response
+    response = sc$names$response,
+    unique = if (!is.null(reps)) length(reps$count)
   ), class = "fbc_emulator_cv")
 }
 
@@ -228,10 +255,14 @@ cat_warning <- function(msg) {
 #' @export
 print.fbc_emulator_cv <- function(x, digits = 3, ...) {
   m <- nrow(x$runs)
-  how <- if (x$nFolds == m) "leave-one-out" else sprintf("%d-fold", x$nFolds)
+  how <- if (x$nFolds == m || identical(x$nFolds, x$unique)) "leave-one-out" else sprintf("%d-fold", x$nFolds)
   at <- if (x$method == "MAP") "at the MAP draw" else
     sprintf("over %d posterior draw%s (Gaussian mixture per run)", x$ndraws, if (x$ndraws > 1) "s" else "")
   cat(sprintf("<fbc_emulator_cv> Emulator check: %s predictions of %d simulator runs\n", how, m))
+  if (!is.null(x$unique)) {
+    cat(sprintf("  %d unique inputs, each one's replicates held out together; intervals with the run noise\n",
+                x$unique))
+  }
   cat(sprintf("  %s\n", at))
   cat(sprintf("  coverage of nominal intervals: %s\n",
               paste(sprintf("%s: %.2f", names(x$coverage), x$coverage), collapse = "  ")))
@@ -327,7 +358,7 @@ plot.fbc_emulator_cv <- function(x, which = c("both", "inputs", "qq"), ...) {
                                   ggplot2::aes(intercept = 0, slope = 1),
                                   linetype = "dashed", colour = "steelblue")
   }
-  how <- if (x$nFolds == nrow(runs)) "leave-one-out" else paste0(x$nFolds, "-fold")
+  how <- if (x$nFolds == nrow(runs) || identical(x$nFolds, x$unique)) "leave-one-out" else paste0(x$nFolds, "-fold")
   p + ggplot2::geom_point(ggplot2::aes(colour = .data$large), size = 1.2, show.legend = FALSE) +
     ggplot2::scale_colour_manual(values = c(`FALSE` = "grey20", `TRUE` = "firebrick")) +
     ggplot2::facet_wrap(ggplot2::vars(.data$panel), scales = "free_x") +

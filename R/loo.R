@@ -13,7 +13,8 @@
 #' [loo::loo_compare()] then compares fits of the same data: discrepancy
 #' models (`calibrate(discrepancy =)`), correlation families, priors, and
 #' the models of a stochastic simulator's noise (`calibrate(simNoise =)`,
-#' [simulator_noise]): each density conditions on every simulator run (with
+#' [simulator_noise]) and what the field is to it (`calibrate(fieldLink =)`):
+#' each density conditions on every simulator run (with
 #' the noise modelled, the unique inputs' means carry all the runs say of
 #' \eqn{\eta}), so the elements are the same field observations.
 #'

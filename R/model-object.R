@@ -62,10 +62,10 @@ NULL
 build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, kernelS, kernelB,
                         sampler, blockSim, algebra, neighbours, output, source, sourceBias,
                         outputs = "shared", failedRuns = "setAside", simNoise = "auto",
-                        modelCall = NULL, call = parent.frame()) {
+                        fieldLink = "mean", modelCall = NULL, call = parent.frame()) {
   dd <- model_data(sim, field, output, source, failedRuns, call = call)
   # replicate runs and the simulator's own noise (R/sim_noise.R)
-  noise <- sim_noise_model(simNoise, dd$sim, call = call)
+  noise <- sim_noise_model(simNoise, dd$sim, fieldLink, call = call)
   opt <- model_options(dd, discrepancy, sampler, blockSim, algebra, neighbours, hypers,
                        kernelS, kernelB, sourceBias, call = call)
   opt[c("output", "source")] <- list(output, source)
@@ -87,6 +87,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
                                outputs = pr$outputs, replicates = pr$replicates, Xf = dat$Xf)
+  if (noise$link == "realization") spec$model$replicates$realization <- TRUE
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
               list(levels = pr$levels, biasSource = pr$biasSource, outputs = pr$outputs,
@@ -107,7 +108,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                              neighbours = neighbours, output = output,
                                              source = source, sourceBias = sourceBias,
                                              outputs = outputs, failedRuns = failedRuns,
-                                             simNoise = simNoise))),
+                                             simNoise = simNoise, fieldLink = fieldLink))),
                 call = modelCall)
 }
 
@@ -375,7 +376,8 @@ check_threads <- function(threads, call = parent.frame()) {
 # run's settings).
 model_args <- c("field", "kappaDist", "kappaInit", "kappaP1", "kappaP2", "hypers", "discrepancy",
                 "kernelS", "kernelB", "sampler", "blockSim", "algebra", "neighbours", "output",
-                "source", "sourceBias", "outputs", "nonFinite", "simNoise")
+                "source", "sourceBias", "outputs", "nonFinite", "simNoise",
+                "fieldLink")
 
 # calibrate(model, ...): the model, with the call that will be the fit's
 # (the model's call with this call's run settings). A model argument given
@@ -413,6 +415,7 @@ identity_settings <- function(model, run) {
   if (identical(o$outputs, "independent")) s$outputs <- o$outputs
   if (!is.null(model$spec$model$replicates))
     s$simNoise <- if (isTRUE(model$spec$model$replicates$latent)) "input" else "constant"
+  if (isTRUE(model$spec$model$replicates$realization)) s$fieldLink <- "realization"
   # a simulator given as a function: its code and what a non-finite value does
   if (!is.null(model$simulator)) s$simulator <- function_identity(model$simulator)
   s

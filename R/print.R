@@ -86,7 +86,9 @@ print.fbc <- function(x, digits = 3, ...) {
                 paste(which(stopped), collapse = ", "), paste(done[stopped], collapse = ", ")))
   }
   cat("\n")
-  print(summary(x), digits = digits)
+  lat <- latent_summary(summary(x), digits)
+  print(lat$table, digits = digits)
+  if (!is.null(lat$line)) cat(lat$line, "\n", sep = "")
   cat(scale_note_line(sc), "\n", sep = "")
   msgs <- convergence_messages(x)
   if (length(msgs)) {

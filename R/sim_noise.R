@@ -23,12 +23,19 @@
 #' \eqn{-\tfrac12 \sum_i \log n_i}: the likelihood is that of every run,
 #' at the cost of the unique inputs.
 #'
-#' The field is reality's mean behaviour: \eqn{y_f = \eta(x, \kappa) +
-#' \delta(x) + \epsilon}, its noise measurement error only. A physical system
-#' is one system, not a draw of the simulator's randomness, and its
-#' departures from the simulator's mean are what \eqn{\delta} and
-#' \eqn{\epsilon} describe; the simulator's noise says how well each run
-#' measures \eqn{\eta}.
+#' By default (`calibrate(fieldLink = "mean")`) the field is reality's mean
+#' behaviour: \eqn{y_f = \eta(x, \kappa) + \delta(x) + \epsilon}, its noise
+#' measurement error only. A physical system is one system, not a draw of
+#' the simulator's randomness, and its departures from the simulator's mean
+#' are what \eqn{\delta} and \eqn{\epsilon} describe; the simulator's noise
+#' says how well each run measures \eqn{\eta}. With `fieldLink =
+#' "realization"` the field is one realization of the same stochastic
+#' process (an epidemic that happened once, one queue's day): its noise
+#' variance is \eqn{\sigma^2_E + r}, the simulator's own variance added to
+#' the measurement error's (a constant noise only; with `simNoise =
+#' "input"` it would need the latent log-variance at every \eqn{\kappa},
+#' and is refused). [loo()][loo.fbc] compares the two links on the same
+#' field data.
 #'
 #' With `simNoise = "input"` the noise variance depends on the inputs,
 #' \eqn{r(x, t) = \exp(g(x, t))}, and the log-variance is a GP,
@@ -157,15 +164,48 @@ replicate_tolerance <- function(y) {
 # rounding), with the replicates
 # found (`reps`) and what print() says of them (`info`, NULL without
 # replicates and noise).
-sim_noise_model <- function(simNoise, sim, call = parent.frame()) {
+sim_noise_model <- function(simNoise, sim, fieldLink = "mean", call = parent.frame()) {
   simNoise <- check_sim_noise(simNoise, call = call)
+  link <- match_choice(fieldLink, field_link_choices, "fieldLink", call = call)
   reps <- sim_replicates(sim)
   mode <- if (simNoise == "auto") if (any(reps$differ)) sim_noise_auto else "none" else simNoise
+  check_field_link(link, mode, call = call)
   info <- if (mode != "none" || any(reps$count > 1L)) {
     list(mode = mode, asked = simNoise, runs = length(reps$group), unique = length(reps$count),
-         replicated = sum(reps$count > 1L), differ = sum(reps$differ))
+         replicated = sum(reps$count > 1L), differ = sum(reps$differ), link = link)
   }
-  list(mode = mode, reps = reps, info = info)
+  list(mode = mode, reps = reps, info = info, link = link)
+}
+
+# The choices of calibrate(fieldLink =): the field is the system's mean
+# behaviour, or one realization of the stochastic simulator.
+field_link_choices <- c("mean", "realization")
+
+# A field that is one realization carries the simulator's noise at
+# (x, kappa): a constant noise adds sigma2R to the field's variance; an
+# input-dependent one would need the latent GP at the field's inputs and
+# kappa, which the sampler does not carry: refused, as is a realization of
+# a simulator without noise.
+check_field_link <- function(link, mode, call = parent.frame()) {
+  if (link == "mean" || mode == "constant") return(invisible(link))
+  cli::cli_abort(c(
+    if (mode == "input") "{.code fieldLink = \"realization\"} is available with a constant simulator noise only, not with {.code simNoise = \"input\"}."
+    else "{.code fieldLink = \"realization\"} needs the simulator's own noise, which this model does not have ({.code simNoise} gives {.val none}).",
+    i = if (mode == "input") "The field's variance would need the latent log-variance at every kappa. Use {.code simNoise = \"constant\"}, or {.code fieldLink = \"mean\"}."
+        else "Give replicate runs that differ, with {.code simNoise = \"auto\"} or {.val constant}, or leave {.arg fieldLink} at {.val mean}."
+  ), call = call)
+}
+
+# With a simulator function there is no noise model: only "mean".
+check_field_link_function <- function(fieldLink, call = parent.frame()) {
+  link <- match_choice(fieldLink, field_link_choices, "fieldLink", call = call)
+  if (link != "mean") {
+    cli::cli_abort(c(
+      "{.code fieldLink = \"realization\"} needs the noise of simulator runs, but {.arg sim} is a function.",
+      i = "Leave {.arg fieldLink} at {.val mean}."
+    ), call = call)
+  }
+  link
 }
 
 # The scaled data on the unique inputs: Xs their rows, ys their mean
@@ -286,7 +326,8 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
     sprintf("none (their responses differ at %d input%s; the emulator interpolates them)",
             info$differ, if (info$differ == 1L) "" else "s")
   } else "none (the replicates agree)"
-  sprintf("%s; simulator noise: %s", found, noise)
+  link <- if (identical(info$link, "realization")) "; the field one realization (its variance carries the noise)" else ""
+  sprintf("%s; simulator noise: %s%s", found, noise, link)
 }
 
 # What has no model of the simulator's own noise yet refuses a fit that has
@@ -327,4 +368,73 @@ latent_noise_sd <- function(model, phis, Xn) {
     r[, i] <- exp(muG + drop(crossprod(A, w)) + 0.5 * s2G * (1 + jitter - colSums(A^2)))
   }
   sqrt(rowMeans(r))
+}
+
+# emulator_cv() of a fit with the simulator's own noise: the runs' unique
+# inputs (sim_replicates() of the runs the model was built from), NULL for
+# a fit without that noise.
+noise_cv_groups <- function(model) {
+  if (is.null(model$spec$model$replicates)) return(NULL)
+  sim_replicates(model$raw$sim)
+}
+
+# emulator_cv()'s folds over the m unique inputs of a fit with the
+# simulator's noise (NULL: leave-one-out): `folds` NULL or a number of folds
+# as for a deterministic fit, but over the unique inputs; a vector has one
+# label per run and must keep each input's replicates in one fold (a
+# replicate left in the training set would predict its own input).
+noise_cv_folds <- function(folds, reps, m, call = parent.frame()) {
+  n <- length(reps$group)
+  if (length(folds) <= 1L) return(emulator_folds(folds, m, call = call))
+  if (length(folds) != n || anyNA(folds)) {
+    cli::cli_abort(c(
+      "{.arg folds} must be a number of folds or one fold label per simulator run ({n}).",
+      x = "It has length {length(folds)}{if (anyNA(folds)) ' and missing values' else ''}."
+    ), call = call)
+  }
+  split_at <- which(vapply(split(folds, reps$group), function(f) length(unique(f)) > 1L,
+                           logical(1)))
+  if (length(split_at)) {
+    cli::cli_abort(c(
+      "{.arg folds} splits the replicates of {length(split_at)} unique input{?s} over several folds (the first: the runs of input {split_at[1]}).",
+      i = "A held-out run's replicates would stay in the training set and predict it: give each input's replicates one fold."
+    ), call = call)
+  }
+  emulator_folds(folds[reps$first], m, call = call)
+}
+
+# The simulator's noise variance at each unique input for each draw (rows
+# of phis, the sampler's scale: standardised units): m x draws.
+noise_variances <- function(model, phis) {
+  cls <- model$spec$classes
+  m <- nrow(model$data$Xs)
+  if (isTRUE(model$spec$model$replicates$latent)) {
+    exp(t(phis[, cls == "gR", drop = FALSE]))
+  } else {
+    matrix(phis[, cls == "sigma2R"], m, nrow(phis), byrow = TRUE)
+  }
+}
+
+# Every run's response on the standardised scale (the model holds the
+# unique inputs' means).
+run_responses <- function(model) {
+  (model$raw$sim[, 1] - model$scale$ymean[1]) / model$scale$ysd[1]
+}
+
+# print() of a fit: the summary table without the latent log-variances gR
+# (one per unique input, hundreds of them), and a line that summarises
+# them (count, range of the medians, worst R-hat and bulk ESS); NULL line
+# without them.
+latent_summary <- function(sm, digits = 3) {
+  rows <- grepl("^gR[0-9]+$", attr(sm, "row.names"))
+  if (!any(rows)) return(list(table = sm, line = NULL))
+  g <- as.data.frame(unclass(sm), stringsAsFactors = FALSE)[rows, , drop = FALSE]
+  lab <- attr(sm, "noiseLabels")
+  table <- sm[!rows, , drop = FALSE]
+  attr(table, "noiseLabels") <- lab
+  f <- function(v) format(signif(v, digits))
+  line <- sprintf("gR: %d latent log-variances (one per unique input), posterior medians %s to %s; largest R-hat %s, smallest bulk ESS %s (all in summary(fit))",
+                  sum(rows), f(min(g$median)), f(max(g$median)), f(max(g$rhat)),
+                  format(round(min(g$ess))))
+  list(table = table, line = line)
 }

@@ -11,8 +11,11 @@
 # For unique inputs x replicates (a Latin hypercube of the unique inputs per
 # data set), `calibrate()` with the defaults (the default discrepancy too),
 # until converged:
+#   auto      simNoise = "auto" (the default: "constant" when replicates differ)
 #   constant  simNoise = "constant" (one noise variance)
 #   input     simNoise = "input" (log-variance a GP over the inputs)
+#   hetgp     the plug-in: hetGP's fitted mean and noise as a fixed emulator
+#             (where hetGP is installed; not a dependency), t by quadrature
 #   none      simNoise = "none" (the runs as if deterministic; up to
 #             --maxNone runs, its cost grows with the rows)
 # Reported per cell: Hellinger distance of t's posterior (a kernel density
@@ -23,11 +26,18 @@
 # varies from 0.1 to 0.4: a constant sd is the model's average), CPU
 # seconds and retained draws per chain.
 #
+# Coverage over many data sets: --bound=FALSE skips the bound's quadrature
+# (Hbound NA), --noneSets=k runs "none" on the first k data sets only, and
+# --save=file keeps every data set's row as it comes (an RDS), so a long run
+# that is stopped still has its rows; a line per fit shows how far it got.
+#
 # Rscript bench/run.R sim-noise [--quick] [--unique=50,200] [--reps=20] [--sets=2] [--maxNone=0]
-#   [--models=constant,input]
+#   [--models=constant,input] [--bound=TRUE] [--noneSets=0] [--save=file] [--first=1]
+# (--first: the first data set's seed, to continue a stopped run)
 source("bench/options.R")
 opt <- bench_options(list(unique = c(50L, 200L), reps = 20L, sets = 2L,
-                          maxNone = 0L, models = c("constant", "input")))
+                          maxNone = 0L, models = c("constant", "input"), bound = TRUE,
+                          noneSets = 0L, save = "", first = 1L))
 if (opt$quick) { opt$unique <- 25L; opt$reps <- 5L; opt$sets <- 1L; opt$maxNone <- 0L }
 suppressPackageStartupMessages(library(FBC))
 
@@ -81,7 +91,41 @@ hellinger <- function(draws, ex) {
   sqrt(max(0, 1 - sum(sqrt(q * ex$dens)) * dt))
 }
 
+# The plug-in: hetGP's mleHetGP (Matern 5/2) fitted to the runs, its mean
+# and emulator variance (sd2) at (x_j, t) a fixed emulator, the field
+# N(yf_j; mean, sd2 + s^2) with s the field's noise sd (the model's
+# half-Cauchy prior, scale the runs' sd) and t's prior as calibrate()'s;
+# t's posterior by quadrature over (t, s).
+plugin_posterior <- function(d, ex) {
+  lo <- min(d$sim[, "t"]); hi <- max(d$sim[, "t"])
+  het <- hetGP::mleHetGP(d$sim[, c("x", "t")], d$sim[, "y"], covtype = "Matern5_2")
+  pr <- predict(het, cbind(rep(xf, length(ex$t)), rep(ex$t, each = length(xf))))
+  mu <- matrix(pr$mean, length(xf)); v <- matrix(pr$sd2, length(xf))
+  s <- exp(seq(log(0.01), log(3), length.out = 200))
+  ysd <- stats::sd(d$sim[, "y"])
+  ls <- vapply(s, function(sd) colSums(stats::dnorm(d$field[, "y"], mu, sqrt(v + sd^2), log = TRUE)),
+               numeric(length(ex$t))) +
+    rep(stats::dcauchy(s, 0, ysd, log = TRUE) + log(s), each = length(ex$t))
+  ls <- ls + stats::dbeta((ex$t - lo) / (hi - lo), 1.1, 1.1, log = TRUE)
+  w <- rowSums(exp(ls - max(ls)))
+  w / sum(w) / diff(ex$t[1:2])
+}
+
+# A row of the table for the plug-in (its quantiles from the grid).
+one_plugin <- function(k, r, seed) {
+  d <- data_set(k, r, seed)
+  ex <- exact_posterior(d)
+  tm <- cpu(dens <- plugin_posterior(d, ex))
+  cdf <- cumsum(dens) * diff(ex$t[1:2])
+  ci <- stats::approx(cdf, ex$t, c(0.05, 0.95), ties = "ordered", rule = 2)$y
+  data.frame(unique = k, reps = r, set = seed, model = "hetGP plug-in",
+             H = grid_hellinger(dens, ex$dens, diff(ex$t[1:2])), Hbound = NA_real_,
+             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = NA_real_, cpu = tm,
+             draws = NA_real_)
+}
+
 one <- function(k, r, seed, simNoise) {
+  if (simNoise == "hetgp") return(one_plugin(k, r, seed))
   d <- data_set(k, r, seed)
   ex <- exact_posterior(d)
   set.seed(seed)
@@ -101,7 +145,7 @@ one <- function(k, r, seed, simNoise) {
           stats::median) * ysd
   }
   sdErr <- if (is.null(sdU)) NA_real_ else mean(abs(sdU - sdRun(xu)) / sdRun(xu))
-  bound <- grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2]))
+  bound <- if (opt$bound) grid_hellinger(bound_posterior(d, ex), ex$dens, diff(ex$t[1:2])) else NA_real_
   data.frame(unique = k, reps = r, set = seed, model = simNoise, H = hellinger(tt, ex),
              Hbound = bound,
              covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = sdErr, cpu = tm,
@@ -109,9 +153,14 @@ one <- function(k, r, seed, simNoise) {
 }
 
 res <- list()
-for (k in opt$unique) for (r in opt$reps) for (s in seq_len(opt$sets)) {
-  for (mode in opt$models) res[[length(res) + 1L]] <- one(k, r, s, mode)
-  if (k * r <= opt$maxNone) res[[length(res) + 1L]] <- one(k, r, s, "none")
+for (k in opt$unique) for (r in opt$reps) for (s in opt$first - 1L + seq_len(opt$sets)) {
+  runs <- c(opt$models, if (k * r <= opt$maxNone && (opt$noneSets == 0L || s <= opt$noneSets)) "none")
+  for (mode in runs) {
+    res[[length(res) + 1L]] <- row <- one(k, r, s, mode)
+    cat(sprintf("%d x %d set %d %s: t 90%% %s, %.1f CPU s\n", k, r, s, mode,
+                if (row$covers) "covers" else "misses", row$cpu))
+    if (nzchar(opt$save)) saveRDS(do.call(rbind, res), opt$save)
+  }
 }
 res <- do.call(rbind, res)
 cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), drop = TRUE),
@@ -121,6 +170,8 @@ cell <- do.call(rbind, lapply(split(res, list(res$model, res$reps, res$unique), 
              H = sprintf("%.3f (%.3f-%.3f)", stats::median(d$H), min(d$H), max(d$H)),
              Hbound = round(stats::median(d$Hbound), 3),
              covers90 = sprintf("%d/%d", sum(d$covers), nrow(d)),
+             # the binomial standard error of the share
+             coverSE = round(sqrt(mean(d$covers) * (1 - mean(d$covers)) / nrow(d)), 3),
              width90 = round(stats::median(d$width90), 3),
              sdErr = round(stats::median(d$sdErr), 3),
              cpu = sprintf("%.1f (%.1f-%.1f)", stats::median(d$cpu), min(d$cpu), max(d$cpu)))

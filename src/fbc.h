@@ -147,6 +147,9 @@ struct Model {
   // with an input-dependent noise (class gR, one per unique input): each
   // unique input's within sum of squares (they add up to repSSW)
   std::vector<double> repSSWi;
+  // the field one realization of the stochastic simulator: its noise
+  // variance gains sigma2R (a constant noise only)
+  bool fieldRealization = false;
 };
 // Reads list(kernS, kernB, algebra, offset, length) (offset and length
 // integer vectors named by class) and checks that the layout tiles phi and
@@ -331,6 +334,7 @@ public:
   arma::vec repInv;         // 1 / the runs at each unique input
   double repSSW = 0.0, repDf = 0.0, repLogN = 0.0;  // repLogN: sum of log n_i
   double noiseLoglik() const;
+  bool fieldReal = false;   // the field's noise variance is sigma2E + sigma2R
   // an input-dependent noise (latent_noise.cpp): input i's variance is
   // exp(gR_i), gR ~ GP(muG, sigma2G Rg(thetaG)); the GP's log density is
   // part of logLik() (latentLogPrior())

@@ -45,6 +45,7 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   latent = lay.length_of("gR") > 0;
   simNoise = lay.length_of("sigma2R") > 0 || latent;
   iSigma2R = lay.offset_of("sigma2R");
+  fieldReal = simNoise && !latent && model.fieldRealization;
   iG = lay.offset_of("gR"); iMuG = lay.offset_of("muG");
   iSigma2G = lay.offset_of("sigma2G"); iThetaG = lay.offset_of("thetaG");
   if (latent) {
@@ -393,7 +394,7 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     for (int c = 0; c < b; ++c) {
       const int g = noise ? noise[c] : 0;
       if (g < 0 || g >= G) Rcpp::stop("noise group %d of a new point is not one of the %d", g + 1, G);
-      v0[c] += phi[iSigma2E + g];
+      v0[c] += phi[iSigma2E + g] + (fieldReal ? phi[iSigma2R] : 0.0);
     }
   }
   // covariances with the distinct field rows (Rs(Xk, xk*) involves the
@@ -447,7 +448,7 @@ bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double
       const int r = std::max(gi, gj), c = std::min(gi, gj);
       sc[i] = s2S * Q.at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
     }
-    sc[j] += phi[iSigma2E + noise_[j]];
+    sc[j] += phi[iSigma2E + noise_[j]] + (fieldReal ? phi[iSigma2R] : 0.0);
     dmax = std::max(dmax, sc[j]);
   }
   if (!chol_lower(S)) return false;

@@ -187,6 +187,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     out.repSSW = 0.0;
     for (double v : ssw) out.repSSW += v;
     if (lay.length_of("gR") > 0) out.repSSWi = ssw;
+    out.fieldRealization = rp.containsElementNamed("realization") && Rcpp::as<bool>(rp["realization"]);
     out.repDf = 0.0;
     for (double c : out.repCount) {
       if (!(c >= 1)) Rcpp::stop("the replicate counts must be 1, 2, ...");

@@ -278,3 +278,66 @@ test_that("with several outputs: an RMSE per output, and the output drawn as cat
   expect_equal(p$data$x[p$data$panel == "out (1 conc, 2 rate)"], match(sim$out, c("conc", "rate")))
   expect_no_error(ggplot2::ggplot_build(p))
 })
+
+# A stochastic simulator (5 exp(-t x) plus N(0, 0.2^2) run noise) on 3 x 3
+# unique inputs with 1 to 4 replicates each, and field data at t = 1.7.
+noisy_runs <- function(seed = 2) {
+  set.seed(seed)
+  U <- expand.grid(x = c(0, 1.5, 3), t = c(0.5, 1.75, 3))
+  X <- U[rep(seq_len(9), c(1, 3, 2, 4, 2, 3, 1, 2, 4)), ]
+  sim <- cbind(y = 5 * exp(-X$t * X$x) + rnorm(nrow(X), 0, 0.2), x = X$x, t = X$t)
+  rownames(sim) <- NULL
+  xf <- seq(0.1, 2.9, length.out = 4)
+  list(sim = sim, field = cbind(y = 5 * exp(-1.7 * xf) + rnorm(4, 0, 0.05), x = xf))
+}
+
+test_that("with the simulator's noise, every run is predicted with its input's replicates held out", {
+  pb <- noisy_runs()
+  set.seed(4)
+  fit <- suppressWarnings(calibrate(pb$sim, pb$field, discrepancy = "none", nMCMC = 100,
+                                    nBurn = 50, nChains = 1, converge = FALSE))
+  sc <- fit$model$scale
+  phi <- FBC:::sampler_draws(fit, which.max(fit$logPost))[1, ]
+  idx <- FBC:::param_indices(1, 1, "none", replicates = 1L)
+  th <- lapply(idx, function(i) phi[i])
+  # plain R on every run: K = sigma2S (R_s + nugget) over the runs' inputs
+  # plus r I, each input's runs held out together
+  X <- cbind((pb$sim[, "x"] - sc$xmin[1]) / (sc$xmax[1] - sc$xmin[1]),
+             (pb$sim[, "t"] - sc$xmin[2]) / (sc$xmax[2] - sc$xmin[2]))
+  y <- (pb$sim[, 1] - sc$ymean) / sc$ysd
+  n <- nrow(X)
+  group <- FBC:::sim_replicates(pb$sim)$group
+  # (replicates share eta, and so its nugget)
+  K <- th$sigma2S * (dense_corr(X, X, th$thetaS, th$alphaS, "matern52") +
+                       fit$settings$nugget * outer(group, group, "==")) + th$sigma2R * diag(n)
+  ref_mean <- ref_var <- numeric(n)
+  for (g in unique(group)) {
+    B <- which(group == g)
+    A <- solve(K[-B, -B], K[-B, B, drop = FALSE])
+    ref_mean[B] <- crossprod(A, y[-B])
+    ref_var[B] <- diag(K[B, B, drop = FALSE] - K[B, -B, drop = FALSE] %*% A)
+  }
+  v <- emulator_cv(fit, method = "MAP")
+  expect_identical(nrow(v$runs), n)
+  expect_identical(v$runs$fold, group)
+  expect_equal(v$runs$observed, pb$sim[, 1])
+  expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref_mean, tolerance = 1e-8)
+  expect_equal(v$runs$sd, sc$ysd * sqrt(ref_var), tolerance = 1e-8)
+  expect_equal(v$runs$pit, pnorm((y - ref_mean) / sqrt(ref_var)), tolerance = 1e-7)
+  expect_equal(as.matrix(v$runs[, c("x", "t")]), pb$sim[, c("x", "t")], ignore_attr = TRUE)
+  # folds: a number counts the unique inputs; labels per run keep replicates together
+  lab <- c(1, 2, 3, 1, 2, 3, 1, 2, 3)[group]
+  v3 <- emulator_cv(fit, method = "MAP", folds = lab)
+  expect_identical(v3$nFolds, 3L)
+  for (k in 1:3) {
+    B <- which(lab == k)
+    A <- solve(K[-B, -B], K[-B, B, drop = FALSE])
+    expect_equal(v3$runs$mean[B], sc$ymean + sc$ysd * drop(crossprod(A, y[-B])), tolerance = 1e-8)
+  }
+  expect_identical(emulator_cv(fit, method = "MAP", folds = 3)$runs$mean, v3$runs$mean)
+  expect_snapshot(print(v), transform = function(x) gsub("-?[0-9]+\\.[0-9]+", "<num>", x))
+  expect_snapshot(error = TRUE, {
+    emulator_cv(fit, folds = seq_len(n))
+    emulator_cv(fit, folds = 1:9)
+  })
+})

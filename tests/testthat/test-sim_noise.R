@@ -344,7 +344,16 @@ test_that("an input-dependent noise predicts its sd, prints, and resumes from a 
   mu <- -3 + drop(t(k) %*% solve(K, g + 3))
   v <- 1 + 1e-6 - colSums(k * solve(K, k))
   expect_equal(one$noiseSd, sqrt(exp(mu + v / 2)) * fit$model$scale$ysd, tolerance = 1e-6)
-  expect_match(capture.output(print(fit)), "input-dependent", all = FALSE)
+  out <- capture.output(print(fit))
+  expect_match(out, "input-dependent", all = FALSE)
+  # print() summarises the latent log-variances in one line: their count
+  # and the range of their medians, none of them as a row of the table
+  expect_false(any(grepl("^gR[0-9]+ ", out)))
+  med <- apply(fit$Phi[, paste0("gR", 1:5)], 2, stats::median)
+  line <- grep("^gR: ", out, value = TRUE)
+  expect_match(line, sprintf("5 latent log-variances .* medians %s to %s;",
+                             format(signif(min(med), 3)), format(signif(max(med), 3))))
+  expect_true(all(paste0("gR", 1:5) %in% attr(summary(fit), "row.names")))
   # a checkpointed run is the same run, and resumes
   dir <- withr::local_tempdir()
   first <- tiny_latent(300, checkpoint = dir)
@@ -393,4 +402,96 @@ test_that("loo() compares simNoise choices on the same field data", {
   cmp <- suppressWarnings(loo::loo_compare(loos))
   expect_setequal(rownames(cmp), names(fits))
   expect_equal(unname(cmp[, "elpd_diff"][1]), 0)
+})
+
+test_that("a field that is one realization carries the simulator's noise in its variance", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3, 2, 4), nf = 4, seed = 2)
+  set.seed(9)
+  for (disc in c("gp", "none")) {
+    model <- calibrate(pb$sim, pb$field, simNoise = "constant", fieldLink = "realization",
+                       discrepancy = disc, fit = FALSE)
+    mean_model <- calibrate(pb$sim, pb$field, simNoise = "constant", discrepancy = disc,
+                            fit = FALSE)
+    expect_true(model$spec$model$replicates$realization)
+    expect_null(mean_model$spec$model$replicates$realization)
+    d <- model$data
+    n <- nrow(d$Xf)
+    for (k in 1:2) {
+      phi <- random_phi(1, 1, disc)
+      r <- stats::rgamma(1, 2, 20)
+      full <- c(phi, r)
+      # plain R on every run: the field rows' variance gains r
+      sys <- full_row_system(model, pb$sim, phi, rep(r, nrow(d$Xs)), disc)
+      C <- sys$C + diag(c(rep(r, n), rep(0, length(sys$res) - n)))
+      L <- chol(C)
+      a <- backsolve(L, sys$res, transpose = TRUE)
+      ref <- -0.5 * (length(sys$res) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+      got <- FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, full, FBC:::fbc_nugget,
+                               model = model$spec$model)
+      expect_equal(got, ref, tolerance = 1e-8)
+      # the mean link is the same model without that term
+      sysM <- full_row_system(mean_model, pb$sim, phi, rep(r, nrow(d$Xs)), disc)
+      expect_equal(FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, full, FBC:::fbc_nugget,
+                                     model = mean_model$spec$model),
+                   as.numeric(determinant(sysM$C)$modulus) * -0.5 - 0.5 *
+                     (length(sysM$res) * log(2 * pi) + sum(sysM$res * solve(sysM$C, sysM$res))),
+                   tolerance = 1e-8)
+      # leave-one-out densities of the field rows (what loo() compares)
+      Q <- solve(C)
+      q <- diag(Q)[1:n]
+      aa <- drop(Q %*% sys$res)[1:n]
+      loo_ref <- -0.5 * log(2 * pi) + 0.5 * log(q) - 0.5 * aa^2 / q
+      got_loo <- FBC:::.fbc_loo(d$Xf, d$yf, d$Xs, d$ys, rbind(full), FBC:::fbc_nugget,
+                                group = seq_len(n), model = model$spec$model)
+      expect_equal(drop(got_loo), loo_ref, tolerance = 1e-8)
+      # a new field observation at the first field input: its variance and
+      # covariances as row 1's (the field's noise r + sigma2E its own)
+      th <- unpack_phi(phi, 1, 1, disc)
+      kv <- C[, 1]
+      kv[1] <- kv[1] - th$sigma2E - r
+      pr <- FBC:::.fbc_predict(d$Xf, d$yf, d$Xs, d$ys, rbind(full), d$Xf[1, , drop = FALSE],
+                               type = 1L, nugget = FBC:::fbc_nugget, block = 10L,
+                               model = model$spec$model, noise = integer(), source = integer())
+      mu0 <- if (disc == "gp") th$muB else 0
+      expect_equal(drop(pr$mean), mu0 + sum(kv * solve(C, sys$res)), tolerance = 1e-8)
+      expect_equal(drop(pr$var), C[1, 1] - sum(kv * solve(C, kv)), tolerance = 1e-8)
+    }
+  }
+})
+
+test_that("loo() compares the field links on the same data, and ppc_field() follows the link", {
+  skip_if_not_installed("loo")
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(2, 3), nf = 5, seed = 5)
+  fits <- lapply(c(mean = "mean", realization = "realization"), function(link) {
+    set.seed(8)
+    calibrate(pb$sim, pb$field, fieldLink = link, discrepancy = "none", nMCMC = 200,
+              nBurn = 100, nChains = 2, converge = FALSE)
+  })
+  loos <- lapply(fits, function(f) suppressWarnings(loo::loo(f, ndraws = 100)))
+  expect_true(all(vapply(loos, function(l) nrow(l$pointwise), integer(1)) == 5L))
+  cmp <- suppressWarnings(loo::loo_compare(loos))
+  expect_setequal(rownames(cmp), names(fits))
+  # the replicated field data: each draw's predictive variance carries r
+  # under "realization" (as predict(type = "field") of that draw)
+  f <- fits$realization
+  set.seed(1)
+  pp <- ppc_field(f, ndraws = 20)
+  rows <- FBC:::check_rows(f, "Bayesian", 20)
+  phis <- FBC:::sampler_draws(f, rows)
+  d <- f$model$data
+  one <- FBC:::.fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis, d$Xf, type = 1L,
+                            nugget = f$settings$nugget, block = 100L, model = f$model$spec$model,
+                            noise = integer(), source = integer())
+  ysd <- f$model$scale$ysd
+  expect_equal(pp$obs$sd^2, ysd^2 * (rowMeans(one$var) + rowMeans((one$mean - rowMeans(one$mean))^2)),
+               tolerance = 1e-8)
+  # and the field's noise is at least r at every draw
+  expect_true(all(one$var >= matrix(phis[, ncol(phis)], nrow(one$var), ncol(one$var), byrow = TRUE)))
+  expect_snapshot(print(calibrate(pb$sim, pb$field, fieldLink = "realization", fit = FALSE)))
+  expect_snapshot(error = TRUE, {
+    calibrate(pb$sim, pb$field, simNoise = "input", fieldLink = "realization", fit = FALSE)
+    calibrate(pb$sim, pb$field, simNoise = "none", fieldLink = "realization", fit = FALSE)
+    calibrate(pb$sim, pb$field, fieldLink = "one")
+    calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, fieldLink = "realization")
+  })
 })
