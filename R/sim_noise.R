@@ -330,17 +330,6 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
   sprintf("%s; simulator noise: %s%s", found, noise, link)
 }
 
-# What has no model of the simulator's own noise yet refuses a fit that has
-# it (`fn`: the function's name): the design of new runs scores a run as if
-# it were noiseless.
-check_no_sim_noise <- function(model, fn, call = parent.frame()) {
-  if (is.null(model$spec$model$replicates)) return(invisible(TRUE))
-  cli::cli_abort(c(
-    "{.fn {fn}} does not model the simulator's own noise yet, which this fit samples ({.code simNoise = \"{model$design$simNoise$mode}\"}).",
-    i = "It would score new runs as if they were noiseless. Choose runs from a fit with {.code simNoise = \"none\"}, or by a design of your own."
-  ), call = call)
-}
-
 # The noise sd of a run at new experimental inputs Xn (scaled) and each
 # draw's kappa, from the latent log-variances' GP (standardised units): at
 # a draw, log r(x*) given g at the unique inputs is normal with mean
