@@ -34,7 +34,9 @@
 #' more kernel expansion whose indices are again in closed form, with no
 #' Monte Carlo error of their own. Between the support points the path is
 #' its conditional mean, so the spread is slightly understated when `paths`
-#' is small against the inputs' dimension. `paths = 0` gives the indices of
+#' is small against the inputs' dimension (on Ishigami's function and Sobol's
+#' g-function with 200 runs, 512 points widen the intervals by 7-9% over the
+#' default 128, at five to eight times the cost). `paths = 0` gives the indices of
 #' the emulator's posterior mean at each draw: they carry the parameters'
 #' uncertainty only, and their intervals narrow faster than the emulator's
 #' error shrinks (on Ishigami's function with 100 to 200 runs they cover the
