@@ -81,6 +81,10 @@
     .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support)
 }
 
+.fbc_sobol_pred_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share) {
+    .Call(`_FBC_fbc_sobol_pred`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share)
+}
+
 .fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model, support) {
     .Call(`_FBC_fbc_sim_mean`, Xf, yf, Xs, ys, phis, nugget, model, support)
 }

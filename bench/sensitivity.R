@@ -18,14 +18,17 @@
 #             points at the true (x2, x6) = (0.3, 0.6), noise sd 0.02.
 #             True indices from V_i = 1 / (3 (1 + a_i)^2).
 # Each design: calibrate() with the default kernels (kernelS = "matern52",
-# a GP discrepancy) and nMCMC/nBurn/nChains as given (a fixed run length),
+# a GP discrepancy) and its default run length (four chains run until they
+# have converged; --nMCMC, --nBurn, --nChains > 0 fix them instead),
 # then sensitivity(fit, prediction = FALSE) with its defaults (200 draws,
 # each with a conditional sample path through 128 support points; method
 # "FBC") and with paths = 0 (the indices of the emulator's mean; "FBC
 # (mean)"), the measure the problem's box (inputs = the true ranges).
 # Columns per method, problem and m:
 # designs run; coverage of the true first-order (S) and total (ST) indices
-# by the 90% intervals, over designs and inputs (cover_S_nz: over the
+# by the 90% intervals, over designs and inputs, with its binomial standard
+# error sqrt(c (1 - c) / pairs) (se_*; pairs of one design are not
+# independent, so it is a lower bound) (cover_S_nz: over the
 # inputs whose true S is not zero, which no interval of a positive index
 # holds); mean interval widths; the
 # largest |median - truth|'s mean over designs; CPU seconds of
@@ -40,8 +43,8 @@
 library(FBC)
 source("bench/options.R")
 opt <- bench_options(list(m = c(50L, 100L, 200L), designs = c(20L, 20L, 10L),
-                          problems = c("ishigami", "gfun"), nMCMC = 3000L, nBurn = 1000L,
-                          nChains = 2L, peer_n = 300L,
+                          problems = c("ishigami", "gfun"), nMCMC = 0L, nBurn = 0L,
+                          nChains = 0L, peer_n = 300L,
                           out = "sensitivity-study.rds"))
 if (opt$quick) {
   opt$m <- 50L
@@ -117,8 +120,9 @@ one_design <- function(pname, m, seed) {
   inputs <- lapply(dat$ord, function(k) c(pr$lower[k], pr$upper[k]))
   names(inputs) <- dat$names
   t0 <- cpu()
-  fit <- suppressWarnings(calibrate(dat$sim, dat$field, nMCMC = opt$nMCMC, nBurn = opt$nBurn,
-                                    nChains = opt$nChains))
+  run <- list(nMCMC = opt$nMCMC, nBurn = opt$nBurn, nChains = opt$nChains)
+  run <- run[vapply(run, function(v) v > 0L, logical(1))]  # 0: calibrate()'s default
+  fit <- suppressWarnings(do.call(calibrate, c(list(dat$sim, dat$field), run)))
   t_fit <- cpu() - t0
   t0 <- cpu()
   s <- sensitivity(fit, inputs = inputs, prediction = FALSE)
@@ -196,13 +200,16 @@ res$width <- res$upper - res$lower
 res$err <- abs(res$median - res$truth)
 summ <- do.call(rbind, lapply(split(res, list(res$peer, res$problem, res$m), drop = TRUE), function(d) {
   per <- function(ix, what) mean(d[[what]][d$index == ix])
+  bse <- function(x) sqrt(mean(x) * (1 - mean(x)) / length(x))
   sens <- tapply(d$cpu_sens, d$seed, `[`, 1)
   fitc <- tapply(d$cpu_fit, d$seed, `[`, 1)
   data.frame(method = d$peer[1], problem = d$problem[1], m = d$m[1],
              designs = length(unique(d$seed)),
              cover_S = per("first", "covered"),
              cover_S_nz = mean(d$covered[d$index == "first" & d$truth > 0]),
+             se_S_nz = bse(d$covered[d$index == "first" & d$truth > 0]),
              cover_ST = per("total", "covered"),
+             se_ST = bse(d$covered[d$index == "total"]),
              width_S = per("first", "width"), width_ST = per("total", "width"),
              max_err = mean(tapply(d$err, d$seed, max)),
              cpu_fit = if (all(is.na(fitc))) NA_character_ else

@@ -340,6 +340,30 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// fbc_sobol_pred
+Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& share);
+RcppExport SEXP _FBC_fbc_sobol_pred(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP shareSEXP) {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xf(XfSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type yf(yfSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type Xs(XsSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type ys(ysSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type phis(phisSEXP);
+    Rcpp::traits::input_parameter< double >::type nugget(nuggetSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type model(modelSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::LogicalVector& >::type exact(exactSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type lower(lowerSEXP);
+    Rcpp::traits::input_parameter< const arma::vec& >::type upper(upperSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type nodes(nodesSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type weights(weightsSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type grid(gridSEXP);
+    Rcpp::traits::input_parameter< const arma::mat& >::type share(shareSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sobol_pred(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share));
+    return rcpp_result_gen;
+END_RCPP
+}
 // fbc_sim_mean
 Rcpp::List fbc_sim_mean(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const arma::mat& support);
 RcppExport SEXP _FBC_fbc_sim_mean(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP supportSEXP) {
@@ -416,6 +440,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
     {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 14},
+    {"_FBC_fbc_sobol_pred", (DL_FUNC) &_FBC_fbc_sobol_pred, 14},
     {"_FBC_fbc_sim_mean", (DL_FUNC) &_FBC_fbc_sim_mean, 8},
     {"_FBC_has_openmp", (DL_FUNC) &_FBC_has_openmp, 0},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},

@@ -533,8 +533,10 @@ public:
   // The simulator's conditional mean given y at the current state as a
   // kernel expansion (sensitivity.cpp): E[eta(z) | y] = sum_j w_j Rs(z, Z_j)
   // over the centres Z = (Xs; the distinct field rows at kappa); with
-  // support points P a conditional sample path through them (centres P added).
-  void simMean(arma::mat& Z, arma::vec& w, const arma::mat* P = nullptr);
+  // support points P a conditional sample path through them (centres P added);
+  // wb: the bias's mean as s2B Rb(x, Xu) wb over the distinct field inputs.
+  void simMean(arma::mat& Z, arma::vec& w, const arma::mat* P = nullptr,
+               arma::vec* wb = nullptr);
 
 protected:
   // x <- Ds^-1 x at the current state (sensitivity.cpp; by default from

@@ -52,7 +52,11 @@ void DensePosterior::simSolve(arma::vec& x) {
 //   = mu*(z) + s2S Rs(z, P) c,   c = Cov(eta(P) | y)^-1 (f_P - mu_P) = L^-T u,
 // where mu* is the mean above given y* = y - Cov(y, eta(P)) c: one more
 // kernel expansion, with the centres P added.
-void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P) {
+// Without P, wb: the bias's posterior mean given y is s2B Kb(x)' S^-1 r
+// (model.cpp, condition()), Kb = Rb(Xu, x) or, under S-GaSP, c (Rb(Xu, Xu)
+// + c I)^-1 Rb(Xu, x) (biasModelCross()): wb = s2B S^-1 r summed by
+// distinct row, times c (Rb + c I)^-1 under S-GaSP.
+void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P, arma::vec* wb) {
   const double s2S = phi[iSigma2S], muB = biasMean ? phi[iMuB] : 0.0;
   arma::mat Xk(nu_, p + q);
   if (p > 0) Xk.cols(0, p - 1) = Xu_;
@@ -92,6 +96,18 @@ void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P) {
   v = arma::solve(arma::trimatu(arma::trimatl(LS).t()), v);
   arma::vec beta(nu_, arma::fill::zeros);
   for (int i = 0; i < n; ++i) beta[grp_[i]] += s2S * v[i];
+  if (wb) {
+    wb->zeros(bias ? nu_ : 0);
+    if (bias) {
+      const double s2B = phi[iSigma2B];
+      for (int i = 0; i < n; ++i) (*wb)[grp_[i]] += s2B * v[i];
+      arma::mat Wb(wb->memptr(), nu_, 1, false, true);
+      arma::vec unused;
+      const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
+      const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
+      biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, Wb, unused);
+    }
+  }
   arma::vec c = ys - K * beta / s2S;
   simSolve(c);
   Z = arma::join_cols(Xs_, Xk);
@@ -215,6 +231,19 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
   }
   static const double gx[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
   static const double gw[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+  // For two centres inside [a, b] the tails' moments int_0^X v^k exp(-2 v) dv
+  // depend on one centre each (X = s (b - c2) right of both, s (c1 - a) left
+  // of both): computed once per centre, not once per pair.
+  std::vector<double> hb, ha;
+  if (shared) {
+    hb.assign(5 * N, 0.0);
+    ha.assign(5 * N, 0.0);
+    for (arma::uword j = 0; j < N; ++j) {
+      if (c[j] < a || c[j] > b) continue;
+      exp_moments(2.0, s * (b - c[j]), 2 * K, Eb[j] * Eb[j], &hb[5 * j]);
+      exp_moments(2.0, s * (c[j] - a), 2 * K, Ea[j] * Ea[j], &ha[5 * j]);
+    }
+  }
   I2.set_size(N, N);
   for (arma::uword l = 0; l < N; ++l) {
     for (arma::uword j = l; j < N; ++j) {
@@ -235,12 +264,17 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
       for (int i = 0; i <= K; ++i)
         for (int k = 0; k <= K; ++k) Q[i + k] += sh[i] * pc[k];
       double v = 0.0;
-      if (b > std::max(a, c2)) {
-        const double e1 = inside ? Eb[i2] * Eb[i2] : std::exp(-2.0 * s * (b - c2));
+      if (inside) {
+        const double* r = &hb[5 * i2];
+        const double* l = &ha[5 * i1];
+        for (int k = 0; k <= 2 * K; ++k) v += Q[k] * (r[k] + l[k]);
+        v *= E / s;
+      } else if (b > std::max(a, c2)) {
+        const double e1 = std::exp(-2.0 * s * (b - c2));
         v += E * exp_poly(Q, 2 * K, s, 2.0, std::max(a, c2) - c2, b - c2, e1);
       }
-      if (std::min(b, c1) > a) {
-        const double e1 = inside ? Ea[i1] * Ea[i1] : std::exp(-2.0 * s * (c1 - a));
+      if (!inside && std::min(b, c1) > a) {
+        const double e1 = std::exp(-2.0 * s * (c1 - a));
         v += E * exp_poly(Q, 2 * K, s, 2.0, c1 - std::min(b, c1), c1 - a, e1);
       }
       const double lo = std::max(a, c1), hi = std::min(b, c2);
@@ -257,6 +291,54 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
       I2.at(j, l) = v / len;
       I2.at(l, j) = v / len;
     }
+  }
+}
+
+// One input's integrals for centres c of the family kern (theta, alpha):
+// I1[j] = int r(t - c_j) dmu(t) and I2 (N x N), in closed form against a
+// uniform measure on [lo, up] (exact) for the Gaussian and Matern families,
+// else by the quadrature nodes and weights (summing to one).
+static void integrals_1d(int kern, double theta, double alpha, const arma::vec& c, bool exact,
+                         double lo, double up, const arma::vec& nodes, const arma::vec& wq,
+                         double* I1, arma::mat& I2) {
+  const bool gauss = kern == 2 || (kern == 1 && alpha == 2.0);  // Gaussian, power exponential
+  if (exact && gauss) {
+    gauss_uniform(c, theta, lo, up, I1, I2);
+  } else if (exact && (kern == 3 || kern == 4)) {
+    matern_uniform(c, theta, kern, lo, up, I1, I2);
+  } else {
+    arma::mat Rq(c.n_elem, nodes.n_elem);
+    kernel_corr(kern, arma::mat(c), arma::mat(nodes), 1, &theta, &alpha, Rq, false);
+    arma::vec(I1, c.n_elem, false, true) = Rq * wq;
+    Rq.each_row() %= arma::sqrt(wq).t();
+    I2 = Rq * Rq.t();
+  }
+}
+
+// The Sobol variances of f(z) = sum_j w_j prod_k phi_jk(z_k) over the first
+// D inputs from I1 (N x D) and I2[k] (the header's formulas): V, V1[k],
+// VT[k]; A (N x D) the weights times a_k = prod_{i != k} I1[, i], for the
+// main effects E[f | z_k = t] = sum_j A_jk phi_jk(t).
+static void sobol_variances(const arma::vec& w, const arma::mat& I1,
+                            const std::vector<arma::mat>& I2, int D, double& V, double* V1,
+                            double* VT, arma::mat& A) {
+  const arma::uword N = w.n_elem;
+  const double f0 = arma::dot(w, arma::prod(I1, 1));
+  // suffix products pre[k] = I2_k o ... o I2_{D-1} (pre[D]: ones)
+  std::vector<arma::mat> pre(D + 1);
+  pre[D].ones(N, N);
+  for (int k = D - 1; k >= 0; --k) pre[k] = pre[k + 1] % I2[k];
+  V = arma::as_scalar(w.t() * pre[0] * w) - f0 * f0;
+  arma::mat prefix(N, N, arma::fill::ones);
+  A.set_size(N, D);
+  for (int k = 0; k < D; ++k) {
+    arma::vec ak(N, arma::fill::ones);
+    for (int i = 0; i < D; ++i) if (i != k) ak %= I1.col(i);
+    A.col(k) = w % ak;
+    V1[k] = arma::as_scalar(A.col(k).t() * I2[k] * A.col(k)) - f0 * f0;
+    const arma::vec wi = w % I1.col(k);
+    VT[k] = V - (arma::as_scalar(wi.t() * (prefix % pre[k + 1]) * wi) - f0 * f0);
+    prefix %= I2[k];
   }
 }
 
@@ -279,15 +361,15 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
   Posterior& post = *pp;
   const int kern = Rcpp::as<int>(model["kernS"]);
-  const int D = post.p + post.q, M = phis.n_rows, G = grid.n_rows, Q = nodes.n_rows;
+  const int D = post.p + post.q, M = phis.n_rows, G = grid.n_rows;
   if ((int) exact.size() != D || (int) nodes.n_cols != D || (int) weights.n_cols != D ||
       (int) grid.n_cols != D || (int) lower.n_elem != D || (int) upper.n_elem != D)
     Rcpp::stop("the measure must have %d inputs", D);
-  arma::vec f0(M), V(M);
+  arma::vec V(M);
   arma::mat V1(D, M), VT(D, M), main(G * D, M);
-  arma::mat Z, I1, Rq, Rg;
+  arma::mat Z, I1, A, Rg;
   arma::vec w;
-  std::vector<arma::mat> I2(D), pre(D + 1);
+  std::vector<arma::mat> I2(D);
   const int S = support.n_rows / std::max(M, 1);
   if (S > 0 && ((int) support.n_rows != S * M || (int) support.n_cols != D))
     Rcpp::stop("the support points must be %d draws x S rows and %d columns", M, D);
@@ -295,54 +377,136 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   for_each_draw(post, phis, [&](arma::uword d) {
     if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
     sp->simMean(Z, w, S > 0 ? &Pd : nullptr);
-    const arma::uword N = Z.n_rows;
-    I1.set_size(N, D);
+    I1.set_size(Z.n_rows, D);
     for (int k = 0; k < D; ++k) {
-      const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
-      const bool gauss = kern == 2 || (kern == 1 && alpha == 2.0);  // Gaussian, power exponential
-      const arma::vec c = Z.col(k);
-      if (exact[k] && gauss) {
-        gauss_uniform(c, theta, lower[k], upper[k], I1.colptr(k), I2[k]);
-      } else if (exact[k] && (kern == 3 || kern == 4)) {
-        matern_uniform(c, theta, kern, lower[k], upper[k], I1.colptr(k), I2[k]);
-      } else {
-        Rq.set_size(N, Q);
-        kernel_corr(kern, arma::mat(c), arma::mat(nodes.col(k)), 1, &theta, &alpha, Rq, false);
-        I1.col(k) = Rq * weights.col(k);
-        Rq.each_row() %= arma::sqrt(weights.col(k)).t();
-        I2[k] = Rq * Rq.t();
-      }
+      integrals_1d(kern, post.phi[post.iThetaS + k], post.phi[post.iAlphaS + k], Z.col(k),
+                   exact[k], lower[k], upper[k], nodes.col(k), weights.col(k), I1.colptr(k),
+                   I2[k]);
     }
-    // a_k = prod_{i != k} I1[, i], through the product of all where nonzero
-    arma::vec all = arma::prod(I1, 1);
-    f0[d] = arma::dot(w, all);
-    // suffix products pre[k] = I2_k o ... o I2_{D-1} (pre[D]: ones)
-    pre[D].ones(N, N);
-    for (int k = D - 1; k >= 0; --k) pre[k] = pre[k + 1] % I2[k];
-    const double Emu2 = arma::as_scalar(w.t() * pre[0] * w);
-    V[d] = Emu2 - f0[d] * f0[d];
-    arma::mat prefix(N, N, arma::fill::ones);
+    sobol_variances(w, I1, I2, D, V[d], V1.colptr(d), VT.colptr(d), A);
     for (int k = 0; k < D; ++k) {
-      arma::vec ak(N, arma::fill::ones);
-      for (int i = 0; i < D; ++i) if (i != k) ak %= I1.col(i);
-      const arma::vec wa = w % ak;
-      V1(k, d) = arma::as_scalar(wa.t() * I2[k] * wa) - f0[d] * f0[d];
-      const arma::vec wi = w % I1.col(k);
-      const arma::mat Mk = prefix % pre[k + 1];
-      VT(k, d) = V[d] - (arma::as_scalar(wi.t() * Mk * wi) - f0[d] * f0[d]);
-      prefix %= I2[k];
-      // main effect E[mu | z_k = t] = sum_j w_j a_k[j] r_k(t - Z_jk) at the grid
       const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
-      Rg.set_size(G, N);
+      Rg.set_size(G, Z.n_rows);
       kernel_corr(kern, arma::mat(grid.col(k)), arma::mat(Z.col(k)), 1, &theta, &alpha, Rg, false);
-      main.col(d).subvec(k * G, (k + 1) * G - 1) = Rg * wa;
+      main.col(d).subvec(k * G, (k + 1) * G - 1) = Rg * A.col(k);
     }
     return true;
   });
-  return Rcpp::List::create(Rcpp::Named("f0") = f0, Rcpp::Named("V") = V,
-                            Rcpp::Named("V1") = V1, Rcpp::Named("VT") = VT,
-                            Rcpp::Named("main") = main);
+  return Rcpp::List::create(Rcpp::Named("V") = V, Rcpp::Named("V1") = V1,
+                            Rcpp::Named("VT") = VT, Rcpp::Named("main") = main);
 }
+
+// The calibrated prediction's mean zeta(x) = E[eta(x, kappa) + delta(x) | y]
+// per draw over the p experimental inputs: muB plus two kernel expansions,
+// the simulator's (simMean(): centres Z, weights w times the correlation
+// prod_{k >= p} rS(kappa_k - Z_jk) of their calibration coordinates) and
+// the bias's (centres Xu, weights wb, the bias family and parameters). Its
+// Sobol variances in closed form as the simulator's: per input, the blocks
+// of I2 within each expansion in closed form (integrals_1d()), the cross
+// block by the quadrature nodes (r_S(t - c_j) r_B(t - u_l) against the
+// measure). Measure: the first p columns of exact, lower, upper, nodes,
+// weights; grid: G x p values for the main effects. With `share` points
+// (b x p) also predict()'s conditional means and variances there (types
+// mean, simulator and, with a bias, bias) for the variance shares.
+// [[Rcpp::export(.fbc_sobol_pred_c)]]
+Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
+                          const arma::vec& ys, const arma::mat& phis, double nugget,
+                          const Rcpp::List& model, const Rcpp::LogicalVector& exact,
+                          const arma::vec& lower, const arma::vec& upper,
+                          const arma::mat& nodes, const arma::mat& weights,
+                          const arma::mat& grid, const arma::mat& share) {
+  std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
+  SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
+  if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
+  Posterior& post = *pp;
+  const int kS = Rcpp::as<int>(model["kernS"]), kB = Rcpp::as<int>(model["kernB"]);
+  const int p = post.p, D = p + post.q, M = phis.n_rows, G = grid.n_rows;
+  const int b = share.n_rows;
+  if (p < 1) Rcpp::stop("the prediction needs an experimental input");
+  if ((int) grid.n_cols != p || (int) share.n_cols != p) Rcpp::stop("grid and share need %d columns", p);
+  arma::vec V(M);
+  arma::mat V1(p, M), VT(p, M), main(G * p, M);
+  arma::mat mean(b, M), vmean(b, M), vsim(b, M), vbias(b, M, arma::fill::zeros);
+  arma::mat Z, I1, A, Rg, Rs, Rb;
+  arma::vec w, wb, ws;
+  std::vector<arma::mat> I2(p);
+  for_each_draw(post, phis, [&](arma::uword d) {
+    sp->simMean(Z, w, nullptr, &wb);
+    const arma::uword Ns = Z.n_rows, Nb = wb.n_elem, N = Ns + Nb;
+    // the simulator's weights times its calibration coordinates' correlations
+    ws = w;
+    for (int k = p; k < D; ++k) {
+      const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
+      arma::mat kap(1, 1);
+      kap[0] = post.phi[post.iKappa + k - p];
+      arma::mat r(Ns, 1);
+      kernel_corr(kS, arma::mat(Z.col(k)), kap, 1, &theta, &alpha, r, false);
+      ws %= r.col(0);
+    }
+    const arma::vec wall = arma::join_cols(ws, wb);
+    I1.set_size(N, p);
+    arma::vec i1b;
+    arma::mat i2b;
+    for (int k = 0; k < p; ++k) {
+      const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
+      I2[k].set_size(N, N);
+      arma::mat i2s;
+      arma::vec i1s(Ns);
+      integrals_1d(kS, tS, aS, Z.col(k), exact[k], lower[k], upper[k], nodes.col(k),
+                   weights.col(k), i1s.memptr(), i2s);
+      I1.col(k).head(Ns) = i1s;
+      I2[k].submat(0, 0, Ns - 1, Ns - 1) = i2s;
+      if (Nb > 0) {
+        const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
+        const arma::vec u = Z.col(k).subvec(Ns - Nb, Ns - 1);  // the distinct field rows
+        i1b.set_size(Nb);
+        integrals_1d(kB, tB, aB, u, exact[k], lower[k], upper[k], nodes.col(k), weights.col(k),
+                     i1b.memptr(), i2b);
+        I1.col(k).tail(Nb) = i1b;
+        I2[k].submat(Ns, Ns, N - 1, N - 1) = i2b;
+        Rs.set_size(Ns, nodes.n_rows);
+        Rb.set_size(Nb, nodes.n_rows);
+        kernel_corr(kS, arma::mat(Z.col(k)), arma::mat(nodes.col(k)), 1, &tS, &aS, Rs, false);
+        kernel_corr(kB, arma::mat(u), arma::mat(nodes.col(k)), 1, &tB, &aB, Rb, false);
+        Rs.each_row() %= weights.col(k).t();
+        const arma::mat X = Rs * Rb.t();
+        I2[k].submat(0, Ns, Ns - 1, N - 1) = X;
+        I2[k].submat(Ns, 0, N - 1, Ns - 1) = X.t();
+      }
+    }
+    sobol_variances(wall, I1, I2, p, V[d], V1.colptr(d), VT.colptr(d), A);
+    for (int k = 0; k < p; ++k) {
+      const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
+      Rg.set_size(G, Ns);
+      kernel_corr(kS, arma::mat(grid.col(k)), arma::mat(Z.col(k)), 1, &tS, &aS, Rg, false);
+      arma::vec me = Rg * A.col(k).head(Ns);
+      if (Nb > 0) {
+        const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
+        Rg.set_size(G, Nb);
+        kernel_corr(kB, arma::mat(grid.col(k)), arma::mat(Z.col(k).subvec(Ns - Nb, Ns - 1)),
+                    1, &tB, &aB, Rg, false);
+        me += Rg * A.col(k).tail(Nb);
+      }
+      main.col(d).subvec(k * G, (k + 1) * G - 1) = me + (post.biasMean ? post.phi[post.iMuB] : 0.0);
+    }
+    if (b > 0) {
+      post.condition(share, PT_MEAN, mean.colptr(d), vmean.colptr(d));
+      arma::vec junk(b);
+      if (post.bias) {
+        post.condition(share, PT_SIMULATOR, junk.memptr(), vsim.colptr(d));
+        post.condition(share, PT_BIAS, junk.memptr(), vbias.colptr(d));
+      } else {
+        vsim.col(d) = vmean.col(d);
+      }
+    }
+    return true;
+  });
+  return Rcpp::List::create(Rcpp::Named("V") = V, Rcpp::Named("V1") = V1,
+                            Rcpp::Named("VT") = VT, Rcpp::Named("main") = main,
+                            Rcpp::Named("mean") = mean, Rcpp::Named("var") = vmean,
+                            Rcpp::Named("var_sim") = vsim, Rcpp::Named("var_bias") = vbias);
+}
+
 
 // The simulator's posterior mean per draw as a kernel expansion (for tests):
 // the centres Z and weights w of each draw; with support points (S rows per
