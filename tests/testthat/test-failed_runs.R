@@ -73,6 +73,23 @@ test_that("the failure classifier's Laplace mode solves its fixed-point equation
   expect_equal(md$logZ, ref, tolerance = 1e-6)
 })
 
+test_that("the Laplace evidence's gradient is its difference quotient", {
+  set.seed(3)
+  Z <- matrix(stats::runif(80), 40, 2)
+  y <- as.numeric(rowSums((Z - 0.5)^2) < 0.1)
+  par <- c(log(0.2), log(0.35), log(1.5))
+  ev <- laplace_evidence(Z, y, exp(par[1:2]), exp(par[3]))
+  h <- 1e-5
+  num <- vapply(1:3, function(j) {
+    e <- replace(numeric(3), j, h)
+    up <- laplace_mode(Z, y, exp(par[1:2] + e[1:2]), exp(par[3] + e[3]), tol = 1e-13)$logZ
+    dn <- laplace_mode(Z, y, exp(par[1:2] - e[1:2]), exp(par[3] - e[3]), tol = 1e-13)$logZ
+    (up - dn) / (2 * h)
+  }, numeric(1))
+  expect_equal(ev$grad, num, tolerance = 1e-5)
+  expect_equal(ev$logZ, laplace_mode(Z, y, exp(par[1:2]), exp(par[3]))$logZ)
+})
+
 test_that("the failure probability finds a known failure region", {
   set.seed(4)
   m <- 120
