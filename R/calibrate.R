@@ -43,7 +43,8 @@
 #' process classifier over the numeric inputs (logistic link, Laplace
 #' approximation, its length-scales and variance at their posterior mode:
 #' plug-in values serve because it does not enter kappa's posterior; above
-#' 1,000 runs it sees every failed run and a sample of the successful ones):
+#' 1,000 runs it sees every failed run and a sample of the successful ones;
+#' fitted when first asked for, not by `calibrate()`):
 #' `predict(fit, newdata, type = "failure")`, `plot(fit, type = "failure")`,
 #' and [propose_runs()] weighs its candidates by it. Field data in long
 #' format may miss an output at some field inputs.

@@ -100,6 +100,15 @@ inform_failed_runs <- function(inputs, bad, classifier, call = parent.frame()) {
 # failed run and a random 1,000 minus those of the successful ones,
 # reweighting nothing (said in ?calibrate). Returns NULL when no input is
 # numeric.
+# The fit (its optimisation costs seconds on a few hundred runs, most of a
+# short calibration's CPU) is made when a probability is first asked for
+# (failure_probability(): predict(type = "failure"), its plot,
+# propose_runs()), not by calibrate(): the classifier is an environment
+# that holds the runs (X, y_all, named: what its users read) and the
+# subsample, drawn here so that calibrate()'s random numbers are the same
+# whether or not the classifier is ever fitted, and receives the fitted
+# values (fit_failure_classifier()) the first time they are needed; every
+# copy of the fit shares them.
 failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   num <- if (is.data.frame(inputs)) vapply(inputs, is.numeric, logical(1)) else rep(TRUE, ncol(inputs))
   if (!any(num)) return(NULL)
@@ -108,32 +117,54 @@ failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   # (unnamed runs: inputs by position, labelled by their column of sim)
   named <- !is.null(usable_names(X))
   if (!named) colnames(X) <- paste0("input ", which(num) + 1L)
-  lower <- apply(X, 2, min)
-  range <- pmax(apply(X, 2, max) - lower, .Machine$double.eps)
-  Z <- sweep(sweep(X, 2, lower), 2, range, "/")
-  y <- as.numeric(failed)
-  keep <- seq_len(nrow(Z))
-  if (nrow(Z) > max_runs) {
+  keep <- seq_len(nrow(X))
+  if (nrow(X) > max_runs) {
     ok <- which(!failed)
     keep <- sort(c(which(failed), ok[sample.int(length(ok), max(max_runs - sum(failed), 0L))]))
   }
+  cl <- new.env(parent = emptyenv())
+  cl$X <- X
+  cl$y_all <- as.numeric(failed)
+  cl$named <- named
+  cl$keep <- keep
+  cl$subsample <- length(keep) < nrow(X)
+  cl$fitted <- FALSE
+  class(cl) <- "fbc_failure_classifier"
+  cl
+}
+
+# The classifier's plug-in fit (see failure_classifier()), into `cl` once.
+fit_failure_classifier <- function(cl) {
+  if (isTRUE(cl$fitted)) return(invisible(cl))
+  X <- cl$X
+  lower <- apply(X, 2, min)
+  range <- pmax(apply(X, 2, max) - lower, .Machine$double.eps)
+  Z <- sweep(sweep(X, 2, lower), 2, range, "/")[cl$keep, , drop = FALSE]
+  y <- cl$y_all[cl$keep]
   d <- ncol(Z)
-  obj <- function(par) {
-    fit <- laplace_mode(Z[keep, , drop = FALSE], y[keep], exp(par[seq_len(d)]), exp(par[d + 1L]))
-    -(fit$logZ + sum(stats::dnorm(par[seq_len(d)], log(0.3), 1, log = TRUE)) +
-        stats::dnorm(par[d + 1L], log(2), 1, log = TRUE))
+  # -(log Laplace evidence + log prior) and its gradient in par = (log l,
+  # log s2), both from one mode at each par (optim asks for them apart)
+  last <- NULL
+  at <- function(par) {
+    if (!identical(last$par, par)) {
+      ev <- laplace_evidence(Z, y, exp(par[seq_len(d)]), exp(par[d + 1L]))
+      mu <- c(rep(log(0.3), d), log(2))
+      last <<- list(par = par, value = -(ev$logZ + sum(stats::dnorm(par, mu, 1, log = TRUE))),
+                    grad = -(ev$grad - (par - mu)))
+    }
+    last
   }
   start <- c(rep(log(0.3), d), log(2))
-  opt <- stats::optim(start, obj, method = "L-BFGS-B", lower = c(rep(log(0.02), d), log(0.01)),
+  opt <- stats::optim(start, function(par) at(par)$value, function(par) at(par)$grad,
+                      method = "L-BFGS-B", lower = c(rep(log(0.02), d), log(0.01)),
                       upper = c(rep(log(10), d), log(100)))
   ell <- exp(opt$par[seq_len(d)])
   s2 <- exp(opt$par[d + 1L])
-  mode <- laplace_mode(Z[keep, , drop = FALSE], y[keep], ell, s2)
-  structure(list(X = X, y_all = y, lower = lower, range = range, Z = Z[keep, , drop = FALSE],
-                 y = y[keep], ell = ell, s2 = s2, f = mode$f, L = mode$L, sW = mode$sW,
-                 grad = y[keep] - stats::plogis(mode$f), subsample = length(keep) < nrow(Z),
-                 named = named),
-            class = "fbc_failure_classifier")
+  mode <- laplace_mode(Z, y, ell, s2)
+  cl$lower <- lower; cl$range <- range; cl$Z <- Z; cl$y <- y; cl$ell <- ell; cl$s2 <- s2
+  cl$f <- mode$f; cl$L <- mode$L; cl$sW <- mode$sW; cl$grad <- y - stats::plogis(mode$f)
+  cl$fitted <- TRUE
+  invisible(cl)
 }
 
 # The latent covariance of the classifier between rows of A and B.
@@ -169,11 +200,42 @@ laplace_mode <- function(Z, y, ell, s2, tol = 1e-8, maxit = 100L) {
        logZ = -0.5 * sum(a * f) + sum(y * f - log1p(exp(f))) - sum(log(diag(L))))
 }
 
+# The Laplace evidence log q(y | l, s2) (laplace_mode()) and its gradient
+# in (log l, log s2) (Rasmussen and Williams 2006, algorithm 5.1; through
+# W = -d^2 log p, d log q / d f_i = +1/2 [(K^-1 + W)^-1]_ii d^3 log p(y_i | f_i)
+# / d f_i^3, the sign checked against a difference quotient in the tests):
+# with R = (W^-1 + K)^-1 and dK_j = dK / d par_j,
+#   explicit_j = a' dK_j a / 2 - tr(R dK_j) / 2,  a = K^-1 f,
+#   implicit_j = s2' (I - K R) dK_j (y - logistic(f)),
+#   s2_i = [K - K W^1/2 B^-1 W^1/2 K]_ii d3_i / 2.
+# O(n^3) once and O(n^2) per parameter, instead of a mode per parameter
+# for a difference quotient.
+laplace_evidence <- function(Z, y, ell, s2) {
+  md <- laplace_mode(Z, y, ell, s2)
+  d <- ncol(Z)
+  Dk <- lapply(seq_len(d), function(k) outer(Z[, k], Z[, k], "-")^2 / ell[k]^2)
+  E <- s2 * exp(-Reduce(`+`, Dk))
+  K <- E + 10
+  pr <- stats::plogis(md$f)
+  a <- y - pr # = K^-1 f at the mode
+  sW <- md$sW
+  R <- sW * t(sW * chol2inv(md$L))
+  C <- forwardsolve(t(md$L), sW * K)
+  s2v <- 0.5 * (diag(K) - colSums(C^2)) * (-pr * (1 - pr) * (1 - 2 * pr))
+  grad <- vapply(seq_len(d + 1L), function(j) {
+    dK <- if (j <= d) 2 * E * Dk[[j]] else E
+    b <- drop(dK %*% a)
+    0.5 * sum(a * b) - 0.5 * sum(R * dK) + sum(s2v * (b - drop(K %*% (R %*% b))))
+  }, numeric(1))
+  list(logZ = md$logZ, grad = grad)
+}
+
 # The probability of failure at the rows of X (inputs on their own scale,
 # the classifier's columns): the latent Gaussian's mean and variance
 # (algorithm 3.2) and the logistic averaged over it by the probit
 # approximation 1 / (1 + exp(-mu / sqrt(1 + pi v / 8))).
 failure_probability <- function(cl, X) {
+  fit_failure_classifier(cl)
   Z <- sweep(sweep(X, 2, cl$lower), 2, cl$range, "/")
   Ks <- failure_kernel(cl$Z, Z, cl$ell, cl$s2)
   mu <- drop(crossprod(Ks, cl$grad))

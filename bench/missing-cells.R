@@ -13,12 +13,20 @@
 # --moves: instead, the mean CPU ms of a likelihood evaluation along a path
 # of moves (every class and dimension in turn) on random data, grids of
 # 80 x 50 and 30 x 20 runs with `share` of the cells missing at random.
+# --sweeps: instead, on --grid (80x50 for the bound) at each share (and
+# complete), the CPU ms of a sweep of a short default fit (one chain,
+# `nsweep` retained sweeps and half as many of burn-in, set-up included),
+# and the CPU ms of one Cholesky factor of a k x k matrix, k the missing
+# cells: the least that a draw of the k cells from their exact joint
+# conditional costs (data augmentation), against the complete sweep.
 #   Rscript bench/run.R missing-cells [--quick] [--grid=30x20] [--share=0.1,0.2,0.4]
 #     [--pattern=mcar,mnar] [--dense] [--drop] [--seed=1] [--moves]
+#     [--sweeps --nsweep=40]
 suppressPackageStartupMessages(library(FBC))
 source("bench/options.R")
 opt <- bench_options(list(grid = "30x20", share = c(0.1, 0.2, 0.4), pattern = c("mcar", "mnar"),
-                          dense = FALSE, drop = FALSE, seed = 1L, moves = FALSE))
+                          dense = FALSE, drop = FALSE, seed = 1L, moves = FALSE,
+                          sweeps = FALSE, nsweep = 40L))
 if (opt$moves) {
   out <- NULL
   for (sz in list(c(50L, 80L), c(20L, 30L))) for (share in c(0, opt$share)) {
@@ -80,6 +88,31 @@ run <- function(sim, label, share, pattern, algebra = "auto") {
                         t1 = sprintf("%.3f [%.3f, %.3f]", q[2, 1], q[1, 1], q[3, 1]),
                         t2 = sprintf("%.3f [%.3f, %.3f]", q[2, 2], q[1, 2], q[3, 2])),
        q = q, sd = apply(fit$Phi[, c("kappa1", "kappa2")], 2, sd))
+}
+
+if (opt$sweeps) {
+  out <- NULL
+  for (share in c(0, opt$share)) {
+    set.seed(opt$seed + 1L)
+    miss <- if (share > 0) missing_cells(share, "mcar") else integer(0)
+    sim <- if (length(miss)) full[-miss, ] else full
+    ns <- if (share > 0) opt$nsweep else 25L * opt$nsweep  # the complete sweep: longer, for its set-up
+    s <- cpu(suppressMessages(suppressWarnings(
+      calibrate(sim, field, nMCMC = ns, nBurn = ns / 2, nChains = 1))))
+    k <- length(miss)
+    ch <- NA
+    if (k) {
+      A <- crossprod(matrix(rnorm(k * k), k)) + diag(k)
+      ch <- 1000 * cpu(for (r in 1:3) chol(A)) / 3
+    }
+    out <- rbind(out, data.frame(grid = opt$grid, missing = share, cells = k,
+                                 ms.per.sweep = round(1000 * s / (1.5 * ns), 1),
+                                 ms.chol.k = round(ch, 1)))
+  }
+  out$chol.over.complete.sweep <- round(out$ms.chol.k / out$ms.per.sweep[1], 1)
+  out$sweep.over.complete <- round(out$ms.per.sweep / out$ms.per.sweep[1], 1)
+  print(out, row.names = FALSE)
+  quit(save = "no")
 }
 
 complete <- run(full, "complete", 0, "-")

@@ -73,6 +73,23 @@ test_that("the failure classifier's Laplace mode solves its fixed-point equation
   expect_equal(md$logZ, ref, tolerance = 1e-6)
 })
 
+test_that("the Laplace evidence's gradient is its difference quotient", {
+  set.seed(3)
+  Z <- matrix(stats::runif(80), 40, 2)
+  y <- as.numeric(rowSums((Z - 0.5)^2) < 0.1)
+  par <- c(log(0.2), log(0.35), log(1.5))
+  ev <- laplace_evidence(Z, y, exp(par[1:2]), exp(par[3]))
+  h <- 1e-5
+  num <- vapply(1:3, function(j) {
+    e <- replace(numeric(3), j, h)
+    up <- laplace_mode(Z, y, exp(par[1:2] + e[1:2]), exp(par[3] + e[3]), tol = 1e-13)$logZ
+    dn <- laplace_mode(Z, y, exp(par[1:2] - e[1:2]), exp(par[3] - e[3]), tol = 1e-13)$logZ
+    (up - dn) / (2 * h)
+  }, numeric(1))
+  expect_equal(ev$grad, num, tolerance = 1e-5)
+  expect_equal(ev$logZ, laplace_mode(Z, y, exp(par[1:2]), exp(par[3]))$logZ)
+})
+
 test_that("the failure probability finds a known failure region", {
   set.seed(4)
   m <- 120
@@ -95,6 +112,37 @@ test_that("the failure probability finds a known failure region", {
   # ranks the runs: failed runs above the successful ones on average
   p <- failure_probability(cl, X)
   expect_gt(mean(p[inside]), mean(p[!inside]) + 0.5)
+})
+
+test_that("the failure classifier is fitted when a probability is first asked for, once", {
+  set.seed(4)
+  X <- cbind(x = stats::runif(60), t = stats::runif(60, 10, 20))
+  inside <- (X[, "x"] - 0.5)^2 + ((X[, "t"] - 15) / 10)^2 < 0.25^2
+  sim <- data.frame(y = ifelse(inside, NA, sin(3 * X[, "x"]) + X[, "t"] / 10), x = X[, "x"],
+                    t = X[, "t"])
+  field <- data.frame(y = sin(3 * (1:8) / 9) + 1.5, x = (1:8) / 9)
+  model <- suppressMessages(calibrate(sim, field, fit = FALSE))
+  cl <- model$design$failed$classifier
+  expect_false(cl$fitted) # calibrate() does not pay for it
+  expect_null(cl$ell)
+  p1 <- failure_probability(cl, X)
+  expect_true(cl$fitted)
+  ell <- cl$ell
+  # a second call reuses the fit (the same plug-in values, the same probabilities)
+  expect_identical(failure_probability(cl, X), p1)
+  expect_identical(cl$ell, ell)
+  # against a classifier built and fitted afresh on the same runs
+  expect_identical(failure_probability(failure_classifier(sim[, -1], inside), X), p1)
+  # above max_runs the subsample is drawn when the classifier is built: set.seed() reproduces
+  # it whether or not it is ever fitted
+  set.seed(9)
+  a <- failure_classifier(sim[, -1], inside, max_runs = 30L)
+  set.seed(9)
+  b <- failure_classifier(sim[, -1], inside, max_runs = 30L)
+  expect_identical(a$keep, b$keep)
+  expect_length(a$keep, 30L)
+  expect_true(all(which(inside) %in% a$keep))
+  expect_true(a$subsample)
 })
 
 test_that("predict(type = \"failure\") takes the inputs by name or position, and refuses clearly", {
