@@ -368,44 +368,6 @@ main_effects <- function(main, grid, sc, nm, G, level) {
   })
 }
 
-# The pick-freeze points A, B, A_B^1, ..., A_B^p (N rows each; A_B^k is A
-# with column k from B) on [0, 1]^p, A and B from the Halton points in 2 p
-# dimensions shifted by one uniform draw modulo one.
-pick_freeze_design <- function(N, p) {
-  U <- (halton(N, 2L * p) + rep(stats::runif(2L * p), each = N)) %% 1
-  A <- U[, seq_len(p), drop = FALSE]
-  B <- U[, p + seq_len(p), drop = FALSE]
-  rbind(A, B, do.call(rbind, lapply(seq_len(p), function(k) {
-    C <- A
-    C[, k] <- B[, k]
-    C
-  })))
-}
-
-# Sobol indices of the columns of f (one function per column) from their
-# values at the pick-freeze points A, B, A_B^1, ..., A_B^p (N rows each, in
-# that order): the Saltelli (2010) first-order and Jansen (1999) total
-# estimators, V from (f_A, f_B), with their standard errors by the
-# independent-sampling formula (a bound for a quasi-Monte Carlo design):
-# S1, ST, se1, seT (columns x p).
-pick_freeze <- function(f, N, p) {
-  f <- as.matrix(f)
-  fa <- f[seq_len(N), , drop = FALSE]
-  fb <- f[N + seq_len(N), , drop = FALSE]
-  V <- pmax(apply(f[seq_len(2L * N), , drop = FALSE], 2, stats::var), .Machine$double.xmin)
-  out <- list(S1 = NULL, ST = NULL, se1 = NULL, seT = NULL)
-  for (k in seq_len(p)) {
-    fc <- f[(k + 1L) * N + seq_len(N), , drop = FALSE]
-    g1 <- fb * (fc - fa)
-    gT <- (fa - fc)^2 / 2
-    out$S1 <- cbind(out$S1, colMeans(g1) / V)
-    out$ST <- cbind(out$ST, colMeans(gT) / V)
-    out$se1 <- cbind(out$se1, apply(g1, 2, stats::sd) / sqrt(N) / V)
-    out$seT <- cbind(out$seT, apply(gT, 2, stats::sd) / sqrt(N) / V)
-  }
-  out
-}
-
 # The calibrated prediction over the experimental inputs: per draw the
 # Sobol variances of the mean response zeta(x) = E[eta(x, kappa) + delta(x)
 # | y] in closed form (two kernel expansions, the simulator's at the draw's

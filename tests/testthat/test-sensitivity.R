@@ -320,36 +320,6 @@ test_that("as.data.frame() stacks the indices; plot() draws the main effects and
   }
 })
 
-test_that("the pick-freeze estimator recovers Ishigami's indices within its stated error", {
-  # Ishigami (a = 7, b = 0.1) on U(-pi, pi)^3: S = (0.3139, 0.4424, 0),
-  # ST = (0.5576, 0.4424, 0.2437)
-  ish <- function(U) {
-    X <- -pi + 2 * pi * U
-    sin(X[, 1]) + 7 * sin(X[, 2])^2 + 0.1 * X[, 3]^4 * sin(X[, 1])
-  }
-  S <- c(0.3139, 0.4424, 0)
-  ST <- c(0.5576, 0.4424, 0.2437)
-  set.seed(8)
-  N <- 2048L
-  reps <- replicate(20, {
-    X <- FBC:::pick_freeze_design(N, 3)
-    expect_identical(dim(X), c(5L * N, 3L))
-    pf <- FBC:::pick_freeze(ish(X), N, 3)
-    c(pf$S1, pf$ST, pf$se1, pf$seT)
-  })
-  est <- reps[1:6, ]
-  se <- reps[7:12, ]
-  # each estimate within 4 of its standard errors of the truth
-  expect_true(all(abs(est - c(S, ST)) < 4 * se))
-  # the standard error is a bound for the randomised Halton design: the
-  # estimates' spread over 20 random shifts is below it, and not zero
-  spread <- apply(est, 1, stats::sd)
-  expect_true(all(spread < 1.2 * rowMeans(se)))
-  expect_true(all(spread > 0))
-  # the mean of the 20 estimates: within 4 standard errors of that mean
-  expect_true(all(abs(rowMeans(est) - c(S, ST)) < 4 * spread / sqrt(20) + 1e-3))
-})
-
 test_that("a draw's sample path has the emulator's conditional mean and covariance at its support points", {
   set.seed(5)
   phi <- random_phi(2, 1)
