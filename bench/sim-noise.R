@@ -12,6 +12,10 @@
 # data set), `calibrate()` with the defaults (the default discrepancy too),
 # until converged:
 #   auto      simNoise = "auto" (the default: "constant" when replicates differ)
+#   auto-nobias  the same with discrepancy = "none" (the field model without
+#             the bias GP, which the data's truth has none of)
+#   bound     oracle: eta known, the field's noise one unknown variance, t by quadrature
+#   exact     oracle: eta and the noise sd(x) known (the exact posterior itself)
 #   constant  simNoise = "constant" (one noise variance)
 #   input     simNoise = "input" (log-variance a GP over the inputs)
 #   hetgp     the plug-in: hetGP's fitted mean and noise as a fixed emulator
@@ -124,13 +128,33 @@ one_plugin <- function(k, r, seed) {
              draws = NA_real_)
 }
 
+# The oracles, by quadrature on every 5th point of the exact posterior's
+# grid: "bound" (eta known, the field's noise one unknown variance: FBC's
+# field model) and "exact" (eta and the noise sd(x) known).
+one_oracle <- function(k, r, seed, which) {
+  d <- data_set(k, r, seed)
+  ex <- exact_posterior(d)
+  keep <- seq(1, length(ex$t), by = 5)
+  ex <- list(t = ex$t[keep], dens = ex$dens[keep] / sum(ex$dens[keep]) / diff(ex$t[keep][1:2]))
+  dens <- if (which == "bound") bound_posterior(d, ex) else ex$dens
+  cdf <- cumsum(dens) * diff(ex$t[1:2])
+  ci <- stats::approx(cdf, ex$t, c(0.05, 0.95), ties = "ordered", rule = 2)$y
+  data.frame(unique = k, reps = r, set = seed, model = which,
+             H = grid_hellinger(dens, ex$dens, diff(ex$t[1:2])), Hbound = NA_real_,
+             covers = ci[1] < 1.7 && 1.7 < ci[2], width90 = diff(ci), sdErr = NA_real_,
+             cpu = NA_real_, draws = NA_real_)
+}
+
 one <- function(k, r, seed, simNoise) {
   if (simNoise == "hetgp") return(one_plugin(k, r, seed))
+  if (simNoise %in% c("bound", "exact")) return(one_oracle(k, r, seed, simNoise))
   d <- data_set(k, r, seed)
   ex <- exact_posterior(d)
   set.seed(seed)
+  nobias <- simNoise == "auto-nobias"
   tm <- cpu(fit <- suppressMessages(suppressWarnings(
-    calibrate(d$sim, d$field, simNoise = simNoise, showProgress = FALSE,
+    calibrate(d$sim, d$field, simNoise = if (nobias) "auto" else simNoise,
+              discrepancy = if (nobias) "none" else "gp", showProgress = FALSE,
               converge = if (opt$quick) until_converged(maxMCMC = 2000)))))
   tt <- fit$Phi[, fit$indices$kappa]
   ci <- stats::quantile(tt, c(0.05, 0.95), names = FALSE)
