@@ -133,9 +133,11 @@ failure_classifier <- function(inputs, failed, max_runs = 1000L) {
   cl
 }
 
-# The classifier's plug-in fit (see failure_classifier()), into `cl` once.
+# The classifier's plug-in fit (see failure_classifier()), into `cl` once
+# (a list: a classifier of a fit saved before the fit was made on first
+# use, fitted already).
 fit_failure_classifier <- function(cl) {
-  if (isTRUE(cl$fitted)) return(invisible(cl))
+  if (!is.environment(cl) || isTRUE(cl$fitted)) return(invisible(cl))
   X <- cl$X
   lower <- apply(X, 2, min)
   range <- pmax(apply(X, 2, max) - lower, .Machine$double.eps)

@@ -133,6 +133,11 @@ test_that("the failure classifier is fitted when a probability is first asked fo
   expect_identical(cl$ell, ell)
   # against a classifier built and fitted afresh on the same runs
   expect_identical(failure_probability(failure_classifier(sim[, -1], inside), X), p1)
+  # a fit saved when the classifier was fitted by calibrate() holds it as a
+  # plain list of the fitted values (no `keep`, no `fitted`): used as it is
+  old <- as.list.environment(cl)
+  old[c("keep", "fitted", "subsample")] <- NULL
+  expect_identical(failure_probability(old, X), p1)
   # above max_runs the subsample is drawn when the classifier is built: set.seed() reproduces
   # it whether or not it is ever fitted
   set.seed(9)
