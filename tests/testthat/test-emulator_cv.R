@@ -9,7 +9,12 @@
 refit_heldout <- function(Xs, ys, th, fold, nugget = 1e-6, kernel = "powexp") {
   m <- nrow(Xs)
   K <- th$sigma2S * (dense_corr(Xs, Xs, th$thetaS, th$alphaS, kernel) + nugget * diag(m))
-  mean <- var <- numeric(m)
+  heldout_by_fold(K, ys, fold)
+}
+# The Gaussian conditional of each fold's responses given the others', for
+# the runs' covariance K.
+heldout_by_fold <- function(K, ys, fold) {
+  mean <- var <- numeric(length(ys))
   for (k in unique(fold)) {
     B <- which(fold == k)
     A <- solve(K[-B, -B], K[-B, B, drop = FALSE])
@@ -310,20 +315,14 @@ test_that("with the simulator's noise, every run is predicted with its input's r
   # (replicates share eta, and so its nugget)
   K <- th$sigma2S * (dense_corr(X, X, th$thetaS, th$alphaS, "matern52") +
                        fit$settings$nugget * outer(group, group, "==")) + th$sigma2R * diag(n)
-  ref_mean <- ref_var <- numeric(n)
-  for (g in unique(group)) {
-    B <- which(group == g)
-    A <- solve(K[-B, -B], K[-B, B, drop = FALSE])
-    ref_mean[B] <- crossprod(A, y[-B])
-    ref_var[B] <- diag(K[B, B, drop = FALSE] - K[B, -B, drop = FALSE] %*% A)
-  }
+  ref <- heldout_by_fold(K, y, group)
   v <- emulator_cv(fit, method = "MAP")
   expect_identical(nrow(v$runs), n)
   expect_identical(v$runs$fold, group)
   expect_equal(v$runs$observed, pb$sim[, 1])
-  expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref_mean, tolerance = 1e-8)
-  expect_equal(v$runs$sd, sc$ysd * sqrt(ref_var), tolerance = 1e-8)
-  expect_equal(v$runs$pit, pnorm((y - ref_mean) / sqrt(ref_var)), tolerance = 1e-7)
+  expect_equal(v$runs$mean, sc$ymean + sc$ysd * ref$mean, tolerance = 1e-8)
+  expect_equal(v$runs$sd, sc$ysd * sqrt(ref$var), tolerance = 1e-8)
+  expect_equal(v$runs$pit, pnorm((y - ref$mean) / sqrt(ref$var)), tolerance = 1e-7)
   expect_equal(as.matrix(v$runs[, c("x", "t")]), pb$sim[, c("x", "t")], ignore_attr = TRUE)
   # folds: a number counts the unique inputs; labels per run keep replicates together
   lab <- c(1, 2, 3, 1, 2, 3, 1, 2, 3)[group]
