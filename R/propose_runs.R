@@ -646,28 +646,16 @@ look_ahead <- function(parts, U, model, n, nfantasy, XT = matrix(0, 0, ncol(mode
 # of U, scaled) under each draw (rows of phis, the sampler's scale), as a
 # matrix candidates x draws; 0 x 0 for a deterministic simulator. A
 # constant noise is the draw's sigma2R; an input-dependent one the mean of
-# exp(g(u)) given the draw's log-variances gR at the unique inputs (their
-# GP's conditional, log-normal: exp(mean + var / 2)), which at a run's own
-# input is exp(gR_i) up to the GP's jitter.
+# exp(g(u)) given the draw's log-variances (latent_noise_mean()), which at
+# a run's own input is exp(gR_i) up to the GP's jitter.
 run_noise <- function(model, phis, U) {
   reps <- model$spec$model$replicates
   if (is.null(reps) || !nrow(U)) return(matrix(0, 0, 0))
-  cls <- model$spec$classes
   if (!isTRUE(reps$latent)) {
-    return(matrix(phis[, cls == "sigma2R"], nrow(U), nrow(phis), byrow = TRUE))
+    return(matrix(phis[, model$spec$classes == "sigma2R"], nrow(U), nrow(phis), byrow = TRUE))
   }
-  Xs <- model$data$Xs
-  jitter <- 1e-6  # as src/latent_noise.cpp
-  two <- rep(2, ncol(Xs))
-  r <- vapply(seq_len(nrow(phis)), function(i) {
-    ph <- phis[i, ]
-    th <- ph[cls == "thetaG"]
-    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 4L) + jitter * diag(nrow(Xs))))
-    A <- forwardsolve(L, .corr_matrix(Xs, U, th, two, 4L))
-    muG <- ph[cls == "muG"]
-    w <- forwardsolve(L, ph[cls == "gR"] - muG)
-    exp(muG + drop(crossprod(A, w)) + 0.5 * ph[cls == "sigma2G"] * (1 + jitter - colSums(A^2)))
-  }, numeric(nrow(U)))
+  r <- vapply(seq_len(nrow(phis)), function(i) latent_noise_mean(model, phis[i, ], U),
+              numeric(nrow(U)))
   matrix(r, nrow(U))
 }
 

@@ -330,33 +330,35 @@ sim_noise_line <- function(model, Phi = NULL, digits = 3) {
   sprintf("%s; simulator noise: %s%s", found, noise, link)
 }
 
-# The noise sd of a run at new experimental inputs Xn (scaled) and each
-# draw's kappa, from the latent log-variances' GP (standardised units): at
-# a draw, log r(x*) given g at the unique inputs is normal with mean
-# muG + k' Kg^-1 (g - muG) and variance sigma2G (1 + jitter) - sigma2G k' Kg^-1 k
-# (Kg = Rg + jitter I, k = Rg(X, x*)), so E r(x*) = exp(mean + var / 2);
-# returns the root of its mean over the draws (phis, on the sampler's
-# scale), the posterior mean of the noise variance.
-latent_noise_sd <- function(model, phis, Xn) {
+# The noise variance a run is expected to have at the rows of Z (all the
+# run inputs, scaled) under one draw ph (the sampler's scale), from the
+# latent log-variances' GP (standardised units): log r(z) given g at the
+# unique inputs is normal with mean muG + k' Kg^-1 (g - muG) and variance
+# sigma2G (1 + jitter) - sigma2G k' Kg^-1 k (Kg = Rg + jitter I, k =
+# Rg(X, z)), so E r(z) = exp(mean + var / 2).
+latent_noise_mean <- function(model, ph, Z) {
   cls <- model$spec$classes
   Xs <- model$data$Xs
-  m <- nrow(Xs)
   jitter <- 1e-6  # as src/latent_noise.cpp
-  kap <- which(cls == "kappa")
-  r <- matrix(0, nrow(Xn), nrow(phis))
-  for (i in seq_len(nrow(phis))) {
-    ph <- phis[i, ]
-    th <- ph[cls == "thetaG"]
-    two <- rep(2, ncol(Xs))
-    L <- t(chol(.corr_matrix(Xs, Xs, th, two, 4L) + jitter * diag(m)))
-    Z <- cbind(Xn, matrix(ph[kap], nrow(Xn), length(kap), byrow = TRUE))
-    A <- forwardsolve(L, .corr_matrix(Xs, Z, th, two, 4L))
-    muG <- ph[cls == "muG"]
-    s2G <- ph[cls == "sigma2G"]
-    w <- forwardsolve(L, ph[cls == "gR"] - muG)
-    r[, i] <- exp(muG + drop(crossprod(A, w)) + 0.5 * s2G * (1 + jitter - colSums(A^2)))
-  }
-  sqrt(rowMeans(r))
+  th <- ph[cls == "thetaG"]
+  two <- rep(2, ncol(Xs))
+  L <- t(chol(.corr_matrix(Xs, Xs, th, two, 4L) + jitter * diag(nrow(Xs))))
+  A <- forwardsolve(L, .corr_matrix(Xs, Z, th, two, 4L))
+  muG <- ph[cls == "muG"]
+  w <- forwardsolve(L, ph[cls == "gR"] - muG)
+  exp(muG + drop(crossprod(A, w)) + 0.5 * ph[cls == "sigma2G"] * (1 + jitter - colSums(A^2)))
+}
+
+# The noise sd of a run at new experimental inputs Xn (scaled) and each
+# draw's kappa: the root of latent_noise_mean()'s mean over the draws
+# (phis, on the sampler's scale), the posterior mean of the noise variance.
+latent_noise_sd <- function(model, phis, Xn) {
+  kap <- which(model$spec$classes == "kappa")
+  r <- vapply(seq_len(nrow(phis)), function(i) {
+    Z <- cbind(Xn, matrix(phis[i, kap], nrow(Xn), length(kap), byrow = TRUE))
+    latent_noise_mean(model, phis[i, ], Z)
+  }, numeric(nrow(Xn)))
+  sqrt(rowMeans(matrix(r, nrow(Xn))))
 }
 
 # emulator_cv() of a fit with the simulator's own noise: the runs' unique
