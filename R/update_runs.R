@@ -420,9 +420,11 @@ warm_state <- function(state, old, new) {
 # model `old` in the scaling of `new`: kappa
 # through its own units; theta_k * (range_new / range_old)^a (a = alpha_k
 # for the power exponential, 2 otherwise: theta d^a is what the kernel
-# sees); variances by (sd_old / sd_new)^2 and muB by the change of mean,
-# each output's by its own (param_outputs()); fixed parameters at the new
-# model's values.
+# sees; the latent noise GP's theta by the ranges' ratio squared);
+# variances (the simulator's noise sigma2R too) by (sd_old / sd_new)^2, its
+# log-variances gR and their mean muG by 2 log(sd_old / sd_new), and muB by
+# the change of mean, each output's by its own (param_outputs()); fixed
+# parameters at the new model's values.
 warm_phi <- function(phi, old, new) {
   if (is.null(dim(phi))) return(warm_phi(matrix(phi, 1L), old, new)[1L, ])
   # one row per draw (reweight_runs()), one column per parameter
@@ -448,10 +450,15 @@ warm_phi <- function(phi, old, new) {
   out[, th] <- stretch("thetaS", "alphaS", new$kernelS)
   tb <- which(cls == "thetaB")
   if (length(tb)) out[, tb] <- stretch("thetaB", "alphaB", new$kernelB)
+  tg <- which(cls == "thetaG")  # the latent log-variance GP's (Matern)
+  out[, tg] <- phi[, tg] * rep(input_ratio(ratio, "thetaS", length(tg), sn)^2, each = n)
   # with several outputs each is standardised by its own runs' mean and sd
   o <- param_outputs(new)
-  v <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E"))
+  v <- which(cls %in% c("sigma2S", "sigma2B", "sigma2E", "sigma2R"))
   out[, v] <- phi[, v] * rep((so$ysd[o[v]] / sn$ysd[o[v]])^2, each = n)
+  # the simulator's log-variances (input-dependent noise) shift by the same
+  g <- which(cls %in% c("gR", "muG"))
+  out[, g] <- phi[, g] + rep(2 * log(so$ysd[o[g]] / sn$ysd[o[g]]), each = n)
   mu <- which(cls == "muB")
   out[, mu] <- (phi[, mu] * rep(so$ysd[o[mu]], each = n) + rep(so$ymean[o[mu]] - sn$ymean[o[mu]], each = n)) /
     rep(sn$ysd[o[mu]], each = n)

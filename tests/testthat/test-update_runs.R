@@ -325,3 +325,68 @@ test_that("runs added by update_runs() are never taken for an output in wide for
   expect_no_warning(up <- update_runs(fit, more, nMCMC = 300, nBurn = 100, converge = FALSE))
   expect_identical(nrow(up$model$options$args$sim), 42L)
 })
+
+test_that("the reweighting's weights for a noisy simulator are the new posterior over the old (plain-R, every run)", {
+  # eta = 5 exp(-t x) with noise sd 0.2 on 4 x 3 inputs, 3 replicates each;
+  # the new runs are 3 more replicates of the inputs at x = 0, which move
+  # the responses' mean and sd (every variance's map, sigma2R's included)
+  set.seed(1)
+  U <- expand.grid(x = seq(0, 3, length.out = 4), t = seq(0.5, 3, length.out = 3))
+  X <- U[rep(seq_len(12), 6), ]
+  sim <- unname(cbind(y = 5 * exp(-X$t * X$x) + stats::rnorm(72, 0, 0.2), x = X$x, t = X$t))
+  colnames(sim) <- c("y", "x", "t")
+  xf <- seq(0.1, 2.9, length.out = 4)
+  field <- cbind(y = 5 * exp(-1.7 * xf) + stats::rnorm(4, 0, 0.05), x = xf)
+  first <- sim[1:36, ]
+  more <- sim[37:72, ][sim[37:72, "x"] == 0, ]
+  all <- rbind(first, more)
+  set.seed(2)
+  fit <- calibrate(first, field, discrepancy = "none", nMCMC = 400, nBurn = 200, nChains = 2,
+                   showProgress = FALSE)
+  new <- calibrate(all, field, discrepancy = "none", fit = FALSE)
+  expect_identical(new$design$simNoise$mode, fit$model$design$simNoise$mode)
+  expect_gt(abs(log(new$scale$ysd / fit$model$scale$ysd)), 0.05)
+  rows <- round(seq(3, nrow(fit$Phi), length.out = 5))
+  lw <- FBC:::reweight_log_weights(fit, new, rows)
+  # the reference: the new model's log posterior at T(phi) with the
+  # likelihood of every run (each run of unique input i: the emulator's
+  # eta_i plus its own noise sigma2R; plain R, dense), plus log |det dT/dphi|
+  # by central differences, minus the old fit's logPost
+  d <- new$data
+  cls <- new$spec$classes
+  iR <- which(cls == "sigma2R")
+  tab <- new$spec$table
+  free <- which(tab$family != FBC:::prior_families[["fixed"]])
+  reps <- FBC:::sim_replicates(all)
+  ys <- (all[, 1] - new$scale$ymean) / new$scale$ysd
+  n <- nrow(d$Xf)
+  m <- nrow(d$Xs)
+  E <- rbind(cbind(diag(n), matrix(0, n, m)),
+             cbind(matrix(0, length(ys), n), diag(m)[reps$group, , drop = FALSE]))
+  phis <- FBC:::sampler_draws(fit, rows)
+  ref <- vapply(seq_along(rows), function(r) {
+    phi <- phis[r, ]
+    T <- function(v) {
+      x <- phi
+      x[free] <- v
+      FBC:::warm_phi(x, fit$model, new)[free]
+    }
+    J <- vapply(seq_along(free), function(j) {
+      h <- 1e-6 * max(1, abs(phi[free[j]]))
+      e <- replace(numeric(length(free)), j, h)
+      (T(phi[free] + e) - T(phi[free] - e)) / (2 * h)
+    }, numeric(length(free)))
+    out <- FBC:::warm_phi(phi, fit$model, new)
+    Cu <- dense_cov(d$Xf, d$Xs, out[-iR], FBC:::fbc_nugget, "matern52", "matern52", "none")
+    C <- E %*% Cu %*% t(E) + diag(c(rep(0, n), rep(out[iR], length(ys))))
+    L <- chol(C)
+    a <- backsolve(L, c(d$yf, ys), transpose = TRUE)
+    ll <- -0.5 * (length(a) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))
+    lp <- sum(vapply(free, function(j) FBC:::log_prior_row(tab, j, out[j]), numeric(1)))
+    ll + lp + determinant(J)$modulus - fit$logPost[rows[r]]
+  }, numeric(1))
+  expect_lt(max(abs((lw - ref) - mean(lw - ref))), 1e-5)
+  expect_gt(sd(ref), 0.1)
+  # the map carries sigma2R to the new response's units
+  expect_equal(attr(lw, "phi")[, iR], phis[, iR] * (fit$model$scale$ysd / new$scale$ysd)^2)
+})
