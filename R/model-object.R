@@ -78,7 +78,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
                         general = length(pr$levels) == 0L)
   if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
-  alg <- sim_noise_algebra(alg, noise, output, call = call)
+  alg <- sim_noise_algebra(alg, noise, output, nrow(dat$Xs), call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,

@@ -76,10 +76,15 @@
 #'
 #' `simNoise = "none"` treats the simulator as deterministic (the emulator
 #' interpolates the runs, up to a tiny nugget; a message says when
-#' replicates differ). The simulator's noise runs on the exact dense
-#' algebra: with several outputs or the nearest-neighbour algebra
-#' `calibrate()` refuses it, and on a product design of the unique inputs
-#' the dense algebra runs in place of the Kronecker one. `print()` says what
+#' replicates differ). The algebra is chosen by the unique inputs, as for a
+#' deterministic simulator: the exact dense algebra, or the
+#' nearest-neighbour one on many scattered inputs, whose conditionals carry
+#' each mean's noise variance as they carry the nugget (so 1,000 unique
+#' inputs with 100 replicates each cost about what 1,000 runs do). On a
+#' product design of the unique inputs the dense algebra runs in place of
+#' the Kronecker one; with several outputs `calibrate()` refuses the noise,
+#' and `"input"` on more than 2,000 unique inputs (its latent GP over them
+#' is dense). `print()` says what
 #' was found and modelled; `predict(fit, newdata, type = "simulator")`
 #' predicts \eqn{\eta}, the simulator's mean, and the noise sd.
 #'
@@ -226,10 +231,15 @@ collapse_replicates <- function(dat, reps, latent = FALSE) {
        sswi = sswi, count = reps$count)
 }
 
-# The simulator's noise runs on the dense algebra: several outputs and the
-# nearest-neighbour algebra are refused (naming simNoise and the algebra);
-# on a product design the dense algebra replaces the Kronecker one.
-sim_noise_algebra <- function(alg, noise, outputs, call = parent.frame()) {
+# The simulator's noise runs on the dense and nearest-neighbour algebras
+# (the runs' means carry their noise variance r_i / n_i on the diagonal of
+# their covariance, which the Vecchia conditionals hold as they hold the
+# nugget); several outputs are refused, and so is an input-dependent noise
+# on more than fbc_latent_max unique inputs (its latent GP over them is
+# dense: O(m^3) per move of its hyperparameters), naming simNoise; on a
+# product design the dense algebra replaces the Kronecker one.
+fbc_latent_max <- 2000L
+sim_noise_algebra <- function(alg, noise, outputs, m, call = parent.frame()) {
   if (noise$mode == "none") return(alg)
   asked <- noise$info$asked
   why <- if (asked == "auto") {
@@ -241,10 +251,10 @@ sim_noise_algebra <- function(alg, noise, outputs, call = parent.frame()) {
       i = "Use {.code simNoise = \"none\"} to treat the simulator as deterministic."
     ), call = call)
   }
-  if (alg$name == "vecchia") {
+  if (noise$mode == "input" && m > fbc_latent_max) {
     cli::cli_abort(c(
-      paste0(why, ", which the nearest-neighbour algebra ({.code algebra = \"vecchia\"}) does not have."),
-      i = "Use {.code algebra = \"dense\"} (exact) to model it, or {.code simNoise = \"none\"} to treat the simulator as deterministic."
+      paste0(why, ", whose latent log-variances over the {m} unique inputs have a dense GP prior (at most {fbc_latent_max} unique inputs)."),
+      i = "Use {.code simNoise = \"constant\"} (one noise variance) or {.code simNoise = \"none\"} (deterministic)."
     ), call = call)
   }
   if (alg$name == "kronecker") {

@@ -22,6 +22,8 @@
 #             (where hetGP is installed; not a dependency), t by quadrature
 #   none      simNoise = "none" (the runs as if deterministic; up to
 #             --maxNone runs, its cost grows with the rows)
+#   mean      the cost reference: one deterministic run of the mean eta at
+#             each unique input (no replicates, no noise), the defaults
 # Reported per cell: Hellinger distance of t's posterior (a kernel density
 # of the draws) to the exact one, beside the bound (Hbound: eta known, the
 # field's noise one unknown variance as in FBC's model), the share of data
@@ -149,11 +151,15 @@ one <- function(k, r, seed, simNoise) {
   if (simNoise == "hetgp") return(one_plugin(k, r, seed))
   if (simNoise %in% c("bound", "exact")) return(one_oracle(k, r, seed, simNoise))
   d <- data_set(k, r, seed)
+  if (simNoise == "mean") {
+    d$sim <- d$sim[seq_len(k), , drop = FALSE]
+    d$sim[, "y"] <- eta(d$sim[, "x"], d$sim[, "t"])
+  }
   ex <- exact_posterior(d)
   set.seed(seed)
   nobias <- simNoise == "auto-nobias"
   tm <- cpu(fit <- suppressMessages(suppressWarnings(
-    calibrate(d$sim, d$field, simNoise = if (nobias) "auto" else simNoise,
+    calibrate(d$sim, d$field, simNoise = if (nobias || simNoise == "mean") "auto" else simNoise,
               discrepancy = if (nobias) "none" else "gp", showProgress = FALSE,
               converge = if (opt$quick) until_converged(maxMCMC = 2000)))))
   tt <- fit$Phi[, fit$indices$kappa]

@@ -786,6 +786,8 @@ private:
     arma::mat Kw, Xg;
     arma::vec rhs;
     std::vector<double> Gw, Cw, Ww, x;
+    std::vector<int> rid;  // the run of each of Xg's run rows
+
     std::vector<std::pair<double, int> > cand;
   };
   std::vector<Work> ws_;
@@ -818,6 +820,11 @@ private:
   void fieldNeighbours(std::vector<int>& nbrF, const std::vector<int>& prev);
   int gather(Work& w, const int* nb, int c, const std::vector<int>& L, const double* x) const;
   int gatherRun(Work& w, int i) const;
+  // a run's diagonal in correlation units: the nugget, and with the
+  // simulator's own noise its mean's noise variance over sigma2S
+  double runDiag(int j) const {
+    return simNoise ? nugget_ + meanNoise(j) / phi[iSigma2S] : nugget_;
+  }
 };
 
 // Independent outputs (outputs.cpp): the covariance of (yf, ys) is block

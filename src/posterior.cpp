@@ -177,7 +177,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have,
                  c.length < 0 ? K * b : want);
   }
-  // a stochastic simulator's replicates (R/sim_noise.R): the dense algebra only
+  // a stochastic simulator's replicates (R/sim_noise.R): one emulated output
   if (model.containsElementNamed("replicates")) {
     const Rcpp::List rp = model["replicates"];
     out.repCount = Rcpp::as<std::vector<double> >(rp["count"]);
@@ -193,8 +193,8 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       if (!(c >= 1)) Rcpp::stop("the replicate counts must be 1, 2, ...");
       out.repDf += c - 1.0;
     }
-    if (out.algebra == ALG_VECCHIA || K > 1 || !out.emulator)
-      Rcpp::stop("the simulator's own noise has the dense algebra only");
+    if (K > 1 || !out.emulator)
+      Rcpp::stop("the simulator's own noise needs one emulated output");
   }
   // the noise: sigma2R (constant) or gR, one per unique input, with its GP's
   // muG, sigma2G and thetaG (input-dependent)

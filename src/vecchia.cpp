@@ -6,7 +6,9 @@
 // Nodes, in order: the m simulator runs in a maximin ordering of their
 // inputs scaled by w (Guinness 2018; Katzfuss, Guinness and Lawrence 2022),
 // then the nu distinct field latents f_j = eta(x_j, kappa). In correlation
-// units (Ds = Rs + nugget I on the runs, no nugget on the latents):
+// units (Ds = Rs + nugget I on the runs, no nugget on the latents; with the
+// simulator's own noise the runs are the unique inputs' means and Ds = Rs +
+// nugget I + diag(r_i / n_i) / sigma2S, runDiag()):
 //   run s_i | its <= k nearest earlier runs N_i:
 //     ys_i = b_i' ys_N + e_i, e_i ~ N(0, d_i),
 //     log|Ds| ~ sum log d_i,  ys' Ds^-1 ys ~ sum e_i^2 / d_i,
@@ -180,6 +182,7 @@ VecchiaPosterior::VecchiaPosterior(const arma::mat& Xf, const arma::vec& yf, con
     w.Cw.resize(nemax);
     w.Ww.resize(nemax);
     w.x.resize(K);
+    w.rid.resize(smax);
   }
   runLd_.resize(m);
   runZz_.resize(m);
@@ -273,7 +276,7 @@ void VecchiaPosterior::syncLevels() {
 }
 
 // The conditional of the node in the last of the s rows of w.Xg given the
-// others (the first `runs` of them simulator runs, with the nugget): the
+// others (the first `runs` of them simulator runs w.rid, with runDiag()): the
 // factor of their joint correlation in w.Kw, coefficients into w.rhs[0 ..
 // s-2] (when `coef`), returns the conditional variance (NaN when the factor
 // fails even with a jitter on the latents). G: the rows' per-dimension
@@ -298,7 +301,7 @@ double VecchiaPosterior::conditional(Work& w, int s, int runs, bool coef, const 
       r += s - j;
     }
     level_scale(levels, levelC_, w.Xg, w.Xg, w.Kw, true, s);
-    for (int i = 0; i < s; ++i) w.Kw.at(i, i) += i < runs ? nugget_ : jitter;
+    for (int i = 0; i < s; ++i) w.Kw.at(i, i) += i < runs ? runDiag(w.rid[i]) : jitter;
     if (y) for (int j = 0; j < s; ++j) w.Kw.at(s, j) = y[j];
     if (!small_chol(w.Kw.memptr(), s, lda, y ? s + 1 : s)) continue;
     if (coef) {
@@ -326,13 +329,21 @@ bool VecchiaPosterior::simUpdate(const Touch& t, double& ldDs, double& zz) {
   return runsPass(ldDs, zz);
 }
 
-// The simulator GP's correlation parameters in phi: thetaS, alphaS, rhoS
-// (what the runs' conditionals depend on).
+// What the runs' conditionals depend on in phi: the simulator GP's
+// correlation parameters thetaS, alphaS, rhoS and, with the simulator's own
+// noise, sigma2S and the noise variance (sigma2R, or the latent gR).
 arma::vec VecchiaPosterior::simKey() const {
   const int K = p + q, nz = level_count(levels);
-  arma::vec key(2 * K + nz);
+  const int nr = !simNoise ? 0 : latent ? 1 + m : 2;
+  arma::vec key(2 * K + nz + nr);
   for (int d = 0; d < K; ++d) { key[d] = phi[iThetaS + d]; key[K + d] = phi[iAlphaS + d]; }
   for (int z = 0; z < nz; ++z) key[2 * K + z] = phi[iRhoS + z];
+  if (nr) {
+    double* r = key.memptr() + 2 * K + nz;
+    r[0] = phi[iSigma2S];
+    if (latent) for (int i = 0; i < m; ++i) r[1 + i] = phi[iG + i];
+    else r[1] = phi[iSigma2R];
+  }
   return key;
 }
 
@@ -364,8 +375,9 @@ bool VecchiaPosterior::runsPass(double& ldDs, double& zz) {
     Work& w = ws_[thread_id()];
     const int* nb = vd_.nbr.data() + (size_t) i * k;
     const int c = gather ? gatherRun(w, i) : runC_[i];
-    for (int r = 0; r < c; ++r) w.rhs[r] = ys_[nb[r]];
+    for (int r = 0; r < c; ++r) { w.rhs[r] = ys_[nb[r]]; w.rid[r] = nb[r]; }
     w.rhs[c] = ys_[vd_.ord[i]];
+    w.rid[c] = vd_.ord[i];
     // z = L^-1 [ys_N; ys_s] in row c + 1 of Kw: its last entry is e / sqrt(d)
     const double v = conditional(w, c + 1, c + 1, false, runDist(i), w.rhs.memptr());
     const double z = w.Kw.at(c + 1, c);
@@ -389,10 +401,13 @@ int VecchiaPosterior::gatherRun(Work& w, int i) const {
   const int K = p + q, k = vd_.k;
   const int* nb = vd_.nbr.data() + (size_t) i * k;
   int c = 0;
-  for (; c < k && nb[c] >= 0; ++c)
+  for (; c < k && nb[c] >= 0; ++c) {
     for (int d = 0; d < K; ++d) w.Xg.at(c, d) = Xs_.at(nb[c], d);
+    w.rid[c] = nb[c];
+  }
   const int s = vd_.ord[i];
   for (int d = 0; d < K; ++d) w.Xg.at(c, d) = Xs_.at(s, d);
+  w.rid[c] = s;
   return c;
 }
 
@@ -457,8 +472,10 @@ int VecchiaPosterior::gather(Work& w, const int* nb, int c, const std::vector<in
   const int K = p + q;
   arma::mat& Xg = w.Xg;
   int r = 0;
-  for (int a = 0; a < c; ++a, ++r)
+  for (int a = 0; a < c; ++a, ++r) {
     for (int d = 0; d < K; ++d) Xg.at(r, d) = Xs_.at(nb[a], d);
+    w.rid[r] = nb[a];
+  }
   for (int l : L) {
     for (int d = 0; d < p; ++d) Xg.at(r, d) = Xu_.at(l, d);
     for (int d = 0; d < q; ++d) Xg.at(r, p + d) = phi[iKappa + d];

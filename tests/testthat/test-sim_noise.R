@@ -122,6 +122,47 @@ test_that("the simulator's noise and t are recovered on a stochastic simulator",
   expect_identical(again$Phi, fit$Phi)
 })
 
+test_that("the nearest-neighbour algebra carries the noise: with every predecessor, the dense likelihood and moves", {
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3, 2, 4), nf = 4, seed = 2)
+  for (mode in c("constant", "input")) {
+    dense <- calibrate(pb$sim, pb$field, simNoise = mode, fit = FALSE)
+    vec <- calibrate(pb$sim, pb$field, simNoise = mode, algebra = "vecchia", neighbours = 12,
+                     fit = FALSE)
+    expect_identical(vec$algebra$name, "vecchia")
+    d <- dense$data
+    m <- nrow(d$Xs)
+    set.seed(5)
+    phis <- t(replicate(3, {
+      phi <- random_phi(1, 1, "gp")
+      if (mode == "constant") c(phi, stats::rgamma(1, 2, 20)) else
+        c(phi, stats::rnorm(m, -3, 0.7), stats::rnorm(1, -3), stats::rgamma(1, 2, 2),
+          stats::rgamma(2, 2, 1))
+    }))
+    ll <- function(model, phi) FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, FBC:::fbc_nugget,
+                                                 model = model$spec$model)
+    for (i in 1:3) expect_equal(ll(vec, phis[i, ]), ll(dense, phis[i, ]), tolerance = 1e-8)
+    # the moves of every class one after another (rejected decoys between),
+    # then the scale move: the same path
+    path <- function(model, scale) FBC:::.loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, FBC:::fbc_nugget,
+                                                      decoys = TRUE, scale = scale,
+                                                      model = model$spec$model)
+    expect_equal(path(vec, FALSE), path(dense, FALSE), tolerance = 1e-8)
+    if (mode == "constant") expect_equal(path(vec, TRUE), path(dense, TRUE), tolerance = 1e-8)
+  }
+  # a fit's predictions of the simulator's mean and noise at the same draws
+  go <- function(...) {
+    set.seed(1)
+    calibrate(pb$sim, pb$field, simNoise = "constant", discrepancy = "none", nMCMC = 200,
+              nBurn = 100, nChains = 1, converge = FALSE, ...)
+  }
+  vfit <- go(algebra = "vecchia", neighbours = 12)
+  dfit <- go()
+  expect_match(paste(capture.output(print(vfit)), collapse = "\n"), "Vecchia")
+  dfit$Phi[] <- vfit$Phi
+  at <- function(fit) { set.seed(2); predict(fit, c(0.5, 1.5), type = "simulator", ndraws = 40) }
+  expect_equal(at(vfit), at(dfit), tolerance = 1e-6)
+})
+
 test_that("print() says what was found and modelled", {
   pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3), nf = 4)
   set.seed(2)
@@ -142,10 +183,8 @@ test_that("what the simulator's noise cannot do is refused, naming simNoise", {
   noisy$y[25:27] <- noisy$y[25:27] + 0.1
   expect_snapshot(error = TRUE, {
     calibrate(noisy, two$field, output = "out", fit = FALSE)
-    calibrate(pb$sim, pb$field, simNoise = "input", algebra = "vecchia", fit = FALSE)
     calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "input")
     calibrate(pb$sim, pb$field, simNoise = "noisy")
-    calibrate(pb$sim, pb$field, algebra = "vecchia", fit = FALSE)
     calibrate(same, ballField, simNoise = "constant", fit = FALSE)
     calibrate(function(x, kappa) 5 * exp(-kappa[["t"]] * x$x), pb$field, simNoise = "constant")
   })
@@ -154,12 +193,11 @@ test_that("what the simulator's noise cannot do is refused, naming simNoise", {
                    nChains = 1, converge = FALSE)
   # (propose_runs() scores such fits: test-propose_runs-noise.R)
   expect_true(is.logical(suppressMessages(propose_runs(fit, ndraws = 20))$replicate))
-  # the compiled core refuses the noise with another algebra too
-  m <- calibrate(pb$sim, pb$field, fit = FALSE)
-  mc <- m$spec$model
-  mc$algebra <- 2L
-  expect_error(FBC:::.fbc_loglik(m$data$Xf, m$data$yf, m$data$Xs, m$data$ys, m$spec$init,
-                                 FBC:::fbc_nugget, model = mc), "dense algebra only")
+  # an input-dependent noise on more unique inputs than its dense latent GP takes
+  big <- data.frame(y = stats::rnorm(4002), x = rep(seq(0, 1, length.out = 2001), 2),
+                    t = rep((seq_len(2001) * 0.618034) %% 1, 2))
+  expect_snapshot(error = TRUE,
+    calibrate(big, data.frame(y = 1:3, x = c(0.2, 0.5, 0.8)), simNoise = "input", fit = FALSE))
 })
 
 test_that("a run with the simulator's noise resumes from its checkpoint, and takes new runs", {
