@@ -42,7 +42,9 @@
 #' The failed inputs feed a model of where the simulator fails, a Gaussian
 #' process classifier over the numeric inputs (logistic link, Laplace
 #' approximation, its length-scales and variance at their posterior mode:
-#' plug-in values serve because it does not enter kappa's posterior; above
+#' plug-in values serve because it does not enter kappa's posterior; a
+#' large latent scale and the latent's mode, so that it interpolates the
+#' runs, since a deterministic code fails again where it failed; above
 #' 1,000 runs it sees every failed run and a sample of the successful ones;
 #' fitted when first asked for, not by `calibrate()`):
 #' `predict(fit, newdata, type = "failure")`, `plot(fit, type = "failure")`,

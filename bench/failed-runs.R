@@ -8,9 +8,12 @@
 #     design_loop() from 10 runs, one run a step, with and without the
 #     failure model's weighting of propose_runs()' gains: the share of the
 #     picks that fail, and u's 90% width at the end.
-# Rscript bench/run.R failed-runs [--quick] [--reps=10] [--budget=12]
+#     --oracle=TRUE adds the weighting by the true failure indicator (the
+#     bound of what a failure model can give); --spotweld=FALSE skips part 1.
+# Rscript bench/run.R failed-runs [--quick] [--reps=10] [--budget=12] [--oracle=FALSE]
+#   [--spotweld=TRUE]
 source("bench/options.R")
-opt <- bench_options(list(reps = 10L, budget = 12L, seeds = 1L))
+opt <- bench_options(list(reps = 10L, budget = 12L, seeds = 1L, oracle = FALSE, spotweld = TRUE))
 if (opt$quick) { opt$reps <- 2L; opt$budget <- 4L }
 suppressPackageStartupMessages(library(FBC))
 
@@ -34,11 +37,13 @@ run_sw <- function(data) {
   data.frame(m = fit$model$dims$m, q05 = q[1], q50 = q[2], q95 = q[3],
              cpu = t, messages = length(msgs))
 }
-cat("\n1. Spot weld, default calibrate(), seed", opt$seeds, "\n\n")
-tab <- rbind(cbind(data = "raw sw_sim.txt (17 NA rows)", run_sw(sim)),
-             cbind(data = "hand-cleaned (35 runs)", run_sw(sim[!is.na(sim$diameter), ])))
-rownames(tab) <- NULL
-print(knitr::kable(tab, digits = 3))
+if (opt$spotweld) {
+  cat("\n1. Spot weld, default calibrate(), seed", opt$seeds, "\n\n")
+  tab <- rbind(cbind(data = "raw sw_sim.txt (17 NA rows)", run_sw(sim)),
+               cbind(data = "hand-cleaned (35 runs)", run_sw(sim[!is.na(sim$diameter), ])))
+  rownames(tab) <- NULL
+  print(knitr::kable(tab, digits = 3))
+}
 
 # ---- 2. a known failure region
 inside <- function(x, u) (x - 0.75)^2 + (u - 0.55)^2 < 0.2^2
@@ -46,12 +51,41 @@ f_sin <- function(x, kappa) {
   if (inside(x$x, kappa[["u"]])) stop("the solver diverged")
   sin(10 * kappa[["u"]] * x$x)
 }
-run_loop <- function(seed, weighted) {
+# The probability of success that weighs propose_runs()' gains: the failure
+# model's ("model"), none ("none": every gain as it is), or the oracle's,
+# the true indicator of the disc's complement ("oracle": what any failure
+# model could at best give, the bound of the weighting itself).
+oracle_success <- function(model, U, K = 1L) {
+  sc <- model$scale
+  X <- FBC:::unscale_inputs(U[seq(1L, nrow(U), by = K), , drop = FALSE], sc, seq_len(sc$p + sc$q))
+  as.numeric(!inside(X[, 1], X[, 2]))
+}
+# u's posterior with eta known (no emulator), the field noise sd s unknown
+# (half-Cauchy, scale the runs' sd, as calibrate()'s prior) and u's prior
+# calibrate()'s Beta(1.1, 1.1) on [0, 1]: by quadrature over (u, s). The
+# Hellinger distance of a loop's last fit to it says how well its runs
+# pinned u down.
+ref_posterior <- function(fld, ysd) {
+  u <- seq(0, 1, length.out = 1001)
+  s <- exp(seq(log(0.01), log(2), length.out = 300))
+  ls <- outer(u, s, Vectorize(function(uu, sd) sum(stats::dnorm(fld$y, sin(10 * uu * fld$x), sd, log = TRUE)))) +
+    rep(stats::dcauchy(s, 0, ysd, log = TRUE) + log(s), each = length(u))
+  ls <- ls + stats::dbeta(u, 1.1, 1.1, log = TRUE)
+  w <- rowSums(exp(ls - max(ls)))
+  list(u = u, dens = w / sum(w) / diff(u[1:2]))
+}
+hellinger <- function(draws, ref) {
+  k <- stats::density(draws, from = 0, to = 1, n = length(ref$u))
+  q <- k$y / sum(k$y) / diff(ref$u[1:2])
+  sqrt(max(0, 1 - sum(sqrt(q * ref$dens)) * diff(ref$u[1:2])))
+}
+run_loop <- function(seed, mode) {
   ns <- asNamespace("FBC")
-  if (!weighted) {
+  if (mode != "model") {
     keep <- ns$run_success
     unlockBinding("run_success", ns)
-    assign("run_success", function(...) numeric(), envir = ns)
+    assign("run_success", if (mode == "none") function(...) numeric() else oracle_success,
+           envir = ns)
     on.exit({assign("run_success", keep, envir = ns); lockBinding("run_success", ns)})
   }
   set.seed(seed)
@@ -62,25 +96,33 @@ run_loop <- function(seed, weighted) {
                 batch = 1, budget = opt$budget, discrepancy = "none", nChains = 2))))
   picks <- out$sim[-(1:10), ]
   w <- diff(stats::quantile(out$fit$Phi[, 1], c(0.05, 0.95)))
-  data.frame(seed = seed, weighted = weighted, picks = nrow(picks),
-             failed = sum(inside(picks$x, picks$u)), width = w, cpu = t)
+  ref <- ref_posterior(fld, stats::sd(out$sim$y, na.rm = TRUE))
+  data.frame(seed = seed, weighting = mode, picks = nrow(picks),
+             failed = sum(inside(picks$x, picks$u)), width = w,
+             H = hellinger(out$fit$Phi[, 1], ref), cpu = t)
 }
 cat("\n2. Runs failing inside a disc; design_loop() from 10 runs, budget", opt$budget, "\n\n")
+modes <- c("model", "none", if (opt$oracle) "oracle")
 res <- do.call(rbind, lapply(seq_len(opt$reps), function(r) {
-  rbind(run_loop(r, TRUE), run_loop(r, FALSE))
+  do.call(rbind, lapply(modes, function(m) run_loop(r, m)))
 }))
-summ <- do.call(rbind, lapply(split(res, res$weighted), function(d) {
-  data.frame(failure_model = d$weighted[1], replicates = nrow(d),
+summ <- do.call(rbind, lapply(split(res, res$weighting)[modes], function(d) {
+  data.frame(weighting = d$weighting[1], replicates = nrow(d),
              failed_share = sum(d$failed) / sum(d$picks),
              failed_per_loop = paste(range(d$failed), collapse = "-"),
-             u_width_median = stats::median(d$width), cpu_median = stats::median(d$cpu))
+             u_width_median = stats::median(d$width), H_median = stats::median(d$H),
+             cpu_median = stats::median(d$cpu))
 }))
 rownames(summ) <- NULL
-print(knitr::kable(summ[order(!summ$failure_model), ], digits = 3))
-d <- split(res, res$weighted)
-cat(sprintf("\nPaired difference of failed picks per loop (with - without): mean %.2f, se %.2f\n",
-            mean(d[["TRUE"]]$failed - d[["FALSE"]]$failed),
-            stats::sd(d[["TRUE"]]$failed - d[["FALSE"]]$failed) / sqrt(opt$reps)))
+print(knitr::kable(summ, digits = 3))
+d <- split(res, res$weighting)
+for (m in setdiff(modes, "none"))
+  cat(sprintf("\nPaired difference of failed picks per loop (%s - none): mean %.2f, se %.2f\n", m,
+              mean(d[[m]]$failed - d[["none"]]$failed),
+              stats::sd(d[[m]]$failed - d[["none"]]$failed) / sqrt(opt$reps)))
+for (m in setdiff(modes, "none"))
+  cat(sprintf("Paired difference of the last fit's Hellinger distance to u's posterior with eta known (%s - none): mean %.3f, se %.3f\n", m,
+              mean(d[[m]]$H - d[["none"]]$H), stats::sd(d[[m]]$H - d[["none"]]$H) / sqrt(opt$reps)))
 cat(sprintf("\n%s, R %s, BLAS %s, commit %s\n", format(Sys.time(), "%Y-%m-%d"),
             getRversion(), basename(La_library()),
             tryCatch(system("git rev-parse --short HEAD", intern = TRUE), error = function(e) "?")))

@@ -112,6 +112,10 @@ test_that("the failure probability finds a known failure region", {
   # ranks the runs: failed runs above the successful ones on average
   p <- failure_probability(cl, X)
   expect_gt(mean(p[inside]), mean(p[!inside]) + 0.5)
+  # a deterministic code fails again where it failed: the classifier
+  # interpolates its runs (the latent's mode at a large scale)
+  expect_true(all(p[inside] > 0.8) && all(p[!inside] < 0.2))
+  expect_gt(cl$s2, 100)
 })
 
 test_that("the failure classifier is fitted when a probability is first asked for, once", {
