@@ -869,8 +869,10 @@ static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
   const Posterior& post = ch.post;
   const std::vector<int>& idx = mv.b.idx;
   const int k = idx.size();
-  if (!want || k < 2 || !post.canPreview() || post.layout.length_of("sigma2S") != 1 ||
-      idx[k - 1] != post.iSigma2S)
+  // (with the simulator's own noise Ds holds sigma2R / sigma2S, so the
+  // runs' conditional of sigma2S is not that inverse gamma)
+  if (!want || k < 2 || !post.canPreview() || post.simNoise ||
+      post.layout.length_of("sigma2S") != 1 || idx[k - 1] != post.iSigma2S)
     return;
   mv.b.walked = k - 1;
   mv.idxT.assign(idx.begin(), idx.end() - 1);

@@ -158,6 +158,10 @@ test_that("the nearest-neighbour algebra carries the noise: with every predecess
   vfit <- go(algebra = "vecchia", neighbours = 12)
   dfit <- go()
   expect_match(paste(capture.output(print(vfit)), collapse = "\n"), "Vecchia")
+  # the same moves on the same likelihood: the same draws (the simulator
+  # block walks sigma2S with the rest: with the noise its conditional given
+  # the runs is not the inverse gamma the deterministic model's is)
+  expect_equal(vfit$Phi, dfit$Phi, tolerance = 1e-6)
   dfit$Phi[] <- vfit$Phi
   at <- function(fit) { set.seed(2); predict(fit, c(0.5, 1.5), type = "simulator", ndraws = 40) }
   expect_equal(at(vfit), at(dfit), tolerance = 1e-6)
