@@ -38,7 +38,10 @@
 #            simulator and bias GPs; "noise": of the latent noise GP's
 #            hyperparameters, whose variance and ranges trade off), "single"
 #            (single site), "gibbs" (an
-#            exact draw when its prior allows, else single site)
+#            exact draw when its prior allows, else single site); the
+#            simulator's noise variance sigma2R moves with the simulator
+#            GP's block, since each of its moves refactors the runs' system
+#            (alone it doubled a sweep's cost at m = 1000)
 #   joint    (with move "each") also one joint adapted walk of the class's
 #            free parameters, beside their own moves, when it has at least
 #            two: calibration inputs that trade off move along their ridge
@@ -63,7 +66,7 @@ model_classes <- data.frame(
   domain = c("real", "positive", "unit12", "corr", "positive", "unit12", "corr", "corr", "positive", "positive", "positive", "positive", "real", "positive", "real", "real", "positive", "positive"),
   walk   = c("identity", "log", "logit12", "atanh", "log", "logit12", "atanh", "atanh", "log", "log", "log", "log", "identity", "log", "identity", "identity", "log", "log"),
   sd0    = c(0.1, 0.5, 0.5, 0.3, 0.5, 0.5, 0.3, 0.3, 0.5, 0.3, 0.3, 0.3, 0.1, 0.1, 0.1, 0.3, 0.3, 0.3),
-  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "single", "slice", "noise", "noise", "noise"),
+  move   = c("each", "sim", "sim", "sim", "bias", "bias", "bias", "bias", "bias", "sim", "bias", "single", "gibbs", "sim", "slice", "noise", "noise", "noise"),
   joint  = c(TRUE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE),
   scaled = c(FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, FALSE, TRUE, TRUE, TRUE, FALSE, TRUE, FALSE, FALSE, FALSE, FALSE),
   touch  = c("kappa", "sim", "simPow", "simLevels", "bias", "biasPow", "bias", "bias", "bias", "field", "field", "field", "residual", "runs", "latent", "latentHyper", "latentHyper", "latentK"),

@@ -38,6 +38,14 @@ sampler_moves <- function(sampler, spec, large = FALSE, jump = TRUE) {
   free <- fam != "fixed"
   row <- match(spec$classes, model_classes$class)
   move <- model_classes$move[row]
+  # sigma2R joins the simulator block where the compiled core draws it from
+  # the replicates' within term (tail_sigma2R(), src/sampler.cpp: more
+  # than 2 within degrees of freedom and a positive within sum of squares);
+  # else it moves alone
+  rp <- spec$model$replicates
+  if (!is.null(rp) && !(sum(rp$count - 1) > 2 && sum(rp$ssw) > 0)) {
+    move[spec$classes == "sigma2R"] <- "single"
+  }
   # each free parameter of an "each" class alone (a one-parameter block: its
   # walk scale adapts like the joint ones'), three moves a sweep (one when
   # `large`): a kappa move needs no m x m factorization, and kappa is what

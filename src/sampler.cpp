@@ -606,11 +606,25 @@ struct BlockMove : Move {
     }
     return walk_proposal(ch, n, lpDiff, jac);
   }
+  // (tailR: the block ends with the simulator's noise variance sigma2R,
+  // drawn from the replicates' within term alone, IG(aR, bR); see
+  // tail_sigma2R())
+  bool tailR = false;
+  double aR = 0, bR = 0;
   bool step_collapsed(Chain& ch) {
     Posterior& post = ch.post;
     const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
     double lpDiff = 0, jac = 0;
     if (!proposal(ch, kt, lpDiff, jac)) return false;
+    if (tailR) {
+      const double s2 = post.phi[js], s2New = 1.0 / R::rgamma(aR, 1.0 / bR);
+      b.vals[kt] = s2New;
+      b.lpNew[kt] = ch.pr(js, s2New);
+      if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
+      lpDiff += b.lpNew[kt] - ch.lp[js];
+      const double lq = log_ig(s2, aR, bR) - log_ig(s2New, aR, bR);
+      return metropolis(ch, b.idx, b.lpNew.memptr(), post.propose(b.idx, b.vals), {lpDiff, jac, lq});
+    }
     for (int i = 0; i < kt; ++i) valsT[i] = b.vals[i];
     double zzNew;
     bool ok;
@@ -884,6 +898,28 @@ static void collapse_sigma2S(BlockMove& mv, const Chain& ch, bool want) {
   }
 }
 
+// Makes the simulator block mv, when it ends with the simulator's constant
+// noise variance sigma2R, draw sigma2R from the replicates' within term
+// alone, exp(-[repDf log r + SSW / r] / 2) = IG(repDf / 2 - 1, SSW / 2) in
+// r, an independence proposal (the rest of the block as before) whose
+// Metropolis-Hastings ratio keeps the posterior exact: the within term's
+// repDf degrees of freedom pin sigma2R down (at 1,000 inputs x 100
+// replicates to 0.5%), which a joint walk or t proposal of the block
+// follows slowly, and a move of its own costs a second factorisation of
+// the runs' system a sweep.
+static void tail_sigma2R(BlockMove& mv, const Chain& ch) {
+  const Posterior& post = ch.post;
+  const std::vector<int>& idx = mv.b.idx;
+  const int k = idx.size();
+  if (k < 2 || !post.simNoise || post.latent || idx[k - 1] != post.iSigma2R ||
+      !(post.repDf > 2) || !(post.repSSW > 0))
+    return;
+  mv.b.walked = k - 1;
+  mv.tailR = true;
+  mv.aR = 0.5 * post.repDf - 1.0;
+  mv.bR = 0.5 * post.repSSW;
+}
+
 // The schedule of `moves` (R's sampler_moves()): the moves in sweep order.
 // Each free parameter in the order of phi gets its block's move at the
 // block's first parameter (the block continued from `state` when it has
@@ -930,6 +966,7 @@ static Schedule make_schedule(Chain& ch, const Rcpp::List& moves, const Rcpp::Li
     BlockMove* mv = new BlockMove(std::move(blocks[b]), (int) repeats.size() > b ? std::max(1, repeats[b]) : 1);
     if (!mv->b.overlay) {
       collapse_sigma2S(*mv, ch, has(collapse, b + 1));
+      tail_sigma2R(*mv, ch);
       mv->independent = has(independent, b + 1);
     }
     schedule.emplace_back(mv);

@@ -1,6 +1,7 @@
 # The grid posterior of kappa1 against the sampler's draws: the reference
 # that test-exact-posterior.R, test-kronecker.R, test-vecchia.R and
-# test-factors.R each check their algebra against.
+# test-factors.R each check their algebra against; and the walked
+# parameters of a sampler test against theirs (expect_draws_match_grid()).
 
 # Quantiles of a density tabulated on an equispaced grid (trapezoid CDF).
 grid_quantile <- function(x, dens, probs) {
@@ -37,5 +38,37 @@ expect_kappa_grid <- function(fit, loglik, u = seq(0, 1, length.out = 101), col 
   if (!is.null(ksTol)) {
     ks <- suppressWarnings(stats::ks.test(fit$Phi[, "kappa1"], grid_cdf(kappa, dens))$statistic)
     expect_lt(ks, ksTol)
+  }
+}
+
+# The draws of the walked parameters `vars` of a one-chain fit (every other
+# parameter fixed) against their posterior on a grid of the walk's scales
+# (npts points a side, +-5 sd of the draws): the compiled log-likelihood
+# times the priors, its marginals' means and sds by the trapezoid rule; the
+# draws' means within 0.1 sd, their sds within 8%.
+expect_draws_match_grid <- function(fit, vars, npts) {
+  k <- length(vars)
+  cols <- match(vars, fit$model$spec$vars)
+  W <- log(FBC:::sampler_draws(fit)[, cols, drop = FALSE])
+  tab <- fit$model$spec$table
+  phi <- fit$state$chains[[1]]$last
+  dat <- fit$model$data
+  g <- lapply(seq_len(k), function(i) seq(mean(W[, i]) - 5 * sd(W[, i]),
+                                          mean(W[, i]) + 5 * sd(W[, i]), length.out = npts))
+  lp <- apply(as.matrix(expand.grid(g)), 1, function(w) {
+    x <- exp(w)
+    phi[cols] <- x
+    FBC:::.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$model$spec$model) +
+      sum(vapply(seq_len(k), function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) +
+      sum(w)
+  })
+  dens <- array(exp(lp - max(lp)), rep(npts, k))
+  for (i in seq_len(k)) {
+    marg <- apply(dens, i, sum)
+    marg <- marg / sum(marg)
+    mu <- sum(g[[i]] * marg)
+    s <- sqrt(sum((g[[i]] - mu)^2 * marg))
+    expect_lt(abs(mean(W[, i]) - mu) / s, 0.1)
+    expect_lt(abs(sd(W[, i]) / s - 1), 0.08)
   }
 }

@@ -185,38 +185,6 @@ test_that("the simulator block's sigma2S drawn from the runs' conditional target
   }
 })
 
-# The draws of the walked parameters `vars` of a one-chain fit (every other
-# parameter fixed) against their posterior on a grid of the walk's scales
-# (npts points a side, +-5 sd of the draws): the compiled log-likelihood
-# times the priors, its marginals' means and sds by the trapezoid rule; the
-# draws' means within 0.1 sd, their sds within 8%.
-expect_draws_match_grid <- function(fit, vars, npts) {
-  k <- length(vars)
-  cols <- match(vars, fit$model$spec$vars)
-  W <- log(FBC:::sampler_draws(fit)[, cols, drop = FALSE])
-  tab <- fit$model$spec$table
-  phi <- fit$state$chains[[1]]$last
-  dat <- fit$model$data
-  g <- lapply(seq_len(k), function(i) seq(mean(W[, i]) - 5 * sd(W[, i]),
-                                          mean(W[, i]) + 5 * sd(W[, i]), length.out = npts))
-  lp <- apply(as.matrix(expand.grid(g)), 1, function(w) {
-    x <- exp(w)
-    phi[cols] <- x
-    .fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi, 1e-6, model = fit$model$spec$model) +
-      sum(vapply(seq_len(k), function(i) FBC:::log_prior_row(tab, cols[i], x[i]), numeric(1))) +
-      sum(w)
-  })
-  dens <- array(exp(lp - max(lp)), rep(npts, k))
-  for (i in seq_len(k)) {
-    marg <- apply(dens, i, sum)
-    marg <- marg / sum(marg)
-    mu <- sum(g[[i]] * marg)
-    s <- sqrt(sum((g[[i]] - mu)^2 * marg))
-    expect_lt(abs(mean(W[, i]) - mu) / s, 0.1)
-    expect_lt(abs(sd(W[, i]) / s - 1), 0.08)
-  }
-}
-
 test_that("after warm-up the simulator block proposes from its warm-up estimate and targets the grid posterior", {
   skip_if_not_slow()
   # 40 runs of a smooth function (p = 2, q = 1), 12 field rows, the dense

@@ -167,6 +167,23 @@ test_that("the nearest-neighbour algebra carries the noise: with every predecess
   expect_equal(at(vfit), at(dfit), tolerance = 1e-6)
 })
 
+test_that("sigma2R drawn from the replicates' within term in the simulator block targets the grid posterior", {
+  # 12 unique inputs x 3 replicates, everything fixed but thetaS1, thetaS2
+  # and sigma2R: the simulator block walks (or after warm-up proposes) the
+  # length-scales and draws sigma2R from IG(df / 2 - 1, SSW / 2), an
+  # independence proposal corrected by Metropolis-Hastings
+  pb <- stochastic_problem(nx = 4, nt = 3, reps = 3, nf = 6, seed = 3)
+  hyp <- set_hyperPriors(sigma2SDist = "fixed", sigma2SInit = 1, sigma2EDist = "fixed",
+                         sigma2EInit = 0.01)
+  set.seed(6)
+  fit <- calibrate(pb$sim, pb$field, simNoise = "constant", discrepancy = "none", hypers = hyp,
+                   kappaDist = "fixed", kappaInit = 1.7, nMCMC = 6000, nChains = 1,
+                   converge = FALSE)
+  mv <- FBC:::move_report(fit)
+  expect_identical(mv$parameters[mv$move == "sim"], "thetaS1,thetaS2,sigma2R")
+  expect_draws_match_grid(fit, c("thetaS1", "thetaS2", "sigma2R"), 15)
+})
+
 test_that("print() says what was found and modelled", {
   pb <- stochastic_problem(nx = 4, nt = 3, reps = c(1, 3), nf = 4)
   set.seed(2)
