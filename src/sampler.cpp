@@ -616,28 +616,26 @@ struct BlockMove : Move {
     const int k = b.idx.size(), kt = k - 1, js = b.idx[kt];
     double lpDiff = 0, jac = 0;
     if (!proposal(ch, kt, lpDiff, jac)) return false;
+    const double s2 = post.phi[js];
+    double s2New, lq;
     if (tailR) {
-      const double s2 = post.phi[js], s2New = 1.0 / R::rgamma(aR, 1.0 / bR);
-      b.vals[kt] = s2New;
-      b.lpNew[kt] = ch.pr(js, s2New);
-      if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
-      lpDiff += b.lpNew[kt] - ch.lp[js];
-      const double lq = log_ig(s2, aR, bR) - log_ig(s2New, aR, bR);
-      return metropolis(ch, b.idx, b.lpNew.memptr(), post.propose(b.idx, b.vals), {lpDiff, jac, lq});
+      s2New = 1.0 / R::rgamma(aR, 1.0 / bR);
+      lq = log_ig(s2, aR, bR) - log_ig(s2New, aR, bR);
+    } else {
+      for (int i = 0; i < kt; ++i) valsT[i] = b.vals[i];
+      double zzNew;
+      bool ok;
+      post.simPreview(idxT, valsT, zzNew, ok);
+      if (!ok) return false;
+      const double aq = a0 + 0.5 * post.m, bNew = b0 + 0.5 * zzNew;
+      const double bOld = b0 + 0.5 * post.currentZz();
+      s2New = 1.0 / R::rgamma(aq, 1.0 / bNew);
+      lq = log_ig(s2, aq, bOld) - log_ig(s2New, aq, bNew);
     }
-    for (int i = 0; i < kt; ++i) valsT[i] = b.vals[i];
-    double zzNew;
-    bool ok;
-    post.simPreview(idxT, valsT, zzNew, ok);
-    if (!ok) return false;
-    const double aq = a0 + 0.5 * post.m, bNew = b0 + 0.5 * zzNew;
-    const double bOld = b0 + 0.5 * post.currentZz();
-    const double s2 = post.phi[js], s2New = 1.0 / R::rgamma(aq, 1.0 / bNew);
     b.vals[kt] = s2New;
     b.lpNew[kt] = ch.pr(js, s2New);
     if (!std::isfinite(b.lpNew[kt]) || !(s2New > 0)) return false;
     lpDiff += b.lpNew[kt] - ch.lp[js];
-    const double lq = log_ig(s2, aq, bOld) - log_ig(s2New, aq, bNew);
     return metropolis(ch, b.idx, b.lpNew.memptr(), post.propose(b.idx, b.vals), {lpDiff, jac, lq});
   }
   // the walk's positions w of every parameter of the block (what a burn-in
