@@ -42,6 +42,22 @@
 #' error shrinks (on Ishigami's function with 100 to 200 runs they cover the
 #' true indices far less often than their level says).
 #'
+#' Where the expansion has more than 2,000 centres (runs, distinct field
+#' inputs and support points; typical of the nearest-neighbour algebra) the
+#' closed form's \eqn{N \times N} integrals give way to an estimator
+#' (`estimator = "sampling"`, chosen by `"auto"`) at \eqn{O(N D (64 + (D + 2)
+#' n))} per draw for `samples` = \eqn{n}: the mean \eqn{f_0} stays exact and
+#' each first-order variance is the squared main effect integrated by the
+#' input's 64 quadrature nodes (exact but for the quadrature), while the
+#' variance and the total indices come from two independent samples of
+#' \eqn{n} points of the measure (Jansen's estimator; Saltelli et al. 2010),
+#' fresh for every draw (each draw's indices limited to \eqn{[0, 1]}). The
+#' result's `sampling_sd` column gives each
+#' index's sampling error for one draw (the median over the draws); it is
+#' part of the intervals' spread. On the nearest-neighbour algebra the
+#' emulator's mean is that of its approximation (\eqn{D_s^{-1} \approx U
+#' U'} of the runs' conditionals), exact with every predecessor.
+#'
 #' An index that is exactly zero (an input without effect) lies on the
 #' boundary: a path's first-order variance is positive, so no equal-tailed
 #' interval holds zero; read a small upper limit as "no effect".
@@ -65,8 +81,8 @@
 #' gives, averaged over those points (`points` in the result).
 #'
 #' @param fit An `fbc` object from [calibrate()], with an emulated simulator,
-#'   one output, numeric inputs and the dense or Kronecker algebra (for the
-#'   prediction's part, one field data set).
+#'   one output and numeric inputs (for the prediction's part, one field data
+#'   set).
 #' @param inputs Input distributions other than uniform over the design's
 #'   box: a named list whose names are inputs of the simulator and whose
 #'   elements are either a range `c(lower, upper)` (uniform, in the input's
@@ -86,10 +102,16 @@
 #' @param points Quasi-random points of the experimental inputs over which
 #'   the predictive variance's shares are averaged (three conditional
 #'   variances per point and draw).
+#' @param estimator `"closed"` (the closed form), `"sampling"` (the total
+#'   variance and the total indices by sampling, see Details) or `"auto"`:
+#'   the closed form up to 2,000 centres.
+#' @param samples Points of each of the sampling estimator's two samples per
+#'   draw (it evaluates the mean at `(D + 2) * samples` points per draw).
 #' @param ... Not used: an argument given here is an error.
 #' @return An object of class `fbc_sensitivity`: `simulator` and
 #'   `prediction` (data frames with one row per input and index: `median`,
-#'   `lower`, `upper`, `mcse` the Monte Carlo standard error of the median),
+#'   `lower`, `upper`, `mcse` the Monte Carlo standard error of the median,
+#'   and with the sampling estimator `sampling_sd`),
 #'   `shares` (the prediction's variance shares), `points` (the points the
 #'   shares average over, in the inputs' units), `draws` (per-draw indices:
 #'   arrays draws x inputs x index), `main` (main effects: for each input a
@@ -112,7 +134,8 @@
 #' s
 #' as.data.frame(s)
 sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 128,
-                        prediction = TRUE, points = 128, ...) {
+                        prediction = TRUE, points = 128,
+                        estimator = c("auto", "closed", "sampling"), samples = 1024, ...) {
   check_dots_empty(..., fn = sensitivity, name = "sensitivity")
   fit <- check_fbc(fit, "fit")
   check_sensitivity_fit(fit)
@@ -122,6 +145,8 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
   if (paths == 1L) cli::cli_abort("{.arg paths} must be 0 (no sample paths) or at least 2, not 1.")
   check_flag(prediction, "prediction")
   points <- check_count(points, "points", min = 2)
+  estimator <- match_choice(estimator, c("auto", "closed", "sampling"), "estimator")
+  samples <- check_count(samples, "samples", min = 2)
   if (prediction && !is.null(fit$model$spec$model$source)) {
     cli::cli_abort(c(
       "The calibrated prediction's part needs a fit with one field data set.",
@@ -138,27 +163,25 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
   phis <- sampler_draws(fit, rows)
   M <- length(rows)
 
+  estimator <- sensitivity_estimator(fit, paths, estimator)
+  sampled <- estimator == "sampling"
   G <- 25L
   grid <- matrix(seq(0, 1, length.out = G), G, D)
   for (k in seq_len(D)) grid[, k] <- seq(measure$lower[k], measure$upper[k], length.out = G)
   res <- at_draws(fit, .fbc_sobol_c, phis, exact = measure$exact, lower = measure$lower,
                   upper = measure$upper, nodes = measure$nodes, weights = measure$weights,
-                  grid = grid, support = support_points(paths, M, measure))
-  V <- pmax(as.vector(res$V), .Machine$double.xmin)
-  S1 <- t(res$V1) / V
-  ST <- t(res$VT) / V
-  dn <- list(NULL, nm)
-  dimnames(S1) <- dimnames(ST) <- dn
-  sim_draws <- array(c(S1, ST), c(M, D, 2), list(NULL, nm, c("first", "total")))
+                  grid = grid, support = support_points(paths, M, measure),
+                  samples = sobol_samples(if (sampled) samples else 0L, M, measure))
+  sim_draws <- index_draws(res, M, nm, sampled)
   role <- rep(c("experimental", "calibration"), c(p, q))
   out <- list(
-    simulator = index_table(sim_draws, role, level),
+    simulator = index_table(sim_draws, role, level, if (sampled) sampling_sd(res, M, nm)),
     prediction = NULL, shares = NULL,
     draws = list(simulator = sim_draws),
     main = list(simulator = main_effects(res$main, grid, sc, nm, G, level))
   )
   if (prediction) {
-    pr <- prediction_sensitivity(fit, phis, points, level, measure)
+    pr <- prediction_sensitivity(fit, phis, points, level, measure, if (sampled) samples else 0L)
     out$prediction <- pr$table
     out$shares <- pr$shares
     out$draws$prediction <- pr$draws
@@ -167,6 +190,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
   }
   out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = nm, role = role,
                        measure = measure$label, paths = paths, points = points,
+                       estimator = estimator, samples = if (sampled) samples else NA_integer_,
                        kernel = kernels$label[match(fit$model$spec$model$kernS, kernels$code)])
   class(out) <- "fbc_sensitivity"
   out
@@ -178,12 +202,11 @@ check_sensitivity_fit <- function(fit, call = parent.frame()) {
   why <- c(
     if (!is.null(mdl$simulator)) "its simulator is an R function (there is no emulator)",
     if (!is.null(mdl$outputs)) "it has several independent outputs",
-    if (!is.null(mdl$levels)) "it has categorical inputs",
-    if (identical(as.integer(mdl$algebra), 2L)) "it uses the nearest-neighbour (Vecchia) algebra"
+    if (!is.null(mdl$levels)) "it has categorical inputs"
   )
   if (length(why)) {
     cli::cli_abort(c(
-      "{.fn sensitivity} needs a fit with one emulated output, numeric inputs and the dense or Kronecker algebra.",
+      "{.fn sensitivity} needs a fit with one emulated output and numeric inputs.",
       x = "{.arg fit} cannot be used: {why[1]}."
     ), call = call)
   }
@@ -195,6 +218,44 @@ check_level <- function(level, arg = "level", call = parent.frame()) {
     cli::cli_abort("{.arg {arg}} must be a single number strictly between 0 and 1.", call = call)
   }
   invisible(level)
+}
+
+# The closed form's integrals are N x N per input, N the centres of the
+# expansion (runs, distinct field rows, support points): above this many the
+# indices are estimated by sampling (`estimator = "auto"`).
+fbc_sensitivity_closed_max <- 2000L
+
+# The estimator `"auto"` stands for: the closed form unless the expansion's
+# centres (the runs, or unique inputs with the simulator's noise, the
+# distinct field rows and the support points) are more than the maximum.
+sensitivity_estimator <- function(fit, paths, estimator) {
+  if (estimator != "auto") return(estimator)
+  d <- fit$model$data
+  N <- nrow(d$Xs) + nrow(unique(d$Xf)) + paths
+  if (N > fbc_sensitivity_closed_max) "sampling" else "closed"
+}
+
+# Per draw, two independent samples A and B of n points from the measure
+# (2 n rows per draw, stacked: A then B); n = 0: none (the closed form).
+sobol_samples <- function(n, M, measure) {
+  D <- length(measure$lower)
+  if (n == 0L) return(matrix(0, 0, D))
+  to_measure(matrix(stats::runif(2L * n * M * D), 2L * n * M, D), measure)
+}
+
+# The draws' indices (draws x inputs x index) from the compiled variances;
+# sampled ones limited to [0, 1], where every index lies.
+index_draws <- function(res, M, nm, sampled = FALSE) {
+  V <- pmax(as.vector(res$V), .Machine$double.xmin)
+  D <- length(nm)
+  S <- array(c(t(res$V1) / V, t(res$VT) / V), c(M, D, 2), list(NULL, nm, c("first", "total")))
+  if (sampled) S[] <- pmin(pmax(S, 0), 1)
+  S
+}
+
+# Each draw's sampling error of its indices (draws x inputs x index).
+sampling_sd <- function(res, M, nm) {
+  array(c(t(res$sd1), t(res$sdT)), c(M, length(nm), 2), list(NULL, nm, c("first", "total")))
 }
 
 # The first n points of the Halton sequence in d dimensions (radical inverses
@@ -233,17 +294,23 @@ support_points <- function(N, M, measure) {
     rows <- (d - 1L) * N + seq_len(N)
     out[rows, ] <- (H + rep(stats::runif(D), each = N)) %% 1
   }
-  for (k in seq_len(D)) {
-    u <- out[, k]
-    out[, k] <- if (measure$exact[k]) {
-      measure$lower[k] + (measure$upper[k] - measure$lower[k]) * u
+  to_measure(out, measure)
+}
+
+# Points u of the unit cube mapped to each input's measure: uniform on its
+# range, or the inverse of the quadrature's distribution function for a
+# density.
+to_measure <- function(u, measure) {
+  for (k in seq_len(ncol(u))) {
+    u[, k] <- if (measure$exact[k]) {
+      measure$lower[k] + (measure$upper[k] - measure$lower[k]) * u[, k]
     } else {
       cw <- cumsum(measure$weights[, k])
-      stats::approx(c(0, cw), c(measure$lower[k], measure$nodes[, k]), u, rule = 2,
+      stats::approx(c(0, cw), c(measure$lower[k], measure$nodes[, k]), u[, k], rule = 2,
                     ties = "ordered")$y
     }
   }
-  out
+  u
 }
 
 # Gauss-Legendre nodes and weights on [0, 1] (Golub-Welsch), weights summing to one.
@@ -324,7 +391,7 @@ sensitivity_measure <- function(inputs, sc, nm, call = parent.frame()) {
 
 # Median, interval and the Monte Carlo error of the median of each input's
 # indices (draws x inputs x index).
-index_table <- function(draws, role, level) {
+index_table <- function(draws, role, level, sampling = NULL) {
   nm <- dimnames(draws)[[2]]
   a <- (1 - level) / 2
   rows <- lapply(dimnames(draws)[[3]], function(ix) {
@@ -340,6 +407,12 @@ index_table <- function(draws, role, level) {
       stringsAsFactors = FALSE
     )
   })
+  if (!is.null(sampling)) {
+    # the sampling estimator's own error of one draw's index (its median
+    # over the draws), already inside the interval's spread
+    sd <- lapply(dimnames(draws)[[3]], function(ix) apply(sampling[, , ix, drop = FALSE], 2, stats::median))
+    for (i in seq_along(rows)) rows[[i]]$sampling_sd <- sd[[i]]
+  }
   out <- do.call(rbind, rows)
   rownames(out) <- NULL
   out
@@ -375,7 +448,7 @@ main_effects <- function(main, grid, sc, nm, G, level) {
 # inputs, and its main effects on a grid of G values per input; the shares
 # of the predictive variance averaged over `points` randomised Halton
 # points of the same measure (predict()'s conditional variances there).
-prediction_sensitivity <- function(fit, phis, points, level, measure) {
+prediction_sensitivity <- function(fit, phis, points, level, measure, samples = 0L) {
   sc <- fit$model$scale
   p <- sc$p
   M <- nrow(phis)
@@ -389,12 +462,15 @@ prediction_sensitivity <- function(fit, phis, points, level, measure) {
   X <- support_points(points, 1L, mp)
   res <- at_draws(fit, .fbc_sobol_pred_c, phis, exact = mp$exact, lower = mp$lower,
                   upper = mp$upper, nodes = mp$nodes, weights = mp$weights, grid = grid,
-                  share = X)
+                  share = X, samples = sobol_samples(samples, M, mp))
   nm <- sim_input_names(sc, p + sc$q)[ex]
-  V <- pmax(as.vector(res$V), .Machine$double.xmin)
-  S <- array(c(t(res$V1) / V, t(res$VT) / V), c(M, p, 2), list(NULL, nm, c("first", "total")))
+  S <- index_draws(res, M, nm, samples > 0L)
+  sd <- if (samples > 0L) sampling_sd(res, M, nm)
   # one input: both indices are one by definition
-  if (p == 1L) S[] <- 1
+  if (p == 1L) {
+    S[] <- 1
+    if (!is.null(sd)) sd[] <- 0
+  }
   # variance shares over the points: each draw's conditional variances and
   # the spread of the conditional means over the draws (predict()'s se^2)
   s2E <- phis[, fit$model$spec$model$offset[["sigma2E"]] + 1L]
@@ -411,7 +487,7 @@ prediction_sensitivity <- function(fit, phis, points, level, measure) {
   rownames(shares) <- NULL
   pts <- sweep(sweep(X, 2, sc$xmax[ex] - sc$xmin[ex], "*"), 2, sc$xmin[ex], "+")
   colnames(pts) <- nm
-  list(table = index_table(S, rep("experimental", p), level), shares = shares, draws = S,
+  list(table = index_table(S, rep("experimental", p), level, sd), shares = shares, draws = S,
        main = main_effects(res$main, grid, sc, nm, G, level), points = pts)
 }
 
@@ -429,7 +505,12 @@ print.fbc_sensitivity <- function(x, digits = 3, ...) {
                             formatC(tab$upper, digits, format = "f"))
     tab$median <- formatC(tab$median, digits, format = "f")
     tab$mcse <- formatC(tab$mcse, digits, format = "f")
-    print(tab[c("input", "index", "median", "interval", "mcse")], row.names = FALSE)
+    cols <- c("input", "index", "median", "interval", "mcse")
+    if (!is.null(tab$sampling_sd)) {
+      tab$sampling <- formatC(tab$sampling_sd, digits, format = "f")
+      cols <- c(cols, "sampling")
+    }
+    print(tab[cols], row.names = FALSE)
   }
   show(x$simulator)
   if (!is.null(x$prediction)) {
@@ -442,6 +523,10 @@ print.fbc_sensitivity <- function(x, digits = 3, ...) {
               collapse = "\n"), "\n", sep = "")
   }
   cat("mcse: Monte Carlo standard error of the median over the draws.\n")
+  if (identical(s$estimator, "sampling")) {
+    cat(sprintf("sampling: one draw's sampling error (two samples of %d points per draw; inside the intervals).\n",
+                s$samples))
+  }
   invisible(x)
 }
 

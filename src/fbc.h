@@ -765,6 +765,7 @@ protected:
                   std::vector<arma::mat>& QBB) override;
   void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
                  bool haveW) override;
+  void simSolve(arma::vec& x) override;  // Ds^-1 ~ U U', for the kernel expansion
 
 private:
   // the runs' pass (simUpdate()) at phi: log|Ds|, zz; false if not PD

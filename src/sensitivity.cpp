@@ -19,6 +19,7 @@
 // Gauss-Legendre (or the user's) quadrature nodes and weights, the
 // correlations at the nodes from the kernel module (kernels.cpp).
 #include "fbc.h"
+#include <functional>
 #include <numeric>
 
 static const double PI_ = 3.141592653589793238462643383280;
@@ -70,16 +71,27 @@ void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P, arm
     arma::mat C, L, KP;
     runPrior(phi, *P, *P, C);
     C -= rc.A.t() * rc.A;
-    // a jitter relative to the prior variance, raised until C factors
+    // a jitter relative to the prior variance, raised until C factors; where
+    // it does not by 1e-4 (an approximate algebra's C need not be positive
+    // semi-definite), c = C^+ (f_P - mu_P) = V Lam^-1/2 u over the
+    // eigenvalues above 1e-10 s2S (the others' directions fixed at the mean)
     bool ok = false;
-    for (double jit = 1e-10; !ok && jit < 1e-2; jit *= 100) {
+    for (double jit = 1e-10; !ok && jit < 1e-3; jit *= 100) {
       C.diag() += jit * s2S;
       ok = arma::chol(L, C, "lower");
     }
-    if (!ok) Rcpp::stop("the conditional covariance at the support points does not factor");
     cP.set_size(P->n_rows);
     for (arma::uword i = 0; i < cP.n_elem; ++i) cP[i] = R::norm_rand();
-    cP = arma::solve(arma::trimatu(L.t()), cP);
+    if (ok) {
+      cP = arma::solve(arma::trimatu(L.t()), cP);
+    } else {
+      arma::vec lam;
+      arma::mat U;
+      if (!arma::eig_sym(lam, U, C)) Rcpp::stop("the conditional covariance at the support points has no eigendecomposition");
+      for (arma::uword i = 0; i < lam.n_elem; ++i)
+        cP[i] = lam[i] > 1e-10 * s2S ? cP[i] / std::sqrt(lam[i]) : 0.0;
+      cP = U * cP;
+    }
     runPrior(phi, Xs_, *P, KP);
     ys -= KP * cP;
     runPrior(phi, Xk, *P, KP);
@@ -128,24 +140,25 @@ static double erf_diff(double x, double y) {
 // The Gaussian family exp(-theta d^2) against the uniform measure on [a, b]:
 // I1 and I2 in closed form (erf).
 static void gauss_uniform(const arma::vec& c, double theta, double a, double b, double* I1,
-                          arma::mat& I2) {
+                          arma::mat* I2) {
   const arma::uword N = c.n_elem;
   if (!(theta > 1e-300)) {
     for (arma::uword j = 0; j < N; ++j) I1[j] = 1.0;
-    I2.ones(N, N);
+    if (I2) I2->ones(N, N);
     return;
   }
   const double len = b - a, st = std::sqrt(theta), s2 = std::sqrt(2.0 * theta);
   const double k1 = std::sqrt(PI_ / theta) / (2.0 * len);
   const double k2 = std::sqrt(PI_ / (2.0 * theta)) / (2.0 * len);
   for (arma::uword j = 0; j < N; ++j) I1[j] = k1 * erf_diff(st * (b - c[j]), st * (a - c[j]));
-  I2.set_size(N, N);
+  if (!I2) return;
+  I2->set_size(N, N);
   for (arma::uword l = 0; l < N; ++l) {
     for (arma::uword j = l; j < N; ++j) {
       const double d = c[j] - c[l], mid = 0.5 * (c[j] + c[l]);
       const double v = std::exp(-0.5 * theta * d * d) * k2 * erf_diff(s2 * (b - mid), s2 * (a - mid));
-      I2.at(j, l) = v;
-      I2.at(l, j) = v;
+      I2->at(j, l) = v;
+      I2->at(l, j) = v;
     }
   }
 }
@@ -206,13 +219,13 @@ static double exp_poly(const double* c, int K, double s, double lam, double u0, 
 // three Gauss-Legendre nodes. The exponentials come from each centre's
 // distances to a and b (one exp per centre) unless they could underflow.
 static void matern_uniform(const arma::vec& c, double theta, int kern, double a, double b,
-                           double* I1, arma::mat& I2) {
+                           double* I1, arma::mat* I2) {
   const arma::uword N = c.n_elem;
   const int K = kern == 3 ? 1 : 2;
   const double s = std::sqrt((kern == 3 ? 3.0 : 5.0) * theta);
   if (!(s > 1e-150)) {
     for (arma::uword j = 0; j < N; ++j) I1[j] = 1.0;
-    I2.ones(N, N);
+    if (I2) I2->ones(N, N);
     return;
   }
   const double pc[3] = {1.0, 1.0, 1.0 / 3.0};
@@ -229,6 +242,7 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
     if (std::min(b, cj) > a) v += exp_poly(pc, K, s, 1.0, cj - std::min(b, cj), cj - a, Ea[j]);
     I1[j] = v / len;
   }
+  if (!I2) return;
   static const double gx[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
   static const double gw[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
   // For two centres inside [a, b] the tails' moments int_0^X v^k exp(-2 v) dv
@@ -244,7 +258,7 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
       exp_moments(2.0, s * (c[j] - a), 2 * K, Ea[j] * Ea[j], &ha[5 * j]);
     }
   }
-  I2.set_size(N, N);
+  I2->set_size(N, N);
   for (arma::uword l = 0; l < N; ++l) {
     for (arma::uword j = l; j < N; ++j) {
       const bool jl = c[j] <= c[l];
@@ -288,19 +302,20 @@ static void matern_uniform(const arma::vec& c, double theta, int kern, double a,
         }
         v += E * h * g;
       }
-      I2.at(j, l) = v / len;
-      I2.at(l, j) = v / len;
+      I2->at(j, l) = v / len;
+      I2->at(l, j) = v / len;
     }
   }
 }
 
 // One input's integrals for centres c of the family kern (theta, alpha):
-// I1[j] = int r(t - c_j) dmu(t) and I2 (N x N), in closed form against a
-// uniform measure on [lo, up] (exact) for the Gaussian and Matern families,
-// else by the quadrature nodes and weights (summing to one).
+// I1[j] = int r(t - c_j) dmu(t) and I2 (N x N; not computed when null), in
+// closed form against a uniform measure on [lo, up] (exact) for the Gaussian
+// and Matern families, else by the quadrature nodes and weights (summing to
+// one).
 static void integrals_1d(int kern, double theta, double alpha, const arma::vec& c, bool exact,
                          double lo, double up, const arma::vec& nodes, const arma::vec& wq,
-                         double* I1, arma::mat& I2) {
+                         double* I1, arma::mat* I2) {
   const bool gauss = kern == 2 || (kern == 1 && alpha == 2.0);  // Gaussian, power exponential
   if (exact && gauss) {
     gauss_uniform(c, theta, lo, up, I1, I2);
@@ -310,8 +325,9 @@ static void integrals_1d(int kern, double theta, double alpha, const arma::vec& 
     arma::mat Rq(c.n_elem, nodes.n_elem);
     kernel_corr(kern, arma::mat(c), arma::mat(nodes), 1, &theta, &alpha, Rq, false);
     arma::vec(I1, c.n_elem, false, true) = Rq * wq;
+    if (!I2) return;
     Rq.each_row() %= arma::sqrt(wq).t();
-    I2 = Rq * Rq.t();
+    *I2 = Rq * Rq.t();
   }
 }
 
@@ -319,6 +335,15 @@ static void integrals_1d(int kern, double theta, double alpha, const arma::vec& 
 // D inputs from I1 (N x D) and I2[k] (the header's formulas): V, V1[k],
 // VT[k]; A (N x D) the weights times a_k = prod_{i != k} I1[, i], for the
 // main effects E[f | z_k = t] = sum_j A_jk phi_jk(t).
+static void main_weights(const arma::vec& w, const arma::mat& I1, int D, arma::mat& A) {
+  A.set_size(w.n_elem, D);
+  for (int k = 0; k < D; ++k) {
+    arma::vec ak(w.n_elem, arma::fill::ones);
+    for (int i = 0; i < D; ++i) if (i != k) ak %= I1.col(i);
+    A.col(k) = w % ak;
+  }
+}
+
 static void sobol_variances(const arma::vec& w, const arma::mat& I1,
                             const std::vector<arma::mat>& I2, int D, double& V, double* V1,
                             double* VT, arma::mat& A) {
@@ -330,15 +355,65 @@ static void sobol_variances(const arma::vec& w, const arma::mat& I1,
   for (int k = D - 1; k >= 0; --k) pre[k] = pre[k + 1] % I2[k];
   V = arma::as_scalar(w.t() * pre[0] * w) - f0 * f0;
   arma::mat prefix(N, N, arma::fill::ones);
-  A.set_size(N, D);
+  main_weights(w, I1, D, A);
   for (int k = 0; k < D; ++k) {
-    arma::vec ak(N, arma::fill::ones);
-    for (int i = 0; i < D; ++i) if (i != k) ak %= I1.col(i);
-    A.col(k) = w % ak;
     V1[k] = arma::as_scalar(A.col(k).t() * I2[k] * A.col(k)) - f0 * f0;
     const arma::vec wi = w % I1.col(k);
     VT[k] = V - (arma::as_scalar(wi.t() * (prefix % pre[k + 1]) * wi) - f0 * f0);
     prefix %= I2[k];
+  }
+}
+
+// f(X) = R(X, Z) w, R the product correlation of family kern at (th, al)
+// over X's columns: a kernel expansion at the rows of X, 512 at a time.
+static void expansion_at(int kern, const arma::mat& X, const arma::mat& Z, const arma::vec& w,
+                         const arma::vec& th, const arma::vec& al, arma::vec& out) {
+  out.set_size(X.n_rows);
+  for (arma::uword r0 = 0; r0 < X.n_rows; r0 += 512) {
+    const arma::uword r1 = std::min<arma::uword>(X.n_rows, r0 + 512) - 1;
+    out.subvec(r0, r1) = corr_matrix(X.rows(r0, r1), Z, th, al, kern) * w;
+  }
+}
+
+// The Sobol variances of an expansion f too large for the closed form's
+// N x N integrals, at O(N D (Q + (D + 2) Nb)) per draw: f0 = E f in closed
+// form (from I1, as in sobol_variances()); each first-order variance
+//   V_k = int (E[f | z_k = t] - f0)^2 dmu_k(t)
+// by input k's quadrature nodes and weights (main(k, t, out): the main
+// effect at t); the variance and the totals by sampling (Saltelli et al.
+// 2010): with A and B (the first and last Nb rows of AB) independent
+// samples of the measure, A_B^k the rows of A with column k from B and
+// g = f - f0,
+//   V    = mean of g^2 over the 2 Nb points of A and B,
+//   VT_k = mean of (g(A) - g(A_B^k))^2 / 2              (Jansen 1999);
+// sd1[k], sdT[k] the sampling's standard errors of V_k / V (through V) and
+// of VT_k / V (the Jansen terms' sd over sqrt(Nb), over V).
+static void sobol_sampled(const std::function<void(const arma::mat&, arma::vec&)>& f,
+                          const std::function<void(int, const arma::vec&, arma::vec&)>& main,
+                          double f0, const arma::mat& nodes, const arma::mat& weights,
+                          const arma::mat& AB, int D, double& V, double* V1, double* VT,
+                          double* sd1, double* sdT) {
+  const arma::uword Nb = AB.n_rows / 2;
+  const arma::mat A = AB.rows(0, Nb - 1), B = AB.rows(Nb, 2 * Nb - 1);
+  arma::vec fA, fB, fk, me;
+  f(A, fA);
+  f(B, fB);
+  fA -= f0;
+  fB -= f0;
+  const arma::vec g2 = arma::join_cols(arma::square(fA), arma::square(fB));
+  V = arma::mean(g2);
+  const double Vs = std::max(V, 1e-300), sdV = arma::stddev(g2) / std::sqrt(2.0 * Nb);
+  arma::mat Ak = A;
+  for (int k = 0; k < D; ++k) {
+    main(k, nodes.col(k), me);
+    V1[k] = arma::dot(weights.col(k), arma::square(me - f0));
+    sd1[k] = V1[k] / Vs * sdV / Vs;
+    Ak.col(k) = B.col(k);
+    f(Ak, fk);
+    Ak.col(k) = A.col(k);
+    const arma::vec tT = 0.5 * arma::square(fA - (fk - f0));
+    VT[k] = arma::mean(tT);
+    sdT[k] = arma::stddev(tT) / std::sqrt((double) Nb) / Vs;
   }
 }
 
@@ -349,16 +424,19 @@ static void sobol_variances(const arma::vec& w, const arma::mat& I1,
 // exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
 // form where the family allows); otherwise nodes[, k] and weights[, k]
 // (weights summing to one). grid: G x D values (scaled) for the main effects.
+// samples: none (0 rows) for the closed form, else 2 Nb rows per draw (A
+// then B, sobol_sampled()), and sd1, sdT the sampling errors; the main
+// effects need the one-dimensional integrals I1 alone either way.
 // [[Rcpp::export(.fbc_sobol_c)]]
 Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                      const arma::vec& ys, const arma::mat& phis, double nugget,
                      const Rcpp::List& model, const Rcpp::LogicalVector& exact,
                      const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes,
                      const arma::mat& weights, const arma::mat& grid,
-                     const arma::mat& support) {
+                     const arma::mat& support, const arma::mat& samples) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
-  if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
+  if (!sp) Rcpp::stop("the Sobol indices need one simulator GP");
   Posterior& post = *pp;
   const int kern = Rcpp::as<int>(model["kernS"]);
   const int D = post.p + post.q, M = phis.n_rows, G = grid.n_rows;
@@ -366,13 +444,18 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
       (int) grid.n_cols != D || (int) lower.n_elem != D || (int) upper.n_elem != D)
     Rcpp::stop("the measure must have %d inputs", D);
   arma::vec V(M);
-  arma::mat V1(D, M), VT(D, M), main(G * D, M);
+  arma::mat V1(D, M), VT(D, M), sd1(D, M, arma::fill::zeros), sdT(D, M, arma::fill::zeros);
+  arma::mat main(G * D, M);
   arma::mat Z, I1, A, Rg;
   arma::vec w;
   std::vector<arma::mat> I2(D);
   const int S = support.n_rows / std::max(M, 1);
   if (S > 0 && ((int) support.n_rows != S * M || (int) support.n_cols != D))
     Rcpp::stop("the support points must be %d draws x S rows and %d columns", M, D);
+  const int Nb = samples.n_rows / std::max(2 * M, 1);
+  if (samples.n_rows > 0 && (Nb < 2 || (int) samples.n_rows != 2 * Nb * M ||
+                             (int) samples.n_cols != D))
+    Rcpp::stop("the samples must be %d draws x 2 Nb rows and %d columns", M, D);
   arma::mat Pd;
   for_each_draw(post, phis, [&](arma::uword d) {
     if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
@@ -381,19 +464,36 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
     for (int k = 0; k < D; ++k) {
       integrals_1d(kern, post.phi[post.iThetaS + k], post.phi[post.iAlphaS + k], Z.col(k),
                    exact[k], lower[k], upper[k], nodes.col(k), weights.col(k), I1.colptr(k),
-                   I2[k]);
+                   Nb > 0 ? nullptr : &I2[k]);
     }
-    sobol_variances(w, I1, I2, D, V[d], V1.colptr(d), VT.colptr(d), A);
-    for (int k = 0; k < D; ++k) {
+    // E[f | z_k = t] = sum_j A_jk r_k(t - Z_jk) at the values t
+    auto effect = [&](int k, const arma::vec& t, arma::vec& out) {
       const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
-      Rg.set_size(G, Z.n_rows);
-      kernel_corr(kern, arma::mat(grid.col(k)), arma::mat(Z.col(k)), 1, &theta, &alpha, Rg, false);
-      main.col(d).subvec(k * G, (k + 1) * G - 1) = Rg * A.col(k);
+      Rg.set_size(t.n_elem, Z.n_rows);
+      kernel_corr(kern, arma::mat(t), arma::mat(Z.col(k)), 1, &theta, &alpha, Rg, false);
+      out = Rg * A.col(k);
+    };
+    if (Nb > 0) {
+      const arma::vec th = post.phi.subvec(post.iThetaS, post.iThetaS + D - 1);
+      const arma::vec al = post.phi.subvec(post.iAlphaS, post.iAlphaS + D - 1);
+      main_weights(w, I1, D, A);
+      sobol_sampled([&](const arma::mat& X, arma::vec& f) { expansion_at(kern, X, Z, w, th, al, f); },
+                    effect, arma::dot(w, arma::prod(I1, 1)), nodes, weights,
+                    samples.rows(2 * Nb * d, 2 * Nb * (d + 1) - 1), D, V[d], V1.colptr(d),
+                    VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
+    } else {
+      sobol_variances(w, I1, I2, D, V[d], V1.colptr(d), VT.colptr(d), A);
+    }
+    arma::vec me;
+    for (int k = 0; k < D; ++k) {
+      effect(k, grid.col(k), me);
+      main.col(d).subvec(k * G, (k + 1) * G - 1) = me;
     }
     return true;
   });
   return Rcpp::List::create(Rcpp::Named("V") = V, Rcpp::Named("V1") = V1,
-                            Rcpp::Named("VT") = VT, Rcpp::Named("main") = main);
+                            Rcpp::Named("VT") = VT, Rcpp::Named("sd1") = sd1,
+                            Rcpp::Named("sdT") = sdT, Rcpp::Named("main") = main);
 }
 
 // The calibrated prediction's mean zeta(x) = E[eta(x, kappa) + delta(x) | y]
@@ -407,25 +507,34 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
 // measure). Measure: the first p columns of exact, lower, upper, nodes,
 // weights; grid: G x p values for the main effects. With `share` points
 // (b x p) also predict()'s conditional means and variances there (types
-// mean, simulator and, with a bias, bias) for the variance shares.
+// mean, simulator and, with a bias, bias) for the variance shares. samples:
+// as in fbc_sobol() (p columns), the variances by sampling the two
+// expansions' sum instead of their N x N integrals.
 // [[Rcpp::export(.fbc_sobol_pred_c)]]
 Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                           const arma::vec& ys, const arma::mat& phis, double nugget,
                           const Rcpp::List& model, const Rcpp::LogicalVector& exact,
                           const arma::vec& lower, const arma::vec& upper,
                           const arma::mat& nodes, const arma::mat& weights,
-                          const arma::mat& grid, const arma::mat& share) {
+                          const arma::mat& grid, const arma::mat& share,
+                          const arma::mat& samples) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
-  if (!sp) Rcpp::stop("the closed-form indices need one simulator GP");
+  if (!sp) Rcpp::stop("the Sobol indices need one simulator GP");
   Posterior& post = *pp;
   const int kS = Rcpp::as<int>(model["kernS"]), kB = Rcpp::as<int>(model["kernB"]);
   const int p = post.p, D = p + post.q, M = phis.n_rows, G = grid.n_rows;
   const int b = share.n_rows;
   if (p < 1) Rcpp::stop("the prediction needs an experimental input");
   if ((int) grid.n_cols != p || (int) share.n_cols != p) Rcpp::stop("grid and share need %d columns", p);
+  const int ns = samples.n_rows / std::max(2 * M, 1);
+  const bool sampled = ns > 0;
+  if (samples.n_rows > 0 && (ns < 2 || (int) samples.n_rows != 2 * ns * M ||
+                             (int) samples.n_cols != p))
+    Rcpp::stop("the samples must be %d draws x 2 Nb rows and %d columns", M, p);
   arma::vec V(M);
   arma::mat V1(p, M), VT(p, M), main(G * p, M);
+  arma::mat sd1(p, M, arma::fill::zeros), sdT(p, M, arma::fill::zeros);
   arma::mat mean(b, M), vmean(b, M), vsim(b, M), vbias(b, M, arma::fill::zeros);
   arma::mat Z, I1, A, Rg, Rs, Rb;
   arma::vec w, wb, ws;
@@ -449,20 +558,21 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
     arma::mat i2b;
     for (int k = 0; k < p; ++k) {
       const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
-      I2[k].set_size(N, N);
+      if (!sampled) I2[k].set_size(N, N);
       arma::mat i2s;
       arma::vec i1s(Ns);
       integrals_1d(kS, tS, aS, Z.col(k), exact[k], lower[k], upper[k], nodes.col(k),
-                   weights.col(k), i1s.memptr(), i2s);
+                   weights.col(k), i1s.memptr(), sampled ? nullptr : &i2s);
       I1.col(k).head(Ns) = i1s;
-      I2[k].submat(0, 0, Ns - 1, Ns - 1) = i2s;
+      if (!sampled) I2[k].submat(0, 0, Ns - 1, Ns - 1) = i2s;
       if (Nb > 0) {
         const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
         const arma::vec u = Z.col(k).subvec(Ns - Nb, Ns - 1);  // the distinct field rows
         i1b.set_size(Nb);
         integrals_1d(kB, tB, aB, u, exact[k], lower[k], upper[k], nodes.col(k), weights.col(k),
-                     i1b.memptr(), i2b);
+                     i1b.memptr(), sampled ? nullptr : &i2b);
         I1.col(k).tail(Nb) = i1b;
+        if (sampled) continue;
         I2[k].submat(Ns, Ns, N - 1, N - 1) = i2b;
         Rs.set_size(Ns, nodes.n_rows);
         Rb.set_size(Nb, nodes.n_rows);
@@ -474,19 +584,46 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
         I2[k].submat(Ns, 0, N - 1, Ns - 1) = X.t();
       }
     }
-    sobol_variances(wall, I1, I2, p, V[d], V1.colptr(d), VT.colptr(d), A);
-    for (int k = 0; k < p; ++k) {
+    // E[zeta - muB | x_k = t]: the two expansions' main effects at the values t
+    auto effect = [&](int k, const arma::vec& t, arma::vec& out) {
       const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
-      Rg.set_size(G, Ns);
-      kernel_corr(kS, arma::mat(grid.col(k)), arma::mat(Z.col(k)), 1, &tS, &aS, Rg, false);
-      arma::vec me = Rg * A.col(k).head(Ns);
+      Rg.set_size(t.n_elem, Ns);
+      kernel_corr(kS, arma::mat(t), arma::mat(Z.col(k)), 1, &tS, &aS, Rg, false);
+      out = Rg * A.col(k).head(Ns);
       if (Nb > 0) {
         const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
-        Rg.set_size(G, Nb);
-        kernel_corr(kB, arma::mat(grid.col(k)), arma::mat(Z.col(k).subvec(Ns - Nb, Ns - 1)),
-                    1, &tB, &aB, Rg, false);
-        me += Rg * A.col(k).tail(Nb);
+        Rg.set_size(t.n_elem, Nb);
+        kernel_corr(kB, arma::mat(t), arma::mat(Z.col(k).subvec(Ns - Nb, Ns - 1)), 1, &tB, &aB,
+                    Rg, false);
+        out += Rg * A.col(k).tail(Nb);
       }
+    };
+    if (sampled) {
+      const arma::vec thS = post.phi.subvec(post.iThetaS, post.iThetaS + p - 1);
+      const arma::vec alS = post.phi.subvec(post.iAlphaS, post.iAlphaS + p - 1);
+      const arma::mat Zx = Z.cols(0, p - 1);
+      arma::vec thB, alB;
+      arma::mat Xu;
+      if (Nb > 0) {
+        thB = post.phi.subvec(post.iThetaB, post.iThetaB + p - 1);
+        alB = post.phi.subvec(post.iAlphaB, post.iAlphaB + p - 1);
+        Xu = Zx.rows(Ns - Nb, Ns - 1);
+      }
+      arma::vec fb;
+      main_weights(wall, I1, p, A);
+      sobol_sampled([&](const arma::mat& X, arma::vec& f) {
+                      expansion_at(kS, X, Zx, ws, thS, alS, f);
+                      if (Nb > 0) { expansion_at(kB, X, Xu, wb, thB, alB, fb); f += fb; }
+                    },
+                    effect, arma::dot(wall, arma::prod(I1, 1)), nodes.cols(0, p - 1),
+                    weights.cols(0, p - 1), samples.rows(2 * ns * d, 2 * ns * (d + 1) - 1), p,
+                    V[d], V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
+    } else {
+      sobol_variances(wall, I1, I2, p, V[d], V1.colptr(d), VT.colptr(d), A);
+    }
+    arma::vec me;
+    for (int k = 0; k < p; ++k) {
+      effect(k, grid.col(k), me);
       main.col(d).subvec(k * G, (k + 1) * G - 1) = me + (post.biasMean ? post.phi[post.iMuB] : 0.0);
     }
     if (b > 0) {
@@ -502,7 +639,8 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
     return true;
   });
   return Rcpp::List::create(Rcpp::Named("V") = V, Rcpp::Named("V1") = V1,
-                            Rcpp::Named("VT") = VT, Rcpp::Named("main") = main,
+                            Rcpp::Named("VT") = VT, Rcpp::Named("sd1") = sd1,
+                            Rcpp::Named("sdT") = sdT, Rcpp::Named("main") = main,
                             Rcpp::Named("mean") = mean, Rcpp::Named("var") = vmean,
                             Rcpp::Named("var_sim") = vsim, Rcpp::Named("var_bias") = vbias);
 }

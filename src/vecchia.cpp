@@ -696,3 +696,24 @@ void VecchiaPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy
   }
   G = WB.t() * W;
 }
+
+// x <- Ds^-1 x with Ds^-1 ~ U U' (the runs' conditionals, as simWhiten()
+// has them): u_i = (U' x)_i, then x = U u, O(m k^2) (the simulator's mean as
+// a kernel expansion, sensitivity.cpp).
+void VecchiaPosterior::simSolve(arma::vec& x) {
+  const int k = vd_.k;
+  Work& w = ws_[0];
+  syncLevels();
+  arma::vec out(m, arma::fill::zeros);
+  for (int i = 0; i < m; ++i) {
+    const int* nb = vd_.nbr.data() + (size_t) i * k;
+    const int c = gatherRun(w, i), s = vd_.ord[i];
+    const double sd = std::sqrt(conditional(w, c + 1, c + 1, true, runDist(i)));
+    double u = x[s];
+    for (int r = 0; r < c; ++r) u -= w.rhs[r] * x[nb[r]];
+    u /= sd * sd;
+    out[s] += u;
+    for (int r = 0; r < c; ++r) out[nb[r]] -= w.rhs[r] * u;
+  }
+  x = out;
+}

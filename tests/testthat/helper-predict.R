@@ -46,7 +46,7 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
 # (p = 2, q = 1), as random_koh_data() returns them.
 fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
                       d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed),
-                      discrepancy = "gp") {
+                      discrepancy = "gp", ...) {
   # native units: inputs stretched, response shifted/scaled
   sim <- cbind(y = 3 + 2 * d$ys, x1 = 10 * d$Xs[, 1], x2 = d$Xs[, 2] - 5, t = 4 * d$Xs[, 3])
   field <- cbind(y = 3 + 2 * d$yf, x1 = 10 * d$Xf[, 1], x2 = d$Xf[, 2] - 5)
@@ -73,6 +73,6 @@ fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
               kappaInit = kap, hypers = hyp, kernelS = kernelS,
               # no bias GP: its family is not given (calibrate() warns it is unused)
               kernelB = if (discrepancy == "none") "matern52" else kernelB,
-              discrepancy = discrepancy),
+              discrepancy = discrepancy, ...),
     classes = "fbc_extrapolation")
 }

@@ -258,6 +258,8 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
     sensitivity(fit, inputs = list(x1 = c(5, 1)))
     sensitivity(fit, inputs = list(x1 = "wide"))
     sensitivity(fit, inputs = list(t = function(x) -x))
+    sensitivity(fit, estimator = "exact")
+    sensitivity(fit, samples = 1)
     plot(sensitivity(fit, prediction = FALSE), of = "prediction")
   })
   # the fits without one kernel expansion of the simulator's mean
@@ -267,10 +269,83 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
                                     kappaDist = "uniform", kappaP1 = c(a = 0), kappaP2 = 2,
                                     nMCMC = 6, nBurn = 2, nChains = 1))
   expect_snapshot(error = TRUE, sensitivity(fun))
-  Xs <- cbind(x = runif(20), t = runif(20))
-  vec <- suppressWarnings(calibrate(cbind(y = Xs[, 1] + Xs[, 2], Xs), field, algebra = "vecchia",
-                                    neighbours = 5, nMCMC = 6, nBurn = 2, nChains = 1))
-  expect_snapshot(error = TRUE, sensitivity(vec))
+})
+
+test_that("the nearest-neighbour algebra with every predecessor gives the dense algebra's indices", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(20, 60, 40)
+  dense <- fixed_fit(phi, kernelS = "matern52")
+  # 12 runs: every run and field latent conditions on all its predecessors
+  vec <- fixed_fit(phi, kernelS = "matern52", algebra = "vecchia", neighbours = 12)
+  expect_identical(vec$model$algebra$name, "vecchia")
+  for (paths in c(0, 16)) {
+    set.seed(1)
+    a <- sensitivity(dense, ndraws = 2, points = 8, paths = paths)
+    set.seed(1)
+    b <- sensitivity(vec, ndraws = 2, points = 8, paths = paths)
+    expect_abs(b$draws$simulator, a$draws$simulator, 1e-6)
+    expect_abs(b$draws$prediction, a$draws$prediction, 1e-6)
+    expect_abs(b$shares$share, a$shares$share, 1e-6)
+    me <- function(s) unlist(lapply(s$main$simulator, `[[`, "median"))
+    expect_abs(me(b), me(a), 1e-6 * max(abs(me(a))))
+  }
+  # with fewer neighbours: an approximation, near the exact indices here
+  set.seed(1)
+  few <- sensitivity(fixed_fit(phi, kernelS = "matern52", algebra = "vecchia", neighbours = 6),
+                     ndraws = 2, points = 8, paths = 0)
+  set.seed(1)
+  a <- sensitivity(dense, ndraws = 2, points = 8, paths = 0)
+  expect_abs(few$draws$simulator, a$draws$simulator, 0.05)
+})
+
+test_that("the sampling estimator agrees with the closed form within its sampling error", {
+  set.seed(5)
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(8, 20, 10)
+  for (kern in c("gaussian", "matern32")) {
+    fit <- fixed_fit(phi, kernelS = kern)
+    set.seed(1)
+    cl <- sensitivity(fit, ndraws = 2, points = 8, paths = 0)
+    set.seed(1)
+    sa <- sensitivity(fit, ndraws = 2, points = 8, paths = 0, estimator = "sampling",
+                      samples = 4000)
+    expect_identical(sa$settings$estimator, "sampling")
+    expect_identical(cl$settings$estimator, "closed")
+    for (part in c("simulator", "prediction")) {
+      x <- sa[[part]]
+      y <- cl[[part]]
+      expect_true(all(x$sampling_sd > 0 & x$sampling_sd < 0.05))
+      expect_true(all(abs(x$median - y$median) < 4 * x$sampling_sd + 1e-9))
+      # the first-order variances by quadrature are exact: each draw's
+      # first-order indices differ from the closed form's by one factor (the
+      # sampled total variance) for every input
+      ratio <- sa$draws[[part]][, , "first"] / cl$draws[[part]][, , "first"]
+      expect_lt(max(abs(ratio - rowMeans(ratio))), 1e-5)
+      expect_lt(max(abs(ratio - 1)), 0.2)
+    }
+    # the main effects are in closed form either way
+    expect_equal(sa$main, cl$main, tolerance = 1e-10)
+  }
+  # more samples, a smaller sampling error: about 1 / sqrt(samples)
+  fit <- fixed_fit(phi, kernelS = "gaussian")
+  set.seed(2)
+  small <- sensitivity(fit, ndraws = 2, points = 8, paths = 0, estimator = "sampling",
+                       samples = 500, prediction = FALSE)
+  set.seed(2)
+  large <- sensitivity(fit, ndraws = 2, points = 8, paths = 0, estimator = "sampling",
+                       samples = 8000, prediction = FALSE)
+  r <- small$simulator$sampling_sd / large$simulator$sampling_sd
+  expect_true(all(r > 2.5 & r < 6))
+})
+
+test_that("the estimator is the closed form up to 2000 centres", {
+  fit <- linear_fit()
+  expect_identical(FBC:::sensitivity_estimator(fit, 128, "auto"), "closed")
+  expect_identical(FBC:::sensitivity_estimator(fit, 128, "sampling"), "sampling")
+  N <- nrow(fit$model$data$Xs) + nrow(unique(fit$model$data$Xf))
+  expect_identical(FBC:::sensitivity_estimator(fit, 2000 - N, "auto"), "closed")
+  expect_identical(FBC:::sensitivity_estimator(fit, 2001 - N, "auto"), "sampling")
 })
 
 test_that("set.seed() reproduces sensitivity(), which leaves the fit as it was", {
