@@ -209,6 +209,12 @@ test_that("the indices of a linear simulator are recovered", {
   expect_abs(s$prediction$median, c(Sp, Sp), 0.02)
   expect_identical(s$prediction$role, rep("experimental", 4))
   expect_identical(s$simulator$role, rep(c("experimental", "experimental", "calibration"), 2))
+  # the sampling estimator recovers them too, within its sampling error
+  set.seed(3)
+  e <- sensitivity(fit, ndraws = 50, estimator = "sampling")
+  expect_abs(e$simulator$median, c(S, S), 0.02)
+  expect_abs(e$prediction$median, c(Sp, Sp), 0.03)
+  expect_true(all(e$simulator$sampling_sd < 0.03))
 })
 
 test_that("the variance shares sum to one and to predict()'s squared standard error over the box", {
