@@ -16,6 +16,7 @@ benchmarks <- c(
   scale        = "functional output (Kronecker) and large dense designs",
   vecchia      = "the nearest-neighbour algebra, m = 1000 ... 100,000",
   threads      = "threads inside a chain: the nearest-neighbour sweep with 1 and 2 threads",
+  "kronecker-blas" = "the Kronecker sweep under this process's BLAS (threads are the BLAS's)",
   outputs      = "several outputs on a product design",
   "outputs-study" = "several outputs, known truth: pooled against one output",
   discrepancy  = "the discrepancy models against a known L2 projection",
@@ -33,6 +34,7 @@ benchmarks <- c(
   peers        = "FBC beside RobustCalibration on the same data, same process",
   "failed-runs" = "failed runs: spot weld as shipped; design around a failure region",
   sensitivity  = "Sobol indices against known ones: coverage, widths, CPU s",
+  "sensitivity-large" = "Sobol indices by sampling on the nearest-neighbour algebra, beside the closed form",
   "sim-noise"  = "stochastic simulators: replicate runs against the exact posterior",
   "sepia-ball" = "SEPIA's ball drop 1: height x (R, C) on the Kronecker algebra",
   "missing-cells" = "functional output on a product design with missing cells"

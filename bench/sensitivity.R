@@ -17,6 +17,11 @@
 #             experimental, x2 and x6 the calibration inputs. Field: 20
 #             points at the true (x2, x6) = (0.3, 0.6), noise sd 0.02.
 #             True indices from V_i = 1 / (3 (1 + a_i)^2).
+#   gpath     a well-specified problem: one draw of a Matern 5/2 GP on
+#             U(0, 1)^3 (length-scales 0.35, 0.5, 0.45), the interpolant of
+#             its values at 300 fixed points; x1, x2 experimental, x3 the
+#             calibration input. Field: 10 points at x3 = 0.5, noise sd
+#             0.05. True indices by quadrature in plain R.
 # Each design: calibrate() with the default kernels (kernelS = "matern52",
 # a GP discrepancy) and its default run length (four chains run until they
 # have converged; --nMCMC, --nBurn, --nChains > 0 fix them instead),
@@ -77,6 +82,56 @@ gfun_truth <- local({
   list(S = Vi / V, ST = Vi * sapply(seq_along(Vi), function(i) prod(1 + Vi[-i])) / V)
 })
 
+# Gauss-Legendre nodes and weights of 8 points on [0, 1/400] (Golub-Welsch).
+statmod_free_gl8 <- function() {
+  i <- 1:7
+  b <- i / sqrt(4 * i^2 - 1)
+  J <- matrix(0, 8, 8)
+  J[cbind(i, i + 1)] <- b
+  J[cbind(i + 1, i)] <- b
+  e <- eigen(J, symmetric = TRUE)
+  list(x = (e$values + 1) / 2 / 400, w = e$vectors[1, ]^2 / 400)
+}
+# A well-specified problem: a function the emulator's own family describes,
+# the interpolant of one draw of a zero-mean Matern 5/2 GP (unit variance,
+# length-scales gp_len on [0, 1]^3) at 300 fixed quasi-random points, a
+# kernel expansion f(z) = sum_j a_j prod_k r_k(z_k - c_jk) whose indices
+# follow in plain R from one-dimensional integrals on a fine composite
+# Gauss-Legendre rule (the formulas of Oakley and O'Hagan 2004).
+gp_len <- c(0.35, 0.5, 0.45)
+matern52 <- function(d, l) {
+  u <- sqrt(5) * abs(d) / l
+  (1 + u + u^2 / 3) * exp(-u)
+}
+gpath <- local({
+  set.seed(2026)
+  C <- matrix(stats::runif(300 * 3), 300, 3)
+  K <- Reduce(`*`, lapply(1:3, function(k) matern52(outer(C[, k], C[, k], "-"), gp_len[k])))
+  L <- chol(K + 1e-8 * diag(300))
+  a <- backsolve(L, forwardsolve(t(L), drop(crossprod(L, stats::rnorm(300)))))
+  f <- function(X) {
+    R <- Reduce(`*`, lapply(1:3, function(k) matern52(outer(X[, k], C[, k], "-"), gp_len[k])))
+    drop(R %*% a)
+  }
+  # 1-D integrals against U(0, 1): 400 panels of 8 Gauss-Legendre nodes
+  g <- statmod_free_gl8()
+  t <- as.vector(outer(g$x, (0:399) / 400, "+")) ; w <- rep(g$w, 400)
+  I1 <- sapply(1:3, function(k) colSums(w * matern52(outer(t, C[, k], "-"), gp_len[k])))
+  I2 <- lapply(1:3, function(k) {
+    R <- matern52(outer(t, C[, k], "-"), gp_len[k])
+    crossprod(R * w, R)
+  })
+  f0 <- sum(a * apply(I1, 1, prod))
+  V <- drop(t(a) %*% Reduce(`*`, I2) %*% a) - f0^2
+  S <- ST <- numeric(3)
+  for (k in 1:3) {
+    ak <- a * apply(I1[, -k, drop = FALSE], 1, prod)
+    S[k] <- (drop(t(ak) %*% I2[[k]] %*% ak) - f0^2) / V
+    ai <- a * I1[, k]
+    ST[k] <- 1 - (drop(t(ai) %*% Reduce(`*`, I2[-k]) %*% ai) - f0^2) / V
+  }
+  list(f = f, S = S, ST = ST)
+})
 problems <- list(
   ishigami = list(
     d = 3L, exp = 1:2, cal = 3L, lower = rep(-pi, 3), upper = rep(pi, 3),
@@ -88,6 +143,10 @@ problems <- list(
     d = 6L, exp = c(1L, 3L, 4L, 5L), cal = c(2L, 6L), lower = rep(0, 6), upper = rep(1, 6),
     f = gfun, nf = 20L, kappa = c(0.3, 0.6), sd = 0.02,
     S = gfun_truth$S, ST = gfun_truth$ST
+  ),
+  gpath = list(
+    d = 3L, exp = 1:2, cal = 3L, lower = rep(0, 3), upper = rep(1, 3),
+    f = gpath$f, nf = 10L, kappa = 0.5, sd = 0.05, S = gpath$S, ST = gpath$ST
   )
 )
 

@@ -245,6 +245,10 @@ test_that("print() shows the indices, the intervals and the shares", {
   fit <- fixed_fit(phi, kernelS = "gaussian")
   expect_snapshot(print(sensitivity(fit, points = 64)))
   expect_snapshot(print(sensitivity(fit, prediction = FALSE, level = 0.5), digits = 5))
+  # the sampling estimator adds each index's sampling error
+  set.seed(4)
+  expect_snapshot(print(sensitivity(fit, ndraws = 4, points = 16, estimator = "sampling",
+                                    samples = 500), digits = 2))
 })
 
 test_that("bad arguments and unsupported fits are errors naming the argument", {
