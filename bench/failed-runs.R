@@ -10,6 +10,8 @@
 #     picks that fail, and u's 90% width at the end.
 #     --oracle=TRUE adds the weighting by the true failure indicator (the
 #     bound of what a failure model can give); --spotweld=FALSE skips part 1.
+#     Each step's fit's Hellinger distance to u's posterior with eta known
+#     gives the runs each loop needs to reach 0.1 (censored at the budget).
 # Rscript bench/run.R failed-runs [--quick] [--reps=10] [--budget=12] [--oracle=FALSE]
 #   [--spotweld=TRUE]
 source("bench/options.R")
@@ -91,15 +93,29 @@ run_loop <- function(seed, mode) {
   set.seed(seed)
   xf <- rep(seq(0.1, 0.9, length.out = 5), 2)
   fld <- data.frame(y = sin(10 * pi / 5 * xf) + stats::rnorm(10, 0, 0.1), x = xf)
+  # each step's Hellinger distance, from the step's fit (its row of the
+  # loop's history is made by loop_row(fit, runs, ...)): u's posterior with
+  # eta known under the prior scale that step's runs give
+  steps <- new.env()
+  steps$H <- numeric()
+  trace("loop_row", where = ns, print = FALSE, exit = bquote({
+    .s <- .(steps)
+    .y <- fit$model$data$ys * fit$model$scale$ysd[1] + fit$model$scale$ymean[1]
+    .s$H <- c(.s$H, .(hellinger)(fit$Phi[, 1], .(ref_posterior)(.(fld), stats::sd(.y))))
+  }))
+  on.exit(untrace("loop_row", where = ns), add = TRUE)
   t <- cpu(out <- suppressWarnings(suppressMessages(
     design_loop(f_sin, fld, lower = c(x = 0, u = 0), upper = c(x = 1, u = 1), n0 = 10,
                 batch = 1, budget = opt$budget, discrepancy = "none", nChains = 2))))
   picks <- out$sim[-(1:10), ]
   w <- diff(stats::quantile(out$fit$Phi[, 1], c(0.05, 0.95)))
   ref <- ref_posterior(fld, stats::sd(out$sim$y, na.rm = TRUE))
+  # runs after the first 10 until H <= 0.1 (NA: not within the budget)
+  hit <- which(steps$H <= 0.1)
   data.frame(seed = seed, weighting = mode, picks = nrow(picks),
              failed = sum(inside(picks$x, picks$u)), width = w,
-             H = hellinger(out$fit$Phi[, 1], ref), cpu = t)
+             H = hellinger(out$fit$Phi[, 1], ref),
+             to_H01 = if (length(hit)) out$history$runs[hit[1]] - 10L else NA_integer_, cpu = t)
 }
 cat("\n2. Runs failing inside a disc; design_loop() from 10 runs, budget", opt$budget, "\n\n")
 modes <- c("model", "none", if (opt$oracle) "oracle")
@@ -111,6 +127,9 @@ summ <- do.call(rbind, lapply(split(res, res$weighting)[modes], function(d) {
              failed_share = sum(d$failed) / sum(d$picks),
              failed_per_loop = paste(range(d$failed), collapse = "-"),
              u_width_median = stats::median(d$width), H_median = stats::median(d$H),
+             reached_H01 = sum(!is.na(d$to_H01)),
+             # loops that did not reach it count as budget + 1 (censored)
+             runs_to_H01_median = stats::median(ifelse(is.na(d$to_H01), opt$budget + 1L, d$to_H01)),
              cpu_median = stats::median(d$cpu))
 }))
 rownames(summ) <- NULL
@@ -120,6 +139,12 @@ for (m in setdiff(modes, "none"))
   cat(sprintf("\nPaired difference of failed picks per loop (%s - none): mean %.2f, se %.2f\n", m,
               mean(d[[m]]$failed - d[["none"]]$failed),
               stats::sd(d[[m]]$failed - d[["none"]]$failed) / sqrt(opt$reps)))
+for (m in setdiff(modes, "none")) {
+  cens <- function(v) ifelse(is.na(v), opt$budget + 1L, v)
+  dd <- cens(d[[m]]$to_H01) - cens(d[["none"]]$to_H01)
+  cat(sprintf("Paired difference of the runs to Hellinger 0.1 (%s - none; a loop that did not reach it counted as budget + 1 = %d): mean %.2f, se %.2f, median %.1f\n",
+              m, opt$budget + 1L, mean(dd), stats::sd(dd) / sqrt(opt$reps), stats::median(dd)))
+}
 for (m in setdiff(modes, "none"))
   cat(sprintf("Paired difference of the last fit's Hellinger distance to u's posterior with eta known (%s - none): mean %.3f, se %.3f\n", m,
               mean(d[[m]]$H - d[["none"]]$H), stats::sd(d[[m]]$H - d[["none"]]$H) / sqrt(opt$reps)))
