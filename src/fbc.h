@@ -700,6 +700,7 @@ protected:
                   std::vector<arma::mat>& QBB) override;
   void simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& wy, arma::mat& G,
                  bool haveW) override;
+  void simSolve(arma::vec& x) override;  // by the eigendecompositions (complete grids)
 
 private:
   // the algebra of the full grid (ys zero at the missing cells); the

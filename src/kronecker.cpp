@@ -658,3 +658,22 @@ void KroneckerPosterior::simWhiten(const arma::mat& Z, arma::mat& W, arma::vec& 
     }
   G = WB.t() * W;
 }
+
+// x <- Ds^-1 x = (Ux (x) Ut) diag(lam)^-1 (Ux (x) Ut)' x on a complete grid
+// (x as the I x J matrix X of its runs' cells: Ux (Ux' X Ut / lam) Ut'),
+// O(I J (I + J)); with missing cells the inverse simHeldout() forms.
+void KroneckerPosterior::simSolve(arma::vec& x) {
+  if (!dz_.mi.empty()) { SchurPosterior::simSolve(x); return; }
+  const int I = dz_.I, J = dz_.J;
+  arma::mat X(I, J);
+  for (int r = 0; r < m; ++r) X(dz_.ix[r], dz_.jt[r]) = x[r];
+  const arma::mat& Ux = Ux_.cur();
+  const arma::mat& Ut = Ut_.cur();
+  arma::mat Xt = Ux.t() * X * Ut;
+  const arma::vec& lx = lx_.cur();
+  const arma::vec& lt = lt_.cur();
+  for (int j = 0; j < J; ++j)
+    for (int i = 0; i < I; ++i) Xt(i, j) /= lx[i] * lt[j] + nugget_;
+  X = Ux * Xt * Ut.t();
+  for (int r = 0; r < m; ++r) x[r] = X(dz_.ix[r], dz_.jt[r]);
+}

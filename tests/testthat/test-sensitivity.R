@@ -309,6 +309,28 @@ test_that("the nearest-neighbour algebra with every predecessor gives the dense 
   expect_abs(few$draws$simulator, a$draws$simulator, 0.05)
 })
 
+test_that("the Kronecker algebra's indices are the dense algebra's on a product design", {
+  # 6 experimental settings x 4 calibration settings: Ds^-1 by the two
+  # eigendecompositions (sampled indices too, for the same random numbers)
+  set.seed(8)
+  d <- random_koh_data(n = 7, m = 24, p = 2, q = 1, seed = 8)
+  g <- expand.grid(i = 1:6, j = 1:4)
+  d$Xs <- cbind(matrix(runif(12), 6, 2)[g$i, ], seq(0.1, 0.9, length.out = 4)[g$j])
+  phi <- random_phi(2, 1)
+  phi[2:4] <- c(8, 20, 10)
+  dense <- fixed_fit(phi, kernelS = "matern52", d = d, algebra = "dense")
+  kron <- fixed_fit(phi, kernelS = "matern52", d = d)  # "auto": the product design
+  expect_identical(kron$model$algebra$name, "kronecker")
+  for (est in c("closed", "sampling")) {
+    set.seed(1)
+    a <- sensitivity(dense, ndraws = 2, points = 8, paths = 16, estimator = est, samples = 200)
+    set.seed(1)
+    b <- sensitivity(kron, ndraws = 2, points = 8, paths = 16, estimator = est, samples = 200)
+    expect_abs(b$draws$simulator, a$draws$simulator, 1e-8)
+    expect_abs(b$draws$prediction, a$draws$prediction, 1e-8)
+  }
+})
+
 test_that("the sampling estimator agrees with the closed form within its sampling error", {
   set.seed(5)
   phi <- random_phi(2, 1)
