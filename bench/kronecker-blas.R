@@ -8,28 +8,22 @@
 # where it is installed but not the system's BLAS:
 #   OPENBLAS_NUM_THREADS=1 LD_PRELOAD="<openblas>/libblas.so.3 <openblas>/liblapack.so.3" \
 #     Rscript bench/run.R kronecker-blas --out=ob1.rds
-# Problem: a functional output on a product design, J run settings (t1, t2)
-# x I output points x (bench/missing-cells.R's curves, complete), 10 field
-# points; calibrate(nMCMC = sweeps, nBurn = 100, nChains = 1, converge =
+# Problem: bench/problems.R's product_curves(), a functional output on a
+# complete product design of J run settings (t1, t2) x I output points, 10
+# field points; calibrate(nMCMC = sweeps, nBurn = 100, nChains = 1, converge =
 # FALSE) after set.seed(1) (nMCMC counts the burn-in), `threads = 1` and `threads = 2` alternating.
 # Per run: CPU and elapsed ms per sweep (burn-in included) and whether the
 # draws equal, to the bit, those of the first run and of the draws saved by
 # an earlier run in --ref (an .rds file of Phi: another BLAS's).
 suppressPackageStartupMessages(library(FBC))
 source("bench/options.R")
+source("bench/problems.R")
 opt <- bench_options(list(grid = "200x100", sweeps = 300L, reps = 3L, out = "", ref = ""))
 if (opt$quick) { opt$grid <- "40x20"; opt$sweeps <- 160L; opt$reps <- 1L }
 sz <- as.integer(strsplit(opt$grid, "x", fixed = TRUE)[[1]])
 J <- sz[1]; I <- sz[2]
-set.seed(1)
-x <- seq(0, 4, length.out = I)
-runs <- cbind(runif(J), runif(J))
-t1 <- 1 + 2 * runs[, 1]; t2 <- 0.2 + runs[, 2]
-g <- expand.grid(i = seq_len(I), j = seq_len(J))
-sim <- data.frame(y = t1[g$j] * exp(-t2[g$j] * x[g$i]), x = x[g$i], t1 = t1[g$j], t2 = t2[g$j])
-xf <- seq(0.2, 3.8, length.out = 10)
-field <- data.frame(y = 2 * exp(-0.7 * xf) + 0.05 * xf / 4 + rnorm(10, 0, 0.03), x = xf)
-model <- suppressMessages(calibrate(sim, field, fit = FALSE))
+pc <- product_curves(J, I)
+model <- suppressMessages(calibrate(pc$sim, pc$field, fit = FALSE))
 blas <- extSoftVersion()[["BLAS"]]
 cat(sprintf("FBC %s, %s; BLAS %s; OPENBLAS_NUM_THREADS=%s; algebra %s; grid %d x %d (m = %d)\n",
             utils::packageVersion("FBC"), format(Sys.time(), "%Y-%m-%d %H:%M"), blas,

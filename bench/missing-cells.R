@@ -24,6 +24,7 @@
 #     [--sweeps --nsweep=40]
 suppressPackageStartupMessages(library(FBC))
 source("bench/options.R")
+source("bench/problems.R")
 opt <- bench_options(list(grid = "30x20", share = c(0.1, 0.2, 0.4), pattern = c("mcar", "mnar"),
                           dense = FALSE, drop = FALSE, seed = 1L, moves = FALSE,
                           sweeps = FALSE, nsweep = 40L))
@@ -51,15 +52,8 @@ if (opt$moves) {
 }
 sz <- as.integer(strsplit(opt$grid, "x", fixed = TRUE)[[1]])
 J <- sz[1]; I <- sz[2]  # J run settings x I output points
-set.seed(opt$seed)
-x <- seq(0, 4, length.out = I)
-runs <- cbind(runif(J), runif(J))
-t1 <- 1 + 2 * runs[, 1]; t2 <- 0.2 + runs[, 2]
-g <- expand.grid(i = seq_len(I), j = seq_len(J))
-full <- data.frame(y = t1[g$j] * exp(-t2[g$j] * x[g$i]), x = x[g$i], t1 = t1[g$j], t2 = t2[g$j])
-xf <- seq(0.2, 3.8, length.out = 10)
-truth <- c(2, 0.7)
-field <- data.frame(y = truth[1] * exp(-truth[2] * xf) + 0.05 * xf / 4 + rnorm(10, 0, 0.03), x = xf)
+pc <- product_curves(J, I, seed = opt$seed)
+full <- pc$sim; field <- pc$field; g <- pc$g; t1 <- pc$t1; truth <- pc$truth
 
 # the cells of `share` missing: at random, or the runs with t1 above its
 # median losing their last output points (as many as make the share; at

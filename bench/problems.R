@@ -28,3 +28,23 @@ scattered_problem <- function(m, seed = 1) {
                         stats::rnorm(100, 0, 0.05), x1 = xf[, 1], x2 = xf[, 2])
   list(sim = sim, field = field, truth = c(0.3, 0.7, 0.5))
 }
+
+# A functional output on a complete product design: J run settings (t1,
+# t2) x I output points x on [0, 4], y = t1 exp(-t2 x); field: 10 points
+# of the curve at (t1, t2) = (2, 0.7) with a bias 0.05 x / 4 and noise sd
+# 0.03. `g` the grid's cells (i: output point, j: run setting), in the
+# rows' order.
+product_curves <- function(J, I, seed = 1) {
+  set.seed(seed)
+  x <- seq(0, 4, length.out = I)
+  runs <- cbind(stats::runif(J), stats::runif(J))
+  t1 <- 1 + 2 * runs[, 1]; t2 <- 0.2 + runs[, 2]
+  g <- expand.grid(i = seq_len(I), j = seq_len(J))
+  sim <- data.frame(y = t1[g$j] * exp(-t2[g$j] * x[g$i]), x = x[g$i], t1 = t1[g$j],
+                    t2 = t2[g$j])
+  xf <- seq(0.2, 3.8, length.out = 10)
+  truth <- c(2, 0.7)
+  field <- data.frame(y = truth[1] * exp(-truth[2] * xf) + 0.05 * xf / 4 +
+                        stats::rnorm(10, 0, 0.03), x = xf)
+  list(sim = sim, field = field, g = g, t1 = t1, t2 = t2, truth = truth)
+}
