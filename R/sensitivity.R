@@ -145,6 +145,14 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
   if (paths == 1L) cli::cli_abort("{.arg paths} must be 0 (no sample paths) or at least 2, not 1.")
   check_flag(prediction, "prediction")
   points <- check_count(points, "points", min = 2)
+  alg <- fit$model$algebra
+  if (paths > 0L && identical(alg$name, "kronecker") && isTRUE(alg$missing > 0L)) {
+    cli::cli_abort(c(
+      "Sample paths ({.arg paths} > 0) need a complete product design on the Kronecker algebra.",
+      x = "{.arg fit}'s runs leave {alg$missing} cell{?s} of the product design out.",
+      i = "Use {.code paths = 0} (the indices of the emulator's mean at each draw), or refit with {.code algebra = \"dense\"}."
+    ))
+  }
   estimator <- match_choice(estimator, c("auto", "closed", "sampling"), "estimator")
   samples <- check_count(samples, "samples", min = 2)
   if (prediction && !is.null(fit$model$spec$model$source)) {

@@ -279,6 +279,17 @@ test_that("bad arguments and unsupported fits are errors naming the argument", {
                                     kappaDist = "uniform", kappaP1 = c(a = 0), kappaP2 = 2,
                                     nMCMC = 6, nBurn = 2, nChains = 1))
   expect_snapshot(error = TRUE, sensitivity(fun))
+  # sample paths on a product design with missing cells (the Kronecker
+  # algebra's correction has no whitening for them); paths = 0 runs
+  g <- expand.grid(i = 1:6, j = 1:4)
+  Xs <- cbind(x = seq(0, 1, length.out = 6)[g$i], t = seq(0, 1, length.out = 4)[g$j])
+  sim <- cbind(y = Xs[, 1] + Xs[, 2], Xs)
+  sim[c(3, 11), "y"] <- NA
+  kr <- suppressWarnings(suppressMessages(calibrate(sim, field, nMCMC = 40, nBurn = 20,
+                                                    nChains = 1, converge = FALSE)))
+  expect_identical(kr$model$algebra$missing, 2L)
+  expect_snapshot(error = TRUE, sensitivity(kr, ndraws = 2))
+  expect_s3_class(sensitivity(kr, ndraws = 2, paths = 0, points = 8), "fbc_sensitivity")
 })
 
 test_that("the nearest-neighbour algebra with every predecessor gives the dense algebra's indices", {
