@@ -417,6 +417,16 @@ static void sobol_sampled(const std::function<void(const arma::mat&, arma::vec&)
   }
 }
 
+// The points per sample of `samples` (2 Nb rows per draw of M, D columns;
+// none: 0, the closed form), checked.
+static int sample_count(const arma::mat& samples, int M, int D) {
+  const int Nb = samples.n_rows / std::max(2 * M, 1);
+  if (samples.n_rows > 0 && (Nb < 2 || (int) samples.n_rows != 2 * Nb * M ||
+                             (int) samples.n_cols != D))
+    Rcpp::stop("the samples must be %d draws x 2 Nb rows and %d columns", M, D);
+  return Nb;
+}
+
 // Per draw (rows of phis): the Sobol variances of the simulator's posterior
 // mean over its D = p + q inputs, and its main effects at the grid values;
 // with support points (S rows per draw: rows d S .. d S + S - 1 of
@@ -452,10 +462,7 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   const int S = support.n_rows / std::max(M, 1);
   if (S > 0 && ((int) support.n_rows != S * M || (int) support.n_cols != D))
     Rcpp::stop("the support points must be %d draws x S rows and %d columns", M, D);
-  const int Nb = samples.n_rows / std::max(2 * M, 1);
-  if (samples.n_rows > 0 && (Nb < 2 || (int) samples.n_rows != 2 * Nb * M ||
-                             (int) samples.n_cols != D))
-    Rcpp::stop("the samples must be %d draws x 2 Nb rows and %d columns", M, D);
+  const int Nb = sample_count(samples, M, D);
   arma::mat Pd;
   for_each_draw(post, phis, [&](arma::uword d) {
     if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
@@ -527,11 +534,8 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
   const int b = share.n_rows;
   if (p < 1) Rcpp::stop("the prediction needs an experimental input");
   if ((int) grid.n_cols != p || (int) share.n_cols != p) Rcpp::stop("grid and share need %d columns", p);
-  const int ns = samples.n_rows / std::max(2 * M, 1);
+  const int ns = sample_count(samples, M, p);
   const bool sampled = ns > 0;
-  if (samples.n_rows > 0 && (ns < 2 || (int) samples.n_rows != 2 * ns * M ||
-                             (int) samples.n_cols != p))
-    Rcpp::stop("the samples must be %d draws x 2 Nb rows and %d columns", M, p);
   arma::vec V(M);
   arma::mat V1(p, M), VT(p, M), main(G * p, M);
   arma::mat sd1(p, M, arma::fill::zeros), sdT(p, M, arma::fill::zeros);
