@@ -5,7 +5,7 @@
 # class is one row here, its default prior in set_hyperPriors() and the code
 # that computes with it: the compiled core keeps no list of the classes, it
 # receives each class's offset and length by name (compiled_model()) and
-# looks up those it computes with (src/posterior.cpp, class_needs()); the
+# looks up those it computes with (src/model.cpp, class_needs()); the
 # package checks when it loads that R's table names every one of them
 # (check_model_codes(), R/boundary.R).
 #

@@ -154,7 +154,7 @@ struct Model {
 // Reads list(kernS, kernB, algebra, offset, length) (offset and length
 // integer vectors named by class) and checks that the layout tiles phi and
 // gives the classes the compiled core computes with the lengths p and q
-// imply (class_needs(), posterior.cpp).
+// imply (class_needs(), model.cpp).
 Model read_model(const Rcpp::List& model, int p, int q);
 // Fills lay.d, lay.cls and lay.pos from lay.offset and lay.length (and
 // checks that the classes tile phi).
@@ -512,6 +512,18 @@ bool latent_shift(Posterior& post, double& ll, arma::vec& lp, const std::vector<
 // Q = Rs(Xk,Xk) - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk), the residual and the moves'
 // bookkeeping (model.cpp). The simulator algebra behind it supplies
 // log|Ds|, ys' Ds^-1 ys, Q and Rs(Xs,Xk)' Ds^-1 ys through the sim*() hooks.
+// The classes the compiled core computes with, one row each (model.cpp):
+// its name, the parameters the data need (p experimental and q calibration
+// inputs, K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
+// ld level correlations; u unique runs with an input-dependent noise),
+// whether a model may have none instead (a class of some models only) and
+// the member holding its offset. read_model() checks the lengths and
+// set_sizes() looks up the offsets by these rows; R's table (model_classes)
+// may hold more classes, and must name these (check_model_codes()).
+struct ClassNeed { const char* name; int length; bool optional; int Posterior::* offset; };
+std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc, int ld,
+                                   int u);
+
 class SchurPosterior : public Posterior {
 public:
   bool init(const arma::vec& phi0) override;

@@ -25,8 +25,29 @@ double SchurPosterior::loglik(double ldDs, double zz, double ldS, double vv, dou
   return loglik_.alt() = ll;
 }
 
+// The classes the compiled core computes with, one row each (see fbc.h).
+// thetaS and alphaS p + q per output with a simulator GP, the bias classes p
+// or 1 per output with a bias, muB and lambdaZ one per output with a bias
+// in the discrepancy models that have them; the simulator's own noise,
+// sigma2R or the input-dependent gR (one per unique run) with its GP's
+// muG, sigma2G and thetaG (read_model() checks which goes with which).
+std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc, int ld,
+                                   int u) {
+  using P = Posterior;
+  return {{"kappa", q, false, &P::iKappa}, {"thetaS", e * K * (p + q), false, &P::iThetaS},
+          {"alphaS", e * K * (p + q), false, &P::iAlphaS}, {"thetaB", K * b * p, false, &P::iThetaB},
+          {"alphaB", K * b * p, false, &P::iAlphaB}, {"sigma2S", e * K, false, &P::iSigma2S},
+          {"sigma2B", K * b, false, &P::iSigma2B}, {"sigma2E", G, false, &P::iSigma2E},
+          {"muB", K * b, true, &P::iMuB}, {"lambdaZ", K * b, true, &P::iLambdaZ},
+          {"rhoS", e * K * lc, false, &P::iRhoS}, {"rhoB", K * b * lc, false, &P::iRhoB},
+          {"rhoD", K * b * ld, false, &P::iRhoD}, {"sigma2R", 1, true, &P::iSigma2R},
+          {"gR", u, true, &P::iG}, {"muG", 1, true, &P::iMuG}, {"sigma2G", 1, true, &P::iSigma2G},
+          {"thetaG", p + q, true, &P::iThetaG}};
+}
+
 // Sizes, the layout and the offsets of the classes computed with, looked up
-// by name; the discrepancy model read off the layout (see Posterior).
+// by name (class_needs()'s rows); the discrepancy model read off the layout
+// (see Posterior).
 void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   n = n_; m = m_; p = p_; q = q_;
   const Layout& lay = model.layout;
@@ -35,19 +56,11 @@ void Posterior::set_sizes(int n_, int m_, int p_, int q_, const Model& model) {
   sgasp = lay.length_of("lambdaZ") > 0;
   biasMean = lay.length_of("muB") > 0;
   d = lay.d;
-  iKappa = lay.offset_of("kappa"); iThetaS = lay.offset_of("thetaS");
-  iAlphaS = lay.offset_of("alphaS"); iThetaB = lay.offset_of("thetaB");
-  iAlphaB = lay.offset_of("alphaB"); iSigma2S = lay.offset_of("sigma2S");
-  iSigma2B = lay.offset_of("sigma2B"); iSigma2E = lay.offset_of("sigma2E");
-  iMuB = lay.offset_of("muB"); iLambdaZ = lay.offset_of("lambdaZ");
-  iRhoS = lay.offset_of("rhoS"); iRhoB = lay.offset_of("rhoB"); iRhoD = lay.offset_of("rhoD");
+  for (const ClassNeed& c : class_needs(0, 0, 1, 1, 1, 1, 0, 0, 0)) this->*c.offset = lay.offset_of(c.name);
   levels = model.levels;
   latent = lay.length_of("gR") > 0;
   simNoise = lay.length_of("sigma2R") > 0 || latent;
-  iSigma2R = lay.offset_of("sigma2R");
   fieldReal = simNoise && !latent && model.fieldRealization;
-  iG = lay.offset_of("gR"); iMuG = lay.offset_of("muG");
-  iSigma2G = lay.offset_of("sigma2G"); iThetaG = lay.offset_of("thetaG");
   if (latent) {
     if ((int) model.repSSWi.size() != m_)
       Rcpp::stop("the input-dependent noise needs a within sum of squares per unique run (%d)", m_);

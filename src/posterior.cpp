@@ -3,22 +3,6 @@
 // and nothing else names the algebras.
 #include "fbc.h"
 
-// The classes the compiled core computes with and the number of parameters
-// each must have for a model of `m` with p experimental and q calibration
-// inputs (K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
-// ld level correlations): thetaS and alphaS p + q per output, the bias
-// classes p or 1 per output with a bias, none without. -1: 0 or one per
-// output with a bias (muB, lambdaZ: which is the discrepancy model's).
-// R's table (model_classes) may hold more classes.
-struct ClassNeed { const char* name; int length; };
-static std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc,
-                                          int ld) {
-  return {{"kappa", q}, {"thetaS", e * K * (p + q)}, {"alphaS", e * K * (p + q)},
-          {"thetaB", K * b * p}, {"alphaB", K * b * p}, {"sigma2S", e * K}, {"sigma2B", K * b},
-          {"sigma2E", G}, {"muB", -1}, {"lambdaZ", -1}, {"rhoS", e * K * lc},
-          {"rhoB", K * b * lc}, {"rhoD", K * b * ld}};
-}
-
 // The compiled core's code tables by name (walks, kernels, algebras,
 // prediction types, what a move touches) and the names of the classes it
 // computes with: R's tables (R/boundary.R) must agree and R's model_classes
@@ -27,7 +11,7 @@ static std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int
 // [[Rcpp::export(.model_codes)]]
 Rcpp::List model_codes() {
   using Rcpp::_;
-  const std::vector<ClassNeed> need = class_needs(1, 1, 1, 1, 1, 1, 0, 0);
+  const std::vector<ClassNeed> need = class_needs(1, 1, 1, 1, 1, 1, 0, 0, 0);
   Rcpp::CharacterVector cls(need.size());
   for (size_t c = 0; c < need.size(); ++c) cls[c] = need[c].name;
   const Rcpp::List kern = kernel_table();
@@ -166,17 +150,7 @@ Model read_model(const Rcpp::List& model, int p, int q) {
   read_outputs(model, p, out);
   Layout& lay = out.layout;
   lay = read_layout(model);
-  // what each class expands over (class_needs()); a bias when sigma2B has
-  // parameters
-  const int K = out.nOutputs(), b = lay.length_of("sigma2B") > 0 ? 1 : 0;
-  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
-  for (const ClassNeed& c : class_needs(p, q, K, out.emulator ? 1 : 0, b, G, level_count(out.levels),
-                                        out.sourceL * (out.sourceL - 1) / 2)) {
-    const int have = lay.length_of(c.name), want = c.length < 0 ? have : c.length;
-    if (have != want || (c.length < 0 && have != 0 && have != K * b))
-      Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have,
-                 c.length < 0 ? K * b : want);
-  }
+  const int K = out.nOutputs();
   // a stochastic simulator's replicates (R/sim_noise.R): one emulated output
   if (model.containsElementNamed("replicates")) {
     const Rcpp::List rp = model["replicates"];
@@ -195,6 +169,17 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     }
     if (K > 1 || !out.emulator)
       Rcpp::stop("the simulator's own noise needs one emulated output");
+  }
+  // what each class expands over (class_needs()); a bias when sigma2B has
+  // parameters
+  const int b = lay.length_of("sigma2B") > 0 ? 1 : 0;
+  const int G = out.noise.empty() ? 1 : *std::max_element(out.noise.begin(), out.noise.end()) + 1;
+  for (const ClassNeed& c : class_needs(p, q, K, out.emulator ? 1 : 0, b, G, level_count(out.levels),
+                                        out.sourceL * (out.sourceL - 1) / 2,
+                                        (int) out.repCount.size())) {
+    const int have = lay.length_of(c.name);
+    if (have != c.length && !(c.optional && have == 0))
+      Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have, c.length);
   }
   // the noise: sigma2R (constant) or gR, one per unique input, with its GP's
   // muG, sigma2G and thetaG (input-dependent)
