@@ -355,7 +355,8 @@ public:
   std::vector<int> scaled;  // the variances the scale move multiplies (in phi)
   arma::vec phi;  // current parameters
 
-  // Set phi and compute every block; false if a covariance is not PD.
+  // Set phi and compute every block; false if a covariance is not PD. (A
+  // phi of another length than the layout's stops: set_phi().)
   virtual bool init(const arma::vec& phi0) = 0;
   virtual double logLik() const = 0;
   // Log-likelihood with phi[idx[i]] = values[i] for every i (-Inf if a
@@ -432,6 +433,12 @@ public:
 
 protected:
   void set_sizes(int n_, int m_, int p_, int q_, const Model& model);
+  // phi = phi0, which must have the layout's d entries (every init()).
+  void set_phi(const arma::vec& phi0) {
+    if ((int) phi0.n_elem != d)
+      Rcpp::stop("phi has %d entries where the model's layout has %d", (int) phi0.n_elem, d);
+    phi = phi0;
+  }
   // The field rows' groups (model.fieldRows, checked against Xf, or found
   // here by exact equality without it): field row i is distinct row
   // grp_[i] of Xu_ (nu_ x p), in measurement-error group noise_[i]; srcU_

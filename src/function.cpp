@@ -27,7 +27,7 @@ public:
   }
 
   bool init(const arma::vec& phi0) override {
-    phi = phi0;
+    set_phi(phi0);
     tk_ = tb_ = tf_ = true;
     sc_ = false;
     if (!std::isfinite(evaluate())) return false;

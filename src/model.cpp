@@ -229,7 +229,7 @@ void SchurPosterior::add_touch(int j, Touch& t) const {
 }
 
 bool SchurPosterior::init(const arma::vec& phi0) {
-  phi = phi0;
+  set_phi(phi0);
   Touch all; all.everything(p + q, p);
   scratch_ = true;
   double ll = evaluate(all);

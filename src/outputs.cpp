@@ -135,7 +135,7 @@ static arma::uvec output_rows(const arma::mat& X, const LevelInput& out, int o) 
 }
 
 bool OutputsPosterior::init(const arma::vec& phi0) {
-  phi = phi0;
+  set_phi(phi0);
   ll_ = 0.0;
   for (int o = 0; o < K_; ++o) {
     if (!sub_[o]->init(local_phi(phi, map_[o]))) return false;

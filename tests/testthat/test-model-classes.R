@@ -386,6 +386,11 @@ test_that("the compiled core reads the discrepancy model off the layout and refu
   expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi[-1], 1e-6,
                            model = lay(gp, len[names(len) != "kappa"])),
                "kappa 0 entries where the data need 1")
+  # a phi of another length than the layout's is refused, not read past
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, phi[-length(phi)], 1e-6, model = gp),
+               "phi has 10 entries where the model's layout has 11")
+  expect_error(.fbc_loglik(dat$Xf, dat$yf, dat$Xs, dat$ys, c(phi, 1), 1e-6, model = gp),
+               "phi has 12 entries where the model's layout has 11")
 })
 
 test_that("without a discrepancy the sampler retains dense log-likelihoods and has no bias moves", {
