@@ -75,6 +75,76 @@ model_classes <- data.frame(
   stringsAsFactors = FALSE
 )
 
+# The default prior of each class that set_hyperPriors() takes (kappa's is
+# calibrate()'s; gR's is the GP of muG, sigma2G and thetaG, sim_noise_priors()):
+# `prior` its family, initial value (NA: from the data, or the family's
+# centre) and the family's two parameters, the defaults of set_hyperPriors()'
+# arguments <class>Dist, <class>Init, <class>P1 and <class>P2 (in this
+# order, which is theirs); `help` those arguments' help (roxygen markdown,
+# pasted; a class without one is documented with the class before it).
+class_priors <- list(
+  thetaS = list(prior = alist("gamma", 1, 1.1, 0.1),
+    help = "Simulator GP correlation scales."),
+  alphaS = list(prior = alist("betashift", 1.9, 5, 2),
+    help = c("Simulator GP smoothness, in `[1, 2]` (power-exponential family only: with",
+      "another `kernelS` in [calibrate()] it is not a parameter and these are ignored,",
+      "with a warning).")),
+  thetaB = list(prior = alist("gamma", 1, 1.1, 0.1),
+    help = "Bias GP correlation scales."),
+  alphaB = list(prior = alist("betashift", 1.9, 5, 2),
+    help = c("Bias GP smoothness, in `[1, 2]` (power exponential only, as for `alphaS` with",
+      "`kernelB`).")),
+  sigma2S = list(prior = alist("inversegamma", 1, 1.5, 1.5),
+    help = "Simulator GP marginal variance."),
+  sigma2B = list(prior = alist("inversegamma", 0.1, 1.5, 1.5),
+    help = "Bias GP marginal variance."),
+  sigma2E = list(prior = alist("halft_sd", 0.1, 1, 1),
+    help = "Measurement error variance."),
+  muB = list(prior = alist("gaussian", 0, 0, 1),
+    help = c("Bias GP mean (not under `discrepancy = \"sgasp\"`, whose bias has mean 0).")),
+  lambdaZ = list(prior = alist("lognormal", 20, log(20), 1.5),
+    help = c("Scale \\eqn{\\lambda_z} of the S-GaSP discrepancy (`discrepancy = \"sgasp\"` in",
+      "[calibrate()] only): how strongly the bias's L2 norm is shrunk. The default",
+      "lognormal prior has median 20 (meanlog `log(20)`, sdlog 1.5: 95% between about 1",
+      "and 380), around the value RobustCalibration's default rule \\eqn{\\sqrt{n \\|\\beta",
+      "L\\| \\sigma^2_B / \\sigma^2_E}} gives on the ball and kinetics data; fix it with",
+      "`lambdaZDist = \"fixed\", lambdaZInit =`.")),
+  rhoS = list(prior = alist("uniform", 0, -1, 1),
+    help = c("The levels' correlations of categorical inputs (see \"Categorical inputs\" in",
+      "[calibrate()]), in the simulator and bias GPs: their canonical partial",
+      "correlations, in `(-1, 1)`, \\eqn{L(L-1)/2} per input with \\eqn{L} levels (with",
+      "two levels, the correlation itself). Default uniform on `(-1, 1)`, starting at 0",
+      "(levels uncorrelated).")),
+  rhoB = list(prior = alist("uniform", 0, -1, 1)),
+  rhoD = list(prior = alist("uniform", 0, -1, 1),
+    help = c("With `sourceBias = \"own\"` in [calibrate()], the correlation between the field",
+      "data sets' biases: its canonical partial correlations, as for `rhoB` (one for",
+      "two data sets). Default uniform on `(-1, 1)`; `rhoDDist = \"fixed\", rhoDInit = 0`",
+      "makes the biases independent.")),
+  sigma2R = list(prior = alist("halft_sd", NA, 1, 1),
+    help = c("The simulator's own noise variance \\eqn{r} of a stochastic simulator (`simNoise",
+      "= \"constant\"` in [calibrate()]; see [simulator_noise]). Default: a half-Cauchy",
+      "on its sd (`\"halft_sd\"`, 1 degree of freedom, scale 1, the standardised",
+      "response's sd), weakly informative, as for \\eqn{\\sigma^2_E}: the replicates'",
+      "spread sets it. Started at the pooled within-replicate variance unless",
+      "`sigma2RInit` is given.")),
+  muG = list(prior = alist("gaussian", NA, -3, 3),
+    help = c("An input-dependent simulator noise (`simNoise = \"input\"`; see",
+      "[simulator_noise]): its log-variance on the standardised response's scale is a",
+      "GP with mean \\eqn{\\mu_g} (default gaussian, mean -3, sd 3: noise sds from 0.001",
+      "to 20 times the response's sd within two prior sds; started at the mean of the",
+      "unique inputs' log within-replicate variances), variance \\eqn{\\sigma^2_g}",
+      "(half-Cauchy on its sd, scale 1: the log-variance varying by a factor of about e",
+      "over the inputs) and the Mat\u00e9rn 5/2 correlation's \\eqn{\\theta_{g,k}} (\\eqn{h_k =",
+      "\\sqrt{\\theta_{g,k}} d_k}) over the inputs scaled to \\eqn{[0, 1]} (default",
+      "lognormal, median 2, sdlog 0.7: 95% between 0.5 and 8, a correlation of 0.8 to",
+      "0.07 across an input's range, a noise that changes smoothly; its tail towards 0",
+      "kept thin, as there the correlation flattens while \\eqn{\\sigma^2_g} grows",
+      "without bound, a ridge the sampler crosses slowly).")),
+  sigma2G = list(prior = alist("halft_sd", 1, 1, 1)),
+  thetaG = list(prior = alist("lognormal", 2, log(2), 0.7))
+)
+
 # The smoothness classes (parameters only for a family that has one), the
 # argument of calibrate() choosing that family, and the classes with one
 # parameter per input (labelled with the input's name).

@@ -266,87 +266,21 @@ check_support <- function(dist, p1, p2, cls, arg, call = parent.frame()) {
 #' available by name: `set_hyperPriors(sigma2EDist = "inversegamma",
 #' sigma2EP1 = 1.5, sigma2EP2 = 1.5)`.
 #'
-#' @param thetaSDist,thetaSInit,thetaSP1,thetaSP2 Simulator GP correlation scales.
-#' @param alphaSDist,alphaSInit,alphaSP1,alphaSP2 Simulator GP smoothness, in
-#'   `[1, 2]` (power-exponential family only: with another `kernelS` in
-#'   [calibrate()] it is not a parameter and these are ignored, with a warning).
-#' @param thetaBDist,thetaBInit,thetaBP1,thetaBP2 Bias GP correlation scales.
-#' @param alphaBDist,alphaBInit,alphaBP1,alphaBP2 Bias GP smoothness, in
-#'   `[1, 2]` (power exponential only, as for `alphaS` with `kernelB`).
-#' @param sigma2SDist,sigma2SInit,sigma2SP1,sigma2SP2 Simulator GP marginal variance.
-#' @param sigma2BDist,sigma2BInit,sigma2BP1,sigma2BP2 Bias GP marginal variance.
-#' @param sigma2EDist,sigma2EInit,sigma2EP1,sigma2EP2 Measurement error variance.
-#' @param muBDist,muBInit,muBP1,muBP2 Bias GP mean (not under
-#'   `discrepancy = "sgasp"`, whose bias has mean 0).
-#' @param lambdaZDist,lambdaZInit,lambdaZP1,lambdaZP2 Scale \eqn{\lambda_z}
-#'   of the S-GaSP discrepancy (`discrepancy = "sgasp"` in [calibrate()]
-#'   only): how strongly the bias's L2 norm is shrunk. The default lognormal
-#'   prior has median 20 (meanlog `log(20)`, sdlog 1.5: 95% between about 1
-#'   and 380), around the value RobustCalibration's default rule
-#'   \eqn{\sqrt{n \|\beta L\| \sigma^2_B / \sigma^2_E}} gives on the ball
-#'   and kinetics data; fix it with `lambdaZDist = "fixed", lambdaZInit =`.
-#' @param rhoSDist,rhoSInit,rhoSP1,rhoSP2,rhoBDist,rhoBInit,rhoBP1,rhoBP2
-#'   The levels' correlations of categorical inputs (see "Categorical
-#'   inputs" in [calibrate()]), in the simulator and bias GPs: their
-#'   canonical partial correlations, in `(-1, 1)`, \eqn{L(L-1)/2} per input
-#'   with \eqn{L} levels (with two levels, the correlation itself). Default
-#'   uniform on `(-1, 1)`, starting at 0 (levels uncorrelated).
-#' @param rhoDDist,rhoDInit,rhoDP1,rhoDP2 With `sourceBias = "own"` in
-#'   [calibrate()], the correlation between the field data sets' biases:
-#'   its canonical partial correlations, as for `rhoB` (one for two data
-#'   sets). Default uniform on `(-1, 1)`; `rhoDDist = "fixed", rhoDInit = 0`
-#'   makes the biases independent.
-#' @param sigma2RDist,sigma2RInit,sigma2RP1,sigma2RP2 The simulator's own
-#'   noise variance \eqn{r} of a stochastic simulator (`simNoise =
-#'   "constant"` in [calibrate()]; see [simulator_noise]). Default: a
-#'   half-Cauchy on its sd (`"halft_sd"`, 1 degree of freedom, scale 1, the
-#'   standardised response's sd), weakly informative, as for
-#'   \eqn{\sigma^2_E}: the replicates' spread sets it. Started at the pooled
-#'   within-replicate variance unless `sigma2RInit` is given.
-#' @param muGDist,muGInit,muGP1,muGP2,sigma2GDist,sigma2GInit,sigma2GP1,sigma2GP2,thetaGDist,thetaGInit,thetaGP1,thetaGP2
-#'   An input-dependent simulator noise (`simNoise = "input"`; see
-#'   [simulator_noise]): its log-variance on the standardised response's
-#'   scale is a GP with mean \eqn{\mu_g} (default gaussian, mean -3, sd 3:
-#'   noise sds from 0.001 to 20 times the response's sd within two prior
-#'   sds; started at the mean of the unique inputs' log within-replicate
-#'   variances), variance \eqn{\sigma^2_g} (half-Cauchy on its sd, scale 1:
-#'   the log-variance varying by a factor of about e over the inputs) and
-#'   the Matérn 5/2 correlation's \eqn{\theta_{g,k}} (\eqn{h_k =
-#'   \sqrt{\theta_{g,k}} d_k}) over the inputs scaled to \eqn{[0, 1]}
-#'   (default lognormal, median 2, sdlog 0.7: 95% between 0.5 and 8, a
-#'   correlation of 0.8 to 0.07 across an input's range, a noise that
-#'   changes smoothly; its tail towards 0 kept thin, as there the
-#'   correlation flattens while \eqn{\sigma^2_g} grows without bound, a
-#'   ridge the sampler crosses slowly).
+#' @eval hyper_param_docs()
 #' @return An object of class `fbc_hypers` to pass as `hypers` to [calibrate()].
 #' @export
 #' @examples
 #' priors <- set_hyperPriors(thetaSDist = "beta", thetaSP1 = 2, thetaSP2 = 6,
 #'                           thetaSInit = 0.5)
 #' priors$thetaS
-set_hyperPriors <- function(
-    thetaSDist = "gamma", thetaSInit = 1, thetaSP1 = 1.1, thetaSP2 = 0.1,
-    alphaSDist = "betashift", alphaSInit = 1.9, alphaSP1 = 5, alphaSP2 = 2,
-    thetaBDist = "gamma", thetaBInit = 1, thetaBP1 = 1.1, thetaBP2 = 0.1,
-    alphaBDist = "betashift", alphaBInit = 1.9, alphaBP1 = 5, alphaBP2 = 2,
-    sigma2SDist = "inversegamma", sigma2SInit = 1, sigma2SP1 = 1.5, sigma2SP2 = 1.5,
-    sigma2BDist = "inversegamma", sigma2BInit = 0.1, sigma2BP1 = 1.5, sigma2BP2 = 1.5,
-    sigma2EDist = "halft_sd", sigma2EInit = 0.1, sigma2EP1 = 1, sigma2EP2 = 1,
-    muBDist = "gaussian", muBInit = 0, muBP1 = 0, muBP2 = 1,
-    lambdaZDist = "lognormal", lambdaZInit = 20, lambdaZP1 = log(20), lambdaZP2 = 1.5,
-    rhoSDist = "uniform", rhoSInit = 0, rhoSP1 = -1, rhoSP2 = 1,
-    rhoBDist = "uniform", rhoBInit = 0, rhoBP1 = -1, rhoBP2 = 1,
-    rhoDDist = "uniform", rhoDInit = 0, rhoDP1 = -1, rhoDP2 = 1,
-    sigma2RDist = "halft_sd", sigma2RInit = NA, sigma2RP1 = 1, sigma2RP2 = 1,
-    muGDist = "gaussian", muGInit = NA, muGP1 = -3, muGP2 = 3,
-    sigma2GDist = "halft_sd", sigma2GInit = 1, sigma2GP1 = 1, sigma2GP2 = 1,
-    thetaGDist = "lognormal", thetaGInit = 2, thetaGP1 = log(2), thetaGP2 = 0.7) {
+set_hyperPriors <- function() {
   env <- environment()
   defaults <- formals(sys.function())
   out <- list()
-  # (gR, the latent log-variances, has the GP of muG, sigma2G, thetaG as
-  # its prior: sim_noise_priors())
-  for (cls in setdiff(param_classes[-1], "gR")) {
+  # each class of class_priors, in the table's order (gR, the latent
+  # log-variances, has the GP of muG, sigma2G, thetaG as its prior:
+  # sim_noise_priors())
+  for (cls in intersect(param_classes, names(class_priors))) {
     is_missing <- function(arg) eval(call("missing", as.name(paste0(cls, arg))), env)
     dist <- get(paste0(cls, "Dist"), env)
     # a family that cannot fit the class is the first thing to say
@@ -363,6 +297,24 @@ set_hyperPriors <- function(
     out[[cls]] <- spec
   }
   structure(out, class = "fbc_hypers")
+}
+# Its arguments, four per class of class_priors with their defaults
+# (R/model-classes.R), and their help.
+formals(set_hyperPriors) <- unlist(lapply(names(class_priors), function(cls) {
+  stats::setNames(class_priors[[cls]]$prior, paste0(cls, c("Dist", "Init", "P1", "P2")))
+}), recursive = FALSE)
+hyper_param_docs <- function() {
+  out <- character()
+  for (cls in names(class_priors)) {
+    args <- paste0(cls, c("Dist", "Init", "P1", "P2"), collapse = ",")
+    help <- class_priors[[cls]]$help
+    if (is.null(help)) {
+      out[length(out)] <- sub("^@param (\\S+)", paste0("@param \\1,", args), out[length(out)])
+    } else {
+      out <- c(out, paste("@param", args, paste(help, collapse = " ")))
+    }
+  }
+  out
 }
 
 #' @export
