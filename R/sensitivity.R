@@ -80,14 +80,36 @@
 #' it comes with). Their sum is the squared standard error [predict()]
 #' gives, averaged over those points (`points` in the result).
 #'
-#' @param fit An `fbc` object from [calibrate()], with an emulated simulator,
-#'   one output and numeric inputs (for the prediction's part, one field data
-#'   set).
+#' @section Categorical inputs and several outputs:
+#' A categorical input has a discrete measure: uniform over its levels, or
+#' the level probabilities given in `inputs`. Its one-dimensional integrals
+#' are the probability-weighted sums over its levels of the level
+#' correlation \eqn{C[l, a_j]} between each level and each centre's, and
+#' its double integrals the double sums; the sampling estimator and the
+#' sample paths' support points draw its levels. Its indices are ordinary
+#' Sobol indices, and its main effect is the conditional mean at each level.
+#'
+#' With several outputs the output is not an input of the measure: the
+#' indices, the shares and the main effects are given at each output (a
+#' column `output`). With `outputs = "shared"` the output's level is held
+#' at that output (the expansion's weights times the output's level
+#' correlation \eqn{C[j, a_i]}, the bias's likewise); with
+#' `"independent"` each output's own GPs are used. Each output's draws have
+#' their own sample paths (through support points at that output), and the
+#' noise share is that output's measurement error (its first group with
+#' several field data sets); the prediction's part needs field data at
+#' every output.
+#'
+#' @param fit An `fbc` object from [calibrate()], with an emulated simulator
+#'   (for the prediction's part, one bias for all field data).
 #' @param inputs Input distributions other than uniform over the design's
 #'   box: a named list whose names are inputs of the simulator and whose
 #'   elements are either a range `c(lower, upper)` (uniform, in the input's
 #'   units) or a density function of the input in its units (say kappa's
-#'   prior), integrated over the design's range of that input by quadrature.
+#'   prior), integrated over the design's range of that input by quadrature;
+#'   for a categorical input, its levels' probabilities (named by the
+#'   levels, those left out 0, or one per level in order, summing to one).
+#'   The output of a fit with several outputs is not among them.
 #' @param ndraws The number of posterior draws used (evenly spaced over all
 #'   retained draws, as in [predict()]); `NULL` uses them all. Each draw
 #'   brings its own sample path, so that the draws are nearly independent:
@@ -113,12 +135,15 @@
 #'   `lower`, `upper`, `mcse` the Monte Carlo standard error of the median,
 #'   and with the sampling estimator `sampling_sd`),
 #'   `shares` (the prediction's variance shares), `points` (the points the
-#'   shares average over, in the inputs' units), `draws` (per-draw indices:
-#'   arrays draws x inputs x index), `main` (main effects: for each input a
-#'   data frame of the conditional mean over a grid, in the response's units,
-#'   with its median and interval over the draws) and `settings`.
-#'   `as.data.frame()` stacks the indices; `plot()` shows the main effects or
-#'   the indices.
+#'   shares average over, in the inputs' units; a data frame with
+#'   categorical inputs), `draws` (per-draw indices: arrays draws x inputs x
+#'   index, x output with several outputs), `main` (main effects: for each
+#'   input a data frame of the conditional mean over a grid, or at each level
+#'   (`level`, numbered by `x`), in the response's units, with its median and
+#'   interval over the draws) and `settings`. With several outputs the data
+#'   frames have a column `output`. `as.data.frame()` stacks the indices;
+#'   `plot()` shows the main effects or the indices (one row of panels per
+#'   output; `output =` names those shown).
 #' @references Oakley, J. E. and O'Hagan, A. (2004). Probabilistic
 #'   sensitivity analysis of complex models: a Bayesian approach. JRSS B 66,
 #'   751-769. Marrel, A., Iooss, B., Laurent, B. and Roustant, O. (2009).

@@ -18,6 +18,11 @@
 // and the Matern families (exponentials times polynomials), and otherwise
 // Gauss-Legendre (or the user's) quadrature nodes and weights, the
 // correlations at the nodes from the kernel module (kernels.cpp).
+// A categorical input f multiplies the correlation by its levels' C_f[a, b]
+// (levels.cpp): against its levels' probabilities pi it is one more factor
+// of the product, I1[j, f] = sum_l pi_l C_f[l, a_j] and I2_f[j, k] =
+// sum_l pi_l C_f[l, a_j] C_f[l, a_k]; a point mass (an output held at its
+// level) folds C_f[j, a_i] into the weights and adds no variance.
 #include "fbc.h"
 #include <functional>
 #include <numeric>

@@ -473,7 +473,7 @@ test_that("a draw's sample path has the emulator's conditional mean and covarian
 
 # Categorical inputs and several outputs. The references: the emulator's
 # posterior mean at a draw phi written from the dense joint covariance with
-# the levels' correlations (helper-dense.R), a sum over its centres of a
+# the levels' correlations (dense_cov()), a sum over its centres of a
 # product of one factor per input of the measure (a numeric input's
 # correlation, a categorical input's level correlation C[l, a_n]) times the
 # factors of the levels held (an output), integrated on a tensor grid:
@@ -495,7 +495,7 @@ level_fit <- function(seed = 3, m = 30, kernel = "matern52") {
                              kernelS = kernel, kernelB = kernel), classes = "fbc_extrapolation")
 }
 
-# Two outputs sharing the rate t (helper-outputs.R), shared or independent.
+# Two outputs sharing the rate t (two_outputs()), shared or independent.
 outputs_fit <- function(outputs, m = 16, kernel = "matern52") {
   tw <- two_outputs(m = m)
   set.seed(4)
