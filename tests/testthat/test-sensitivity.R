@@ -482,7 +482,7 @@ test_that("a draw's sample path has the emulator's conditional mean and covarian
 
 # One numeric experimental input x, one categorical input c (3 levels) and
 # a calibration input t; a short chain (the draws differ).
-level_fit <- function(seed = 3, m = 30, kernel = "matern52") {
+level_fit <- function(seed = 3, m = 30, kernel = "matern52", discrepancy = "gp") {
   set.seed(seed)
   lev <- c("a", "b", "c")
   x <- runif(m); t <- runif(m); cc <- factor(sample(lev, m, TRUE), lev)
@@ -492,7 +492,28 @@ level_fit <- function(seed = 3, m = 30, kernel = "matern52") {
   xf <- runif(9); cf <- factor(rep(lev, 3), lev)
   field <- data.frame(y = f(xf, cf, 0.4) + rnorm(9, 0, 0.05), x = xf, c = cf)
   suppressWarnings(calibrate(sim, field, nMCMC = 40, nBurn = 20, nChains = 1, converge = FALSE,
-                             kernelS = kernel, kernelB = kernel), classes = "fbc_extrapolation")
+                             kernelS = kernel, kernelB = kernel, discrepancy = discrepancy),
+                   classes = "fbc_extrapolation")
+}
+
+# The prediction's per-draw indices over x and the categorical c (uniform
+# over its levels) from predict()'s per-draw means on a tensor grid.
+expect_level_prediction <- function(fit, s) {
+  d <- fit$model$data
+  sc <- fit$model$scale
+  r <- composite_rule(c(d$Xs[, 1], d$Xf[, 1]))
+  u <- sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * r$x
+  nd <- expand.grid(x = u, c = factor(c("a", "b", "c"), c("a", "b", "c")))
+  pr <- predict(fit, nd, type = "mean", ndraws = 2, draws = TRUE)$draws
+  for (i in 1:2) {
+    f <- matrix(pr[, i], length(u))
+    w <- r$w %o% rep(1 / 3, 3)
+    f0 <- sum(w * f)
+    V <- sum(w * f^2) - f0^2
+    V1 <- c(sum(r$w * drop(f %*% rep(1 / 3, 3))^2), sum(rep(1 / 3, 3) * drop(r$w %*% f)^2)) - f0^2
+    ref <- c(V1 / V, 1 - rev(V1) / V)
+    expect_abs(as.vector(s$draws$prediction[i, , ]), ref, 1e-6)
+  }
 }
 
 # Two outputs sharing the rate t (two_outputs()), shared or independent.
@@ -589,21 +610,11 @@ test_that("a categorical input's closed-form indices are those of the emulator's
   # the main effect at each level: E[mu | c = l]
   expect_identical(s$main$simulator$c$level, c("a", "b", "c"))
   expect_identical(s$main$simulator$c$x, 1:3)
-  # the prediction's indices: predict()'s per-draw means on a tensor grid
-  sc <- fit$model$scale
-  r <- composite_rule(c(d$Xs[, 1], d$Xf[, 1]))
-  u <- sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * r$x
-  nd <- expand.grid(x = u, c = factor(c("a", "b", "c"), c("a", "b", "c")))
-  pr <- predict(fit, nd, type = "mean", ndraws = 2, draws = TRUE)$draws
-  for (i in 1:2) {
-    f <- matrix(pr[, i], length(u))
-    w <- r$w %o% rep(1 / 3, 3)
-    f0 <- sum(w * f)
-    V <- sum(w * f^2) - f0^2
-    V1 <- c(sum(r$w * drop(f %*% rep(1 / 3, 3))^2), sum(rep(1 / 3, 3) * drop(r$w %*% f)^2)) - f0^2
-    ref <- c(V1 / V, 1 - rev(V1) / V)
-    expect_abs(as.vector(s$draws$prediction[i, , ]), ref, 1e-6)
-  }
+  # the prediction's indices: predict()'s per-draw means on a tensor grid,
+  # with the KOH bias and the S-GaSP one (its weights carry the levels too)
+  expect_level_prediction(fit, s)
+  sg <- level_fit(discrepancy = "sgasp")
+  expect_level_prediction(sg, sensitivity(sg, ndraws = 2, paths = 0, points = 8))
   # level probabilities given: a point mass makes the input's indices 0
   s1 <- sensitivity(fit, ndraws = 2, paths = 0, prediction = FALSE,
                     inputs = list(c = c(b = 1)))
