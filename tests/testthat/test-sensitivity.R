@@ -482,7 +482,7 @@ test_that("a draw's sample path has the emulator's conditional mean and covarian
 
 # One numeric experimental input x, one categorical input c (3 levels) and
 # a calibration input t; a short chain (the draws differ).
-level_fit <- function(seed = 3, m = 30, kernel = "matern52", discrepancy = "gp") {
+level_fit <- function(seed = 3, m = 30, kernel = "matern52", discrepancy = "gp", ...) {
   set.seed(seed)
   lev <- c("a", "b", "c")
   x <- runif(m); t <- runif(m); cc <- factor(sample(lev, m, TRUE), lev)
@@ -492,7 +492,7 @@ level_fit <- function(seed = 3, m = 30, kernel = "matern52", discrepancy = "gp")
   xf <- runif(9); cf <- factor(rep(lev, 3), lev)
   field <- data.frame(y = f(xf, cf, 0.4) + rnorm(9, 0, 0.05), x = xf, c = cf)
   suppressWarnings(calibrate(sim, field, nMCMC = 40, nBurn = 20, nChains = 1, converge = FALSE,
-                             kernelS = kernel, kernelB = kernel, discrepancy = discrepancy),
+                             kernelS = kernel, kernelB = kernel, discrepancy = discrepancy, ...),
                    classes = "fbc_extrapolation")
 }
 
@@ -749,4 +749,36 @@ test_that("print(), as.data.frame() and plot() show the levels and the outputs",
     plot(s, output = "speed")
     plot(s1, output = "conc")
   })
+})
+
+test_that("levels drawn by their probabilities, an output held at its level; the nearest-neighbour algebra with every predecessor gives the dense indices", {
+  fit <- level_fit()
+  sc <- fit$model$scale
+  m <- FBC:::sensitivity_measure(list(c = c(a = 0.2, b = 0.5, c = 0.3)), sc, fit$model$spec$model)
+  set.seed(1)
+  n <- 4000
+  X <- FBC:::sobol_samples(n / 2, 1L, m)
+  lev <- fit$model$spec$model$levels
+  freq <- colMeans(X[, lev$col + 0:2])
+  expect_true(all(abs(freq - c(0.2, 0.5, 0.3)) < 4 * sqrt(c(0.2, 0.5, 0.3) * 0.8 / n)))
+  expect_true(all(rowSums(X[, lev$col + 0:2]) == 1))
+  # shared outputs: every support point at the output held
+  sh <- outputs_fit("shared")
+  ms <- FBC:::sensitivity_measure(NULL, sh$model$scale, sh$model$spec$model, "rate")
+  P <- FBC:::support_points(16, 2L, ms)
+  expect_true(all(P[, sh$model$spec$model$levels$col] == 1))
+  expect_identical(ms$names, c("x", "t"))
+  # with every predecessor the nearest-neighbour algebra's mean is the
+  # dense one's, sample paths too (the same draws)
+  vec <- level_fit(algebra = "vecchia", neighbours = 40)
+  expect_identical(vec$model$algebra$name, "vecchia")
+  vec <- fit_with_draws(vec, fit$Phi, fit$chain, fit$logPost, fit$logLik)
+  for (paths in c(0, 8)) {
+    set.seed(1)
+    a <- sensitivity(fit, ndraws = 2, points = 8, paths = paths)
+    set.seed(1)
+    b <- sensitivity(vec, ndraws = 2, points = 8, paths = paths)
+    expect_abs(b$draws$simulator, a$draws$simulator, 1e-6)
+    expect_abs(b$draws$prediction, a$draws$prediction, 1e-6)
+  }
 })
