@@ -101,7 +101,8 @@
 #' every output.
 #'
 #' @param fit An `fbc` object from [calibrate()], with an emulated simulator
-#'   (for the prediction's part, one bias for all field data).
+#'   (for the prediction's part, one bias for all field data and field data
+#'   at every output).
 #' @param inputs Input distributions other than uniform over the design's
 #'   box: a named list whose names are inputs of the simulator and whose
 #'   elements are either a range `c(lower, upper)` (uniform, in the input's
@@ -189,7 +190,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
   sc <- fit$model$scale
   rows <- draw_rows(nrow(fit$Phi), ndraws)
   targets <- sensitivity_targets(fit, sampler_draws(fit, rows))
-  if (prediction) check_prediction_targets(targets, sc)
+  if (prediction) check_prediction_targets(targets)
   M <- length(rows)
   estimator <- sensitivity_estimator(fit, paths, estimator)
   sampled <- estimator == "sampling"
@@ -205,7 +206,7 @@ sensitivity <- function(fit, inputs = NULL, ndraws = 200, level = 0.9, paths = 1
     parts[[i]] <- sensitivity_target(tg, sc, measure, paths, ns, level, prediction, points, share_u)
     share_u <- parts[[i]]$share_u
   }
-  out <- combine_targets(parts, targets, sc)
+  out <- combine_targets(parts, targets)
   out$settings <- list(ndraws = M, draw_rows = rows, level = level, inputs = measure0$names,
                        role = measure0$role, measure = measure0$label, paths = paths,
                        points = points, estimator = estimator,
@@ -316,8 +317,7 @@ output_model <- function(mc, o, K, g, rf) {
     sub$length[[cl]] <- l
     at <- at + l
   }
-  noise <- if (is.null(mc$noise)) rep(1L, max(rf)) else mc$noise
-  sub$noise <- if (!is.null(mc$noise)) match(noise[rf], g)
+  if (!is.null(mc$noise)) sub$noise <- match(mc$noise[rf], g)
   if (!is.null(mc$fieldRows)) {
     fr <- mc$fieldRows[rf]
     sub$fieldRows <- match(fr, unique(fr))
@@ -327,7 +327,7 @@ output_model <- function(mc, o, K, g, rf) {
 }
 
 # The prediction's part at an output needs its field data (its noise).
-check_prediction_targets <- function(targets, sc, call = parent.frame()) {
+check_prediction_targets <- function(targets, call = parent.frame()) {
   lacking <- vapply(targets, function(tg) is.na(tg$s2E), logical(1))
   if (any(lacking)) {
     none <- vapply(targets[lacking], `[[`, "", "output")
@@ -342,7 +342,7 @@ check_prediction_targets <- function(targets, sc, call = parent.frame()) {
 
 # The parts of every output stacked, with an `output` column (and the
 # draws' arrays a fourth dimension, the output) when there are several.
-combine_targets <- function(parts, targets, sc) {
+combine_targets <- function(parts, targets) {
   if (length(parts) == 1L && is.null(targets[[1]]$output)) {
     p <- parts[[1]]
     return(list(simulator = p$simulator, prediction = p$prediction, shares = p$shares,
