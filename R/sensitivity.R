@@ -907,15 +907,15 @@ plot.fbc_sensitivity <- function(x, what = c("main", "indices"), of = c("simulat
     df$input <- factor(df$input, unique(df$input))
     if (several) df$output <- factor(df$output, outs)
     num <- df[!df$categorical, , drop = FALSE]
-    cat <- df[df$categorical, , drop = FALSE]
+    lv <- df[df$categorical, , drop = FALSE]
     g <- ggplot2::ggplot(df, ggplot2::aes(x = .data$x, y = .data$median))
     if (nrow(num)) {
       g <- g + ggplot2::geom_ribbon(data = num, ggplot2::aes(ymin = .data$lower, ymax = .data$upper),
                                     alpha = 0.3) +
         ggplot2::geom_line(data = num)
     }
-    if (nrow(cat)) {
-      g <- g + ggplot2::geom_pointrange(data = cat, ggplot2::aes(ymin = .data$lower, ymax = .data$upper))
+    if (nrow(lv)) {
+      g <- g + ggplot2::geom_pointrange(data = lv, ggplot2::aes(ymin = .data$lower, ymax = .data$upper))
     }
     g <- g + if (several) ggplot2::facet_grid(output ~ input, scales = "free") else
       ggplot2::facet_wrap(~input, scales = "free_x")
