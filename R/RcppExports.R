@@ -77,12 +77,12 @@
     .Call(`_FBC_fbc_block_estimate`, W, forget, walked)
 }
 
-.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples) {
-    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples)
+.fbc_sobol_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples, cols, probs) {
+    .Call(`_FBC_fbc_sobol`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples, cols, probs)
 }
 
-.fbc_sobol_pred_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples) {
-    .Call(`_FBC_fbc_sobol_pred`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples)
+.fbc_sobol_pred_c <- function(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples, cols, probs) {
+    .Call(`_FBC_fbc_sobol_pred`, Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples, cols, probs)
 }
 
 .fbc_sim_mean_c <- function(Xf, yf, Xs, ys, phis, nugget, model, support) {

@@ -317,8 +317,8 @@ BEGIN_RCPP
 END_RCPP
 }
 // fbc_sobol
-Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& support, const arma::mat& samples);
-RcppExport SEXP _FBC_fbc_sobol(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP supportSEXP, SEXP samplesSEXP) {
+Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& support, const arma::mat& samples, const Rcpp::IntegerVector& cols, const Rcpp::List& probs);
+RcppExport SEXP _FBC_fbc_sobol(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP supportSEXP, SEXP samplesSEXP, SEXP colsSEXP, SEXP probsSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -337,13 +337,15 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type grid(gridSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type support(supportSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type samples(samplesSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sobol(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples));
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type cols(colsSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type probs(probsSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sobol(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, support, samples, cols, probs));
     return rcpp_result_gen;
 END_RCPP
 }
 // fbc_sobol_pred
-Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& share, const arma::mat& samples);
-RcppExport SEXP _FBC_fbc_sobol_pred(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP shareSEXP, SEXP samplesSEXP) {
+Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs, const arma::vec& ys, const arma::mat& phis, double nugget, const Rcpp::List& model, const Rcpp::LogicalVector& exact, const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes, const arma::mat& weights, const arma::mat& grid, const arma::mat& share, const arma::mat& samples, const Rcpp::IntegerVector& cols, const Rcpp::List& probs);
+RcppExport SEXP _FBC_fbc_sobol_pred(SEXP XfSEXP, SEXP yfSEXP, SEXP XsSEXP, SEXP ysSEXP, SEXP phisSEXP, SEXP nuggetSEXP, SEXP modelSEXP, SEXP exactSEXP, SEXP lowerSEXP, SEXP upperSEXP, SEXP nodesSEXP, SEXP weightsSEXP, SEXP gridSEXP, SEXP shareSEXP, SEXP samplesSEXP, SEXP colsSEXP, SEXP probsSEXP) {
 BEGIN_RCPP
     Rcpp::RObject rcpp_result_gen;
     Rcpp::RNGScope rcpp_rngScope_gen;
@@ -362,7 +364,9 @@ BEGIN_RCPP
     Rcpp::traits::input_parameter< const arma::mat& >::type grid(gridSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type share(shareSEXP);
     Rcpp::traits::input_parameter< const arma::mat& >::type samples(samplesSEXP);
-    rcpp_result_gen = Rcpp::wrap(fbc_sobol_pred(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples));
+    Rcpp::traits::input_parameter< const Rcpp::IntegerVector& >::type cols(colsSEXP);
+    Rcpp::traits::input_parameter< const Rcpp::List& >::type probs(probsSEXP);
+    rcpp_result_gen = Rcpp::wrap(fbc_sobol_pred(Xf, yf, Xs, ys, phis, nugget, model, exact, lower, upper, nodes, weights, grid, share, samples, cols, probs));
     return rcpp_result_gen;
 END_RCPP
 }
@@ -441,8 +445,8 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_fbc_loglik_draws", (DL_FUNC) &_FBC_fbc_loglik_draws, 7},
     {"_FBC_fbc_loglik", (DL_FUNC) &_FBC_fbc_loglik, 7},
     {"_FBC_fbc_block_estimate", (DL_FUNC) &_FBC_fbc_block_estimate, 3},
-    {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 15},
-    {"_FBC_fbc_sobol_pred", (DL_FUNC) &_FBC_fbc_sobol_pred, 15},
+    {"_FBC_fbc_sobol", (DL_FUNC) &_FBC_fbc_sobol, 17},
+    {"_FBC_fbc_sobol_pred", (DL_FUNC) &_FBC_fbc_sobol_pred, 17},
     {"_FBC_fbc_sim_mean", (DL_FUNC) &_FBC_fbc_sim_mean, 8},
     {"_FBC_has_openmp", (DL_FUNC) &_FBC_has_openmp, 0},
     {"_FBC_vecchia_order", (DL_FUNC) &_FBC_vecchia_order, 2},

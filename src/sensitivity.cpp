@@ -18,6 +18,11 @@
 // and the Matern families (exponentials times polynomials), and otherwise
 // Gauss-Legendre (or the user's) quadrature nodes and weights, the
 // correlations at the nodes from the kernel module (kernels.cpp).
+// A categorical input f multiplies the correlation by its levels' C_f[a, b]
+// (levels.cpp): against its levels' probabilities pi it is one more factor
+// of the product, I1[j, f] = sum_l pi_l C_f[l, a_j] and I2_f[j, k] =
+// sum_l pi_l C_f[l, a_j] C_f[l, a_k]; a point mass (an output held at its
+// level) folds C_f[j, a_i] into the weights and adds no variance.
 #include "fbc.h"
 #include <functional>
 #include <numeric>
@@ -117,7 +122,11 @@ void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P, arm
       arma::vec unused;
       const arma::vec thetaB = phi.subvec(iThetaB, iThetaB + p - 1);
       const arma::vec alphaB = phi.subvec(iAlphaB, iAlphaB + p - 1);
-      biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, Wb, unused);
+      biasModelCross([&] {
+        arma::mat R = corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_);
+        level_scale(levels, phi.memptr() + iRhoB, Xu_, Xu_, R, false);
+        return R;
+      }, Wb, unused);
     }
   }
   arma::vec c = ys - K * beta / s2S;
@@ -365,37 +374,93 @@ static void sobol_variances(const arma::vec& w, const arma::mat& I1,
 }
 
 // f(X) = R(X, Z) w, R the product correlation of family kern at (th, al)
-// over X's columns: a kernel expansion at the rows of X, 512 at a time.
+// over X's columns times the levels' correlations C of the categorical
+// inputs lev (none: empty): a kernel expansion at the rows of X, 512 at a
+// time.
 static void expansion_at(int kern, const arma::mat& X, const arma::mat& Z, const arma::vec& w,
-                         const arma::vec& th, const arma::vec& al, arma::vec& out) {
+                         const arma::vec& th, const arma::vec& al,
+                         const std::vector<LevelInput>& lev, const std::vector<arma::mat>& C,
+                         arma::vec& out) {
   out.set_size(X.n_rows);
   for (arma::uword r0 = 0; r0 < X.n_rows; r0 += 512) {
     const arma::uword r1 = std::min<arma::uword>(X.n_rows, r0 + 512) - 1;
-    out.subvec(r0, r1) = corr_matrix(X.rows(r0, r1), Z, th, al, kern) * w;
+    const arma::mat Xr = X.rows(r0, r1);
+    arma::mat R = corr_matrix(Xr, Z, th, al, kern);
+    level_scale(lev, C, Xr, Z, R, false);
+    out.subvec(r0, r1) = R * w;
   }
+}
+
+// The inputs of the measure: the numeric columns `cols` (0-based, of the
+// centres), then each categorical input f of `lev` with its levels'
+// probabilities probs[f] (a point mass holds the input at one level). An
+// input's columns (swapped together by the sampling estimator).
+struct MeasureInputs {
+  std::vector<int> cols;
+  std::vector<arma::vec> probs;
+  std::vector<std::vector<arma::uword> > swap;
+  int size() const { return cols.size() + probs.size(); }
+};
+
+static MeasureInputs measure_inputs(const Rcpp::IntegerVector& cols, const Rcpp::List& probs,
+                                    const std::vector<LevelInput>& lev, int ncol) {
+  MeasureInputs mi;
+  if ((int) probs.size() != (int) lev.size())
+    Rcpp::stop("the measure needs the probabilities of %d categorical inputs", (int) lev.size());
+  for (int c : cols) {
+    if (c < 0 || c >= ncol) Rcpp::stop("input column %d out of range", c + 1);
+    mi.cols.push_back(c);
+    mi.swap.push_back(std::vector<arma::uword>(1, c));
+  }
+  for (size_t f = 0; f < lev.size(); ++f) {
+    const arma::vec pr = Rcpp::as<arma::vec>(probs[f]);
+    if ((int) pr.n_elem != lev[f].L) Rcpp::stop("categorical input %d needs %d probabilities", (int) f + 1, lev[f].L);
+    mi.probs.push_back(pr);
+    std::vector<arma::uword> s;
+    for (int a = 0; a < lev[f].ncol; ++a) s.push_back(lev[f].col + a);
+    mi.swap.push_back(s);
+  }
+  return mi;
+}
+
+// G(l, j) = C(l, a_j) for the levels a_j of the rows of Z (categorical input f).
+static arma::mat level_columns(const arma::mat& C, const arma::mat& Z, const LevelInput& f) {
+  arma::mat G(C.n_rows, Z.n_rows);
+  for (arma::uword j = 0; j < Z.n_rows; ++j) G.col(j) = C.col(level_of(Z, j, f));
+  return G;
+}
+
+// A categorical input's integrals against its levels' probabilities pi:
+// I1[j] = sum_l pi_l G(l, j), I2 = G' diag(pi) G (not computed when null).
+static void level_integrals(const arma::mat& G, const arma::vec& pi, double* I1, arma::mat* I2) {
+  arma::vec(I1, G.n_cols, false, true) = G.t() * pi;
+  if (!I2) return;
+  arma::mat Gw = G;
+  Gw.each_col() %= arma::sqrt(pi);
+  *I2 = Gw.t() * Gw;
 }
 
 // The Sobol variances of an expansion f too large for the closed form's
 // N x N integrals, at O(N D (Q + (D + 2) Nb)) per draw: f0 = E f in closed
 // form (from I1, as in sobol_variances()); each first-order variance
 //   V_k = int (E[f | z_k = t] - f0)^2 dmu_k(t)
-// by input k's quadrature nodes and weights (main(k, t, out): the main
-// effect at t); the variance and the totals by sampling (Saltelli et al.
+// by input k's quadrature nodes and weights, or its levels' probabilities
+// (first(k)); the variance and the totals by sampling (Saltelli et al.
 // 2010): with A and B (the first and last Nb rows of AB) independent
-// samples of the measure, A_B^k the rows of A with column k from B and
-// g = f - f0,
+// samples of the measure, A_B^k the rows of A with input k's columns
+// (swap[k]) from B and g = f - f0,
 //   V    = mean of g^2 over the 2 Nb points of A and B,
 //   VT_k = mean of (g(A) - g(A_B^k))^2 / 2              (Jansen 1999);
 // sd1[k], sdT[k] the sampling's standard errors of V_k / V (through V) and
 // of VT_k / V (the Jansen terms' sd over sqrt(Nb), over V).
 static void sobol_sampled(const std::function<void(const arma::mat&, arma::vec&)>& f,
-                          const std::function<void(int, const arma::vec&, arma::vec&)>& main,
-                          double f0, const arma::mat& nodes, const arma::mat& weights,
-                          const arma::mat& AB, int D, double& V, double* V1, double* VT,
+                          const std::function<double(int)>& first, double f0,
+                          const std::vector<std::vector<arma::uword> >& swap,
+                          const arma::mat& AB, double& V, double* V1, double* VT,
                           double* sd1, double* sdT) {
   const arma::uword Nb = AB.n_rows / 2;
   const arma::mat A = AB.rows(0, Nb - 1), B = AB.rows(Nb, 2 * Nb - 1);
-  arma::vec fA, fB, fk, me;
+  arma::vec fA, fB, fk;
   f(A, fA);
   f(B, fB);
   fA -= f0;
@@ -404,13 +469,12 @@ static void sobol_sampled(const std::function<void(const arma::mat&, arma::vec&)
   V = arma::mean(g2);
   const double Vs = std::max(V, 1e-300), sdV = arma::stddev(g2) / std::sqrt(2.0 * Nb);
   arma::mat Ak = A;
-  for (int k = 0; k < D; ++k) {
-    main(k, nodes.col(k), me);
-    V1[k] = arma::dot(weights.col(k), arma::square(me - f0));
+  for (size_t k = 0; k < swap.size(); ++k) {
+    V1[k] = first(k);
     sd1[k] = V1[k] / Vs * sdV / Vs;
-    Ak.col(k) = B.col(k);
+    for (arma::uword c : swap[k]) Ak.col(c) = B.col(c);
     f(Ak, fk);
-    Ak.col(k) = A.col(k);
+    for (arma::uword c : swap[k]) Ak.col(c) = A.col(c);
     const arma::vec tT = 0.5 * arma::square(fA - (fk - f0));
     VT[k] = arma::mean(tT);
     sdT[k] = arma::stddev(tT) / std::sqrt((double) Nb) / Vs;
@@ -427,23 +491,38 @@ static int sample_count(const arma::mat& samples, int M, int D) {
   return Nb;
 }
 
+// The rows of the main effects: G grid values per numeric input, one per
+// level of a categorical input.
+static int main_rows(const MeasureInputs& mi, int G) {
+  int r = G * mi.cols.size();
+  for (const arma::vec& pr : mi.probs) r += pr.n_elem;
+  return r;
+}
+
 // Per draw (rows of phis): the Sobol variances of the simulator's posterior
-// mean over its D = p + q inputs, and its main effects at the grid values;
-// with support points (S rows per draw: rows d S .. d S + S - 1 of
-// `support`, scaled) those of a conditional sample path through them.
-// exact[k]: input k's measure is uniform on [lower[k], upper[k]] (closed
-// form where the family allows); otherwise nodes[, k] and weights[, k]
-// (weights summing to one). grid: G x D values (scaled) for the main effects.
-// samples: none (0 rows) for the closed form, else 2 Nb rows per draw (A
-// then B, sobol_sampled()), and sd1, sdT the sampling errors; the main
-// effects need the one-dimensional integrals I1 alone either way.
+// mean over the inputs of the measure (cols, probs: MeasureInputs; a
+// categorical input's integrals are the probability-weighted sums over its
+// levels of the level correlation C[l, a_j]), and its main effects at the
+// grid values (and at each level); with support points (S rows per draw:
+// rows d S .. d S + S - 1 of `support`, scaled) those of a conditional
+// sample path through them. exact[k]: column k's measure is uniform on
+// [lower[k], upper[k]] (closed form where the family allows); otherwise
+// nodes[, k] and weights[, k] (weights summing to one). grid: G x D values
+// (scaled) for the main effects. samples: none (0 rows) for the closed
+// form, else 2 Nb rows per draw (A then B, sobol_sampled(); a categorical
+// input's indicator columns hold the levels drawn), and sd1, sdT the
+// sampling errors; the main effects need the one-dimensional integrals I1
+// alone either way. Columns of neither the numeric inputs nor the
+// categorical ones have correlation parameter 0 (an output's indicators
+// under independent outputs): they add nothing.
 // [[Rcpp::export(.fbc_sobol_c)]]
 Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                      const arma::vec& ys, const arma::mat& phis, double nugget,
                      const Rcpp::List& model, const Rcpp::LogicalVector& exact,
                      const arma::vec& lower, const arma::vec& upper, const arma::mat& nodes,
                      const arma::mat& weights, const arma::mat& grid,
-                     const arma::mat& support, const arma::mat& samples) {
+                     const arma::mat& support, const arma::mat& samples,
+                     const Rcpp::IntegerVector& cols, const Rcpp::List& probs) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
   if (!sp) Rcpp::stop("the Sobol indices need one simulator GP");
@@ -453,12 +532,14 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   if ((int) exact.size() != D || (int) nodes.n_cols != D || (int) weights.n_cols != D ||
       (int) grid.n_cols != D || (int) lower.n_elem != D || (int) upper.n_elem != D)
     Rcpp::stop("the measure must have %d inputs", D);
+  const MeasureInputs mi = measure_inputs(cols, probs, post.levels, D);
+  const int nd = mi.size(), nc = mi.cols.size();
   arma::vec V(M);
-  arma::mat V1(D, M), VT(D, M), sd1(D, M, arma::fill::zeros), sdT(D, M, arma::fill::zeros);
-  arma::mat main(G * D, M);
+  arma::mat V1(nd, M), VT(nd, M), sd1(nd, M, arma::fill::zeros), sdT(nd, M, arma::fill::zeros);
+  arma::mat main(main_rows(mi, G), M);
   arma::mat Z, I1, A, Rg;
   arma::vec w;
-  std::vector<arma::mat> I2(D);
+  std::vector<arma::mat> I2(nd), C, Gl(mi.probs.size());
   const int S = support.n_rows / std::max(M, 1);
   if (S > 0 && ((int) support.n_rows != S * M || (int) support.n_cols != D))
     Rcpp::stop("the support points must be %d draws x S rows and %d columns", M, D);
@@ -467,34 +548,57 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
   for_each_draw(post, phis, [&](arma::uword d) {
     if (S > 0) Pd = support.rows(d * S, d * S + S - 1);
     sp->simMean(Z, w, S > 0 ? &Pd : nullptr);
-    I1.set_size(Z.n_rows, D);
-    for (int k = 0; k < D; ++k) {
-      integrals_1d(kern, post.phi[post.iThetaS + k], post.phi[post.iAlphaS + k], Z.col(k),
-                   exact[k], lower[k], upper[k], nodes.col(k), weights.col(k), I1.colptr(k),
+    if (!post.levels.empty()) level_corr(post.levels, post.phi.memptr() + post.iRhoS, C);
+    I1.set_size(Z.n_rows, nd);
+    for (int k = 0; k < nc; ++k) {
+      const int c = mi.cols[k];
+      integrals_1d(kern, post.phi[post.iThetaS + c], post.phi[post.iAlphaS + c], Z.col(c),
+                   exact[c], lower[c], upper[c], nodes.col(c), weights.col(c), I1.colptr(k),
                    Nb > 0 ? nullptr : &I2[k]);
     }
-    // E[f | z_k = t] = sum_j A_jk r_k(t - Z_jk) at the values t
+    for (size_t f = 0; f < mi.probs.size(); ++f) {
+      Gl[f] = level_columns(C[f], Z, post.levels[f]);
+      level_integrals(Gl[f], mi.probs[f], I1.colptr(nc + f), Nb > 0 ? nullptr : &I2[nc + f]);
+    }
+    // E[f | z_k = t] = sum_j A_jk r_k(t - Z_jk) at the values t; at each
+    // level l of a categorical input, sum_j A_jk C[l, a_j]
     auto effect = [&](int k, const arma::vec& t, arma::vec& out) {
-      const double theta = post.phi[post.iThetaS + k], alpha = post.phi[post.iAlphaS + k];
+      if (k >= nc) { out = Gl[k - nc] * A.col(k); return; }
+      const int c = mi.cols[k];
+      const double theta = post.phi[post.iThetaS + c], alpha = post.phi[post.iAlphaS + c];
       Rg.set_size(t.n_elem, Z.n_rows);
-      kernel_corr(kern, arma::mat(t), arma::mat(Z.col(k)), 1, &theta, &alpha, Rg, false);
+      kernel_corr(kern, arma::mat(t), arma::mat(Z.col(c)), 1, &theta, &alpha, Rg, false);
       out = Rg * A.col(k);
     };
     if (Nb > 0) {
       const arma::vec th = post.phi.subvec(post.iThetaS, post.iThetaS + D - 1);
       const arma::vec al = post.phi.subvec(post.iAlphaS, post.iAlphaS + D - 1);
-      main_weights(w, I1, D, A);
-      sobol_sampled([&](const arma::mat& X, arma::vec& f) { expansion_at(kern, X, Z, w, th, al, f); },
-                    effect, arma::dot(w, arma::prod(I1, 1)), nodes, weights,
-                    samples.rows(2 * Nb * d, 2 * Nb * (d + 1) - 1), D, V[d], V1.colptr(d),
-                    VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
+      const double f0 = arma::dot(w, arma::prod(I1, 1));
+      main_weights(w, I1, nd, A);
+      sobol_sampled([&](const arma::mat& X, arma::vec& f) {
+                      expansion_at(kern, X, Z, w, th, al, post.levels, C, f);
+                    },
+                    [&](int k) {
+                      arma::vec me;
+                      if (k >= nc) {
+                        effect(k, arma::vec(), me);
+                        return arma::dot(mi.probs[k - nc], arma::square(me - f0));
+                      }
+                      const int c = mi.cols[k];
+                      effect(k, nodes.col(c), me);
+                      return arma::dot(weights.col(c), arma::square(me - f0));
+                    },
+                    f0, mi.swap, samples.rows(2 * Nb * d, 2 * Nb * (d + 1) - 1), V[d],
+                    V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
     } else {
-      sobol_variances(w, I1, I2, D, V[d], V1.colptr(d), VT.colptr(d), A);
+      sobol_variances(w, I1, I2, nd, V[d], V1.colptr(d), VT.colptr(d), A);
     }
     arma::vec me;
-    for (int k = 0; k < D; ++k) {
-      effect(k, grid.col(k), me);
-      main.col(d).subvec(k * G, (k + 1) * G - 1) = me;
+    int at = 0;
+    for (int k = 0; k < nd; ++k) {
+      effect(k, k < nc ? arma::vec(grid.col(mi.cols[k])) : arma::vec(), me);
+      main.col(d).subvec(at, at + me.n_elem - 1) = me;
+      at += me.n_elem;
     }
     return true;
   });
@@ -504,19 +608,22 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
 }
 
 // The calibrated prediction's mean zeta(x) = E[eta(x, kappa) + delta(x) | y]
-// per draw over the p experimental inputs: muB plus two kernel expansions,
-// the simulator's (simMean(): centres Z, weights w times the correlation
-// prod_{k >= p} rS(kappa_k - Z_jk) of their calibration coordinates) and
-// the bias's (centres Xu, weights wb, the bias family and parameters). Its
-// Sobol variances in closed form as the simulator's: per input, the blocks
-// of I2 within each expansion in closed form (integrals_1d()), the cross
-// block by the quadrature nodes (r_S(t - c_j) r_B(t - u_l) against the
-// measure). Measure: the first p columns of exact, lower, upper, nodes,
-// weights; grid: G x p values for the main effects. With `share` points
-// (b x p) also predict()'s conditional means and variances there (types
-// mean, simulator and, with a bias, bias) for the variance shares. samples:
-// as in fbc_sobol() (p columns), the variances by sampling the two
-// expansions' sum instead of their N x N integrals.
+// per draw over the experimental inputs of the measure (cols, probs as in
+// fbc_sobol(); every categorical input is experimental): muB plus two
+// kernel expansions, the simulator's (simMean(): centres Z, weights w times
+// the correlation prod_{k >= p} rS(kappa_k - Z_jk) of their calibration
+// coordinates) and the bias's (centres Xu, weights wb, the bias family and
+// parameters, its levels' correlations rhoB). Its Sobol variances in closed
+// form as the simulator's: per input, the blocks of I2 within each
+// expansion in closed form (integrals_1d()), the cross block by the
+// quadrature nodes (r_S(t - c_j) r_B(t - u_l) against the measure), or for
+// a categorical input the probability-weighted sums over its levels of
+// C_S[l, a_j] C_B[l, b_l]. Measure: the first p columns of exact, lower,
+// upper, nodes, weights; grid: G x p values for the main effects. With
+// `share` points (b x p) also predict()'s conditional means and variances
+// there (types mean, simulator and, with a bias, bias) for the variance
+// shares. samples: as in fbc_sobol() (p columns), the variances by
+// sampling the two expansions' sum instead of their N x N integrals.
 // [[Rcpp::export(.fbc_sobol_pred_c)]]
 Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::mat& Xs,
                           const arma::vec& ys, const arma::mat& phis, double nugget,
@@ -524,7 +631,8 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
                           const arma::vec& lower, const arma::vec& upper,
                           const arma::mat& nodes, const arma::mat& weights,
                           const arma::mat& grid, const arma::mat& share,
-                          const arma::mat& samples) {
+                          const arma::mat& samples, const Rcpp::IntegerVector& cols,
+                          const Rcpp::List& probs) {
   std::unique_ptr<Posterior> pp = make_posterior(Xf, yf, Xs, ys, nugget, model);
   SchurPosterior* sp = dynamic_cast<SchurPosterior*>(pp.get());
   if (!sp) Rcpp::stop("the Sobol indices need one simulator GP");
@@ -534,18 +642,27 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
   const int b = share.n_rows;
   if (p < 1) Rcpp::stop("the prediction needs an experimental input");
   if ((int) grid.n_cols != p || (int) share.n_cols != p) Rcpp::stop("grid and share need %d columns", p);
+  const MeasureInputs mi = measure_inputs(cols, probs, post.levels, p);
+  const int nd = mi.size(), nc = mi.cols.size(), F = mi.probs.size();
   const int ns = sample_count(samples, M, p);
   const bool sampled = ns > 0;
   arma::vec V(M);
-  arma::mat V1(p, M), VT(p, M), main(G * p, M);
-  arma::mat sd1(p, M, arma::fill::zeros), sdT(p, M, arma::fill::zeros);
+  arma::mat V1(nd, M), VT(nd, M), main(main_rows(mi, G), M);
+  arma::mat sd1(nd, M, arma::fill::zeros), sdT(nd, M, arma::fill::zeros);
   arma::mat mean(b, M), vmean(b, M), vsim(b, M), vbias(b, M, arma::fill::zeros);
   arma::mat Z, I1, A, Rg, Rs, Rb;
   arma::vec w, wb, ws;
-  std::vector<arma::mat> I2(p);
+  std::vector<arma::mat> I2(nd), CS, CB, Gl(F);
   for_each_draw(post, phis, [&](arma::uword d) {
     sp->simMean(Z, w, nullptr, &wb);
     const arma::uword Ns = Z.n_rows, Nb = wb.n_elem, N = Ns + Nb;
+    const arma::mat Zx = Z.cols(0, p - 1);
+    arma::mat Xu;
+    if (Nb > 0) Xu = Zx.rows(Ns - Nb, Ns - 1);  // the distinct field rows
+    if (F > 0) {
+      level_corr(post.levels, post.phi.memptr() + post.iRhoS, CS);
+      if (Nb > 0) level_corr(post.levels, post.phi.memptr() + post.iRhoB, CB);
+    }
     // the simulator's weights times its calibration coordinates' correlations
     ws = w;
     for (int k = p; k < D; ++k) {
@@ -557,78 +674,98 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
       ws %= r.col(0);
     }
     const arma::vec wall = arma::join_cols(ws, wb);
-    I1.set_size(N, p);
+    I1.set_size(N, nd);
     arma::vec i1b;
     arma::mat i2b;
-    for (int k = 0; k < p; ++k) {
-      const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
+    for (int k = 0; k < nc; ++k) {
+      const int c = mi.cols[k];
+      const double tS = post.phi[post.iThetaS + c], aS = post.phi[post.iAlphaS + c];
       if (!sampled) I2[k].set_size(N, N);
       arma::mat i2s;
       arma::vec i1s(Ns);
-      integrals_1d(kS, tS, aS, Z.col(k), exact[k], lower[k], upper[k], nodes.col(k),
-                   weights.col(k), i1s.memptr(), sampled ? nullptr : &i2s);
+      integrals_1d(kS, tS, aS, Z.col(c), exact[c], lower[c], upper[c], nodes.col(c),
+                   weights.col(c), i1s.memptr(), sampled ? nullptr : &i2s);
       I1.col(k).head(Ns) = i1s;
       if (!sampled) I2[k].submat(0, 0, Ns - 1, Ns - 1) = i2s;
       if (Nb > 0) {
-        const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
-        const arma::vec u = Z.col(k).subvec(Ns - Nb, Ns - 1);  // the distinct field rows
+        const double tB = post.phi[post.iThetaB + c], aB = post.phi[post.iAlphaB + c];
+        const arma::vec u = Xu.col(c);
         i1b.set_size(Nb);
-        integrals_1d(kB, tB, aB, u, exact[k], lower[k], upper[k], nodes.col(k), weights.col(k),
+        integrals_1d(kB, tB, aB, u, exact[c], lower[c], upper[c], nodes.col(c), weights.col(c),
                      i1b.memptr(), sampled ? nullptr : &i2b);
         I1.col(k).tail(Nb) = i1b;
         if (sampled) continue;
         I2[k].submat(Ns, Ns, N - 1, N - 1) = i2b;
         Rs.set_size(Ns, nodes.n_rows);
         Rb.set_size(Nb, nodes.n_rows);
-        kernel_corr(kS, arma::mat(Z.col(k)), arma::mat(nodes.col(k)), 1, &tS, &aS, Rs, false);
-        kernel_corr(kB, arma::mat(u), arma::mat(nodes.col(k)), 1, &tB, &aB, Rb, false);
-        Rs.each_row() %= weights.col(k).t();
+        kernel_corr(kS, arma::mat(Z.col(c)), arma::mat(nodes.col(c)), 1, &tS, &aS, Rs, false);
+        kernel_corr(kB, arma::mat(u), arma::mat(nodes.col(c)), 1, &tB, &aB, Rb, false);
+        Rs.each_row() %= weights.col(c).t();
         const arma::mat X = Rs * Rb.t();
         I2[k].submat(0, Ns, Ns - 1, N - 1) = X;
         I2[k].submat(Ns, 0, N - 1, Ns - 1) = X.t();
       }
     }
-    // E[zeta - muB | x_k = t]: the two expansions' main effects at the values t
+    for (int f = 0; f < F; ++f) {
+      Gl[f] = level_columns(CS[f], Zx, post.levels[f]);
+      if (Nb > 0) Gl[f] = arma::join_rows(Gl[f], level_columns(CB[f], Xu, post.levels[f]));
+      level_integrals(Gl[f], mi.probs[f], I1.colptr(nc + f), sampled ? nullptr : &I2[nc + f]);
+    }
+    // E[zeta - muB | x_k = t]: the two expansions' main effects at the
+    // values t (at each level of a categorical input)
     auto effect = [&](int k, const arma::vec& t, arma::vec& out) {
-      const double tS = post.phi[post.iThetaS + k], aS = post.phi[post.iAlphaS + k];
+      if (k >= nc) { out = Gl[k - nc] * A.col(k); return; }
+      const int c = mi.cols[k];
+      const double tS = post.phi[post.iThetaS + c], aS = post.phi[post.iAlphaS + c];
       Rg.set_size(t.n_elem, Ns);
-      kernel_corr(kS, arma::mat(t), arma::mat(Z.col(k)), 1, &tS, &aS, Rg, false);
+      kernel_corr(kS, arma::mat(t), arma::mat(Z.col(c)), 1, &tS, &aS, Rg, false);
       out = Rg * A.col(k).head(Ns);
       if (Nb > 0) {
-        const double tB = post.phi[post.iThetaB + k], aB = post.phi[post.iAlphaB + k];
+        const double tB = post.phi[post.iThetaB + c], aB = post.phi[post.iAlphaB + c];
         Rg.set_size(t.n_elem, Nb);
-        kernel_corr(kB, arma::mat(t), arma::mat(Z.col(k).subvec(Ns - Nb, Ns - 1)), 1, &tB, &aB,
-                    Rg, false);
+        kernel_corr(kB, arma::mat(t), arma::mat(Xu.col(c)), 1, &tB, &aB, Rg, false);
         out += Rg * A.col(k).tail(Nb);
       }
     };
     if (sampled) {
       const arma::vec thS = post.phi.subvec(post.iThetaS, post.iThetaS + p - 1);
       const arma::vec alS = post.phi.subvec(post.iAlphaS, post.iAlphaS + p - 1);
-      const arma::mat Zx = Z.cols(0, p - 1);
       arma::vec thB, alB;
-      arma::mat Xu;
       if (Nb > 0) {
         thB = post.phi.subvec(post.iThetaB, post.iThetaB + p - 1);
         alB = post.phi.subvec(post.iAlphaB, post.iAlphaB + p - 1);
-        Xu = Zx.rows(Ns - Nb, Ns - 1);
       }
       arma::vec fb;
-      main_weights(wall, I1, p, A);
+      const double f0 = arma::dot(wall, arma::prod(I1, 1));
+      main_weights(wall, I1, nd, A);
       sobol_sampled([&](const arma::mat& X, arma::vec& f) {
-                      expansion_at(kS, X, Zx, ws, thS, alS, f);
-                      if (Nb > 0) { expansion_at(kB, X, Xu, wb, thB, alB, fb); f += fb; }
+                      expansion_at(kS, X, Zx, ws, thS, alS, post.levels, CS, f);
+                      if (Nb > 0) {
+                        expansion_at(kB, X, Xu, wb, thB, alB, post.levels, CB, fb);
+                        f += fb;
+                      }
                     },
-                    effect, arma::dot(wall, arma::prod(I1, 1)), nodes.cols(0, p - 1),
-                    weights.cols(0, p - 1), samples.rows(2 * ns * d, 2 * ns * (d + 1) - 1), p,
-                    V[d], V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
+                    [&](int k) {
+                      arma::vec me;
+                      if (k >= nc) {
+                        effect(k, arma::vec(), me);
+                        return arma::dot(mi.probs[k - nc], arma::square(me - f0));
+                      }
+                      const int c = mi.cols[k];
+                      effect(k, nodes.col(c), me);
+                      return arma::dot(weights.col(c), arma::square(me - f0));
+                    },
+                    f0, mi.swap, samples.rows(2 * ns * d, 2 * ns * (d + 1) - 1), V[d],
+                    V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
     } else {
-      sobol_variances(wall, I1, I2, p, V[d], V1.colptr(d), VT.colptr(d), A);
+      sobol_variances(wall, I1, I2, nd, V[d], V1.colptr(d), VT.colptr(d), A);
     }
     arma::vec me;
-    for (int k = 0; k < p; ++k) {
-      effect(k, grid.col(k), me);
-      main.col(d).subvec(k * G, (k + 1) * G - 1) = me + (post.biasMean ? post.phi[post.iMuB] : 0.0);
+    int at = 0;
+    for (int k = 0; k < nd; ++k) {
+      effect(k, k < nc ? arma::vec(grid.col(mi.cols[k])) : arma::vec(), me);
+      main.col(d).subvec(at, at + me.n_elem - 1) = me + (post.biasMean ? post.phi[post.iMuB] : 0.0);
+      at += me.n_elem;
     }
     if (b > 0) {
       post.condition(share, PT_MEAN, mean.colptr(d), vmean.colptr(d));

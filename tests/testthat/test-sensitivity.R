@@ -470,3 +470,315 @@ test_that("a draw's sample path has the emulator's conditional mean and covarian
                        support = matrix(0, 0, 3))[[1]]
   expect_equal(drop(corr(P, m0$Z) %*% m0$w), mu, tolerance = 1e-8)
 })
+
+# Categorical inputs and several outputs. The references: the emulator's
+# posterior mean at a draw phi written from the dense joint covariance with
+# the levels' correlations (dense_cov()), a sum over its centres of a
+# product of one factor per input of the measure (a numeric input's
+# correlation, a categorical input's level correlation C[l, a_n]) times the
+# factors of the levels held (an output), integrated on a tensor grid:
+# composite Gauss-Legendre rules split at the centres for a numeric input,
+# the levels with their probabilities for a categorical one.
+
+# One numeric experimental input x, one categorical input c (3 levels) and
+# a calibration input t; a short chain (the draws differ).
+level_fit <- function(seed = 3, m = 30, kernel = "matern52", discrepancy = "gp", ...) {
+  set.seed(seed)
+  lev <- c("a", "b", "c")
+  x <- runif(m); t <- runif(m); cc <- factor(sample(lev, m, TRUE), lev)
+  eff <- c(a = 0, b = 1, c = -0.5)
+  f <- function(x, cc, t) sin(3 * x) + eff[as.character(cc)] * (1 + x) + t^2
+  sim <- data.frame(y = f(x, cc, t), x = x, c = cc, t = t)
+  xf <- runif(9); cf <- factor(rep(lev, 3), lev)
+  field <- data.frame(y = f(xf, cf, 0.4) + rnorm(9, 0, 0.05), x = xf, c = cf)
+  suppressWarnings(calibrate(sim, field, nMCMC = 40, nBurn = 20, nChains = 1, converge = FALSE,
+                             kernelS = kernel, kernelB = kernel, discrepancy = discrepancy, ...),
+                   classes = "fbc_extrapolation")
+}
+
+# The prediction's per-draw indices over x and the categorical c (uniform
+# over its levels) from predict()'s per-draw means on a tensor grid.
+expect_level_prediction <- function(fit, s) {
+  d <- fit$model$data
+  sc <- fit$model$scale
+  r <- composite_rule(c(d$Xs[, 1], d$Xf[, 1]))
+  u <- sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * r$x
+  nd <- expand.grid(x = u, c = factor(c("a", "b", "c"), c("a", "b", "c")))
+  pr <- predict(fit, nd, type = "mean", ndraws = 2, draws = TRUE)$draws
+  for (i in 1:2) {
+    f <- matrix(pr[, i], length(u))
+    w <- r$w %o% rep(1 / 3, 3)
+    f0 <- sum(w * f)
+    V <- sum(w * f^2) - f0^2
+    V1 <- c(sum(r$w * drop(f %*% rep(1 / 3, 3))^2), sum(rep(1 / 3, 3) * drop(r$w %*% f)^2)) - f0^2
+    ref <- c(V1 / V, 1 - rev(V1) / V)
+    expect_abs(as.vector(s$draws$prediction[i, , ]), ref, 1e-6)
+  }
+}
+
+# Two outputs sharing the rate t (two_outputs()), shared or independent.
+outputs_fit <- function(outputs, m = 16, kernel = "matern52") {
+  tw <- two_outputs(m = m)
+  set.seed(4)
+  suppressWarnings(calibrate(tw$sim, tw$field, output = "out", outputs = outputs, nMCMC = 40,
+                             nBurn = 20, nChains = 1, converge = FALSE, kernelS = kernel,
+                             kernelB = kernel), classes = "fbc_extrapolation")
+}
+
+# The codes (1-based levels) of the rows of X for categorical input f of
+# `levels` (list(col, ncol, L)).
+level_codes <- function(X, levels, f) {
+  cols <- levels$col[f] + seq_len(levels$ncol[f]) - 1L
+  if (length(cols) == 1L) 1L + (X[, cols] > 0.5) else max.col(X[, cols, drop = FALSE], "first")
+}
+
+# The emulator's mean at phi on data d as weights a and centres X (all
+# columns), with th the parameters by class.
+plain_level_mean <- function(d, phi, nugget, kern, levels, noise, G) {
+  p <- ncol(d$Xf); q <- ncol(d$Xs) - p; n <- nrow(d$Xf)
+  th <- unpack_phi(phi, p, q, "gp", G, FBC:::level_count(levels))
+  C <- dense_cov(d$Xf, d$Xs, phi, nugget, kern, kern, "gp", noise, levels)
+  list(a = th$sigma2S * solve(C, c(d$yf - th$muB, d$ys)),
+       X = rbind(cbind(d$Xf, matrix(th$kappa, n, q, byrow = TRUE)), d$Xs), th = th)
+}
+
+# First-order and total indices of the mean over the inputs `num` (numeric
+# columns) and the categorical inputs `cat` (indices into levels, uniform
+# over their levels), the categorical inputs `held` at the levels `at`.
+plain_level_sobol <- function(mp, kern, levels, num, cat = integer(), held = integer(),
+                              at = integer()) {
+  X <- mp$X
+  th <- mp$th
+  Cs <- list()
+  off <- 0
+  for (f in seq_along(levels$L)) {
+    L <- levels$L[f]
+    Cs[[f]] <- level_corr_plain(L, th$rhoS[off + seq_len(L * (L - 1) / 2)])
+    off <- off + L * (L - 1) / 2
+  }
+  a <- mp$a
+  for (i in seq_along(held)) a <- a * Cs[[held[i]]][at[i], level_codes(X, levels, held[i])]
+  Fm <- list(); w <- list()
+  for (k in num) {
+    r <- composite_rule(X[, k])
+    Fm[[length(Fm) + 1]] <- dense_corr(r$x, X[, k], th$thetaS[k], th$alphaS[k], kern)
+    w[[length(w) + 1]] <- r$w
+  }
+  for (f in cat) {
+    Fm[[length(Fm) + 1]] <- Cs[[f]][, level_codes(X, levels, f), drop = FALSE]
+    w[[length(w) + 1]] <- rep(1 / levels$L[f], levels$L[f])
+  }
+  J <- length(Fm)
+  G <- vapply(Fm, nrow, 1L)
+  f <- array(0, G)
+  if (J == 2) f[] <- Fm[[1]] %*% (a * t(Fm[[2]]))
+  if (J == 3) for (i3 in seq_len(G[3])) f[, , i3] <- Fm[[1]] %*% (a * Fm[[3]][i3, ] * t(Fm[[2]]))
+  W <- Reduce(`%o%`, w)
+  f0 <- sum(W * f)
+  V <- sum(W * f^2) - f0^2
+  V1 <- VT <- numeric(J)
+  for (j in seq_len(J)) {
+    e1 <- apply(W * f, j, sum) / w[[j]]
+    V1[j] <- sum(w[[j]] * e1^2) - f0^2
+    wk <- apply(W, seq_len(J)[-j], sum)
+    ek <- apply(W * f, seq_len(J)[-j], sum) / wk
+    VT[j] <- V - (sum(wk * ek^2) - f0^2)
+  }
+  list(S1 = V1 / V, ST = VT / V)
+}
+
+test_that("a categorical input's closed-form indices are those of the emulator's mean summed over its levels", {
+  fit <- level_fit()
+  mc <- fit$model$spec$model
+  d <- fit$model$data
+  expect_identical(mc$levels$ncol, 3L)
+  s <- sensitivity(fit, ndraws = 2, paths = 0, points = 8)
+  expect_identical(s$settings$inputs, c("x", "c", "t"))
+  expect_identical(unname(s$settings$measure[2]), "uniform over its levels")
+  expect_identical(dimnames(s$draws$simulator)[[2]], c("x", "c", "t"))
+  phis <- FBC:::sampler_draws(fit, s$settings$draw_rows)
+  p <- ncol(d$Xf)
+  for (i in 1:2) {
+    mp <- plain_level_mean(d, phis[i, ], fit$settings$nugget, "matern52", mc$levels, NULL, 1L)
+    # x, then c, then t (the calibration input, column p + 1)
+    ref <- plain_level_sobol(mp, "matern52", mc$levels, num = c(1, p + 1), cat = 1)
+    o <- c(1, 3, 2)
+    expect_abs(unname(s$draws$simulator[i, , "first"]), ref$S1[o], 1e-6)
+    expect_abs(unname(s$draws$simulator[i, , "total"]), ref$ST[o], 1e-6)
+  }
+  expect_gt(min(s$simulator$median[s$simulator$input == "c"]), 0.3)
+  # the main effect at each level: E[mu | c = l]
+  expect_identical(s$main$simulator$c$level, c("a", "b", "c"))
+  expect_identical(s$main$simulator$c$x, 1:3)
+  # the prediction's indices: predict()'s per-draw means on a tensor grid,
+  # with the KOH bias and the S-GaSP one (its weights carry the levels too)
+  expect_level_prediction(fit, s)
+  sg <- level_fit(discrepancy = "sgasp")
+  expect_level_prediction(sg, sensitivity(sg, ndraws = 2, paths = 0, points = 8))
+  # level probabilities given: a point mass makes the input's indices 0
+  s1 <- sensitivity(fit, ndraws = 2, paths = 0, prediction = FALSE,
+                    inputs = list(c = c(b = 1)))
+  expect_abs(s1$draws$simulator[, "c", ], rep(0, 4), 1e-9)
+  expect_identical(unname(s1$settings$measure[2]), "the level probabilities given")
+  pw <- c(0.2, 0.5, 0.3)
+  s2 <- sensitivity(fit, ndraws = 2, paths = 0, prediction = FALSE, inputs = list(c = pw))
+  s3 <- sensitivity(fit, ndraws = 2, paths = 0, prediction = FALSE,
+                    inputs = list(c = c(c = 0.3, a = 0.2, b = 0.5)))
+  expect_identical(s2$draws, s3$draws)
+})
+
+test_that("shared outputs: the indices at each output are those of the emulator's mean with the output held there", {
+  fit <- outputs_fit("shared")
+  mc <- fit$model$spec$model
+  d <- fit$model$data
+  s <- sensitivity(fit, ndraws = 2, paths = 0, points = 8)
+  expect_identical(dimnames(s$draws$simulator)[[4]], c("conc", "rate"))
+  expect_identical(s$simulator$output, rep(c("conc", "rate"), each = 4))
+  expect_identical(unique(s$simulator$input), c("x", "t"))
+  phis <- FBC:::sampler_draws(fit, s$settings$draw_rows)
+  p <- ncol(d$Xf)
+  for (i in 1:2) {
+    mp <- plain_level_mean(d, phis[i, ], fit$settings$nugget, "matern52", mc$levels, mc$noise, 2L)
+    for (j in 1:2) {
+      ref <- plain_level_sobol(mp, "matern52", mc$levels, num = c(1, p + 1), held = 1, at = j)
+      expect_abs(unname(s$draws$simulator[i, , "first", j]), ref$S1, 1e-6)
+      expect_abs(unname(s$draws$simulator[i, , "total", j]), ref$ST, 1e-6)
+    }
+  }
+  # the two outputs' indices differ (the decay and the linear response)
+  expect_gt(max(abs(s$draws$simulator[, , , 1] - s$draws$simulator[, , , 2])), 0.01)
+  # the shares sum to one at each output
+  expect_identical(s$shares$output, rep(c("conc", "rate"), each = 4))
+  for (o in c("conc", "rate")) expect_equal(sum(s$shares$share[s$shares$output == o]), 1, tolerance = 1e-12)
+  # the main effects in each output's units
+  sc <- fit$model$scale
+  me <- s$main$simulator$x
+  expect_identical(unique(me$output), c("conc", "rate"))
+  expect_gt(abs(mean(me$median[me$output == "conc"]) - mean(me$median[me$output == "rate"])), 0.1)
+})
+
+test_that("independent outputs: the indices at each output are those of its own GP's mean", {
+  fit <- outputs_fit("independent")
+  mc <- fit$model$spec$model
+  d <- fit$model$data
+  p <- ncol(d$Xf); q <- ncol(d$Xs) - p
+  s <- sensitivity(fit, ndraws = 2, paths = 0, points = 8)
+  phis <- FBC:::sampler_draws(fit, s$settings$draw_rows)
+  idx <- FBC:::param_indices(p, q, "gp", 2L, outputs = 2L)
+  for (o in 1:2) {
+    rf <- which(d$outF == o); rs <- which(d$outS == o)
+    g <- sort(unique(mc$noise[rf]))
+    do <- list(Xf = d$Xf[rf, , drop = FALSE], yf = d$yf[rf], Xs = d$Xs[rs, , drop = FALSE],
+               ys = d$ys[rs])
+    # output o's parameters in the layout of one output
+    one <- FBC:::param_indices(p, q, "gp", length(g))
+    cols <- unlist(lapply(names(one), function(cl) {
+      j <- idx[[cl]]
+      if (cl == "kappa") j else if (cl == "sigma2E") j[g] else
+        j[(o - 1) * length(one[[cl]]) + seq_along(one[[cl]])]
+    }))
+    for (i in 1:2) {
+      mp <- plain_level_mean(do, phis[i, cols], fit$settings$nugget, "matern52", NULL,
+                             match(mc$noise[rf], g), length(g))
+      ref <- plain_level_sobol(mp, "matern52", NULL, num = c(1, p + 1))
+      expect_abs(unname(s$draws$simulator[i, , "first", o]), ref$S1, 1e-6)
+      expect_abs(unname(s$draws$simulator[i, , "total", o]), ref$ST, 1e-6)
+    }
+    expect_equal(sum(s$shares$share[s$shares$output == c("conc", "rate")[o]]), 1, tolerance = 1e-12)
+  }
+  # the prediction: predict()'s per-draw means at each output on a grid of x
+  sc <- fit$model$scale
+  r <- composite_rule(c(d$Xs[, 1], d$Xf[, 1]))
+  u <- sc$xmin[1] + (sc$xmax[1] - sc$xmin[1]) * r$x
+  for (o in c("conc", "rate")) {
+    pr <- predict(fit, data.frame(x = u, out = o), type = "mean", ndraws = 2, draws = TRUE)$draws
+    # one experimental input: both indices are one; its main effect is the mean
+    expect_abs(as.vector(s$draws$prediction[, , , o]), rep(1, 4), 1e-12)
+    me <- s$main$prediction$x
+    me <- me[me$output == o, ]
+    at <- predict(fit, data.frame(x = me$x, out = o), type = "mean", ndraws = 2, draws = TRUE)$draws
+    expect_abs(me$median, apply(at, 1, stats::median), 1e-6)
+  }
+})
+
+test_that("with levels and outputs the sampling estimator agrees with the closed form within its sampling error", {
+  for (fit in list(level_fit(), outputs_fit("shared"))) {
+    set.seed(1)
+    cl <- sensitivity(fit, ndraws = 2, points = 8, paths = 0)
+    set.seed(1)
+    sa <- sensitivity(fit, ndraws = 2, points = 8, paths = 0, estimator = "sampling",
+                      samples = 3000)
+    for (part in c("simulator", "prediction")) {
+      x <- sa[[part]]
+      y <- cl[[part]]
+      expect_identical(x[c("input", "index")], y[c("input", "index")])
+      expect_true(all(x$sampling_sd < 0.05))
+      expect_true(all(abs(x$median - y$median) < 4 * x$sampling_sd + 1e-9))
+    }
+    expect_equal(sa$main, cl$main, tolerance = 1e-10)
+  }
+})
+
+test_that("print(), as.data.frame() and plot() show the levels and the outputs", {
+  fit <- level_fit()
+  set.seed(2)
+  expect_snapshot(print(sensitivity(fit, ndraws = 4, paths = 8, points = 16)))
+  sh <- outputs_fit("shared")
+  set.seed(2)
+  s <- sensitivity(sh, ndraws = 4, paths = 8, points = 16)
+  expect_snapshot(print(s))
+  df <- as.data.frame(s)
+  expect_identical(names(df)[1:3], c("of", "output", "input"))
+  expect_identical(nrow(df), 2L * 2L * 2L + 2L * 1L * 2L)
+  # one panel row per output; `output =` picks some
+  g <- plot(s)
+  built <- ggplot2::ggplot_build(g)
+  expect_identical(length(unique(built$data[[1]]$PANEL)), 4L)
+  g <- plot(s, output = "rate", of = "prediction")
+  expect_identical(length(unique(ggplot2::ggplot_build(g)$data[[1]]$PANEL)), 1L)
+  expect_s3_class(plot(s, what = "indices"), "ggplot")
+  # a categorical input's main effect: a point per level
+  s1 <- sensitivity(fit, ndraws = 4, paths = 8, points = 16)
+  b <- ggplot2::ggplot_build(plot(s1))
+  expect_identical(nrow(b$data[[3]]), 3L)
+  expect_snapshot(error = TRUE, {
+    sensitivity(fit, inputs = list(c = c(0.5, 0.6, 0.1)))
+    sensitivity(fit, inputs = list(c = c(d = 1)))
+    sensitivity(fit, inputs = list(c = c(0, 1)))
+    sensitivity(sh, inputs = list(out = c(conc = 1)))
+    plot(s, output = "speed")
+    plot(s1, output = "conc")
+  })
+})
+
+test_that("levels drawn by their probabilities, an output held at its level; the nearest-neighbour algebra with every predecessor gives the dense indices", {
+  fit <- level_fit()
+  sc <- fit$model$scale
+  m <- FBC:::sensitivity_measure(list(c = c(a = 0.2, b = 0.5, c = 0.3)), sc, fit$model$spec$model)
+  set.seed(1)
+  n <- 4000
+  X <- FBC:::sobol_samples(n / 2, 1L, m)
+  lev <- fit$model$spec$model$levels
+  freq <- colMeans(X[, lev$col + 0:2])
+  expect_true(all(abs(freq - c(0.2, 0.5, 0.3)) < 4 * sqrt(c(0.2, 0.5, 0.3) * 0.8 / n)))
+  expect_true(all(rowSums(X[, lev$col + 0:2]) == 1))
+  # shared outputs: every support point at the output held
+  sh <- outputs_fit("shared")
+  ms <- FBC:::sensitivity_measure(NULL, sh$model$scale, sh$model$spec$model, "rate")
+  P <- FBC:::support_points(16, 2L, ms)
+  expect_true(all(P[, sh$model$spec$model$levels$col] == 1))
+  expect_identical(ms$names, c("x", "t"))
+  # with every predecessor the nearest-neighbour algebra's mean is the
+  # dense one's, sample paths too (the same draws)
+  vec <- level_fit(algebra = "vecchia", neighbours = 40)
+  expect_identical(vec$model$algebra$name, "vecchia")
+  vec <- fit_with_draws(vec, fit$Phi, fit$chain, fit$logPost, fit$logLik)
+  for (paths in c(0, 8)) {
+    set.seed(1)
+    a <- sensitivity(fit, ndraws = 2, points = 8, paths = paths)
+    set.seed(1)
+    b <- sensitivity(vec, ndraws = 2, points = 8, paths = paths)
+    expect_abs(b$draws$simulator, a$draws$simulator, 1e-6)
+    expect_abs(b$draws$prediction, a$draws$prediction, 1e-6)
+  }
+})
