@@ -423,6 +423,24 @@ static MeasureInputs measure_inputs(const Rcpp::IntegerVector& cols, const Rcpp:
   return mi;
 }
 
+// The first-order variance of measure input k, its main effect's squared
+// deviation from f0 (effect(k, t, out): the main effect at the points t of
+// a numeric input, at every level of a categorical one) integrated by the
+// input's quadrature nodes and weights or its levels' probabilities.
+template <class Effect>
+static double main_variance(const Effect& effect, int k, const MeasureInputs& mi,
+                            const arma::mat& nodes, const arma::mat& weights, double f0) {
+  arma::vec me;
+  const int nc = mi.cols.size();
+  if (k >= nc) {
+    effect(k, arma::vec(), me);
+    return arma::dot(mi.probs[k - nc], arma::square(me - f0));
+  }
+  const int c = mi.cols[k];
+  effect(k, arma::vec(nodes.col(c)), me);
+  return arma::dot(weights.col(c), arma::square(me - f0));
+}
+
 // G(l, j) = C(l, a_j) for the levels a_j of the rows of Z (categorical input f).
 static arma::mat level_columns(const arma::mat& C, const arma::mat& Z, const LevelInput& f) {
   arma::mat G(C.n_rows, Z.n_rows);
@@ -578,16 +596,7 @@ Rcpp::List fbc_sobol(const arma::mat& Xf, const arma::vec& yf, const arma::mat& 
       sobol_sampled([&](const arma::mat& X, arma::vec& f) {
                       expansion_at(kern, X, Z, w, th, al, post.levels, C, f);
                     },
-                    [&](int k) {
-                      arma::vec me;
-                      if (k >= nc) {
-                        effect(k, arma::vec(), me);
-                        return arma::dot(mi.probs[k - nc], arma::square(me - f0));
-                      }
-                      const int c = mi.cols[k];
-                      effect(k, nodes.col(c), me);
-                      return arma::dot(weights.col(c), arma::square(me - f0));
-                    },
+                    [&](int k) { return main_variance(effect, k, mi, nodes, weights, f0); },
                     f0, mi.swap, samples.rows(2 * Nb * d, 2 * Nb * (d + 1) - 1), V[d],
                     V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
     } else {
@@ -745,16 +754,7 @@ Rcpp::List fbc_sobol_pred(const arma::mat& Xf, const arma::vec& yf, const arma::
                         f += fb;
                       }
                     },
-                    [&](int k) {
-                      arma::vec me;
-                      if (k >= nc) {
-                        effect(k, arma::vec(), me);
-                        return arma::dot(mi.probs[k - nc], arma::square(me - f0));
-                      }
-                      const int c = mi.cols[k];
-                      effect(k, nodes.col(c), me);
-                      return arma::dot(weights.col(c), arma::square(me - f0));
-                    },
+                    [&](int k) { return main_variance(effect, k, mi, nodes, weights, f0); },
                     f0, mi.swap, samples.rows(2 * ns * d, 2 * ns * (d + 1) - 1), V[d],
                     V1.colptr(d), VT.colptr(d), sd1.colptr(d), sdT.colptr(d));
     } else {

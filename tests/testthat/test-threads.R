@@ -13,8 +13,10 @@ test_that("the Vecchia log-likelihood along the sampler's moves is the same for 
   d <- list(Xf = cbind(runif(9), diag(3)[c(1, 2, 3, 1, 2, 3, 2, 1, 3), ]), yf = rnorm(9),
             Xs = Xs, ys = sin(4 * Xs[, 1]) + Xs[, 5] + rnorm(m, 0, 0.1))
   des <- FBC:::vecchia_design(d$Xs, d$ys, 4L, 8L, 4L)
-  phis <- t(replicate(4, random_phi(4, 1, nLev = 3L)))
   path <- function(threads, levels) {
+    # (the same random phis for every number of threads)
+    set.seed(66)
+    phis <- t(replicate(4, random_phi(4, 1, nLev = if (levels) 3L else 0L)))
     model <- FBC:::compiled_model(4, 1, kernS = 4L, algebra = 2L, vecchia = des,
                                   levels = if (levels) lev)
     model$threads <- threads
