@@ -314,6 +314,29 @@ struct RunConditional {
 // mean (`biasMean`) when muB has, scaled (`sgasp`, the S-GaSP of Gu and
 // Wang 2018: Posterior::biasModel()) when lambdaZ has: the offsets of
 // empty classes are never read.
+// The field block's covariance given the simulator runs, S = D + Z M Z'
+// (field.cpp): D the field rows' noise variances d, Z each row's distinct
+// row, M the distinct rows' part (its lower triangle read). factor() gives
+// S = L L' (n x n Cholesky), or with `reduce` (replicated rows) works on the
+// distinct rows alone (L = chol(I + N^1/2 M N^1/2), N = Z' D^-1 Z): the
+// same log|S| and the same products by the whitening F^-1 (S = F F') and
+// by S^-1. False where S is not positive definite, or (floor > 0) a pivot
+// L_ii^2 falls below floor times the largest diagonal entry.
+struct FieldFactor {
+  bool reduced = false;
+  arma::mat L;
+  arma::vec d, sd, sN;  // reduced: d, sqrt(d), sqrt(diag(N))
+  double logdet = 0.0;  // log|S|
+  bool factor(const arma::mat& M, const std::vector<int>& grp, const arma::vec& dv, bool reduce,
+              double floor);
+  void whiten(arma::mat& X, const std::vector<int>& grp) const;  // X <- F^-1 X
+  void whiten(arma::vec& x, const std::vector<int>& grp) const;
+  void solve(arma::mat& X, const std::vector<int>& grp) const;   // X <- S^-1 X
+  void solve(arma::vec& x, const std::vector<int>& grp) const;
+  arma::mat inverse(const std::vector<int>& grp) const;          // S^-1
+  void scale(double c);                                          // S -> c S
+};
+
 class Posterior {
 public:
   virtual ~Posterior() {}
@@ -448,12 +471,13 @@ protected:
   int nu_ = 0, sourceL_ = 0;
   arma::mat Xu_;
   std::vector<int> grp_, noise_, srcU_;
-  // log p(y_G | the rest) per group G from the field block's factor LS and
-  // residual r (loo.cpp); a'a and a'b with a = LS^-1 1, b = LS^-1 r (the
-  // exact muB draw's quadratic).
-  static void gaussian_loo(const arma::mat& LS, const arma::vec& r,
+  // log p(y_G | the rest) per group G from the field block's inverse S^-1
+  // and residual r (loo.cpp); a'a and a'b with a = F^-1 1, b = F^-1 r
+  // (S = F F', FieldFactor; the exact muB draw's quadratic).
+  static void gaussian_loo(const arma::mat& Sinv, const arma::vec& r,
                            const std::vector<std::vector<int> >& groups, arma::vec& logdens);
-  static void mub_quadratic(const arma::mat& LS, arma::vec r, double& aa, double& ab);
+  static void mub_quadratic(const FieldFactor& FS, const std::vector<int>& grp, arma::vec r,
+                            double& aa, double& ab);
   std::vector<int> one_ = std::vector<int>(1);
   arma::vec oneVal_ = arma::vec(1);
 
@@ -601,7 +625,10 @@ private:
   std::vector<arma::mat> Gf_;  // per experimental input: field-field kernel_dist
   std::vector<arma::mat> Gfb_; // ... for the bias GP's family when it differs
   std::vector<const arma::mat*> ptrF_, ptrB_;
-  Buf2<arma::mat> Rkk_, Q_, Rb_, LS_;
+  Buf2<arma::mat> Rkk_, Q_, Rb_;
+  Buf2<FieldFactor> FS_;  // the field block's factor (fieldFactor())
+  arma::mat M_;           // its distinct rows' part
+  arma::vec dv_;          // ... and the rows' noise variances
   Buf2<arma::vec> wz_;
   Buf2<double> ldDs_, zz_, ldS_, vv_, loglik_;
   arma::vec u_;

@@ -4,8 +4,8 @@
 //   yf = fs(kappa) + delta + eps,
 //   S = sigma2B Rb + sigma2E I   (KOH, with mean muB; S-GaSP: Rb -> Rz, no
 //       muB; "none": S = sigma2E I),
-//   log L = -0.5 [ n log 2pi + log|S| + v'v ],  v = LS^-1 (yf - muB - fs),
-// LS = chol(S). f is called once per kappa proposal (the closure `field`,
+//   log L = -0.5 [ n log 2pi + log|S| + v'v ],  v = F^-1 (yf - muB - fs),
+// S = F F' (FieldFactor, field.cpp). f is called once per kappa proposal (the closure `field`,
 // vectorised over the field rows) and its value kept on accept; a move of
 // the bias or noise parameters reuses it. Rb lives on the nu distinct field
 // rows (replicates share their bias).
@@ -22,8 +22,10 @@ public:
     set_sizes(Xf.n_rows, 0, Xf.n_cols, model.layout.length_of("kappa"), model);
     set_field(Xf, model);  // the distinct field rows, as SchurPosterior's
     for (int b = 0; b < 2; ++b) {
-      f_.b[b].zeros(n); Rb_.b[b].zeros(nu_, nu_); LS_.b[b].zeros(n, n);
+      f_.b[b].zeros(n); Rb_.b[b].zeros(nu_, nu_);
     }
+    M_.zeros(nu_, nu_);
+    dv_.zeros(n);
   }
 
   bool init(const arma::vec& phi0) override {
@@ -65,14 +67,18 @@ public:
   }
 
   void accept() override {
-    if (sc_) LS_.alt() = std::sqrt(pendingScale()) * LS_.cur();
+    if (sc_) {
+      FS_.alt() = FS_.cur();
+      FS_.alt().scale(pendingScale());
+    }
     flip();
   }
   void reject() override { restore(); }
 
-  // the log-likelihood is -0.5 |b - muB a|^2 + const, b = LS^-1 (yf - fs)
+  // the log-likelihood is -0.5 |b - muB a|^2 + const, b = F^-1 (yf - fs)
+  // (S = F F')
   void muBQuadratic(double& aa, double& ab) const override {
-    mub_quadratic(LS_.cur(), yf_ - f_.cur(), aa, ab);
+    mub_quadratic(FS_.cur(), grp_, yf_ - f_.cur(), aa, ab);
   }
 
   void condition(const arma::mat& Xnew, int type, double* mean, double* var,
@@ -84,7 +90,8 @@ public:
 
   // As SchurPosterior::fieldLoo (loo.cpp) with r = yf - muB - fs.
   void fieldLoo(const std::vector<std::vector<int> >& groups, arma::vec& logdens) const override {
-    gaussian_loo(LS_.cur(), yf_ - (biasMean ? phi[iMuB] : 0.0) - f_.cur(), groups, logdens);
+    gaussian_loo(FS_.cur().inverse(grp_), yf_ - (biasMean ? phi[iMuB] : 0.0) - f_.cur(), groups,
+                 logdens);
   }
 
   std::string algebra() const override { return "function"; }
@@ -96,7 +103,10 @@ private:
   Rcpp::Function fieldFn_, atFn_;
   bool tk_ = false, tb_ = false, tf_ = false, sc_ = false;
   Buf2<arma::vec> f_;
-  Buf2<arma::mat> Rb_, LS_;
+  Buf2<arma::mat> Rb_;
+  Buf2<FieldFactor> FS_;  // the field block's factor, S = D + Z s2B Rb Z'
+  arma::mat M_;
+  arma::vec dv_;
   Buf2<double> ldS_, vv_, loglik_;
   arma::mat Bz_, Wz_;
 
@@ -131,20 +141,19 @@ private:
     const arma::vec& f = tk_ ? f_.alt() : f_.cur();
     const arma::mat& Rb = tb_ ? Rb_.alt() : Rb_.cur();
     if (tf_) {
-      arma::mat& S = LS_.alt();
       const double s2B = bias ? phi[iSigma2B] : 0.0;
-      for (int j = 0; j < n; ++j)
-        for (int i = j; i < n; ++i) S(i, j) = bias ? s2B * Rb(grp_[i], grp_[j]) : 0.0;
-      for (int j = 0; j < n; ++j) S(j, j) += phi[iSigma2E + noise_[j]];
-      if (!chol_lower(S)) return R_NegInf;
-      ldS_.alt() = logdet_chol(S);
+      for (int c = 0; c < nu_; ++c)
+        for (int r = c; r < nu_; ++r) M_.at(r, c) = bias ? s2B * Rb.at(r, c) : 0.0;
+      for (int j = 0; j < n; ++j) dv_[j] = phi[iSigma2E + noise_[j]];
+      if (!FS_.alt().factor(M_, grp_, dv_, nu_ < n, 0.0)) return R_NegInf;
+      ldS_.alt() = FS_.alt().logdet;
     } else {
       ldS_.alt() = ldS_.cur();
     }
-    const arma::mat& LS = tf_ ? LS_.alt() : LS_.cur();
+    const FieldFactor& FS = tf_ ? FS_.alt() : FS_.cur();
     const double muB = biasMean ? phi[iMuB] : 0.0;
     arma::vec v = yf_ - muB - f;
-    solve_lower(LS, v);
+    FS.whiten(v, grp_);
     vv_.alt() = arma::dot(v, v);
     loglik_.alt() = -0.5 * (n * LOG_2PI + ldS_.alt() + vv_.alt());
     return loglik_.alt();
@@ -152,7 +161,7 @@ private:
   void flip() {
     if (tk_) f_.flip();
     if (tb_) Rb_.flip();
-    if (tf_ || sc_) LS_.flip();
+    if (tf_ || sc_) FS_.flip();
     ldS_.flip(); vv_.flip(); loglik_.flip();
   }
 };
@@ -160,8 +169,8 @@ private:
 // Prediction at new scaled inputs Xnew, at the current state. The bias
 // part is the GP conditional given the field residual r = yf - muB - fs:
 // with K the bias's cross-correlation (KOH: R(Xu, Xnew), r0 = 1; S-GaSP:
-// the discretized kernel, as SchurPosterior::biasCross), h = LS^-1 s2B K,
-// v = LS^-1 r:  bias mean = muB + h'v, variance s2B r0 - h'h. By type:
+// the discretized kernel, as SchurPosterior::biasCross), h = F^-1 s2B K,
+// v = F^-1 r:  bias mean = muB + h'v, variance s2B r0 - h'h. By type:
 // 1 field = f(x*) + bias + eps (variance + sigma2E of its group),
 // 2 mean = f(x*) + bias, 3 simulator = f(x*) (variance 0: f is known),
 // 4 bias. f(x*) comes from the closure `at`, once per draw.
@@ -183,9 +192,9 @@ void FunctionPosterior::condition(const arma::mat& Xnew, int type, double* mean,
     arma::vec r0;
     biasModelCross([&] { return corr_matrix(Xu_, Xu_, thetaB, alphaB, kernB_); }, K, r0);
     arma::mat H = s2B * K.rows(arma::conv_to<arma::uvec>::from(grp_));
-    solve_lower(LS_.cur(), H);
+    FS_.cur().whiten(H, grp_);
     arma::vec v = yf_ - muB - f_.cur();
-    solve_lower(LS_.cur(), v);
+    FS_.cur().whiten(v, grp_);
     bm = muB + H.t() * v;
     bv = s2B * r0 - arma::sum(arma::square(H), 0).t();
   }

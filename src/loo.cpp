@@ -3,17 +3,15 @@
 // the joint Gaussian at one parameter vector (Rasmussen and Williams 2006,
 // section 5.4.2; Burkner, Gabry and Vehtari 2021 for non-factorized
 // Gaussian models). The field block of C^-1 is S^-1 (S the Schur complement
-// of the simulator block, S = LS LS'), and (C^-1 (y - mu))_f = S^-1 r with
+// of the simulator block), and (C^-1 (y - mu))_f = S^-1 r with
 // r = yf - muB - wz the field residual given the simulator runs. For a
 // group G of field rows, with P = (S^-1)_GG and a = S^-1 r:
 //   y_G | rest ~ N(y_G - P^-1 a_G, P^-1),
 //   log p(y_G | rest) = -0.5 (|G| log 2 pi - log|P| + a_G' P^-1 a_G).
 #include "fbc.h"
 
-void Posterior::gaussian_loo(const arma::mat& LS, const arma::vec& r,
+void Posterior::gaussian_loo(const arma::mat& Sinv, const arma::vec& r,
                              const std::vector<std::vector<int> >& groups, arma::vec& logdens) {
-  const arma::mat Li = arma::inv(arma::trimatl(LS));
-  const arma::mat Sinv = Li.t() * Li;
   const arma::vec a = Sinv * r;
   logdens.set_size(groups.size());
   for (size_t g = 0; g < groups.size(); ++g) {
@@ -31,7 +29,7 @@ void SchurPosterior::fieldLoo(const std::vector<std::vector<int> >& groups,
   const double muB = biasMean ? phi[iMuB] : 0.0;
   arma::vec r(n);
   for (int i = 0; i < n; ++i) r[i] = yf_[i] - muB - wz_.cur()[grp_[i]];
-  gaussian_loo(LS_.cur(), r, groups, logdens);
+  gaussian_loo(FS_.cur().inverse(grp_), r, groups, logdens);
 }
 
 // Log leave-one-out predictive densities (scaled space) of the field data,

@@ -3,8 +3,9 @@
 // With y = (yf, ys), Ds = Rs(Xs,Xs) + nugget I, Bs = Rs(Xs,Xk),
 //   Q = Rs(Xk,Xk) - Bs' Ds^-1 Bs,  wz = Bs' Ds^-1 ys,
 //   S = sigma2S Q + sigma2B Rb + sigma2E I   (Schur complement of D in C),
-// LS = chol(S), v = LS^-1 (yf - muB - wz); without a bias (discrepancy
-// "none") S = sigma2S Q + sigma2E I and v = LS^-1 (yf - wz):
+// S = F F' (FieldFactor, field.cpp: chol(S), or with replicated field rows a
+// factor on the distinct rows), v = F^-1 (yf - muB - wz); without a bias
+// (discrepancy "none") S = sigma2S Q + sigma2E I and v = F^-1 (yf - wz):
 //   log L = -0.5 [ (n+m) log 2pi + m log sigma2S + log|Ds| + log|S|
 //                  + ys' Ds^-1 ys / sigma2S + v'v ].
 // log|Ds|, ys' Ds^-1 ys, Q and wz come from the simulator algebra (dense.cpp,
@@ -166,9 +167,10 @@ SchurPosterior::SchurPosterior(const arma::mat& Xf, const arma::vec& yf, const a
       if (kernel_has_alpha(kernB_)) Pfb_[k].b[b].zeros(nu_, nu_);
     }
     Rkk_.b[b].zeros(nu_, nu_); Q_.b[b].zeros(nu_, nu_); Rb_.b[b].zeros(nu_, nu_);
-    LS_.b[b].zeros(n, n);
     wz_.b[b].zeros(nu_);
   }
+  M_.zeros(nu_, nu_);
+  dv_.zeros(n);
   u_.zeros(n);
   ptrF_.resize(p); ptrB_.resize(p);
   auto dist_cache = [&](int kern, std::vector<arma::mat>& G) {
@@ -246,7 +248,7 @@ double SchurPosterior::propose(const std::vector<int>& idx, const arma::vec& val
   return evaluate(touch_);
 }
 
-// C -> c C: log|Ds| and z'z are unchanged, S -> c S (LS -> sqrt(c) LS,
+// C -> c C: log|Ds| and z'z are unchanged, S -> c S (FieldFactor::scale(),
 // log|S| + n log c, v'v / c) and sigma2S -> c sigma2S.
 double SchurPosterior::proposeScale(double c) {
   saveScale(c);
@@ -261,7 +263,8 @@ double SchurPosterior::proposeScale(double c) {
 void SchurPosterior::accept() {
   if (touch_.scale) {
     const double c = pendingScale();  // sigma2S comes first
-    LS_.alt() = std::sqrt(c) * LS_.cur();
+    FS_.alt() = FS_.cur();
+    FS_.alt().scale(c);
   }
   flip(touch_);
 }
@@ -270,27 +273,28 @@ void SchurPosterior::reject() {
   restore();
 }
 
-// LS^-1 (yf - muB - wz), each field row's wz its distinct row's.
-static arma::vec field_residual(const arma::mat& LS, const arma::vec& yf, double muB,
+// F^-1 (yf - muB - wz) (S = F F'), each field row's wz its distinct row's.
+static arma::vec field_residual(const FieldFactor& FS, const arma::vec& yf, double muB,
                                 const arma::vec& wz, const std::vector<int>& grp) {
   arma::vec v(yf.n_elem);
   for (arma::uword i = 0; i < yf.n_elem; ++i) v[i] = yf[i] - muB - wz[grp[i]];
-  solve_lower(LS, v);
+  FS.whiten(v, grp);
   return v;
 }
 
-// LS^-1 K_F with K_F's rows those of K (a row per distinct field row) at
+// F^-1 K_F with K_F's rows those of K (a row per distinct field row) at
 // each field row's.
-static arma::mat field_rows(const arma::mat& LS, const arma::mat& K, const std::vector<int>& grp) {
+static arma::mat field_rows(const FieldFactor& FS, const arma::mat& K, const std::vector<int>& grp) {
   arma::mat H = K.rows(arma::conv_to<arma::uvec>::from(grp));
-  solve_lower(LS, H);
+  FS.whiten(H, grp);
   return H;
 }
 
-void Posterior::mub_quadratic(const arma::mat& LS, arma::vec r, double& aa, double& ab) {
+void Posterior::mub_quadratic(const FieldFactor& FS, const std::vector<int>& grp, arma::vec r,
+                              double& aa, double& ab) {
   arma::vec a(r.n_elem, arma::fill::ones);
-  solve_lower(LS, a);
-  solve_lower(LS, r);
+  FS.whiten(a, grp);
+  FS.whiten(r, grp);
   aa = arma::dot(a, a);
   ab = arma::dot(a, r);
 }
@@ -298,7 +302,7 @@ void Posterior::mub_quadratic(const arma::mat& LS, arma::vec r, double& aa, doub
 void SchurPosterior::muBQuadratic(double& aa, double& ab) const {
   arma::vec r(n);
   for (int i = 0; i < n; ++i) r[i] = yf_[i] - 0.0 - wz_.cur()[grp_[i]];
-  mub_quadratic(LS_.cur(), r, aa, ab);
+  mub_quadratic(FS_.cur(), grp_, r, aa, ab);
 }
 
 // The S-GaSP correlation on the nu distinct field inputs (Gu and Wang 2018,
@@ -383,8 +387,8 @@ void SchurPosterior::biasCross(const arma::mat& Xnew, arma::mat& K, arma::vec& r
 // GP conditional of a target with covariance ks = s2S k with ys and kf with
 // yf (k = Rs(Xs, xk*), xk* = (x*, kappa)), prior mean mu0 and variance v0,
 // through the blocks of C: with a = k' Ds^-1 ys, b = k' Ds^-1 k,
-// g = Bs' Ds^-1 k (the algebra's simCondition), h = LS^-1 (kf - s2S g),
-// v = LS^-1 (yf - muB - wz):
+// g = Bs' Ds^-1 k (the algebra's simCondition), h = F^-1 (kf - s2S g),
+// v = F^-1 (yf - muB - wz) (S = F F'):
 //   mean = mu0 + a + h'v,   var = v0 - s2S b - h'h.
 // Targets, by type: 1 field (eta + delta + eps), 2 mean (eta + delta),
 // 3 simulator (eta), 4 bias (delta, ks = 0):
@@ -428,8 +432,8 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
     Kf += s2B * Kb;
     v0 += s2B * rb;
   }
-  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
-  const arma::mat H = field_rows(LS_.cur(), Kf, grp_);
+  const arma::vec v = field_residual(FS_.cur(), yf_, muB, wz_.cur(), grp_);
+  const arma::mat H = field_rows(FS_.cur(), Kf, grp_);
   for (int c = 0; c < b; ++c) {
     const double* h = H.colptr(c);
     double hv = 0.0, hh = 0.0;
@@ -451,22 +455,12 @@ void SchurPosterior::condition(const arma::mat& Xnew, int type, double* mean, do
 bool SchurPosterior::fieldFactor(const arma::mat& Q, const arma::mat* Rb, double s2S,
                                  double s2B, double& ldS) {
   static const double S_PIVOT = 1e-10;
-  arma::mat& S = LS_.alt();
-  double dmax = 0;
-  for (int j = 0; j < n; ++j) {
-    const int gj = grp_[j];
-    double* sc = S.colptr(j);
-    for (int i = j; i < n; ++i) {
-      const int gi = grp_[i];
-      const int r = std::max(gi, gj), c = std::min(gi, gj);
-      sc[i] = s2S * Q.at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
-    }
-    sc[j] += phi[iSigma2E + noise_[j]] + (fieldReal ? phi[iSigma2R] : 0.0);
-    dmax = std::max(dmax, sc[j]);
-  }
-  if (!chol_lower(S)) return false;
-  if (!scratch_ && arma::min(S.diag()) < std::sqrt(S_PIVOT * dmax)) return false;
-  ldS = logdet_chol(S);
+  for (int c = 0; c < nu_; ++c)
+    for (int r = c; r < nu_; ++r) M_.at(r, c) = s2S * Q.at(r, c) + (bias ? s2B * Rb->at(r, c) : 0.0);
+  for (int j = 0; j < n; ++j) dv_[j] = phi[iSigma2E + noise_[j]] + (fieldReal ? phi[iSigma2R] : 0.0);
+  // (on the distinct rows alone with replicated ones)
+  if (!FS_.alt().factor(M_, grp_, dv_, nu_ < n, scratch_ ? 0.0 : S_PIVOT)) return false;
+  ldS = FS_.alt().logdet;
   return true;
 }
 
@@ -527,17 +521,17 @@ double SchurPosterior::evaluate(const Touch& t) {
   }
 
   // Schur complement S and its factor (fieldFactor()).
-  const arma::mat* LS = &LS_.cur();
+  const FieldFactor* FS = &FS_.cur();
   double ldS = ldS_.cur();
   if (t.field) {
     if (!fieldFactor(*Q, Rb, s2S, s2B, ldS)) return R_NegInf;
-    LS = &LS_.alt();
+    FS = &FS_.alt();
   }
 
   // Residual of the field block given the simulator block.
   const double muB = biasMean ? phi[iMuB] : 0.0;
   for (int j = 0; j < n; ++j) u_[j] = yf_[j] - muB - (*wz)[grp_[j]];
-  solve_lower(*LS, u_);
+  FS->whiten(u_, grp_);
   return loglik(ldDs, zz, ldS, arma::dot(u_, u_), lpG);
 }
 
@@ -551,7 +545,7 @@ void SchurPosterior::flip(const Touch& t) {
   if (t.expDim) Rkk_.flip();
   if (t.cross) { Q_.flip(); wz_.flip(); }
   if (t.biasCorr) Rb_.flip();
-  if (t.field || t.scale) LS_.flip();
+  if (t.field || t.scale) FS_.flip();
   if (t.latentK) { Lg_.flip(); ldG_.flip(); }
   ldDs_.flip(); zz_.flip(); ldS_.flip(); vv_.flip(); loglik_.flip(); lpG_.flip();
 }
@@ -579,7 +573,7 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
   arma::mat Xk(nu_, p + q);
   Xk.cols(0, p - 1) = Xu_;
   for (int k = 0; k < q; ++k) Xk.col(p + k).fill(phi[iKappa + k]);
-  const arma::vec v = field_residual(LS_.cur(), yf_, muB, wz_.cur(), grp_);
+  const arma::vec v = field_residual(FS_.cur(), yf_, muB, wz_.cur(), grp_);
   arma::vec wy;
   auto root = [&](const arma::mat& Z, const arma::mat* Kb, arma::mat& W, bool haveW,
                   arma::mat& A) {
@@ -588,7 +582,7 @@ void SchurPosterior::runConditional(const arma::mat& U, const arma::mat& XT,
     runPrior(phi, Xk, Z, R);
     R -= s2S * G;
     if (Kb) R += s2B * *Kb;
-    A = arma::join_cols(rs * W, field_rows(LS_.cur(), R, grp_));
+    A = arma::join_cols(rs * W, field_rows(FS_.cur(), R, grp_));
   };
   // the runs' part at the candidates (runW_, runWy_) depends on the
   // simulator's correlation parameters alone: kept from the last call

@@ -108,9 +108,7 @@ void SchurPosterior::simMean(arma::mat& Z, arma::vec& w, const arma::mat* P, arm
   }
   arma::vec v(n);
   for (int i = 0; i < n; ++i) v[i] = yf[i] - muB - wz[grp_[i]];
-  const arma::mat& LS = LS_.cur();
-  solve_lower(LS, v);
-  v = arma::solve(arma::trimatu(arma::trimatl(LS).t()), v);
+  FS_.cur().solve(v, grp_);
   arma::vec beta(nu_, arma::fill::zeros);
   for (int i = 0; i < n; ++i) beta[grp_[i]] += s2S * v[i];
   if (wb) {
