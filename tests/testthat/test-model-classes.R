@@ -53,6 +53,39 @@ test_that("replicated field inputs (shared columns) give the dense log-likelihoo
   }
 })
 
+test_that("repeated field rows in several noise groups: the field block on the distinct rows gives the dense likelihood and predictions", {
+  # four distinct inputs, each measured three times, the replicates of one
+  # input in different measurement-error groups: the field block is
+  # factored on the 4 distinct rows (field.cpp), exactly
+  p <- 2; q <- 1
+  d <- random_koh_data(4, 15, p, q, seed = 81)
+  d$Xf <- d$Xf[rep(1:4, 3), , drop = FALSE]
+  d$yf <- rnorm(12)
+  noise <- rep(c(1L, 2L, 3L), each = 4)
+  for (disc in c("gp", "sgasp", "none")) {
+    model <- FBC:::compiled_model(p, q, discrepancy = disc, noise = noise)
+    phis <- rbind(random_phi(p, q, disc, G = 3L), random_phi(p, q, disc, G = 3L))
+    dense <- function(phi) dense_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, 1e-6, discrepancy = disc,
+                                        noise = noise)
+    for (i in 1:2) {
+      expect_equal(.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], 1e-6, model = model),
+                   dense(phis[i, ]), tolerance = 1e-10)
+    }
+    path <- .loglik_path(d$Xf, d$yf, d$Xs, d$ys, phis, 1e-6, decoys = TRUE, model = model)
+    expect_equal(path, apply(phis, 1, dense), tolerance = 1e-10)
+    expect_joint_moves_dense(d, phis, p, q, discrepancy = disc, noise = noise)
+    Xn <- d$Xf[c(1, 6), , drop = FALSE]
+    got <- .fbc_predict(d$Xf, d$yf, d$Xs, d$ys, phis, Xn, 1L, 1e-6, 2L, model = model,
+                        noise = c(3L, 1L))
+    for (i in 1:2) {
+      ref <- dense_predict(d$Xf, d$yf, d$Xs, d$ys, phis[i, ], Xn, "field", discrepancy = disc,
+                           noise = noise, noiseNew = c(3L, 1L))
+      expect_equal(got$mean[, i], ref$mean, tolerance = 1e-10)
+      expect_equal(got$var[, i], ref$var, tolerance = 1e-10)
+    }
+  }
+})
+
 test_that("the sampler's retained log-likelihoods (accept and reject paths) equal the dense ones", {
   # Every retained draw was reached through a run of proposals, some accepted
   # and some rejected; a stale cache after a rejection would show up here.
