@@ -4,6 +4,7 @@
 #
 #   Rscript bench/run.R sensitivity [--m=50,100,200] [--designs=20,20,10]
 #                                   [--problems=ishigami,gfun] [--out=sensitivity-study.rds]
+#                                   [--paths=128]
 #
 # Problems (simulator runs on a maximin Latin hypercube, the best of 50
 # random Latin hypercubes by smallest distance, one per design seed):
@@ -49,7 +50,7 @@ library(FBC)
 source("bench/options.R")
 opt <- bench_options(list(m = c(50L, 100L, 200L), designs = c(20L, 20L, 10L),
                           problems = c("ishigami", "gfun"), nMCMC = 0L, nBurn = 0L,
-                          nChains = 0L, peer_n = 300L,
+                          nChains = 0L, peer_n = 300L, paths = 128L,
                           out = "sensitivity-study.rds"))
 if (opt$quick) {
   opt$m <- 50L
@@ -184,7 +185,9 @@ one_design <- function(pname, m, seed) {
   fit <- suppressWarnings(do.call(calibrate, c(list(dat$sim, dat$field), run)))
   t_fit <- cpu() - t0
   t0 <- cpu()
-  s <- sensitivity(fit, inputs = inputs, prediction = FALSE)
+  # (--paths: the support points of each draw's sample path; 128 is the
+  # default)
+  s <- sensitivity(fit, inputs = inputs, paths = opt$paths, prediction = FALSE)
   t_sens <- cpu() - t0
   # the default call (with the prediction's part) on each m's first design
   t_default <- NA_real_
