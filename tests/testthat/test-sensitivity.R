@@ -14,6 +14,19 @@ expect_abs <- function(actual, expected, tol) {
   expect_lt(max(abs(actual - expected)), tol)
 }
 
+# Two fits of the same model on two algebras: the same indices and shares
+# (same seed, 2 draws, `paths` support points).
+expect_same_sensitivity <- function(fit, other, paths, shares = TRUE, tol = 1e-6) {
+  set.seed(1)
+  a <- sensitivity(fit, ndraws = 2, points = 8, paths = paths)
+  set.seed(1)
+  b <- sensitivity(other, ndraws = 2, points = 8, paths = paths)
+  expect_abs(b$draws$simulator, a$draws$simulator, tol)
+  expect_abs(b$draws$prediction, a$draws$prediction, tol)
+  if (shares) expect_abs(b$shares$share, a$shares$share, tol)
+  invisible(list(a = a, b = b))
+}
+
 # The weights a and centres X of mu at the scaled-space draw phi.
 plain_sim_mean <- function(fit, phi, kernS) {
   d <- fit$model$data
@@ -301,15 +314,9 @@ test_that("the nearest-neighbour algebra with every predecessor gives the dense 
   vec <- fixed_fit(phi, kernelS = "matern52", algebra = "vecchia", neighbours = 12)
   expect_identical(vec$model$algebra$name, "vecchia")
   for (paths in c(0, 16)) {
-    set.seed(1)
-    a <- sensitivity(dense, ndraws = 2, points = 8, paths = paths)
-    set.seed(1)
-    b <- sensitivity(vec, ndraws = 2, points = 8, paths = paths)
-    expect_abs(b$draws$simulator, a$draws$simulator, 1e-6)
-    expect_abs(b$draws$prediction, a$draws$prediction, 1e-6)
-    expect_abs(b$shares$share, a$shares$share, 1e-6)
+    ab <- expect_same_sensitivity(dense, vec, paths)
     me <- function(s) unlist(lapply(s$main$simulator, `[[`, "median"))
-    expect_abs(me(b), me(a), 1e-6 * max(abs(me(a))))
+    expect_abs(me(ab$b), me(ab$a), 1e-6 * max(abs(me(ab$a))))
   }
   # with fewer neighbours: an approximation, near the exact indices here
   set.seed(1)
@@ -773,12 +780,5 @@ test_that("levels drawn by their probabilities, an output held at its level; the
   vec <- level_fit(algebra = "vecchia", neighbours = 40)
   expect_identical(vec$model$algebra$name, "vecchia")
   vec <- fit_with_draws(vec, fit$Phi, fit$chain, fit$logPost, fit$logLik)
-  for (paths in c(0, 8)) {
-    set.seed(1)
-    a <- sensitivity(fit, ndraws = 2, points = 8, paths = paths)
-    set.seed(1)
-    b <- sensitivity(vec, ndraws = 2, points = 8, paths = paths)
-    expect_abs(b$draws$simulator, a$draws$simulator, 1e-6)
-    expect_abs(b$draws$prediction, a$draws$prediction, 1e-6)
-  }
+  for (paths in c(0, 8)) expect_same_sensitivity(fit, vec, paths, shares = FALSE)
 })
