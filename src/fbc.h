@@ -302,18 +302,6 @@ struct RunConditional {
   arma::vec mu, v, v0, mT, VT;
 };
 
-// The posterior's likelihood part with every factor cached, so that a move
-// recomputes only the blocks it touches. This is the one interface the
-// sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
-// it is chosen by make_posterior().
-// Parameter vector phi (scaled space, kappa on [0,1]) holds the classes at
-// the offsets of `layout` (iKappa ... iRhoD, looked up by name in
-// set_sizes()). The discrepancy model (R/model-classes.R,
-// discrepancy_models) is read off the layout: a bias GP (`bias`) when
-// sigma2B has parameters (else thetaB, alphaB, muB ... have none), with a
-// mean (`biasMean`) when muB has, scaled (`sgasp`, the S-GaSP of Gu and
-// Wang 2018: Posterior::biasModel()) when lambdaZ has: the offsets of
-// empty classes are never read.
 // The field block's covariance given the simulator runs, S = D + Z M Z'
 // (field.cpp): D the field rows' noise variances d, Z each row's distinct
 // row, M the distinct rows' part (its lower triangle read). factor() gives
@@ -337,6 +325,18 @@ struct FieldFactor {
   void scale(double c);                                          // S -> c S
 };
 
+// The posterior's likelihood part with every factor cached, so that a move
+// recomputes only the blocks it touches. This is the one interface the
+// sampler (sampler.cpp) and prediction (predict.cpp) see; the algebra behind
+// it is chosen by make_posterior().
+// Parameter vector phi (scaled space, kappa on [0,1]) holds the classes at
+// the offsets of `layout` (iKappa ... iRhoD, looked up by name in
+// set_sizes()). The discrepancy model (R/model-classes.R,
+// discrepancy_models) is read off the layout: a bias GP (`bias`) when
+// sigma2B has parameters (else thetaB, alphaB, muB ... have none), with a
+// mean (`biasMean`) when muB has, scaled (`sgasp`, the S-GaSP of Gu and
+// Wang 2018: Posterior::biasModel()) when lambdaZ has: the offsets of
+// empty classes are never read.
 class Posterior {
 public:
   virtual ~Posterior() {}
@@ -537,12 +537,6 @@ bool latent_shift(Posterior& post, double& ll, arma::vec& lp, const std::vector<
                   const std::vector<int>& tr, double s,
                   const std::function<double(int, double)>& lpOf);
 
-// Everything but the simulator block: the field block, its Schur
-// complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a
-// bias) with
-// Q = Rs(Xk,Xk) - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk), the residual and the moves'
-// bookkeeping (model.cpp). The simulator algebra behind it supplies
-// log|Ds|, ys' Ds^-1 ys, Q and Rs(Xs,Xk)' Ds^-1 ys through the sim*() hooks.
 // The classes the compiled core computes with, one row each (model.cpp):
 // its name, the parameters the data need (p experimental and q calibration
 // inputs, K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
@@ -555,6 +549,12 @@ struct ClassNeed { const char* name; int length; bool optional; int Posterior::*
 std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc, int ld,
                                    int u);
 
+// Everything but the simulator block: the field block, its Schur
+// complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a
+// bias) with
+// Q = Rs(Xk,Xk) - Rs(Xs,Xk)' Ds^-1 Rs(Xs,Xk), the residual and the moves'
+// bookkeeping (model.cpp). The simulator algebra behind it supplies
+// log|Ds|, ys' Ds^-1 ys, Q and Rs(Xs,Xk)' Ds^-1 ys through the sim*() hooks.
 class SchurPosterior : public Posterior {
 public:
   bool init(const arma::vec& phi0) override;

@@ -77,14 +77,29 @@ static void add_u(const arma::vec& sd, const arma::vec& sN, const std::vector<in
   }
 }
 
-void FieldFactor::whiten(arma::mat& X, const std::vector<int>& grp) const {
-  if (!reduced) { solve_lower(L, X); return; }
+// X <- L'^-1 X (L lower triangular).
+static void back_solve(const arma::mat& L, arma::mat& X) {
+  X = arma::solve(arma::trimatu(arma::trimatl(L).t()), X);
+}
+
+// The distinct rows' form of whiten() (back false: D^-1/2 X + U (LK^-1 C -
+// C)) and of solve() (back true: D^-1/2 (D^-1/2 X + U (K^-1 C - C))), C =
+// U' D^-1/2 X.
+static void reduced_apply(const FieldFactor& F, const std::vector<int>& grp, arma::mat& X,
+                          bool back) {
   arma::mat C;
-  reduce_cols(sd, sN, grp, X, C);
+  reduce_cols(F.sd, F.sN, grp, X, C);
   arma::mat E = C;
-  solve_lower(L, E);
+  solve_lower(F.L, E);
+  if (back) back_solve(F.L, E);
   E -= C;
-  add_u(sd, sN, grp, E, X);
+  add_u(F.sd, F.sN, grp, E, X);
+  if (back) X.each_col() /= F.sd;
+}
+
+void FieldFactor::whiten(arma::mat& X, const std::vector<int>& grp) const {
+  if (reduced) { reduced_apply(*this, grp, X, false); return; }
+  solve_lower(L, X);
 }
 
 void FieldFactor::whiten(arma::vec& x, const std::vector<int>& grp) const {
@@ -93,20 +108,9 @@ void FieldFactor::whiten(arma::vec& x, const std::vector<int>& grp) const {
 }
 
 void FieldFactor::solve(arma::mat& X, const std::vector<int>& grp) const {
-  if (!reduced) {
-    solve_lower(L, X);
-    X = arma::solve(arma::trimatu(arma::trimatl(L).t()), X);
-    return;
-  }
-  arma::mat C;
-  reduce_cols(sd, sN, grp, X, C);
-  arma::mat E = C;
-  solve_lower(L, E);
-  E = arma::solve(arma::trimatu(arma::trimatl(L).t()), E);
-  E -= C;
-  add_u(sd, sN, grp, E, X);
-  for (arma::uword k = 0; k < X.n_cols; ++k)
-    for (arma::uword i = 0; i < X.n_rows; ++i) X.at(i, k) /= sd[i];
+  if (reduced) { reduced_apply(*this, grp, X, true); return; }
+  solve_lower(L, X);
+  back_solve(L, X);
 }
 
 void FieldFactor::solve(arma::vec& x, const std::vector<int>& grp) const {
