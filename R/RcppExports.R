@@ -41,6 +41,10 @@
     .Call(`_FBC_fbc_loo`, Xf, yf, Xs, ys, phis, nugget, group, model)
 }
 
+.class_algebras <- function() {
+    .Call(`_FBC_class_algebras`)
+}
+
 .model_codes <- function() {
     .Call(`_FBC_model_codes`)
 }

@@ -145,3 +145,35 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
   out[c("name", "code", "neighbours", "reason", "forced", "dims",
         if (!is.null(out$split)) "split", if (!is.null(out$missing)) "missing")]
 }
+
+# The algebra, against the classes the model has parameters of (`sizes`,
+# class_sizes()) and its `outputs` (independent outputs' count): the compiled
+# core computes with some classes on some algebras only (src/model.cpp,
+# class_needs(), read here through .class_algebras()). On a product design
+# the dense algebra replaces the Kronecker one where a class needs it (the
+# compiled core makes the same choice); any other algebra that does not
+# compute with a class is refused, naming the class and the algebras that do.
+class_algebra <- function(alg, sizes, outputs = 1L, call = parent.frame()) {
+  have <- .class_algebras()
+  have <- have[intersect(names(have), names(sizes)[sizes > 0L])]
+  kind <- c(alg$name, if (outputs > 1L) "outputs")
+  lacks <- names(have)[!vapply(have, function(a) all(kind %in% a), logical(1))]
+  if (!length(lacks)) return(alg)
+  dense <- all(vapply(have[lacks], function(a) all(c("dense", kind[-1]) %in% a), logical(1)))
+  if (alg$name == "kronecker" && dense) {
+    return(list(name = "dense", code = algebra_codes[["dense"]], neighbours = NULL,
+                reason = sprintf("exact; the runs are a product design, but the Kronecker algebra does not compute with %s",
+                                 paste0("`", lacks, "`", collapse = ", ")),
+                forced = FALSE, dims = NULL))
+  }
+  label <- c(dense = "dense", kronecker = "Kronecker", vecchia = "nearest-neighbour",
+             "function" = "simulator function's", outputs = "independent outputs'")
+  cls <- lacks[1]
+  ways <- have[[cls]]
+  what <- paste(label[[alg$name]], "algebra", if (outputs > 1L) "of independent outputs")
+  cli::cli_abort(c(
+    "The {what} does not compute with {.field {cls}}.",
+    i = "Only the {.or {label[setdiff(ways, 'outputs')]}} algebra{?s} {?does/do}{if (!'outputs' %in% ways) ', of one output'}.",
+    i = if (alg$forced && "dense" %in% ways && outputs == 1L) "Use {.code algebra = \"dense\"}."
+  ), call = call)
+}

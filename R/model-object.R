@@ -78,7 +78,11 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
                         general = length(pr$levels) == 0L)
   if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
-  alg <- sim_noise_algebra(alg, noise, output, nrow(dat$Xs), call = call)
+  refuse_sim_noise_options(noise, output, nrow(dat$Xs), call = call)
+  alg <- class_algebra(alg, class_sizes(p, dd$q, opt$discrepancy, levels = level_count(pr$levels),
+                                        outputs = output_count(pr$outputs),
+                                        replicates = noise_sizes(pr$replicates)),
+                       output_count(pr$outputs), call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,

@@ -236,11 +236,13 @@ collapse_replicates <- function(dat, reps, latent = FALSE) {
 # their covariance, which the Vecchia conditionals hold as they hold the
 # nugget); several outputs are refused, and so is an input-dependent noise
 # on more than fbc_latent_max unique inputs (its latent GP over them is
-# dense: O(m^3) per move of its hyperparameters), naming simNoise; on a
-# product design the dense algebra replaces the Kronecker one.
+# dense: O(m^3) per move of its hyperparameters), naming simNoise. (The
+# classes of the noise say which algebras compute with them, src/model.cpp:
+# on a product design the dense algebra replaces the Kronecker one,
+# class_algebra().)
 fbc_latent_max <- 2000L
-sim_noise_algebra <- function(alg, noise, outputs, m, call = parent.frame()) {
-  if (noise$mode == "none") return(alg)
+refuse_sim_noise_options <- function(noise, outputs, m, call = parent.frame()) {
+  if (noise$mode == "none") return(invisible(noise))
   asked <- noise$info$asked
   why <- if (asked == "auto") {
     sprintf("The replicate runs differ at %d input%s, so {.code simNoise = \"auto\"} models the simulator's own noise", noise$info$differ, if (noise$info$differ == 1L) "" else "s")
@@ -257,12 +259,7 @@ sim_noise_algebra <- function(alg, noise, outputs, m, call = parent.frame()) {
       i = "Use {.code simNoise = \"constant\"} (one noise variance) or {.code simNoise = \"none\"} (deterministic)."
     ), call = call)
   }
-  if (alg$name == "kronecker") {
-    alg <- list(name = "dense", code = algebra_codes[["dense"]], neighbours = NULL,
-                reason = "exact; the unique runs are a product design, but the simulator's noise needs the dense algebra",
-                forced = FALSE, dims = NULL)
-  }
-  alg
+  invisible(noise)
 }
 
 # sigma2R's prior (from an fbc_hypers made before the class existed: the

@@ -170,6 +170,16 @@ BEGIN_RCPP
     return rcpp_result_gen;
 END_RCPP
 }
+// class_algebras
+Rcpp::List class_algebras();
+RcppExport SEXP _FBC_class_algebras() {
+BEGIN_RCPP
+    Rcpp::RObject rcpp_result_gen;
+    Rcpp::RNGScope rcpp_rngScope_gen;
+    rcpp_result_gen = Rcpp::wrap(class_algebras());
+    return rcpp_result_gen;
+END_RCPP
+}
 // model_codes
 Rcpp::List model_codes();
 RcppExport SEXP _FBC_model_codes() {
@@ -436,6 +446,7 @@ static const R_CallMethodDef CallEntries[] = {
     {"_FBC_sim_algebra", (DL_FUNC) &_FBC_sim_algebra, 4},
     {"_FBC_level_corr_r", (DL_FUNC) &_FBC_level_corr_r, 2},
     {"_FBC_fbc_loo", (DL_FUNC) &_FBC_fbc_loo, 8},
+    {"_FBC_class_algebras", (DL_FUNC) &_FBC_class_algebras, 0},
     {"_FBC_model_codes", (DL_FUNC) &_FBC_model_codes, 0},
     {"_FBC_loglik_path", (DL_FUNC) &_FBC_loglik_path, 10},
     {"_FBC_fbc_predict", (DL_FUNC) &_FBC_fbc_predict, 12},

@@ -541,13 +541,25 @@ bool latent_shift(Posterior& post, double& ll, arma::vec& lp, const std::vector<
 // its name, the parameters the data need (p experimental and q calibration
 // inputs, K outputs; e, b: a simulator GP, a bias GP; G noise groups; lc,
 // ld level correlations; u unique runs with an input-dependent noise),
-// whether a model may have none instead (a class of some models only) and
-// the member holding its offset. read_model() checks the lengths and
-// set_sizes() looks up the offsets by these rows; R's table (model_classes)
-// may hold more classes, and must name these (check_model_codes()).
-struct ClassNeed { const char* name; int length; bool optional; int Posterior::* offset; };
+// whether a model may have none instead (a class of some models only), the
+// member holding its offset and the algebras that compute with it (AlgebraKind
+// bits; all unless the row says). read_model() checks the lengths and the
+// algebras, set_sizes() looks up the offsets and make_posterior() takes the
+// Kronecker algebra only where its classes allow, by these rows; R's table
+// (model_classes) may hold more classes, and must name these
+// (check_model_codes()); R reads the algebras (.class_algebras()).
+enum AlgebraKind { AK_DENSE = 1, AK_KRONECKER = 2, AK_VECCHIA = 4, AK_FUNCTION = 8, AK_OUTPUTS = 16,
+                   AK_ALL = 31 };
+struct ClassNeed {
+  const char* name; int length; bool optional; int Posterior::* offset;
+  unsigned algebras = AK_ALL;
+};
 std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc, int ld,
                                    int u);
+// The first class of `lay` (with parameters) that an algebra of kind `kind`
+// (AlgebraKind bits, all of which must compute with it) does not compute
+// with; nullptr when there is none.
+const char* class_outside(const Layout& lay, unsigned kind);
 
 // Everything but the simulator block: the field block, its Schur
 // complement S = sigma2S Q + sigma2B Rb + sigma2E I (no Rb term without a

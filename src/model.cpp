@@ -31,19 +31,45 @@ double SchurPosterior::loglik(double ldDs, double zz, double ldS, double vv, dou
 // or 1 per output with a bias, muB and lambdaZ one per output with a bias
 // in the discrepancy models that have them; the simulator's own noise,
 // sigma2R or the input-dependent gR (one per unique run) with its GP's
-// muG, sigma2G and thetaG (read_model() checks which goes with which).
+// muG, sigma2G and thetaG (read_model() checks which goes with which),
+// computed by the dense and nearest-neighbour algebras of one emulated output.
 std::vector<ClassNeed> class_needs(int p, int q, int K, int e, int b, int G, int lc, int ld,
                                    int u) {
   using P = Posterior;
+  const unsigned noise = AK_DENSE | AK_VECCHIA;
   return {{"kappa", q, false, &P::iKappa}, {"thetaS", e * K * (p + q), false, &P::iThetaS},
           {"alphaS", e * K * (p + q), false, &P::iAlphaS}, {"thetaB", K * b * p, false, &P::iThetaB},
           {"alphaB", K * b * p, false, &P::iAlphaB}, {"sigma2S", e * K, false, &P::iSigma2S},
           {"sigma2B", K * b, false, &P::iSigma2B}, {"sigma2E", G, false, &P::iSigma2E},
           {"muB", K * b, true, &P::iMuB}, {"lambdaZ", K * b, true, &P::iLambdaZ},
           {"rhoS", e * K * lc, false, &P::iRhoS}, {"rhoB", K * b * lc, false, &P::iRhoB},
-          {"rhoD", K * b * ld, false, &P::iRhoD}, {"sigma2R", 1, true, &P::iSigma2R},
-          {"gR", u, true, &P::iG}, {"muG", 1, true, &P::iMuG}, {"sigma2G", 1, true, &P::iSigma2G},
-          {"thetaG", p + q, true, &P::iThetaG}};
+          {"rhoD", K * b * ld, false, &P::iRhoD}, {"sigma2R", 1, true, &P::iSigma2R, noise},
+          {"gR", u, true, &P::iG, noise}, {"muG", 1, true, &P::iMuG, noise},
+          {"sigma2G", 1, true, &P::iSigma2G, noise}, {"thetaG", p + q, true, &P::iThetaG, noise}};
+}
+
+const char* class_outside(const Layout& lay, unsigned kind) {
+  for (const ClassNeed& c : class_needs(0, 0, 1, 1, 1, 1, 0, 0, 0))
+    if (lay.length_of(c.name) > 0 && (c.algebras & kind) != kind) return c.name;
+  return nullptr;
+}
+
+// The algebras that compute with each class, by name, for R (class_algebra(),
+// R/algebra.R).
+// [[Rcpp::export(.class_algebras)]]
+Rcpp::List class_algebras() {
+  const char* kinds[] = {"dense", "kronecker", "vecchia", "function", "outputs"};
+  const std::vector<ClassNeed> need = class_needs(0, 0, 1, 1, 1, 1, 0, 0, 0);
+  Rcpp::List out(need.size());
+  Rcpp::CharacterVector names(need.size());
+  for (size_t c = 0; c < need.size(); ++c) {
+    std::vector<std::string> k;
+    for (int b = 0; b < 5; ++b) if (need[c].algebras & (1u << b)) k.push_back(kinds[b]);
+    out[c] = Rcpp::wrap(k);
+    names[c] = need[c].name;
+  }
+  out.names() = names;
+  return out;
 }
 
 // Sizes, the layout and the offsets of the classes computed with, looked up

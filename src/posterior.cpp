@@ -167,8 +167,6 @@ Model read_model(const Rcpp::List& model, int p, int q) {
       if (!(c >= 1)) Rcpp::stop("the replicate counts must be 1, 2, ...");
       out.repDf += c - 1.0;
     }
-    if (K > 1 || !out.emulator)
-      Rcpp::stop("the simulator's own noise needs one emulated output");
   }
   // what each class expands over (class_needs()); a bias when sigma2B has
   // parameters
@@ -181,6 +179,12 @@ Model read_model(const Rcpp::List& model, int p, int q) {
     if (have != c.length && !(c.optional && have == 0))
       Rcpp::stop("the layout gives %s %d entries where the data need %d", c.name, have, c.length);
   }
+  // the algebra computes with every class the layout has (on a product
+  // design make_block() takes the Kronecker algebra only where they allow)
+  const unsigned kind = !out.emulator ? AK_FUNCTION
+                        : (K > 1 ? AK_OUTPUTS : 0u) | (out.algebra == ALG_VECCHIA ? AK_VECCHIA : AK_DENSE);
+  if (const char* cls = class_outside(lay, kind))
+    Rcpp::stop("the model's algebra does not compute with %s", cls);
   // the noise: sigma2R (constant) or gR, one per unique input, with its GP's
   // muG, sigma2G and thetaG (input-dependent)
   const int nR = lay.length_of("sigma2R"), nG = lay.length_of("gR");
@@ -207,8 +211,8 @@ static std::unique_ptr<Posterior> make_block(const arma::mat& Xf, const arma::ve
   if (model.algebra == ALG_VECCHIA)
     return std::unique_ptr<Posterior>(new VecchiaPosterior(Xf, yf, Xs, ys, nugget, model));
   if (Xs.n_cols <= Xf.n_cols) Rcpp::stop("Xs needs more columns than Xf");
-  // (the simulator's own noise: the dense algebra, whatever the design)
-  if (model.algebra == ALG_AUTO && model.repCount.empty()) {
+  // (the Kronecker algebra where its classes allow, class_needs())
+  if (model.algebra == ALG_AUTO && !class_outside(model.layout, AK_KRONECKER)) {
     ProductDesign pd;
     if (product_design(Xs, Xf.n_cols, pd, model.levels.empty() && model.outputs.L == 0))
       return std::unique_ptr<Posterior>(new KroneckerPosterior(Xf, yf, Xs, ys, nugget, model, pd));

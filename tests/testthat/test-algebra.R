@@ -66,6 +66,48 @@ test_that("auto: dense while cheap, Vecchia above, Kronecker on a product design
   })
 })
 
+test_that("an algebra that does not compute with a class: Kronecker gives way to dense, others are refused", {
+  # the compiled core's table: the simulator's noise on the dense and
+  # nearest-neighbour algebras of one output, every other class on all
+  alg <- FBC:::.class_algebras()
+  expect_setequal(names(alg), FBC:::model_code_tables(FBC:::.model_codes())$class)
+  for (cls in FBC:::sim_noise_classes) expect_identical(alg[[cls]], c("dense", "vecchia"))
+  expect_identical(unique(alg[setdiff(names(alg), FBC:::sim_noise_classes)]),
+                   list(c("dense", "kronecker", "vecchia", "function", "outputs")))
+  ca <- function(name, sizes, outputs = 1L, forced = FALSE) {
+    FBC:::class_algebra(list(name = name, forced = forced), sizes, outputs)
+  }
+  expect_identical(ca("kronecker", c(kappa = 1L, sigma2R = 0L))$name, "kronecker")
+  expect_identical(ca("vecchia", c(kappa = 1L, sigma2R = 1L))$name, "vecchia")
+  expect_identical(ca("kronecker", c(kappa = 1L, sigma2R = 1L))[c("name", "code", "forced")],
+                   list(name = "dense", code = 1L, forced = FALSE))
+  expect_snapshot(error = TRUE, {
+    ca("function", c(kappa = 1L, sigma2R = 1L))
+    ca("kronecker", c(kappa = 1L, gR = 5L, muG = 1L), outputs = 2L)
+  })
+  # a stochastic simulator on a product design of unique inputs: the model
+  # takes the dense algebra, and the compiled core, left to choose (auto),
+  # takes it too: the same log-likelihood to the bit
+  set.seed(2)
+  U <- expand.grid(x = seq(0, 3, length.out = 6), t = seq(0.5, 3, length.out = 5))
+  X <- U[rep(seq_len(30), 2), ]
+  sim <- data.frame(y = 5 * exp(-X$t * X$x) + stats::rnorm(60, 0, 0.2), x = X$x, t = X$t)
+  field <- data.frame(y = 5 * exp(-1.7 * c(0.5, 1.5, 2.5)) + c(0.02, -0.03, 0.01), x = c(0.5, 1.5, 2.5))
+  model <- calibrate(sim, field, fit = FALSE)
+  expect_identical(model$algebra$name, "dense")
+  expect_match(model$algebra$reason, "does not compute with `sigma2R`", fixed = TRUE)
+  d <- model$data
+  cm <- model$spec$model
+  expect_true(length(FBC:::.sim_algebra(d$Xs, 1L, 0L)) > 0)  # a product design
+  phi <- c(random_phi(1, 1, "gp"), 0.05)
+  ll <- function(code) {
+    cm$algebra <- code
+    FBC:::.fbc_loglik(d$Xf, d$yf, d$Xs, d$ys, phi, FBC:::fbc_nugget, model = cm)
+  }
+  expect_identical(ll(0L), ll(1L))
+  expect_true(is.finite(ll(0L)))
+})
+
 test_that("a named algebra is used as asked, and neighbours without Vecchia gets a message", {
   set.seed(2)
   X <- matrix(runif(200 * 2), 200)
