@@ -229,7 +229,8 @@ fbc_spec_problems <- function(x) {
                                                    if (disc == "none") 0L else dm$sources,
                                                    outputs = dm$outputs %||% 1L,
                                                    emulator = x$model$algebra$name != "function",
-                                                   replicates = noise_sizes(spec$model$replicates)))) {
+                                                   replicates = noise_sizes(spec$model$replicates),
+                                                   asked = asked_classes(compiled = spec$model)))) {
     return(c(out, sprintf("`model$spec$model` must hold the layout of phi for p = %d, q = %d and discrepancy \"%s\" (offset and length by class).",
                           sc$p, sc$q, disc)))
   }

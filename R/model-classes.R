@@ -26,7 +26,10 @@
 #            simulator input with an input-dependent noise: its latent
 #            log-variances; else none), "latent" (one with an
 #            input-dependent noise, else none), "latentInputs" (p + q with
-#            an input-dependent noise, else none), "one"
+#            an input-dependent noise, else none), "one", "asked" (one
+#            when the model is given the class's prior, set_hyperPriors()'s
+#            <class>Dist, whose default NULL leaves the class out: a
+#            parameter a user adds; asked_classes())
 #   domain   "real", "positive", "unit12" ([1, 2]) or "corr" ((-1, 1))
 #   walk     the scale its random walk runs on: "identity", "log",
 #            "logit12" (logit of x - 1), "atanh" (Fisher's z)
@@ -80,7 +83,8 @@ model_classes <- data.frame(
 # `prior` its family, initial value (NA: from the data, or the family's
 # centre) and the family's two parameters, the defaults of set_hyperPriors()'
 # arguments <class>Dist, <class>Init, <class>P1 and <class>P2 (in this
-# order, which is theirs); `help` those arguments' help (roxygen markdown,
+# order, which is theirs; a class over "asked" has the family NULL: none
+# unless a user gives one); `help` those arguments' help (roxygen markdown,
 # pasted; a class without one is documented with the class before it).
 class_priors <- list(
   thetaS = list(prior = alist("gamma", 1, 1.1, 0.1),
@@ -233,14 +237,16 @@ discrepancy_having <- function(cls) {
 # a function (`emulator` FALSE), no simulator-GP classes; `replicates`
 # the noise classes' sizes (noise_sizes(), R/sim_noise.R): 1 for a
 # constant noise (sigma2R), c(0, m) for an input-dependent one over m
-# unique inputs (gR, muG, sigma2G, thetaG).
+# unique inputs (gR, muG, sigma2G, thetaG); `asked` the classes over
+# "asked" that the model has (asked_classes()).
 class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sources = 0L,
-                        outputs = 1L, emulator = TRUE, replicates = 0L) {
+                        outputs = 1L, emulator = TRUE, replicates = 0L, asked = character()) {
   rp <- c(as.integer(replicates), 0L)[1:2]
   n <- c(calibration = q, inputs = p + q, experimental = p, one = 1L, noise = noise,
          levels = levels, sources = sources, replicates = rp[1], unique = rp[2],
-         latent = as.integer(rp[2] > 0L), latentInputs = if (rp[2] > 0L) p + q else 0L)
+         latent = as.integer(rp[2] > 0L), latentInputs = if (rp[2] > 0L) p + q else 0L, asked = 1L)
   n <- as.integer(n[model_classes$over])
+  n[model_classes$over == "asked" & !model_classes$class %in% asked] <- 0L
   n[!class_in_model(discrepancy)] <- 0L
   n[model_classes$perOutput] <- n[model_classes$perOutput] * as.integer(outputs)
   # a simulator given as a function (R/simulator_function.R) has no
@@ -253,16 +259,28 @@ class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sourc
 # is a function.
 emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
 
+# The classes over "asked" that a model has: those `hypers` gives a prior
+# (an fbc_hypers), or, from a compiled model (its `offset` and `length`),
+# those its layout holds.
+asked_classes <- function(hypers = NULL, compiled = NULL) {
+  ask <- model_classes$class[model_classes$over == "asked"]
+  if (!is.null(compiled)) return(intersect(ask, names(compiled$length)[compiled$length > 0L]))
+  ask[!vapply(ask, function(cls) is.null(hypers[[cls]]), logical(1))]
+}
+
 # The layout of phi, the sampler's parameter vector: for each class, its
 # 1-based positions (a named list; integer(0) for an empty class).
 param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                           sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
+                           sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L,
+                           asked = character()) {
   sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, outputs = outputs,
-                       emulator = emulator, replicates = replicates)
-  # the simulator's own noise has classes only in the models that have it:
-  # every other model's layout is the one it has always been (fits and
-  # checkpoints made before the classes existed keep theirs)
-  sizes <- sizes[!(names(sizes) %in% sim_noise_classes & sizes == 0L)]
+                       emulator = emulator, replicates = replicates, asked = asked)
+  # the simulator's own noise and the classes a user adds are in the layout
+  # only of the models that have them: every other model's layout is the one
+  # it has always been (fits and checkpoints made before the classes existed
+  # keep theirs)
+  later <- c(sim_noise_classes, model_classes$class[model_classes$over == "asked"])
+  sizes <- sizes[!(names(sizes) %in% later & sizes == 0L)]
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),
                   names(sizes))
@@ -273,15 +291,16 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # independent outputs (`outputs`: their labels, or a count) a perOutput
 # class's copies end in "[label]" (thetaS1[amount], sigma2S[amount]).
 param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                         sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
+                         sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L,
+                         asked = character()) {
   K <- if (is.character(outputs)) length(outputs) else as.integer(outputs)
   lab <- if (is.character(outputs)) outputs else as.character(seq_len(K))
   sizes <- class_sizes(p, q, discrepancy, noise, levels, sources, emulator = emulator,
-                       replicates = replicates)
+                       replicates = replicates, asked = asked)
   unlist(lapply(seq_along(sizes), function(i) {
     cls <- names(sizes)[i]
     one <- if (sizes[i] == 0L) character(0)
-    else if (model_classes$over[i] %in% c("one", "replicates", "latent") ||
+    else if (model_classes$over[i] %in% c("one", "replicates", "latent", "asked") ||
              (model_classes$over[i] == "noise" && sizes[i] == 1L)) cls
     else paste0(cls, seq_len(sizes[i]))
     if (K > 1L && model_classes$perOutput[i] && length(one)) {
@@ -292,17 +311,18 @@ param_names <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 
 # The class of each parameter of phi.
 param_class_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                            sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
+                            sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L,
+                            asked = character()) {
   rep(model_classes$class, class_sizes(p, q, discrepancy, noise, levels, sources,
                                        outputs = outputs, emulator = emulator,
-                                       replicates = replicates))
+                                       replicates = replicates, asked = asked))
 }
 
 # The output (1-based) each parameter of phi belongs to with `outputs`
 # independent outputs: 0 for the shared ones (kappa, sigma2E).
 param_output_of <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                             sources = 0L, outputs = 1L) {
-  one <- class_sizes(p, q, discrepancy, noise, levels, sources)
+                             sources = 0L, outputs = 1L, asked = character()) {
+  one <- class_sizes(p, q, discrepancy, noise, levels, sources, asked = asked)
   unlist(lapply(seq_along(one), function(i) {
     if (outputs > 1L && model_classes$perOutput[i]) rep(seq_len(outputs), each = one[[i]])
     else rep(0L, one[[i]])
@@ -320,9 +340,10 @@ absent_classes <- function(kernS, kernB) {
 # 0-based offsets and lengths named by class (sigma2R only when the
 # simulator's own noise is modelled: param_indices()).
 layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
-                          sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L) {
+                          sources = 0L, outputs = 1L, emulator = TRUE, replicates = 0L,
+                          asked = character()) {
   idx <- param_indices(p, q, discrepancy, noise, levels, sources, outputs = outputs,
-                       emulator = emulator, replicates = replicates)
+                       emulator = emulator, replicates = replicates, asked = asked)
   len <- lengths(idx)
   ends <- cumsum(len)
   list(offset = stats::setNames(as.integer(ends - len), names(idx)),
@@ -351,11 +372,13 @@ layout_codes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
 # and finds them itself without it).
 compiled_model <- function(p, q, kernS = 1L, kernB = 1L, algebra = 0L, discrepancy = "gp",
                            vecchia = NULL, noise = NULL, levels = NULL, source = NULL,
-                           outputs = NULL, simulator = NULL, replicates = NULL, Xf = NULL) {
+                           outputs = NULL, simulator = NULL, replicates = NULL, Xf = NULL,
+                           asked = character()) {
   if (discrepancy == "none") source <- NULL
   lay <- layout_codes(p, q, discrepancy, if (is.null(noise)) 1L else max(noise), level_count(levels),
                       source_count(source), outputs = output_count(outputs),
-                      emulator = is.null(simulator), replicates = noise_sizes(replicates))
+                      emulator = is.null(simulator), replicates = noise_sizes(replicates),
+                      asked = asked)
   c(list(kernS = as.integer(kernS), kernB = as.integer(kernB), algebra = as.integer(algebra),
          discrepancy = discrepancy_codes[[discrepancy]]),
     lay, class_roles(names(lay$offset)),

@@ -81,7 +81,8 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   refuse_sim_noise_options(noise, output, nrow(dat$Xs), call = call)
   alg <- class_algebra(alg, class_sizes(p, dd$q, opt$discrepancy, levels = level_count(pr$levels),
                                         outputs = output_count(pr$outputs),
-                                        replicates = noise_sizes(pr$replicates)),
+                                        replicates = noise_sizes(pr$replicates),
+                                        asked = asked_classes(opt$hypers)),
                        output_count(pr$outputs), call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
@@ -90,7 +91,8 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                vecchia = if (alg$name == "vecchia") {
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
-                               outputs = pr$outputs, replicates = pr$replicates, Xf = dat$Xf)
+                               outputs = pr$outputs, replicates = pr$replicates, Xf = dat$Xf,
+                               asked = asked_classes(opt$hypers))
   if (noise$link == "realization") spec$model$replicates$realization <- TRUE
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],
@@ -248,7 +250,8 @@ new_fbc_model <- function(data, raw, scale, design, spec, kernelS, kernelB, disc
                outputs = output_count(design$outputs), d = length(spec$vars))
   lay <- layout_codes(dims$p, dims$q, discrepancy, dims$noise, dims$levels, dims$sources,
                       outputs = dims$outputs, emulator = algebra$name != "function",
-                      replicates = noise_sizes(spec$model$replicates))
+                      replicates = noise_sizes(spec$model$replicates),
+                      asked = asked_classes(compiled = spec$model))
   x <- structure(list(
     data = data, raw = raw, scale = scale, design = design, dims = dims,
     classes = data.frame(class = names(lay$offset), offset = unname(lay$offset),
@@ -295,7 +298,8 @@ fbc_model_problems <- function(x) {
   if (length(out)) return(out)
   lay <- layout_codes(d$p, d$q, x$discrepancy, d$noise, d$levels, d$sources,
                       outputs = d$outputs %||% 1L, emulator = is.null(x$spec$model$simulator),
-                      replicates = noise_sizes(x$spec$model$replicates))
+                      replicates = noise_sizes(x$spec$model$replicates),
+                      asked = asked_classes(compiled = x$spec$model))
   if (!identical(x$classes$length, unname(lay$length)) ||
       !identical(x$classes$offset, unname(lay$offset)) ||
       !identical(x$classes$class, names(lay$length))) {

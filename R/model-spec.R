@@ -146,8 +146,9 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   nSrc <- source_count(source)
   K <- output_count(outputs)
   nRep <- noise_sizes(replicates)
+  asked <- asked_classes(hypers)
   sizes <- class_sizes(p, q, discrepancy, noise, nLev, nSrc, emulator = emulator,
-                       replicates = nRep)
+                       replicates = nRep, asked = asked)
   classes <- param_classes[sizes > 0L]
   priors <- list(kappa = kappaSpec)
   for (cls in classes[-1]) {
@@ -208,12 +209,12 @@ build_priors <- function(kappaSpec, hypers, scale, p, q, discrepancy = "gp", noi
   table <- do.call(rbind, rows)
   vars <- param_names(p, q, discrepancy, noise, nLev, nSrc,
                       outputs = if (K > 1L) scale$output$levels else 1L, emulator = emulator,
-                      replicates = nRep)
+                      replicates = nRep, asked = asked)
   cls_of <- param_class_of(p, q, discrepancy, noise, nLev, nSrc, outputs = K, emulator = emulator,
-                           replicates = nRep)
+                           replicates = nRep, asked = asked)
   sd0 <- model_classes$sd0[match(cls_of, model_classes$class)]
   list(table = table, init = init, logsd = log(sd0), vars = vars,
-       classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K),
+       classes = cls_of, outputOf = if (K > 1L) param_output_of(p, q, discrepancy, noise, nLev, nSrc, K, asked),
        priors = priors, fns = prior_functions(table, vars, cls_of, scale))
 }
 

@@ -283,6 +283,17 @@ set_hyperPriors <- function() {
   for (cls in intersect(param_classes, names(class_priors))) {
     is_missing <- function(arg) eval(call("missing", as.name(paste0(cls, arg))), env)
     dist <- get(paste0(cls, "Dist"), env)
+    # a class a user adds (model_classes' over "asked") is in the model only
+    # when given a family
+    if (is.null(dist)) {
+      given <- paste0(cls, c("Init", "P1", "P2"))[!vapply(c("Init", "P1", "P2"), is_missing, logical(1))]
+      if (length(given)) {
+        cli::cli_abort(c("{.arg {given}} {?is/are} given, but not {.arg {cls}Dist}.",
+                         i = "{.arg {cls}Dist} adds the class's parameter to the model; without it there is none."),
+                       call = env)
+      }
+      next
+    }
     # a family that cannot fit the class is the first thing to say
     for (d in Filter(support_known, unique(dist[is.character(dist) & dist %in% names(prior_registry)]))) {
       check_support(d, NA, NA, cls, arg = paste0(cls, "Dist"), call = env)

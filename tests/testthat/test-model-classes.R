@@ -447,3 +447,42 @@ test_that("without a discrepancy the sampler retains dense log-likelihoods and h
   })
   expect_equal(res$logLik, dense, tolerance = 1e-8)
 })
+
+test_that("a class a user adds (over \"asked\") has parameters only in the models given its prior", {
+  # the package's table with one such class added, read by copies of the
+  # functions that size the layout
+  tbl <- FBC:::model_classes
+  extra <- tbl[tbl$class == "muB", ]
+  extra$class <- "extra"
+  extra$over <- "asked"
+  env <- list2env(list(model_classes = rbind(tbl, extra)), parent = asNamespace("FBC"))
+  for (f in c("class_sizes", "class_in_model", "param_indices", "layout_codes", "param_names",
+              "asked_classes")) {
+    fn <- get(f, asNamespace("FBC"))
+    environment(fn) <- env
+    assign(f, fn, envir = env)
+  }
+  sizes <- env$class_sizes(2, 1)
+  expect_identical(sizes[["extra"]], 0L)
+  expect_identical(env$class_sizes(2, 1, asked = "extra")[["extra"]], 1L)
+  # every other class as without it
+  expect_identical(env$class_sizes(2, 1, asked = "extra")[names(FBC:::class_sizes(2, 1))],
+                   FBC:::class_sizes(2, 1))
+  # a model without it has the layout it had; with it, the class comes last
+  expect_identical(env$layout_codes(2, 1), FBC:::layout_codes(2, 1))
+  with <- env$layout_codes(2, 1, asked = "extra")
+  d <- sum(FBC:::layout_codes(2, 1)$length)
+  expect_identical(with$offset[["extra"]], d)
+  expect_identical(with$length[["extra"]], 1L)
+  expect_identical(env$param_names(2, 1, asked = "extra"), c(FBC:::param_names(2, 1), "extra"))
+  # asked: by the priors (an fbc_hypers with the class) or off a compiled layout
+  expect_identical(env$asked_classes(set_hyperPriors()), character())
+  h <- set_hyperPriors()
+  h$extra <- list(dist = "gaussian", init = 0, p1 = 0, p2 = 1)
+  expect_identical(env$asked_classes(h), "extra")
+  expect_identical(env$asked_classes(compiled = with), "extra")
+  expect_identical(env$asked_classes(compiled = FBC:::layout_codes(2, 1)), character())
+  # the package's own classes: none is asked for, so every model's layout
+  # is as before
+  expect_identical(FBC:::asked_classes(set_hyperPriors()), character())
+})
