@@ -435,7 +435,7 @@ struct Move {
   // its adapted state into the chain's state list (write_chain())
   virtual void write(arma::vec&, arma::vec&, Rcpp::List&) const {}
   // the acceptance rate its scale adapts towards (NA: not adapted)
-  virtual double target() const { return NA_REAL; }
+  virtual double acceptGoal() const { return NA_REAL; }
   virtual const char* kind() const = 0;
 };
 
@@ -482,7 +482,7 @@ struct SiteMove : Move {
     logsd = adapt_step(logsd, accBatch / BATCH, 0.44, ch.batch);
   }
   double logScale() const override { return logsd; }
-  double target() const override { return 0.44; }
+  double acceptGoal() const override { return 0.44; }
   void write(arma::vec& lsd, arma::vec& acc, Rcpp::List&) const override {
     lsd[j] = logsd; acc[j] = accBatch;
   }
@@ -670,7 +670,7 @@ struct BlockMove : Move {
   // (an independence proposal has no adapted scale)
   double logScale() const override { return indOn ? NA_REAL : b.logscale; }
   double warmScale() const override { return b.logscale + b.log_volume(); }
-  double target() const override { return idx.size() == 1 ? 0.44 : 0.234; }
+  double acceptGoal() const override { return idx.size() == 1 ? 0.44 : 0.234; }
 };
 
 // Exact draw of muB from its Gaussian full conditional (gaussian prior).
@@ -713,7 +713,7 @@ struct ScalarMove : Move {
     logsd = adapt_step(logsd, accBatch / BATCH, goal, batch);
   }
   double logScale() const override { return logsd; }
-  double target() const override { return goal; }
+  double acceptGoal() const override { return goal; }
   const char* kind() const override { return key.c_str(); }
   void write(arma::vec&, arma::vec&, Rcpp::List& out) const override {
     out[key + "Logsd"] = logsd; out[key + "AccBatch"] = accBatch; out[key + "Batch"] = batch;
@@ -1057,7 +1057,7 @@ static bool window_settled(Chain& ch, const Schedule& schedule) {
   bool ok = ch.windows >= 2;  // the log scales two windows back to compare with
   const int nm = schedule.size();
   for (int i = 0; i < nm; ++i) {
-    const double target = schedule[i]->target(), ls = schedule[i]->warmScale();
+    const double target = schedule[i]->acceptGoal(), ls = schedule[i]->warmScale();
     if (!ISNAN(target)) {
       if (std::fabs(ch.winAcc[i] / (WINDOW / BATCH) - target) > WARM_BAND) ok = false;
       // the drift since two windows back (since the first window's end at
