@@ -11,11 +11,12 @@
 #' \deqn{y_f = \eta(x_f, \kappa) + \delta(x_f) + \epsilon, \quad y_s = \eta(x_s, t_s),}
 #' \eqn{\eta \sim GP(0, \sigma^2_S R_s)}, \eqn{\delta \sim GP(\mu_B, \sigma^2_B R_b)},
 #' \eqn{\epsilon \sim N(0, \sigma^2_E)}, with separable correlations of the
-#' family chosen for each GP ([correlation()]). `discrepancy = "sgasp"`
-#' replaces \eqn{\delta} by the scaled GP of Gu and Wang (2018), `"none"`
-#' drops it. Inputs are scaled to \eqn{[0, 1]} over the simulator design and
-#' the response standardised by the simulator runs; the hyperparameters and
-#' their priors live on that scale, \eqn{\kappa} in its own units.
+#' family chosen for each GP ([correlation()]). This is
+#' `discrepancy = "gp"`, the default; the other models of `discrepancy`
+#' (below) change \eqn{\delta} or drop it. Inputs are scaled to
+#' \eqn{[0, 1]} over the simulator design and the response standardised by
+#' the simulator runs; the hyperparameters and their priors live on that
+#' scale, \eqn{\kappa} in its own units.
 #'
 #' The details are in the articles: `vignette("model", package = "FBC")`
 #' (discrepancy models, correlation families, scaling, categorical inputs,
@@ -84,9 +85,7 @@
 #'   A prior reaching beyond the range the simulator design covers warns,
 #'   and one with no support on it is refused.
 #' @param hypers Hyperparameter priors from [set_hyperPriors()].
-#' @param discrepancy The discrepancy model: `"gp"` (the default, the bias
-#'   GP), `"sgasp"` (the scaled GP of Gu and Wang 2018) or `"none"` (no
-#'   discrepancy).
+#' @eval discrepancy_docs()
 #' @param kernelS,kernelB Correlation family of the simulator GP and of the
 #'   bias GP: `"matern52"` (the default), `"powexp"` (the vignette's),
 #'   `"gaussian"` or `"matern32"`.
@@ -174,7 +173,8 @@
 #'   draw, chains stacked; one column per parameter, in the order `kappa`,
 #'   `thetaS`, `alphaS`, `thetaB`, `alphaB`, `sigma2S`, `sigma2B`, `sigma2E`,
 #'   `muB`, without `alphaS`/`alphaB` for a family that has no smoothness
-#'   and without the bias's parameters under `discrepancy = "none"`),
+#'   and without those of the bias GP the discrepancy model lacks, all
+#'   of them under `discrepancy = "none"`),
 #'   `chain` (the chain of each row), `estimates` (posterior summaries with
 #'   `rhat` and `ess`), `logPost`, `priors`, `acceptance`, `vars` (the names
 #'   of `Phi`'s columns), `indices` (for each parameter

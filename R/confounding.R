@@ -3,7 +3,7 @@
 # measurement error's, so the data cannot separate a change of the
 # calibration from a bias.
 #
-# With a bias GP (discrepancy "gp" or "sgasp"), a calibration parameter is
+# With a bias GP (any discrepancy model with one), a calibration parameter is
 # flagged when its posterior is nearly what its prior says or spans most of
 # the range the simulator design covers -- its central 95% covers at least
 # `fbc_confound_cover` of the design's range, or its posterior sd is at

@@ -242,7 +242,7 @@ smooth_kernel_hint <- function(cls) {
 #' field data; more runs where kappa's draws lie are the remedy).
 #'
 #' @section Confounding:
-#' With a bias GP (`discrepancy = "gp"` or `"sgasp"`), a calibration
+#' With a bias GP (any `discrepancy` of [calibrate()] that has one), a calibration
 #' parameter is flagged when the field data barely inform it -- its central
 #' 95% posterior interval covers at least 70% of the range the simulator
 #' design covers, or its posterior sd is at least 70% of its prior's --

@@ -85,7 +85,9 @@ model_classes <- data.frame(
 # arguments <class>Dist, <class>Init, <class>P1 and <class>P2 (in this
 # order, which is theirs; a class over "asked" has the family NULL: none
 # unless a user gives one); `help` those arguments' help (roxygen markdown,
-# pasted; a class without one is documented with the class before it).
+# pasted; a class without one is documented with the class before it;
+# "{with}" stands for the discrepancy models with the class, "{without}"
+# for those with a bias GP but without it: class_models_docs()).
 class_priors <- list(
   thetaS = list(prior = alist("gamma", 1, 1.1, 0.1),
     help = "Simulator GP correlation scales."),
@@ -105,9 +107,9 @@ class_priors <- list(
   sigma2E = list(prior = alist("halft_sd", 0.1, 1, 1),
     help = "Measurement error variance."),
   muB = list(prior = alist("gaussian", 0, 0, 1),
-    help = c("Bias GP mean (not under `discrepancy = \"sgasp\"`, whose bias has mean 0).")),
+    help = c("Bias GP mean (not under {without}, whose bias has mean 0).")),
   lambdaZ = list(prior = alist("lognormal", 20, log(20), 1.5),
-    help = c("Scale \\eqn{\\lambda_z} of the S-GaSP discrepancy (`discrepancy = \"sgasp\"` in",
+    help = c("Scale \\eqn{\\lambda_z} of the S-GaSP discrepancy ({with} in",
       "[calibrate()] only): how strongly the bias's L2 norm is shrunk. The default",
       "lognormal prior has median 20 (meanlog `log(20)`, sdlog 1.5: 95% between about 1",
       "and 380), around the value RobustCalibration's default rule \\eqn{\\sqrt{n \\|\\beta",
@@ -179,21 +181,25 @@ class_domain <- stats::setNames(model_classes$domain, model_classes$class)
 class_transform <- stats::setNames(walk_codes[model_classes$walk], model_classes$class)
 
 # The discrepancy models of calibrate(discrepancy =), one row each, the one
-# description all code reads (the compiled core sees a model only through
-# its layout: a bias GP when sigma2B has parameters, see src/fbc.h):
+# description all code and help read (the compiled core sees a model only
+# through its layout: a bias GP when sigma2B has parameters, see src/fbc.h):
 #   name     the choice's name (the first is the default)
 #   code     its code in a fit's compiled model (spec$model$discrepancy;
 #            fits store it, so a code never changes)
 #   label    print()'s name of the model
 #   classes  the classes of the bias GP it has (space separated); a class
 #            named by no model is in every model
+#   help     what it is, for calibrate()'s help (roxygen markdown, after
+#            the name: discrepancy_docs())
 discrepancy_models <- rows_table(
   list(name = "gp", code = 0L, label = "Kennedy-O'Hagan",
-       classes = "thetaB alphaB rhoB rhoD sigma2B muB"),
+       classes = "thetaB alphaB rhoB rhoD sigma2B muB",
+       help = "the bias GP, with mean `muB`"),
   list(name = "sgasp", code = 2L, label = "S-GaSP discrepancy, Gu and Wang 2018",
-       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ"),
+       classes = "thetaB alphaB rhoB rhoD sigma2B lambdaZ",
+       help = "the scaled GP of Gu and Wang 2018, with mean 0 and scale `lambdaZ`"),
   list(name = "none", code = 1L, label = "no discrepancy: y_f = eta(x, kappa) + eps",
-       classes = "")
+       classes = "", help = "no discrepancy")
 )
 discrepancy_codes <- stats::setNames(discrepancy_models$code, discrepancy_models$name)
 
@@ -212,21 +218,52 @@ class_in_model <- function(discrepancy) {
     model_classes$class %in% has[[match(discrepancy, discrepancy_models$name)]]
 }
 
+# The discrepancy models with parameters of class `cls` (in the table's
+# order); bias = TRUE: only those with a bias GP (sigma2B).
+class_models <- function(cls, bias = FALSE) {
+  has <- function(d, cls) class_in_model(d)[match(cls, model_classes$class)]
+  keep <- vapply(discrepancy_models$name, function(d) has(d, cls) && (!bias || has(d, "sigma2B")),
+                 logical(1))
+  discrepancy_models$name[keep]
+}
+
+# "a", "a or b", "a, b or c".
+or_list <- function(x) {
+  if (length(x) < 2L) return(x)
+  paste(paste(x[-length(x)], collapse = ", "), "or", x[length(x)])
+}
 
 # Why the discrepancy model has no parameter of class `cls`, and which
-# models have one (for messages).
+# models have one (for messages): a model without a bias GP has none of
+# its classes; a class some models with a bias GP lack says so in its own
+# words (class_lacks).
+class_lacks <- c(muB = "has no bias mean (its bias has mean 0)",
+                 lambdaZ = "has no S-GaSP scale")
 discrepancy_lacks <- function(cls, discrepancy) {
-  if (discrepancy == "none") return("has no bias GP")
-  switch(cls,
-         muB = "has no bias mean (the S-GaSP bias has mean 0)",
-         lambdaZ = "has no S-GaSP scale",
-         "has no such parameter")
+  if (!class_in_model(discrepancy)[match("sigma2B", model_classes$class)]) return("has no bias GP")
+  if (cls %in% names(class_lacks)) class_lacks[[cls]] else "has no such parameter"
 }
 discrepancy_having <- function(cls) {
-  has <- names(discrepancy_codes)[vapply(names(discrepancy_codes), function(d)
-    class_in_model(d)[match(cls, model_classes$class)], logical(1))]
   sprintf("Use %s in `calibrate()` to sample `%s`.",
-          paste(sprintf("`discrepancy = \"%s\"`", has), collapse = " or "), cls)
+          or_list(sprintf("`discrepancy = \"%s\"`", class_models(cls))), cls)
+}
+
+# The help of calibrate()'s argument `discrepancy` (roxygen, @eval): the
+# models in the table's order with their `help`, the first the default.
+discrepancy_docs <- function() {
+  d <- discrepancy_models
+  what <- paste0(c("the default, ", rep("", nrow(d) - 1L)), d$help)
+  paste0("@param discrepancy The discrepancy model: ",
+         or_list(sprintf("`\"%s\"` (%s)", d$name, what)), ".")
+}
+
+# A class's help with "{with}" and "{without}" (class_priors) replaced by
+# the models with the class and those with a bias GP but without it
+# (`discrepancy = "a"` or `"b"`).
+class_models_docs <- function(help, cls) {
+  name <- function(x) if (length(x)) or_list(sprintf(c("`discrepancy = \"%s\"`", rep("`\"%s\"`", length(x) - 1L)), x)) else "none"
+  help <- gsub("{with}", name(class_models(cls)), help, fixed = TRUE)
+  gsub("{without}", name(setdiff(class_models("sigma2B"), class_models(cls))), help, fixed = TRUE)
 }
 
 # How many parameters each class has with p experimental and q calibration

@@ -52,8 +52,9 @@ indicator_hypers <- function(hypers, pos, p, q) {
 }
 
 # The hyperparameter priors of the discrepancy model: the classes it does
-# not have (the bias GP's under "none", muB under "sgasp", lambdaZ but
-# under "sgasp") have no parameters, so a prior the user gave for one, or a
+# not have (class_in_model(): all of the bias GP's without one, and those
+# of the bias GP its row in discrepancy_models does not name) have no
+# parameters, so a prior the user gave for one, or a
 # bias correlation family other than the default (calibrate()'s
 # "matern52") without a bias, is ignored with a warning naming
 # the arguments.

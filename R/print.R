@@ -1,7 +1,7 @@
 #' Print a calibration
 #'
-#' Shows a compact header (the discrepancy model: Kennedy-O'Hagan's bias GP,
-#' the S-GaSP or none, see `discrepancy` in [calibrate()]; data sizes; the names of the
+#' Shows a compact header (the discrepancy model by its name, e.g.
+#' Kennedy-O'Hagan: see `discrepancy` in [calibrate()]; data sizes; the names of the
 #' response, the experimental inputs and the calibration inputs, with the
 #' range the simulator design covers for each calibration input; the MCMC
 #' settings, the acceptance rates, the correlation families of the
@@ -36,7 +36,7 @@ print.fbc <- function(x, digits = 3, ...) {
   s <- x$settings
   mo <- x$model
   sc <- x$model$scale
-  gp <- mo$discrepancy != "none"  # a bias GP (KOH or S-GaSP)
+  gp <- mo$discrepancy != "none"  # a bias GP (every model but "none")
   cat(sprintf("<fbc> Full Bayesian calibration (%s)\n", discrepancy_info(mo$discrepancy, "label")))
   fn <- !is.null(mo$simulator)  # the simulator is a function (R/simulator_function.R)
   cat(sprintf("  data: n = %d field, %s; p = %d, q = %d\n", length(x$model$data$yf),

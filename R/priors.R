@@ -322,7 +322,7 @@ hyper_param_docs <- function() {
     if (is.null(help)) {
       out[length(out)] <- sub("^@param (\\S+)", paste0("@param \\1,", args), out[length(out)])
     } else {
-      out <- c(out, paste("@param", args, paste(help, collapse = " ")))
+      out <- c(out, paste("@param", args, class_models_docs(paste(help, collapse = " "), cls)))
     }
   }
   out

@@ -124,9 +124,9 @@
 #' The conditional is computed per draw with a dense Cholesky factor of
 #' the covariance of the \eqn{m} runs and the field's distinct inputs
 #' (exact, whatever algebra the fit ran; refused beyond 3000 runs and
-#' distinct field inputs). It handles every discrepancy model (`"gp"`,
-#' `"sgasp"`: its bias on the field's distinct inputs as the fit has it,
-#' `"none"`); several field data sets (`source`), each with its own noise
+#' distinct field inputs). It handles every discrepancy model (any
+#' `discrepancy` of [calibrate()]: its bias, if it has one, on the field's
+#' distinct inputs as the fit has it); several field data sets (`source`), each with its own noise
 #' variance, with one bias or a bias each (`sourceBias = "own"`; then for
 #' kappa only: a prediction target is refused, as its bias would be that
 #' of no data set); and categorical inputs (their level correlations as

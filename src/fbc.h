@@ -345,9 +345,9 @@ public:
   int iKappa, iThetaS, iAlphaS, iThetaB, iAlphaB, iSigma2S, iSigma2B, iSigma2E, iMuB, iLambdaZ;
   int iRhoS, iRhoB, iRhoD;          // the level correlations' partial correlations
   std::vector<LevelInput> levels;   // the categorical inputs (none: empty)
-  bool bias;                // the model has a bias GP (KOH or S-GaSP)
-  bool biasMean;            // ... with a mean muB (KOH)
-  bool sgasp;               // ... scaled (S-GaSP)
+  bool bias;                // the model has a bias GP (sigma2B has parameters)
+  bool biasMean;            // ... with a mean (muB has)
+  bool sgasp;               // ... scaled, the S-GaSP (lambdaZ has)
   // the simulator's own noise (sigma2R has a parameter): the runs are the
   // unique inputs' means, so D = sigma2S (Rs + nugget I) + sigma2R
   // diag(repInv) and the log-likelihood has the replicates' within term

@@ -2,8 +2,9 @@
 // (R/simulator_function.R builds the closures). No simulator GP: in the
 // scaled space, with fs(kappa) the scaled f at the n field rows,
 //   yf = fs(kappa) + delta + eps,
-//   S = sigma2B Rb + sigma2E I   (KOH, with mean muB; S-GaSP: Rb -> Rz, no
-//       muB; "none": S = sigma2E I),
+//   S = sigma2B Rb + sigma2E I   (with a bias GP: its mean muB when muB
+//       has parameters, else 0; Rb -> Rz when scaled, lambdaZ; without
+//       one S = sigma2E I),
 //   log L = -0.5 [ n log 2pi + log|S| + v'v ],  v = F^-1 (yf - muB - fs),
 // S = F F' (FieldFactor, field.cpp). f is called once per kappa proposal (the closure `field`,
 // vectorised over the field rows) and its value kept on accept; a move of

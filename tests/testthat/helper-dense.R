@@ -1,6 +1,11 @@
 # Plain-R reference implementations used as independent checks of the
 # compiled code: dense covariance, dense Cholesky log-likelihood.
 
+# Has the discrepancy model parameters of class `cls`?
+model_has <- function(discrepancy, cls) {
+  FBC:::class_in_model(discrepancy)[match(cls, FBC:::model_classes$class)]
+}
+
 # R(X, Y) = prod_k r(|x_k - y_k|), one outer() per input, with r written
 # from the formulas of ?correlation (h = sqrt(theta) d):
 #   powexp exp(-theta d^alpha), gaussian exp(-theta d^2),
@@ -139,7 +144,7 @@ dense_loglik <- function(Xf, yf, Xs, ys, phi, nugget = 1e-6, kernS = "powexp",
   th <- unpack_phi(phi, p, q, discrepancy, max(noise, 1L), FBC:::level_count(levels),
                    FBC:::source_count(source))
   C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise, levels, source)
-  r <- c(yf - if (discrepancy == "gp") th$muB else 0, ys)  # S-GaSP: mean 0
+  r <- c(yf - if (model_has(discrepancy, "muB")) th$muB else 0, ys)  # no muB: mean 0
   L <- chol(C)
   a <- backsolve(L, r, transpose = TRUE)
   -0.5 * (length(r) * log(2 * pi) + 2 * sum(log(diag(L))) + sum(a^2))

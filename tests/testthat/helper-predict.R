@@ -2,8 +2,8 @@
 # the dense joint covariance (helper-dense.R) with one explicit solve per
 # target: mean = mu* + k' C^-1 (y - mu), var = v* - k' C^-1 k (scaled space).
 # kernS, kernB: correlation families (dense_corr()); discrepancy "none": no
-# bias (its mean and variance 0); "sgasp": the S-GaSP bias, mean 0, its
-# covariances from the discretized kernel (bias_kernel_dense()).
+# bias (its mean and variance 0); a model without muB has bias mean 0; the
+# S-GaSP's covariances are from the discretized kernel (bias_kernel_dense()).
 dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS = "powexp",
                           kernB = "powexp", discrepancy = "gp", noise = NULL, noiseNew = NULL,
                           levels = NULL, source = NULL, sourceNew = NULL) {
@@ -14,7 +14,7 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
   Xb <- if (srcL) cbind(Xf, source$codes) else Xf
   Xnb <- if (srcL) cbind(Xnew, sourceNew) else Xnew
   if (discrepancy == "none") th[c("muB", "sigma2B")] <- list(0, 0)
-  if (discrepancy == "sgasp") th$muB <- 0
+  if (!model_has(discrepancy, "muB")) th$muB <- 0
   C <- dense_cov(Xf, Xs, phi, nugget, kernS, kernB, discrepancy, noise, levels, source)
   r <- c(yf - th$muB, ys)
   Xk <- cbind(Xf, matrix(th$kappa, n, q, byrow = TRUE))
@@ -41,8 +41,9 @@ dense_predict <- function(Xf, yf, Xs, ys, phi, Xnew, type, nugget = 1e-6, kernS 
 # A tiny fbc object on random data (p = 2, q = 1) with every parameter fixed
 # at `phi` (sampler scale), so each retained draw equals phi; kernelS,
 # kernelB: correlation families (a family without a smoothness gets no
-# alpha prior: its alpha is not a parameter); discrepancy: "gp", "none"
-# (phi then has no bias classes) or "sgasp" (no muB, a lambdaZ). `d`: other data on the scaled space
+# alpha prior: its alpha is not a parameter); discrepancy: any model, phi
+# with its classes ("none": no bias classes; "sgasp": no muB, a lambdaZ),
+# the priors of those it has fixed. `d`: other data on the scaled space
 # (p = 2, q = 1), as random_koh_data() returns them.
 fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
                       d = random_koh_data(n = 7, m = 12, p = 2, q = 1, seed = seed),
@@ -62,10 +63,8 @@ fixed_fit <- function(phi, seed = 11, kernelS = "powexp", kernelB = "powexp",
   if (kernelS != "powexp") args[c("alphaSDist", "alphaSInit")] <- NULL
   if (kernelB != "powexp") args[c("alphaBDist", "alphaBInit")] <- NULL
   if (discrepancy == "none") args[grepl("^(thetaB|alphaB|sigma2B|muB)", names(args))] <- NULL
-  if (discrepancy == "sgasp") {
-    args[grepl("^muB", names(args))] <- NULL
-    args[c("lambdaZDist", "lambdaZInit")] <- list("fixed", th$lambdaZ)
-  }
+  if (!model_has(discrepancy, "muB")) args[grepl("^muB", names(args))] <- NULL
+  if (model_has(discrepancy, "lambdaZ")) args[c("lambdaZDist", "lambdaZInit")] <- list("fixed", th$lambdaZ)
   hyp <- do.call(set_hyperPriors, args)
   # the random field inputs overhang the random design: the warning is expected
   suppressWarnings(

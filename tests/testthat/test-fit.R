@@ -96,7 +96,10 @@ test_that("a fit of format 1 (before the discrepancy models) upgrades to the bia
   other$model$spec$model$discrepancy <- 0L
   expect_error(FBC:::validate_fbc(other), "layout of phi for p = 1, q = 1 and discrepancy \"gp\"")
   other$model$spec$model$discrepancy <- 5L
-  expect_error(FBC:::validate_fbc(other), "must be a discrepancy code \\(0 for gp, 2 for sgasp, 1 for none\\)")
+  dm <- FBC:::discrepancy_models  # each model by its code
+  expect_error(FBC:::validate_fbc(other), sprintf("must be a discrepancy code (%s)",
+                                                  paste(dm$code, "for", dm$name, collapse = ", ")),
+               fixed = TRUE)
 })
 
 test_that("validate_fbc() refuses broken objects, naming what is wrong", {

@@ -426,6 +426,29 @@ test_that("the compiled core reads the discrepancy model off the layout and refu
                "phi has 12 entries where the model's layout has 11")
 })
 
+test_that("the help and messages list the discrepancy models of the table", {
+  dm <- FBC:::discrepancy_models
+  docs <- FBC:::discrepancy_docs()
+  expect_match(docs, "^@param discrepancy ")
+  for (i in seq_len(nrow(dm))) {
+    expect_match(docs, sprintf("`\"%s\"` (%s%s)", dm$name[i], if (i == 1L) "the default, " else "",
+                               dm$help[i]), fixed = TRUE)
+  }
+  expect_identical(FBC:::or_list(c("a", "b", "c")), "a, b or c")
+  # set_hyperPriors()'s help names the models with or without a class
+  hyper <- FBC:::hyper_param_docs()
+  expect_false(any(grepl("{with}", hyper, fixed = TRUE) | grepl("{without}", hyper, fixed = TRUE)))
+  # a model without a class says why, and the message names the models with it
+  for (disc in dm$name) for (cls in FBC:::model_classes$class[!FBC:::class_in_model(disc)]) {
+    why <- FBC:::discrepancy_lacks(cls, disc)
+    if (!model_has(disc, "sigma2B")) expect_identical(why, "has no bias GP")
+    else expect_identical(why, unname(FBC:::class_lacks[cls]))
+    having <- FBC:::discrepancy_having(cls)
+    for (d in FBC:::class_models(cls)) expect_match(having, sprintf("`discrepancy = \"%s\"`", d), fixed = TRUE)
+    expect_no_match(having, sprintf("\"%s\"", disc), fixed = TRUE)
+  }
+})
+
 test_that("without a discrepancy the sampler retains dense log-likelihoods and has no bias moves", {
   p <- 2; q <- 1
   dat <- random_koh_data(8, 20, p, q, seed = 17)
