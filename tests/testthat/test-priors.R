@@ -216,3 +216,25 @@ test_that("prior_family_name() gives the registry's name of each code", {
   expect_identical(FBC:::prior_family_name(rev(unname(codes))), rev(names(codes)))
   expect_identical(FBC:::prior_family_name(c(codes[["beta"]], -99L)), c("beta", NA))
 })
+
+test_that("a class a user adds is not in the priors without a family, and its other arguments need one", {
+  # set_hyperPriors() as it would be with such a class (over "asked",
+  # default family NULL) in the table
+  tbl <- FBC:::model_classes
+  extra <- tbl[tbl$class == "muB", ]
+  extra$class <- "extra"
+  extra$over <- "asked"
+  tbl <- rbind(tbl, extra)
+  # (its priors with a family are checked as every class's, by functions
+  # that read the package's table: not reached here)
+  cp <- c(FBC:::class_priors, list(extra = list(prior = alist(NULL, NA, 0, 1), help = "An extra.")))
+  env <- list2env(list(model_classes = tbl, param_classes = tbl$class, class_priors = cp,
+                       class_domain = stats::setNames(tbl$domain, tbl$class)),
+                  parent = asNamespace("FBC"))
+  shp <- FBC::set_hyperPriors
+  formals(shp) <- c(formals(shp), stats::setNames(cp$extra$prior, paste0("extra", c("Dist", "Init", "P1", "P2"))))
+  environment(shp) <- env
+  expect_identical(unclass(shp()), unclass(set_hyperPriors()))
+  expect_null(shp(muBP2 = 2)$extra)
+  expect_snapshot(error = TRUE, shp(extraP1 = 1, extraInit = 0.5))
+})
