@@ -289,7 +289,7 @@ set_hyperPriors <- function() {
       given <- paste0(cls, c("Init", "P1", "P2"))[!vapply(c("Init", "P1", "P2"), is_missing, logical(1))]
       if (length(given)) {
         cli::cli_abort(c("{.arg {given}} {?is/are} given, but not {.arg {cls}Dist}.",
-                         i = "{.arg {cls}Dist}, a prior family, adds {.field {cls}} to the model; without one the model has no such parameter."),
+                         i = "{.arg {cls}Dist}, a prior family, adds {.code {cls}} to the model; without one the model has no such parameter."),
                        call = env)
       }
       next
