@@ -2,12 +2,15 @@
 # table that all code reads (the parameter layout, priors' domains, walks,
 # initial proposal scales, the sampler's moves, Phi's columns, plot labels,
 # the conflict check, checkpoints' identity and the tests' helpers). Adding a
-# class is one row here, its default prior in set_hyperPriors() and the code
-# that computes with it: the compiled core keeps no list of the classes, it
-# receives each class's offset and length by name (compiled_model()) and
-# looks up those it computes with (src/model.cpp, class_needs()); the
+# class is one row here, its default prior and help in class_priors below
+# and the code that computes with it: the compiled core keeps no list of the
+# classes, it receives each class's offset and length by name
+# (compiled_model()) and looks up those it computes with (src/model.cpp,
+# class_needs(): its length, the member holding its offset and the algebras
+# that compute with it, which choose the algebra, class_algebra()); the
 # package checks when it loads that R's table names every one of them
-# (check_model_codes(), R/boundary.R).
+# (check_model_codes(), R/boundary.R). A class over "asked" is one a user
+# adds by giving its prior: models without it keep their layouts.
 #
 # Columns:
 #   class    name, in the vignette's notation; its parameters are named
