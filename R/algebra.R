@@ -93,8 +93,12 @@ dense_sweep_cost <- function(m, n, p, q, large = m >= fbc_large_m, bias = TRUE) 
 # model records this one choice (model$algebra): the product design is
 # detected here only (the compiled core finds the same one from
 # the same code, src/kronecker.cpp). Says so when
-# `neighbours` is given for an algebra that does not use it.
-choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FALSE) {
+# `neighbours` is given for an algebra that does not use it. `without`: the
+# model's classes that the Kronecker algebra does not compute with
+# (classes_outside()): with any, a product design is left to the rule's
+# dense or nearest-neighbour algebra, and the reason says why.
+choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FALSE,
+                           without = character()) {
   m <- nrow(Xs)
   # the sweep the dense algebra would run (the large-problem schedule from
   # fbc_large_m runs), and the rule's yardstick: the sweep of the
@@ -110,6 +114,12 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
   if (identical(split, seq_len(p))) split <- NULL
   missing <- attr(dims, "missing")
   dims <- as.vector(dims)
+  why <- ""
+  if (length(dims) && length(without)) {
+    why <- sprintf("; the runs are a product design, but the Kronecker algebra does not compute with %s",
+                   paste0("`", without, "`", collapse = ", "))
+    dims <- integer(0)
+  }
   out <- if (algebra == "vecchia") {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
     list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = TRUE,
@@ -125,14 +135,14 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
          dims = dims, split = split, missing = missing)
   } else if (rule < fbc_dense_sweep_max) {
     list(name = "dense", code = algebra_codes[["auto"]], neighbours = NULL, forced = FALSE,
-         reason = sprintf("exact; projected at %s (m = %d, n = %d, %d inputs; under %g s)", costTxt,
-                          m, n, ncol(Xs), fbc_dense_sweep_max))
+         reason = sprintf("exact; projected at %s (m = %d, n = %d, %d inputs; under %g s)%s", costTxt,
+                          m, n, ncol(Xs), fbc_dense_sweep_max, why))
   } else {
     k <- as.integer(neighbours %||% vecchia_neighbours(m))
     list(name = "vecchia", code = algebra_codes[["vecchia"]], neighbours = k, forced = FALSE,
          reason = sprintf(
-           "the exact dense algebra is projected at %s (m = %d, n = %d, %d inputs; over %g s): `algebra = \"dense\"` is exact, a larger `neighbours =` comes closer",
-           txt(rule), m, n, ncol(Xs), fbc_dense_sweep_max))
+           "the exact dense algebra is projected at %s (m = %d, n = %d, %d inputs; over %g s): `algebra = \"dense\"` is exact, a larger `neighbours =` comes closer%s",
+           txt(rule), m, n, ncol(Xs), fbc_dense_sweep_max, why))
   }
   if (!is.null(neighbours) && out$name != "vecchia") {
     ran <- if (out$name == "kronecker") "Kronecker" else out$name
@@ -146,30 +156,28 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
         if (!is.null(out$split)) "split", if (!is.null(out$missing)) "missing")]
 }
 
-# The algebra, against the classes the model has parameters of (`sizes`,
-# class_sizes()) and its `outputs` (independent outputs' count): the compiled
-# core computes with some classes on some algebras only (src/model.cpp,
-# class_needs(), read here through .class_algebras()). On a product design
-# the dense algebra replaces the Kronecker one where a class needs it (the
-# compiled core makes the same choice); any other algebra that does not
-# compute with a class is refused, naming the class and the algebras that do.
-class_algebra <- function(alg, sizes, outputs = 1L, call = parent.frame()) {
+# The classes the model has parameters of (`sizes`, class_sizes()) that the
+# algebra `name` ("dense", "kronecker", "vecchia", "function"), with
+# `outputs` independent outputs, does not compute with: the compiled core
+# computes with some classes on some algebras only (src/model.cpp,
+# class_needs(), read here through .class_algebras()).
+classes_outside <- function(name, sizes, outputs = 1L) {
   have <- .class_algebras()
   have <- have[intersect(names(have), names(sizes)[sizes > 0L])]
-  kind <- c(alg$name, if (outputs > 1L) "outputs")
-  lacks <- names(have)[!vapply(have, function(a) all(kind %in% a), logical(1))]
-  if (!length(lacks)) return(alg)
-  dense <- all(vapply(have[lacks], function(a) all(c("dense", kind[-1]) %in% a), logical(1)))
-  if (alg$name == "kronecker" && dense) {
-    return(list(name = "dense", code = algebra_codes[["dense"]], neighbours = NULL,
-                reason = sprintf("exact; the runs are a product design, but the Kronecker algebra does not compute with %s",
-                                 paste0("`", lacks, "`", collapse = ", ")),
-                forced = FALSE, dims = NULL))
-  }
+  kind <- c(name, if (outputs > 1L) "outputs")
+  names(have)[!vapply(have, function(a) all(kind %in% a), logical(1))]
+}
+
+# The algebra `alg` (choose_algebra()'s, which leaves the Kronecker one out
+# where a class needs it), refused when it does not compute with a class of
+# the model, naming the class and the algebras that do.
+check_class_algebra <- function(alg, sizes, outputs = 1L, call = parent.frame()) {
+  lacks <- classes_outside(alg$name, sizes, outputs)
+  if (!length(lacks)) return(invisible(alg))
   label <- c(dense = "dense", kronecker = "Kronecker", vecchia = "nearest-neighbour",
              "function" = "simulator function's", outputs = "independent outputs'")
   cls <- lacks[1]
-  ways <- have[[cls]]
+  ways <- .class_algebras()[[cls]]
   what <- paste(label[[alg$name]], "algebra", if (outputs > 1L) "of independent outputs")
   cli::cli_abort(c(
     "The {what} does not compute with {.field {cls}}.",

@@ -7,7 +7,7 @@
 # classes, it receives each class's offset and length by name
 # (compiled_model()) and looks up those it computes with (src/model.cpp,
 # class_needs(): its length, the member holding its offset and the algebras
-# that compute with it, which choose the algebra, class_algebra()); the
+# that compute with it, which choose the algebra, classes_outside()); the
 # package checks when it loads that R's table names every one of them
 # (check_model_codes(), R/boundary.R). A class over "asked" is one a user
 # adds by giving its prior: models without it keep their layouts.

@@ -75,15 +75,16 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   dat <- pr$dat
   # independent outputs: the algebra of the largest output's block
   XsAlg <- largest_output_sim(dat, opt$outputs)
-  alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
-                        general = length(pr$levels) == 0L)
-  if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
   refuse_sim_noise_options(noise, output, nrow(dat$Xs), call = call)
-  alg <- class_algebra(alg, class_sizes(p, dd$q, opt$discrepancy, levels = level_count(pr$levels),
-                                        outputs = output_count(pr$outputs),
-                                        replicates = noise_sizes(pr$replicates),
-                                        asked = asked_classes(opt$hypers)),
-                       output_count(pr$outputs), call = call)
+  # the classes the model has, some of which only some algebras compute with
+  K <- output_count(pr$outputs)
+  sizes <- class_sizes(p, dd$q, opt$discrepancy, levels = level_count(pr$levels), outputs = K,
+                       replicates = noise_sizes(pr$replicates), asked = asked_classes(opt$hypers))
+  alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
+                        general = length(pr$levels) == 0L,
+                        without = classes_outside("kronecker", sizes, K))
+  if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
+  check_class_algebra(alg, sizes, K, call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,

@@ -238,8 +238,8 @@ collapse_replicates <- function(dat, reps, latent = FALSE) {
 # on more than fbc_latent_max unique inputs (its latent GP over them is
 # dense: O(m^3) per move of its hyperparameters), naming simNoise. (The
 # classes of the noise say which algebras compute with them, src/model.cpp:
-# on a product design the dense algebra replaces the Kronecker one,
-# class_algebra().)
+# on a product design the rule's dense or nearest-neighbour algebra replaces
+# the Kronecker one, choose_algebra().)
 fbc_latent_max <- 2000L
 refuse_sim_noise_options <- function(noise, outputs, m, call = parent.frame()) {
   if (noise$mode == "none") return(invisible(noise))

@@ -54,7 +54,7 @@ const char* class_outside(const Layout& lay, unsigned kind) {
   return nullptr;
 }
 
-// The algebras that compute with each class, by name, for R (class_algebra(),
+// The algebras that compute with each class, by name, for R (classes_outside(),
 // R/algebra.R).
 // [[Rcpp::export(.class_algebras)]]
 Rcpp::List class_algebras() {

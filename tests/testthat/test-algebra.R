@@ -66,7 +66,7 @@ test_that("auto: dense while cheap, Vecchia above, Kronecker on a product design
   })
 })
 
-test_that("an algebra that does not compute with a class: Kronecker gives way to dense, others are refused", {
+test_that("an algebra that does not compute with a class: a product design goes to the rule's algebra, others are refused", {
   # the compiled core's table: the simulator's noise on the dense and
   # nearest-neighbour algebras of one output, every other class on all
   alg <- FBC:::.class_algebras()
@@ -78,19 +78,34 @@ test_that("an algebra that does not compute with a class: Kronecker gives way to
     expect_identical(alg[[cls]], every)
   }
   expect_true(all(vapply(alg, function(a) "dense" %in% a && all(a %in% every), logical(1))))
-  ca <- function(name, sizes, outputs = 1L, forced = FALSE) {
-    FBC:::class_algebra(list(name = name, forced = forced), sizes, outputs)
-  }
-  expect_identical(ca("kronecker", c(kappa = 1L, sigma2R = 0L))$name, "kronecker")
-  expect_identical(ca("vecchia", c(kappa = 1L, sigma2R = 1L))$name, "vecchia")
-  expect_identical(ca("kronecker", c(kappa = 1L, sigma2R = 1L))[c("name", "code", "forced")],
-                   list(name = "dense", code = 1L, forced = FALSE))
+  out <- function(name, sizes, outputs = 1L) FBC:::classes_outside(name, sizes, outputs)
+  expect_identical(out("kronecker", c(kappa = 1L, sigma2R = 0L)), character(0))
+  expect_identical(out("vecchia", c(kappa = 1L, sigma2R = 1L)), character(0))
+  expect_identical(out("kronecker", c(kappa = 1L, sigma2R = 1L)), "sigma2R")
+  expect_identical(out("dense", c(kappa = 1L, gR = 5L, muG = 1L), outputs = 2L), c("gR", "muG"))
+  ok <- list(name = "dense", forced = FALSE)
+  expect_identical(FBC:::check_class_algebra(ok, c(kappa = 1L, sigma2R = 1L)), ok)
   expect_snapshot(error = TRUE, {
-    ca("function", c(kappa = 1L, sigma2R = 1L))
-    ca("kronecker", c(kappa = 1L, gR = 5L, muG = 1L), outputs = 2L)
+    FBC:::check_class_algebra(list(name = "function", forced = FALSE), c(kappa = 1L, sigma2R = 1L))
+    FBC:::check_class_algebra(list(name = "kronecker", forced = FALSE), c(kappa = 1L, gR = 5L, muG = 1L),
+                              outputs = 2L)
   })
+  # on a product design such classes leave the choice to the rule: dense
+  # while cheap (6 x 5 runs), the nearest-neighbour algebra on 80 x 50, each
+  # saying why
+  grid <- as.matrix(expand.grid(x = seq(0, 1, length.out = 80), t = seq(0, 1, length.out = 50)))
+  big <- FBC:::choose_algebra("auto", NULL, grid, 1, "matern52", 30, without = "sigma2R")
+  expect_identical(big[c("name", "neighbours")], list(name = "vecchia", neighbours = 10L))
+  six <- as.matrix(expand.grid(x = seq(0, 1, length.out = 6), t = seq(0, 1, length.out = 5)))
+  expect_identical(FBC:::choose_algebra("auto", NULL, six, 1, "matern52", 30)$name, "kronecker")
+  small <- FBC:::choose_algebra("auto", NULL, six, 1, "matern52", 30, without = "sigma2R")
+  expect_identical(small[c("name", "code")], list(name = "dense", code = 0L))
+  for (a in list(big, small)) {
+    expect_match(a$reason, "the runs are a product design, but the Kronecker algebra does not compute with `sigma2R`",
+                 fixed = TRUE)
+  }
   # a stochastic simulator on a product design of unique inputs: the model
-  # takes the dense algebra, and the compiled core, left to choose (auto),
+  # takes the dense algebra (auto), and the compiled core, left to choose,
   # takes it too: the same log-likelihood to the bit
   set.seed(2)
   U <- expand.grid(x = seq(0, 3, length.out = 6), t = seq(0.5, 3, length.out = 5))
