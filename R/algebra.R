@@ -182,6 +182,6 @@ check_class_algebra <- function(alg, sizes, outputs = 1L, call = parent.frame())
   cli::cli_abort(c(
     "The {what} does not compute with {.field {cls}}.",
     i = "Only the {.or {label[setdiff(ways, 'outputs')]}} algebra{?s} {?does/do}{if (!'outputs' %in% ways) ', of one output'}.",
-    i = if (alg$forced && "dense" %in% ways && outputs == 1L) "Use {.code algebra = \"dense\"}."
+    i = if (alg$name != "dense" && alg$name != "function" && "dense" %in% ways && outputs == 1L) "Use {.code algebra = \"dense\"}."
   ), call = call)
 }
