@@ -156,14 +156,14 @@ choose_algebra <- function(algebra, neighbours, Xs, p, kernelS, n, general = FAL
         if (!is.null(out$split)) "split", if (!is.null(out$missing)) "missing")]
 }
 
-# The classes the model has parameters of (`sizes`, class_sizes()) that the
+# The classes of `classes` (those the model has parameters of) that the
 # algebra `name` ("dense", "kronecker", "vecchia", "function"), with
 # `outputs` independent outputs, does not compute with: the compiled core
 # computes with some classes on some algebras only (src/model.cpp,
 # class_needs(), read here through .class_algebras()).
-classes_outside <- function(name, sizes, outputs = 1L) {
+classes_outside <- function(name, classes, outputs = 1L) {
   have <- .class_algebras()
-  have <- have[intersect(names(have), names(sizes)[sizes > 0L])]
+  have <- have[intersect(names(have), classes)]
   kind <- c(name, if (outputs > 1L) "outputs")
   names(have)[!vapply(have, function(a) all(kind %in% a), logical(1))]
 }
@@ -171,8 +171,8 @@ classes_outside <- function(name, sizes, outputs = 1L) {
 # The algebra `alg` (choose_algebra()'s, which leaves the Kronecker one out
 # where a class needs it), refused when it does not compute with a class of
 # the model, naming the class and the algebras that do.
-check_class_algebra <- function(alg, sizes, outputs = 1L, call = parent.frame()) {
-  lacks <- classes_outside(alg$name, sizes, outputs)
+check_class_algebra <- function(alg, classes, outputs = 1L, call = parent.frame()) {
+  lacks <- classes_outside(alg$name, classes, outputs)
   if (!length(lacks)) return(invisible(alg))
   label <- c(dense = "dense", kronecker = "Kronecker", vecchia = "nearest-neighbour",
              "function" = "simulator function's", outputs = "independent outputs'")

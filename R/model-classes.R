@@ -243,7 +243,7 @@ or_list <- function(x) {
 class_lacks <- c(muB = "has no bias mean (its bias has mean 0)",
                  lambdaZ = "has no S-GaSP scale")
 discrepancy_lacks <- function(cls, discrepancy) {
-  if (!class_in_model(discrepancy)[match("sigma2B", model_classes$class)]) return("has no bias GP")
+  if (!discrepancy %in% class_models("sigma2B")) return("has no bias GP")
   if (cls %in% names(class_lacks)) class_lacks[[cls]] else "has no such parameter"
 }
 discrepancy_having <- function(cls) {
@@ -299,13 +299,13 @@ class_sizes <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L, sourc
 # is a function.
 emulator_classes <- c("thetaS", "alphaS", "rhoS", "sigma2S")
 
-# The classes over "asked" that a model has: those `hypers` gives a prior
-# (an fbc_hypers), or, from a compiled model (its `offset` and `length`),
-# those its layout holds.
+# The classes a user adds (over "asked"), and those of them a model has:
+# those `hypers` gives a prior (an fbc_hypers), or, from a compiled model
+# (its `offset` and `length`), those its layout holds.
+user_classes <- model_classes$class[model_classes$over == "asked"]
 asked_classes <- function(hypers = NULL, compiled = NULL) {
-  ask <- model_classes$class[model_classes$over == "asked"]
-  if (!is.null(compiled)) return(intersect(ask, names(compiled$length)[compiled$length > 0L]))
-  ask[!vapply(ask, function(cls) is.null(hypers[[cls]]), logical(1))]
+  if (!is.null(compiled)) return(intersect(user_classes, names(compiled$length)[compiled$length > 0L]))
+  user_classes[!vapply(user_classes, function(cls) is.null(hypers[[cls]]), logical(1))]
 }
 
 # The layout of phi, the sampler's parameter vector: for each class, its
@@ -319,7 +319,7 @@ param_indices <- function(p, q, discrepancy = "gp", noise = 1L, levels = 0L,
   # only of the models that have them: every other model's layout is the one
   # it has always been (fits and checkpoints made before the classes existed
   # keep theirs)
-  later <- c(sim_noise_classes, model_classes$class[model_classes$over == "asked"])
+  later <- c(sim_noise_classes, user_classes)
   sizes <- sizes[!(names(sizes) %in% later & sizes == 0L)]
   ends <- unname(cumsum(sizes))
   stats::setNames(lapply(seq_along(sizes), function(i) seq_len(sizes[[i]]) + ends[i] - sizes[[i]]),

@@ -76,15 +76,15 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
   # independent outputs: the algebra of the largest output's block
   XsAlg <- largest_output_sim(dat, opt$outputs)
   refuse_sim_noise_options(noise, output, nrow(dat$Xs), call = call)
-  # the classes the model has, some of which only some algebras compute with
+  # the classes the model has (its priors'), some of which only some
+  # algebras compute with
   K <- output_count(pr$outputs)
-  sizes <- class_sizes(p, dd$q, opt$discrepancy, levels = level_count(pr$levels), outputs = K,
-                       replicates = noise_sizes(pr$replicates), asked = asked_classes(opt$hypers))
+  classes <- unique(pr$spec$classes)
   alg <- choose_algebra(opt$algebra, opt$neighbours, XsAlg, p, opt$kernelS, nrow(dat$Xf),
                         general = length(pr$levels) == 0L,
-                        without = classes_outside("kronecker", sizes, K))
+                        without = classes_outside("kronecker", classes, K))
   if (alg$name == "vecchia") check_outputs(opt$outputs %||% "shared", dd, "vecchia", call = call)
-  check_class_algebra(alg, sizes, K, call = call)
+  check_class_algebra(alg, classes, K, call = call)
   kS <- kernel_codes[[opt$kernelS]]
   spec <- pr$spec
   spec$model <- compiled_model(p, dd$q, kS, kernel_codes[[opt$kernelB]], algebra = alg$code,
@@ -93,7 +93,7 @@ build_model <- function(sim, field, kappa, kappaDefault, hypers, discrepancy, ke
                                  vecchia_design(dat$Xs, dat$ys, kS, alg$neighbours, alg$neighbours)
                                }, noise = dd$fac$noise, levels = pr$levels, source = pr$biasSource,
                                outputs = pr$outputs, replicates = pr$replicates, Xf = dat$Xf,
-                               asked = asked_classes(opt$hypers))
+                               asked = intersect(classes, user_classes))
   if (noise$link == "realization") spec$model$replicates$realization <- TRUE
   moves <- sampler_moves(opt$sampler, spec, large = large_dense(nrow(dat$Xs), alg))
   design <- c(dd$fac[c("factors", "output", "source", "noise", "noiseLabels")],

@@ -70,7 +70,7 @@ build_function_model <- function(f, field, kappa, hypers, discrepancy, kernelB, 
   spec$model <- compiled_model(p, q, kernel_codes[["matern52"]], kernel_codes[[kernelB]],
                                algebra = algebra_codes[["dense"]], discrepancy, noise = ng$noise,
                                simulator = function_closures(f, x, scale, nonFinite, out$codes),
-                               Xf = dat$Xf, asked = asked_classes(hypers))
+                               Xf = dat$Xf, asked = intersect(unique(spec$classes), user_classes))
   alg <- list(name = "function", code = algebra_codes[["dense"]], neighbours = NULL,
               forced = FALSE, reason = "the simulator is a function, called once per kappa proposal (no emulator)",
               dims = NULL)

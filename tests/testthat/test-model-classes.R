@@ -478,7 +478,9 @@ test_that("a class a user adds (over \"asked\") has parameters only in the model
   extra <- tbl[tbl$class == "muB", ]
   extra$class <- "extra"
   extra$over <- "asked"
-  env <- list2env(list(model_classes = rbind(tbl, extra)), parent = asNamespace("FBC"))
+  tbl <- rbind(tbl, extra)
+  env <- list2env(list(model_classes = tbl, user_classes = tbl$class[tbl$over == "asked"]),
+                  parent = asNamespace("FBC"))
   for (f in c("class_sizes", "class_in_model", "param_indices", "layout_codes", "param_names",
               "asked_classes")) {
     fn <- get(f, asNamespace("FBC"))
